@@ -1,0 +1,9 @@
+//! droidctl: drive Sphero's Star Wars droids and friends from the terminal.
+//!
+//! The crate is layered: [`protocol`] is sans-IO (bytes in, typed values out); everything that
+//! touches a clock, a radio or a terminal sits at the edges.
+
+pub mod cli;
+pub mod hex;
+pub mod protocol;
+pub mod units;

@@ -1,0 +1,3 @@
+//! The sans-IO protocol core.
+
+pub mod v2;

@@ -1,0 +1,485 @@
+//! A streaming v2 decoder: bytes in any chunking in, packets and typed errors out.
+//!
+//! BLE notifications are not packet boundaries (`droid-facts.md` §1), so the decoder treats
+//! its input as one byte stream. It never panics, never holds more than `max_body` bytes,
+//! resynchronises on the next SOP after any error, and counts every error kind so the UI can
+//! show them. Bytes are unescaped into one reused buffer: nothing is allocated per byte, one
+//! `Vec` per decoded packet for its payload.
+
+use super::packet::{BodyError, EOP, ESC, ESC_EOP, ESC_ESC, ESC_SOP, Packet, SOP, parse_body};
+use std::fmt;
+
+/// Default bound on an unescaped body. Real packets are far shorter (the longest documented
+/// response is 46 bytes of data); anything larger is line noise.
+pub const DEFAULT_MAX_BODY: usize = 512;
+
+/// What went wrong, without the details.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum DecodeErrorKind {
+    /// The checksum byte does not match the body.
+    BadChecksum,
+    /// ESC followed by something other than 0x23 / 0x05 / 0x50.
+    BadEscape,
+    /// A new SOP arrived before the current packet's EOP; the partial packet is dropped and
+    /// decoding restarts at the new SOP.
+    SopInsidePacket,
+    /// A body too short for the header its flags announce.
+    TooShort,
+    /// A body longer than the decoder's bound.
+    Oversize,
+    /// Bytes outside any packet.
+    Garbage,
+    /// The stream ended inside a packet (only reported by [`Decoder::finish`]).
+    Truncated,
+}
+
+impl DecodeErrorKind {
+    pub const ALL: [DecodeErrorKind; 7] = [
+        DecodeErrorKind::BadChecksum,
+        DecodeErrorKind::BadEscape,
+        DecodeErrorKind::SopInsidePacket,
+        DecodeErrorKind::TooShort,
+        DecodeErrorKind::Oversize,
+        DecodeErrorKind::Garbage,
+        DecodeErrorKind::Truncated,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            DecodeErrorKind::BadChecksum => "bad_checksum",
+            DecodeErrorKind::BadEscape => "bad_escape",
+            DecodeErrorKind::SopInsidePacket => "sop_inside_packet",
+            DecodeErrorKind::TooShort => "too_short",
+            DecodeErrorKind::Oversize => "oversize",
+            DecodeErrorKind::Garbage => "garbage",
+            DecodeErrorKind::Truncated => "truncated",
+        }
+    }
+
+    fn index(self) -> usize {
+        self as usize
+    }
+}
+
+/// A decode error with where it happened in the stream.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DecodeError {
+    pub kind: DecodeErrorKind,
+    /// Stream offset (bytes since the decoder was created) of the packet's SOP, or of the
+    /// first garbage byte.
+    pub offset: u64,
+    /// Extra detail for people, e.g. the checksum values or byte counts.
+    pub detail: String,
+    /// For a bad checksum: the packet as it was read, for diagnostics.
+    pub packet: Option<Box<Packet>>,
+}
+
+impl fmt::Display for DecodeError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{} at offset {}", self.kind.name(), self.offset)?;
+        if !self.detail.is_empty() {
+            write!(f, ": {}", self.detail)?;
+        }
+        Ok(())
+    }
+}
+
+/// Counters of everything the decoder has seen.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct DecoderStats {
+    pub packets: u64,
+    pub bytes: u64,
+    /// Bytes dropped: garbage, and the rest of packets abandoned after an error.
+    pub skipped_bytes: u64,
+    errors: [u64; 7],
+}
+
+impl DecoderStats {
+    pub fn errors(&self, kind: DecodeErrorKind) -> u64 {
+        self.errors[kind.index()]
+    }
+
+    pub fn total_errors(&self) -> u64 {
+        self.errors.iter().sum()
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum State {
+    /// Looking for SOP; `garbage_start` marks a pending run of garbage.
+    Hunting,
+    /// Inside a packet; `escaped` after ESC.
+    Body { escaped: bool },
+    /// After an error inside a packet: drop bytes until EOP or SOP, silently (the error
+    /// was already reported once).
+    Discarding,
+}
+
+/// The streaming decoder. Feed it with [`Decoder::feed`].
+#[derive(Debug, Clone)]
+pub struct Decoder {
+    state: State,
+    buf: Vec<u8>,
+    max_body: usize,
+    offset: u64,
+    packet_start: u64,
+    garbage_start: Option<u64>,
+    garbage_len: u64,
+    stats: DecoderStats,
+}
+
+impl Default for Decoder {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Decoder {
+    pub fn new() -> Self {
+        Self::with_max_body(DEFAULT_MAX_BODY)
+    }
+
+    /// A decoder that rejects bodies longer than `max_body` unescaped bytes (at least 8).
+    pub fn with_max_body(max_body: usize) -> Self {
+        let max_body = max_body.max(8);
+        Decoder {
+            state: State::Hunting,
+            buf: Vec::with_capacity(max_body),
+            max_body,
+            offset: 0,
+            packet_start: 0,
+            garbage_start: None,
+            garbage_len: 0,
+            stats: DecoderStats::default(),
+        }
+    }
+
+    pub fn stats(&self) -> &DecoderStats {
+        &self.stats
+    }
+
+    /// Bytes currently buffered for an unfinished packet (never more than the bound).
+    pub fn buffered(&self) -> usize {
+        self.buf.len()
+    }
+
+    /// Decode `bytes`, yielding every packet and error they complete. The iterator must be
+    /// drained for all of `bytes` to be consumed; state carries over to the next call.
+    pub fn feed<'a>(&'a mut self, bytes: &'a [u8]) -> Feed<'a> {
+        Feed {
+            decoder: self,
+            bytes,
+            pos: 0,
+        }
+    }
+
+    /// Convenience for tests and tools: decode a whole slice into a vector.
+    pub fn decode_all(&mut self, bytes: &[u8]) -> Vec<Result<Packet, DecodeError>> {
+        self.feed(bytes).collect()
+    }
+
+    /// The stream has ended: report a pending garbage run or an unfinished packet.
+    pub fn finish(&mut self) -> Vec<DecodeError> {
+        let mut out = Vec::new();
+        if let Some(e) = self.take_garbage() {
+            out.push(e);
+        }
+        if let State::Body { .. } = self.state {
+            let detail = format!("{} body bytes before the stream ended", self.buf.len());
+            out.push(self.error(DecodeErrorKind::Truncated, self.packet_start, detail));
+            self.stats.skipped_bytes += self.buf.len() as u64 + 1;
+        }
+        self.buf.clear();
+        self.state = State::Hunting;
+        out
+    }
+
+    fn error(&mut self, kind: DecodeErrorKind, offset: u64, detail: String) -> DecodeError {
+        self.stats.errors[kind.index()] += 1;
+        DecodeError {
+            kind,
+            offset,
+            detail,
+            packet: None,
+        }
+    }
+
+    fn take_garbage(&mut self) -> Option<DecodeError> {
+        let start = self.garbage_start.take()?;
+        let len = std::mem::take(&mut self.garbage_len);
+        let detail = format!("{len} byte(s) outside any packet");
+        Some(self.error(DecodeErrorKind::Garbage, start, detail))
+    }
+
+    fn start_packet(&mut self, at: u64) {
+        self.buf.clear();
+        self.packet_start = at;
+        self.state = State::Body { escaped: false };
+    }
+
+    /// Abandon the current packet after an error inside it.
+    fn abandon(&mut self, kind: DecodeErrorKind, detail: String) -> DecodeError {
+        self.stats.skipped_bytes += self.buf.len() as u64 + 1;
+        self.buf.clear();
+        self.state = State::Discarding;
+        self.error(kind, self.packet_start, detail)
+    }
+
+    fn push_body(&mut self, b: u8) -> Option<DecodeError> {
+        if self.buf.len() >= self.max_body {
+            let detail = format!("body longer than {} bytes", self.max_body);
+            return Some(self.abandon(DecodeErrorKind::Oversize, detail));
+        }
+        self.buf.push(b);
+        None
+    }
+
+    fn end_packet(&mut self) -> Result<Packet, DecodeError> {
+        self.state = State::Hunting;
+        let result = parse_body(&self.buf);
+        let len = self.buf.len() as u64;
+        self.buf.clear();
+        match result {
+            Ok(p) => {
+                self.stats.packets += 1;
+                Ok(p)
+            }
+            Err((BodyError::TooShort { needed, got }, _)) => {
+                self.stats.skipped_bytes += len + 2;
+                let detail = format!("{got} body byte(s), its flags need at least {needed}");
+                Err(self.error(DecodeErrorKind::TooShort, self.packet_start, detail))
+            }
+            Err((BodyError::BadChecksum { expected, got }, packet)) => {
+                self.stats.skipped_bytes += len + 2;
+                let detail = format!("checksum 0x{got:02X}, expected 0x{expected:02X}");
+                let mut e = self.error(DecodeErrorKind::BadChecksum, self.packet_start, detail);
+                e.packet = packet.map(Box::new);
+                Err(e)
+            }
+        }
+    }
+
+    /// Process one byte at stream offset `at`; returns at most one event, except that a SOP
+    /// ending a garbage run may need to report the run *and* start a packet (the run is
+    /// reported, the packet starts silently).
+    fn step(&mut self, b: u8, at: u64) -> Option<Result<Packet, DecodeError>> {
+        match self.state {
+            State::Hunting => {
+                if b == SOP {
+                    let garbage = self.take_garbage();
+                    self.start_packet(at);
+                    return garbage.map(Err);
+                }
+                self.stats.skipped_bytes += 1;
+                if self.garbage_start.is_none() {
+                    self.garbage_start = Some(at);
+                }
+                self.garbage_len += 1;
+                None
+            }
+            State::Discarding => {
+                match b {
+                    SOP => self.start_packet(at),
+                    EOP => {
+                        self.stats.skipped_bytes += 1;
+                        self.state = State::Hunting;
+                    }
+                    _ => self.stats.skipped_bytes += 1,
+                }
+                None
+            }
+            State::Body { escaped } => {
+                if b == SOP {
+                    // Drop the partial packet, restart here.
+                    self.stats.skipped_bytes += self.buf.len() as u64 + 1;
+                    let detail = format!("new SOP after {} body byte(s)", self.buf.len());
+                    let e = self.error(DecodeErrorKind::SopInsidePacket, self.packet_start, detail);
+                    self.start_packet(at);
+                    return Some(Err(e));
+                }
+                if escaped {
+                    let unescaped = match b {
+                        ESC_ESC => ESC,
+                        ESC_SOP => SOP,
+                        ESC_EOP => EOP,
+                        other => {
+                            let detail = format!("ESC followed by 0x{other:02X}");
+                            let e = self.abandon(DecodeErrorKind::BadEscape, detail);
+                            if other == EOP {
+                                self.state = State::Hunting;
+                            }
+                            return Some(Err(e));
+                        }
+                    };
+                    self.state = State::Body { escaped: false };
+                    return self.push_body(unescaped).map(Err);
+                }
+                match b {
+                    EOP => Some(self.end_packet()),
+                    ESC => {
+                        self.state = State::Body { escaped: true };
+                        None
+                    }
+                    other => self.push_body(other).map(Err),
+                }
+            }
+        }
+    }
+}
+
+/// Iterator returned by [`Decoder::feed`].
+pub struct Feed<'a> {
+    decoder: &'a mut Decoder,
+    bytes: &'a [u8],
+    pos: usize,
+}
+
+impl Iterator for Feed<'_> {
+    type Item = Result<Packet, DecodeError>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        while self.pos < self.bytes.len() {
+            let b = self.bytes[self.pos];
+            self.pos += 1;
+            let at = self.decoder.offset;
+            self.decoder.offset += 1;
+            self.decoder.stats.bytes += 1;
+            if let Some(event) = self.decoder.step(b, at) {
+                return Some(event);
+            }
+        }
+        None
+    }
+}
+
+impl Drop for Feed<'_> {
+    /// Consume whatever the caller did not iterate, so no input is silently lost.
+    fn drop(&mut self) {
+        for _ in self.by_ref() {}
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::hex;
+
+    fn kinds(events: &[Result<Packet, DecodeError>]) -> Vec<Result<(u8, u8), DecodeErrorKind>> {
+        events
+            .iter()
+            .map(|e| match e {
+                Ok(p) => Ok((p.did, p.cid)),
+                Err(e) => Err(e.kind),
+            })
+            .collect()
+    }
+
+    #[test]
+    fn decodes_wake_and_response() {
+        let mut d = Decoder::new();
+        let bytes = hex::parse("8D 0A 13 0D 00 D5 D8 8D 09 13 0D 00 00 D6 D8").unwrap();
+        let out = d.decode_all(&bytes);
+        assert_eq!(kinds(&out), vec![Ok((0x13, 0x0D)), Ok((0x13, 0x0D))]);
+        assert_eq!(d.stats().packets, 2);
+    }
+
+    #[test]
+    fn byte_at_a_time() {
+        let mut d = Decoder::new();
+        let bytes = hex::parse("8D 0A 1A 0E AB 05 00 AB 23 AB 50 BD D8").unwrap();
+        let mut got = Vec::new();
+        for b in &bytes {
+            got.extend(d.feed(std::slice::from_ref(b)));
+        }
+        let p = got.pop().unwrap().unwrap();
+        assert_eq!(p.seq, 0x8D);
+        assert_eq!(p.data, vec![0x00, 0xAB, 0xD8]);
+    }
+
+    #[test]
+    fn bad_checksum_reports_and_resyncs() {
+        let mut d = Decoder::new();
+        let bytes = hex::parse("8D 0A 13 0D 00 D4 D8 8D 0A 13 0D 00 D5 D8").unwrap();
+        let out = d.decode_all(&bytes);
+        assert_eq!(
+            kinds(&out),
+            vec![Err(DecodeErrorKind::BadChecksum), Ok((0x13, 0x0D))]
+        );
+        let Err(e) = &out[0] else { panic!() };
+        assert_eq!(e.offset, 0);
+        assert!(e.packet.is_some());
+        assert_eq!(d.stats().errors(DecodeErrorKind::BadChecksum), 1);
+    }
+
+    #[test]
+    fn sop_inside_packet_restarts() {
+        let mut d = Decoder::new();
+        let bytes = hex::parse("8D 0A 13 8D 0A 13 0D 00 D5 D8").unwrap();
+        let out = d.decode_all(&bytes);
+        assert_eq!(
+            kinds(&out),
+            vec![Err(DecodeErrorKind::SopInsidePacket), Ok((0x13, 0x0D))]
+        );
+    }
+
+    #[test]
+    fn bad_escape_discards_rest_of_packet_once() {
+        let mut d = Decoder::new();
+        let bytes = hex::parse("8D 0A AB 11 13 0D 00 D5 D8 8D 0A 13 0D 00 D5 D8").unwrap();
+        let out = d.decode_all(&bytes);
+        assert_eq!(
+            kinds(&out),
+            vec![Err(DecodeErrorKind::BadEscape), Ok((0x13, 0x0D))]
+        );
+    }
+
+    #[test]
+    fn garbage_reported_once_per_run() {
+        let mut d = Decoder::new();
+        let bytes = hex::parse("01 02 03 8D 0A 13 0D 00 D5 D8 FF").unwrap();
+        let out = d.decode_all(&bytes);
+        assert_eq!(kinds(&out), vec![Err(DecodeErrorKind::Garbage), Ok((0x13, 0x0D))]);
+        let Err(e) = &out[0] else { panic!() };
+        assert_eq!(e.offset, 0);
+        let tail = d.finish();
+        assert_eq!(tail.len(), 1);
+        assert_eq!(tail[0].kind, DecodeErrorKind::Garbage);
+        assert_eq!(tail[0].offset, 10);
+    }
+
+    #[test]
+    fn too_short_and_truncated() {
+        let mut d = Decoder::new();
+        let out = d.decode_all(&hex::parse("8D 0A 13 D8 8D 0A").unwrap());
+        assert_eq!(kinds(&out), vec![Err(DecodeErrorKind::TooShort)]);
+        let tail = d.finish();
+        assert_eq!(tail[0].kind, DecodeErrorKind::Truncated);
+        assert_eq!(tail[0].offset, 4);
+    }
+
+    #[test]
+    fn oversize_is_bounded() {
+        let mut d = Decoder::with_max_body(16);
+        let mut bytes = vec![SOP];
+        bytes.extend(std::iter::repeat_n(0x11, 1000));
+        bytes.push(EOP);
+        bytes.extend(hex::parse("8D 0A 13 0D 00 D5 D8").unwrap());
+        let mut max_buffered = 0;
+        let mut out = Vec::new();
+        for chunk in bytes.chunks(7) {
+            out.extend(d.feed(chunk));
+            max_buffered = max_buffered.max(d.buffered());
+        }
+        assert!(max_buffered <= 16);
+        assert_eq!(kinds(&out), vec![Err(DecodeErrorKind::Oversize), Ok((0x13, 0x0D))]);
+    }
+
+    #[test]
+    fn dropping_feed_consumes_input() {
+        let mut d = Decoder::new();
+        let bytes = hex::parse("8D 0A 13 0D 00 D5 D8 8D 0A 13 0D 00 D5 D8").unwrap();
+        let first = d.feed(&bytes).next();
+        assert!(first.is_some());
+        assert_eq!(d.stats().packets, 2);
+    }
+}

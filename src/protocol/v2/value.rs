@@ -1,0 +1,122 @@
+//! Decoded field values: what the packet log, `packet decode` and JSON output show.
+
+use serde::ser::{Serialize, SerializeSeq, Serializer};
+use std::fmt;
+
+/// One decoded field value.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Value {
+    Bool(bool),
+    Int(i64),
+    Float(f64),
+    /// A mask or id better read in hex; `width` is the number of bytes.
+    Hex { value: u64, width: u8 },
+    /// An enumerated value and its name when known (unknown values are kept, not lost).
+    Enum { value: u64, name: Option<&'static str> },
+    /// A set of flag names plus the raw bits.
+    Flags { bits: u64, names: Vec<&'static str> },
+    Text(String),
+    Bytes(Vec<u8>),
+    List(Vec<Value>),
+}
+
+impl Value {
+    pub fn as_f64(&self) -> Option<f64> {
+        match *self {
+            Value::Int(i) => Some(i as f64),
+            Value::Float(f) => Some(f),
+            Value::Hex { value, .. } | Value::Enum { value, .. } | Value::Flags { bits: value, .. } => {
+                Some(value as f64)
+            }
+            Value::Bool(b) => Some(b as u8 as f64),
+            _ => None,
+        }
+    }
+}
+
+impl fmt::Display for Value {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Value::Bool(b) => write!(f, "{b}"),
+            Value::Int(i) => write!(f, "{i}"),
+            Value::Float(x) => {
+                if x.fract() == 0.0 && x.abs() < 1e9 {
+                    write!(f, "{x:.1}")
+                } else {
+                    write!(f, "{}", (x * 1e4).round() / 1e4)
+                }
+            }
+            Value::Hex { value, width } => write!(f, "0x{:0w$X}", value, w = *width as usize * 2),
+            Value::Enum { value, name: Some(n) } => write!(f, "{n} ({value})"),
+            Value::Enum { value, name: None } => write!(f, "unknown ({value})"),
+            Value::Flags { bits, names } if names.is_empty() => write!(f, "none (0x{bits:02X})"),
+            Value::Flags { bits, names } => write!(f, "{} (0x{bits:02X})", names.join("|")),
+            Value::Text(s) => write!(f, "{s:?}"),
+            Value::Bytes(b) => write!(f, "[{}]", crate::hex::spaced(b)),
+            Value::List(items) => {
+                write!(f, "[")?;
+                for (i, v) in items.iter().enumerate() {
+                    if i > 0 {
+                        write!(f, ", ")?;
+                    }
+                    write!(f, "{v}")?;
+                }
+                write!(f, "]")
+            }
+        }
+    }
+}
+
+impl Serialize for Value {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        match self {
+            Value::Bool(b) => s.serialize_bool(*b),
+            Value::Int(i) => s.serialize_i64(*i),
+            Value::Float(x) if x.is_finite() => s.serialize_f64(*x),
+            Value::Float(_) => s.serialize_none(),
+            Value::Hex { value, .. } => s.serialize_u64(*value),
+            Value::Enum { name: Some(n), .. } => s.serialize_str(n),
+            Value::Enum { value, name: None } => s.serialize_u64(*value),
+            Value::Flags { names, .. } => {
+                let mut seq = s.serialize_seq(Some(names.len()))?;
+                for n in names {
+                    seq.serialize_element(n)?;
+                }
+                seq.end()
+            }
+            Value::Text(t) => s.serialize_str(t),
+            Value::Bytes(b) => s.serialize_str(&crate::hex::compact(b)),
+            Value::List(items) => {
+                let mut seq = s.serialize_seq(Some(items.len()))?;
+                for v in items {
+                    seq.serialize_element(v)?;
+                }
+                seq.end()
+            }
+        }
+    }
+}
+
+/// Named field values in wire order.
+pub type Fields = Vec<(&'static str, Value)>;
+
+/// Fields as a JSON object (order kept as inserted).
+pub fn fields_json(fields: &Fields) -> serde_json::Value {
+    let mut map = serde_json::Map::new();
+    for (name, value) in fields {
+        map.insert(
+            (*name).to_string(),
+            serde_json::to_value(value).unwrap_or(serde_json::Value::Null),
+        );
+    }
+    serde_json::Value::Object(map)
+}
+
+/// Fields as `name=value` pairs for one line of human output.
+pub fn fields_line(fields: &Fields) -> String {
+    fields
+        .iter()
+        .map(|(n, v)| format!("{n}={v}"))
+        .collect::<Vec<_>>()
+        .join(" ")
+}
