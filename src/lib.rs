@@ -7,3 +7,8 @@ pub mod cli;
 pub mod hex;
 pub mod protocol;
 pub mod units;
+pub mod link;
+pub mod model;
+pub mod session;
+pub mod rng;
+pub mod sim;

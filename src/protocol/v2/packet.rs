@@ -49,9 +49,10 @@ impl Packet {
         }
     }
 
-    /// The response a droid sends to `request`: same DID/CID/SEQ and addressing swapped.
+    /// The response a droid sends to `request`: same DID/CID/SEQ, addressing swapped, and the
+    /// activity flag copied (the captured wake response is `8D 09 …`: response | activity).
     pub fn response_to(request: &Packet, err: ErrorCode, data: Vec<u8>) -> Self {
-        let mut flags = Flags::IS_RESPONSE;
+        let mut flags = Flags::IS_RESPONSE | (request.flags & Flags::IS_ACTIVITY);
         if request.sid.is_some() {
             flags |= Flags::HAS_TARGET_ID;
         }
@@ -228,6 +229,13 @@ mod tests {
     fn wake_vector() {
         let p = Packet::command(0x13, 0x0D, 0, vec![]);
         assert_eq!(p.encode(), hex::parse("8D 0A 13 0D 00 D5 D8").unwrap());
+    }
+
+    #[test]
+    fn wake_response_vector() {
+        let req = Packet::command(0x13, 0x0D, 0, vec![]);
+        let resp = Packet::response_to(&req, ErrorCode::Success, vec![]);
+        assert_eq!(resp.encode(), hex::parse("8D 09 13 0D 00 00 D6 D8").unwrap());
     }
 
     #[test]

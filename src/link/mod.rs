@@ -1,0 +1,75 @@
+//! The `Link`: bytes to and from a droid. BLE, the simulator and anything later (a network
+//! bridge) implement it; the session, control loop, script runner and UI know only this trait.
+//!
+//! A link is opened into a [`Connection`]: a writer half and a channel of events, so the
+//! session can wait for incoming bytes and write at the same time.
+
+pub mod backoff;
+
+use futures_util::future::BoxFuture;
+use std::fmt;
+use tokio::sync::mpsc;
+
+/// Why a link failed.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct LinkError {
+    pub message: String,
+    /// Nothing will change by retrying (no adapter, permission denied): give up at once.
+    pub fatal: bool,
+}
+
+impl LinkError {
+    pub fn transient(message: impl Into<String>) -> Self {
+        LinkError {
+            message: message.into(),
+            fatal: false,
+        }
+    }
+
+    pub fn fatal(message: impl Into<String>) -> Self {
+        LinkError {
+            message: message.into(),
+            fatal: true,
+        }
+    }
+}
+
+impl fmt::Display for LinkError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.message)
+    }
+}
+
+impl std::error::Error for LinkError {}
+
+/// What arrives from an open connection.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum LinkEvent {
+    /// Bytes from the droid. Not a packet boundary (`droid-facts.md` §1).
+    Data(Vec<u8>),
+    /// The connection is gone; the reason is for people.
+    Disconnected(String),
+}
+
+/// The writing half of an open connection.
+pub trait LinkWriter: Send {
+    /// Write one chunk (at most the link's chunk size, 20 bytes for BLE).
+    fn write<'a>(&'a mut self, chunk: &'a [u8]) -> BoxFuture<'a, Result<(), LinkError>>;
+    /// Close the connection (best effort).
+    fn close(&mut self) -> BoxFuture<'_, ()>;
+}
+
+/// An open connection: write with `writer`, read `events` until `Disconnected` or `None`.
+pub struct Connection {
+    pub writer: Box<dyn LinkWriter>,
+    pub events: mpsc::Receiver<LinkEvent>,
+}
+
+/// Something that can connect to a droid.
+pub trait Link: Send {
+    /// Connect, including the model's handshake (e.g. the v2 anti-DoS write), and subscribe to
+    /// notifications. Called again after a disconnect to reconnect.
+    fn open(&mut self) -> BoxFuture<'_, Result<Connection, LinkError>>;
+    /// A name for the status bar: "R2-D2 D2-1A2B (simulated)".
+    fn describe(&self) -> String;
+}

@@ -1,0 +1,144 @@
+//! The droids droidctl knows (`droid-facts.md` §1): how to recognise them by advertised name,
+//! which protocol they speak, and how fast they may be written to.
+
+use std::time::Duration;
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Model {
+    R2D2,
+    R2Q5,
+    BB9E,
+    BB8,
+    SprkPlus,
+    Ollie,
+    Robi42,
+}
+
+/// The wire protocol a model speaks.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Protocol {
+    SpheroV2,
+    SpheroV1,
+    Rsrcp,
+}
+
+impl Model {
+    pub const ALL: [Model; 7] = [
+        Model::R2D2,
+        Model::R2Q5,
+        Model::BB9E,
+        Model::BB8,
+        Model::SprkPlus,
+        Model::Ollie,
+        Model::Robi42,
+    ];
+
+    /// Recognise a model from its advertised BLE name (`D2-1234` → R2-D2).
+    pub fn from_advertised_name(name: &str) -> Option<Model> {
+        let n = name.trim();
+        if n == "Robi 42" {
+            return Some(Model::Robi42);
+        }
+        Model::ALL
+            .into_iter()
+            .find(|m| m.name_prefix().is_some_and(|p| n.starts_with(p)))
+    }
+
+    /// The advertised-name prefix (`None` for Robi 42, which uses a full local name).
+    pub fn name_prefix(self) -> Option<&'static str> {
+        match self {
+            Model::R2D2 => Some("D2-"),
+            Model::R2Q5 => Some("Q5-"),
+            Model::BB9E => Some("GB-"),
+            Model::BB8 => Some("BB-"),
+            Model::SprkPlus => Some("SK-"),
+            Model::Ollie => Some("2B-"),
+            Model::Robi42 => None,
+        }
+    }
+
+    pub fn display_name(self) -> &'static str {
+        match self {
+            Model::R2D2 => "R2-D2",
+            Model::R2Q5 => "R2-Q5",
+            Model::BB9E => "BB-9E",
+            Model::BB8 => "BB-8",
+            Model::SprkPlus => "SPRK+",
+            Model::Ollie => "Ollie",
+            Model::Robi42 => "Robi 42",
+        }
+    }
+
+    /// Short lower-case id used on the command line (`--sim r2d2`).
+    pub fn id(self) -> &'static str {
+        match self {
+            Model::R2D2 => "r2d2",
+            Model::R2Q5 => "r2q5",
+            Model::BB9E => "bb9e",
+            Model::BB8 => "bb8",
+            Model::SprkPlus => "sprk",
+            Model::Ollie => "ollie",
+            Model::Robi42 => "robi42",
+        }
+    }
+
+    pub fn from_id(id: &str) -> Option<Model> {
+        let id = id.trim().to_ascii_lowercase().replace(['-', '_', ' '], "");
+        Model::ALL.into_iter().find(|m| m.id() == id || m.display_name().to_ascii_lowercase().replace(['-', ' '], "") == id)
+    }
+
+    pub fn protocol(self) -> Protocol {
+        match self {
+            Model::R2D2 | Model::R2Q5 | Model::BB9E => Protocol::SpheroV2,
+            Model::BB8 | Model::SprkPlus | Model::Ollie => Protocol::SpheroV1,
+            Model::Robi42 => Protocol::Rsrcp,
+        }
+    }
+
+    /// Minimum interval between writes used by reference clients (`droid-facts.md` §1).
+    /// One client uses 12 ms for R2-D2: this is only a default, configurable.
+    pub fn write_pacing(self) -> Duration {
+        match self.protocol() {
+            Protocol::SpheroV2 => Duration::from_millis(120),
+            Protocol::SpheroV1 => Duration::from_millis(60),
+            Protocol::Rsrcp => Duration::from_millis(20),
+        }
+    }
+
+    /// Whether the droid has R2's legs (stances).
+    pub fn has_legs(self) -> bool {
+        matches!(self, Model::R2D2 | Model::R2Q5)
+    }
+
+    /// Whether the droid has R2's rotating dome.
+    pub fn has_dome(self) -> bool {
+        matches!(self, Model::R2D2 | Model::R2Q5)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_to_models() {
+        assert_eq!(Model::from_advertised_name("D2-1A2B"), Some(Model::R2D2));
+        assert_eq!(Model::from_advertised_name("Q5-0000"), Some(Model::R2Q5));
+        assert_eq!(Model::from_advertised_name("GB-77"), Some(Model::BB9E));
+        assert_eq!(Model::from_advertised_name("BB-8A"), Some(Model::BB8));
+        assert_eq!(Model::from_advertised_name("SK-1"), Some(Model::SprkPlus));
+        assert_eq!(Model::from_advertised_name("2B-9"), Some(Model::Ollie));
+        assert_eq!(Model::from_advertised_name("Robi 42"), Some(Model::Robi42));
+        assert_eq!(Model::from_advertised_name("JBL Flip"), None);
+        assert_eq!(Model::from_advertised_name("d2-lower"), None);
+    }
+
+    #[test]
+    fn ids() {
+        assert_eq!(Model::from_id("r2d2"), Some(Model::R2D2));
+        assert_eq!(Model::from_id("R2-Q5"), Some(Model::R2Q5));
+        assert_eq!(Model::from_id("bb9e"), Some(Model::BB9E));
+        assert_eq!(Model::from_id("c3po"), None);
+        assert_eq!(Model::R2D2.write_pacing(), Duration::from_millis(120));
+    }
+}

@@ -1,0 +1,303 @@
+//! A session over a [`Link`]: SEQ numbering, request/response matching with timeouts,
+//! notification fan-out, write pacing and chunking, latest-wins coalescing of continuous
+//! controls, a packet log, and automatic reconnection.
+//!
+//! The session runs as one tokio task that owns the link; callers hold a cheap, cloneable
+//! [`SessionHandle`]. All timing goes through `tokio::time`, so tests run with paused time.
+
+pub mod queue;
+mod task;
+
+pub use queue::Slot;
+
+use crate::link::Link;
+use crate::link::backoff::Backoff;
+use crate::protocol::v2::{Command, DecodeError, ErrorCode, Notification, Packet};
+use queue::{OutQueue, Queued};
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+use tokio::sync::{Notify, broadcast, oneshot, watch};
+
+/// Session settings. Defaults follow `droid-facts.md` §1 for R2-D2.
+#[derive(Debug, Clone)]
+pub struct SessionConfig {
+    /// How long a written request waits for its response.
+    pub request_timeout: Duration,
+    /// Minimum interval between writes to the link.
+    pub pacing: Duration,
+    /// Largest write (the 20-byte ATT payload).
+    pub chunk_size: usize,
+    pub backoff: Backoff,
+    /// Commands run after every (re)connect, in order: wake, stance, streaming, …
+    pub setup: Vec<Command>,
+    /// Bound of the discrete request queue.
+    pub queue_capacity: usize,
+    /// Capacity of the log and notification broadcast channels.
+    pub event_capacity: usize,
+}
+
+impl Default for SessionConfig {
+    fn default() -> Self {
+        SessionConfig {
+            request_timeout: Duration::from_secs(2),
+            pacing: Duration::from_millis(120),
+            chunk_size: 20,
+            backoff: Backoff::default(),
+            setup: Vec::new(),
+            queue_capacity: 64,
+            event_capacity: 4096,
+        }
+    }
+}
+
+/// Why a request did not get a successful response.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum RequestError {
+    /// No response within the timeout.
+    Timeout,
+    /// The droid answered with an error code.
+    Droid(ErrorCode),
+    /// The link went down before the response came.
+    LinkLost,
+    /// Too many requests waiting to be written.
+    QueueFull,
+    /// The session has ended.
+    Closed,
+}
+
+impl std::fmt::Display for RequestError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            RequestError::Timeout => write!(f, "no response from the droid in time"),
+            RequestError::Droid(e) => write!(f, "the droid answered {e}"),
+            RequestError::LinkLost => write!(f, "the connection was lost"),
+            RequestError::QueueFull => write!(f, "too many commands waiting to be sent"),
+            RequestError::Closed => write!(f, "the session has ended"),
+        }
+    }
+}
+
+impl std::error::Error for RequestError {}
+
+/// The connection as the user sees it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum LinkState {
+    Connecting,
+    Connected,
+    /// Down and retrying; `attempt` counts from 1.
+    Reconnecting { attempt: u32, reason: String },
+    /// Ended: by request (`None`) or for good (a fatal link error).
+    Closed { reason: Option<String> },
+}
+
+impl LinkState {
+    pub fn label(&self) -> String {
+        match self {
+            LinkState::Connecting => "connecting".into(),
+            LinkState::Connected => "connected".into(),
+            LinkState::Reconnecting { attempt, .. } => format!("reconnecting (attempt {attempt})"),
+            LinkState::Closed { reason: None } => "closed".into(),
+            LinkState::Closed { reason: Some(r) } => format!("closed: {r}"),
+        }
+    }
+}
+
+/// Direction of a logged packet.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Direction {
+    In,
+    Out,
+}
+
+impl Direction {
+    pub fn arrow(self) -> &'static str {
+        match self {
+            Direction::In => "<-",
+            Direction::Out => "->",
+        }
+    }
+}
+
+/// One packet-log entry.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LogEntry {
+    /// Time since the session started.
+    pub at: Duration,
+    pub dir: Direction,
+    pub item: LogItem,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub enum LogItem {
+    Packet(Packet),
+    DecodeError(DecodeError),
+}
+
+/// Something the application acts on.
+#[derive(Debug, Clone, PartialEq)]
+pub enum SessionEvent {
+    Notification(Notification),
+    /// A known notification whose payload did not fit.
+    BadNotification { name: &'static str, reason: String },
+}
+
+/// Counters for the status bar and the run summary.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct SessionStats {
+    pub sent: u64,
+    pub received: u64,
+    pub bytes_out: u64,
+    pub bytes_in: u64,
+    /// Decode errors, error responses and malformed notifications.
+    pub errors: u64,
+    pub decode_errors: u64,
+    pub droid_errors: u64,
+    pub timeouts: u64,
+    pub answered: u64,
+    /// Responses that matched no pending request.
+    pub unmatched: u64,
+    pub coalesced: u64,
+    pub reconnects: u64,
+    /// Requests failed because the link went down.
+    pub link_lost: u64,
+    pub rejected: u64,
+}
+
+/// State shared between the handle and the task.
+pub(crate) struct Shared {
+    pub queue: Mutex<OutQueue>,
+    pub wake: Notify,
+    pub stats: Mutex<SessionStats>,
+    pub shutdown: Mutex<Option<Vec<Command>>>,
+    pub shutdown_wake: Notify,
+}
+
+/// A handle to a running session. Cloning is cheap.
+#[derive(Clone)]
+pub struct SessionHandle {
+    shared: Arc<Shared>,
+    state: watch::Receiver<LinkState>,
+    events: broadcast::Sender<SessionEvent>,
+    log: broadcast::Sender<LogEntry>,
+    done: Arc<Mutex<Option<tokio::task::JoinHandle<()>>>>,
+}
+
+/// Start a session over `link`. Needs a tokio runtime with time enabled.
+pub fn start(link: Box<dyn Link>, config: SessionConfig) -> SessionHandle {
+    let shared = Arc::new(Shared {
+        queue: Mutex::new(OutQueue::new(config.queue_capacity)),
+        wake: Notify::new(),
+        stats: Mutex::new(SessionStats::default()),
+        shutdown: Mutex::new(None),
+        shutdown_wake: Notify::new(),
+    });
+    let (state_tx, state_rx) = watch::channel(LinkState::Connecting);
+    let (events, _) = broadcast::channel(config.event_capacity.max(16));
+    let (log, _) = broadcast::channel(config.event_capacity.max(16));
+    let task = task::Task::new(link, config, shared.clone(), state_tx, events.clone(), log.clone());
+    let join = tokio::spawn(task.run());
+    SessionHandle {
+        shared,
+        state: state_rx,
+        events,
+        log,
+        done: Arc::new(Mutex::new(Some(join))),
+    }
+}
+
+fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    // A panic while holding one of these locks cannot leave the data half-updated in a way
+    // that matters more than stopping the droid: keep going.
+    m.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+impl SessionHandle {
+    /// Send a request and wait for its response (or a typed error).
+    pub async fn request(&self, cmd: Command) -> Result<Packet, RequestError> {
+        let (tx, rx) = oneshot::channel();
+        self.enqueue(Queued {
+            cmd,
+            reply: Some(tx),
+            want_response: true,
+        })?;
+        rx.await.unwrap_or(Err(RequestError::Closed))
+    }
+
+    /// Send a request without waiting. Its response (or error) is still matched and counted.
+    pub fn send(&self, cmd: Command) -> Result<(), RequestError> {
+        self.enqueue(Queued {
+            cmd,
+            reply: None,
+            want_response: true,
+        })
+    }
+
+    fn enqueue(&self, q: Queued) -> Result<(), RequestError> {
+        if self.is_closed() {
+            return Err(RequestError::Closed);
+        }
+        let pushed = lock(&self.shared.queue).push(q);
+        match pushed {
+            Ok(()) => {
+                self.shared.wake.notify_one();
+                Ok(())
+            }
+            Err(_) => {
+                lock(&self.shared.stats).rejected += 1;
+                Err(RequestError::QueueFull)
+            }
+        }
+    }
+
+    /// Set the latest value of a continuous control (drive or head): replaces any older
+    /// unwritten one. Never blocks, never queues more than one per slot.
+    pub fn set(&self, slot: Slot, cmd: Command) {
+        let mut q = lock(&self.shared.queue);
+        q.set_slot(slot, cmd);
+        let coalesced = q.coalesced;
+        drop(q);
+        lock(&self.shared.stats).coalesced = coalesced;
+        self.shared.wake.notify_one();
+    }
+
+    /// Commands waiting to be written (slots included).
+    pub fn queued(&self) -> usize {
+        lock(&self.shared.queue).len()
+    }
+
+    pub fn state(&self) -> LinkState {
+        self.state.borrow().clone()
+    }
+
+    /// A receiver of link-state changes.
+    pub fn watch_state(&self) -> watch::Receiver<LinkState> {
+        self.state.clone()
+    }
+
+    pub fn subscribe(&self) -> broadcast::Receiver<SessionEvent> {
+        self.events.subscribe()
+    }
+
+    pub fn subscribe_log(&self) -> broadcast::Receiver<LogEntry> {
+        self.log.subscribe()
+    }
+
+    pub fn stats(&self) -> SessionStats {
+        *lock(&self.shared.stats)
+    }
+
+    pub fn is_closed(&self) -> bool {
+        matches!(*self.state.borrow(), LinkState::Closed { .. })
+    }
+
+    /// End the session: write `last` (e.g. a stop) first, best effort and bounded in time,
+    /// then close the link. Waits for the task to finish.
+    pub async fn shutdown(&self, last: Vec<Command>) {
+        *lock(&self.shared.shutdown) = Some(last);
+        self.shared.shutdown_wake.notify_one();
+        let join = lock(&self.done).take();
+        if let Some(join) = join {
+            let _ = join.await;
+        }
+    }
+}

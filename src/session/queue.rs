@@ -1,0 +1,212 @@
+//! The outgoing queue: a bounded FIFO for discrete requests plus latest-wins slots for
+//! continuous controls (drive, dome). A newer drive command replaces a queued older one, so
+//! under any input rate there is at most one drive and one head command waiting.
+
+use super::RequestError;
+use crate::protocol::v2::{Command, Packet};
+use std::collections::VecDeque;
+use tokio::sync::oneshot;
+
+/// Continuous controls whose latest value is all that matters.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Slot {
+    Drive,
+    Head,
+}
+
+pub type Reply = oneshot::Sender<Result<Packet, RequestError>>;
+
+/// A discrete request waiting to be written.
+#[derive(Debug)]
+pub struct Queued {
+    pub cmd: Command,
+    /// Set when the caller waits for the response.
+    pub reply: Option<Reply>,
+    /// Ask the droid for a response (the default); fire-and-forget sends also ask, so that
+    /// errors are seen and counted.
+    pub want_response: bool,
+}
+
+/// What to write next.
+#[derive(Debug)]
+pub enum Next {
+    Slot(Slot, Command),
+    Fifo(Queued),
+}
+
+#[derive(Debug)]
+pub struct OutQueue {
+    drive: Option<Command>,
+    head: Option<Command>,
+    fifo: VecDeque<Queued>,
+    capacity: usize,
+    slots_turn: bool,
+    /// Continuous commands replaced before they were written.
+    pub coalesced: u64,
+}
+
+impl OutQueue {
+    pub fn new(capacity: usize) -> Self {
+        OutQueue {
+            drive: None,
+            head: None,
+            fifo: VecDeque::new(),
+            capacity: capacity.max(1),
+            slots_turn: true,
+            coalesced: 0,
+        }
+    }
+
+    /// Put the latest value of a continuous control; replaces any unwritten older one.
+    pub fn set_slot(&mut self, slot: Slot, cmd: Command) {
+        let s = match slot {
+            Slot::Drive => &mut self.drive,
+            Slot::Head => &mut self.head,
+        };
+        if s.replace(cmd).is_some() {
+            self.coalesced += 1;
+        }
+    }
+
+    /// Queue a discrete request; a full queue hands it back.
+    pub fn push(&mut self, q: Queued) -> Result<(), Queued> {
+        if self.fifo.len() >= self.capacity {
+            return Err(q);
+        }
+        self.fifo.push_back(q);
+        Ok(())
+    }
+
+    /// Queue ahead of everything else (connect setup).
+    pub fn push_front_all(&mut self, items: Vec<Queued>) {
+        for q in items.into_iter().rev() {
+            self.fifo.push_front(q);
+        }
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.drive.is_none() && self.head.is_none() && self.fifo.is_empty()
+    }
+
+    pub fn len(&self) -> usize {
+        self.fifo.len() + self.drive.is_some() as usize + self.head.is_some() as usize
+    }
+
+    /// The next thing to write. A drive command with speed 0 (a stop) always goes first;
+    /// otherwise slots and the FIFO take turns so neither starves the other.
+    pub fn pop(&mut self) -> Option<Next> {
+        if self.drive.as_ref().is_some_and(is_stop) {
+            return self.drive.take().map(|c| Next::Slot(Slot::Drive, c));
+        }
+        let slot_first = self.slots_turn || self.fifo.is_empty();
+        self.slots_turn = !self.slots_turn;
+        if slot_first {
+            if let Some(c) = self.drive.take() {
+                return Some(Next::Slot(Slot::Drive, c));
+            }
+            if let Some(c) = self.head.take() {
+                return Some(Next::Slot(Slot::Head, c));
+            }
+        }
+        self.fifo.pop_front().map(Next::Fifo)
+    }
+
+    /// Drop everything (link lost); the discrete requests are returned so their callers can
+    /// be told.
+    pub fn clear(&mut self) -> Vec<Queued> {
+        self.drive = None;
+        self.head = None;
+        self.fifo.drain(..).collect()
+    }
+}
+
+/// A Drive With Heading whose speed byte is 0.
+pub fn is_stop(c: &Command) -> bool {
+    (c.did, c.cid) == (0x16, 0x07) && c.data.first() == Some(&0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::protocol::v2::cmd;
+    use crate::protocol::v2::wire::DriveFlags;
+    use crate::units::Heading;
+
+    fn drive(speed: u8) -> Command {
+        cmd::drive_with_heading(speed, Heading::new(90).unwrap(), DriveFlags::empty())
+    }
+
+    fn req(c: Command) -> Queued {
+        Queued {
+            cmd: c,
+            reply: None,
+            want_response: true,
+        }
+    }
+
+    #[test]
+    fn latest_drive_wins() {
+        let mut q = OutQueue::new(8);
+        for s in 1..=100 {
+            q.set_slot(Slot::Drive, drive(s));
+            assert!(q.len() <= 1);
+        }
+        assert_eq!(q.coalesced, 99);
+        let Some(Next::Slot(Slot::Drive, c)) = q.pop() else { panic!() };
+        assert_eq!(c.data[0], 100);
+        assert!(q.pop().is_none());
+    }
+
+    #[test]
+    fn stop_jumps_the_queue() {
+        let mut q = OutQueue::new(8);
+        q.push(req(cmd::wake())).unwrap();
+        q.push(req(cmd::ping())).unwrap();
+        q.set_slot(Slot::Drive, drive(0));
+        let Some(Next::Slot(Slot::Drive, c)) = q.pop() else { panic!() };
+        assert!(is_stop(&c));
+    }
+
+    #[test]
+    fn slots_and_fifo_alternate() {
+        let mut q = OutQueue::new(8);
+        q.push(req(cmd::wake())).unwrap();
+        q.push(req(cmd::ping())).unwrap();
+        q.set_slot(Slot::Drive, drive(50));
+        let mut order = Vec::new();
+        while let Some(n) = q.pop() {
+            order.push(match n {
+                Next::Slot(..) => "slot",
+                Next::Fifo(_) => "fifo",
+            });
+            if order.len() == 2 {
+                q.set_slot(Slot::Drive, drive(60));
+            }
+        }
+        assert_eq!(order, ["slot", "fifo", "slot", "fifo"]);
+    }
+
+    #[test]
+    fn fifo_is_bounded() {
+        let mut q = OutQueue::new(2);
+        assert!(q.push(req(cmd::wake())).is_ok());
+        assert!(q.push(req(cmd::wake())).is_ok());
+        assert!(q.push(req(cmd::wake())).is_err());
+        assert_eq!(q.clear().len(), 2);
+        assert!(q.is_empty());
+    }
+
+    #[test]
+    fn setup_goes_first() {
+        let mut q = OutQueue::new(8);
+        q.push(req(cmd::ping())).unwrap();
+        q.push_front_all(vec![req(cmd::wake()), req(cmd::reset_yaw())]);
+        let names: Vec<u8> = std::iter::from_fn(|| q.pop())
+            .map(|n| match n {
+                Next::Fifo(q) => q.cmd.cid,
+                Next::Slot(..) => 0xFF,
+            })
+            .collect();
+        assert_eq!(names, [0x0D, 0x06, 0x01]);
+    }
+}

@@ -1,0 +1,414 @@
+//! The session task: one loop that owns the link, the decoder and the pending requests.
+
+use super::queue::{Next, Queued, Reply};
+use super::{
+    Direction, LinkState, LogEntry, LogItem, RequestError, SessionConfig, SessionEvent, Shared, lock,
+};
+use crate::link::{Connection, Link, LinkEvent};
+use crate::protocol::v2::{Command, Decoder, ErrorCode, Flags, Notification, Packet, StreamingConfig};
+use std::collections::{HashMap, VecDeque};
+use std::sync::Arc;
+use std::time::Duration;
+use tokio::sync::{broadcast, watch};
+use tokio::time::{Instant, sleep, sleep_until, timeout};
+
+/// How long the final commands on shutdown may take.
+const SHUTDOWN_BUDGET: Duration = Duration::from_secs(1);
+
+struct Pending {
+    deadline: Instant,
+    reply: Option<Reply>,
+}
+
+pub(super) struct Task {
+    link: Box<dyn Link>,
+    cfg: SessionConfig,
+    shared: Arc<Shared>,
+    state: watch::Sender<LinkState>,
+    events: broadcast::Sender<SessionEvent>,
+    log: broadcast::Sender<LogEntry>,
+    start: Instant,
+    seq: u8,
+    pending: HashMap<(u8, u8, u8), Pending>,
+    streaming: StreamingConfig,
+    /// The last drive command written, so a reconnect can resume with speed 0 at the same
+    /// heading (a stop at heading 0 would spin the droid round).
+    last_drive: Option<Command>,
+}
+
+/// Why the connected loop ended.
+enum Ended {
+    LinkLost(String),
+    Shutdown,
+}
+
+impl Task {
+    pub(super) fn new(
+        link: Box<dyn Link>,
+        cfg: SessionConfig,
+        shared: Arc<Shared>,
+        state: watch::Sender<LinkState>,
+        events: broadcast::Sender<SessionEvent>,
+        log: broadcast::Sender<LogEntry>,
+    ) -> Self {
+        Task {
+            link,
+            cfg,
+            shared,
+            state,
+            events,
+            log,
+            start: Instant::now(),
+            seq: 0,
+            pending: HashMap::new(),
+            streaming: StreamingConfig::default(),
+            last_drive: None,
+        }
+    }
+
+    fn shutdown_requested(&self) -> bool {
+        lock(&self.shared.shutdown).is_some()
+    }
+
+    pub(super) async fn run(mut self) {
+        let mut attempt: u32 = 0;
+        loop {
+            if self.shutdown_requested() {
+                break;
+            }
+            let opened = tokio::select! {
+                r = self.link.open() => r,
+                _ = self.shared.shutdown_wake.notified() => break,
+            };
+            match opened {
+                Ok(conn) => {
+                    if attempt > 0 {
+                        lock(&self.shared.stats).reconnects += 1;
+                    }
+                    attempt = 0;
+                    tracing::info!(link = %self.link.describe(), "connected");
+                    self.state.send_replace(LinkState::Connected);
+                    self.queue_setup();
+                    match self.connected(conn).await {
+                        Ended::Shutdown => break,
+                        Ended::LinkLost(reason) => {
+                            tracing::warn!(%reason, "link lost");
+                            self.fail_all(RequestError::LinkLost);
+                            attempt += 1;
+                            if !self.wait_retry(attempt, reason).await {
+                                break;
+                            }
+                        }
+                    }
+                }
+                Err(e) if e.fatal => {
+                    tracing::error!(error = %e, "link failed for good");
+                    self.fail_all(RequestError::Closed);
+                    self.state.send_replace(LinkState::Closed {
+                        reason: Some(e.message),
+                    });
+                    return;
+                }
+                Err(e) => {
+                    tracing::warn!(error = %e, attempt, "connect failed");
+                    attempt += 1;
+                    if !self.wait_retry(attempt, e.message).await {
+                        break;
+                    }
+                }
+            }
+        }
+        self.fail_all(RequestError::Closed);
+        self.state.send_replace(LinkState::Closed { reason: None });
+    }
+
+    /// Show "reconnecting (attempt N)" and wait the backoff delay; false on shutdown.
+    async fn wait_retry(&mut self, attempt: u32, reason: String) -> bool {
+        self.state
+            .send_replace(LinkState::Reconnecting { attempt, reason });
+        let delay = self.cfg.backoff.delay(attempt);
+        tokio::select! {
+            _ = sleep(delay) => !self.shutdown_requested(),
+            _ = self.shared.shutdown_wake.notified() => false,
+        }
+    }
+
+    /// After a (re)connect: setup commands first, then a stop at the last heading.
+    fn queue_setup(&mut self) {
+        let mut items: Vec<Queued> = self
+            .cfg
+            .setup
+            .iter()
+            .cloned()
+            .map(|cmd| Queued {
+                cmd,
+                reply: None,
+                want_response: true,
+            })
+            .collect();
+        if let Some(mut stop) = self.last_drive.clone() {
+            if let Some(speed) = stop.data.first_mut() {
+                *speed = 0;
+            }
+            items.push(Queued {
+                cmd: stop,
+                reply: None,
+                want_response: true,
+            });
+        }
+        lock(&self.shared.queue).push_front_all(items);
+    }
+
+    /// Fail every pending and queued request (link lost or closed).
+    fn fail_all(&mut self, why: RequestError) {
+        let queued = lock(&self.shared.queue).clear();
+        let n = self.pending.len() as u64 + queued.len() as u64;
+        for p in self.pending.drain().map(|(_, p)| p.reply) {
+            if let Some(r) = p {
+                let _ = r.send(Err(why.clone()));
+            }
+        }
+        for q in queued {
+            if let Some(r) = q.reply {
+                let _ = r.send(Err(why.clone()));
+            }
+        }
+        if why == RequestError::LinkLost {
+            lock(&self.shared.stats).link_lost += n;
+        }
+    }
+
+    fn now(&self) -> Duration {
+        Instant::now().duration_since(self.start)
+    }
+
+    fn log(&self, dir: Direction, item: LogItem) {
+        let _ = self.log.send(LogEntry {
+            at: self.now(),
+            dir,
+            item,
+        });
+    }
+
+    /// The next SEQ: 0..=254, wrapping, skipping one still pending for the same DID/CID.
+    fn next_seq(&mut self, did: u8, cid: u8) -> u8 {
+        for _ in 0..255 {
+            let s = self.seq;
+            self.seq = if self.seq >= 254 { 0 } else { self.seq + 1 };
+            if !self.pending.contains_key(&(did, cid, s)) {
+                return s;
+            }
+        }
+        self.seq
+    }
+
+    /// Turn the next queued item into wire chunks, registering its pending entry.
+    fn take_next(&mut self) -> Option<Vec<Vec<u8>>> {
+        let next = lock(&self.shared.queue).pop()?;
+        let (cmd, reply, want_response) = match next {
+            Next::Slot(_, c) => (c, None, true),
+            Next::Fifo(q) => (q.cmd, q.reply, q.want_response),
+        };
+        let seq = self.next_seq(cmd.did, cmd.cid);
+        let mut packet = cmd.to_packet(seq);
+        if !want_response {
+            packet.flags.remove(Flags::REQUESTS_RESPONSE);
+        }
+        self.snoop(&cmd);
+        let wire = packet.encode();
+        let chunks: Vec<Vec<u8>> = wire.chunks(self.cfg.chunk_size.max(1)).map(<[u8]>::to_vec).collect();
+        if want_response {
+            let extra = self.cfg.pacing * (chunks.len().saturating_sub(1) as u32);
+            self.pending.insert(
+                (cmd.did, cmd.cid, seq),
+                Pending {
+                    deadline: Instant::now() + self.cfg.request_timeout + extra,
+                    reply,
+                },
+            );
+        } else if let Some(r) = reply {
+            let _ = r.send(Ok(Packet::response_to(&packet, ErrorCode::Success, vec![])));
+        }
+        {
+            let mut st = lock(&self.shared.stats);
+            st.sent += 1;
+            st.bytes_out += wire.len() as u64;
+        }
+        self.log(Direction::Out, LogItem::Packet(packet));
+        Some(chunks)
+    }
+
+    /// Track what the droid will stream, and the last drive command.
+    fn snoop(&mut self, cmd: &Command) {
+        match (cmd.did, cmd.cid, cmd.data.as_slice()) {
+            (0x18, 0x00, [i0, i1, _count, m @ ..]) if m.len() == 4 => {
+                self.streaming.interval_ms = u16::from_be_bytes([*i0, *i1]);
+                self.streaming.mask = u32::from_be_bytes([m[0], m[1], m[2], m[3]]);
+            }
+            (0x18, 0x0C, m) if m.len() == 4 => {
+                self.streaming.ext_mask = u32::from_be_bytes([m[0], m[1], m[2], m[3]]);
+            }
+            (0x16, 0x07, _) => self.last_drive = Some(cmd.clone()),
+            _ => {}
+        }
+    }
+
+    fn handle_bytes(&mut self, decoder: &mut Decoder, bytes: &[u8]) {
+        lock(&self.shared.stats).bytes_in += bytes.len() as u64;
+        for r in decoder.feed(bytes) {
+            match r {
+                Ok(p) => self.handle_packet(p),
+                Err(e) => {
+                    tracing::debug!(error = %e, "decode error");
+                    {
+                        let mut st = lock(&self.shared.stats);
+                        st.decode_errors += 1;
+                        st.errors += 1;
+                    }
+                    self.log(Direction::In, LogItem::DecodeError(e));
+                }
+            }
+        }
+    }
+
+    fn handle_packet(&mut self, p: Packet) {
+        lock(&self.shared.stats).received += 1;
+        if p.is_response() {
+            let key = (p.did, p.cid, p.seq);
+            let err = p.err.unwrap_or(ErrorCode::Success);
+            match self.pending.remove(&key) {
+                Some(pending) => {
+                    let mut st = lock(&self.shared.stats);
+                    st.answered += 1;
+                    if !err.is_success() {
+                        st.droid_errors += 1;
+                        st.errors += 1;
+                    }
+                    drop(st);
+                    if !err.is_success() {
+                        tracing::warn!(did = p.did, cid = p.cid, seq = p.seq, error = %err, "droid error");
+                    }
+                    if let Some(reply) = pending.reply {
+                        let _ = reply.send(if err.is_success() {
+                            Ok(p.clone())
+                        } else {
+                            Err(RequestError::Droid(err))
+                        });
+                    }
+                }
+                None => lock(&self.shared.stats).unmatched += 1,
+            }
+        } else if p.is_notification() {
+            match Notification::decode(&p, &self.streaming) {
+                Ok(n) => {
+                    let _ = self.events.send(SessionEvent::Notification(n));
+                }
+                Err(e) => {
+                    let mut st = lock(&self.shared.stats);
+                    st.errors += 1;
+                    drop(st);
+                    let _ = self.events.send(SessionEvent::BadNotification {
+                        name: e.name,
+                        reason: e.reason,
+                    });
+                }
+            }
+        }
+        self.log(Direction::In, LogItem::Packet(p));
+    }
+
+    fn expire(&mut self) {
+        let now = Instant::now();
+        let expired: Vec<_> = self
+            .pending
+            .iter()
+            .filter(|(_, p)| p.deadline <= now)
+            .map(|(k, _)| *k)
+            .collect();
+        for k in expired {
+            if let Some(p) = self.pending.remove(&k) {
+                lock(&self.shared.stats).timeouts += 1;
+                tracing::debug!(did = k.0, cid = k.1, seq = k.2, "request timed out");
+                if let Some(r) = p.reply {
+                    let _ = r.send(Err(RequestError::Timeout));
+                }
+            }
+        }
+    }
+
+    async fn connected(&mut self, mut conn: Connection) -> Ended {
+        let mut decoder = Decoder::new();
+        let mut chunks: VecDeque<Vec<u8>> = VecDeque::new();
+        let mut next_write = Instant::now();
+        loop {
+            let last = lock(&self.shared.shutdown).take();
+            if let Some(last) = last {
+                self.finish(&mut conn, chunks, last).await;
+                return Ended::Shutdown;
+            }
+            let has_work = !chunks.is_empty() || !lock(&self.shared.queue).is_empty();
+            let deadline = self.pending.values().map(|p| p.deadline).min();
+            tokio::select! {
+                biased;
+                _ = self.shared.shutdown_wake.notified() => {
+                    // Handled at the top of the loop; keep the permit semantics simple.
+                    if lock(&self.shared.shutdown).is_none() {
+                        continue;
+                    }
+                }
+                ev = conn.events.recv() => match ev {
+                    Some(LinkEvent::Data(bytes)) => self.handle_bytes(&mut decoder, &bytes),
+                    Some(LinkEvent::Disconnected(reason)) => {
+                        conn.writer.close().await;
+                        return Ended::LinkLost(reason);
+                    }
+                    None => return Ended::LinkLost("the link closed".into()),
+                },
+                _ = sleep_until(next_write), if has_work => {
+                    if chunks.is_empty() {
+                        chunks.extend(self.take_next().into_iter().flatten());
+                    }
+                    if let Some(chunk) = chunks.pop_front() {
+                        if let Err(e) = conn.writer.write(&chunk).await {
+                            conn.writer.close().await;
+                            return Ended::LinkLost(format!("write failed: {e}"));
+                        }
+                        next_write = Instant::now() + self.cfg.pacing;
+                    }
+                }
+                _ = self.shared.wake.notified(), if !has_work => {}
+                _ = sleep_until(deadline.unwrap_or_else(Instant::now)), if deadline.is_some() => self.expire(),
+            }
+        }
+    }
+
+    /// Shutdown: finish the packet in flight, write the final commands (a stop), close.
+    async fn finish(&mut self, conn: &mut Connection, chunks: VecDeque<Vec<u8>>, last: Vec<Command>) {
+        let mut wire: Vec<Vec<u8>> = chunks.into_iter().collect();
+        for cmd in last {
+            let seq = self.next_seq(cmd.did, cmd.cid);
+            let mut packet = cmd.to_packet(seq);
+            // Nobody will wait for these responses.
+            packet.flags.remove(Flags::REQUESTS_RESPONSE);
+            let bytes = packet.encode();
+            wire.extend(bytes.chunks(self.cfg.chunk_size.max(1)).map(<[u8]>::to_vec));
+            lock(&self.shared.stats).sent += 1;
+            self.log(Direction::Out, LogItem::Packet(packet));
+        }
+        let writer = &mut conn.writer;
+        let pacing = self.cfg.pacing;
+        let _ = timeout(SHUTDOWN_BUDGET, async {
+            for (i, chunk) in wire.iter().enumerate() {
+                if i > 0 {
+                    sleep(pacing).await;
+                }
+                if writer.write(chunk).await.is_err() {
+                    break;
+                }
+            }
+        })
+        .await;
+        writer.close().await;
+    }
+}
+

@@ -1,0 +1,274 @@
+//! The simulated droid behind the [`Link`] trait: an in-process connection that delivers the
+//! droid's bytes in pieces of at most 20 bytes, with the configured faults, on tokio time.
+
+use super::{Faults, SimConfig, SimDroid, SimState};
+use crate::link::{Connection, Link, LinkError, LinkEvent, LinkWriter};
+use crate::model::Model;
+use crate::protocol::v2::Packet;
+use crate::rng::Rng;
+use futures_util::future::BoxFuture;
+use std::collections::VecDeque;
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+use tokio::sync::mpsc;
+use tokio::time::{Instant, sleep_until};
+
+/// The ATT payload: no notification carries more.
+const NOTIFY_MAX: usize = 20;
+
+struct Shared {
+    droid: SimDroid,
+    rng: Rng,
+    /// Index of the next scheduled disconnect.
+    next_disconnect: usize,
+    opens: u32,
+    connected: bool,
+}
+
+/// Read access to the simulated droid, for tests and the `run` command.
+#[derive(Clone)]
+pub struct SimProbe {
+    shared: Arc<Mutex<Shared>>,
+    epoch: Instant,
+}
+
+impl SimProbe {
+    /// The droid's state, brought up to the current time.
+    pub fn state(&self) -> SimState {
+        let mut s = lock(&self.shared);
+        let now = Instant::now().duration_since(self.epoch);
+        // Advancing here only integrates physics; any notifications it produces are not lost
+        // for a connected host because the pump advances the same droid and they are kept
+        // only when nobody is connected.
+        if !s.connected {
+            let _ = s.droid.advance(now);
+        }
+        s.droid.state().clone()
+    }
+
+    pub fn connected(&self) -> bool {
+        lock(&self.shared).connected
+    }
+
+    pub fn opens(&self) -> u32 {
+        lock(&self.shared).opens
+    }
+}
+
+fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// A link to a simulated droid.
+pub struct SimLink {
+    shared: Arc<Mutex<Shared>>,
+    faults: Arc<Faults>,
+    epoch: Instant,
+    model: Model,
+    step: Duration,
+}
+
+impl SimLink {
+    /// A simulated droid of `model`. Create it inside the tokio runtime that will drive it.
+    pub fn new(model: Model, cfg: SimConfig, faults: Faults) -> Self {
+        let step = cfg.step.max(Duration::from_millis(1));
+        let rng = Rng::new(faults.seed);
+        SimLink {
+            shared: Arc::new(Mutex::new(Shared {
+                droid: SimDroid::new(model, cfg),
+                rng,
+                next_disconnect: 0,
+                opens: 0,
+                connected: false,
+            })),
+            faults: Arc::new(faults),
+            epoch: Instant::now(),
+            model,
+            step,
+        }
+    }
+
+    pub fn probe(&self) -> SimProbe {
+        SimProbe {
+            shared: self.shared.clone(),
+            epoch: self.epoch,
+        }
+    }
+}
+
+struct SimWriter {
+    tx: Option<mpsc::Sender<Vec<u8>>>,
+}
+
+impl LinkWriter for SimWriter {
+    fn write<'a>(&'a mut self, chunk: &'a [u8]) -> BoxFuture<'a, Result<(), LinkError>> {
+        Box::pin(async move {
+            let tx = self
+                .tx
+                .as_ref()
+                .ok_or_else(|| LinkError::transient("the simulated link is closed"))?;
+            tx.send(chunk.to_vec())
+                .await
+                .map_err(|_| LinkError::transient("the simulated droid disconnected"))
+        })
+    }
+
+    fn close(&mut self) -> BoxFuture<'_, ()> {
+        self.tx = None;
+        Box::pin(async {})
+    }
+}
+
+impl Link for SimLink {
+    fn open(&mut self) -> BoxFuture<'_, Result<Connection, LinkError>> {
+        Box::pin(async move {
+            {
+                let mut s = lock(&self.shared);
+                s.opens += 1;
+                if s.opens <= self.faults.fail_opens {
+                    return Err(LinkError::transient(format!(
+                        "simulated connect failure ({} of {})",
+                        s.opens, self.faults.fail_opens
+                    )));
+                }
+                s.connected = true;
+            }
+            let (write_tx, write_rx) = mpsc::channel(64);
+            let (event_tx, event_rx) = mpsc::channel(1024);
+            let pump = Pump {
+                shared: self.shared.clone(),
+                faults: self.faults.clone(),
+                epoch: self.epoch,
+                step: self.step,
+                inbound: VecDeque::new(),
+                outbound: VecDeque::new(),
+                last_in: Instant::now(),
+                last_out: Instant::now(),
+            };
+            tokio::spawn(pump.run(write_rx, event_tx));
+            Ok(Connection {
+                writer: Box::new(SimWriter { tx: Some(write_tx) }),
+                events: event_rx,
+            })
+        })
+    }
+
+    fn describe(&self) -> String {
+        format!("{} (simulated)", self.model.display_name())
+    }
+}
+
+/// Moves bytes between one connection and the droid, and keeps its clock running.
+struct Pump {
+    shared: Arc<Mutex<Shared>>,
+    faults: Arc<Faults>,
+    epoch: Instant,
+    step: Duration,
+    inbound: VecDeque<(Instant, Vec<u8>)>,
+    outbound: VecDeque<(Instant, Vec<u8>)>,
+    last_in: Instant,
+    last_out: Instant,
+}
+
+impl Pump {
+    fn sim_time(&self) -> Duration {
+        Instant::now().duration_since(self.epoch)
+    }
+
+    /// Encode, mangle, cut and schedule the droid's packets.
+    fn deliver(&mut self, packets: Vec<Packet>, s: &mut Shared) {
+        if packets.is_empty() {
+            return;
+        }
+        let now = Instant::now();
+        let mut bytes = Vec::new();
+        for p in &packets {
+            p.encode_into(&mut bytes);
+        }
+        let bytes = self.faults.mangle(&mut s.rng, &bytes);
+        let pieces = if self.faults.split {
+            self.faults.pieces(&mut s.rng, &bytes, NOTIFY_MAX)
+        } else {
+            // One notification per packet, each cut at 20 bytes.
+            let mut out = Vec::new();
+            let mut bytes = bytes.as_slice();
+            for p in &packets {
+                let len = p.encode().len().min(bytes.len());
+                out.extend(self.faults.pieces(&mut s.rng, &bytes[..len], NOTIFY_MAX));
+                bytes = &bytes[len..];
+            }
+            if !bytes.is_empty() {
+                out.extend(self.faults.pieces(&mut s.rng, bytes, NOTIFY_MAX));
+            }
+            out
+        };
+        for piece in pieces {
+            let at = (now + self.faults.delay(&mut s.rng)).max(self.last_out);
+            self.last_out = at;
+            self.outbound.push_back((at, piece));
+        }
+    }
+
+    fn next_disconnect(&self) -> Option<Instant> {
+        let s = lock(&self.shared);
+        self.faults
+            .disconnect_at
+            .get(s.next_disconnect)
+            .map(|d| self.epoch + *d)
+    }
+
+    async fn run(mut self, mut writes: mpsc::Receiver<Vec<u8>>, events: mpsc::Sender<LinkEvent>) {
+        let mut next_tick = Instant::now() + self.step;
+        let reason = loop {
+            let disconnect = self.next_disconnect();
+            let next_in = self.inbound.front().map(|(t, _)| *t);
+            let next_out = self.outbound.front().map(|(t, _)| *t);
+            tokio::select! {
+                biased;
+                _ = sleep_until(disconnect.unwrap_or_else(Instant::now)), if disconnect.is_some() => {
+                    lock(&self.shared).next_disconnect += 1;
+                    break Some("simulated link loss".to_string());
+                }
+                w = writes.recv() => match w {
+                    Some(bytes) => {
+                        let mut s = lock(&self.shared);
+                        let bytes = self.faults.mangle(&mut s.rng, &bytes);
+                        let at = (Instant::now() + self.faults.delay(&mut s.rng)).max(self.last_in);
+                        drop(s);
+                        self.last_in = at;
+                        self.inbound.push_back((at, bytes));
+                    }
+                    None => break None,
+                },
+                _ = sleep_until(next_in.unwrap_or_else(Instant::now)), if next_in.is_some() => {
+                    if let Some((_, bytes)) = self.inbound.pop_front() {
+                        let now = self.sim_time();
+                        let shared = self.shared.clone();
+                        let mut s = lock(&shared);
+                        let out = s.droid.receive(&bytes, now);
+                        self.deliver(out, &mut s);
+                    }
+                }
+                _ = sleep_until(next_out.unwrap_or_else(Instant::now)), if next_out.is_some() => {
+                    if let Some((_, piece)) = self.outbound.pop_front() {
+                        if events.send(LinkEvent::Data(piece)).await.is_err() {
+                            break None;
+                        }
+                    }
+                }
+                _ = sleep_until(next_tick) => {
+                    next_tick += self.step;
+                    let now = self.sim_time();
+                    let shared = self.shared.clone();
+                    let mut s = lock(&shared);
+                    let out = s.droid.advance(now);
+                    self.deliver(out, &mut s);
+                }
+            }
+        };
+        lock(&self.shared).connected = false;
+        if let Some(reason) = reason {
+            let _ = events.send(LinkEvent::Disconnected(reason)).await;
+        }
+    }
+}

@@ -1,0 +1,72 @@
+//! A faithful simulated droid: R2-D2, R2-Q5 and BB-9E speaking API v2 through the same
+//! protocol core as the real thing. [`droid::SimDroid`] is a sans-IO state machine driven by
+//! explicit time; [`link::SimLink`] runs it behind the [`crate::link::Link`] trait with fault
+//! injection, so the session, UI and scripts cannot tell it from a droid.
+
+pub mod droid;
+pub mod faults;
+pub mod link;
+mod physics;
+
+pub use droid::{SimDroid, SimState};
+pub use faults::Faults;
+pub use link::SimLink;
+
+use std::time::Duration;
+
+/// The simulated world and the droid's physical figures. Figures marked *unverified* in
+/// `droid-facts.md` are here so they can be changed.
+#[derive(Debug, Clone)]
+pub struct SimConfig {
+    /// Speed 255 in cm/s. About 1.6 m/s for R2-D2 (issue 3; no better figure found).
+    pub top_speed_cm_s: f32,
+    /// Acceleration and braking limits, cm/s².
+    pub accel_cm_s2: f32,
+    pub brake_cm_s2: f32,
+    /// How fast the body turns toward the commanded heading, °/s.
+    pub turn_rate_deg_s: f32,
+    /// How fast the dome moves, °/s.
+    pub head_rate_deg_s: f32,
+    /// The droid stops by itself when drive commands stop for this long (*unverified*; a
+    /// reference client re-sends at least every 0.8 s).
+    pub motion_timeout: Duration,
+    /// A stance change takes this long (`droid-facts.md` §2: about 2 s).
+    pub stance_time: Duration,
+    /// Room size in cm; the droid starts in the middle, at locator (0, 0).
+    pub room_cm: (f32, f32),
+    /// The droid's radius: how close its centre gets to a wall.
+    pub radius_cm: f32,
+    /// Inactivity timeout before sleep (changed by Set Inactivity Timeout).
+    pub inactivity_timeout: Duration,
+    /// Battery at start, and drain while awake (V/s), and extra at full speed.
+    pub battery_start_v: f32,
+    pub drain_idle_v_s: f32,
+    pub drain_drive_v_s: f32,
+    pub animation_time: Duration,
+    pub sound_time: Duration,
+    /// Physics step.
+    pub step: Duration,
+}
+
+impl Default for SimConfig {
+    fn default() -> Self {
+        SimConfig {
+            top_speed_cm_s: 160.0,
+            accel_cm_s2: 150.0,
+            brake_cm_s2: 300.0,
+            turn_rate_deg_s: 180.0,
+            head_rate_deg_s: 180.0,
+            motion_timeout: Duration::from_secs(2),
+            stance_time: Duration::from_secs(2),
+            room_cm: (400.0, 400.0),
+            radius_cm: 10.0,
+            inactivity_timeout: Duration::from_secs(300),
+            battery_start_v: 4.10,
+            drain_idle_v_s: 0.0002,
+            drain_drive_v_s: 0.0008,
+            animation_time: Duration::from_secs(3),
+            sound_time: Duration::from_millis(1500),
+            step: Duration::from_millis(10),
+        }
+    }
+}
