@@ -12,3 +12,8 @@ pub mod model;
 pub mod session;
 pub mod rng;
 pub mod sim;
+pub mod mission;
+pub mod script;
+pub mod setup;
+pub mod telemetry;
+pub mod logging;

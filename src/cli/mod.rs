@@ -3,6 +3,7 @@
 //! 1 for failures at run time.
 
 pub mod packet;
+pub mod run;
 
 use clap::{Parser, Subcommand};
 
@@ -18,6 +19,8 @@ pub enum Command {
     /// Decode and encode Sphero API v2 packets.
     #[command(subcommand)]
     Packet(packet::PacketCmd),
+    /// Run a mission script against a droid (`--sim` for the simulator, in simulated time).
+    Run(run::RunArgs),
 }
 
 /// A failure with the exit status it deserves.
@@ -58,6 +61,10 @@ pub fn main() -> i32 {
     let mut out = std::io::stdout().lock();
     let result = match cli.command {
         Some(Command::Packet(cmd)) => packet::run(cmd, &mut out),
+        Some(Command::Run(args)) => {
+            drop(out);
+            run::run(args)
+        }
         None => {
             use clap::CommandFactory;
             let _ = Cli::command().print_help();

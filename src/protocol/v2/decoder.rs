@@ -123,6 +123,9 @@ pub struct Decoder {
     max_body: usize,
     offset: u64,
     packet_start: u64,
+    /// Wire bytes of the current packet so far, SOP and escapes included: what is counted as
+    /// skipped when the packet is abandoned (`buf` holds the unescaped body, which is shorter).
+    packet_wire_len: u64,
     garbage_start: Option<u64>,
     garbage_len: u64,
     stats: DecoderStats,
@@ -148,6 +151,7 @@ impl Decoder {
             max_body,
             offset: 0,
             packet_start: 0,
+            packet_wire_len: 0,
             garbage_start: None,
             garbage_len: 0,
             stats: DecoderStats::default(),
@@ -187,7 +191,7 @@ impl Decoder {
         if let State::Body { .. } = self.state {
             let detail = format!("{} body bytes before the stream ended", self.buf.len());
             out.push(self.error(DecodeErrorKind::Truncated, self.packet_start, detail));
-            self.stats.skipped_bytes += self.buf.len() as u64 + 1;
+            self.stats.skipped_bytes += self.packet_wire_len;
         }
         self.buf.clear();
         self.state = State::Hunting;
@@ -214,12 +218,13 @@ impl Decoder {
     fn start_packet(&mut self, at: u64) {
         self.buf.clear();
         self.packet_start = at;
+        self.packet_wire_len = 1;
         self.state = State::Body { escaped: false };
     }
 
     /// Abandon the current packet after an error inside it.
     fn abandon(&mut self, kind: DecodeErrorKind, detail: String) -> DecodeError {
-        self.stats.skipped_bytes += self.buf.len() as u64 + 1;
+        self.stats.skipped_bytes += self.packet_wire_len;
         self.buf.clear();
         self.state = State::Discarding;
         self.error(kind, self.packet_start, detail)
@@ -237,7 +242,7 @@ impl Decoder {
     fn end_packet(&mut self) -> Result<Packet, DecodeError> {
         self.state = State::Hunting;
         let result = parse_body(&self.buf);
-        let len = self.buf.len() as u64;
+        let len = self.packet_wire_len;
         self.buf.clear();
         match result {
             Ok(p) => {
@@ -245,12 +250,12 @@ impl Decoder {
                 Ok(p)
             }
             Err((BodyError::TooShort { needed, got }, _)) => {
-                self.stats.skipped_bytes += len + 2;
+                self.stats.skipped_bytes += len;
                 let detail = format!("{got} body byte(s), its flags need at least {needed}");
                 Err(self.error(DecodeErrorKind::TooShort, self.packet_start, detail))
             }
             Err((BodyError::BadChecksum { expected, got }, packet)) => {
-                self.stats.skipped_bytes += len + 2;
+                self.stats.skipped_bytes += len;
                 let detail = format!("checksum 0x{got:02X}, expected 0x{expected:02X}");
                 let mut e = self.error(DecodeErrorKind::BadChecksum, self.packet_start, detail);
                 e.packet = packet.map(Box::new);
@@ -291,12 +296,13 @@ impl Decoder {
             State::Body { escaped } => {
                 if b == SOP {
                     // Drop the partial packet, restart here.
-                    self.stats.skipped_bytes += self.buf.len() as u64 + 1;
+                    self.stats.skipped_bytes += self.packet_wire_len;
                     let detail = format!("new SOP after {} body byte(s)", self.buf.len());
                     let e = self.error(DecodeErrorKind::SopInsidePacket, self.packet_start, detail);
                     self.start_packet(at);
                     return Some(Err(e));
                 }
+                self.packet_wire_len += 1;
                 if escaped {
                     let unescaped = match b {
                         ESC_ESC => ESC,
@@ -472,6 +478,29 @@ mod tests {
         }
         assert!(max_buffered <= 16);
         assert_eq!(kinds(&out), vec![Err(DecodeErrorKind::Oversize), Ok((0x13, 0x0D))]);
+    }
+
+    #[test]
+    fn skipped_bytes_count_escapes_of_abandoned_packets() {
+        // Every byte fed ends up in a packet or in skipped_bytes, escapes included.
+        for stream in [
+            "8D 0A AB 23 D8",          // too short, with an escape
+            "8D 0A AB 05 13 0D 00 00 D8", // bad checksum, with an escape
+            "8D 0A AB 23 AB 11 22 D8",  // bad escape after a good one
+            "8D 0A AB 23 AB",           // truncated inside an escape
+            "8D 0A AB 23 8D 0A 13 0D 00 D5 D8", // SOP inside a packet
+        ] {
+            let bytes = hex::parse(stream).unwrap();
+            let mut d = Decoder::new();
+            let packets: u64 = d
+                .decode_all(&bytes)
+                .iter()
+                .filter_map(|e| e.as_ref().ok())
+                .map(|p| p.encode().len() as u64)
+                .sum();
+            d.finish();
+            assert_eq!(packets + d.stats().skipped_bytes, bytes.len() as u64, "{stream}");
+        }
     }
 
     #[test]

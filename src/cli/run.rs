@@ -1,0 +1,196 @@
+//! `droidctl run SCRIPT [--sim [MODEL]] [--json] [--interval MS]`: run a mission script.
+
+use super::CliError;
+use crate::link::Link;
+use crate::mission::{self, MissionEvent, MissionOptions, Summary};
+use crate::model::Model;
+use crate::session::{self, SessionConfig};
+use crate::setup::{SetupOptions, connect_setup};
+use crate::sim::{Faults, SimConfig, SimLink};
+use clap::Args;
+use std::io::Write;
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::Duration;
+
+#[derive(Debug, Args)]
+pub struct RunArgs {
+    /// The mission script (see README, "Mission scripts").
+    #[arg(value_name = "SCRIPT")]
+    pub script: Option<PathBuf>,
+    /// Run against the simulated droid: r2d2 (default), r2q5 or bb9e. The mission runs in
+    /// simulated time.
+    #[arg(long, num_args = 0..=1, default_missing_value = "r2d2", value_name = "MODEL")]
+    pub sim: Option<String>,
+    /// One JSON object per telemetry sample, then a summary object.
+    #[arg(long)]
+    pub json: bool,
+    /// Telemetry sample interval in milliseconds.
+    #[arg(long, default_value_t = 100, value_name = "MS", value_parser = clap::value_parser!(u64).range(1..=60_000))]
+    pub interval: u64,
+}
+
+/// Resolve `--sim MODEL` vs the script path: `droidctl run --sim mission.txt` puts the script
+/// where the model would go.
+fn resolve(args: &RunArgs) -> Result<(PathBuf, Option<Model>), CliError> {
+    let mut script = args.script.clone();
+    let model = match &args.sim {
+        None => None,
+        Some(m) => match Model::from_id(m) {
+            Some(model) if matches!(model, Model::R2D2 | Model::R2Q5 | Model::BB9E) => Some(model),
+            Some(other) => {
+                return Err(CliError::usage(format!(
+                    "the simulator speaks API v2 only: r2d2, r2q5 or bb9e, not {}",
+                    other.id()
+                )));
+            }
+            None if script.is_none() => {
+                script = Some(PathBuf::from(m));
+                Some(Model::R2D2)
+            }
+            None => {
+                return Err(CliError::usage(format!(
+                    "unknown simulated model {m:?}: use r2d2, r2q5 or bb9e"
+                )));
+            }
+        },
+    };
+    let script = script.ok_or_else(|| CliError::usage("run needs a SCRIPT file"))?;
+    Ok((script, model))
+}
+
+pub fn run(args: RunArgs) -> Result<i32, CliError> {
+    let (path, sim) = resolve(&args)?;
+    let text = std::fs::read_to_string(&path)
+        .map_err(|e| CliError::usage(format!("cannot read script {}: {e}", path.display())))?;
+    let shown = path.display().to_string();
+    let script_errors = |errs: Vec<crate::script::ScriptError>| {
+        let lines: Vec<String> = errs.iter().map(|e| format!("{shown}:{}: {}", e.line, e.message)).collect();
+        CliError::usage(format!("the script has errors; nothing was sent\n{}", lines.join("\n")))
+    };
+    let steps = crate::script::parse(&text).map_err(script_errors)?;
+    let Some(model) = sim else {
+        return Err(CliError::failure(
+            "running on a real droid needs Bluetooth, which this build cannot use yet — try `--sim`",
+        ));
+    };
+    mission::validate(model, &steps).map_err(script_errors)?;
+    let _ = crate::logging::init();
+
+    let opts = MissionOptions {
+        interval: Duration::from_millis(args.interval),
+        ..MissionOptions::default()
+    };
+    // Simulated time: the clock jumps whenever everything waits, so a 60 s mission takes a
+    // fraction of a second and behaves exactly as in real time.
+    let rt = tokio::runtime::Builder::new_current_thread()
+        .enable_time()
+        .start_paused(true)
+        .build()
+        .map_err(|e| CliError::failure(format!("cannot start the runtime: {e}")))?;
+    let json = args.json;
+    let result = rt.block_on(async move {
+        let link = SimLink::new(model, SimConfig::default(), Faults::none());
+        run_on(Box::new(link), model, &steps, opts, json).await
+    });
+    match result {
+        Ok(summary) => {
+            print_summary(&summary, json);
+            Ok(if summary.failed_steps > 0 { 1 } else { 0 })
+        }
+        Err(e) => Err(CliError::failure(e)),
+    }
+}
+
+/// Run the mission over any link, printing as it goes.
+pub async fn run_on(
+    link: Box<dyn Link>,
+    model: Model,
+    steps: &[crate::script::Step],
+    opts: MissionOptions,
+    json: bool,
+) -> Result<Summary, String> {
+    let interval_ms = opts.interval.as_millis().clamp(20, 1000) as u16;
+    let setup = SetupOptions {
+        tripod: false,
+        streaming_interval_ms: interval_ms.min(100),
+    };
+    let config = SessionConfig {
+        pacing: model.write_pacing(),
+        setup: connect_setup(model, &setup),
+        ..SessionConfig::default()
+    };
+    let session = session::start(link, config);
+    let samples_per_line = (1000 / opts.interval.as_millis().max(1)).max(1) as u64;
+    let count = std::sync::atomic::AtomicU64::new(0);
+    let emit: Arc<dyn Fn(MissionEvent) + Send + Sync> = Arc::new(move |e| {
+        let mut out = std::io::stdout().lock();
+        let _ = match e {
+            MissionEvent::Sample(s) if json => writeln!(out, "{}", serde_json::to_string(&s).unwrap_or_default()),
+            MissionEvent::Sample(s) => {
+                let n = count.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                if n % samples_per_line != 0 {
+                    return;
+                }
+                writeln!(out, "{}", sample_line(&s))
+            }
+            MissionEvent::Step { t_ms, line, text } if !json => {
+                writeln!(out, "[{:>8.2}s] line {line}: {text}", t_ms as f64 / 1000.0)
+            }
+            MissionEvent::Step { .. } => Ok(()),
+            MissionEvent::Warning { t_ms, line, message } => {
+                let at = line.map(|l| format!("line {l}: ")).unwrap_or_default();
+                eprintln!("[{:>8.2}s] warning: {at}{message}", t_ms as f64 / 1000.0);
+                Ok(())
+            }
+        };
+    });
+    let result = mission::run(&session, model, steps, opts, emit).await;
+    // Stop first, then close.
+    session
+        .shutdown(vec![crate::protocol::v2::cmd::drive_with_heading(
+            0,
+            crate::units::Heading::default(),
+            crate::protocol::v2::wire::DriveFlags::empty(),
+        )])
+        .await;
+    result.map_err(|e| e.to_string())
+}
+
+fn opt(v: Option<f32>, prec: usize) -> String {
+    v.map(|v| format!("{v:.prec$}")).unwrap_or_else(|| "-".into())
+}
+
+fn sample_line(s: &mission::Sample) -> String {
+    format!(
+        "[{:>8.2}s] pos ({}, {}) cm  speed {} cm/s  heading {}  head {}°  stance {}  battery {} V  collisions {}",
+        s.t_ms as f64 / 1000.0,
+        opt(s.x_cm, 1),
+        opt(s.y_cm, 1),
+        opt(s.speed, 0),
+        s.heading.map(|h| format!("{h}°")).unwrap_or_else(|| "-".into()),
+        opt(s.head_deg, 0),
+        s.stance,
+        opt(s.battery_v, 2),
+        s.collisions
+    )
+}
+
+fn print_summary(s: &Summary, json: bool) {
+    if json {
+        println!("{}", serde_json::to_string(s).unwrap_or_default());
+    } else {
+        println!(
+            "done in {:.2} s: sent {}, received {}, errors {}, timeouts {}, collisions {}, failed steps {}, final position ({}, {}) cm",
+            s.t_ms as f64 / 1000.0,
+            s.sent,
+            s.received,
+            s.errors,
+            s.timeouts,
+            s.collisions,
+            s.failed_steps,
+            opt(s.x_cm, 1),
+            opt(s.y_cm, 1)
+        );
+    }
+}
