@@ -17,3 +17,6 @@ pub mod script;
 pub mod setup;
 pub mod telemetry;
 pub mod logging;
+pub mod app;
+pub mod config;
+pub mod teleop;

@@ -158,7 +158,11 @@ fn decode(
                     if i > 0 {
                         writeln!(out).map_err(io_err)?;
                     }
-                    write!(out, "{}", packet_text(packet, *checksum_ok, &d)).map_err(io_err)?;
+                    // A packet with a bad checksum only comes out of a single-packet decode,
+                    // where the input is exactly its wire bytes: show those, not a re-encoding
+                    // (which would carry the corrected checksum).
+                    let received = (!checksum_ok).then_some(bytes);
+                    write!(out, "{}", packet_text(packet, received, &d)).map_err(io_err)?;
                 }
             }
             Item::Error(e) => {
@@ -201,10 +205,12 @@ pub fn packet_json(p: &Packet, checksum_ok: bool, d: &Described) -> serde_json::
     })
 }
 
-fn packet_text(p: &Packet, checksum_ok: bool, d: &Described) -> String {
+/// `received` is the wire as it arrived when the checksum failed (`None` when it was fine).
+fn packet_text(p: &Packet, received: Option<&[u8]>, d: &Described) -> String {
+    let checksum_ok = received.is_none();
     let mut s = String::new();
     let mut line = |k: &str, v: String| s.push_str(&format!("{k:<9} {v}\n"));
-    line("wire", hex::spaced(&p.encode()));
+    line("wire", hex::spaced(&received.map_or_else(|| p.encode(), <[u8]>::to_vec)));
     let names = p.flags.names();
     line(
         "flags",

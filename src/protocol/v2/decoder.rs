@@ -483,12 +483,14 @@ mod tests {
     #[test]
     fn skipped_bytes_count_escapes_of_abandoned_packets() {
         // Every byte fed ends up in a packet or in skipped_bytes, escapes included.
+        // Too short, bad checksum, bad escape after a good one, truncated inside an escape,
+        // SOP inside a packet: each with escapes in the abandoned bytes.
         for stream in [
-            "8D 0A AB 23 D8",          // too short, with an escape
-            "8D 0A AB 05 13 0D 00 00 D8", // bad checksum, with an escape
-            "8D 0A AB 23 AB 11 22 D8",  // bad escape after a good one
-            "8D 0A AB 23 AB",           // truncated inside an escape
-            "8D 0A AB 23 8D 0A 13 0D 00 D5 D8", // SOP inside a packet
+            "8D 0A AB 23 D8",
+            "8D 0A AB 05 13 0D 00 00 D8",
+            "8D 0A AB 23 AB 11 22 D8",
+            "8D 0A AB 23 AB",
+            "8D 0A AB 23 8D 0A 13 0D 00 D5 D8",
         ] {
             let bytes = hex::parse(stream).unwrap();
             let mut d = Decoder::new();

@@ -1,0 +1,332 @@
+//! The packet log: a bounded ring buffer of formatted entries plus the pane's view state
+//! (scroll, pause, filter, decoded/hex). Entries are formatted once, when they arrive, so
+//! drawing a full log costs the same as drawing an empty one.
+
+use crate::hex;
+use crate::protocol::v2::{Device, ErrorCode, Kind, StreamingConfig, describe, value};
+use crate::session::{Direction, LogEntry, LogItem};
+use std::collections::VecDeque;
+use std::time::Duration;
+
+/// Default bound of the log.
+pub const DEFAULT_CAPACITY: usize = 10_000;
+
+/// One formatted line of the log.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LogLine {
+    pub at: Duration,
+    pub dir: Direction,
+    /// Catalogue name, or `power/0x42`, or the decode error kind.
+    pub name: String,
+    pub did: Option<u8>,
+    pub seq: Option<u8>,
+    pub err: Option<ErrorCode>,
+    /// A decode error, an error response, or a malformed payload.
+    pub is_error: bool,
+    pub hex: String,
+    /// Decoded fields (`speed=100 heading=90 …`) or the problem.
+    pub decoded: String,
+}
+
+impl LogLine {
+    pub fn from_entry(e: &LogEntry, streaming: Option<&StreamingConfig>) -> LogLine {
+        match &e.item {
+            LogItem::Packet(p) => {
+                let d = describe(p, streaming);
+                let err = p.err.filter(|e| !e.is_success());
+                let decoded = match (&d.fields, &d.problem) {
+                    (Some(f), _) if f.is_empty() => String::new(),
+                    (Some(f), _) => value::fields_line(f),
+                    (None, Some(problem)) => problem.clone(),
+                    (None, None) => String::new(),
+                };
+                let is_error = err.is_some() || (d.fields.is_none() && d.kind != Kind::Command && d.name.is_some());
+                LogLine {
+                    at: e.at,
+                    dir: e.dir,
+                    name: d.label(p),
+                    did: Some(p.did),
+                    seq: (d.kind != Kind::Notification).then_some(p.seq),
+                    err,
+                    is_error,
+                    hex: hex::spaced(&p.encode()),
+                    decoded,
+                }
+            }
+            LogItem::DecodeError(de) => LogLine {
+                at: e.at,
+                dir: e.dir,
+                name: format!("decode error: {}", de.kind.name()),
+                did: None,
+                seq: None,
+                err: None,
+                is_error: true,
+                hex: String::new(),
+                decoded: de.detail.clone(),
+            },
+        }
+    }
+}
+
+/// Which lines the pane shows.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct LogFilter {
+    pub dir: Option<Direction>,
+    pub did: Option<u8>,
+    /// Case-insensitive text that must appear in the name, decoded fields or hex.
+    pub text: String,
+}
+
+impl LogFilter {
+    pub fn matches(&self, l: &LogLine) -> bool {
+        if self.dir.is_some_and(|d| d != l.dir) {
+            return false;
+        }
+        if self.did.is_some() && self.did != l.did {
+            return false;
+        }
+        if self.text.is_empty() {
+            return true;
+        }
+        let t = self.text.to_ascii_lowercase();
+        l.name.to_ascii_lowercase().contains(&t)
+            || l.decoded.to_ascii_lowercase().contains(&t)
+            || l.hex.to_ascii_lowercase().contains(&t)
+    }
+
+    pub fn is_active(&self) -> bool {
+        self.dir.is_some() || self.did.is_some() || !self.text.is_empty()
+    }
+
+    /// Parse the filter prompt: words `in`/`out`, `dev:NAME` (or a device name), free text.
+    pub fn parse(input: &str) -> LogFilter {
+        let mut f = LogFilter::default();
+        let mut text = Vec::new();
+        for w in input.split_whitespace() {
+            match w.to_ascii_lowercase().as_str() {
+                "in" | "<-" => f.dir = Some(Direction::In),
+                "out" | "->" => f.dir = Some(Direction::Out),
+                lw => match lw.strip_prefix("dev:").and_then(Device::parse) {
+                    Some(did) => f.did = Some(did),
+                    None => text.push(w),
+                },
+            }
+        }
+        f.text = text.join(" ");
+        f
+    }
+
+    pub fn describe(&self) -> String {
+        let mut parts = Vec::new();
+        if let Some(d) = self.dir {
+            parts.push(if d == Direction::In { "in".to_string() } else { "out".to_string() });
+        }
+        if let Some(did) = self.did {
+            parts.push(format!("dev:{}", Device::describe(did)));
+        }
+        if !self.text.is_empty() {
+            parts.push(format!("{:?}", self.text));
+        }
+        parts.join(" ")
+    }
+}
+
+/// The log and its view state.
+#[derive(Debug, Clone)]
+pub struct PacketLog {
+    lines: VecDeque<LogLine>,
+    capacity: usize,
+    /// Lines scrolled up from the newest (0 = follow the tail).
+    pub scroll: usize,
+    /// Paused: the view holds still while lines keep arriving.
+    pub paused: bool,
+    /// Show decoded fields (true) or raw hex (false).
+    pub decoded: bool,
+    pub filter: LogFilter,
+    /// Lines dropped off the front since the start.
+    pub dropped: u64,
+    pub total: u64,
+}
+
+impl Default for PacketLog {
+    fn default() -> Self {
+        Self::with_capacity(DEFAULT_CAPACITY)
+    }
+}
+
+impl PacketLog {
+    pub fn with_capacity(capacity: usize) -> Self {
+        PacketLog {
+            lines: VecDeque::with_capacity(capacity.min(1024)),
+            capacity: capacity.max(1),
+            scroll: 0,
+            paused: false,
+            decoded: true,
+            filter: LogFilter::default(),
+            dropped: 0,
+            total: 0,
+        }
+    }
+
+    pub fn push(&mut self, line: LogLine) {
+        if self.lines.len() >= self.capacity {
+            self.lines.pop_front();
+            self.dropped += 1;
+        }
+        // While paused or scrolled back, keep the same lines in view.
+        if (self.paused || self.scroll > 0) && self.filter.matches(&line) {
+            self.scroll += 1;
+        }
+        self.lines.push_back(line);
+        self.total += 1;
+    }
+
+    pub fn len(&self) -> usize {
+        self.lines.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.lines.is_empty()
+    }
+
+    pub fn capacity(&self) -> usize {
+        self.capacity
+    }
+
+    /// The lines passing the filter, oldest first.
+    pub fn filtered(&self) -> impl DoubleEndedIterator<Item = &LogLine> {
+        self.lines.iter().filter(|l| self.filter.matches(l))
+    }
+
+    /// The `height` lines to show, oldest first, honouring scroll.
+    pub fn visible(&self, height: usize) -> Vec<&LogLine> {
+        let mut v: Vec<&LogLine> = self.filtered().rev().skip(self.scroll).take(height).collect();
+        v.reverse();
+        v
+    }
+
+    pub fn scroll_up(&mut self, n: usize) {
+        let max = self.filtered().count().saturating_sub(1);
+        self.scroll = (self.scroll + n).min(max);
+    }
+
+    pub fn scroll_down(&mut self, n: usize) {
+        self.scroll = self.scroll.saturating_sub(n);
+    }
+
+    pub fn toggle_pause(&mut self) {
+        self.paused = !self.paused;
+        if !self.paused {
+            self.scroll = 0;
+        }
+    }
+
+    pub fn set_filter(&mut self, f: LogFilter) {
+        self.filter = f;
+        self.scroll = 0;
+    }
+
+    pub fn errors(&self) -> usize {
+        self.lines.iter().filter(|l| l.is_error).count()
+    }
+}
+
+/// Re-exported for the UI: direction arrows.
+pub fn arrow(d: Direction) -> &'static str {
+    d.arrow()
+}
+
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::protocol::v2::{Packet, cmd};
+
+    fn entry(dir: Direction, p: Packet, ms: u64) -> LogEntry {
+        LogEntry {
+            at: Duration::from_millis(ms),
+            dir,
+            item: LogItem::Packet(p),
+        }
+    }
+
+    fn line(dir: Direction, p: Packet) -> LogLine {
+        LogLine::from_entry(&entry(dir, p, 0), None)
+    }
+
+    #[test]
+    fn formats_commands_responses_and_errors() {
+        let wake = cmd::wake().to_packet(7);
+        let l = line(Direction::Out, wake.clone());
+        assert_eq!(l.name, "wake");
+        assert_eq!(l.seq, Some(7));
+        assert_eq!(l.hex, "8D 0A 13 0D 07 CE D8");
+        assert!(!l.is_error);
+        let bad = Packet::response_to(&wake, ErrorCode::BadDataLength, vec![]);
+        let l = line(Direction::In, bad);
+        assert!(l.is_error);
+        assert_eq!(l.err, Some(ErrorCode::BadDataLength));
+        let de = crate::protocol::v2::Decoder::new().decode_all(&[0x8D, 0x0A, 0x13, 0xD8]);
+        let Err(e) = de[0].clone() else { panic!() };
+        let l = LogLine::from_entry(
+            &LogEntry {
+                at: Duration::ZERO,
+                dir: Direction::In,
+                item: LogItem::DecodeError(e),
+            },
+            None,
+        );
+        assert!(l.is_error && l.name.contains("too_short"));
+    }
+
+    #[test]
+    fn ring_buffer_is_bounded() {
+        let mut log = PacketLog::with_capacity(100);
+        for i in 0..1000u32 {
+            log.push(line(Direction::Out, cmd::play_animation(i as u16).to_packet(0)));
+        }
+        assert_eq!(log.len(), 100);
+        assert_eq!(log.dropped, 900);
+        assert_eq!(log.total, 1000);
+    }
+
+    #[test]
+    fn filter_by_direction_device_text() {
+        let mut log = PacketLog::default();
+        log.push(line(Direction::Out, cmd::wake().to_packet(0)));
+        log.push(line(Direction::Out, cmd::play_animation(3).to_packet(1)));
+        log.push(line(
+            Direction::In,
+            Packet::response_to(&cmd::wake().to_packet(0), ErrorCode::Success, vec![]),
+        ));
+        log.set_filter(LogFilter::parse("out"));
+        assert_eq!(log.filtered().count(), 2);
+        log.set_filter(LogFilter::parse("dev:animatronic"));
+        assert_eq!(log.filtered().count(), 1);
+        log.set_filter(LogFilter::parse("in wake"));
+        assert_eq!(log.filtered().count(), 1);
+        assert_eq!(LogFilter::parse("in dev:power wake").describe(), "in dev:power \"wake\"");
+        log.set_filter(LogFilter::parse("ANIMATION"));
+        assert_eq!(log.filtered().count(), 1);
+    }
+
+    #[test]
+    fn pause_and_scroll_hold_the_view() {
+        let mut log = PacketLog::default();
+        for i in 0..10u16 {
+            log.push(line(Direction::Out, cmd::play_animation(i).to_packet(i as u8)));
+        }
+        assert_eq!(log.visible(3).last().unwrap().seq, Some(9));
+        log.toggle_pause();
+        log.push(line(Direction::Out, cmd::play_animation(10).to_packet(10)));
+        assert_eq!(log.visible(3).last().unwrap().seq, Some(9));
+        log.toggle_pause();
+        assert_eq!(log.visible(3).last().unwrap().seq, Some(10));
+        log.scroll_up(2);
+        assert_eq!(log.visible(3).last().unwrap().seq, Some(8));
+        log.scroll_up(1000);
+        assert_eq!(log.visible(3).first().unwrap().seq, Some(0));
+        log.scroll_down(1000);
+        assert_eq!(log.scroll, 0);
+    }
+}

@@ -1,0 +1,185 @@
+//! The application state: everything the screen shows, owned by the event loop and updated
+//! from events. [`crate::ui`] renders an immutable borrow of it; nothing here draws.
+
+use super::catalog::{self, Entry};
+use super::packet_log::PacketLog;
+use crate::model::Model;
+use crate::session::{LinkState, SessionStats};
+use crate::telemetry::Telemetry;
+use crate::units::Heading;
+use std::path::PathBuf;
+use std::time::Duration;
+
+/// What the control loop is commanding (written by the teleop layer every tick).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ControlView {
+    /// Commanded speed 0..=255 (magnitude).
+    pub speed: u8,
+    /// Commanded heading (direction of travel).
+    pub heading: Heading,
+    pub reverse: bool,
+    pub turbo: bool,
+    /// Cruise speed used while a drive key is held.
+    pub cruise: u8,
+    /// Emergency stop latched.
+    pub estop: bool,
+    /// No drive input: the deadman holds speed at 0.
+    pub deadman: bool,
+    /// Commanded dome angle, degrees.
+    pub head_target: f32,
+    /// "hold" or "latched".
+    pub mode: &'static str,
+    /// Where the drive input comes from now: "keyboard", "gamepad" or "-".
+    pub source: &'static str,
+}
+
+impl Default for ControlView {
+    fn default() -> Self {
+        ControlView {
+            speed: 0,
+            heading: Heading::default(),
+            reverse: false,
+            turbo: false,
+            cruise: 100,
+            estop: false,
+            deadman: true,
+            head_target: 0.0,
+            mode: "hold",
+            source: "-",
+        }
+    }
+}
+
+/// Gamepad status for the status bar.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum GamepadStatus {
+    /// Disabled in the config.
+    Disabled,
+    /// No gamepad support here (e.g. no /dev/input): normal, shown, not an error.
+    Unavailable(String),
+    /// Working, no pad plugged in.
+    NoPad,
+    Connected(String),
+}
+
+/// How key releases are known.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum KeyboardMode {
+    /// The terminal reports releases (kitty keyboard protocol).
+    ReleaseEvents,
+    /// Releases are inferred from the auto-repeat stopping.
+    Emulated,
+}
+
+/// What overlays the main screen.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Overlay {
+    None,
+    Help,
+    /// Picking an animation; `selected` indexes [`AppState::animations`].
+    Animations { selected: usize },
+    /// Picking a sound; `selected` indexes [`AppState::sounds`].
+    Sounds { selected: usize },
+    /// Typing a packet-log filter.
+    Filter { input: String },
+}
+
+/// Which pane has the keyboard.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Focus {
+    /// Keys drive the droid.
+    Drive,
+    /// Keys scroll the packet log (the droid is held stopped).
+    Log,
+}
+
+/// One line of the help overlay: keys and what they do.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct HelpLine {
+    pub keys: String,
+    pub action: String,
+}
+
+/// A message shown for a while (e.g. "R2 can't roll on two legs — switching to tripod").
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Hint {
+    pub text: String,
+    pub until: Duration,
+}
+
+#[derive(Debug, Clone)]
+pub struct AppState {
+    /// Time since the app started (drives the collision flash and hints).
+    pub now: Duration,
+    pub model: Model,
+    /// The droid's name ("D2-1A2B", or "R2-D2 (simulated)").
+    pub droid_name: String,
+    pub link: LinkState,
+    pub stats: SessionStats,
+    /// Packets per second in and out, over the last second.
+    pub rate_in: f32,
+    pub rate_out: f32,
+    pub telemetry: Telemetry,
+    pub control: ControlView,
+    pub log: PacketLog,
+    pub overlay: Overlay,
+    pub focus: Focus,
+    pub gamepad: GamepadStatus,
+    pub keyboard: KeyboardMode,
+    pub log_path: Option<PathBuf>,
+    pub hint: Option<Hint>,
+    /// Help overlay lines, from the bindings as configured.
+    pub help_keys: Vec<HelpLine>,
+    pub help_gamepad: Vec<HelpLine>,
+    pub animations: Vec<Entry>,
+    pub sounds: Vec<Entry>,
+    /// A collision flashes this long.
+    pub collision_flash: Duration,
+}
+
+impl AppState {
+    pub fn new(model: Model, droid_name: String) -> Self {
+        AppState {
+            now: Duration::ZERO,
+            model,
+            droid_name,
+            link: LinkState::Connecting,
+            stats: SessionStats::default(),
+            rate_in: 0.0,
+            rate_out: 0.0,
+            telemetry: Telemetry::default(),
+            control: ControlView::default(),
+            log: PacketLog::default(),
+            overlay: Overlay::None,
+            focus: Focus::Drive,
+            gamepad: GamepadStatus::NoPad,
+            keyboard: KeyboardMode::Emulated,
+            log_path: None,
+            hint: None,
+            help_keys: Vec::new(),
+            help_gamepad: Vec::new(),
+            animations: catalog::animations(),
+            sounds: catalog::sounds(),
+            collision_flash: Duration::from_millis(1500),
+        }
+    }
+
+    /// Whether the collision flash is on now.
+    pub fn flashing(&self) -> bool {
+        self.telemetry
+            .last_collision
+            .is_some_and(|c| self.now.saturating_sub(c.at) < self.collision_flash)
+    }
+
+    /// The hint to show now, if any.
+    pub fn current_hint(&self) -> Option<&str> {
+        self.hint.as_ref().filter(|h| self.now < h.until).map(|h| h.text.as_str())
+    }
+
+    pub fn show_hint(&mut self, text: impl Into<String>, for_: Duration) {
+        self.hint = Some(Hint {
+            text: text.into(),
+            until: self.now + for_,
+        });
+    }
+}

@@ -1,0 +1,380 @@
+//! A fake adapter and peripheral for tests: they record every operation with its tokio time,
+//! answer reads from a table, and fail, hang or drop the connection on command. Public (not
+//! `cfg(test)`) so integration tests and the other crates' tests can drive a [`super::BleLink`]
+//! without a radio.
+
+use super::backend::{
+    Advertisement, BleAddress, BleCentral, BlePeripheral, DiscoveredChar, PeripheralEvent,
+};
+use super::error::{BleError, BleErrorKind};
+use crate::link::gatt::{CharRef, GattProfile, GattUuid};
+use futures_util::future::BoxFuture;
+use futures_util::stream::{self, BoxStream, StreamExt};
+use std::collections::{HashMap, HashSet};
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+use tokio::sync::mpsc;
+use tokio::time::Instant;
+
+fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// One operation the fake peripheral saw.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum FakeOp {
+    Connect,
+    Discover,
+    Write { ch: GattUuid, data: Vec<u8> },
+    Read(GattUuid),
+    Subscribe(GattUuid),
+    Disconnect,
+}
+
+#[derive(Default)]
+struct PeripheralState {
+    chars: Vec<DiscoveredChar>,
+    reads: HashMap<GattUuid, Vec<u8>>,
+    log: Vec<(Instant, FakeOp)>,
+    connected: bool,
+    subscribed: HashSet<GattUuid>,
+    listeners: Vec<mpsc::UnboundedSender<PeripheralEvent>>,
+    fail_connects: u32,
+    hang_connect: bool,
+    fail_next_write: Option<BleError>,
+}
+
+impl PeripheralState {
+    fn record(&mut self, op: FakeOp) {
+        self.log.push((Instant::now(), op));
+    }
+
+    fn emit(&mut self, ev: PeripheralEvent) {
+        self.listeners.retain(|l| l.send(ev.clone()).is_ok());
+    }
+
+    fn require_connected(&self) -> Result<(), BleError> {
+        if self.connected {
+            Ok(())
+        } else {
+            Err(BleError::new(
+                BleErrorKind::Disconnected,
+                "the droid is not connected",
+            ))
+        }
+    }
+
+    fn require_char(&self, ch: CharRef) -> Result<(), BleError> {
+        if self
+            .chars
+            .iter()
+            .any(|d| ch.matches(d.service, d.characteristic))
+        {
+            Ok(())
+        } else {
+            Err(BleError::new(
+                BleErrorKind::MissingCharacteristic,
+                format!("no characteristic {ch}"),
+            ))
+        }
+    }
+}
+
+/// A fake droid. Clones share state: keep one to inspect and steer the one the link uses.
+#[derive(Clone, Default)]
+pub struct FakePeripheral {
+    state: Arc<Mutex<PeripheralState>>,
+}
+
+impl FakePeripheral {
+    /// A device with exactly these characteristics.
+    pub fn new(chars: Vec<DiscoveredChar>) -> Self {
+        let p = FakePeripheral::default();
+        lock(&p.state).chars = chars;
+        p
+    }
+
+    /// A device offering everything `profile` uses (characteristics the profile names without
+    /// a service are put in the profile's main service).
+    pub fn for_profile(profile: &GattProfile) -> Self {
+        let chars = profile
+            .characteristics()
+            .into_iter()
+            .map(|c| DiscoveredChar {
+                service: c.service.unwrap_or(profile.service),
+                characteristic: c.characteristic,
+            })
+            .collect();
+        FakePeripheral::new(chars)
+    }
+
+    /// What a read of `ch` returns (empty otherwise).
+    pub fn set_read(&self, ch: GattUuid, value: Vec<u8>) {
+        lock(&self.state).reads.insert(ch, value);
+    }
+
+    /// Fail the next `n` connects as BlueZ does when the droid does not answer.
+    pub fn fail_connects(&self, n: u32) {
+        lock(&self.state).fail_connects = n;
+    }
+
+    /// Make connects never finish (a sleeping droid), to exercise the connect timeout.
+    pub fn hang_connect(&self, hang: bool) {
+        lock(&self.state).hang_connect = hang;
+    }
+
+    /// Fail the next write with `err`.
+    pub fn fail_next_write(&self, err: BleError) {
+        lock(&self.state).fail_next_write = Some(err);
+    }
+
+    /// Send a notification on `ch`, if connected and subscribed to it (as a real device would).
+    pub fn notify(&self, ch: GattUuid, value: &[u8]) {
+        let mut s = lock(&self.state);
+        if s.connected && s.subscribed.contains(&ch) {
+            s.emit(PeripheralEvent::Notification {
+                characteristic: ch,
+                value: value.to_vec(),
+            });
+        }
+    }
+
+    /// The droid drops the connection (walked out of range, fell asleep).
+    pub fn drop_connection(&self, reason: &str) {
+        let mut s = lock(&self.state);
+        s.connected = false;
+        s.subscribed.clear();
+        s.emit(PeripheralEvent::Disconnected(reason.to_string()));
+        s.listeners.clear();
+    }
+
+    pub fn is_connected(&self) -> bool {
+        lock(&self.state).connected
+    }
+
+    /// Every operation so far.
+    pub fn ops(&self) -> Vec<FakeOp> {
+        lock(&self.state).log.iter().map(|(_, o)| o.clone()).collect()
+    }
+
+    /// Every operation with the tokio time it happened.
+    pub fn timed_ops(&self) -> Vec<(Instant, FakeOp)> {
+        lock(&self.state).log.clone()
+    }
+
+    /// The writes to `ch`, in order, with their times.
+    pub fn writes_to(&self, ch: GattUuid) -> Vec<(Instant, Vec<u8>)> {
+        lock(&self.state)
+            .log
+            .iter()
+            .filter_map(|(t, o)| match o {
+                FakeOp::Write { ch: c, data } if *c == ch => Some((*t, data.clone())),
+                _ => None,
+            })
+            .collect()
+    }
+
+    pub fn clear_ops(&self) {
+        lock(&self.state).log.clear();
+    }
+}
+
+impl BlePeripheral for FakePeripheral {
+    fn connect(&self) -> BoxFuture<'_, Result<(), BleError>> {
+        Box::pin(async move {
+            let hang = {
+                let mut s = lock(&self.state);
+                s.record(FakeOp::Connect);
+                if s.fail_connects > 0 {
+                    s.fail_connects -= 1;
+                    return Err(BleError::from_dbus(
+                        Some("org.bluez.Error.Failed"),
+                        "le-connection-abort-by-local",
+                    ));
+                }
+                s.hang_connect
+            };
+            if hang {
+                std::future::pending::<()>().await;
+            }
+            lock(&self.state).connected = true;
+            Ok(())
+        })
+    }
+
+    fn discover_services(&self) -> BoxFuture<'_, Result<Vec<DiscoveredChar>, BleError>> {
+        Box::pin(async move {
+            let mut s = lock(&self.state);
+            s.record(FakeOp::Discover);
+            s.require_connected()?;
+            Ok(s.chars.clone())
+        })
+    }
+
+    fn write<'a>(
+        &'a self,
+        ch: CharRef,
+        data: &'a [u8],
+        _with_response: bool,
+    ) -> BoxFuture<'a, Result<(), BleError>> {
+        Box::pin(async move {
+            let mut s = lock(&self.state);
+            s.require_connected()?;
+            s.require_char(ch)?;
+            if let Some(e) = s.fail_next_write.take() {
+                return Err(e);
+            }
+            s.record(FakeOp::Write {
+                ch: ch.characteristic,
+                data: data.to_vec(),
+            });
+            Ok(())
+        })
+    }
+
+    fn read(&self, ch: CharRef) -> BoxFuture<'_, Result<Vec<u8>, BleError>> {
+        Box::pin(async move {
+            let mut s = lock(&self.state);
+            s.require_connected()?;
+            s.require_char(ch)?;
+            s.record(FakeOp::Read(ch.characteristic));
+            Ok(s.reads.get(&ch.characteristic).cloned().unwrap_or_default())
+        })
+    }
+
+    fn subscribe(&self, ch: CharRef) -> BoxFuture<'_, Result<(), BleError>> {
+        Box::pin(async move {
+            let mut s = lock(&self.state);
+            s.require_connected()?;
+            s.require_char(ch)?;
+            s.record(FakeOp::Subscribe(ch.characteristic));
+            s.subscribed.insert(ch.characteristic);
+            Ok(())
+        })
+    }
+
+    fn events(&self) -> BoxFuture<'_, Result<BoxStream<'static, PeripheralEvent>, BleError>> {
+        Box::pin(async move {
+            let (tx, rx) = mpsc::unbounded_channel();
+            lock(&self.state).listeners.push(tx);
+            let s = stream::unfold(rx, |mut rx| async move { rx.recv().await.map(|e| (e, rx)) });
+            Ok(s.boxed())
+        })
+    }
+
+    fn disconnect(&self) -> BoxFuture<'_, Result<(), BleError>> {
+        Box::pin(async move {
+            let mut s = lock(&self.state);
+            s.record(FakeOp::Disconnect);
+            if s.connected {
+                s.connected = false;
+                s.subscribed.clear();
+                s.emit(PeripheralEvent::Disconnected("disconnected by us".into()));
+                s.listeners.clear();
+            }
+            Ok(())
+        })
+    }
+}
+
+#[derive(Default)]
+struct CentralState {
+    /// Advertisements and how long after the scan starts each is first heard.
+    ads: Vec<(Duration, Advertisement)>,
+    devices: HashMap<BleAddress, FakePeripheral>,
+    scan_started: Option<Instant>,
+    scans: u32,
+    fail_scan: Option<BleError>,
+}
+
+/// A fake adapter with scripted advertisements.
+#[derive(Clone, Default)]
+pub struct FakeCentral {
+    state: Arc<Mutex<CentralState>>,
+}
+
+impl FakeCentral {
+    pub fn new() -> Self {
+        FakeCentral::default()
+    }
+
+    /// A device heard `after` the scan starts.
+    pub fn advertise(&self, ad: Advertisement, after: Duration) {
+        lock(&self.state).ads.push((after, ad));
+    }
+
+    /// A connectable device: its advertisement (heard at once) and its peripheral.
+    pub fn add_device(&self, ad: Advertisement, peripheral: FakePeripheral) {
+        let mut s = lock(&self.state);
+        s.devices.insert(ad.address, peripheral);
+        s.ads.push((Duration::ZERO, ad));
+    }
+
+    /// Make scanning fail (adapter off, permission denied, …).
+    pub fn fail_scan(&self, err: BleError) {
+        lock(&self.state).fail_scan = Some(err);
+    }
+
+    /// Forget every advertisement and device (the adapter lost track of them).
+    pub fn forget_devices(&self) -> Vec<(Duration, Advertisement)> {
+        let mut s = lock(&self.state);
+        s.devices.clear();
+        std::mem::take(&mut s.ads)
+    }
+
+    /// How many scans were started.
+    pub fn scans(&self) -> u32 {
+        lock(&self.state).scans
+    }
+}
+
+impl BleCentral for FakeCentral {
+    fn start_scan(&self) -> BoxFuture<'_, Result<(), BleError>> {
+        Box::pin(async move {
+            let mut s = lock(&self.state);
+            if let Some(e) = s.fail_scan.clone() {
+                return Err(e);
+            }
+            s.scans += 1;
+            s.scan_started = Some(Instant::now());
+            Ok(())
+        })
+    }
+
+    fn stop_scan(&self) -> BoxFuture<'_, Result<(), BleError>> {
+        Box::pin(async move {
+            lock(&self.state).scan_started = None;
+            Ok(())
+        })
+    }
+
+    fn advertisements(&self) -> BoxFuture<'_, Result<Vec<Advertisement>, BleError>> {
+        Box::pin(async move {
+            let s = lock(&self.state);
+            let Some(started) = s.scan_started else {
+                return Ok(Vec::new());
+            };
+            let now = Instant::now();
+            Ok(s.ads
+                .iter()
+                .filter(|(after, _)| started + *after <= now)
+                .map(|(_, a)| a.clone())
+                .collect())
+        })
+    }
+
+    fn peripheral(
+        &self,
+        address: BleAddress,
+    ) -> BoxFuture<'_, Result<Arc<dyn BlePeripheral>, BleError>> {
+        Box::pin(async move {
+            match lock(&self.state).devices.get(&address) {
+                Some(p) => Ok(Arc::new(p.clone()) as Arc<dyn BlePeripheral>),
+                None => Err(BleError::new(
+                    BleErrorKind::NotFound,
+                    format!("no device {address}"),
+                )),
+            }
+        })
+    }
+}

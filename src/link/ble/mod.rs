@@ -1,0 +1,88 @@
+//! Bluetooth LE: scanning for droids and [`BleLink`], the [`crate::link::Link`] to a real one.
+//!
+//! Layers, each testable without the one below:
+//! - [`crate::link::gatt`]: each model's GATT profile as data;
+//! - [`backend`]: the radio-free interface ([`BleCentral`], [`BlePeripheral`]);
+//! - [`BleLink`] and [`scan`]: the generic logic, written against that interface;
+//! - `btleplug_backend` (real BlueZ) and [`fake`] (tests): its two implementations.
+//!
+//! Entry points for commands: [`open_central`] + [`scan::scan`] for `droidctl scan`, and
+//! [`connect_link`] for everything that drives a droid.
+
+pub mod backend;
+mod btleplug_backend;
+pub mod error;
+pub mod fake;
+mod link;
+pub mod scan;
+
+pub use backend::{Advertisement, BleAddress, BleCentral, BlePeripheral, DiscoveredChar, PeripheralEvent};
+pub use btleplug_backend::open_central;
+pub use error::{BleError, BleErrorKind};
+pub use link::{BleLink, BleTimeouts};
+pub use scan::{DeviceSelector, ScanEntry};
+
+use crate::model::Model;
+use std::sync::Arc;
+
+/// The droid [`connect_link`] chose, and what else was heard.
+pub struct FoundDroid {
+    /// Not yet connected: hand it to `session::start`, which calls `open()` (and again on
+    /// every reconnect). `Box::new(found.link)` makes it a `Box<dyn Link>`.
+    pub link: BleLink,
+    pub model: Model,
+    pub name: String,
+    pub address: BleAddress,
+    /// Every device heard, strongest first, unsupported ones included (`model: None`): what a
+    /// picker would offer.
+    pub candidates: Vec<ScanEntry>,
+}
+
+/// Find the droid `sel` asks for and build a [`BleLink`] to it.
+///
+/// Opens the system's Bluetooth adapter, scans for up to `sel.scan_timeout` (stopping early
+/// once a droid asked for by `--name` or `--address` is heard), then picks: `sel.address`,
+/// else `sel.name` (case-insensitive, exact or a unique part such as `1A2B`), else the
+/// strongest supported droid. The returned link is not connected yet; the session connects it.
+///
+/// Errors are one line for the user, ending in what to do. `BleError::fatal()` is true for
+/// "no Bluetooth here" (no D-Bus system bus, BlueZ not running, no adapter, adapter off,
+/// permission denied) and for a device that is not a droid; the messages mention `--sim`.
+/// `NotFound` (nothing matching heard) is not fatal: scanning again may find a droid that
+/// was asleep. Example:
+///
+/// ```no_run
+/// # async fn f() -> Result<(), droidctl::link::ble::BleError> {
+/// use droidctl::link::ble::{DeviceSelector, connect_link};
+/// use droidctl::session::{self, SessionConfig};
+/// let found = connect_link(&DeviceSelector::default()).await?;
+/// let profile = found.link.profile().clone();
+/// let cfg = SessionConfig { pacing: profile.pacing, chunk_size: profile.chunk_size, ..Default::default() };
+/// let session = session::start(Box::new(found.link), cfg);
+/// # Ok(()) }
+/// ```
+pub async fn connect_link(sel: &DeviceSelector) -> Result<FoundDroid, BleError> {
+    let central = open_central().await?;
+    connect_link_with(central, sel).await
+}
+
+/// [`connect_link`] on a given adapter (the fake one in tests).
+pub async fn connect_link_with(
+    central: Arc<dyn BleCentral>,
+    sel: &DeviceSelector,
+) -> Result<FoundDroid, BleError> {
+    let candidates = scan::scan(central.as_ref(), sel.scan_timeout, |e| sel.satisfied_by(e)).await?;
+    let chosen = scan::pick(&candidates, sel)?.clone();
+    let model = chosen.model.ok_or_else(|| {
+        BleError::new(BleErrorKind::Selection, "the chosen device is not a droid")
+    })?;
+    let name = chosen.label();
+    tracing::info!(%name, address = %chosen.address, model = model.display_name(), "chose droid");
+    Ok(FoundDroid {
+        link: BleLink::new(central, chosen.address, name.clone(), model),
+        model,
+        name,
+        address: chosen.address,
+        candidates,
+    })
+}

@@ -1,0 +1,333 @@
+//! Gamepads: gilrs on its own thread (gilrs is not async) sends [`PadEvent`]s over a bounded
+//! channel; [`PadState`] maps them to driving input. No gamepad, or no /dev/input, is
+//! normal: the thread reports `Unavailable` once and ends.
+
+use crate::config::Gamepad as PadConfig;
+use std::collections::HashSet;
+use std::time::Duration;
+use tokio::sync::mpsc;
+
+/// The buttons droidctl maps (a subset of gilrs's, named as in the config).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Button {
+    South,
+    East,
+    North,
+    West,
+    Start,
+    Select,
+    LeftBumper,
+    RightBumper,
+    DPadUp,
+    DPadDown,
+    DPadLeft,
+    DPadRight,
+}
+
+impl Button {
+    pub fn parse(name: &str) -> Option<Button> {
+        Some(match name {
+            "South" => Button::South,
+            "East" => Button::East,
+            "North" => Button::North,
+            "West" => Button::West,
+            "Start" => Button::Start,
+            "Select" => Button::Select,
+            "LeftBumper" => Button::LeftBumper,
+            "RightBumper" => Button::RightBumper,
+            _ => return None,
+        })
+    }
+
+    fn from_gilrs(b: gilrs::Button) -> Option<Button> {
+        use gilrs::Button as G;
+        Some(match b {
+            G::South => Button::South,
+            G::East => Button::East,
+            G::North => Button::North,
+            G::West => Button::West,
+            G::Start => Button::Start,
+            G::Select => Button::Select,
+            G::LeftTrigger => Button::LeftBumper,
+            G::RightTrigger => Button::RightBumper,
+            G::DPadUp => Button::DPadUp,
+            G::DPadDown => Button::DPadDown,
+            G::DPadLeft => Button::DPadLeft,
+            G::DPadRight => Button::DPadRight,
+            _ => return None,
+        })
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Axis {
+    LeftX,
+    LeftY,
+    RightX,
+    RightY,
+    /// Analog right trigger, 0..1.
+    RightTrigger,
+}
+
+/// What the gamepad thread reports.
+#[derive(Debug, Clone, PartialEq)]
+pub enum PadEvent {
+    /// No gamepad support on this machine; the reason is for the status bar.
+    Unavailable(String),
+    Connected(String),
+    Disconnected,
+    Axis(Axis, f32),
+    Pressed(Button),
+    Released(Button),
+}
+
+/// What a button press asks for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PadCommand {
+    Tripod,
+    Bipod,
+    EStop,
+    Animation,
+    Help,
+    Sound(u16),
+}
+
+/// Driving input from the sticks, after deadzone and expo.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PadDrive {
+    /// Compass heading the left stick points to (stick up = 0°, right = 90°).
+    pub heading: f32,
+    /// 0..=1 after the expo curve.
+    pub magnitude: f32,
+}
+
+/// The mapping layer: raw axis values in, driving input out.
+#[derive(Debug, Clone)]
+pub struct PadState {
+    cfg: PadConfig,
+    axes: [f32; 5],
+    pub connected: bool,
+    pressed: HashSet<Button>,
+}
+
+fn axis_index(a: Axis) -> usize {
+    match a {
+        Axis::LeftX => 0,
+        Axis::LeftY => 1,
+        Axis::RightX => 2,
+        Axis::RightY => 3,
+        Axis::RightTrigger => 4,
+    }
+}
+
+/// Radial deadzone then expo: 0 inside the deadzone, rescaled to 0..1 outside, curved.
+pub fn shape(magnitude: f32, deadzone: f32, expo: f32) -> f32 {
+    let m = magnitude.clamp(0.0, 1.0);
+    if m <= deadzone {
+        return 0.0;
+    }
+    ((m - deadzone) / (1.0 - deadzone)).powf(expo)
+}
+
+impl PadState {
+    pub fn new(cfg: PadConfig) -> Self {
+        PadState {
+            cfg,
+            axes: [0.0; 5],
+            connected: false,
+            pressed: HashSet::new(),
+        }
+    }
+
+    /// Fold in one event; returns the command a button press asks for.
+    pub fn apply(&mut self, e: &PadEvent) -> Option<PadCommand> {
+        match e {
+            PadEvent::Connected(_) => self.connected = true,
+            PadEvent::Disconnected | PadEvent::Unavailable(_) => {
+                // Unplugged: everything back to rest (the deadman stops the droid).
+                self.connected = false;
+                self.axes = [0.0; 5];
+                self.pressed.clear();
+            }
+            PadEvent::Axis(a, v) => self.axes[axis_index(*a)] = if v.is_finite() { v.clamp(-1.0, 1.0) } else { 0.0 },
+            PadEvent::Released(b) => {
+                self.pressed.remove(b);
+            }
+            PadEvent::Pressed(b) => {
+                self.pressed.insert(*b);
+                let c = &self.cfg;
+                let is = |name: &str| Button::parse(name) == Some(*b);
+                return Some(match b {
+                    Button::DPadUp => PadCommand::Sound(c.sound_up),
+                    Button::DPadDown => PadCommand::Sound(c.sound_down),
+                    Button::DPadLeft => PadCommand::Sound(c.sound_left),
+                    Button::DPadRight => PadCommand::Sound(c.sound_right),
+                    _ if is(&c.tripod) => PadCommand::Tripod,
+                    _ if is(&c.bipod) => PadCommand::Bipod,
+                    _ if is(&c.estop) => PadCommand::EStop,
+                    _ if is(&c.animation) => PadCommand::Animation,
+                    _ if is(&c.help) => PadCommand::Help,
+                    _ => return None,
+                });
+            }
+        }
+        None
+    }
+
+    /// The e-stop button is held.
+    pub fn estop_held(&self) -> bool {
+        Button::parse(&self.cfg.estop).is_some_and(|b| self.pressed.contains(&b))
+    }
+
+    /// Left stick as polar driving input; `None` inside the deadzone (deadman).
+    pub fn drive(&self) -> Option<PadDrive> {
+        if !self.connected {
+            return None;
+        }
+        let (x, y) = (self.axes[0], self.axes[1]);
+        let m = shape((x * x + y * y).sqrt(), self.cfg.deadzone, self.cfg.expo);
+        if m <= 0.0 {
+            return None;
+        }
+        // gilrs: stick up is +y. Compass: up = 0°, right = 90°.
+        let heading = x.atan2(y).to_degrees().rem_euclid(360.0);
+        Some(PadDrive { heading, magnitude: m })
+    }
+
+    /// Speed 0..=255 for a drive input: the stick scales up to `max_speed`, the right trigger
+    /// adds up to `turbo`.
+    pub fn speed(&self, d: &PadDrive, turbo: u8) -> u8 {
+        let base = self.cfg.max_speed as f32;
+        let trigger = self.axes[4].clamp(0.0, 1.0);
+        let top = base + (turbo as f32 - base).max(0.0) * trigger;
+        (d.magnitude * top).round().clamp(0.0, 255.0) as u8
+    }
+
+    /// Dome rate from the right stick X, °/s (0 inside the deadzone).
+    pub fn dome_rate(&self) -> f32 {
+        if !self.connected {
+            return 0.0;
+        }
+        let x = self.axes[2];
+        shape(x.abs(), self.cfg.deadzone, self.cfg.expo) * x.signum() * self.cfg.dome_rate_deg_s
+    }
+}
+
+/// Start the gamepad thread. It sends events until the receiver is dropped. When gilrs cannot
+/// start (no udev, no /dev/input) it sends one `Unavailable` and ends.
+pub fn spawn(tx: mpsc::Sender<PadEvent>) -> std::io::Result<std::thread::JoinHandle<()>> {
+    std::thread::Builder::new().name("gamepad".into()).spawn(move || {
+        let mut gilrs = match gilrs::Gilrs::new() {
+            Ok(g) => g,
+            Err(e) => {
+                let _ = tx.blocking_send(PadEvent::Unavailable(describe_error(&e)));
+                return;
+            }
+        };
+        for (_, pad) in gilrs.gamepads() {
+            if tx.blocking_send(PadEvent::Connected(pad.name().to_string())).is_err() {
+                return;
+            }
+        }
+        loop {
+            if tx.is_closed() {
+                return;
+            }
+            let Some(ev) = gilrs.next_event_blocking(Some(Duration::from_millis(200))) else {
+                continue;
+            };
+            use gilrs::EventType as E;
+            let out = match ev.event {
+                E::Connected => Some(PadEvent::Connected(gilrs.gamepad(ev.id).name().to_string())),
+                E::Disconnected => Some(PadEvent::Disconnected),
+                E::AxisChanged(a, v, _) => match a {
+                    gilrs::Axis::LeftStickX => Some(PadEvent::Axis(Axis::LeftX, v)),
+                    gilrs::Axis::LeftStickY => Some(PadEvent::Axis(Axis::LeftY, v)),
+                    gilrs::Axis::RightStickX => Some(PadEvent::Axis(Axis::RightX, v)),
+                    gilrs::Axis::RightStickY => Some(PadEvent::Axis(Axis::RightY, v)),
+                    _ => None,
+                },
+                E::ButtonChanged(gilrs::Button::RightTrigger2, v, _) => Some(PadEvent::Axis(Axis::RightTrigger, v)),
+                E::ButtonPressed(b, _) => Button::from_gilrs(b).map(PadEvent::Pressed),
+                E::ButtonReleased(b, _) => Button::from_gilrs(b).map(PadEvent::Released),
+                _ => None,
+            };
+            if let Some(out) = out {
+                if tx.blocking_send(out).is_err() {
+                    return;
+                }
+            }
+        }
+    })
+}
+
+fn describe_error(e: &gilrs::Error) -> String {
+    match e {
+        gilrs::Error::NotImplemented(_) => "no gamepad support on this platform".into(),
+        gilrs::Error::InvalidAxisToBtn => "gamepad mapping error".into(),
+        gilrs::Error::Other(inner) => format!("no gamepad input ({inner})"),
+        other => format!("no gamepad input ({other})"),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config::Config;
+
+    fn pad() -> PadState {
+        let mut p = PadState::new(Config::defaults().gamepad);
+        p.apply(&PadEvent::Connected("Test Pad".into()));
+        p
+    }
+
+    #[test]
+    fn deadzone_and_expo() {
+        assert_eq!(shape(0.1, 0.15, 2.0), 0.0);
+        assert_eq!(shape(1.0, 0.15, 2.0), 1.0);
+        let half = shape(0.575, 0.15, 2.0);
+        assert!((half - 0.25).abs() < 1e-3, "{half}");
+    }
+
+    #[test]
+    fn stick_is_polar() {
+        let mut p = pad();
+        assert!(p.drive().is_none());
+        p.apply(&PadEvent::Axis(Axis::LeftX, 1.0));
+        let d = p.drive().unwrap();
+        assert!((d.heading - 90.0).abs() < 1e-3);
+        assert_eq!(p.speed(&d, 255), 160);
+        p.apply(&PadEvent::Axis(Axis::RightTrigger, 1.0));
+        assert_eq!(p.speed(&d, 255), 255);
+        p.apply(&PadEvent::Axis(Axis::LeftX, 0.0));
+        p.apply(&PadEvent::Axis(Axis::LeftY, -1.0));
+        assert!((p.drive().unwrap().heading - 180.0).abs() < 1e-3);
+        // Back inside the deadzone: no drive input.
+        p.apply(&PadEvent::Axis(Axis::LeftY, -0.05));
+        assert!(p.drive().is_none());
+    }
+
+    #[test]
+    fn unplug_resets() {
+        let mut p = pad();
+        p.apply(&PadEvent::Axis(Axis::LeftY, 1.0));
+        p.apply(&PadEvent::Pressed(Button::East));
+        assert!(p.drive().is_some() && p.estop_held());
+        p.apply(&PadEvent::Disconnected);
+        assert!(p.drive().is_none() && !p.estop_held());
+        assert_eq!(p.dome_rate(), 0.0);
+    }
+
+    #[test]
+    fn buttons_map_to_commands() {
+        let mut p = pad();
+        assert_eq!(p.apply(&PadEvent::Pressed(Button::South)), Some(PadCommand::Tripod));
+        assert_eq!(p.apply(&PadEvent::Pressed(Button::North)), Some(PadCommand::Bipod));
+        assert_eq!(p.apply(&PadEvent::Pressed(Button::East)), Some(PadCommand::EStop));
+        assert_eq!(p.apply(&PadEvent::Pressed(Button::West)), Some(PadCommand::Animation));
+        assert_eq!(p.apply(&PadEvent::Pressed(Button::DPadUp)), Some(PadCommand::Sound(1915)));
+        assert_eq!(p.apply(&PadEvent::Pressed(Button::Start)), None);
+        p.apply(&PadEvent::Axis(Axis::RightX, -1.0));
+        assert_eq!(p.dome_rate(), -180.0);
+    }
+}
