@@ -149,7 +149,8 @@ fn find_key_line(text: &str, section: &str, key: &str) -> Option<usize> {
 impl Config {
     /// The shipped defaults.
     pub fn defaults() -> Config {
-        Config::parse_merged(None, "").unwrap_or_else(|e| panic!("shipped defaults are invalid: {e}"))
+        Config::parse_merged(None, "")
+            .unwrap_or_else(|e| panic!("shipped defaults are invalid: {e}"))
     }
 
     /// Load the user's file if it exists, merged over the defaults.
@@ -175,10 +176,14 @@ impl Config {
             message,
         };
         let user: toml::Table = toml::from_str(text).map_err(|e: toml::de::Error| {
-            err(e.span().map(|s| line_of(text, s.start)), None, e.message().to_string())
+            err(
+                e.span().map(|s| line_of(text, s.start)),
+                None,
+                e.message().to_string(),
+            )
         })?;
-        let mut base: toml::Table =
-            toml::from_str(DEFAULT_TOML).map_err(|e| err(None, None, format!("shipped defaults: {e}")))?;
+        let mut base: toml::Table = toml::from_str(DEFAULT_TOML)
+            .map_err(|e| err(None, None, format!("shipped defaults: {e}")))?;
         // Key bindings replace per action, so one action can be rebound without repeating
         // the whole table; other sections merge key by key.
         merge(&mut base, user);
@@ -198,8 +203,13 @@ impl Config {
             });
             err(line, key, msg)
         })?;
-        cfg.validate()
-            .map_err(|(section, key, message)| err(find_key_line(text, &section, &key), Some(format!("{section}.{key}")), message))?;
+        cfg.validate().map_err(|(section, key, message)| {
+            err(
+                find_key_line(text, &section, &key),
+                Some(format!("{section}.{key}")),
+                message,
+            )
+        })?;
         Ok(cfg)
     }
 
@@ -207,7 +217,11 @@ impl Config {
     fn validate(&self) -> Result<(), (String, String, String)> {
         let bad = |s: &str, k: &str, m: String| Err((s.to_string(), k.to_string(), m));
         if !(1..=50).contains(&self.control.rate_hz) {
-            return bad("control", "rate_hz", format!("{} is out of range 1..=50", self.control.rate_hz));
+            return bad(
+                "control",
+                "rate_hz",
+                format!("{} is out of range 1..=50", self.control.rate_hz),
+            );
         }
         if !(self.control.turn_rate_deg_s > 0.0 && self.control.turn_rate_deg_s <= 720.0) {
             return bad("control", "turn_rate_deg_s", "must be in 0..=720".into());
@@ -228,7 +242,10 @@ impl Config {
                 "must be at least release_repeat_ms (the first repeat comes later than the next ones)".into(),
             );
         }
-        for (k, v) in [("release_first_ms", self.keyboard.release_first_ms), ("release_repeat_ms", self.keyboard.release_repeat_ms)] {
+        for (k, v) in [
+            ("release_first_ms", self.keyboard.release_first_ms),
+            ("release_repeat_ms", self.keyboard.release_repeat_ms),
+        ] {
             if !(20..=5000).contains(&v) {
                 return bad("keyboard", k, format!("{v} is out of range 20..=5000"));
             }
@@ -244,7 +261,13 @@ impl Config {
             ("help", &self.gamepad.help),
         ] {
             if crate::teleop::gamepad::Button::parse(name).is_none() {
-                return bad("gamepad", k, format!("unknown button {name:?} (use South, East, North, West, Start, Select, LeftBumper, RightBumper)"));
+                return bad(
+                    "gamepad",
+                    k,
+                    format!(
+                        "unknown button {name:?} (use South, East, North, West, Start, Select, LeftBumper, RightBumper)"
+                    ),
+                );
             }
         }
         Ok(())
@@ -265,7 +288,11 @@ mod tests {
 
     #[test]
     fn user_values_merge_over_defaults() {
-        let c = Config::parse_merged(None, "[control]\nrate_hz = 20\nmode = \"latched\"\n[keys]\nquit = [\"Ctrl+q\"]\n").unwrap();
+        let c = Config::parse_merged(
+            None,
+            "[control]\nrate_hz = 20\nmode = \"latched\"\n[keys]\nquit = [\"Ctrl+q\"]\n",
+        )
+        .unwrap();
         assert_eq!(c.control.rate_hz, 20);
         assert_eq!(c.control.mode, DriveMode::Latched);
         assert_eq!(c.control.cruise_speed, 100);
@@ -279,10 +306,17 @@ mod tests {
         let e = Config::parse_merged(Some(p), "[control]\n\nrate_hz = 99\n").unwrap_err();
         assert_eq!(e.line, Some(3));
         assert_eq!(e.key.as_deref(), Some("control.rate_hz"));
-        assert!(e.to_string().starts_with("/home/u/.config/droidctl/config.toml:3: key `control.rate_hz`"), "{e}");
+        assert!(
+            e.to_string()
+                .starts_with("/home/u/.config/droidctl/config.toml:3: key `control.rate_hz`"),
+            "{e}"
+        );
 
         let e = Config::parse_merged(Some(p), "[control]\nrate_hz = \"fast\"\n").unwrap_err();
-        assert!(e.message.contains("integer") || e.message.contains("invalid type"), "{e}");
+        assert!(
+            e.message.contains("integer") || e.message.contains("invalid type"),
+            "{e}"
+        );
 
         let e = Config::parse_merged(Some(p), "[control]\nwarp = 9\n").unwrap_err();
         assert_eq!(e.key.as_deref(), Some("warp"));
@@ -296,7 +330,10 @@ mod tests {
         assert_eq!(e.line, Some(2));
 
         let e = Config::parse_merged(Some(p), "[keys]\nforward = [\"t\"]\n").unwrap_err();
-        assert!(e.message.contains("turbo"), "{e}");
+        assert!(
+            e.message.contains("turbo") && e.message.contains("forward"),
+            "{e}"
+        );
 
         let e = Config::parse_merged(Some(p), "[gamepad]\ntripod = \"Z\"\n").unwrap_err();
         assert_eq!(e.key.as_deref(), Some("gamepad.tripod"));

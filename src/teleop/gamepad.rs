@@ -149,7 +149,13 @@ impl PadState {
                 self.axes = [0.0; 5];
                 self.pressed.clear();
             }
-            PadEvent::Axis(a, v) => self.axes[axis_index(*a)] = if v.is_finite() { v.clamp(-1.0, 1.0) } else { 0.0 },
+            PadEvent::Axis(a, v) => {
+                self.axes[axis_index(*a)] = if v.is_finite() {
+                    v.clamp(-1.0, 1.0)
+                } else {
+                    0.0
+                }
+            }
             PadEvent::Released(b) => {
                 self.pressed.remove(b);
             }
@@ -191,7 +197,10 @@ impl PadState {
         }
         // gilrs: stick up is +y. Compass: up = 0°, right = 90°.
         let heading = x.atan2(y).to_degrees().rem_euclid(360.0);
-        Some(PadDrive { heading, magnitude: m })
+        Some(PadDrive {
+            heading,
+            magnitude: m,
+        })
     }
 
     /// Speed 0..=255 for a drive input: the stick scales up to `max_speed`, the right trigger
@@ -216,49 +225,58 @@ impl PadState {
 /// Start the gamepad thread. It sends events until the receiver is dropped. When gilrs cannot
 /// start (no udev, no /dev/input) it sends one `Unavailable` and ends.
 pub fn spawn(tx: mpsc::Sender<PadEvent>) -> std::io::Result<std::thread::JoinHandle<()>> {
-    std::thread::Builder::new().name("gamepad".into()).spawn(move || {
-        let mut gilrs = match gilrs::Gilrs::new() {
-            Ok(g) => g,
-            Err(e) => {
-                let _ = tx.blocking_send(PadEvent::Unavailable(describe_error(&e)));
-                return;
-            }
-        };
-        for (_, pad) in gilrs.gamepads() {
-            if tx.blocking_send(PadEvent::Connected(pad.name().to_string())).is_err() {
-                return;
-            }
-        }
-        loop {
-            if tx.is_closed() {
-                return;
-            }
-            let Some(ev) = gilrs.next_event_blocking(Some(Duration::from_millis(200))) else {
-                continue;
+    std::thread::Builder::new()
+        .name("gamepad".into())
+        .spawn(move || {
+            let mut gilrs = match gilrs::Gilrs::new() {
+                Ok(g) => g,
+                Err(e) => {
+                    let _ = tx.blocking_send(PadEvent::Unavailable(describe_error(&e)));
+                    return;
+                }
             };
-            use gilrs::EventType as E;
-            let out = match ev.event {
-                E::Connected => Some(PadEvent::Connected(gilrs.gamepad(ev.id).name().to_string())),
-                E::Disconnected => Some(PadEvent::Disconnected),
-                E::AxisChanged(a, v, _) => match a {
-                    gilrs::Axis::LeftStickX => Some(PadEvent::Axis(Axis::LeftX, v)),
-                    gilrs::Axis::LeftStickY => Some(PadEvent::Axis(Axis::LeftY, v)),
-                    gilrs::Axis::RightStickX => Some(PadEvent::Axis(Axis::RightX, v)),
-                    gilrs::Axis::RightStickY => Some(PadEvent::Axis(Axis::RightY, v)),
-                    _ => None,
-                },
-                E::ButtonChanged(gilrs::Button::RightTrigger2, v, _) => Some(PadEvent::Axis(Axis::RightTrigger, v)),
-                E::ButtonPressed(b, _) => Button::from_gilrs(b).map(PadEvent::Pressed),
-                E::ButtonReleased(b, _) => Button::from_gilrs(b).map(PadEvent::Released),
-                _ => None,
-            };
-            if let Some(out) = out {
-                if tx.blocking_send(out).is_err() {
+            for (_, pad) in gilrs.gamepads() {
+                if tx
+                    .blocking_send(PadEvent::Connected(pad.name().to_string()))
+                    .is_err()
+                {
                     return;
                 }
             }
-        }
-    })
+            loop {
+                if tx.is_closed() {
+                    return;
+                }
+                let Some(ev) = gilrs.next_event_blocking(Some(Duration::from_millis(200))) else {
+                    continue;
+                };
+                use gilrs::EventType as E;
+                let out = match ev.event {
+                    E::Connected => {
+                        Some(PadEvent::Connected(gilrs.gamepad(ev.id).name().to_string()))
+                    }
+                    E::Disconnected => Some(PadEvent::Disconnected),
+                    E::AxisChanged(a, v, _) => match a {
+                        gilrs::Axis::LeftStickX => Some(PadEvent::Axis(Axis::LeftX, v)),
+                        gilrs::Axis::LeftStickY => Some(PadEvent::Axis(Axis::LeftY, v)),
+                        gilrs::Axis::RightStickX => Some(PadEvent::Axis(Axis::RightX, v)),
+                        gilrs::Axis::RightStickY => Some(PadEvent::Axis(Axis::RightY, v)),
+                        _ => None,
+                    },
+                    E::ButtonChanged(gilrs::Button::RightTrigger2, v, _) => {
+                        Some(PadEvent::Axis(Axis::RightTrigger, v))
+                    }
+                    E::ButtonPressed(b, _) => Button::from_gilrs(b).map(PadEvent::Pressed),
+                    E::ButtonReleased(b, _) => Button::from_gilrs(b).map(PadEvent::Released),
+                    _ => None,
+                };
+                if let Some(out) = out {
+                    if tx.blocking_send(out).is_err() {
+                        return;
+                    }
+                }
+            }
+        })
 }
 
 fn describe_error(e: &gilrs::Error) -> String {
@@ -321,11 +339,26 @@ mod tests {
     #[test]
     fn buttons_map_to_commands() {
         let mut p = pad();
-        assert_eq!(p.apply(&PadEvent::Pressed(Button::South)), Some(PadCommand::Tripod));
-        assert_eq!(p.apply(&PadEvent::Pressed(Button::North)), Some(PadCommand::Bipod));
-        assert_eq!(p.apply(&PadEvent::Pressed(Button::East)), Some(PadCommand::EStop));
-        assert_eq!(p.apply(&PadEvent::Pressed(Button::West)), Some(PadCommand::Animation));
-        assert_eq!(p.apply(&PadEvent::Pressed(Button::DPadUp)), Some(PadCommand::Sound(1915)));
+        assert_eq!(
+            p.apply(&PadEvent::Pressed(Button::South)),
+            Some(PadCommand::Tripod)
+        );
+        assert_eq!(
+            p.apply(&PadEvent::Pressed(Button::North)),
+            Some(PadCommand::Bipod)
+        );
+        assert_eq!(
+            p.apply(&PadEvent::Pressed(Button::East)),
+            Some(PadCommand::EStop)
+        );
+        assert_eq!(
+            p.apply(&PadEvent::Pressed(Button::West)),
+            Some(PadCommand::Animation)
+        );
+        assert_eq!(
+            p.apply(&PadEvent::Pressed(Button::DPadUp)),
+            Some(PadCommand::Sound(1915))
+        );
         assert_eq!(p.apply(&PadEvent::Pressed(Button::Start)), None);
         p.apply(&PadEvent::Axis(Axis::RightX, -1.0));
         assert_eq!(p.dome_rate(), -180.0);

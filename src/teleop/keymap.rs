@@ -42,7 +42,10 @@ impl Key {
 
     /// Parse a config name: "Up", "Space", "F1", "w", "+", "Ctrl+c".
     pub fn parse(name: &str) -> Option<Key> {
-        let (ctrl, rest) = match name.strip_prefix("Ctrl+").or_else(|| name.strip_prefix("ctrl+")) {
+        let (ctrl, rest) = match name
+            .strip_prefix("Ctrl+")
+            .or_else(|| name.strip_prefix("ctrl+"))
+        {
             Some(r) => (true, r),
             None => (false, name),
         };
@@ -60,7 +63,9 @@ impl Key {
             "PageDown" => KeyCode::PageDown,
             "Home" => KeyCode::Home,
             "End" => KeyCode::End,
-            f if f.len() >= 2 && f.starts_with('F') => KeyCode::F(f[1..].parse().ok().filter(|n| (1..=12).contains(n))?),
+            f if f.len() >= 2 && f.starts_with('F') => {
+                KeyCode::F(f[1..].parse().ok().filter(|n| (1..=12).contains(n))?)
+            }
             s => {
                 let mut chars = s.chars();
                 let c = chars.next()?;
@@ -192,7 +197,13 @@ impl Action {
     pub fn is_held(self) -> bool {
         matches!(
             self,
-            Action::Forward | Action::Backward | Action::Left | Action::Right | Action::DomeLeft | Action::DomeRight | Action::EStop
+            Action::Forward
+                | Action::Backward
+                | Action::Left
+                | Action::Right
+                | Action::DomeLeft
+                | Action::DomeRight
+                | Action::EStop
         )
     }
 
@@ -216,17 +227,26 @@ impl KeyMap {
         for (name, names) in keys {
             let action = Action::from_config_name(name).ok_or_else(|| {
                 let all: Vec<&str> = Action::ALL.iter().map(|a| a.config_name()).collect();
-                (name.clone(), format!("unknown action; expected one of {}", all.join(", ")))
+                (
+                    name.clone(),
+                    format!("unknown action; expected one of {}", all.join(", ")),
+                )
             })?;
             for kn in names {
                 let key = Key::parse(kn).ok_or_else(|| {
-                    (name.clone(), format!("unknown key {kn:?} (e.g. \"Up\", \"Space\", \"w\", \"Ctrl+c\")"))
+                    (
+                        name.clone(),
+                        format!("unknown key {kn:?} (e.g. \"Up\", \"Space\", \"w\", \"Ctrl+c\")"),
+                    )
                 })?;
                 if let Some(other) = map.insert(key, action) {
                     if other != action {
                         return Err((
                             name.clone(),
-                            format!("key {kn:?} is also bound to {}", other.config_name()),
+                            format!(
+                                "key {kn:?} is bound to both {} and {name}",
+                                other.config_name()
+                            ),
                         ));
                     }
                 }
@@ -235,7 +255,10 @@ impl KeyMap {
         }
         for a in [Action::Quit, Action::EStop] {
             if by_action.get(&a).is_none_or(|k| k.is_empty()) {
-                return Err((a.config_name().to_string(), "must have at least one key".into()));
+                return Err((
+                    a.config_name().to_string(),
+                    "must have at least one key".into(),
+                ));
             }
         }
         Ok(KeyMap { map, by_action })
@@ -272,7 +295,13 @@ mod tests {
         assert_eq!(Key::parse("Up"), Some(Key::plain(KeyCode::Up)));
         assert_eq!(Key::parse("w"), Some(Key::ch('w')));
         assert_eq!(Key::parse("Q"), Some(Key::ch('Q')));
-        assert_eq!(Key::parse("Ctrl+c"), Some(Key { code: KeyCode::Char('c'), ctrl: true }));
+        assert_eq!(
+            Key::parse("Ctrl+c"),
+            Some(Key {
+                code: KeyCode::Char('c'),
+                ctrl: true
+            })
+        );
         assert_eq!(Key::parse("F12"), Some(Key::plain(KeyCode::F(12))));
         assert_eq!(Key::parse("F13"), None);
         assert_eq!(Key::parse("ww"), None);
@@ -297,7 +326,8 @@ mod tests {
     fn conflicts_and_unknowns_are_errors() {
         let mut keys = Config::defaults().keys;
         keys.insert("forward".into(), vec!["t".into()]);
-        assert_eq!(KeyMap::from_config(&keys).unwrap_err().0, "forward");
+        let (_, msg) = KeyMap::from_config(&keys).unwrap_err();
+        assert!(msg.contains("forward") && msg.contains("turbo"), "{msg}");
         let mut keys = Config::defaults().keys;
         keys.insert("fly".into(), vec!["f".into()]);
         assert_eq!(KeyMap::from_config(&keys).unwrap_err().0, "fly");

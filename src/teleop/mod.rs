@@ -2,5 +2,7 @@
 //! control loop are sans-IO (explicit time), so deadman, e-stop and emulated key release are
 //! tested deterministically.
 
+pub mod control;
 pub mod gamepad;
+pub mod held;
 pub mod keymap;

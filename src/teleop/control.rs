@@ -1,0 +1,585 @@
+//! The control loop's logic: input state in, commands out, once per tick. Sans-IO: the caller
+//! supplies elapsed time and sends the outputs (drive and head through the session's
+//! latest-wins slots, so a change goes out at once and never queues behind stale commands).
+//!
+//! Safety rules: speed is 0 unless drive input is present right now (deadman: key released,
+//! emulated release timed out, stick in its deadzone, pad unplugged, focus lost, link down);
+//! an e-stop forces 0 immediately and stays latched while held.
+
+use super::gamepad::PadDrive;
+use crate::app::state::ControlView;
+use crate::config::{Control as ControlConfig, DriveMode};
+use crate::protocol::v2::wire::LegState;
+use crate::protocol::v2::wire::{DriveFlags, LegAction};
+use crate::protocol::v2::{Command, cmd};
+use crate::telemetry::Stance;
+use crate::units::{HEAD_MAX_DEG, HEAD_MIN_DEG, HeadAngle, Heading};
+use std::time::Duration;
+
+/// Input state at one instant.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Inputs {
+    pub forward: bool,
+    pub backward: bool,
+    pub left: bool,
+    pub right: bool,
+    pub dome_left: bool,
+    pub dome_right: bool,
+    pub estop: bool,
+    /// Left stick outside its deadzone, and the speed it asks for.
+    pub pad: Option<(PadDrive, u8)>,
+    /// Right stick dome rate, °/s.
+    pub pad_dome_rate: f32,
+}
+
+/// What the controller needs to know about the droid.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DroidView {
+    pub connected: bool,
+    pub has_legs: bool,
+    pub has_dome: bool,
+    pub stance: Stance,
+}
+
+/// What to send or show.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Out {
+    /// Latest drive command (for the drive slot).
+    Drive(Command),
+    /// Latest dome command (for the head slot).
+    Head(Command),
+    /// Change stance.
+    Stance(LegAction),
+    /// Tell the operator something.
+    Hint(String),
+}
+
+pub struct Controller {
+    cfg: ControlConfig,
+    heading: f32,
+    cruise: u8,
+    turbo: bool,
+    /// Latched mode: signed speed.
+    latched: i16,
+    head_target: f32,
+    estop: bool,
+    last_drive: Option<(u8, u16, u8)>,
+    last_head: Option<i32>,
+    /// When tripod was last requested automatically (so it is asked once, not every tick).
+    tripod_asked: Option<Duration>,
+    now: Duration,
+    view: ControlView,
+}
+
+const TRIPOD_RETRY: Duration = Duration::from_secs(4);
+
+impl Controller {
+    pub fn new(cfg: ControlConfig) -> Self {
+        let cruise = cfg.cruise_speed;
+        let mode = match cfg.mode {
+            DriveMode::Hold => "hold",
+            DriveMode::Latched => "latched",
+        };
+        Controller {
+            cfg,
+            heading: 0.0,
+            cruise,
+            turbo: false,
+            latched: 0,
+            head_target: 0.0,
+            estop: false,
+            last_drive: None,
+            last_head: None,
+            tripod_asked: None,
+            now: Duration::ZERO,
+            view: ControlView {
+                cruise,
+                mode,
+                ..ControlView::default()
+            },
+        }
+    }
+
+    pub fn view(&self) -> &ControlView {
+        &self.view
+    }
+
+    fn stop_cmd(&self) -> Command {
+        cmd::drive_with_heading(
+            0,
+            Heading::wrapped(self.heading as f64),
+            DriveFlags::empty(),
+        )
+    }
+
+    /// Emergency stop, now: the stop to put in the drive slot at once.
+    pub fn estop_now(&mut self) -> Out {
+        self.estop = true;
+        self.latched = 0;
+        let stop = self.stop_cmd();
+        self.last_drive = Some((0, Heading::wrapped(self.heading as f64).degrees(), 0));
+        self.view.estop = true;
+        self.view.speed = 0;
+        Out::Drive(stop)
+    }
+
+    /// The link went down: forget what was sent, drop latched speed.
+    pub fn link_lost(&mut self) {
+        self.latched = 0;
+        self.turbo = false;
+        self.last_drive = None;
+        self.last_head = None;
+    }
+
+    /// A one-shot action (key or button press).
+    pub fn on_press(&mut self, a: super::keymap::Action, droid: &DroidView) -> Vec<Out> {
+        use super::keymap::Action as A;
+        let step = self.cfg.speed_step as i16;
+        match a {
+            A::Faster => self.cruise = self.cruise.saturating_add(self.cfg.speed_step),
+            A::Slower => self.cruise = self.cruise.saturating_sub(self.cfg.speed_step),
+            A::Turbo => self.turbo = !self.turbo,
+            A::Forward if self.cfg.mode == DriveMode::Latched => {
+                self.latched = (self.latched + step).min(255)
+            }
+            A::Backward if self.cfg.mode == DriveMode::Latched => {
+                self.latched = (self.latched - step).max(-255)
+            }
+            A::EStop => return vec![self.estop_now()],
+            A::Tripod | A::Bipod | A::Waddle | A::StanceStop => {
+                if !droid.has_legs {
+                    return vec![Out::Hint("this droid has no legs".into())];
+                }
+                let leg = match a {
+                    A::Tripod => LegAction::Tripod,
+                    A::Bipod => LegAction::Bipod,
+                    A::Waddle => LegAction::Waddle,
+                    _ => LegAction::Stop,
+                };
+                return vec![Out::Stance(leg)];
+            }
+            _ => {}
+        }
+        self.view.cruise = self.cruise;
+        self.view.turbo = self.turbo;
+        Vec::new()
+    }
+
+    /// One control tick. `dt` is the time since the last tick (0 for an immediate update after
+    /// a release); `heartbeat` re-sends the drive command while moving so the droid's motion
+    /// timeout never stops it.
+    pub fn tick(
+        &mut self,
+        inp: &Inputs,
+        dt: Duration,
+        droid: &DroidView,
+        heartbeat: bool,
+    ) -> Vec<Out> {
+        self.now += dt;
+        let dt_s = dt.as_secs_f32();
+        let mut out = Vec::new();
+        self.estop = inp.estop;
+
+        // Heading: held turn keys turn it (also while stopped, to aim); the stick sets it.
+        let turn = (inp.right as i8 - inp.left as i8) as f32;
+        self.heading = (self.heading + turn * self.cfg.turn_rate_deg_s * dt_s).rem_euclid(360.0);
+        if let Some((pad, _)) = inp.pad {
+            self.heading = pad.heading;
+        }
+
+        // Dome.
+        if droid.has_dome {
+            let rate = (inp.dome_right as i8 - inp.dome_left as i8) as f32
+                * self.cfg.dome_rate_deg_s
+                + inp.pad_dome_rate;
+            let t = self.head_target + rate * dt_s;
+            self.head_target = if t.is_finite() {
+                t.clamp(HEAD_MIN_DEG, HEAD_MAX_DEG)
+            } else {
+                0.0
+            };
+        }
+
+        // Speed: only while input says so right now.
+        if !droid.connected {
+            self.latched = 0;
+        }
+        let (mut speed, reverse, source) = if self.estop || !droid.connected {
+            (0u8, false, "-")
+        } else if let Some((_, s)) = inp.pad {
+            (s, false, "gamepad")
+        } else {
+            match self.cfg.mode {
+                DriveMode::Hold if inp.forward != inp.backward => (
+                    if self.turbo {
+                        self.cfg.turbo_speed
+                    } else {
+                        self.cruise
+                    },
+                    inp.backward,
+                    "keyboard",
+                ),
+                DriveMode::Hold => (0, false, "-"),
+                DriveMode::Latched => (
+                    self.latched.unsigned_abs().min(255) as u8,
+                    self.latched < 0,
+                    "keyboard",
+                ),
+            }
+        };
+        if self.estop {
+            self.latched = 0;
+        }
+
+        // R2 rolls only in tripod.
+        if speed > 0 && droid.has_legs {
+            match droid.stance {
+                Stance::Tripod | Stance::Unknown => {}
+                Stance::Transitioning(LegState::Tripod) => speed = 0,
+                _ => {
+                    speed = 0;
+                    let asked_recently = self
+                        .tripod_asked
+                        .is_some_and(|t| self.now.saturating_sub(t) < TRIPOD_RETRY);
+                    if self.cfg.auto_tripod {
+                        if !asked_recently {
+                            self.tripod_asked = Some(self.now);
+                            out.push(Out::Stance(LegAction::Tripod));
+                            out.push(Out::Hint(
+                                "R2 can't roll on two legs — switching to tripod".into(),
+                            ));
+                        }
+                    } else if !asked_recently {
+                        self.tripod_asked = Some(self.now);
+                        out.push(Out::Hint(
+                            "R2 can't roll on two legs — press 1 for tripod".into(),
+                        ));
+                    }
+                }
+            }
+        }
+
+        // Drive: while moving (heartbeat) and whenever it changes.
+        let travel = Heading::wrapped(self.heading as f64);
+        let wire_heading = if reverse { travel.reversed() } else { travel };
+        let flags = if reverse {
+            DriveFlags::BACKWARD
+        } else {
+            DriveFlags::empty()
+        };
+        let key = (speed, wire_heading.degrees(), flags.bits());
+        if droid.connected && ((speed > 0 && heartbeat) || self.last_drive != Some(key)) {
+            self.last_drive = Some(key);
+            out.push(Out::Drive(cmd::drive_with_heading(
+                speed,
+                wire_heading,
+                flags,
+            )));
+        }
+
+        // Dome: when the target changes by a degree or more.
+        let head = self.head_target.round() as i32;
+        if droid.connected && droid.has_dome && self.last_head != Some(head) {
+            self.last_head = Some(head);
+            out.push(Out::Head(cmd::set_head_position(HeadAngle::clamped(
+                head as f32,
+            ))));
+        }
+
+        self.view = ControlView {
+            speed,
+            heading: travel,
+            reverse,
+            turbo: self.turbo,
+            cruise: self.cruise,
+            estop: self.estop,
+            deadman: speed == 0 && !self.estop,
+            head_target: self.head_target,
+            mode: self.view.mode,
+            source,
+        };
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config::Config;
+    use crate::teleop::keymap::Action;
+
+    const R2: DroidView = DroidView {
+        connected: true,
+        has_legs: true,
+        has_dome: true,
+        stance: Stance::Tripod,
+    };
+    const TICK: Duration = Duration::from_millis(100);
+
+    fn controller() -> Controller {
+        Controller::new(Config::defaults().control)
+    }
+
+    fn drives(out: &[Out]) -> Vec<(u8, u16, u8)> {
+        out.iter()
+            .filter_map(|o| match o {
+                Out::Drive(c) => Some((
+                    c.data[0],
+                    u16::from_be_bytes([c.data[1], c.data[2]]),
+                    c.data[3],
+                )),
+                _ => None,
+            })
+            .collect()
+    }
+
+    #[test]
+    fn hold_forward_then_release_stops() {
+        let mut c = controller();
+        let fwd = Inputs {
+            forward: true,
+            ..Inputs::default()
+        };
+        assert_eq!(drives(&c.tick(&fwd, TICK, &R2, true)), vec![(100, 0, 0)]);
+        // Heartbeat: sent every tick while moving.
+        assert_eq!(drives(&c.tick(&fwd, TICK, &R2, true)), vec![(100, 0, 0)]);
+        // Released: one stop, then nothing.
+        assert_eq!(
+            drives(&c.tick(&Inputs::default(), TICK, &R2, true)),
+            vec![(0, 0, 0)]
+        );
+        assert!(drives(&c.tick(&Inputs::default(), TICK, &R2, true)).is_empty());
+        assert!(c.view().deadman);
+    }
+
+    #[test]
+    fn reverse_uses_backward_flag_and_opposite_heading() {
+        let mut c = controller();
+        let back = Inputs {
+            backward: true,
+            ..Inputs::default()
+        };
+        assert_eq!(
+            drives(&c.tick(&back, TICK, &R2, true)),
+            vec![(100, 180, 0x01)]
+        );
+        assert!(c.view().reverse);
+    }
+
+    #[test]
+    fn turning_aims_while_stopped() {
+        let mut c = controller();
+        let right = Inputs {
+            right: true,
+            ..Inputs::default()
+        };
+        // 90 °/s for 0.5 s.
+        let mut last = Vec::new();
+        for _ in 0..5 {
+            last = drives(&c.tick(&right, TICK, &R2, true));
+        }
+        assert_eq!(last, vec![(0, 45, 0)]);
+        let left = Inputs {
+            left: true,
+            ..Inputs::default()
+        };
+        for _ in 0..10 {
+            c.tick(&left, TICK, &R2, true);
+        }
+        assert_eq!(c.view().heading.degrees(), 315);
+    }
+
+    #[test]
+    fn estop_is_immediate_and_latched_while_held() {
+        let mut c = controller();
+        let fwd = Inputs {
+            forward: true,
+            ..Inputs::default()
+        };
+        c.tick(&fwd, TICK, &R2, true);
+        let Out::Drive(stop) = c.estop_now() else {
+            panic!()
+        };
+        assert_eq!(stop.data[0], 0);
+        let held = Inputs {
+            forward: true,
+            estop: true,
+            ..Inputs::default()
+        };
+        for _ in 0..5 {
+            assert!(
+                drives(&c.tick(&held, TICK, &R2, true))
+                    .iter()
+                    .all(|d| d.0 == 0)
+            );
+            assert!(c.view().estop);
+        }
+        // Released: driving resumes only because forward is still held.
+        assert_eq!(drives(&c.tick(&fwd, TICK, &R2, true)), vec![(100, 0, 0)]);
+    }
+
+    #[test]
+    fn cruise_and_turbo() {
+        let mut c = controller();
+        c.on_press(Action::Faster, &R2);
+        c.on_press(Action::Faster, &R2);
+        let fwd = Inputs {
+            forward: true,
+            ..Inputs::default()
+        };
+        assert_eq!(drives(&c.tick(&fwd, TICK, &R2, true))[0].0, 130);
+        c.on_press(Action::Turbo, &R2);
+        assert_eq!(drives(&c.tick(&fwd, TICK, &R2, true))[0].0, 255);
+        assert!(c.view().turbo);
+    }
+
+    #[test]
+    fn latched_mode_steps_and_space_stops() {
+        let mut cfg = Config::defaults().control;
+        cfg.mode = DriveMode::Latched;
+        let mut c = Controller::new(cfg);
+        c.on_press(Action::Forward, &R2);
+        c.on_press(Action::Forward, &R2);
+        assert_eq!(
+            drives(&c.tick(&Inputs::default(), TICK, &R2, true)),
+            vec![(30, 0, 0)]
+        );
+        c.on_press(Action::EStop, &R2);
+        assert_eq!(
+            drives(&c.tick(&Inputs::default(), TICK, &R2, true)),
+            Vec::<(u8, u16, u8)>::new()
+        );
+        assert_eq!(c.view().speed, 0);
+        // Link loss drops latched speed too.
+        c.on_press(Action::Forward, &R2);
+        c.link_lost();
+        assert_eq!(
+            drives(&c.tick(&Inputs::default(), TICK, &R2, true)),
+            vec![(0, 0, 0)]
+        );
+    }
+
+    #[test]
+    fn bipod_switches_to_tripod_first() {
+        let mut c = controller();
+        let bipod = DroidView {
+            stance: Stance::Bipod,
+            ..R2
+        };
+        let fwd = Inputs {
+            forward: true,
+            ..Inputs::default()
+        };
+        let out = c.tick(&fwd, TICK, &bipod, true);
+        assert!(out.contains(&Out::Stance(LegAction::Tripod)));
+        assert!(
+            out.iter()
+                .any(|o| matches!(o, Out::Hint(h) if h.contains("tripod")))
+        );
+        assert!(drives(&out).iter().all(|d| d.0 == 0));
+        // Asked once, not every tick.
+        let out = c.tick(&fwd, TICK, &bipod, true);
+        assert!(!out.contains(&Out::Stance(LegAction::Tripod)));
+        // Transitioning: still held at 0; tripod: drives.
+        let trans = DroidView {
+            stance: Stance::Transitioning(LegState::Tripod),
+            ..R2
+        };
+        assert!(
+            drives(&c.tick(&fwd, TICK, &trans, true))
+                .iter()
+                .all(|d| d.0 == 0)
+        );
+        assert_eq!(drives(&c.tick(&fwd, TICK, &R2, true)), vec![(100, 0, 0)]);
+    }
+
+    #[test]
+    fn bipod_hint_only_when_auto_tripod_off() {
+        let mut cfg = Config::defaults().control;
+        cfg.auto_tripod = false;
+        let mut c = Controller::new(cfg);
+        let bipod = DroidView {
+            stance: Stance::Bipod,
+            ..R2
+        };
+        let out = c.tick(
+            &Inputs {
+                forward: true,
+                ..Inputs::default()
+            },
+            TICK,
+            &bipod,
+            true,
+        );
+        assert!(!out.iter().any(|o| matches!(o, Out::Stance(_))));
+        assert!(
+            out.iter()
+                .any(|o| matches!(o, Out::Hint(h) if h.contains("press 1")))
+        );
+    }
+
+    #[test]
+    fn dome_moves_and_is_clamped() {
+        let mut c = controller();
+        let right = Inputs {
+            dome_right: true,
+            ..Inputs::default()
+        };
+        let mut heads = 0;
+        for _ in 0..30 {
+            heads += c
+                .tick(&right, TICK, &R2, true)
+                .iter()
+                .filter(|o| matches!(o, Out::Head(_)))
+                .count();
+        }
+        assert_eq!(c.view().head_target, 180.0);
+        assert!(heads > 1);
+        // No change, no command.
+        assert!(
+            !c.tick(&right, TICK, &R2, true)
+                .iter()
+                .any(|o| matches!(o, Out::Head(_)))
+        );
+    }
+
+    #[test]
+    fn disconnected_sends_nothing_and_holds_zero() {
+        let mut c = controller();
+        let down = DroidView {
+            connected: false,
+            ..R2
+        };
+        let out = c.tick(
+            &Inputs {
+                forward: true,
+                ..Inputs::default()
+            },
+            TICK,
+            &down,
+            true,
+        );
+        assert!(out.is_empty());
+        assert_eq!(c.view().speed, 0);
+    }
+
+    #[test]
+    fn gamepad_drives_polar() {
+        let mut c = controller();
+        let pad = PadDrive {
+            heading: 90.0,
+            magnitude: 0.5,
+        };
+        let inp = Inputs {
+            pad: Some((pad, 80)),
+            ..Inputs::default()
+        };
+        assert_eq!(drives(&c.tick(&inp, TICK, &R2, true)), vec![(80, 90, 0)]);
+        assert_eq!(c.view().source, "gamepad");
+        // Stick back in the deadzone: stop.
+        assert_eq!(
+            drives(&c.tick(&Inputs::default(), TICK, &R2, true)),
+            vec![(0, 90, 0)]
+        );
+    }
+}
