@@ -12,7 +12,11 @@ pub fn parse(text: &str) -> Result<Vec<u8>, String> {
         if c == b'0' && i + 1 < bytes.len() && (bytes[i + 1] == b'x' || bytes[i + 1] == b'X') {
             // A `0x` prefix only counts at the start of a token.
             let at_token_start = digits.len() % 2 == 0
-                && (i == 0 || matches!(bytes[i - 1], b' ' | b'\t' | b'\n' | b'\r' | b':' | b',' | b'-'));
+                && (i == 0
+                    || matches!(
+                        bytes[i - 1],
+                        b' ' | b'\t' | b'\n' | b'\r' | b':' | b',' | b'-'
+                    ));
             if at_token_start {
                 i += 2;
                 continue;

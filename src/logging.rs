@@ -15,7 +15,11 @@ pub fn log_path() -> PathBuf {
         return PathBuf::from(p);
     }
     let dir = directories::ProjectDirs::from("", "", "droidctl")
-        .map(|d| d.state_dir().unwrap_or_else(|| d.data_local_dir()).to_path_buf())
+        .map(|d| {
+            d.state_dir()
+                .unwrap_or_else(|| d.data_local_dir())
+                .to_path_buf()
+        })
         .unwrap_or_else(std::env::temp_dir);
     dir.join("droidctl.log")
 }
@@ -24,7 +28,10 @@ fn open(path: &PathBuf) -> std::io::Result<File> {
     if let Some(dir) = path.parent() {
         fs::create_dir_all(dir)?;
     }
-    if fs::metadata(path).map(|m| m.len() > MAX_LOG_BYTES).unwrap_or(false) {
+    if fs::metadata(path)
+        .map(|m| m.len() > MAX_LOG_BYTES)
+        .unwrap_or(false)
+    {
         let _ = fs::rename(path, path.with_extension("log.1"));
     }
     OpenOptions::new().create(true).append(true).open(path)

@@ -77,9 +77,17 @@ pub struct Summary {
 /// What the runner reports as it goes.
 #[derive(Debug, Clone, PartialEq)]
 pub enum MissionEvent {
-    Step { t_ms: u64, line: usize, text: String },
+    Step {
+        t_ms: u64,
+        line: usize,
+        text: String,
+    },
     Sample(Sample),
-    Warning { t_ms: u64, line: Option<usize>, message: String },
+    Warning {
+        t_ms: u64,
+        line: Option<usize>,
+        message: String,
+    },
 }
 
 /// A mission that could not go on.
@@ -98,17 +106,28 @@ pub fn validate(model: Model, steps: &[Step]) -> Result<(), Vec<crate::script::S
         .iter()
         .filter_map(|s| {
             let problem = match &s.action {
-                Action::Stance(_) if !model.has_legs() => Some(format!("{} has no legs", model.display_name())),
-                Action::Head(_) if !model.has_dome() => Some(format!("{} has no dome to turn", model.display_name())),
+                Action::Stance(_) if !model.has_legs() => {
+                    Some(format!("{} has no legs", model.display_name()))
+                }
+                Action::Head(_) if !model.has_dome() => {
+                    Some(format!("{} has no dome to turn", model.display_name()))
+                }
                 Action::LedRgb(LedGroup::Back, _) if !model.has_legs() => {
                     Some(format!("{} has no back LED", model.display_name()))
                 }
                 _ => None,
             };
-            problem.map(|message| crate::script::ScriptError { line: s.line, message })
+            problem.map(|message| crate::script::ScriptError {
+                line: s.line,
+                message,
+            })
         })
         .collect();
-    if errors.is_empty() { Ok(()) } else { Err(errors) }
+    if errors.is_empty() {
+        Ok(())
+    } else {
+        Err(errors)
+    }
 }
 
 /// The LED command for a script line: R2 bits 0..2 front RGB, 3 logic, 4..6 back RGB,
@@ -122,7 +141,10 @@ pub fn led_command(model: Model, action: &Action) -> Option<Command> {
         Action::LedBrightness(LedGroup::Holo, b) => (if r2 { 0x0080 } else { 0x0010 }, vec![b]),
         _ => return None,
     };
-    Some(cmd::set_all_leds_with_16_bit_mask(Mask(mask), crate::protocol::v2::wire::Bytes(values)))
+    Some(cmd::set_all_leds_with_16_bit_mask(
+        Mask(mask),
+        crate::protocol::v2::wire::Bytes(values),
+    ))
 }
 
 type Emit = Arc<dyn Fn(MissionEvent) + Send + Sync>;
@@ -175,7 +197,8 @@ impl Runner {
             sleep(step).await;
             if let Some((speed, heading)) = self.driving {
                 if Instant::now() < end {
-                    self.session.set(Slot::Drive, Self::drive_cmd(speed, heading));
+                    self.session
+                        .set(Slot::Drive, Self::drive_cmd(speed, heading));
                 }
             }
         }
@@ -229,7 +252,8 @@ impl Runner {
                 lock(&self.telemetry).stance_requested(*a);
                 // Subscribe fresh so an old completion is not taken for this one.
                 self.events = self.events.resubscribe();
-                if self.request(s.line, cmd::perform_leg_action(*a)).await && *a != LegAction::Stop {
+                if self.request(s.line, cmd::perform_leg_action(*a)).await && *a != LegAction::Stop
+                {
                     self.await_stance().await;
                 }
             }
@@ -239,7 +263,8 @@ impl Runner {
                 duration,
             } => {
                 self.last_heading = *heading;
-                self.session.set(Slot::Drive, Self::drive_cmd(*speed, *heading));
+                self.session
+                    .set(Slot::Drive, Self::drive_cmd(*speed, *heading));
                 self.driving = (*speed > 0).then_some((*speed, *heading));
                 if let Some(d) = duration {
                     self.hold(*d).await;
@@ -249,21 +274,28 @@ impl Runner {
             }
             Action::Stop => {
                 self.driving = None;
-                self.session.set(Slot::Drive, Self::drive_cmd(0, self.last_heading));
+                self.session
+                    .set(Slot::Drive, Self::drive_cmd(0, self.last_heading));
             }
             Action::Head(a) => self.session.set(Slot::Head, cmd::set_head_position(*a)),
             Action::Animation(id) => {
                 self.request(s.line, cmd::play_animation(*id)).await;
             }
             Action::Sound(id) => {
-                self.request(s.line, cmd::play_audio_file(*id, AudioMode::Immediate)).await;
+                self.request(s.line, cmd::play_audio_file(*id, AudioMode::Immediate))
+                    .await;
             }
-            a @ (Action::LedRgb(..) | Action::LedBrightness(..)) => match led_command(self.model, a) {
-                Some(c) => {
-                    self.request(s.line, c).await;
+            a @ (Action::LedRgb(..) | Action::LedBrightness(..)) => {
+                match led_command(self.model, a) {
+                    Some(c) => {
+                        self.request(s.line, c).await;
+                    }
+                    None => self.warn(
+                        Some(s.line),
+                        format!("{} has no such LED", self.model.display_name()),
+                    ),
                 }
-                None => self.warn(Some(s.line), format!("{} has no such LED", self.model.display_name())),
-            },
+            }
             Action::Wait(d) => self.hold(*d).await,
         }
     }
@@ -277,7 +309,9 @@ async fn await_connected(session: &SessionHandle, limit: Duration) -> Result<(),
             match state.borrow_and_update().clone() {
                 LinkState::Connected => return Ok(()),
                 LinkState::Closed { reason } => {
-                    return Err(MissionError(reason.unwrap_or_else(|| "the session closed".into())));
+                    return Err(MissionError(
+                        reason.unwrap_or_else(|| "the session closed".into()),
+                    ));
                 }
                 _ => {}
             }
@@ -286,9 +320,12 @@ async fn await_connected(session: &SessionHandle, limit: Duration) -> Result<(),
             }
         }
     };
-    timeout(limit, wait)
-        .await
-        .unwrap_or_else(|_| Err(MissionError(format!("no connection within {} s", limit.as_secs()))))
+    timeout(limit, wait).await.unwrap_or_else(|_| {
+        Err(MissionError(format!(
+            "no connection within {} s",
+            limit.as_secs()
+        )))
+    })
 }
 
 fn sample_of(t: &Telemetry, t_ms: u64) -> Sample {
@@ -325,7 +362,9 @@ pub async fn run(
         tokio::spawn(async move {
             loop {
                 match rx.recv().await {
-                    Ok(SessionEvent::Notification(n)) => lock(&telemetry).apply(&n, start.elapsed()),
+                    Ok(SessionEvent::Notification(n)) => {
+                        lock(&telemetry).apply(&n, start.elapsed())
+                    }
                     Ok(_) | Err(broadcast::error::RecvError::Lagged(_)) => {}
                     Err(broadcast::error::RecvError::Closed) => break,
                 }
@@ -351,7 +390,9 @@ pub async fn run(
             loop {
                 if let Ok(p) = session.request(cmd::get_battery_voltage()).await {
                     if let Some(v) = catalog::decode_fields(
-                        catalog::lookup(0x13, 0x03).map(|d| d.response).unwrap_or(&[]),
+                        catalog::lookup(0x13, 0x03)
+                            .map(|d| d.response)
+                            .unwrap_or(&[]),
                         &p.data,
                     )
                     .ok()
@@ -431,4 +472,3 @@ pub async fn run(
     }
     Ok(summary)
 }
-

@@ -84,7 +84,13 @@ impl Model {
 
     pub fn from_id(id: &str) -> Option<Model> {
         let id = id.trim().to_ascii_lowercase().replace(['-', '_', ' '], "");
-        Model::ALL.into_iter().find(|m| m.id() == id || m.display_name().to_ascii_lowercase().replace(['-', ' '], "") == id)
+        Model::ALL.into_iter().find(|m| {
+            m.id() == id
+                || m.display_name()
+                    .to_ascii_lowercase()
+                    .replace(['-', ' '], "")
+                    == id
+        })
     }
 
     pub fn protocol(self) -> Protocol {

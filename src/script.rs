@@ -83,7 +83,11 @@ pub fn parse(text: &str) -> Result<Vec<Step>, Vec<ScriptError>> {
             Err(message) => errors.push(ScriptError { line, message }),
         }
     }
-    if errors.is_empty() { Ok(steps) } else { Err(errors) }
+    if errors.is_empty() {
+        Ok(steps)
+    } else {
+        Err(errors)
+    }
 }
 
 /// Parse `500ms`, `2s`, `1.5s`.
@@ -140,7 +144,11 @@ fn parse_line(content: &str) -> Result<Action, String> {
                 "bipod" => LegAction::Bipod,
                 "waddle" => LegAction::Waddle,
                 "stop" => LegAction::Stop,
-                other => return Err(format!("unknown stance {other:?}: use tripod, bipod, waddle or stop")),
+                other => {
+                    return Err(format!(
+                        "unknown stance {other:?}: use tripod, bipod, waddle or stop"
+                    ));
+                }
             };
             Ok(Action::Stance(a))
         }
@@ -151,7 +159,8 @@ fn parse_line(content: &str) -> Result<Action, String> {
             }
             let speed = int(words[1], "speed", 0, 255)?;
             let h: u16 = int(words[2], "heading", 0, 359)?;
-            let heading = Heading::new(h).ok_or_else(|| format!("heading {h} is out of range 0..=359"))?;
+            let heading =
+                Heading::new(h).ok_or_else(|| format!("heading {h} is out of range 0..=359"))?;
             let duration = if words.len() == 5 {
                 if !words[3].eq_ignore_ascii_case("for") {
                     return Err(format!("expected `for` before the duration in `{usage}`"));
@@ -185,12 +194,18 @@ fn parse_line(content: &str) -> Result<Action, String> {
         }
         "led" => {
             if words.len() < 2 {
-                return Err("expected `led front|back R G B` or `led logic|holo BRIGHTNESS`".into());
+                return Err(
+                    "expected `led front|back R G B` or `led logic|holo BRIGHTNESS`".into(),
+                );
             }
             match words[1].to_ascii_lowercase().as_str() {
                 g @ ("front" | "back") => {
                     arity(&words, 5, &format!("led {g} R G B"))?;
-                    let group = if g == "front" { LedGroup::Front } else { LedGroup::Back };
+                    let group = if g == "front" {
+                        LedGroup::Front
+                    } else {
+                        LedGroup::Back
+                    };
                     let mut rgb = [0u8; 3];
                     for (i, name) in ["red", "green", "blue"].iter().enumerate() {
                         rgb[i] = int(words[2 + i], name, 0, 255)?;
@@ -199,10 +214,19 @@ fn parse_line(content: &str) -> Result<Action, String> {
                 }
                 g @ ("logic" | "holo") => {
                     arity(&words, 3, &format!("led {g} BRIGHTNESS"))?;
-                    let group = if g == "logic" { LedGroup::Logic } else { LedGroup::Holo };
-                    Ok(Action::LedBrightness(group, int(words[2], "brightness", 0, 255)?))
+                    let group = if g == "logic" {
+                        LedGroup::Logic
+                    } else {
+                        LedGroup::Holo
+                    };
+                    Ok(Action::LedBrightness(
+                        group,
+                        int(words[2], "brightness", 0, 255)?,
+                    ))
                 }
-                other => Err(format!("unknown LED {other:?}: use front, back, logic or holo")),
+                other => Err(format!(
+                    "unknown LED {other:?}: use front, back, logic or holo"
+                )),
             }
         }
         "wait" => {
@@ -259,9 +283,18 @@ sleep
                 duration: None
             }
         );
-        assert_eq!(steps[5].action, Action::Head(HeadAngle::new(-45.5).unwrap()));
-        assert_eq!(steps[8].action, Action::LedRgb(LedGroup::Front, [255, 0, 0]));
-        assert_eq!(steps[10].action, Action::LedBrightness(LedGroup::Logic, 200));
+        assert_eq!(
+            steps[5].action,
+            Action::Head(HeadAngle::new(-45.5).unwrap())
+        );
+        assert_eq!(
+            steps[8].action,
+            Action::LedRgb(LedGroup::Front, [255, 0, 0])
+        );
+        assert_eq!(
+            steps[10].action,
+            Action::LedBrightness(LedGroup::Logic, 200)
+        );
         assert_eq!(steps[12].action, Action::Wait(Duration::from_millis(500)));
         assert_eq!(steps[14].action, Action::Sleep);
     }
@@ -303,7 +336,9 @@ sleep
         assert!(err("wait").contains("wait DURATION"));
         assert!(err("wait -1s").contains("zero or more"));
         assert!(err("wait 100000s").contains("longer than a day"));
-        assert!(err("wait NaNs").contains("zero or more") || err("wait NaNs").contains("not a number"));
+        assert!(
+            err("wait NaNs").contains("zero or more") || err("wait NaNs").contains("not a number")
+        );
     }
 
     #[test]
@@ -311,7 +346,10 @@ sleep
         let e = parse("wake\nfly\n\n# ok\ndrive 1 999\n").unwrap_err();
         let lines: Vec<usize> = e.iter().map(|e| e.line).collect();
         assert_eq!(lines, [2, 5]);
-        assert_eq!(e[1].to_string(), "line 5: heading 999 is out of range 0..=359");
+        assert_eq!(
+            e[1].to_string(),
+            "line 5: heading 999 is out of range 0..=359"
+        );
     }
 
     #[test]

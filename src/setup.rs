@@ -39,7 +39,14 @@ pub fn connect_setup(model: Model, opts: &SetupOptions) -> Vec<Command> {
         out.push(cmd::set_head_position(HeadAngle::clamped(0.0)));
     }
     // Equal x and y values sidestep the disputed parameter order (`droid-facts.md` §2).
-    out.push(cmd::configure_collision_detection(CollisionMethod::Accelerometer, 100, 100, 100, 100, 10));
+    out.push(cmd::configure_collision_detection(
+        CollisionMethod::Accelerometer,
+        100,
+        100,
+        100,
+        100,
+        10,
+    ));
     out.push(cmd::enable_collision_detected_notify(true));
     if opts.streaming_interval_ms > 0 {
         // Reconfigure as the reference clients do: mask with interval 0, extended mask, then
@@ -47,7 +54,11 @@ pub fn connect_setup(model: Model, opts: &SetupOptions) -> Vec<Command> {
         let s = streaming(opts);
         out.push(cmd::set_sensor_streaming_mask(0, 0, Mask(s.mask)));
         out.push(cmd::set_extended_sensor_streaming_mask(Mask(s.ext_mask)));
-        out.push(cmd::set_sensor_streaming_mask(s.interval_ms, 0, Mask(s.mask)));
+        out.push(cmd::set_sensor_streaming_mask(
+            s.interval_ms,
+            0,
+            Mask(s.mask),
+        ));
     }
     out.push(cmd::enable_battery_state_changed_notify(true));
     out.push(cmd::enable_battery_voltage_state_change_notify(true));
@@ -61,7 +72,10 @@ mod tests {
     #[test]
     fn r2_setup_order() {
         let cmds = connect_setup(Model::R2D2, &SetupOptions::default());
-        let names: Vec<String> = cmds.iter().map(|c| c.def().map(|d| d.name.clone()).unwrap_or_default()).collect();
+        let names: Vec<String> = cmds
+            .iter()
+            .map(|c| c.def().map(|d| d.name.clone()).unwrap_or_default())
+            .collect();
         assert_eq!(
             names,
             [

@@ -198,7 +198,13 @@ mod tests {
     fn sensors_fill_gauges_and_track() {
         let mut t = Telemetry::default();
         t.apply(
-            &sample(&[("yaw", -90.0), ("locator_x", 10.0), ("locator_y", 5.0), ("velocity_x", 3.0), ("velocity_y", 4.0)]),
+            &sample(&[
+                ("yaw", -90.0),
+                ("locator_x", 10.0),
+                ("locator_y", 5.0),
+                ("velocity_x", 3.0),
+                ("velocity_y", 4.0),
+            ]),
             Duration::ZERO,
         );
         assert_eq!(t.heading().map(Heading::degrees), Some(270));
@@ -214,7 +220,10 @@ mod tests {
     fn track_is_bounded() {
         let mut t = Telemetry::default();
         for i in 0..(TRACK_LEN * 3) {
-            t.apply(&sample(&[("locator_x", i as f32), ("locator_y", 0.0)]), Duration::ZERO);
+            t.apply(
+                &sample(&[("locator_x", i as f32), ("locator_y", 0.0)]),
+                Duration::ZERO,
+            );
         }
         assert_eq!(t.track.len(), TRACK_LEN);
         assert_eq!(t.track.back(), Some(&((TRACK_LEN * 3 - 1) as f32, 0.0)));
@@ -227,7 +236,10 @@ mod tests {
         assert_eq!(t.stance.label(), "→ tripod");
         t.apply(&Notification::LegActionComplete, Duration::ZERO);
         assert_eq!(t.stance, Stance::Tripod);
-        t.apply(&Notification::Collision(Collision::default()), Duration::from_secs(3));
+        t.apply(
+            &Notification::Collision(Collision::default()),
+            Duration::from_secs(3),
+        );
         assert_eq!(t.collisions, 1);
         assert_eq!(t.last_collision.unwrap().at, Duration::from_secs(3));
         t.apply(&Notification::WillSleep, Duration::ZERO);

@@ -12,10 +12,15 @@ async fn drive_forward_in_tripod() {
     let probe = link.probe();
     let s = session::start(Box::new(link), SessionConfig::default());
     s.request(cmd::wake()).await.unwrap();
-    s.request(cmd::perform_leg_action(LegAction::Tripod)).await.unwrap();
+    s.request(cmd::perform_leg_action(LegAction::Tripod))
+        .await
+        .unwrap();
     tokio::time::sleep(Duration::from_millis(2500)).await;
     for _ in 0..20 {
-        s.set(Slot::Drive, cmd::drive_with_heading(128, Heading::new(90).unwrap(), DriveFlags::empty()));
+        s.set(
+            Slot::Drive,
+            cmd::drive_with_heading(128, Heading::new(90).unwrap(), DriveFlags::empty()),
+        );
         tokio::time::sleep(Duration::from_millis(100)).await;
     }
     let st = probe.state();

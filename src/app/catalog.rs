@@ -40,8 +40,17 @@ mod tests {
     fn shipped_catalogues_parse() {
         let a = animations();
         assert!(a.len() >= 25);
-        assert_eq!(a.iter().find(|e| e.id == 10).map(|e| e.name.as_str()), Some("Frustrated"));
+        assert_eq!(
+            a.iter().find(|e| e.id == 10).map(|e| e.name.as_str()),
+            Some("Frustrated")
+        );
         assert!(sounds().iter().any(|e| e.id == 1915));
-        assert_eq!(parse("x\tbad\n# c\n5\tok\n"), vec![Entry { id: 5, name: "ok".into() }]);
+        assert_eq!(
+            parse("x\tbad\n# c\n5\tok\n"),
+            vec![Entry {
+                id: 5,
+                name: "ok".into()
+            }]
+        );
     }
 }

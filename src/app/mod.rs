@@ -5,3 +5,5 @@ pub mod packet_log;
 pub mod state;
 
 pub use state::AppState;
+pub mod input;
+pub mod run;

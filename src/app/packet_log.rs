@@ -40,7 +40,8 @@ impl LogLine {
                     (None, Some(problem)) => problem.clone(),
                     (None, None) => String::new(),
                 };
-                let is_error = err.is_some() || (d.fields.is_none() && d.kind != Kind::Command && d.name.is_some());
+                let is_error = err.is_some()
+                    || (d.fields.is_none() && d.kind != Kind::Command && d.name.is_some());
                 LogLine {
                     at: e.at,
                     dir: e.dir,
@@ -119,7 +120,11 @@ impl LogFilter {
     pub fn describe(&self) -> String {
         let mut parts = Vec::new();
         if let Some(d) = self.dir {
-            parts.push(if d == Direction::In { "in".to_string() } else { "out".to_string() });
+            parts.push(if d == Direction::In {
+                "in".to_string()
+            } else {
+                "out".to_string()
+            });
         }
         if let Some(did) = self.did {
             parts.push(format!("dev:{}", Device::describe(did)));
@@ -200,7 +205,12 @@ impl PacketLog {
 
     /// The `height` lines to show, oldest first, honouring scroll.
     pub fn visible(&self, height: usize) -> Vec<&LogLine> {
-        let mut v: Vec<&LogLine> = self.filtered().rev().skip(self.scroll).take(height).collect();
+        let mut v: Vec<&LogLine> = self
+            .filtered()
+            .rev()
+            .skip(self.scroll)
+            .take(height)
+            .collect();
         v.reverse();
         v
     }
@@ -226,6 +236,21 @@ impl PacketLog {
         self.scroll = 0;
     }
 
+    /// The filter as text, to edit it again in the prompt.
+    pub fn filter_input(&self) -> String {
+        let mut parts = Vec::new();
+        if let Some(d) = self.filter.dir {
+            parts.push(if d == Direction::In { "in".to_string() } else { "out".to_string() });
+        }
+        if let Some(did) = self.filter.did {
+            parts.push(format!("dev:{}", Device::describe(did)));
+        }
+        if !self.filter.text.is_empty() {
+            parts.push(self.filter.text.clone());
+        }
+        parts.join(" ")
+    }
+
     pub fn errors(&self) -> usize {
         self.lines.iter().filter(|l| l.is_error).count()
     }
@@ -235,7 +260,6 @@ impl PacketLog {
 pub fn arrow(d: Direction) -> &'static str {
     d.arrow()
 }
-
 
 #[cfg(test)]
 mod tests {
@@ -283,7 +307,10 @@ mod tests {
     fn ring_buffer_is_bounded() {
         let mut log = PacketLog::with_capacity(100);
         for i in 0..1000u32 {
-            log.push(line(Direction::Out, cmd::play_animation(i as u16).to_packet(0)));
+            log.push(line(
+                Direction::Out,
+                cmd::play_animation(i as u16).to_packet(0),
+            ));
         }
         assert_eq!(log.len(), 100);
         assert_eq!(log.dropped, 900);
@@ -305,7 +332,10 @@ mod tests {
         assert_eq!(log.filtered().count(), 1);
         log.set_filter(LogFilter::parse("in wake"));
         assert_eq!(log.filtered().count(), 1);
-        assert_eq!(LogFilter::parse("in dev:power wake").describe(), "in dev:power \"wake\"");
+        assert_eq!(
+            LogFilter::parse("in dev:power wake").describe(),
+            "in dev:power \"wake\""
+        );
         log.set_filter(LogFilter::parse("ANIMATION"));
         assert_eq!(log.filtered().count(), 1);
     }
@@ -314,7 +344,10 @@ mod tests {
     fn pause_and_scroll_hold_the_view() {
         let mut log = PacketLog::default();
         for i in 0..10u16 {
-            log.push(line(Direction::Out, cmd::play_animation(i).to_packet(i as u8)));
+            log.push(line(
+                Direction::Out,
+                cmd::play_animation(i).to_packet(i as u8),
+            ));
         }
         assert_eq!(log.visible(3).last().unwrap().seq, Some(9));
         log.toggle_pause();

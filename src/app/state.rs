@@ -77,11 +77,17 @@ pub enum Overlay {
     None,
     Help,
     /// Picking an animation; `selected` indexes [`AppState::animations`].
-    Animations { selected: usize },
+    Animations {
+        selected: usize,
+    },
     /// Picking a sound; `selected` indexes [`AppState::sounds`].
-    Sounds { selected: usize },
+    Sounds {
+        selected: usize,
+    },
     /// Typing a packet-log filter.
-    Filter { input: String },
+    Filter {
+        input: String,
+    },
 }
 
 /// Which pane has the keyboard.
@@ -173,7 +179,10 @@ impl AppState {
 
     /// The hint to show now, if any.
     pub fn current_hint(&self) -> Option<&str> {
-        self.hint.as_ref().filter(|h| self.now < h.until).map(|h| h.text.as_str())
+        self.hint
+            .as_ref()
+            .filter(|h| self.now < h.until)
+            .map(|h| h.text.as_str())
     }
 
     pub fn show_hint(&mut self, text: impl Into<String>, for_: Duration) {

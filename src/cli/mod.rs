@@ -2,25 +2,45 @@
 //! dispatches, and maps errors to exit codes: 2 for bad input (usage, malformed values),
 //! 1 for failures at run time.
 
+pub mod config_cmd;
+pub mod drive;
 pub mod packet;
 pub mod run;
+pub mod scan;
+pub mod term;
 
 use clap::{Parser, Subcommand};
 
 #[derive(Debug, Parser)]
-#[command(name = "droidctl", version, about = "Drive Sphero droids from the terminal", long_about = None)]
+#[command(
+    name = "droidctl",
+    version,
+    about = "Drive Sphero droids from the terminal",
+    long_about = "Drive Sphero droids from the terminal.\n\nWithout a subcommand, opens the full-screen app \
+                  (the same as `droidctl drive`). Try `droidctl --sim` to drive the simulated R2-D2.",
+    args_conflicts_with_subcommands = true
+)]
 pub struct Cli {
     #[command(subcommand)]
     pub command: Option<Command>,
+    #[command(flatten)]
+    pub drive: drive::DriveArgs,
 }
 
 #[derive(Debug, Subcommand)]
 pub enum Command {
+    /// Open the full-screen app and drive (the default without a subcommand).
+    Drive(drive::DriveArgs),
     /// Decode and encode Sphero API v2 packets.
     #[command(subcommand)]
     Packet(packet::PacketCmd),
     /// Run a mission script against a droid (`--sim` for the simulator, in simulated time).
     Run(run::RunArgs),
+    /// List nearby droids over Bluetooth LE, strongest signal first (`--all` for every device).
+    Scan(scan::ScanArgs),
+    /// Show or create the configuration file.
+    #[command(subcommand)]
+    Config(config_cmd::ConfigCmd),
 }
 
 /// A failure with the exit status it deserves.
@@ -65,10 +85,15 @@ pub fn main() -> i32 {
             drop(out);
             run::run(args)
         }
+        Some(Command::Scan(args)) => scan::run(args, &mut out),
+        Some(Command::Config(cmd)) => config_cmd::run(cmd),
+        Some(Command::Drive(args)) => {
+            drop(out);
+            drive::run(args)
+        }
         None => {
-            use clap::CommandFactory;
-            let _ = Cli::command().print_help();
-            Ok(0)
+            drop(out);
+            drive::run(cli.drive)
         }
     };
     match result {

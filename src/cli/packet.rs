@@ -38,7 +38,11 @@ pub enum PacketCmd {
         /// Command name (see `droidctl packet list`), or `raw`.
         name: String,
         /// Parameters as `--name value`, plus --seq, --tid, --sid, --no-response.
-        #[arg(trailing_var_arg = true, allow_hyphen_values = true, value_name = "ARGS")]
+        #[arg(
+            trailing_var_arg = true,
+            allow_hyphen_values = true,
+            value_name = "ARGS"
+        )]
         args: Vec<String>,
     },
     /// List every catalogue command and notification with its parameters.
@@ -121,7 +125,10 @@ fn decode(
 
     if !stream {
         // One packet expected. A bad checksum still shows the packet, with the verdict.
-        let packets = items.iter().filter(|i| matches!(i, Item::Packet { .. })).count();
+        let packets = items
+            .iter()
+            .filter(|i| matches!(i, Item::Packet { .. }))
+            .count();
         if packets > 1 || items.len() > 1 {
             return Err(CliError::usage(format!(
                 "the input holds {} packets or errors, not one packet; use --stream to decode a byte stream",
@@ -147,7 +154,10 @@ fn decode(
     let mut status = 0;
     for (i, item) in items.iter().enumerate() {
         match item {
-            Item::Packet { packet, checksum_ok } => {
+            Item::Packet {
+                packet,
+                checksum_ok,
+            } => {
                 if !checksum_ok {
                     status = 1;
                 }
@@ -210,29 +220,49 @@ fn packet_text(p: &Packet, received: Option<&[u8]>, d: &Described) -> String {
     let checksum_ok = received.is_none();
     let mut s = String::new();
     let mut line = |k: &str, v: String| s.push_str(&format!("{k:<9} {v}\n"));
-    line("wire", hex::spaced(&received.map_or_else(|| p.encode(), <[u8]>::to_vec)));
+    line(
+        "wire",
+        hex::spaced(&received.map_or_else(|| p.encode(), <[u8]>::to_vec)),
+    );
     let names = p.flags.names();
     line(
         "flags",
         format!(
             "0x{:02X} {}",
             p.flags.bits(),
-            if names.is_empty() { "(none)".into() } else { names.join(" | ") }
+            if names.is_empty() {
+                "(none)".into()
+            } else {
+                names.join(" | ")
+            }
         ),
     );
     if let Some(x) = p.ext_flags {
         line("ext flags", format!("0x{x:02X}"));
     }
     if let Some(t) = p.tid {
-        line("target", format!("0x{t:02X} (port {}, node {})", t >> 4, t & 0xF));
+        line(
+            "target",
+            format!("0x{t:02X} (port {}, node {})", t >> 4, t & 0xF),
+        );
     }
     if let Some(t) = p.sid {
-        line("source", format!("0x{t:02X} (port {}, node {})", t >> 4, t & 0xF));
+        line(
+            "source",
+            format!("0x{t:02X} (port {}, node {})", t >> 4, t & 0xF),
+        );
     }
-    line("device", format!("{} (0x{:02X})", Device::describe(p.did), p.did));
+    line(
+        "device",
+        format!("{} (0x{:02X})", Device::describe(p.did), p.did),
+    );
     line(
         d.kind.name(),
-        format!("{} (0x{:02X})", d.name.as_deref().unwrap_or("unknown"), p.cid),
+        format!(
+            "{} (0x{:02X})",
+            d.name.as_deref().unwrap_or("unknown"),
+            p.cid
+        ),
     );
     line(
         "seq",
@@ -247,7 +277,11 @@ fn packet_text(p: &Packet, received: Option<&[u8]>, d: &Described) -> String {
     }
     line(
         "data",
-        if p.data.is_empty() { "(none)".into() } else { hex::spaced(&p.data) },
+        if p.data.is_empty() {
+            "(none)".into()
+        } else {
+            hex::spaced(&p.data)
+        },
     );
     if let Some(fields) = &d.fields {
         for (name, v) in fields {

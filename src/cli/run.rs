@@ -65,8 +65,14 @@ pub fn run(args: RunArgs) -> Result<i32, CliError> {
         .map_err(|e| CliError::usage(format!("cannot read script {}: {e}", path.display())))?;
     let shown = path.display().to_string();
     let script_errors = |errs: Vec<crate::script::ScriptError>| {
-        let lines: Vec<String> = errs.iter().map(|e| format!("{shown}:{}: {}", e.line, e.message)).collect();
-        CliError::usage(format!("the script has errors; nothing was sent\n{}", lines.join("\n")))
+        let lines: Vec<String> = errs
+            .iter()
+            .map(|e| format!("{shown}:{}: {}", e.line, e.message))
+            .collect();
+        CliError::usage(format!(
+            "the script has errors; nothing was sent\n{}",
+            lines.join("\n")
+        ))
     };
     let steps = crate::script::parse(&text).map_err(script_errors)?;
     let Some(model) = sim else {
@@ -126,7 +132,9 @@ pub async fn run_on(
     let emit: Arc<dyn Fn(MissionEvent) + Send + Sync> = Arc::new(move |e| {
         let mut out = std::io::stdout().lock();
         let _ = match e {
-            MissionEvent::Sample(s) if json => writeln!(out, "{}", serde_json::to_string(&s).unwrap_or_default()),
+            MissionEvent::Sample(s) if json => {
+                writeln!(out, "{}", serde_json::to_string(&s).unwrap_or_default())
+            }
             MissionEvent::Sample(s) => {
                 let n = count.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
                 if n % samples_per_line != 0 {
@@ -138,7 +146,11 @@ pub async fn run_on(
                 writeln!(out, "[{:>8.2}s] line {line}: {text}", t_ms as f64 / 1000.0)
             }
             MissionEvent::Step { .. } => Ok(()),
-            MissionEvent::Warning { t_ms, line, message } => {
+            MissionEvent::Warning {
+                t_ms,
+                line,
+                message,
+            } => {
                 let at = line.map(|l| format!("line {l}: ")).unwrap_or_default();
                 eprintln!("[{:>8.2}s] warning: {at}{message}", t_ms as f64 / 1000.0);
                 Ok(())
@@ -158,7 +170,8 @@ pub async fn run_on(
 }
 
 fn opt(v: Option<f32>, prec: usize) -> String {
-    v.map(|v| format!("{v:.prec$}")).unwrap_or_else(|| "-".into())
+    v.map(|v| format!("{v:.prec$}"))
+        .unwrap_or_else(|| "-".into())
 }
 
 fn sample_line(s: &mission::Sample) -> String {
@@ -168,7 +181,9 @@ fn sample_line(s: &mission::Sample) -> String {
         opt(s.x_cm, 1),
         opt(s.y_cm, 1),
         opt(s.speed, 0),
-        s.heading.map(|h| format!("{h}°")).unwrap_or_else(|| "-".into()),
+        s.heading
+            .map(|h| format!("{h}°"))
+            .unwrap_or_else(|| "-".into()),
         opt(s.head_deg, 0),
         s.stance,
         opt(s.battery_v, 2),

@@ -107,7 +107,10 @@ pub enum HandshakeStep {
     Write { ch: CharRef, bytes: Vec<u8> },
     /// Read the characteristic. `expect_len` is what the sources say comes back; a different
     /// length is logged, not fatal, because those figures come from a single source.
-    Read { ch: CharRef, expect_len: Option<usize> },
+    Read {
+        ch: CharRef,
+        expect_len: Option<usize>,
+    },
 }
 
 impl HandshakeStep {
@@ -254,12 +257,27 @@ mod tests {
 
     #[test]
     fn uuids_print_like_bluez() {
-        assert_eq!(V2_SERVICE.to_string(), "00010001-574f-4f20-5370-6865726f2121");
+        assert_eq!(
+            V2_SERVICE.to_string(),
+            "00010001-574f-4f20-5370-6865726f2121"
+        );
         assert_eq!(V2_API.to_string(), "00010002-574f-4f20-5370-6865726f2121");
-        assert_eq!(V2_ANTI_DOS.to_string(), "00020005-574f-4f20-5370-6865726f2121");
-        assert_eq!(V1_ANTI_DOS.to_string(), "22bb746f-2bbd-7554-2d6f-726568705327");
-        assert_eq!(V1_RESPONSES.to_string(), "22bb746f-2ba6-7554-2d6f-726568705327");
-        assert_eq!(ROBI_FRAMES.to_string(), "00008765-0000-1000-8000-00805f9b34fb");
+        assert_eq!(
+            V2_ANTI_DOS.to_string(),
+            "00020005-574f-4f20-5370-6865726f2121"
+        );
+        assert_eq!(
+            V1_ANTI_DOS.to_string(),
+            "22bb746f-2bbd-7554-2d6f-726568705327"
+        );
+        assert_eq!(
+            V1_RESPONSES.to_string(),
+            "22bb746f-2ba6-7554-2d6f-726568705327"
+        );
+        assert_eq!(
+            ROBI_FRAMES.to_string(),
+            "00008765-0000-1000-8000-00805f9b34fb"
+        );
         assert_eq!(ROBI_FRAMES.as_u16(), Some(0x8765));
         assert_eq!(V2_API.as_u16(), None);
     }

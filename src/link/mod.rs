@@ -5,6 +5,8 @@
 //! session can wait for incoming bytes and write at the same time.
 
 pub mod backoff;
+pub mod ble;
+pub mod gatt;
 
 use futures_util::future::BoxFuture;
 use std::fmt;

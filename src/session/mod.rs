@@ -85,9 +85,14 @@ pub enum LinkState {
     Connecting,
     Connected,
     /// Down and retrying; `attempt` counts from 1.
-    Reconnecting { attempt: u32, reason: String },
+    Reconnecting {
+        attempt: u32,
+        reason: String,
+    },
     /// Ended: by request (`None`) or for good (a fatal link error).
-    Closed { reason: Option<String> },
+    Closed {
+        reason: Option<String>,
+    },
 }
 
 impl LinkState {
@@ -138,7 +143,10 @@ pub enum LogItem {
 pub enum SessionEvent {
     Notification(Notification),
     /// A known notification whose payload did not fit.
-    BadNotification { name: &'static str, reason: String },
+    BadNotification {
+        name: &'static str,
+        reason: String,
+    },
 }
 
 /// Counters for the status bar and the run summary.
@@ -194,7 +202,14 @@ pub fn start(link: Box<dyn Link>, config: SessionConfig) -> SessionHandle {
     let (state_tx, state_rx) = watch::channel(LinkState::Connecting);
     let (events, _) = broadcast::channel(config.event_capacity.max(16));
     let (log, _) = broadcast::channel(config.event_capacity.max(16));
-    let task = task::Task::new(link, config, shared.clone(), state_tx, events.clone(), log.clone());
+    let task = task::Task::new(
+        link,
+        config,
+        shared.clone(),
+        state_tx,
+        events.clone(),
+        log.clone(),
+    );
     let join = tokio::spawn(task.run());
     SessionHandle {
         shared,

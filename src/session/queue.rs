@@ -41,6 +41,8 @@ pub struct OutQueue {
     fifo: VecDeque<Queued>,
     capacity: usize,
     slots_turn: bool,
+    /// Between the two slots, whose turn it is: a drive storm must not starve the dome.
+    head_turn: bool,
     /// Continuous commands replaced before they were written.
     pub coalesced: u64,
 }
@@ -53,6 +55,7 @@ impl OutQueue {
             fifo: VecDeque::new(),
             capacity: capacity.max(1),
             slots_turn: true,
+            head_turn: false,
             coalesced: 0,
         }
     }
@@ -93,7 +96,8 @@ impl OutQueue {
     }
 
     /// The next thing to write. A drive command with speed 0 (a stop) always goes first;
-    /// otherwise slots and the FIFO take turns so neither starves the other.
+    /// otherwise slots and the FIFO take turns so neither starves the other, and so do the
+    /// drive and head slots.
     pub fn pop(&mut self) -> Option<Next> {
         if self.drive.as_ref().is_some_and(is_stop) {
             return self.drive.take().map(|c| Next::Slot(Slot::Drive, c));
@@ -101,11 +105,20 @@ impl OutQueue {
         let slot_first = self.slots_turn || self.fifo.is_empty();
         self.slots_turn = !self.slots_turn;
         if slot_first {
-            if let Some(c) = self.drive.take() {
-                return Some(Next::Slot(Slot::Drive, c));
-            }
-            if let Some(c) = self.head.take() {
-                return Some(Next::Slot(Slot::Head, c));
+            let order = if self.head_turn {
+                [Slot::Head, Slot::Drive]
+            } else {
+                [Slot::Drive, Slot::Head]
+            };
+            for slot in order {
+                let taken = match slot {
+                    Slot::Drive => self.drive.take(),
+                    Slot::Head => self.head.take(),
+                };
+                if let Some(c) = taken {
+                    self.head_turn = slot == Slot::Drive;
+                    return Some(Next::Slot(slot, c));
+                }
             }
         }
         self.fifo.pop_front().map(Next::Fifo)
@@ -152,7 +165,9 @@ mod tests {
             assert!(q.len() <= 1);
         }
         assert_eq!(q.coalesced, 99);
-        let Some(Next::Slot(Slot::Drive, c)) = q.pop() else { panic!() };
+        let Some(Next::Slot(Slot::Drive, c)) = q.pop() else {
+            panic!()
+        };
         assert_eq!(c.data[0], 100);
         assert!(q.pop().is_none());
     }
@@ -163,7 +178,9 @@ mod tests {
         q.push(req(cmd::wake())).unwrap();
         q.push(req(cmd::ping())).unwrap();
         q.set_slot(Slot::Drive, drive(0));
-        let Some(Next::Slot(Slot::Drive, c)) = q.pop() else { panic!() };
+        let Some(Next::Slot(Slot::Drive, c)) = q.pop() else {
+            panic!()
+        };
         assert!(is_stop(&c));
     }
 
@@ -184,6 +201,24 @@ mod tests {
             }
         }
         assert_eq!(order, ["slot", "fifo", "slot", "fifo"]);
+    }
+
+    #[test]
+    fn drive_storm_does_not_starve_the_head() {
+        let mut q = OutQueue::new(8);
+        q.set_slot(
+            Slot::Head,
+            cmd::set_head_position(crate::units::HeadAngle::clamped(45.0)),
+        );
+        let mut popped = Vec::new();
+        for s in 1..=4 {
+            q.set_slot(Slot::Drive, drive(s));
+            popped.push(match q.pop() {
+                Some(Next::Slot(slot, _)) => slot,
+                other => panic!("{other:?}"),
+            });
+        }
+        assert_eq!(popped[..2], [Slot::Drive, Slot::Head]);
     }
 
     #[test]

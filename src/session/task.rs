@@ -2,10 +2,13 @@
 
 use super::queue::{Next, Queued, Reply};
 use super::{
-    Direction, LinkState, LogEntry, LogItem, RequestError, SessionConfig, SessionEvent, Shared, lock,
+    Direction, LinkState, LogEntry, LogItem, RequestError, SessionConfig, SessionEvent, Shared,
+    lock,
 };
 use crate::link::{Connection, Link, LinkEvent};
-use crate::protocol::v2::{Command, Decoder, ErrorCode, Flags, Notification, Packet, StreamingConfig};
+use crate::protocol::v2::{
+    Command, Decoder, ErrorCode, Flags, Notification, Packet, StreamingConfig,
+};
 use std::collections::{HashMap, VecDeque};
 use std::sync::Arc;
 use std::time::Duration;
@@ -216,7 +219,10 @@ impl Task {
         }
         self.snoop(&cmd);
         let wire = packet.encode();
-        let chunks: Vec<Vec<u8>> = wire.chunks(self.cfg.chunk_size.max(1)).map(<[u8]>::to_vec).collect();
+        let chunks: Vec<Vec<u8>> = wire
+            .chunks(self.cfg.chunk_size.max(1))
+            .map(<[u8]>::to_vec)
+            .collect();
         if want_response {
             let extra = self.cfg.pacing * (chunks.len().saturating_sub(1) as u32);
             self.pending.insert(
@@ -383,7 +389,12 @@ impl Task {
     }
 
     /// Shutdown: finish the packet in flight, write the final commands (a stop), close.
-    async fn finish(&mut self, conn: &mut Connection, chunks: VecDeque<Vec<u8>>, last: Vec<Command>) {
+    async fn finish(
+        &mut self,
+        conn: &mut Connection,
+        chunks: VecDeque<Vec<u8>>,
+        last: Vec<Command>,
+    ) {
         let mut wire: Vec<Vec<u8>> = chunks.into_iter().collect();
         for cmd in last {
             let seq = self.next_seq(cmd.did, cmd.cid);
@@ -411,4 +422,3 @@ impl Task {
         writer.close().await;
     }
 }
-

@@ -83,7 +83,10 @@ pub struct SimDroid {
 
 /// Devices that answer while asleep; the rest say target_unavailable until Wake.
 fn answers_asleep(did: u8) -> bool {
-    matches!(Device::from_id(did), Some(Device::Core | Device::Power | Device::SystemInfo))
+    matches!(
+        Device::from_id(did),
+        Some(Device::Core | Device::Power | Device::SystemInfo)
+    )
 }
 
 impl SimDroid {
@@ -101,7 +104,11 @@ impl SimDroid {
                 yaw_deg: 0.0,
                 velocity_cm_s: 0.0,
                 // Assumption: R2 rests on two legs until told otherwise; BB-9E has none.
-                stance: if model.has_legs() { LegState::Bipod } else { LegState::Unknown },
+                stance: if model.has_legs() {
+                    LegState::Bipod
+                } else {
+                    LegState::Unknown
+                },
                 head_deg: 0.0,
                 battery_v: battery,
                 collisions: 0,
@@ -206,7 +213,10 @@ impl SimDroid {
         let Some(def) = catalog::lookup(p.did, p.cid) else {
             return (ErrorCode::BadCommandId, vec![]);
         };
-        if !self.model.has_legs() && device == Device::Animatronic && !matches!(p.cid, 0x05 | 0x2B | 0x2C) {
+        if !self.model.has_legs()
+            && device == Device::Animatronic
+            && !matches!(p.cid, 0x05 | 0x2B | 0x2C)
+        {
             // BB-9E has no legs and no dome to command.
             return (ErrorCode::BadCommandId, vec![]);
         }
@@ -245,7 +255,10 @@ impl SimDroid {
                 self.voltage_state_notify = d[0] != 0;
                 ok
             }
-            (Device::Power, 0x25) => (ErrorCode::Success, self.state.battery_v.to_be_bytes().to_vec()),
+            (Device::Power, 0x25) => (
+                ErrorCode::Success,
+                self.state.battery_v.to_be_bytes().to_vec(),
+            ),
             (Device::Core, 0x25) => {
                 self.inactivity_timeout = Duration::from_secs(u16_at(0).max(1) as u64);
                 ok
@@ -256,11 +269,15 @@ impl SimDroid {
                 info.extend_from_slice(b"00:00:00:5E:D2:D2\0");
                 (ErrorCode::Success, info)
             }
-            (Device::SystemInfo, 0x00) | (Device::SystemInfo, 0x01) => {
-                (ErrorCode::Success, [4u16, 0, 1].iter().flat_map(|v| v.to_be_bytes()).collect())
-            }
+            (Device::SystemInfo, 0x00) | (Device::SystemInfo, 0x01) => (
+                ErrorCode::Success,
+                [4u16, 0, 1].iter().flat_map(|v| v.to_be_bytes()).collect(),
+            ),
             (Device::SystemInfo, 0x1F) => (ErrorCode::Success, b"droidctl-sim\0".to_vec()),
-            (Device::SystemInfo, 0x39) => (ErrorCode::Success, (self.now.as_millis() as u32).to_be_bytes().to_vec()),
+            (Device::SystemInfo, 0x39) => (
+                ErrorCode::Success,
+                (self.now.as_millis() as u32).to_be_bytes().to_vec(),
+            ),
             (Device::Drive, 0x07) => {
                 let heading = u16_at(1);
                 if heading > 359 {
@@ -270,7 +287,11 @@ impl SimDroid {
                 let backward = flags.contains(DriveFlags::BACKWARD);
                 // Reference clients add 180° when reversing: the heading is the direction of
                 // travel, and a droid backing up faces the other way.
-                let facing = if backward { wrap360(heading as f32 + 180.0) } else { heading as f32 };
+                let facing = if backward {
+                    wrap360(heading as f32 + 180.0)
+                } else {
+                    heading as f32
+                };
                 self.drive = Some(Drive {
                     speed: d[0] as f32 / 255.0 * self.cfg.top_speed_cm_s,
                     facing,
@@ -312,15 +333,23 @@ impl SimDroid {
                 self.head_target = deg.clamp(HEAD_MIN_DEG, HEAD_MAX_DEG);
                 ok
             }
-            (Device::Animatronic, 0x14) => (ErrorCode::Success, self.state.head_deg.to_be_bytes().to_vec()),
+            (Device::Animatronic, 0x14) => (
+                ErrorCode::Success,
+                self.state.head_deg.to_be_bytes().to_vec(),
+            ),
             (Device::Animatronic, 0x25) => {
-                let s = if self.transition.is_some() { LegState::Transitioning } else { self.state.stance };
+                let s = if self.transition.is_some() {
+                    LegState::Transitioning
+                } else {
+                    self.state.stance
+                };
                 (ErrorCode::Success, vec![s.to_byte()])
             }
             (Device::Sensor, 0x00) => {
                 self.streaming.interval_ms = u16_at(0);
                 self.streaming.mask = u32_at(3);
-                self.next_sample = self.now + Duration::from_millis(self.streaming.interval_ms as u64);
+                self.next_sample =
+                    self.now + Duration::from_millis(self.streaming.interval_ms as u64);
                 ok
             }
             (Device::Sensor, 0x01) => {
@@ -333,7 +362,10 @@ impl SimDroid {
                 self.streaming.ext_mask = u32_at(0);
                 ok
             }
-            (Device::Sensor, 0x0D) => (ErrorCode::Success, self.streaming.ext_mask.to_be_bytes().to_vec()),
+            (Device::Sensor, 0x0D) => (
+                ErrorCode::Success,
+                self.streaming.ext_mask.to_be_bytes().to_vec(),
+            ),
             (Device::Sensor, 0x11) => {
                 self.collision_notify = d[0] != 0;
                 self.collision_dead_time = Duration::from_millis(d[5] as u64 * 10);
@@ -410,7 +442,10 @@ impl SimDroid {
     }
 
     fn leg_action(&mut self, a: LegAction) {
-        let current = self.transition.map(|t| t.target).unwrap_or(self.state.stance);
+        let current = self
+            .transition
+            .map(|t| t.target)
+            .unwrap_or(self.state.stance);
         let (target, time) = match a {
             LegAction::Stop => {
                 // Stop ends a waddle at once, standing on two legs.
@@ -424,10 +459,16 @@ impl SimDroid {
             LegAction::Tripod => (LegState::Tripod, self.cfg.stance_time),
             LegAction::Bipod => (LegState::Bipod, self.cfg.stance_time),
             // Waddle starts from bipod: from tripod it first has to stand up.
-            LegAction::Waddle if current == LegState::Tripod => (LegState::Waddle, self.cfg.stance_time),
+            LegAction::Waddle if current == LegState::Tripod => {
+                (LegState::Waddle, self.cfg.stance_time)
+            }
             LegAction::Waddle => (LegState::Waddle, Duration::from_millis(300)),
         };
-        let time = if current == target { Duration::from_millis(50) } else { time };
+        let time = if current == target {
+            Duration::from_millis(50)
+        } else {
+            time
+        };
         self.transition = Some(Transition {
             target,
             ends: self.now + time,
@@ -468,7 +509,8 @@ impl SimDroid {
 
     /// Can the droid roll now? R2 only in tripod, not mid-transition.
     fn can_roll(&self) -> bool {
-        !self.model.has_legs() || (self.state.stance == LegState::Tripod && self.transition.is_none())
+        !self.model.has_legs()
+            || (self.state.stance == LegState::Tripod && self.transition.is_none())
     }
 
     fn step(&mut self, dt: f32) {
@@ -498,7 +540,9 @@ impl SimDroid {
         // Sleep on inactivity, warning 10 s before.
         if self.state.awake {
             let idle = now.saturating_sub(self.last_activity);
-            let warn_at = self.inactivity_timeout.saturating_sub(Duration::from_secs(10));
+            let warn_at = self
+                .inactivity_timeout
+                .saturating_sub(Duration::from_secs(10));
             if idle >= self.inactivity_timeout {
                 self.fall_asleep();
             } else if idle >= warn_at && !self.will_sleep_sent {
@@ -515,7 +559,10 @@ impl SimDroid {
     fn motion(&mut self, dt: f32) {
         let now = self.now;
         // The droid stops by itself when drive commands stop.
-        if self.drive.is_some_and(|d| now.saturating_sub(d.at) > self.cfg.motion_timeout) {
+        if self
+            .drive
+            .is_some_and(|d| now.saturating_sub(d.at) > self.cfg.motion_timeout)
+        {
             if let Some(d) = &mut self.drive {
                 d.speed = 0.0;
             }
@@ -528,11 +575,18 @@ impl SimDroid {
         // Turn toward the commanded facing at a finite rate.
         let before = self.state.yaw_deg;
         let diff = angle_diff(before, target_facing);
-        let turn = diff.clamp(-self.cfg.turn_rate_deg_s * dt, self.cfg.turn_rate_deg_s * dt);
+        let turn = diff.clamp(
+            -self.cfg.turn_rate_deg_s * dt,
+            self.cfg.turn_rate_deg_s * dt,
+        );
         self.state.yaw_deg = wrap360(before + turn);
         self.yaw_rate = turn / dt;
         // Speed with acceleration limits; signed along the facing.
-        let target_v = if backward { -target_speed } else { target_speed };
+        let target_v = if backward {
+            -target_speed
+        } else {
+            target_speed
+        };
         let v = self.state.velocity_cm_s;
         let limit = if target_v.abs() < v.abs() || target_v.signum() != v.signum() {
             self.cfg.brake_cm_s2
@@ -566,10 +620,9 @@ impl SimDroid {
             return;
         }
         let now = self.now;
-        if self
-            .last_collision
-            .is_some_and(|t| now.saturating_sub(t) < self.collision_dead_time.max(Duration::from_millis(10)))
-        {
+        if self.last_collision.is_some_and(|t| {
+            now.saturating_sub(t) < self.collision_dead_time.max(Duration::from_millis(10))
+        }) {
             return;
         }
         self.last_collision = Some(now);
@@ -578,7 +631,9 @@ impl SimDroid {
             return;
         }
         // Impact deceleration over ~50 ms, in g (÷4096 on the wire).
-        let g = |comp: f32| AccelRaw((-(comp * v) / 0.05 / 981.0 * 4096.0).clamp(-32768.0, 32767.0) as i16);
+        let g = |comp: f32| {
+            AccelRaw((-(comp * v) / 0.05 / 981.0 * 4096.0).clamp(-32768.0, 32767.0) as i16)
+        };
         let c = Collision {
             accel: [g(hx), g(hy), AccelRaw(4096)],
             axis: CollisionAxis { x: hit_x, y: hit_y },
@@ -595,7 +650,11 @@ impl SimDroid {
 
     fn dome(&mut self, dt: f32) {
         if self.model.has_dome() && self.state.awake {
-            self.state.head_deg = approach(self.state.head_deg, self.head_target, self.cfg.head_rate_deg_s * dt);
+            self.state.head_deg = approach(
+                self.state.head_deg,
+                self.head_target,
+                self.cfg.head_rate_deg_s * dt,
+            );
         }
     }
 
@@ -628,7 +687,11 @@ impl SimDroid {
         let s = &self.state;
         let (hx, hy) = heading_vector(s.yaw_deg);
         let lateral = s.velocity_cm_s * self.yaw_rate.to_radians();
-        let yaw = if s.yaw_deg > 180.0 { s.yaw_deg - 360.0 } else { s.yaw_deg };
+        let yaw = if s.yaw_deg > 180.0 {
+            s.yaw_deg - 360.0
+        } else {
+            s.yaw_deg
+        };
         let half = s.yaw_deg.to_radians() / 2.0;
         let values = [
             ("quaternion_w", half.cos()),

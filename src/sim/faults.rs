@@ -38,7 +38,11 @@ impl Faults {
             if rng.chance(self.drop_rate) {
                 continue;
             }
-            out.push(if rng.chance(self.corrupt_rate) { rng.byte() } else { b });
+            out.push(if rng.chance(self.corrupt_rate) {
+                rng.byte()
+            } else {
+                b
+            });
         }
         out
     }
@@ -81,7 +85,10 @@ mod tests {
         let pieces = f.pieces(&mut rng, &data, 20);
         assert!(pieces.iter().all(|p| !p.is_empty() && p.len() <= 20));
         assert_eq!(pieces.concat(), data);
-        assert!(pieces.len() > 13, "random splits are smaller than 20 on average");
+        assert!(
+            pieces.len() > 13,
+            "random splits are smaller than 20 on average"
+        );
         let whole = Faults::none().pieces(&mut rng, &data, 20);
         assert_eq!(whole.len(), 13);
     }

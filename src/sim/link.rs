@@ -238,7 +238,16 @@ impl Pump {
                         self.last_in = at;
                         self.inbound.push_back((at, bytes));
                     }
-                    None => break None,
+                    None => {
+                        // The host closed the link: what it wrote before still reaches the
+                        // droid (a final stop must not be lost).
+                        let now = self.sim_time();
+                        let mut s = lock(&self.shared);
+                        for (_, bytes) in self.inbound.drain(..) {
+                            let _ = s.droid.receive(&bytes, now);
+                        }
+                        break None;
+                    }
                 },
                 _ = sleep_until(next_in.unwrap_or_else(Instant::now)), if next_in.is_some() => {
                     if let Some((_, bytes)) = self.inbound.pop_front() {

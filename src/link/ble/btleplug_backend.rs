@@ -37,7 +37,10 @@ pub async fn open_central() -> Result<Arc<dyn BleCentral>, BleError> {
         .await
         .map_err(|_| bluez_silent("listing adapters"))?
         .map_err(map_err)?;
-    let adapter = adapters.into_iter().next().ok_or_else(BleError::no_adapter)?;
+    let adapter = adapters
+        .into_iter()
+        .next()
+        .ok_or_else(BleError::no_adapter)?;
     // Surfaces permission errors before `adapter_state`, which reports any failure as "off".
     timeout(SETUP_TIMEOUT, adapter.adapter_info())
         .await
@@ -71,6 +74,11 @@ fn bluez_silent(what: &str) -> BleError {
 /// thread (not tokio's blocking pool, which a runtime waits for on shutdown) keeps a hung
 /// socket from hanging the program.
 async fn preflight() -> Result<(), BleError> {
+    // BlueZ, and so this check, exist only on Linux; other platforms' btleplug backends need
+    // no system bus.
+    if !cfg!(target_os = "linux") {
+        return Ok(());
+    }
     let (tx, rx) = oneshot::channel();
     std::thread::Builder::new()
         .name("dbus-preflight".into())
@@ -147,7 +155,11 @@ fn map_err(e: btleplug::Error) -> BleError {
             if lower.contains("no bluetooth adapters") {
                 BleError::no_adapter()
             } else if lower.contains("service discovery timed out") {
-                BleError::timeout("service discovery", 0.0)
+                BleError::new(
+                    BleErrorKind::Timeout,
+                    "service discovery timed out — is the droid awake and near? tap it or put \
+                     it on its charger",
+                )
             } else if lower.contains("not found") && lower.contains("uuid") {
                 BleError::new(BleErrorKind::MissingCharacteristic, text)
             } else {
@@ -155,6 +167,14 @@ fn map_err(e: btleplug::Error) -> BleError {
             }
         }
         other => BleError::new(BleErrorKind::Other, format!("Bluetooth error: {other}")),
+    }
+}
+
+/// The D-Bus error name inside a btleplug error, if it wraps one.
+fn dbus_name(e: &btleplug::Error) -> Option<String> {
+    match e {
+        btleplug::Error::Other(inner) => dbus_error_in(&format!("{inner:?}")).map(|(n, _)| n),
+        _ => None,
     }
 }
 
@@ -184,16 +204,9 @@ impl BleCentral for BtleCentral {
         Box::pin(async move {
             // No service filter: v1 droids and Robi do not always advertise their services.
             match self.adapter.start_scan(ScanFilter::default()).await {
-                Ok(()) => Ok(()),
-                Err(e) => {
-                    let e = map_err(e);
-                    // Our own discovery already running is fine.
-                    if e.message.contains("InProgress") || e.message.contains("in progress") {
-                        Ok(())
-                    } else {
-                        Err(e)
-                    }
-                }
+                // Our own discovery already running is fine.
+                Err(e) if dbus_name(&e).is_some_and(|n| n.ends_with(".InProgress")) => Ok(()),
+                r => r.map_err(map_err),
             }
         })
     }
@@ -213,7 +226,10 @@ impl BleCentral for BtleCentral {
                 };
                 out.push(Advertisement {
                     address: BleAddress(props.address.into()),
-                    name: props.local_name.or(props.advertisement_name),
+                    // On BlueZ `local_name` is the Alias, which a user may have renamed and
+                    // which falls back to the address for nameless devices; the advertised
+                    // Name is what identifies the model.
+                    name: props.advertisement_name.or(props.local_name),
                     rssi: props.rssi,
                 });
             }
@@ -365,7 +381,10 @@ mod tests {
         );
         assert_eq!(
             dbus_error_in("D-Bus error: Resource Not Ready (org.bluez.Error.NotReady)"),
-            Some(("org.bluez.Error.NotReady".into(), "Resource Not Ready".into()))
+            Some((
+                "org.bluez.Error.NotReady".into(),
+                "Resource Not Ready".into()
+            ))
         );
         assert_eq!(
             dbus_error_in("D-Bus error: a (b) c (org.bluez.Error.Failed)"),
@@ -378,20 +397,28 @@ mod tests {
     fn maps_typed_btleplug_errors() {
         use btleplug::Error as E;
         assert_eq!(map_err(E::NoAdapterAvailable).kind, BleErrorKind::NoAdapter);
-        assert_eq!(map_err(E::PermissionDenied).kind, BleErrorKind::PermissionDenied);
+        assert_eq!(
+            map_err(E::PermissionDenied).kind,
+            BleErrorKind::PermissionDenied
+        );
         assert_eq!(map_err(E::NotConnected).kind, BleErrorKind::Disconnected);
         assert_eq!(
             map_err(E::TimedOut(Duration::from_secs(3))).kind,
             BleErrorKind::Timeout
         );
         let dbus = dbus::Error::new_custom("org.bluez.Error.NotReady", "Resource Not Ready");
-        assert_eq!(map_err(E::Other(Box::new(dbus))).kind, BleErrorKind::AdapterOff);
+        assert_eq!(
+            map_err(E::Other(Box::new(dbus))).kind,
+            BleErrorKind::AdapterOff
+        );
     }
 
     /// On a machine without a system bus (containers, CI) the preflight says so, quickly.
     #[tokio::test]
     async fn preflight_without_a_bus_is_a_clear_fatal_error() {
-        if std::path::Path::new("/run/dbus/system_bus_socket").exists() {
+        if std::env::var_os("DBUS_SYSTEM_BUS_ADDRESS").is_some()
+            || std::path::Path::new("/run/dbus/system_bus_socket").exists()
+        {
             return;
         }
         let e = preflight().await.unwrap_err();

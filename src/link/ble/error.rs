@@ -98,8 +98,8 @@ impl BleError {
         BleError::new(
             BleErrorKind::NoSystemBus,
             format!(
-                "no D-Bus system bus, so no BlueZ{detail} — Bluetooth needs a Linux host with \
-                 BlueZ running (not a bare container); or try `droidctl --sim`"
+                "no D-Bus system bus, so no BlueZ{detail} — run on a host with BlueZ running \
+                 (`systemctl status bluetooth`), not a bare container, or try `droidctl --sim`"
             ),
         )
     }
@@ -245,12 +245,27 @@ mod tests {
             NoSystemBus
         );
         assert_eq!(k("org.freedesktop.DBus.Error.NoServer", ""), NoSystemBus);
-        assert_eq!(k("org.freedesktop.DBus.Error.ServiceUnknown", "org.bluez"), BluezNotRunning);
-        assert_eq!(k("org.freedesktop.DBus.Error.AccessDenied", ""), PermissionDenied);
+        assert_eq!(
+            k("org.freedesktop.DBus.Error.ServiceUnknown", "org.bluez"),
+            BluezNotRunning
+        );
+        assert_eq!(
+            k("org.freedesktop.DBus.Error.AccessDenied", ""),
+            PermissionDenied
+        );
         assert_eq!(k("org.bluez.Error.NotPermitted", ""), PermissionDenied);
-        assert_eq!(k("org.bluez.Error.NotReady", "Resource Not Ready"), AdapterOff);
-        assert_eq!(k("org.bluez.Error.Failed", "le-connection-abort-by-local"), ConnectFailed);
-        assert_eq!(k("org.bluez.Error.Failed", "Software caused connection abort"), ConnectFailed);
+        assert_eq!(
+            k("org.bluez.Error.NotReady", "Resource Not Ready"),
+            AdapterOff
+        );
+        assert_eq!(
+            k("org.bluez.Error.Failed", "le-connection-abort-by-local"),
+            ConnectFailed
+        );
+        assert_eq!(
+            k("org.bluez.Error.Failed", "Software caused connection abort"),
+            ConnectFailed
+        );
         assert_eq!(k("org.bluez.Error.Failed", "Not connected"), Disconnected);
         assert_eq!(k("org.freedesktop.DBus.Error.NoReply", ""), Timeout);
         assert_eq!(k("org.freedesktop.DBus.Error.UnknownObject", ""), NotFound);

@@ -154,7 +154,11 @@ impl FakePeripheral {
 
     /// Every operation so far.
     pub fn ops(&self) -> Vec<FakeOp> {
-        lock(&self.state).log.iter().map(|(_, o)| o.clone()).collect()
+        lock(&self.state)
+            .log
+            .iter()
+            .map(|(_, o)| o.clone())
+            .collect()
     }
 
     /// Every operation with the tokio time it happened.
@@ -313,13 +317,6 @@ impl FakeCentral {
     /// Make scanning fail (adapter off, permission denied, …).
     pub fn fail_scan(&self, err: BleError) {
         lock(&self.state).fail_scan = Some(err);
-    }
-
-    /// Forget every advertisement and device (the adapter lost track of them).
-    pub fn forget_devices(&self) -> Vec<(Duration, Advertisement)> {
-        let mut s = lock(&self.state);
-        s.devices.clear();
-        std::mem::take(&mut s.ads)
     }
 
     /// How many scans were started.

@@ -186,7 +186,10 @@ impl BleLink {
             .bounded("discovering services of", t.discover, p.discover_services())
             .await?;
         for ch in self.profile.characteristics() {
-            if !found.iter().any(|d| ch.matches(d.service, d.characteristic)) {
+            if !found
+                .iter()
+                .any(|d| ch.matches(d.service, d.characteristic))
+            {
                 return Err(BleError::new(
                     BleErrorKind::MissingCharacteristic,
                     format!(
@@ -224,7 +227,12 @@ impl BleLink {
                 .await?;
         }
         let (tx, rx) = mpsc::channel(EVENT_CAPACITY);
-        let notify: Vec<GattUuid> = self.profile.notify.iter().map(|c| c.characteristic).collect();
+        let notify: Vec<GattUuid> = self
+            .profile
+            .notify
+            .iter()
+            .map(|c| c.characteristic)
+            .collect();
         tokio::spawn(forward(events, notify, tx));
         Ok(Connection {
             writer: Box::new(BleWriter {

@@ -16,7 +16,9 @@ pub mod fake;
 mod link;
 pub mod scan;
 
-pub use backend::{Advertisement, BleAddress, BleCentral, BlePeripheral, DiscoveredChar, PeripheralEvent};
+pub use backend::{
+    Advertisement, BleAddress, BleCentral, BlePeripheral, DiscoveredChar, PeripheralEvent,
+};
 pub use btleplug_backend::open_central;
 pub use error::{BleError, BleErrorKind};
 pub use link::{BleLink, BleTimeouts};
@@ -71,7 +73,8 @@ pub async fn connect_link_with(
     central: Arc<dyn BleCentral>,
     sel: &DeviceSelector,
 ) -> Result<FoundDroid, BleError> {
-    let candidates = scan::scan(central.as_ref(), sel.scan_timeout, |e| sel.satisfied_by(e)).await?;
+    let candidates =
+        scan::scan(central.as_ref(), sel.scan_timeout, |e| sel.satisfied_by(e)).await?;
     let chosen = scan::pick(&candidates, sel)?.clone();
     let model = chosen.model.ok_or_else(|| {
         BleError::new(BleErrorKind::Selection, "the chosen device is not a droid")

@@ -42,7 +42,9 @@ impl ScanEntry {
 
     /// The name, or the address for nameless devices.
     pub fn label(&self) -> String {
-        self.name.clone().unwrap_or_else(|| self.address.to_string())
+        self.name
+            .clone()
+            .unwrap_or_else(|| self.address.to_string())
     }
 
     pub fn to_json(&self) -> serde_json::Value {
@@ -193,7 +195,7 @@ pub fn pick<'a>(entries: &'a [ScanEntry], sel: &DeviceSelector) -> Result<&'a Sc
                     })
                     .collect();
                 match partial.as_slice() {
-                    [one] => one,
+                    [one] => *one,
                     [] => {
                         return Err(BleError::new(
                             BleErrorKind::NotFound,
@@ -341,7 +343,10 @@ mod tests {
 
     #[test]
     fn json_lines() {
-        let s = summarize(&[ad(Some("D2-AAAA"), 1, Some(-70)), ad(None, 2, None)], true);
+        let s = summarize(
+            &[ad(Some("D2-AAAA"), 1, Some(-70)), ad(None, 2, None)],
+            true,
+        );
         let mut out = Vec::new();
         render(&s, true, &mut out).unwrap();
         let text = String::from_utf8(out).unwrap();
@@ -358,7 +363,10 @@ mod tests {
     #[test]
     fn table() {
         let s = summarize(
-            &[ad(Some("D2-AAAA"), 1, Some(-70)), ad(Some("BB-1"), 2, Some(-48))],
+            &[
+                ad(Some("D2-AAAA"), 1, Some(-70)),
+                ad(Some("BB-1"), 2, Some(-48)),
+            ],
             false,
         );
         let mut out = Vec::new();
@@ -391,8 +399,14 @@ mod tests {
             true,
         );
         assert_eq!(pick(&all, &sel(None, None)).unwrap().label(), "D2-BBBB");
-        assert_eq!(pick(&all, &sel(Some("d2-aaaa"), None)).unwrap().label(), "D2-AAAA");
-        assert_eq!(pick(&all, &sel(Some("cccc"), None)).unwrap().label(), "GB-CCCC");
+        assert_eq!(
+            pick(&all, &sel(Some("d2-aaaa"), None)).unwrap().label(),
+            "D2-AAAA"
+        );
+        assert_eq!(
+            pick(&all, &sel(Some("cccc"), None)).unwrap().label(),
+            "GB-CCCC"
+        );
         let a = BleAddress([0xF1, 0, 0, 0, 0, 4]);
         assert_eq!(pick(&all, &sel(None, Some(a))).unwrap().label(), "GB-CCCC");
 

@@ -123,12 +123,19 @@ impl CommandDef {
     pub fn encode_params(&self, given: &[(String, String)]) -> Result<Vec<u8>, String> {
         for (k, _) in given {
             if !self.params.iter().any(|p| p.option() == *k) {
-                let expected: Vec<String> =
-                    self.params.iter().map(|p| format!("--{}", p.option())).collect();
+                let expected: Vec<String> = self
+                    .params
+                    .iter()
+                    .map(|p| format!("--{}", p.option()))
+                    .collect();
                 return Err(if expected.is_empty() {
                     format!("{} takes no parameters, got --{k}", self.name)
                 } else {
-                    format!("{} has no parameter --{k} (expected {})", self.name, expected.join(" "))
+                    format!(
+                        "{} has no parameter --{k} (expected {})",
+                        self.name,
+                        expected.join(" ")
+                    )
                 });
             }
         }
@@ -448,8 +455,16 @@ static CATALOGUE: LazyLock<Catalogue> = LazyLock::new(|| {
             fields: r.fields,
         })
         .collect();
-    let by_id = commands.iter().enumerate().map(|(i, c)| ((c.did(), c.cid), i)).collect();
-    let by_name = commands.iter().enumerate().map(|(i, c)| (c.name.clone(), i)).collect();
+    let by_id = commands
+        .iter()
+        .enumerate()
+        .map(|(i, c)| ((c.did(), c.cid), i))
+        .collect();
+    let by_name = commands
+        .iter()
+        .enumerate()
+        .map(|(i, c)| (c.name.clone(), i))
+        .collect();
     let notif_by_id = notifications
         .iter()
         .enumerate()
@@ -476,7 +491,10 @@ pub fn notifications() -> &'static [NotificationDef] {
 
 /// The command with this DID/CID.
 pub fn lookup(did: u8, cid: u8) -> Option<&'static CommandDef> {
-    CATALOGUE.by_id.get(&(did, cid)).map(|&i| &CATALOGUE.commands[i])
+    CATALOGUE
+        .by_id
+        .get(&(did, cid))
+        .map(|&i| &CATALOGUE.commands[i])
 }
 
 /// The command with this kebab-case name.
@@ -529,7 +547,8 @@ mod tests {
             assert!(seen.insert(c.name.clone()), "duplicate {}", c.name);
             assert!(seen.len() <= commands().len());
         }
-        let ids: std::collections::HashSet<_> = commands().iter().map(|c| (c.did(), c.cid)).collect();
+        let ids: std::collections::HashSet<_> =
+            commands().iter().map(|c| (c.did(), c.cid)).collect();
         assert_eq!(ids.len(), commands().len(), "duplicate DID/CID");
         for n in notifications() {
             assert_eq!(n.name, kebab(n.spec_name));
@@ -553,19 +572,36 @@ mod tests {
     fn issue_examples_encode() {
         let c = by_name("drive-with-heading").unwrap();
         let given = |pairs: &[(&str, &str)]| -> Vec<(String, String)> {
-            pairs.iter().map(|(k, v)| (k.to_string(), v.to_string())).collect()
+            pairs
+                .iter()
+                .map(|(k, v)| (k.to_string(), v.to_string()))
+                .collect()
         };
         assert_eq!(
-            c.encode_params(&given(&[("speed", "100"), ("heading", "180"), ("flags", "0")])),
+            c.encode_params(&given(&[
+                ("speed", "100"),
+                ("heading", "180"),
+                ("flags", "0")
+            ])),
             Ok(vec![100, 0, 180, 0])
         );
         let err = c
-            .encode_params(&given(&[("speed", "100"), ("heading", "360"), ("flags", "0")]))
+            .encode_params(&given(&[
+                ("speed", "100"),
+                ("heading", "360"),
+                ("flags", "0"),
+            ]))
             .unwrap_err();
-        assert!(err.contains("--heading") && err.contains("0..=359"), "{err}");
+        assert!(
+            err.contains("--heading") && err.contains("0..=359"),
+            "{err}"
+        );
         let err = c.encode_params(&given(&[("speed", "100")])).unwrap_err();
         assert!(err.contains("needs --heading"), "{err}");
-        let err = by_name("wake").unwrap().encode_params(&given(&[("x", "1")])).unwrap_err();
+        let err = by_name("wake")
+            .unwrap()
+            .encode_params(&given(&[("x", "1")]))
+            .unwrap_err();
         assert!(err.contains("takes no parameters"));
     }
 

@@ -444,7 +444,10 @@ mod tests {
         let mut d = Decoder::new();
         let bytes = hex::parse("01 02 03 8D 0A 13 0D 00 D5 D8 FF").unwrap();
         let out = d.decode_all(&bytes);
-        assert_eq!(kinds(&out), vec![Err(DecodeErrorKind::Garbage), Ok((0x13, 0x0D))]);
+        assert_eq!(
+            kinds(&out),
+            vec![Err(DecodeErrorKind::Garbage), Ok((0x13, 0x0D))]
+        );
         let Err(e) = &out[0] else { panic!() };
         assert_eq!(e.offset, 0);
         let tail = d.finish();
@@ -477,7 +480,10 @@ mod tests {
             max_buffered = max_buffered.max(d.buffered());
         }
         assert!(max_buffered <= 16);
-        assert_eq!(kinds(&out), vec![Err(DecodeErrorKind::Oversize), Ok((0x13, 0x0D))]);
+        assert_eq!(
+            kinds(&out),
+            vec![Err(DecodeErrorKind::Oversize), Ok((0x13, 0x0D))]
+        );
     }
 
     #[test]
@@ -501,7 +507,11 @@ mod tests {
                 .map(|p| p.encode().len() as u64)
                 .sum();
             d.finish();
-            assert_eq!(packets + d.stats().skipped_bytes, bytes.len() as u64, "{stream}");
+            assert_eq!(
+                packets + d.stats().skipped_bytes,
+                bytes.len() as u64,
+                "{stream}"
+            );
         }
     }
 

@@ -28,7 +28,10 @@ impl Flags {
         for (bit, name) in [
             (Flags::IS_RESPONSE, "is_response"),
             (Flags::REQUESTS_RESPONSE, "requests_response"),
-            (Flags::REQUESTS_ONLY_ERROR_RESPONSE, "requests_only_error_response"),
+            (
+                Flags::REQUESTS_ONLY_ERROR_RESPONSE,
+                "requests_only_error_response",
+            ),
             (Flags::IS_ACTIVITY, "is_activity"),
             (Flags::HAS_TARGET_ID, "has_target_id"),
             (Flags::HAS_SOURCE_ID, "has_source_id"),
@@ -52,7 +55,12 @@ mod tests {
         assert_eq!(Flags::DEFAULT_COMMAND.bits(), 0x0A);
         assert_eq!(
             Flags::from_bits_retain(0x3A).names(),
-            vec!["requests_response", "is_activity", "has_target_id", "has_source_id"]
+            vec![
+                "requests_response",
+                "is_activity",
+                "has_target_id",
+                "has_source_id"
+            ]
         );
     }
 }

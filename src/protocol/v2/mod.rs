@@ -71,7 +71,11 @@ pub fn describe(p: &Packet, streaming: Option<&StreamingConfig>) -> Described {
         Kind::Command | Kind::Response => match catalog::lookup(p.did, p.cid) {
             Some(def) => (
                 Some(def.name.clone()),
-                Some(if kind == Kind::Command { def.params } else { def.response }),
+                Some(if kind == Kind::Command {
+                    def.params
+                } else {
+                    def.response
+                }),
             ),
             None => (None, None),
         },
@@ -104,7 +108,14 @@ pub fn describe(p: &Packet, streaming: Option<&StreamingConfig>) -> Described {
             Ok(f) => d.fields = Some(f),
             Err(e) => d.problem = Some(e.to_string()),
         },
-        None => d.problem = Some(format!("unknown {} {}/0x{:02X}", kind.name(), Device::describe(p.did), p.cid)),
+        None => {
+            d.problem = Some(format!(
+                "unknown {} {}/0x{:02X}",
+                kind.name(),
+                Device::describe(p.did),
+                p.cid
+            ))
+        }
     }
     d
 }

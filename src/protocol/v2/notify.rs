@@ -29,7 +29,11 @@ impl Collision {
                 AccelRaw::get(r, "accel_z")?,
             ],
             axis: CollisionAxis::get(r, "axis")?,
-            power: [i16::get(r, "power_x")?, i16::get(r, "power_y")?, i16::get(r, "power_z")?],
+            power: [
+                i16::get(r, "power_x")?,
+                i16::get(r, "power_y")?,
+                i16::get(r, "power_z")?,
+            ],
             speed: u8::get(r, "speed")?,
             time_ms: u32::get(r, "time_ms")?,
         };
@@ -68,7 +72,11 @@ pub enum Notification {
     AnimationComplete,
     HeadResetToZero,
     /// Any other (DID, CID), or a known one whose payload did not fit: bytes kept.
-    Other { did: u8, cid: u8, data: Vec<u8> },
+    Other {
+        did: u8,
+        cid: u8,
+        data: Vec<u8>,
+    },
 }
 
 /// Why a known notification could not be decoded.
@@ -82,7 +90,10 @@ impl Notification {
     /// Decode a notification packet. `streaming` gives the masks in effect for sensor data.
     /// Known notifications with a malformed payload are errors (counted by the caller);
     /// unknown ones are `Other`.
-    pub fn decode(p: &Packet, streaming: &StreamingConfig) -> Result<Notification, NotificationError> {
+    pub fn decode(
+        p: &Packet,
+        streaming: &StreamingConfig,
+    ) -> Result<Notification, NotificationError> {
         let bad = |name: &'static str, reason: String| NotificationError { name, reason };
         let byte = |name: &'static str| {
             p.data
@@ -95,7 +106,10 @@ impl Notification {
             if p.data.is_empty() {
                 Ok(n)
             } else {
-                Err(bad(name, format!("expected no data, got {} byte(s)", p.data.len())))
+                Err(bad(
+                    name,
+                    format!("expected no data, got {} byte(s)", p.data.len()),
+                ))
             }
         };
         match (Device::from_id(p.did), p.cid) {
@@ -105,16 +119,22 @@ impl Notification {
             (Some(Device::Sensor), 0x02) => decode_sample(streaming, &p.data)
                 .map(Notification::Sensors)
                 .map_err(|e| bad("sensor-streaming-data", e.to_string())),
-            (Some(Device::Power), 0x06) => byte("battery-state-changed").map(Notification::BatteryStateChanged),
+            (Some(Device::Power), 0x06) => {
+                byte("battery-state-changed").map(Notification::BatteryStateChanged)
+            }
             (Some(Device::Power), 0x1C) => {
                 byte("battery-voltage-state-changed").map(Notification::BatteryVoltageStateChanged)
             }
-            (Some(Device::Power), 0x21) => byte("charger-state-changed").map(Notification::ChargerStateChanged),
+            (Some(Device::Power), 0x21) => {
+                byte("charger-state-changed").map(Notification::ChargerStateChanged)
+            }
             (Some(Device::Power), 0x19) => empty("will-sleep", Notification::WillSleep),
             (Some(Device::Power), 0x1A) => empty("did-sleep", Notification::DidSleep),
             (Some(Device::Animatronic), 0x26) => Ok(Notification::LegActionComplete),
             (Some(Device::Animatronic), 0x11) => Ok(Notification::AnimationComplete),
-            (Some(Device::Animatronic), 0x3A) => empty("head-reset-to-zero", Notification::HeadResetToZero),
+            (Some(Device::Animatronic), 0x3A) => {
+                empty("head-reset-to-zero", Notification::HeadResetToZero)
+            }
             _ => Ok(Notification::Other {
                 did: p.did,
                 cid: p.cid,
@@ -153,8 +173,8 @@ mod tests {
         // accel (4096, -2048, 0) = (1 g, -0.5 g, 0), axis x|y, power (100, -5, 7), speed 80,
         // time 0x00012345.
         vec![
-            0x10, 0x00, 0xF8, 0x00, 0x00, 0x00, 0x03, 0x00, 0x64, 0xFF, 0xFB, 0x00, 0x07, 0x50, 0x00, 0x01,
-            0x23, 0x45,
+            0x10, 0x00, 0xF8, 0x00, 0x00, 0x00, 0x03, 0x00, 0x64, 0xFF, 0xFB, 0x00, 0x07, 0x50,
+            0x00, 0x01, 0x23, 0x45,
         ]
     }
 
@@ -180,8 +200,8 @@ mod tests {
         assert_eq!(
             names,
             [
-                "accel_x", "accel_y", "accel_z", "x_axis", "y_axis", "power_x", "power_y", "power_z", "speed",
-                "time_ms"
+                "accel_x", "accel_y", "accel_z", "x_axis", "y_axis", "power_x", "power_y",
+                "power_z", "speed", "time_ms"
             ]
         );
         assert_eq!(fields[0].1, Value::Float(1.0));
@@ -191,11 +211,15 @@ mod tests {
     #[test]
     fn decodes_power_notifications() {
         let cfg = StreamingConfig::default();
-        let n = |cid, data: Vec<u8>| Notification::decode(&Packet::notification(0x13, cid, data), &cfg);
+        let n =
+            |cid, data: Vec<u8>| Notification::decode(&Packet::notification(0x13, cid, data), &cfg);
         assert_eq!(n(0x19, vec![]), Ok(Notification::WillSleep));
         assert_eq!(n(0x1A, vec![]), Ok(Notification::DidSleep));
         assert_eq!(n(0x06, vec![3]), Ok(Notification::BatteryStateChanged(3)));
-        assert_eq!(n(0x1C, vec![2]), Ok(Notification::BatteryVoltageStateChanged(2)));
+        assert_eq!(
+            n(0x1C, vec![2]),
+            Ok(Notification::BatteryVoltageStateChanged(2))
+        );
         assert_eq!(n(0x21, vec![1]), Ok(Notification::ChargerStateChanged(1)));
         assert!(n(0x06, vec![]).is_err());
         assert!(n(0x19, vec![1]).is_err());
@@ -205,11 +229,15 @@ mod tests {
     #[test]
     fn decodes_animatronic_and_unknown() {
         let cfg = StreamingConfig::default();
-        let n = |did, cid| Notification::decode(&Packet::notification(did, cid, vec![]), &cfg).unwrap();
+        let n =
+            |did, cid| Notification::decode(&Packet::notification(did, cid, vec![]), &cfg).unwrap();
         assert_eq!(n(0x17, 0x26), Notification::LegActionComplete);
         assert_eq!(n(0x17, 0x11), Notification::AnimationComplete);
         assert_eq!(n(0x17, 0x3A), Notification::HeadResetToZero);
-        assert!(matches!(n(0x42, 0x01), Notification::Other { did: 0x42, .. }));
+        assert!(matches!(
+            n(0x42, 0x01),
+            Notification::Other { did: 0x42, .. }
+        ));
         assert_eq!(n(0x42, 0x01).name(), "notification-42-01");
     }
 
@@ -217,7 +245,8 @@ mod tests {
     fn decodes_sensor_stream_with_masks() {
         let cfg = StreamingConfig::full(100);
         let data = super::super::sensor::encode_sample(&cfg, &[("yaw", 45.0), ("locator_x", 12.0)]);
-        let Notification::Sensors(s) = Notification::decode(&Packet::notification(0x18, 0x02, data), &cfg).unwrap()
+        let Notification::Sensors(s) =
+            Notification::decode(&Packet::notification(0x18, 0x02, data), &cfg).unwrap()
         else {
             panic!()
         };

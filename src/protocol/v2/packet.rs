@@ -99,7 +99,8 @@ impl Packet {
     /// Make the optional header fields agree with the flags, so a hand-built packet encodes
     /// to something its own decoder accepts: set fields imply their flag.
     pub fn normalized(mut self) -> Self {
-        self.flags.set(Flags::EXTENDED_FLAGS, self.ext_flags.is_some());
+        self.flags
+            .set(Flags::EXTENDED_FLAGS, self.ext_flags.is_some());
         self.flags.set(Flags::HAS_TARGET_ID, self.tid.is_some());
         self.flags.set(Flags::HAS_SOURCE_ID, self.sid.is_some());
         self.flags.set(Flags::IS_RESPONSE, self.err.is_some());
@@ -161,8 +162,14 @@ fn push_escaped(out: &mut Vec<u8>, b: u8) {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum BodyError {
     /// Fewer bytes than the flags require.
-    TooShort { needed: usize, got: usize },
-    BadChecksum { expected: u8, got: u8 },
+    TooShort {
+        needed: usize,
+        got: usize,
+    },
+    BadChecksum {
+        expected: u8,
+        got: u8,
+    },
 }
 
 /// Parse an unescaped body (everything between SOP and EOP, checksum included).
@@ -235,7 +242,10 @@ mod tests {
     fn wake_response_vector() {
         let req = Packet::command(0x13, 0x0D, 0, vec![]);
         let resp = Packet::response_to(&req, ErrorCode::Success, vec![]);
-        assert_eq!(resp.encode(), hex::parse("8D 09 13 0D 00 00 D6 D8").unwrap());
+        assert_eq!(
+            resp.encode(),
+            hex::parse("8D 09 13 0D 00 00 D6 D8").unwrap()
+        );
     }
 
     #[test]

@@ -103,7 +103,10 @@ impl StreamingConfig {
     /// `None` so the count of values stays right.
     pub fn layout(&self) -> Vec<Option<&'static SensorField>> {
         let mut out = Vec::new();
-        for (m, table) in [(self.mask, &STANDARD_FIELDS[..]), (self.ext_mask, &EXTENDED_FIELDS[..])] {
+        for (m, table) in [
+            (self.mask, &STANDARD_FIELDS[..]),
+            (self.ext_mask, &EXTENDED_FIELDS[..]),
+        ] {
             for bit in (0..32).rev() {
                 if m & (1 << bit) != 0 {
                     out.push(table.iter().find(|f| f.bit == bit));
@@ -130,7 +133,10 @@ pub struct SensorSample {
 
 impl SensorSample {
     pub fn get(&self, name: &str) -> Option<f32> {
-        self.values.iter().find(|(n, _)| *n == name).map(|(_, v)| *v)
+        self.values
+            .iter()
+            .find(|(n, _)| *n == name)
+            .map(|(_, v)| *v)
     }
 
     pub fn fields(&self) -> Fields {
@@ -214,8 +220,19 @@ mod tests {
         assert_eq!(
             names,
             [
-                "pitch", "roll", "yaw", "accel_x", "accel_y", "accel_z", "locator_x", "locator_y",
-                "velocity_x", "velocity_y", "gyro_x", "gyro_y", "gyro_z"
+                "pitch",
+                "roll",
+                "yaw",
+                "accel_x",
+                "accel_y",
+                "accel_z",
+                "locator_x",
+                "locator_y",
+                "velocity_x",
+                "velocity_y",
+                "gyro_x",
+                "gyro_y",
+                "gyro_z"
             ]
         );
     }
@@ -254,6 +271,9 @@ mod tests {
         };
         let mut data = vec![0; 4];
         data.extend_from_slice(&3.0f32.to_be_bytes());
-        assert_eq!(decode_sample(&cfg, &data).unwrap().values, vec![("speed", 3.0)]);
+        assert_eq!(
+            decode_sample(&cfg, &data).unwrap().values,
+            vec![("speed", 3.0)]
+        );
     }
 }

@@ -10,11 +10,20 @@ pub enum Value {
     Int(i64),
     Float(f64),
     /// A mask or id better read in hex; `width` is the number of bytes.
-    Hex { value: u64, width: u8 },
+    Hex {
+        value: u64,
+        width: u8,
+    },
     /// An enumerated value and its name when known (unknown values are kept, not lost).
-    Enum { value: u64, name: Option<&'static str> },
+    Enum {
+        value: u64,
+        name: Option<&'static str>,
+    },
     /// A set of flag names plus the raw bits.
-    Flags { bits: u64, names: Vec<&'static str> },
+    Flags {
+        bits: u64,
+        names: Vec<&'static str>,
+    },
     Text(String),
     Bytes(Vec<u8>),
     List(Vec<Value>),
@@ -25,9 +34,9 @@ impl Value {
         match *self {
             Value::Int(i) => Some(i as f64),
             Value::Float(f) => Some(f),
-            Value::Hex { value, .. } | Value::Enum { value, .. } | Value::Flags { bits: value, .. } => {
-                Some(value as f64)
-            }
+            Value::Hex { value, .. }
+            | Value::Enum { value, .. }
+            | Value::Flags { bits: value, .. } => Some(value as f64),
             Value::Bool(b) => Some(b as u8 as f64),
             _ => None,
         }
@@ -47,7 +56,10 @@ impl fmt::Display for Value {
                 }
             }
             Value::Hex { value, width } => write!(f, "0x{:0w$X}", value, w = *width as usize * 2),
-            Value::Enum { value, name: Some(n) } => write!(f, "{n} ({value})"),
+            Value::Enum {
+                value,
+                name: Some(n),
+            } => write!(f, "{n} ({value})"),
             Value::Enum { value, name: None } => write!(f, "unknown ({value})"),
             Value::Flags { bits, names } if names.is_empty() => write!(f, "none (0x{bits:02X})"),
             Value::Flags { bits, names } => write!(f, "{} (0x{bits:02X})", names.join("|")),

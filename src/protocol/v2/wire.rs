@@ -23,7 +23,10 @@ impl std::fmt::Display for FieldError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             FieldError::Short { field, needed } => {
-                write!(f, "payload too short: field {field} needs {needed} more byte(s)")
+                write!(
+                    f,
+                    "payload too short: field {field} needs {needed} more byte(s)"
+                )
             }
             FieldError::Trailing(n) => write!(f, "{n} unexpected trailing byte(s)"),
             FieldError::Invalid { field, reason } => write!(f, "field {field}: {reason}"),
@@ -85,7 +88,9 @@ impl<'a> Reader<'a> {
 pub enum Size {
     Fixed(usize),
     /// Consumes the rest of the payload (at least `min` bytes).
-    Rest { min: usize },
+    Rest {
+        min: usize,
+    },
 }
 
 /// A parameter or field type.
@@ -100,7 +105,11 @@ pub trait Wire: Sized {
     fn parse(text: &str) -> Result<Self, String>;
 
     /// Decode into named values; most types give one, some (collision axis) give several.
-    fn decode_into(r: &mut Reader<'_>, name: &'static str, out: &mut Fields) -> Result<(), FieldError> {
+    fn decode_into(
+        r: &mut Reader<'_>,
+        name: &'static str,
+        out: &mut Fields,
+    ) -> Result<(), FieldError> {
         let v = Self::get(r, name)?;
         out.push((name, v.value()));
         Ok(())
@@ -214,7 +223,9 @@ impl Wire for bool {
         match text.trim().to_ascii_lowercase().as_str() {
             "1" | "true" | "on" | "yes" => Ok(true),
             "0" | "false" | "off" | "no" => Ok(false),
-            _ => Err(format!("{text:?} is not a boolean (true/false, on/off, 1/0)")),
+            _ => Err(format!(
+                "{text:?} is not a boolean (true/false, on/off, 1/0)"
+            )),
         }
     }
 }
@@ -259,8 +270,9 @@ impl Wire for HeadAngle {
     }
     fn parse(text: &str) -> Result<Self, String> {
         let v = parse_f32(text)?;
-        HeadAngle::new(v)
-            .ok_or_else(|| format!("dome angle {v} is out of range {HEAD_MIN_DEG}..={HEAD_MAX_DEG}"))
+        HeadAngle::new(v).ok_or_else(|| {
+            format!("dome angle {v} is out of range {HEAD_MIN_DEG}..={HEAD_MAX_DEG}")
+        })
     }
 }
 
@@ -285,7 +297,11 @@ impl<const N: usize> Wire for Mask<N> {
         }
     }
     fn parse(text: &str) -> Result<Self, String> {
-        let max = if N >= 4 { u32::MAX as u64 } else { (1u64 << (8 * N)) - 1 };
+        let max = if N >= 4 {
+            u32::MAX as u64
+        } else {
+            (1u64 << (8 * N)) - 1
+        };
         Ok(Mask(parse_uint(text, max)? as u32))
     }
 }
@@ -520,7 +536,11 @@ impl Wire for CollisionAxis {
             y: b & 2 != 0,
         })
     }
-    fn decode_into(r: &mut Reader<'_>, name: &'static str, out: &mut Fields) -> Result<(), FieldError> {
+    fn decode_into(
+        r: &mut Reader<'_>,
+        name: &'static str,
+        out: &mut Fields,
+    ) -> Result<(), FieldError> {
         let a = Self::get(r, name)?;
         out.push(("x_axis", Value::Bool(a.x)));
         out.push(("y_axis", Value::Bool(a.y)));
@@ -654,8 +674,7 @@ const DRIVE_FLAG_NAMES: [(DriveFlags, &str); 6] = [
 ];
 
 impl Wire for DriveFlags {
-    const DESCRIPTION: &'static str =
-        "flags: number, or names joined by ',' or '|': backward turbo fast-turn left-direction right-direction enable-drift";
+    const DESCRIPTION: &'static str = "flags: number, or names joined by ',' or '|': backward turbo fast-turn left-direction right-direction enable-drift";
     const SIZE: Size = Size::Fixed(1);
     fn put(&self, out: &mut Vec<u8>) {
         out.push(self.bits());
@@ -678,12 +697,21 @@ impl Wire for DriveFlags {
             return Ok(DriveFlags::from_bits_retain(n as u8));
         }
         let mut flags = DriveFlags::empty();
-        for part in text.split([',', '|', '+']).map(str::trim).filter(|p| !p.is_empty()) {
+        for part in text
+            .split([',', '|', '+'])
+            .map(str::trim)
+            .filter(|p| !p.is_empty())
+        {
             let p = part.to_ascii_lowercase().replace('_', "-");
             match DRIVE_FLAG_NAMES.iter().find(|(_, n)| *n == p) {
                 Some((f, _)) => flags |= *f,
                 None if p == "forward" || p == "none" => {}
-                None => return Err(format!("{part:?} is not a drive flag ({})", Self::DESCRIPTION)),
+                None => {
+                    return Err(format!(
+                        "{part:?} is not a drive flag ({})",
+                        Self::DESCRIPTION
+                    ));
+                }
             }
         }
         Ok(flags)
@@ -708,7 +736,13 @@ mod tests {
     fn unknown_enum_values_are_kept() {
         let mut out = Fields::new();
         LegState::decode_into(&mut Reader::new(&[9]), "state", &mut out).unwrap();
-        assert_eq!(out[0].1, Value::Enum { value: 9, name: None });
+        assert_eq!(
+            out[0].1,
+            Value::Enum {
+                value: 9,
+                name: None
+            }
+        );
     }
 
     #[test]
@@ -740,6 +774,12 @@ mod tests {
     #[test]
     fn short_payload_names_field() {
         let err = u16::get(&mut Reader::new(&[1]), "sound").unwrap_err();
-        assert_eq!(err, FieldError::Short { field: "sound", needed: 1 });
+        assert_eq!(
+            err,
+            FieldError::Short {
+                field: "sound",
+                needed: 1
+            }
+        );
     }
 }

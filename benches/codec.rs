@@ -1,0 +1,177 @@
+//! Throughput of the v2 codec on a realistic mixed stream: sensor-streaming notifications of the
+//! full mask set, responses, drive commands, collisions and LED commands whose payloads need
+//! escaping. Reported in bytes/s; the stream's packet count is printed so packets/s follows.
+//!
+//! `cargo bench --bench codec -- --warm-up-time 1 --measurement-time 3`
+
+use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use droidctl::protocol::v2::sensor::encode_sample;
+use droidctl::protocol::v2::wire::{AccelRaw, Bytes, CollisionAxis};
+use droidctl::protocol::v2::wire::{DriveFlags, LegState, Mask};
+use droidctl::protocol::v2::{Collision, Decoder, ErrorCode, Packet, StreamingConfig, cmd};
+use droidctl::units::Heading;
+use std::hint::black_box;
+
+/// Deterministic pseudo-random numbers (xorshift64*), so every run measures the same stream.
+struct Rng(u64);
+
+impl Rng {
+    fn next(&mut self) -> u64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
+    }
+
+    fn unit(&mut self) -> f32 {
+        (self.next() >> 40) as f32 / (1u64 << 24) as f32
+    }
+
+    fn range(&mut self, lo: f32, hi: f32) -> f32 {
+        lo + (hi - lo) * self.unit()
+    }
+}
+
+/// About one second of a busy session: mostly sensor data at the full mask set, with the
+/// commands and responses of a driver steering the droid.
+fn mixed_packets() -> Vec<Packet> {
+    let mut r = Rng(0x00C0_FFEE_D401_D5EE);
+    let cfg = StreamingConfig::full(150);
+    let mut seq = 0u8;
+    let mut next_seq = || {
+        let s = seq;
+        seq = if seq == 254 { 0 } else { seq + 1 };
+        s
+    };
+    let mut out = Vec::new();
+    for i in 0..1000 {
+        match i % 10 {
+            // 50 %: sensor streaming, 14 f32 values.
+            0..=4 => {
+                let values = [
+                    ("pitch", r.range(-10.0, 10.0)),
+                    ("roll", r.range(-10.0, 10.0)),
+                    ("yaw", r.range(-180.0, 180.0)),
+                    ("accel_x", r.range(-0.3, 0.3)),
+                    ("accel_y", r.range(-0.3, 0.3)),
+                    ("accel_z", r.range(0.8, 1.2)),
+                    ("locator_x", r.range(-300.0, 300.0)),
+                    ("locator_y", r.range(-300.0, 300.0)),
+                    ("velocity_x", r.range(-80.0, 80.0)),
+                    ("velocity_y", r.range(-80.0, 80.0)),
+                    ("head_angle", r.range(-160.0, 180.0)),
+                    ("gyro_x", r.range(-200.0, 200.0)),
+                    ("gyro_y", r.range(-200.0, 200.0)),
+                    ("gyro_z", r.range(-200.0, 200.0)),
+                ];
+                out.push(Packet::notification(
+                    0x18,
+                    0x02,
+                    encode_sample(&cfg, &values),
+                ));
+            }
+            // 20 %: drive commands (SEQ runs through 0x8D, 0xAB and 0xD8, which get escaped).
+            5 | 6 => {
+                let heading = Heading::new((r.next() % 360) as u16).unwrap_or_default();
+                let speed = (r.next() % 256) as u8;
+                let flags = if r.next().is_multiple_of(4) {
+                    DriveFlags::BACKWARD
+                } else {
+                    DriveFlags::empty()
+                };
+                out.push(cmd::drive_with_heading(speed, heading, flags).to_packet(next_seq()));
+            }
+            // 20 %: responses to earlier commands.
+            7 | 8 => {
+                let request = match r.next() % 4 {
+                    0 => cmd::drive_with_heading(0, Heading::default(), DriveFlags::empty()),
+                    1 => cmd::get_battery_voltage(),
+                    2 => cmd::get_head_position(),
+                    _ => cmd::get_leg_action(),
+                }
+                .to_packet(next_seq());
+                let data = match request.cid {
+                    0x03 => (380 + (r.next() % 40) as u16).to_be_bytes().to_vec(),
+                    0x14 => r.range(-160.0, 180.0).to_be_bytes().to_vec(),
+                    0x25 => vec![LegState::Tripod.to_byte()],
+                    _ => vec![],
+                };
+                out.push(Packet::response_to(&request, ErrorCode::Success, data));
+            }
+            // 10 %: collisions and LED commands whose values are the framing bytes.
+            _ => {
+                if r.next().is_multiple_of(2) {
+                    let c = Collision {
+                        accel: [AccelRaw(4096), AccelRaw(-2048), AccelRaw(512)],
+                        axis: CollisionAxis { x: true, y: false },
+                        power: [120, -40, 8],
+                        speed: 90,
+                        time_ms: r.next() as u32,
+                    };
+                    out.push(Packet::notification(0x18, 0x12, c.encode()));
+                } else {
+                    let leds = cmd::set_all_leds_with_16_bit_mask(
+                        Mask(0x00FF),
+                        Bytes(vec![0x8D, 0xAB, 0xD8, 0x00, 0xFF, 0x8D, 0xD8, 0xAB]),
+                    );
+                    out.push(leds.to_packet(next_seq()));
+                }
+            }
+        }
+    }
+    out
+}
+
+fn codec(c: &mut Criterion) {
+    let packets = mixed_packets();
+    let stream: Vec<u8> = packets.iter().flat_map(Packet::encode).collect();
+    let unescaped: usize = packets.iter().map(|p| p.body().len() + 3).sum();
+    eprintln!(
+        "codec stream: {} packets, {} wire bytes ({} escape bytes), {:.1} bytes/packet",
+        packets.len(),
+        stream.len(),
+        stream.len() - unescaped,
+        stream.len() as f64 / packets.len() as f64
+    );
+
+    let mut group = c.benchmark_group("v2");
+    group.throughput(Throughput::Bytes(stream.len() as u64));
+
+    group.bench_function("decode", |b| {
+        b.iter(|| {
+            let mut d = Decoder::new();
+            let n = d.feed(black_box(&stream)).filter(Result::is_ok).count();
+            assert_eq!(n, packets.len());
+            n
+        })
+    });
+
+    // As the bytes arrive over BLE: 20-byte notifications.
+    group.bench_function("decode_ble_chunks", |b| {
+        b.iter(|| {
+            let mut d = Decoder::new();
+            let mut n = 0;
+            for chunk in black_box(&stream).chunks(20) {
+                n += d.feed(chunk).filter(Result::is_ok).count();
+            }
+            assert_eq!(n, packets.len());
+            n
+        })
+    });
+
+    group.bench_function("encode", |b| {
+        let mut buf = Vec::with_capacity(stream.len());
+        b.iter(|| {
+            buf.clear();
+            for p in black_box(&packets) {
+                p.encode_into(&mut buf);
+            }
+            assert_eq!(buf.len(), stream.len());
+            buf.len()
+        })
+    });
+    group.finish();
+}
+
+criterion_group!(benches, codec);
+criterion_main!(benches);

@@ -1,0 +1,611 @@
+//! The event loop: one task owns the [`AppState`]; terminal input, gamepad events, session
+//! notifications, the packet log, link-state changes and the control tick all arrive here over
+//! bounded channels. Every outside input is a parameter, so tests drive it with fakes under
+//! paused time and render into ratatui's `TestBackend`.
+
+use super::input::{KeyKind, TermEvent};
+use super::packet_log::LogLine;
+use super::state::{AppState, Focus, GamepadStatus, HelpLine, KeyboardMode, Overlay};
+use crate::config::Config;
+use crate::model::Model;
+use crate::protocol::v2::sensor::StreamingConfig;
+use crate::protocol::v2::wire::{AudioMode, DriveFlags, LegAction};
+use crate::protocol::v2::{Command, catalog, cmd};
+use crate::session::{LinkState, SessionEvent, SessionHandle, Slot};
+use crate::teleop::control::{Controller, DroidView, Inputs, Out};
+use crate::teleop::gamepad::{PadCommand, PadEvent, PadState};
+use crate::teleop::held::{HeldKeys, ReleaseMode};
+use crate::teleop::keymap::{Action, Key, KeyCode, KeyMap};
+use crate::units::Heading;
+use ratatui::{Frame, Terminal, backend::Backend};
+use std::path::PathBuf;
+use std::time::Duration;
+use tokio::sync::{broadcast, mpsc};
+use tokio::time::{Instant, MissedTickBehavior, interval, sleep_until};
+
+/// How the app is set up.
+pub struct AppOptions {
+    pub config: Config,
+    pub model: Model,
+    pub droid_name: String,
+    pub log_path: Option<PathBuf>,
+    pub release: ReleaseMode,
+    /// The masks the connect setup asks for, to name sensor values in the packet log.
+    pub streaming: Option<StreamingConfig>,
+    /// Whether the connect setup puts R2 into tripod.
+    pub tripod_on_connect: bool,
+}
+
+/// Everything from outside the app.
+pub struct AppInputs {
+    pub term: mpsc::Receiver<TermEvent>,
+    pub pad: mpsc::Receiver<PadEvent>,
+    /// Signals (SIGTERM, SIGHUP, Ctrl-C from outside the terminal): the reason.
+    pub quit: mpsc::Receiver<String>,
+}
+
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum ExitReason {
+    /// The operator quit.
+    Quit,
+    /// A signal.
+    Signal(String),
+    /// The terminal input ended.
+    InputClosed,
+}
+
+/// How the loop ended, with the stop to send before restoring the terminal.
+pub struct Exit {
+    pub reason: ExitReason,
+    pub state: AppState,
+    /// Speed 0 at the last commanded heading.
+    pub stop: Command,
+}
+
+pub type DrawFn = fn(&mut Frame, &AppState);
+
+const RENDER_EVERY: Duration = Duration::from_millis(50);
+const HINT_TIME: Duration = Duration::from_secs(4);
+const BATTERY_EVERY: Duration = Duration::from_secs(10);
+
+struct App {
+    state: AppState,
+    session: SessionHandle,
+    controller: Controller,
+    held: HeldKeys,
+    pad: PadState,
+    keymap: KeyMap,
+    streaming: Option<StreamingConfig>,
+    turbo_speed: u8,
+    start: Instant,
+    last_tick: Instant,
+    dirty: bool,
+}
+
+fn help_lines(config: &Config, keymap: &KeyMap) -> (Vec<HelpLine>, Vec<HelpLine>) {
+    let mut keys: Vec<HelpLine> = keymap
+        .help()
+        .into_iter()
+        .map(|(k, a)| HelpLine {
+            keys: k,
+            action: a.to_string(),
+        })
+        .collect();
+    keys.push(HelpLine {
+        keys: "Ctrl+c".into(),
+        action: "quit (stops the droid first)".into(),
+    });
+    for (k, a) in [
+        ("↑ ↓ PgUp PgDn", "in the log: scroll"),
+        ("p", "in the log: pause / resume"),
+        ("d", "in the log: decoded / hex"),
+        ("/", "in the log: filter (in|out dev:NAME text)"),
+        ("c", "in the log: clear the filter"),
+        ("↑ ↓ Enter Esc", "in a palette: choose, play, close"),
+    ] {
+        keys.push(HelpLine {
+            keys: k.into(),
+            action: a.into(),
+        });
+    }
+    let g = &config.gamepad;
+    let pad = vec![
+        HelpLine { keys: "left stick".into(), action: "heading and speed (polar)".into() },
+        HelpLine { keys: "right stick X".into(), action: "turn the dome".into() },
+        HelpLine { keys: "right trigger".into(), action: "more speed, up to turbo".into() },
+        HelpLine { keys: g.tripod.clone(), action: "stance: tripod".into() },
+        HelpLine { keys: g.bipod.clone(), action: "stance: bipod".into() },
+        HelpLine { keys: g.estop.clone(), action: "EMERGENCY STOP (latched while held)".into() },
+        HelpLine { keys: g.animation.clone(), action: "play the selected animation".into() },
+        HelpLine { keys: g.help.clone(), action: "this help".into() },
+        HelpLine {
+            keys: "D-pad".into(),
+            action: format!("sounds {} / {} / {} / {}", g.sound_up, g.sound_down, g.sound_left, g.sound_right),
+        },
+    ];
+    (keys, pad)
+}
+
+impl App {
+    fn now(&self) -> Duration {
+        Instant::now().duration_since(self.start)
+    }
+
+    fn droid_view(&self) -> DroidView {
+        DroidView {
+            connected: self.state.link == LinkState::Connected,
+            has_legs: self.state.model.has_legs(),
+            has_dome: self.state.model.has_dome(),
+            stance: self.state.telemetry.stance,
+        }
+    }
+
+    fn hint(&mut self, text: impl Into<String>) {
+        self.state.now = self.now();
+        self.state.show_hint(text, HINT_TIME);
+        self.dirty = true;
+    }
+
+    fn apply(&mut self, outs: Vec<Out>) {
+        for o in outs {
+            match o {
+                Out::Drive(c) => self.session.set(Slot::Drive, c),
+                Out::Head(c) => self.session.set(Slot::Head, c),
+                Out::Stance(a) => self.stance(a),
+                Out::Hint(h) => self.hint(h),
+            }
+        }
+        self.state.control = self.controller.view().clone();
+        self.dirty = true;
+    }
+
+    fn stance(&mut self, a: LegAction) {
+        match self.session.send(cmd::perform_leg_action(a)) {
+            Ok(()) => self.state.telemetry.stance_requested(a),
+            Err(e) => self.hint(format!("stance not sent: {e}")),
+        }
+    }
+
+    fn send(&mut self, c: Command, what: &str) {
+        if let Err(e) = self.session.send(c) {
+            self.hint(format!("{what} not sent: {e}"));
+        }
+    }
+
+    /// The driving input right now, from held keys and the pad. Nothing drives while the log
+    /// has focus or an overlay is open.
+    fn inputs(&self) -> Inputs {
+        let mut inp = Inputs::default();
+        let pad_estop = self.pad.estop_held();
+        if self.state.focus != Focus::Drive || self.state.overlay != Overlay::None {
+            inp.estop = pad_estop;
+            return inp;
+        }
+        for k in self.held.keys() {
+            match self.keymap.action(k) {
+                Some(Action::Forward) => inp.forward = true,
+                Some(Action::Backward) => inp.backward = true,
+                Some(Action::Left) => inp.left = true,
+                Some(Action::Right) => inp.right = true,
+                Some(Action::DomeLeft) => inp.dome_left = true,
+                Some(Action::DomeRight) => inp.dome_right = true,
+                Some(Action::EStop) => inp.estop = true,
+                _ => {}
+            }
+        }
+        inp.estop |= pad_estop;
+        inp.pad = self.pad.drive().map(|d| (d, self.pad.speed(&d, self.turbo_speed)));
+        inp.pad_dome_rate = self.pad.dome_rate();
+        inp
+    }
+
+    /// The fixed-rate control tick (`heartbeat`), or an immediate update after input stopped.
+    fn control(&mut self, heartbeat: bool) {
+        let now = Instant::now();
+        let dt = if heartbeat { now.duration_since(self.last_tick) } else { Duration::ZERO };
+        if heartbeat {
+            self.last_tick = now;
+        }
+        let inp = self.inputs();
+        let view = self.droid_view();
+        let outs = self.controller.tick(&inp, dt, &view, heartbeat);
+        self.apply(outs);
+    }
+
+    /// Returns an exit reason when the app should stop.
+    fn on_term(&mut self, e: TermEvent) -> Option<ExitReason> {
+        let now = self.now();
+        match e {
+            TermEvent::FocusLost => {
+                // Focus loss releases every key: the deadman stops the droid now.
+                self.held.release_all();
+                self.control(false);
+            }
+            TermEvent::FocusGained | TermEvent::Resize => self.dirty = true,
+            TermEvent::Key { key, kind: KeyKind::Release } => {
+                self.held.release(key);
+                if let KeyCode::Char(c) = key.code {
+                    // Shift may be let go first: release both cases.
+                    self.held.release(Key { code: KeyCode::Char(c.to_ascii_lowercase()), ctrl: key.ctrl });
+                    self.held.release(Key { code: KeyCode::Char(c.to_ascii_uppercase()), ctrl: key.ctrl });
+                }
+                self.control(false);
+            }
+            TermEvent::Key { key, kind } => {
+                if key == (Key { code: KeyCode::Char('c'), ctrl: true }) {
+                    return Some(ExitReason::Quit);
+                }
+                let new = if kind == KeyKind::Repeat {
+                    self.held.repeat(key, now);
+                    false
+                } else {
+                    self.held.press(key, now)
+                };
+                self.dirty = true;
+                return self.on_key(key, new);
+            }
+        }
+        None
+    }
+
+    fn on_key(&mut self, key: Key, new_press: bool) -> Option<ExitReason> {
+        // Overlays take the keys first.
+        if let Overlay::Animations { selected } | Overlay::Sounds { selected } = self.state.overlay {
+                let animations = matches!(self.state.overlay, Overlay::Animations { .. });
+                let len = if animations { self.state.animations.len() } else { self.state.sounds.len() };
+                let mut sel = selected;
+                match key.code {
+                    KeyCode::Up => sel = sel.saturating_sub(1),
+                    KeyCode::Down => sel = (sel + 1).min(len.saturating_sub(1)),
+                    KeyCode::PageUp => sel = sel.saturating_sub(10),
+                    KeyCode::PageDown => sel = (sel + 10).min(len.saturating_sub(1)),
+                    KeyCode::Esc => {
+                        self.state.overlay = Overlay::None;
+                        return None;
+                    }
+                    KeyCode::Enter if new_press => {
+                        if animations {
+                            if let Some(e) = self.state.animations.get(sel).cloned() {
+                                self.send(cmd::play_animation(e.id), "animation");
+                                self.hint(format!("animation {} ({})", e.name, e.id));
+                            }
+                        } else if let Some(e) = self.state.sounds.get(sel).cloned() {
+                            self.send(cmd::play_audio_file(e.id, AudioMode::Immediate), "sound");
+                            self.hint(format!("sound {} ({})", e.name, e.id));
+                        }
+                        self.state.overlay = Overlay::None;
+                        return None;
+                    }
+                    _ => {}
+                }
+                self.state.overlay = if animations { Overlay::Animations { selected: sel } } else { Overlay::Sounds { selected: sel } };
+                return None;
+                    }
+        match &mut self.state.overlay {
+            Overlay::Help => {
+                if new_press {
+                    self.state.overlay = Overlay::None;
+                }
+                return None;
+            }
+            Overlay::Filter { input } => {
+                match key.code {
+                    KeyCode::Esc => self.state.overlay = Overlay::None,
+                    KeyCode::Enter => {
+                        let f = super::packet_log::LogFilter::parse(input);
+                        self.state.log.set_filter(f);
+                        self.state.overlay = Overlay::None;
+                    }
+                    KeyCode::Backspace => {
+                        input.pop();
+                    }
+                    KeyCode::Char(c) if input.len() < 80 => input.push(c),
+                    KeyCode::Space if input.len() < 80 => input.push(' '),
+                    _ => {}
+                }
+                return None;
+            }
+            Overlay::Animations { .. } | Overlay::Sounds { .. } => {}
+            Overlay::None => {}
+        }
+        if self.state.focus == Focus::Log {
+            let log = &mut self.state.log;
+            match key.code {
+                KeyCode::Up => log.scroll_up(1),
+                KeyCode::Down => log.scroll_down(1),
+                KeyCode::PageUp => log.scroll_up(10),
+                KeyCode::PageDown => log.scroll_down(10),
+                KeyCode::Home => log.scroll_up(usize::MAX / 2),
+                KeyCode::End => log.scroll_down(usize::MAX / 2),
+                KeyCode::Char('p') if new_press => log.toggle_pause(),
+                KeyCode::Char('d') if new_press => log.decoded = !log.decoded,
+                KeyCode::Char('/') | KeyCode::Char('f') if new_press => {
+                    self.state.overlay = Overlay::Filter { input: log.filter_input() }
+                }
+                KeyCode::Char('c') if new_press => log.set_filter(Default::default()),
+                KeyCode::Esc => self.state.focus = Focus::Drive,
+                _ => match self.keymap.action(&key) {
+                    Some(Action::Log) if new_press => self.state.focus = Focus::Drive,
+                    Some(Action::Quit) if new_press && key.code != KeyCode::Esc => return Some(ExitReason::Quit),
+                    Some(Action::EStop) => {
+                        let o = self.controller.estop_now();
+                        self.apply(vec![o]);
+                    }
+                    Some(Action::Help) if new_press => self.state.overlay = Overlay::Help,
+                    _ => {}
+                },
+            }
+            return None;
+        }
+        let action = self.keymap.action(&key)?;
+        if !new_press {
+            return None;
+        }
+        match action {
+            Action::Quit => return Some(ExitReason::Quit),
+            Action::Help => self.state.overlay = Overlay::Help,
+            Action::Log => {
+                self.state.focus = Focus::Log;
+                // The droid is held stopped while the log has the keys.
+                self.held.release_all();
+                self.control(false);
+            }
+            Action::Animations => self.state.overlay = Overlay::Animations { selected: 0 },
+            Action::Sounds => self.state.overlay = Overlay::Sounds { selected: 0 },
+            a => {
+                let view = self.droid_view();
+                let outs = self.controller.on_press(a, &view);
+                self.apply(outs);
+                if a.is_held() {
+                    self.control(false);
+                }
+            }
+        }
+        None
+    }
+
+    fn on_pad(&mut self, e: PadEvent) {
+        match &e {
+            PadEvent::Unavailable(why) => self.state.gamepad = GamepadStatus::Unavailable(why.clone()),
+            PadEvent::Connected(name) => self.state.gamepad = GamepadStatus::Connected(name.clone()),
+            PadEvent::Disconnected => {
+                self.state.gamepad = GamepadStatus::NoPad;
+                self.hint("gamepad unplugged — stopped");
+            }
+            _ => {}
+        }
+        let command = self.pad.apply(&e);
+        let view = self.droid_view();
+        match command {
+            Some(PadCommand::Tripod) => {
+                let o = self.controller.on_press(Action::Tripod, &view);
+                self.apply(o);
+            }
+            Some(PadCommand::Bipod) => {
+                let o = self.controller.on_press(Action::Bipod, &view);
+                self.apply(o);
+            }
+            Some(PadCommand::EStop) => {
+                let o = self.controller.estop_now();
+                self.apply(vec![o]);
+            }
+            Some(PadCommand::Help) => {
+                self.state.overlay = if self.state.overlay == Overlay::Help { Overlay::None } else { Overlay::Help };
+            }
+            Some(PadCommand::Animation) => {
+                let sel = match self.state.overlay {
+                    Overlay::Animations { selected } => selected,
+                    _ => 0,
+                };
+                if let Some(a) = self.state.animations.get(sel).cloned() {
+                    self.send(cmd::play_animation(a.id), "animation");
+                    self.hint(format!("animation {} ({})", a.name, a.id));
+                }
+            }
+            Some(PadCommand::Sound(id)) => self.send(cmd::play_audio_file(id, AudioMode::Immediate), "sound"),
+            None => {}
+        }
+        // Stick back in its deadzone or pad unplugged: stop at once.
+        if matches!(e, PadEvent::Disconnected | PadEvent::Axis(..)) {
+            self.control(false);
+        }
+        self.dirty = true;
+    }
+
+    fn on_link(&mut self, s: LinkState) {
+        if s != LinkState::Connected {
+            self.controller.link_lost();
+        } else if self.state.link != LinkState::Connected {
+            // The connect setup asks for tripod.
+            if self.state.model.has_legs() {
+                self.state.telemetry.stance_requested(LegAction::Tripod);
+            }
+        }
+        self.state.link = s;
+        self.control(false);
+        self.dirty = true;
+    }
+}
+
+/// Run the app until the operator quits, a signal arrives, or input ends.
+pub async fn run<B: Backend>(
+    terminal: &mut Terminal<B>,
+    session: SessionHandle,
+    opts: AppOptions,
+    mut inputs: AppInputs,
+    draw: DrawFn,
+) -> std::io::Result<Exit> {
+    let keymap = KeyMap::from_config(&opts.config.keys)
+        .map_err(|(k, m)| std::io::Error::new(std::io::ErrorKind::InvalidInput, format!("keys.{k}: {m}")))?;
+    let mut state = AppState::new(opts.model, opts.droid_name.clone());
+    let (help_keys, help_gamepad) = help_lines(&opts.config, &keymap);
+    state.help_keys = help_keys;
+    state.help_gamepad = help_gamepad;
+    state.log_path = opts.log_path.clone();
+    state.keyboard = match opts.release {
+        ReleaseMode::Reported => KeyboardMode::ReleaseEvents,
+        ReleaseMode::Emulated { .. } => KeyboardMode::Emulated,
+    };
+    state.gamepad = if opts.config.gamepad.enabled { GamepadStatus::NoPad } else { GamepadStatus::Disabled };
+    let _ = opts.tripod_on_connect;
+    let start = Instant::now();
+    let mut app = App {
+        state,
+        session: session.clone(),
+        controller: Controller::new(opts.config.control.clone()),
+        held: HeldKeys::new(opts.release),
+        pad: PadState::new(opts.config.gamepad.clone()),
+        keymap,
+        streaming: opts.streaming,
+        turbo_speed: opts.config.control.turbo_speed,
+        start,
+        last_tick: start,
+        dirty: true,
+    };
+    app.state.control = app.controller.view().clone();
+
+    let mut log_rx = session.subscribe_log();
+    let mut events_rx = session.subscribe();
+    let mut link_rx = session.watch_state();
+    let period = Duration::from_secs_f64(1.0 / opts.config.control.rate_hz.clamp(1, 50) as f64);
+    let mut tick = interval(period);
+    tick.set_missed_tick_behavior(MissedTickBehavior::Delay);
+    let mut render = interval(RENDER_EVERY);
+    render.set_missed_tick_behavior(MissedTickBehavior::Skip);
+    let mut second = interval(Duration::from_secs(1));
+    second.set_missed_tick_behavior(MissedTickBehavior::Skip);
+    let (battery_tx, mut battery_rx) = mpsc::channel::<f32>(4);
+    let poller = {
+        let session = session.clone();
+        tokio::spawn(async move {
+            let volts = catalog::lookup(0x13, 0x03).map(|d| d.response).unwrap_or(&[]);
+            loop {
+                if let Ok(p) = session.request(cmd::get_battery_voltage()).await {
+                    if let Some(v) = catalog::decode_fields(volts, &p.data)
+                        .ok()
+                        .and_then(|f| f.first().and_then(|(_, v)| v.as_f64()))
+                    {
+                        if battery_tx.send(v as f32).await.is_err() {
+                            return;
+                        }
+                    }
+                }
+                tokio::time::sleep(BATTERY_EVERY).await;
+            }
+        })
+    };
+    let mut prev = session.stats();
+    let mut prev_at = Instant::now();
+    let mut pad_open = true;
+    // Closed channels would fire their select branch forever: disable them instead.
+    let (mut events_open, mut log_open, mut link_open, mut battery_open) = (true, true, true, true);
+
+    let reason = loop {
+        let expiry = app.held.next_expiry().map(|d| start + d);
+        tokio::select! {
+            e = inputs.term.recv() => match e {
+                Some(e) => {
+                    if let Some(r) = app.on_term(e) {
+                        break r;
+                    }
+                }
+                None => break ExitReason::InputClosed,
+            },
+            e = inputs.pad.recv(), if pad_open => match e {
+                Some(e) => app.on_pad(e),
+                None => pad_open = false,
+            },
+            q = inputs.quit.recv() => {
+                break ExitReason::Signal(q.unwrap_or_else(|| "quit".into()));
+            }
+            _ = sleep_until(expiry.unwrap_or_else(Instant::now)), if expiry.is_some() => {
+                // Emulated release: the repeats stopped.
+                let now = app.now();
+                if !app.held.expire(now).is_empty() {
+                    app.control(false);
+                }
+            }
+            _ = tick.tick() => app.control(true),
+            e = events_rx.recv(), if events_open => match e {
+                Ok(SessionEvent::Notification(n)) => {
+                    let at = app.now();
+                    app.state.telemetry.apply(&n, at);
+                    app.dirty = true;
+                }
+                Ok(SessionEvent::BadNotification { name, reason }) => {
+                    tracing::warn!(name, %reason, "malformed notification");
+                }
+                Err(broadcast::error::RecvError::Lagged(n)) => tracing::warn!(n, "notifications lagged"),
+                Err(broadcast::error::RecvError::Closed) => events_open = false,
+            },
+            e = log_rx.recv(), if log_open => match e {
+                Ok(entry) => {
+                    let line = LogLine::from_entry(&entry, app.streaming.as_ref());
+                    app.state.log.push(line);
+                    app.dirty = true;
+                }
+                Err(broadcast::error::RecvError::Lagged(n)) => app.state.log.dropped += n,
+                Err(broadcast::error::RecvError::Closed) => log_open = false,
+            },
+            r = link_rx.changed(), if link_open => {
+                if r.is_ok() {
+                    let s = link_rx.borrow_and_update().clone();
+                    app.on_link(s);
+                } else {
+                    link_open = false;
+                    app.on_link(LinkState::Closed { reason: Some("the session ended".into()) });
+                }
+            }
+            v = battery_rx.recv(), if battery_open => match v {
+                Some(v) => {
+                    app.state.telemetry.battery_v = Some(v);
+                    app.dirty = true;
+                }
+                None => battery_open = false,
+            },
+            _ = second.tick() => {
+                let st = session.stats();
+                let secs = prev_at.elapsed().as_secs_f32().max(1e-3);
+                app.state.rate_in = (st.received - prev.received) as f32 / secs;
+                app.state.rate_out = (st.sent - prev.sent) as f32 / secs;
+                app.state.stats = st;
+                prev = st;
+                prev_at = Instant::now();
+                app.dirty = true;
+            }
+            _ = render.tick() => {
+                if app.dirty {
+                    app.state.now = app.now();
+                    app.state.stats = session.stats();
+                    terminal
+                        .draw(|f| draw(f, &app.state))
+                        .map_err(|e| std::io::Error::other(e.to_string()))?;
+                    app.dirty = false;
+                }
+            }
+        }
+    };
+    poller.abort();
+    let stop = cmd::drive_with_heading(0, app.controller.view().heading, DriveFlags::empty());
+    // The operator sees the droid stopped even before the session writes it.
+    app.session.set(Slot::Drive, stop.clone());
+    Ok(Exit {
+        reason,
+        state: app.state,
+        stop,
+    })
+}
+
+/// The commands to send on exit: a stop, and sleep when configured.
+pub fn exit_commands(exit_stop: Command, sleep_on_exit: bool) -> Vec<Command> {
+    let mut v = vec![exit_stop];
+    if sleep_on_exit {
+        v.push(cmd::sleep());
+    }
+    v
+}
+
+/// A stop at heading 0, for paths that have no controller (e.g. a crash before the loop).
+pub fn plain_stop() -> Command {
+    cmd::drive_with_heading(0, Heading::default(), DriveFlags::empty())
+}

@@ -1,0 +1,50 @@
+//! `droidctl config path|init|check`.
+
+use super::CliError;
+use crate::config::{Config, DEFAULT_TOML, config_path};
+use clap::Subcommand;
+
+#[derive(Debug, Subcommand)]
+pub enum ConfigCmd {
+    /// Print where the config file is read from.
+    Path,
+    /// Write the default config file (with comments) there.
+    Init {
+        /// Overwrite an existing file.
+        #[arg(long)]
+        force: bool,
+    },
+    /// Check the config file and report the first problem.
+    Check,
+}
+
+pub fn run(cmd: ConfigCmd) -> Result<i32, CliError> {
+    let path = config_path();
+    match cmd {
+        ConfigCmd::Path => {
+            println!("{}", path.display());
+            Ok(0)
+        }
+        ConfigCmd::Init { force } => {
+            if path.exists() && !force {
+                return Err(CliError::failure(format!(
+                    "{} already exists; use --force to overwrite it",
+                    path.display()
+                )));
+            }
+            if let Some(dir) = path.parent() {
+                std::fs::create_dir_all(dir)
+                    .map_err(|e| CliError::failure(format!("cannot create {}: {e}", dir.display())))?;
+            }
+            std::fs::write(&path, DEFAULT_TOML)
+                .map_err(|e| CliError::failure(format!("cannot write {}: {e}", path.display())))?;
+            println!("wrote {}", path.display());
+            Ok(0)
+        }
+        ConfigCmd::Check => {
+            Config::load(&path).map_err(|e| CliError::usage(e.to_string()))?;
+            println!("{}: ok", path.display());
+            Ok(0)
+        }
+    }
+}

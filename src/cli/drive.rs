@@ -1,0 +1,244 @@
+//! `droidctl` / `droidctl drive`: the full-screen teleop app.
+
+use super::CliError;
+use super::term::{self, TerminalGuard};
+use crate::app::input::{TermEvent, from_crossterm};
+use crate::app::run::{self, AppInputs, AppOptions, ExitReason};
+use crate::config::Config;
+use crate::link::Link;
+use crate::model::Model;
+use crate::session::{self, SessionConfig, SessionHandle, Slot};
+use crate::setup::{SetupOptions, connect_setup, streaming};
+use crate::sim::{Faults, SimConfig, SimLink};
+use crate::teleop::held::ReleaseMode;
+use clap::Args;
+use futures_util::StreamExt;
+use ratatui::Terminal;
+use ratatui::backend::CrosstermBackend;
+use std::sync::{Mutex, OnceLock};
+use std::time::Duration;
+use tokio::sync::mpsc;
+
+#[derive(Debug, Clone, Default, Args)]
+pub struct DriveArgs {
+    /// Drive the simulated droid in-process: r2d2 (default), r2q5 or bb9e.
+    #[arg(long, num_args = 0..=1, default_missing_value = "r2d2", value_name = "MODEL")]
+    pub sim: Option<String>,
+    /// Connect to the droid with this advertised name (e.g. D2-1A2B).
+    #[arg(long, value_name = "NAME", conflicts_with = "sim")]
+    pub name: Option<String>,
+    /// Connect to the droid with this Bluetooth address.
+    #[arg(long, value_name = "ADDR", conflicts_with_all = ["sim", "name"])]
+    pub address: Option<String>,
+    /// How long to scan for droids, in seconds.
+    #[arg(long, default_value_t = 5, value_name = "SECS", value_parser = clap::value_parser!(u64).range(1..=120))]
+    pub scan_timeout: u64,
+}
+
+/// The simulated model asked for, if any.
+pub fn sim_model(sim: &Option<String>) -> Result<Option<Model>, CliError> {
+    match sim {
+        None => Ok(None),
+        Some(m) => match Model::from_id(m) {
+            Some(model @ (Model::R2D2 | Model::R2Q5 | Model::BB9E)) => Ok(Some(model)),
+            _ => Err(CliError::usage(format!(
+                "unknown simulated model {m:?}: use r2d2, r2q5 or bb9e"
+            ))),
+        },
+    }
+}
+
+static PANIC_MESSAGE: Mutex<Option<String>> = Mutex::new(None);
+static PANIC_SESSION: OnceLock<SessionHandle> = OnceLock::new();
+
+/// On a panic: ask the session to stop the droid at once (a synchronous slot write), keep
+/// the message for after the terminal is restored; a panic outside the app task restores the
+/// terminal itself and prints as usual.
+fn install_panic_hook() {
+    let default = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        if let Some(s) = PANIC_SESSION.get() {
+            s.set(Slot::Drive, run::plain_stop());
+        }
+        let in_app = std::thread::current().name() != Some("main");
+        if in_app && term::active() {
+            if let Ok(mut m) = PANIC_MESSAGE.lock() {
+                *m = Some(info.to_string());
+            }
+        } else {
+            term::restore();
+            default(info);
+        }
+    }));
+}
+
+pub fn run(args: DriveArgs) -> Result<i32, CliError> {
+    let config_path = crate::config::config_path();
+    let config = Config::load(&config_path).map_err(|e| {
+        CliError::usage(format!("{e}\nFix the file (or move it away to use the defaults) and try again."))
+    })?;
+    let model = sim_model(&args.sim)?;
+    let log_path = crate::logging::init().ok();
+    let rt = tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(2)
+        .enable_all()
+        .build()
+        .map_err(|e| CliError::failure(format!("cannot start the runtime: {e}")))?;
+    rt.block_on(async move {
+        let (link, model, name) = match model {
+            Some(m) => {
+                let link: Box<dyn Link> = Box::new(SimLink::new(m, SimConfig::default(), Faults::none()));
+                (link, m, format!("{} (simulated)", m.display_name()))
+            }
+            None => connect_real(&args).await?,
+        };
+        drive(link, model, name, config, log_path).await
+    })
+}
+
+/// Find and connect to a real droid over Bluetooth.
+async fn connect_real(_args: &DriveArgs) -> Result<(Box<dyn Link>, Model, String), CliError> {
+    Err(CliError::failure(
+        "Bluetooth is not available in this build yet — try `droidctl --sim`",
+    ))
+}
+
+async fn drive(
+    link: Box<dyn Link>,
+    model: Model,
+    name: String,
+    config: Config,
+    log_path: Option<std::path::PathBuf>,
+) -> Result<i32, CliError> {
+    let setup = SetupOptions {
+        tripod: true,
+        streaming_interval_ms: config.control.streaming_interval_ms,
+    };
+    let pacing = match config.session.pacing_ms {
+        0 => model.write_pacing(),
+        ms => Duration::from_millis(ms),
+    };
+    let session = session::start(
+        link,
+        SessionConfig {
+            request_timeout: Duration::from_millis(config.session.request_timeout_ms),
+            pacing,
+            setup: connect_setup(model, &setup),
+            ..SessionConfig::default()
+        },
+    );
+    let _ = PANIC_SESSION.set(session.clone());
+    install_panic_hook();
+
+    let mut guard = TerminalGuard::enter().map_err(|e| CliError::failure(format!("cannot use this terminal: {e}")))?;
+    let release = if guard.release_events {
+        ReleaseMode::Reported
+    } else {
+        ReleaseMode::Emulated {
+            first: Duration::from_millis(config.keyboard.release_first_ms),
+            repeat: Duration::from_millis(config.keyboard.release_repeat_ms),
+        }
+    };
+    tracing::info!(?release, %name, "starting the TUI");
+
+    // Terminal input.
+    let (term_tx, term_rx) = mpsc::channel::<TermEvent>(256);
+    let reader = tokio::spawn(async move {
+        let mut events = crossterm::event::EventStream::new();
+        while let Some(Ok(e)) = events.next().await {
+            if let Some(e) = from_crossterm(&e) {
+                if term_tx.send(e).await.is_err() {
+                    break;
+                }
+            }
+        }
+    });
+    // Gamepad.
+    let (pad_tx, pad_rx) = mpsc::channel(256);
+    if config.gamepad.enabled {
+        if let Err(e) = crate::teleop::gamepad::spawn(pad_tx) {
+            tracing::warn!(error = %e, "no gamepad thread");
+        }
+    } else {
+        drop(pad_tx);
+    }
+    // Signals.
+    let (quit_tx, quit_rx) = mpsc::channel::<String>(4);
+    let signals = tokio::spawn(async move {
+        use tokio::signal::unix::{SignalKind, signal};
+        let (Ok(mut term), Ok(mut hup), Ok(mut int)) = (
+            signal(SignalKind::terminate()),
+            signal(SignalKind::hangup()),
+            signal(SignalKind::interrupt()),
+        ) else {
+            return;
+        };
+        let why = tokio::select! {
+            _ = term.recv() => "SIGTERM",
+            _ = hup.recv() => "SIGHUP",
+            _ = int.recv() => "SIGINT",
+        };
+        let _ = quit_tx.send(why.to_string()).await;
+    });
+
+    let sleep_on_exit = config.control.sleep_on_exit;
+    let opts = AppOptions {
+        config,
+        model,
+        droid_name: name,
+        log_path: log_path.clone(),
+        release,
+        streaming: Some(streaming(&setup)),
+        tripod_on_connect: setup.tripod,
+    };
+    let inputs = AppInputs {
+        term: term_rx,
+        pad: pad_rx,
+        quit: quit_rx,
+    };
+    // The app runs as its own task so a panic in it is caught here: the droid is stopped first,
+    // then the terminal restored, then the message shown.
+    let app = tokio::spawn(async move {
+        let backend = CrosstermBackend::new(std::io::stdout());
+        let mut terminal = Terminal::new(backend)?;
+        terminal.clear()?;
+        run::run(&mut terminal, session_for_app(), opts, inputs, crate::ui::draw).await
+    });
+    let result = app.await;
+    let stop_cmds = match &result {
+        Ok(Ok(exit)) => run::exit_commands(exit.stop.clone(), sleep_on_exit),
+        _ => run::exit_commands(run::plain_stop(), sleep_on_exit),
+    };
+    let session = PANIC_SESSION.get().cloned();
+    if let Some(s) = &session {
+        let _ = tokio::time::timeout(Duration::from_secs(3), s.shutdown(stop_cmds)).await;
+    }
+    reader.abort();
+    signals.abort();
+    guard.restore();
+    match result {
+        Ok(Ok(exit)) => {
+            if let ExitReason::Signal(s) = &exit.reason {
+                eprintln!("droidctl: {s}: stopped the droid and exited");
+            }
+            Ok(0)
+        }
+        Ok(Err(e)) => Err(CliError::failure(format!("terminal error: {e}"))),
+        Err(join) => {
+            let msg = PANIC_MESSAGE
+                .lock()
+                .ok()
+                .and_then(|mut m| m.take())
+                .unwrap_or_else(|| join.to_string());
+            let log = log_path.map(|p| format!(" Details are in {}.", p.display())).unwrap_or_default();
+            Err(CliError {
+                status: 101,
+                message: format!("internal error, the droid was sent a stop: {msg}.{log}"),
+            })
+        }
+    }
+}
+
+fn session_for_app() -> SessionHandle {
+    PANIC_SESSION.get().cloned().unwrap_or_else(|| unreachable!("the session is set before the app starts"))
+}

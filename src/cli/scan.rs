@@ -1,0 +1,242 @@
+//! `droidctl scan`: list nearby robots droidctl can drive, strongest signal first.
+//!
+//! Exits 1 with one line naming what is missing when there is no usable Bluetooth (no D-Bus
+//! system bus, BlueZ not running, no adapter, adapter off, permission denied), within a few
+//! seconds: every adapter call is bounded, and so is the whole command.
+
+use super::CliError;
+use crate::link::ble::{self, BleCentral, BleError, scan};
+use clap::Args;
+use std::io::Write;
+use std::time::Duration;
+
+#[derive(Debug, Clone, Args)]
+pub struct ScanArgs {
+    /// How long to listen, in seconds (fractions allowed).
+    #[arg(long, value_name = "SECS", default_value = "5", value_parser = parse_secs)]
+    pub timeout: Duration,
+    /// One JSON object per line: name, model, model_name, address, rssi.
+    #[arg(long)]
+    pub json: bool,
+    /// Also list devices that are not supported robots.
+    #[arg(long)]
+    pub all: bool,
+}
+
+/// Longest scan accepted: a droid advertises several times a second, so minutes are a typo.
+const MAX_SCAN: Duration = Duration::from_secs(300);
+
+/// Time on top of the scan for getting an adapter and stopping: the whole command is bounded.
+const OVERHEAD: Duration = Duration::from_secs(15);
+
+fn parse_secs(s: &str) -> Result<Duration, String> {
+    let v: f64 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("`{s}` is not a number of seconds"))?;
+    if !v.is_finite() || v <= 0.0 {
+        return Err(format!("`{s}`: the timeout must be more than 0 seconds"));
+    }
+    let d = Duration::from_secs_f64(v);
+    if d > MAX_SCAN {
+        return Err(format!("`{s}`: at most {} seconds", MAX_SCAN.as_secs()));
+    }
+    Ok(d)
+}
+
+/// Run `droidctl scan` on the system's adapter.
+pub fn run(args: ScanArgs, out: &mut dyn Write) -> Result<i32, CliError> {
+    let rt = tokio::runtime::Builder::new_current_thread()
+        .enable_all()
+        .build()
+        .map_err(|e| CliError::failure(format!("cannot start the async runtime: {e}")))?;
+    let limit = args.timeout + OVERHEAD;
+    let result = rt.block_on(async {
+        match tokio::time::timeout(limit, async {
+            let central = ble::open_central().await?;
+            scan::scan(central.as_ref(), args.timeout, |_| false).await
+        })
+        .await
+        {
+            Ok(r) => r,
+            Err(_) => Err(BleError::new(
+                ble::BleErrorKind::Timeout,
+                format!(
+                    "the scan did not finish within {:.0} s — check `systemctl status bluetooth`, \
+                     or try `droidctl --sim`",
+                    limit.as_secs_f64()
+                ),
+            )),
+        }
+    });
+    // Do not wait for anything BlueZ left running.
+    rt.shutdown_background();
+    let entries = result.map_err(|e| CliError::failure(e.message))?;
+    report(&entries, &args, out, &mut std::io::stderr())
+}
+
+/// Scan with `central` and print: the testable core of [`run`].
+pub async fn run_with(
+    central: &dyn BleCentral,
+    args: &ScanArgs,
+    out: &mut dyn Write,
+    err: &mut dyn Write,
+) -> Result<i32, CliError> {
+    let entries = scan::scan(central, args.timeout, |_| false)
+        .await
+        .map_err(|e| CliError::failure(e.message))?;
+    report(&entries, args, out, err)
+}
+
+fn report(
+    entries: &[ble::ScanEntry],
+    args: &ScanArgs,
+    out: &mut dyn Write,
+    err: &mut dyn Write,
+) -> Result<i32, CliError> {
+    let shown: Vec<ble::ScanEntry> = entries
+        .iter()
+        .filter(|e| args.all || e.is_supported())
+        .cloned()
+        .collect();
+    let write_err = |e: std::io::Error| CliError::failure(format!("cannot write output: {e}"));
+    if shown.is_empty() {
+        // A hint, not an error: "nothing here" is a valid answer to a scan.
+        let others = entries.len();
+        let tail = if others > 0 && !args.all {
+            format!(" ({others} other device(s) heard: --all lists them)")
+        } else {
+            String::new()
+        };
+        writeln!(
+            err,
+            "no droids found in {:.0} s{tail} — wake it (tap it or put it on its charger) and \
+             keep it near",
+            args.timeout.as_secs_f64()
+        )
+        .map_err(write_err)?;
+        return Ok(0);
+    }
+    scan::render(&shown, args.json, out).map_err(write_err)?;
+    Ok(0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::link::ble::fake::FakeCentral;
+    use crate::link::ble::{Advertisement, BleAddress, BleErrorKind};
+
+    fn args(all: bool, json: bool) -> ScanArgs {
+        ScanArgs {
+            timeout: Duration::from_secs(2),
+            json,
+            all,
+        }
+    }
+
+    fn central() -> FakeCentral {
+        let c = FakeCentral::new();
+        let ad = |name: &str, last, rssi, after| {
+            c.advertise(
+                Advertisement {
+                    address: BleAddress([0xC0, 0, 0, 0, 0, last]),
+                    name: Some(name.into()),
+                    rssi: Some(rssi),
+                },
+                Duration::from_millis(after),
+            )
+        };
+        ad("D2-1A2B", 1, -70, 0);
+        ad("Keyboard", 2, -40, 0);
+        ad("GB-0001", 3, -55, 1500);
+        // Heard only after the scan ends: not listed.
+        ad("Q5-LATE", 4, -30, 5000);
+        c
+    }
+
+    #[tokio::test(start_paused = true)]
+    async fn lists_supported_strongest_first() {
+        let (mut out, mut err) = (Vec::new(), Vec::new());
+        let status = run_with(&central(), &args(false, false), &mut out, &mut err)
+            .await
+            .unwrap();
+        assert_eq!(status, 0);
+        let text = String::from_utf8(out).unwrap();
+        let names: Vec<&str> = text
+            .lines()
+            .skip(1)
+            .map(|l| l.split(' ').next().unwrap())
+            .collect();
+        assert_eq!(names, ["GB-0001", "D2-1A2B"]);
+        assert!(err.is_empty());
+    }
+
+    #[tokio::test(start_paused = true)]
+    async fn all_and_json() {
+        let (mut out, mut err) = (Vec::new(), Vec::new());
+        run_with(&central(), &args(true, true), &mut out, &mut err)
+            .await
+            .unwrap();
+        let text = String::from_utf8(out).unwrap();
+        let v: Vec<serde_json::Value> = text
+            .lines()
+            .map(|l| serde_json::from_str(l).unwrap())
+            .collect();
+        assert_eq!(v.len(), 3);
+        assert_eq!(v[0]["name"], "Keyboard");
+        assert_eq!(v[0]["model"], serde_json::Value::Null);
+        assert_eq!(v[1]["model"], "bb9e");
+        assert_eq!(v[2]["model_name"], "R2-D2");
+        assert_eq!(v[2]["address"], "C0:00:00:00:00:01");
+        assert_eq!(v[2]["rssi"], -70);
+    }
+
+    #[tokio::test(start_paused = true)]
+    async fn nothing_found_is_a_hint_not_an_error() {
+        let c = FakeCentral::new();
+        c.advertise(
+            Advertisement {
+                address: BleAddress([1; 6]),
+                name: Some("TV".into()),
+                rssi: Some(-60),
+            },
+            Duration::ZERO,
+        );
+        let (mut out, mut err) = (Vec::new(), Vec::new());
+        let status = run_with(&c, &args(false, false), &mut out, &mut err)
+            .await
+            .unwrap();
+        assert_eq!(status, 0);
+        assert!(out.is_empty());
+        let err = String::from_utf8(err).unwrap();
+        assert!(
+            err.starts_with("no droids found in 2 s (1 other device(s) heard"),
+            "{err}"
+        );
+    }
+
+    #[tokio::test(start_paused = true)]
+    async fn adapter_errors_exit_1() {
+        let c = FakeCentral::new();
+        c.fail_scan(BleError::adapter_off());
+        let (mut out, mut err) = (Vec::new(), Vec::new());
+        let e = run_with(&c, &args(false, false), &mut out, &mut err)
+            .await
+            .unwrap_err();
+        assert_eq!(e.status, 1);
+        assert!(e.message.contains("bluetoothctl power on"), "{}", e.message);
+        assert_eq!(BleError::adapter_off().kind, BleErrorKind::AdapterOff);
+    }
+
+    #[test]
+    fn timeouts_parse() {
+        assert_eq!(parse_secs("1"), Ok(Duration::from_secs(1)));
+        assert_eq!(parse_secs("0.5"), Ok(Duration::from_millis(500)));
+        assert!(parse_secs("0").is_err());
+        assert!(parse_secs("-1").is_err());
+        assert!(parse_secs("NaN").is_err());
+        assert!(parse_secs("1e9").is_err());
+        assert!(parse_secs("soon").is_err());
+    }
+}

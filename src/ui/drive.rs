@@ -1,0 +1,114 @@
+//! The drive panel: the compass dial plus what is commanded against what is measured (heading,
+//! speed), cruise, turbo/reverse and R2's stance. The dial goes beside the text when the panel
+//! is short and above it when it is tall.
+
+use super::text::opt;
+use super::{compass, theme};
+use crate::app::state::{AppState, Focus};
+use crate::telemetry::Stance;
+use ratatui::Frame;
+use ratatui::layout::Rect;
+use ratatui::style::{Modifier, Style};
+use ratatui::text::{Line, Span};
+use ratatui::widgets::Paragraph;
+
+/// Columns the text block wants when it sits beside the dial.
+const TEXT_W: u16 = 21;
+
+pub fn render(frame: &mut Frame, area: Rect, s: &AppState) {
+    // Keys drive the droid unless the log has focus; say so where the eye is.
+    let title = match s.focus {
+        Focus::Drive => Span::styled(" Drive ", theme::bold()),
+        Focus::Log => Span::styled(" Drive (held: log has focus) ", theme::dim()),
+    };
+    let block = theme::panel(title);
+    let inner = block.inner(area);
+    frame.render_widget(block, area);
+    let lines = text(s);
+    let n = lines.len() as u16;
+    let (dial, info) = if inner.height >= n + 8 {
+        let dial_h = inner.height - n;
+        (
+            Rect { height: dial_h, ..inner },
+            Rect {
+                y: inner.y + dial_h,
+                height: n,
+                ..inner
+            },
+        )
+    } else {
+        let dial_w = inner.width.saturating_sub(TEXT_W).min(inner.height.saturating_mul(2) + 1);
+        (
+            Rect { width: dial_w, ..inner },
+            Rect {
+                x: inner.x + dial_w + u16::from(dial_w > 0),
+                width: inner.width.saturating_sub(dial_w + u16::from(dial_w > 0)),
+                ..inner
+            },
+        )
+    };
+    compass::render(frame, dial, s.control.heading, s.telemetry.heading());
+    frame.render_widget(Paragraph::new(lines), info);
+}
+
+fn flag(on: bool, name: &'static str) -> Span<'static> {
+    if on {
+        Span::styled(name, theme::commanded().add_modifier(Modifier::REVERSED | Modifier::BOLD))
+    } else {
+        Span::styled(name, theme::dim())
+    }
+}
+
+fn text(s: &AppState) -> Vec<Line<'static>> {
+    let c = &s.control;
+    let t = &s.telemetry;
+    let droid = t.heading().map_or("-".to_string(), |h| format!("{}°", h.degrees()));
+    let mut lines = vec![
+        Line::from(vec![
+            Span::styled("◆ cmd   ", theme::commanded()),
+            Span::styled(format!("{}°", c.heading.degrees()), theme::commanded().add_modifier(Modifier::BOLD)),
+        ]),
+        Line::from(vec![
+            Span::styled("● droid ", theme::reported()),
+            Span::styled(droid, theme::reported().add_modifier(Modifier::BOLD)),
+        ]),
+        Line::from(vec![
+            Span::styled("speed ", theme::label()),
+            Span::styled(format!("{:>3}", c.speed), theme::commanded()),
+            Span::styled("/255", theme::dim()),
+        ]),
+        Line::from(vec![
+            Span::styled(" meas ", theme::label()),
+            Span::styled(opt(t.speed_cm_s(), 1, ""), theme::reported()),
+            Span::styled(" cm/s", theme::dim()),
+        ]),
+        Line::from(vec![
+            Span::styled("cruise ", theme::label()),
+            Span::raw(c.cruise.to_string()),
+            Span::styled(format!(" {}", c.mode), theme::dim()),
+        ]),
+        Line::from(vec![flag(c.turbo, "TURBO"), Span::raw(" "), flag(c.reverse, "REVERSE")]),
+    ];
+    if s.model.has_legs() {
+        let style = match t.stance {
+            Stance::Transitioning(_) => Style::new().fg(theme::WARN).add_modifier(Modifier::BOLD),
+            Stance::Unknown => theme::dim(),
+            _ => Style::new(),
+        };
+        lines.push(Line::from(vec![
+            Span::styled("stance ", theme::label()),
+            Span::styled(t.stance.label(), style),
+        ]));
+    }
+    if c.estop {
+        lines.push(Line::from(Span::styled(" E-STOP ", theme::alarm())));
+    } else if t.asleep {
+        lines.push(Line::from(Span::styled("asleep", Style::new().fg(theme::WARN))));
+    } else if c.source != "-" {
+        lines.push(Line::from(vec![
+            Span::styled("input ", theme::label()),
+            Span::raw(c.source),
+        ]));
+    }
+    lines
+}

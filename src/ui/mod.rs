@@ -1,0 +1,54 @@
+//! The terminal UI: a pure function of [`AppState`]. [`draw`] reads the state and paints one
+//! frame; it never mutates anything, so the event loop can redraw whenever it likes and the
+//! snapshot tests can render any state they can build.
+//!
+//! Each panel lives in its own file and draws into the rect [`layout`] gives it, adapting its
+//! content to that size. Nothing here may panic on odd input: values are clamped, NaN and
+//! infinity print as such and are left out of gauges and canvases, and every rect is
+//! clipped to the frame.
+
+mod collisions;
+mod compass;
+mod dome;
+mod drive;
+pub mod layout;
+mod log_pane;
+mod map;
+mod overlay;
+mod sensors;
+mod status;
+mod text;
+mod theme;
+
+use crate::app::state::AppState;
+use layout::{MIN_HEIGHT, MIN_WIDTH};
+use ratatui::Frame;
+use ratatui::text::Span;
+use ratatui::widgets::Paragraph;
+
+/// Draw the whole screen for `state`.
+pub fn draw(frame: &mut Frame, state: &AppState) {
+    let p = layout::plan(frame.area());
+    status::render(frame, p.status, state);
+    if let Some(r) = p.drive {
+        drive::render(frame, r, state);
+    }
+    if let Some(r) = p.map {
+        map::render(frame, r, &state.telemetry);
+    }
+    if let Some(r) = p.dome {
+        dome::render(frame, r, state);
+    }
+    if let Some(r) = p.sensors {
+        sensors::render(frame, r, &state.telemetry);
+    }
+    if let Some(r) = p.collisions {
+        collisions::render(frame, r, state);
+    }
+    if let Some(r) = p.notice {
+        let msg = format!("enlarge the terminal to {MIN_WIDTH}×{MIN_HEIGHT} for the panels");
+        frame.render_widget(Paragraph::new(Span::styled(msg, theme::dim())), r);
+    }
+    log_pane::render(frame, p.log, state);
+    overlay::render(frame, state);
+}

@@ -1,0 +1,21 @@
+//! Overlays drawn over the main screen: help, the animation and sound palettes, and the
+//! packet-log filter prompt. Each clears its own rect first so the panels below never bleed
+//! through.
+
+mod filter;
+mod help;
+mod palette;
+
+use crate::app::state::{AppState, Overlay};
+use ratatui::Frame;
+
+pub fn render(frame: &mut Frame, s: &AppState) {
+    let area = frame.area();
+    match &s.overlay {
+        Overlay::None => {}
+        Overlay::Help => help::render(frame, area, &s.help_keys, &s.help_gamepad),
+        Overlay::Animations { selected } => palette::render(frame, area, "Animations", &s.animations, *selected),
+        Overlay::Sounds { selected } => palette::render(frame, area, "Sounds", &s.sounds, *selected),
+        Overlay::Filter { input } => filter::render(frame, area, input, &s.log.filter),
+    }
+}

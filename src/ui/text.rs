@@ -1,0 +1,210 @@
+//! Text helpers for fixed-width cells: display width, truncation with an ellipsis, and
+//! number formatting that never produces a 40-character float or panics on NaN.
+//!
+//! Widths go through ratatui's own measure ([`Span::width`]) so what we truncate is what the
+//! buffer will lay out.
+
+use ratatui::style::Style;
+use ratatui::text::Span;
+use std::fmt::Write;
+
+/// Display width of a string, in terminal cells.
+pub fn width(s: &str) -> usize {
+    Span::raw(s).width()
+}
+
+fn char_width(c: char) -> usize {
+    let mut b = [0u8; 4];
+    width(c.encode_utf8(&mut b))
+}
+
+/// Replace control characters (from droid names, error strings, paths) so they cannot move
+/// the cursor or break a row.
+pub fn clean(s: &str) -> String {
+    s.chars().map(|c| if c.is_control() { '·' } else { c }).collect()
+}
+
+/// Keep the start of `s` within `max` cells, ending with `…` when cut.
+pub fn truncate(s: &str, max: usize) -> String {
+    if width(s) <= max {
+        return s.to_string();
+    }
+    if max == 0 {
+        return String::new();
+    }
+    let mut out = String::new();
+    let mut used = 0;
+    for c in s.chars() {
+        let w = char_width(c);
+        if used + w > max - 1 {
+            break;
+        }
+        out.push(c);
+        used += w;
+    }
+    out.push('…');
+    out
+}
+
+/// Keep the end of `s` within `max` cells, starting with `…` when cut (paths: the file name
+/// matters more than the home directory).
+pub fn truncate_left(s: &str, max: usize) -> String {
+    if width(s) <= max {
+        return s.to_string();
+    }
+    if max == 0 {
+        return String::new();
+    }
+    let mut tail = Vec::new();
+    let mut used = 0;
+    for c in s.chars().rev() {
+        let w = char_width(c);
+        if used + w > max - 1 {
+            break;
+        }
+        tail.push(c);
+        used += w;
+    }
+    let mut out = String::from("…");
+    out.extend(tail.into_iter().rev());
+    out
+}
+
+/// Exactly `w` cells: truncated, then padded on the right.
+pub fn fit(s: &str, w: usize) -> String {
+    let mut t = truncate(s, w);
+    let pad = w.saturating_sub(width(&t));
+    t.extend(std::iter::repeat_n(' ', pad));
+    t
+}
+
+/// Exactly `w` cells, right-aligned (numbers).
+pub fn fit_right(s: &str, w: usize) -> String {
+    let t = truncate(s, w);
+    let pad = w.saturating_sub(width(&t));
+    let mut out: String = std::iter::repeat_n(' ', pad).collect();
+    out.push_str(&t);
+    out
+}
+
+/// A float with `prec` decimals, bounded in width: huge values switch to exponent form and
+/// NaN/inf print as such instead of as garbage.
+pub fn num(v: f32, prec: usize) -> String {
+    if v.is_nan() {
+        return "NaN".into();
+    }
+    if v.is_infinite() {
+        return if v > 0.0 { "inf".into() } else { "-inf".into() };
+    }
+    let mut s = String::new();
+    if v.abs() >= 1e5 {
+        let _ = write!(s, "{v:.1e}");
+    } else {
+        // Avoid "-0.0" flicker around zero.
+        let v = if v.abs() < 0.5 * 10f32.powi(-(prec as i32)) { 0.0 } else { v };
+        let _ = write!(s, "{v:.prec$}");
+    }
+    s
+}
+
+/// An optional reading: `-` until it has been received.
+pub fn opt(v: Option<f32>, prec: usize, unit: &str) -> String {
+    match v {
+        Some(v) => format!("{}{unit}", num(v, prec)),
+        None => "-".into(),
+    }
+}
+
+/// A value as a fraction of `range` for gauges: 0 for NaN, clamped to -1..=1.
+pub fn unit_fraction(v: f32, range: f32) -> f32 {
+    if !v.is_finite() || !range.is_finite() || range <= 0.0 {
+        return 0.0;
+    }
+    (v / range).clamp(-1.0, 1.0)
+}
+
+/// Greedy word wrap into lines of at most `w` cells; words longer than a line are split.
+pub fn wrap(s: &str, w: usize) -> Vec<String> {
+    let w = w.max(1);
+    let mut lines = Vec::new();
+    let mut cur = String::new();
+    let mut cur_w = 0;
+    for word in s.split_whitespace() {
+        let ww = width(word);
+        if cur_w > 0 && cur_w + 1 + ww <= w {
+            cur.push(' ');
+            cur.push_str(word);
+            cur_w += 1 + ww;
+            continue;
+        }
+        if cur_w > 0 {
+            lines.push(std::mem::take(&mut cur));
+            cur_w = 0;
+        }
+        for c in word.chars() {
+            let cw = char_width(c);
+            if cur_w + cw > w && cur_w > 0 {
+                lines.push(std::mem::take(&mut cur));
+                cur_w = 0;
+            }
+            cur.push(c);
+            cur_w += cw;
+        }
+    }
+    if cur_w > 0 || lines.is_empty() {
+        lines.push(cur);
+    }
+    lines
+}
+
+/// Merge per-cell (symbol, style) pairs into one span per run of equal style, so a 100-cell
+/// bar costs a handful of spans rather than a hundred.
+pub fn runs(cells: impl IntoIterator<Item = (char, Style)>) -> Vec<Span<'static>> {
+    let mut spans = Vec::new();
+    let mut cur: Option<(String, Style)> = None;
+    for (c, style) in cells {
+        match &mut cur {
+            Some((s, st)) if *st == style => s.push(c),
+            _ => {
+                if let Some((s, st)) = cur.take() {
+                    spans.push(Span::styled(s, st));
+                }
+                cur = Some((c.to_string(), style));
+            }
+        }
+    }
+    if let Some((s, st)) = cur {
+        spans.push(Span::styled(s, st));
+    }
+    spans
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn truncation_keeps_width() {
+        assert_eq!(truncate("hello world", 6), "hello…");
+        assert_eq!(truncate("hi", 6), "hi");
+        assert_eq!(truncate("hello", 0), "");
+        assert_eq!(truncate_left("/home/me/droid.log", 10), "…droid.log");
+        assert_eq!(fit("ab", 4), "ab  ");
+        assert_eq!(fit_right("ab", 4), "  ab");
+        assert_eq!(fit("abcdef", 4), "abc…");
+        assert_eq!(wrap("turn left (hold; also aims)", 10), ["turn left", "(hold;", "also aims)"]);
+        assert_eq!(wrap("abcdefghij", 4), ["abcd", "efgh", "ij"]);
+        assert_eq!(wrap("", 4), [""]);
+    }
+
+    #[test]
+    fn numbers_stay_short() {
+        assert_eq!(num(f32::NAN, 1), "NaN");
+        assert_eq!(num(f32::NEG_INFINITY, 1), "-inf");
+        assert_eq!(num(f32::MAX, 1), "3.4e38");
+        assert_eq!(num(-0.01, 1), "0.0");
+        assert_eq!(opt(None, 1, "°"), "-");
+        assert_eq!(unit_fraction(f32::NAN, 1.0), 0.0);
+        assert_eq!(unit_fraction(5.0, 2.0), 1.0);
+    }
+}

@@ -1,0 +1,420 @@
+//! BleLink against the fake peripheral, all on tokio's paused clock: handshakes per model,
+//! chunking, pacing, notifications as a byte stream, timeouts, and the session's reconnect path.
+
+use droidctl::link::backoff::Backoff;
+use droidctl::link::ble::fake::{FakeCentral, FakeOp, FakePeripheral};
+use droidctl::link::ble::{
+    Advertisement, BleAddress, BleError, BleErrorKind, BleLink, DiscoveredChar,
+};
+use droidctl::link::gatt::{self, GattProfile, GattUuid};
+use droidctl::link::{Connection, Link, LinkEvent};
+use droidctl::model::Model;
+use droidctl::protocol::v2::{Decoder, ErrorCode, Packet, cmd};
+use droidctl::session::{self, LinkState, SessionConfig};
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+use tokio::sync::watch;
+use tokio::time::{Instant, sleep, timeout};
+
+const ADDR: BleAddress = BleAddress([0xF1, 0x22, 0x33, 0x44, 0x55, 0x66]);
+
+fn name_for(model: Model) -> String {
+    match model.name_prefix() {
+        Some(p) => format!("{p}1A2B"),
+        None => "Robi 42".into(),
+    }
+}
+
+/// An adapter holding one fake `model` droid; returns the adapter, the droid and its link.
+fn setup(model: Model) -> (FakeCentral, FakePeripheral, BleLink) {
+    let profile = GattProfile::for_model(model);
+    let droid = FakePeripheral::for_profile(&profile);
+    let central = FakeCentral::new();
+    central.add_device(
+        Advertisement {
+            address: ADDR,
+            name: Some(name_for(model)),
+            rssi: Some(-50),
+        },
+        droid.clone(),
+    );
+    let link = BleLink::new(Arc::new(central.clone()), ADDR, name_for(model), model);
+    (central, droid, link)
+}
+
+async fn open(link: &mut BleLink) -> Connection {
+    match link.open().await {
+        Ok(c) => c,
+        Err(e) => panic!("open failed: {e}"),
+    }
+}
+
+fn write(ch: GattUuid, data: &[u8]) -> FakeOp {
+    FakeOp::Write {
+        ch,
+        data: data.to_vec(),
+    }
+}
+
+#[tokio::test(start_paused = true)]
+async fn v2_handshake_is_unlock_then_subscribe() {
+    let (_c, droid, mut link) = setup(Model::R2D2);
+    let _conn = open(&mut link).await;
+    assert_eq!(
+        droid.ops(),
+        [
+            FakeOp::Connect,
+            FakeOp::Discover,
+            write(gatt::V2_ANTI_DOS, b"usetheforce...band"),
+            FakeOp::Subscribe(gatt::V2_API),
+        ]
+    );
+    assert_eq!(
+        gatt::V2_API.to_string(),
+        "00010002-574f-4f20-5370-6865726f2121"
+    );
+    assert_eq!(
+        gatt::V2_ANTI_DOS.to_string(),
+        "00020005-574f-4f20-5370-6865726f2121"
+    );
+    assert_eq!(link.describe(), "R2-D2 D2-1A2B (F1:22:33:44:55:66)");
+}
+
+#[tokio::test(start_paused = true)]
+async fn v1_handshake_is_antidos_txpower_wake_then_subscribe() {
+    for model in [Model::BB8, Model::SprkPlus, Model::Ollie] {
+        let (_c, droid, mut link) = setup(model);
+        let mut conn = open(&mut link).await;
+        assert_eq!(
+            droid.ops(),
+            [
+                FakeOp::Connect,
+                FakeOp::Discover,
+                write(gatt::V1_ANTI_DOS, b"011i3"),
+                write(gatt::V1_TX_POWER, &[0x07]),
+                write(gatt::V1_WAKE, &[0x01]),
+                FakeOp::Subscribe(gatt::V1_RESPONSES),
+            ],
+            "{model:?}"
+        );
+        // Commands go to 2ba1.
+        conn.writer.write(&[0xFF, 0xFF, 0x00, 0x01]).await.unwrap();
+        assert_eq!(droid.writes_to(gatt::V1_COMMANDS).len(), 1);
+        assert_eq!(
+            gatt::V1_COMMANDS.to_string(),
+            "22bb746f-2ba1-7554-2d6f-726568705327"
+        );
+    }
+}
+
+#[tokio::test(start_paused = true)]
+async fn robi_handshake_reads_then_confirms_then_subscribes() {
+    let (_c, droid, mut link) = setup(Model::Robi42);
+    droid.set_read(gatt::ROBI_HANDSHAKE, vec![1, 0, 0, 0x7F, 0x80]);
+    let mut conn = open(&mut link).await;
+    assert_eq!(
+        droid.ops(),
+        [
+            FakeOp::Connect,
+            FakeOp::Discover,
+            FakeOp::Read(gatt::ROBI_HANDSHAKE),
+            write(gatt::ROBI_START, &[0x01]),
+            FakeOp::Subscribe(gatt::ROBI_FRAMES),
+        ]
+    );
+    assert_eq!(gatt::ROBI_FRAMES.as_u16(), Some(0x8765));
+    droid.notify(gatt::ROBI_FRAMES, &[0x7E, 0x01, 0x7F]);
+    assert_eq!(
+        conn.events.recv().await,
+        Some(LinkEvent::Data(vec![0x7E, 0x01, 0x7F]))
+    );
+}
+
+#[tokio::test(start_paused = true)]
+async fn a_45_byte_write_is_three_chunks() {
+    let (_c, droid, mut link) = setup(Model::R2D2);
+    let mut conn = open(&mut link).await;
+    let data: Vec<u8> = (0..45).collect();
+    conn.writer.write(&data).await.unwrap();
+    let writes = droid.writes_to(gatt::V2_API);
+    let sizes: Vec<usize> = writes.iter().map(|(_, d)| d.len()).collect();
+    assert_eq!(sizes, [20, 20, 5]);
+    let joined: Vec<u8> = writes.into_iter().flat_map(|(_, d)| d).collect();
+    assert_eq!(joined, data);
+}
+
+#[tokio::test(start_paused = true)]
+async fn writes_are_paced_per_model_even_when_called_faster() {
+    for (model, ms) in [(Model::R2D2, 120u64), (Model::BB8, 60)] {
+        let (_c, droid, mut link) = setup(model);
+        let mut conn = open(&mut link).await;
+        let ch = link.profile().write.characteristic;
+        let t0 = Instant::now();
+        conn.writer.write(&[0u8; 45]).await.unwrap();
+        conn.writer.write(&[1u8; 5]).await.unwrap();
+        sleep(Duration::from_secs(1)).await;
+        conn.writer.write(&[2u8; 3]).await.unwrap();
+        let at: Vec<u64> = droid
+            .writes_to(ch)
+            .iter()
+            .map(|(t, _)| t.duration_since(t0).as_millis() as u64)
+            .collect();
+        // Back-to-back chunks and calls wait out the pacing; a write after a pause does not.
+        let last = 3 * ms + 1000;
+        assert_eq!(at, [0, ms, 2 * ms, 3 * ms, last], "{model:?}");
+    }
+}
+
+#[tokio::test(start_paused = true)]
+async fn notifications_are_one_byte_stream() {
+    let (_c, droid, mut link) = setup(Model::R2D2);
+    let mut conn = open(&mut link).await;
+    // A response split across three notifications, plus noise on another characteristic.
+    let packet = Packet::response_to(&cmd::wake().to_packet(7), ErrorCode::Success, vec![]);
+    let wire = packet.encode();
+    droid.notify(gatt::V2_API, &wire[..3]);
+    droid.notify(gatt::V2_ANTI_DOS, &[0xAA]);
+    droid.notify(gatt::V2_API, &wire[3..5]);
+    droid.notify(gatt::V2_API, &wire[5..]);
+    let mut bytes = Vec::new();
+    for _ in 0..3 {
+        match conn.events.recv().await {
+            Some(LinkEvent::Data(d)) => bytes.extend(d),
+            other => panic!("unexpected {other:?}"),
+        }
+    }
+    assert_eq!(bytes, wire);
+    let decoded: Vec<Packet> = Decoder::new().feed(&bytes).flatten().collect();
+    assert_eq!(decoded, [packet]);
+}
+
+#[tokio::test(start_paused = true)]
+async fn a_disconnect_becomes_a_link_event() {
+    let (_c, droid, mut link) = setup(Model::R2D2);
+    let mut conn = open(&mut link).await;
+    droid.drop_connection("supervision timeout");
+    assert_eq!(
+        conn.events.recv().await,
+        Some(LinkEvent::Disconnected("supervision timeout".into()))
+    );
+    assert_eq!(conn.events.recv().await, None);
+}
+
+#[tokio::test(start_paused = true)]
+async fn a_failed_write_is_an_error() {
+    let (_c, droid, mut link) = setup(Model::R2D2);
+    let mut conn = open(&mut link).await;
+    droid.fail_next_write(BleError::from_dbus(
+        Some("org.bluez.Error.Failed"),
+        "Not connected",
+    ));
+    let e = conn.writer.write(&[1, 2, 3]).await.unwrap_err();
+    assert!(!e.fatal, "{e}");
+}
+
+#[tokio::test(start_paused = true)]
+async fn a_sleeping_droid_times_out_and_is_retryable() {
+    let (_c, droid, mut link) = setup(Model::R2D2);
+    droid.hang_connect(true);
+    let t0 = Instant::now();
+    let e = link.open().await.err().unwrap();
+    assert_eq!(t0.elapsed(), Duration::from_secs(10));
+    assert!(!e.fatal);
+    assert!(
+        e.message
+            .starts_with("connecting to D2-1A2B timed out after 10 s"),
+        "{e}"
+    );
+    // The pending connect is cancelled.
+    assert_eq!(droid.ops(), [FakeOp::Connect, FakeOp::Disconnect]);
+}
+
+#[tokio::test(start_paused = true)]
+async fn the_wrong_device_is_fatal() {
+    // Something called D2-… without the anti-DoS characteristic.
+    let droid = FakePeripheral::new(vec![DiscoveredChar {
+        service: gatt::V2_SERVICE,
+        characteristic: gatt::V2_API,
+    }]);
+    let central = FakeCentral::new();
+    central.add_device(
+        Advertisement {
+            address: ADDR,
+            name: Some("D2-FAKE".into()),
+            rssi: None,
+        },
+        droid.clone(),
+    );
+    let mut link = BleLink::new(Arc::new(central), ADDR, "D2-FAKE", Model::R2D2);
+    let e = link.open().await.err().unwrap();
+    assert!(e.fatal, "{e}");
+    assert!(e.message.contains("does not look like a R2-D2"), "{e}");
+    assert!(
+        !droid.is_connected(),
+        "disconnects after a failed handshake"
+    );
+}
+
+#[tokio::test(start_paused = true)]
+async fn a_forgotten_device_is_scanned_for_again() {
+    let profile = GattProfile::for_model(Model::R2D2);
+    let droid = FakePeripheral::for_profile(&profile);
+    let central = FakeCentral::new();
+    let mut link = BleLink::new(Arc::new(central.clone()), ADDR, "D2-1A2B", Model::R2D2);
+    // Not known at all: a bounded rescan, then a retryable error.
+    let e = link.open().await.err().unwrap();
+    assert!(!e.fatal);
+    assert!(e.message.contains("is not advertising"), "{e}");
+    // It wakes up two seconds into the next attempt's rescan.
+    let c2 = central.clone();
+    let d2 = droid.clone();
+    tokio::spawn(async move {
+        sleep(Duration::from_secs(2)).await;
+        c2.add_device(
+            Advertisement {
+                address: ADDR,
+                name: Some("D2-1A2B".into()),
+                rssi: Some(-60),
+            },
+            d2,
+        );
+    });
+    let _conn = open(&mut link).await;
+    assert!(droid.is_connected());
+    assert_eq!(central.scans(), 2);
+}
+
+/// Records every state the session goes through.
+fn record(mut rx: watch::Receiver<LinkState>) -> Arc<Mutex<Vec<LinkState>>> {
+    let seen = Arc::new(Mutex::new(vec![rx.borrow_and_update().clone()]));
+    let out = seen.clone();
+    tokio::spawn(async move {
+        while rx.changed().await.is_ok() {
+            let s = rx.borrow_and_update().clone();
+            out.lock().unwrap().push(s);
+        }
+    });
+    seen
+}
+
+async fn wait_for(rx: &mut watch::Receiver<LinkState>, want: impl Fn(&LinkState) -> bool) {
+    timeout(Duration::from_secs(120), async {
+        loop {
+            if want(&rx.borrow_and_update()) {
+                return;
+            }
+            rx.changed().await.unwrap();
+        }
+    })
+    .await
+    .expect("state not reached");
+}
+
+/// The wake commands the session wrote, decoded from the fake's write log.
+fn wakes_written(droid: &FakePeripheral) -> usize {
+    let bytes: Vec<u8> = droid
+        .writes_to(gatt::V2_API)
+        .into_iter()
+        .flat_map(|(_, d)| d)
+        .collect();
+    let wake = cmd::wake();
+    Decoder::new()
+        .feed(&bytes)
+        .flatten()
+        .filter(|p| p.did == wake.did && p.cid == wake.cid)
+        .count()
+}
+
+fn count(droid: &FakePeripheral, op: &FakeOp) -> usize {
+    droid.ops().iter().filter(|o| *o == op).count()
+}
+
+#[tokio::test(start_paused = true)]
+async fn session_reconnects_and_reruns_handshake_and_setup() {
+    let (_c, droid, link) = setup(Model::R2D2);
+    let cfg = SessionConfig {
+        setup: vec![cmd::wake()],
+        pacing: link.profile().pacing,
+        chunk_size: link.profile().chunk_size,
+        ..SessionConfig::default()
+    };
+    let s = session::start(Box::new(link), cfg);
+    let mut rx = s.watch_state();
+    let seen = record(s.watch_state());
+    wait_for(&mut rx, |st| *st == LinkState::Connected).await;
+    sleep(Duration::from_millis(500)).await;
+    assert_eq!(wakes_written(&droid), 1);
+
+    droid.drop_connection("droid went out of range");
+    let lost = Instant::now();
+    wait_for(&mut rx, |st| matches!(st, LinkState::Reconnecting { .. })).await;
+    wait_for(&mut rx, |st| *st == LinkState::Connected).await;
+    // The default backoff waits 500 ms before the first retry.
+    assert_eq!(lost.elapsed(), Backoff::default().delay(1));
+    sleep(Duration::from_millis(500)).await;
+
+    assert_eq!(
+        *seen.lock().unwrap(),
+        [
+            LinkState::Connecting,
+            LinkState::Connected,
+            LinkState::Reconnecting {
+                attempt: 1,
+                reason: "droid went out of range".into()
+            },
+            LinkState::Connected,
+        ]
+    );
+    let unlock = write(gatt::V2_ANTI_DOS, b"usetheforce...band");
+    assert_eq!(count(&droid, &FakeOp::Connect), 2);
+    assert_eq!(count(&droid, &unlock), 2, "handshake re-run");
+    assert_eq!(count(&droid, &FakeOp::Subscribe(gatt::V2_API)), 2);
+    assert_eq!(wakes_written(&droid), 2, "setup commands written again");
+    assert_eq!(s.stats().reconnects, 1);
+    s.shutdown(vec![]).await;
+    assert!(!droid.is_connected(), "shutdown disconnects");
+}
+
+#[tokio::test(start_paused = true)]
+async fn failed_reconnects_follow_the_backoff_schedule() {
+    let (_c, droid, link) = setup(Model::R2D2);
+    let s = session::start(Box::new(link), SessionConfig::default());
+    let mut rx = s.watch_state();
+    wait_for(&mut rx, |st| *st == LinkState::Connected).await;
+    droid.fail_connects(2);
+    droid.clear_ops();
+    let lost = Instant::now();
+    droid.drop_connection("link loss");
+    wait_for(&mut rx, |st| {
+        matches!(st, LinkState::Reconnecting { attempt: 3, .. })
+    })
+    .await;
+    wait_for(&mut rx, |st| *st == LinkState::Connected).await;
+    let connects: Vec<u64> = droid
+        .timed_ops()
+        .into_iter()
+        .filter(|(_, o)| *o == FakeOp::Connect)
+        .map(|(t, _)| t.duration_since(lost).as_millis() as u64)
+        .collect();
+    // 500 ms, then 1 s, then 2 s between attempts (`Backoff::default()`).
+    assert_eq!(connects, [500, 1500, 3500]);
+    s.shutdown(vec![]).await;
+}
+
+#[tokio::test(start_paused = true)]
+async fn a_fatal_open_error_closes_the_session() {
+    let central = FakeCentral::new();
+    central.fail_scan(BleError::no_adapter());
+    // Unknown device → rescan → the adapter error, which retrying cannot fix.
+    let link = BleLink::new(Arc::new(central), ADDR, "D2-1A2B", Model::R2D2);
+    let s = session::start(Box::new(link), SessionConfig::default());
+    let mut rx = s.watch_state();
+    wait_for(&mut rx, |st| matches!(st, LinkState::Closed { .. })).await;
+    match s.state() {
+        LinkState::Closed { reason: Some(r) } => {
+            assert!(r.contains("no Bluetooth adapter found"), "{r}");
+        }
+        other => panic!("{other:?}"),
+    }
+    assert_eq!(BleError::no_adapter().kind, BleErrorKind::NoAdapter);
+}
