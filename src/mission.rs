@@ -195,12 +195,11 @@ impl Runner {
             }
             let step = (end - now).min(self.opts.heartbeat);
             sleep(step).await;
-            if let Some((speed, heading)) = self.driving {
-                if Instant::now() < end {
+            if let Some((speed, heading)) = self.driving
+                && Instant::now() < end {
                     self.session
                         .set(Slot::Drive, Self::drive_cmd(speed, heading));
                 }
-            }
         }
     }
 
@@ -377,19 +376,17 @@ pub async fn run(
         let telemetry = telemetry.clone();
         let every = opts.battery_poll;
         tokio::spawn(async move {
-            if model.has_legs() {
-                if let Ok(p) = session.request(cmd::get_leg_action()).await {
-                    if let Some(s) = p.data.first().and_then(|b| LegState::from_byte(*b)) {
+            if model.has_legs()
+                && let Ok(p) = session.request(cmd::get_leg_action()).await
+                    && let Some(s) = p.data.first().and_then(|b| LegState::from_byte(*b)) {
                         let mut t = lock(&telemetry);
                         if t.stance == crate::telemetry::Stance::Unknown {
                             t.stance = crate::telemetry::Stance::from_state(s);
                         }
                     }
-                }
-            }
             loop {
-                if let Ok(p) = session.request(cmd::get_battery_voltage()).await {
-                    if let Some(v) = catalog::decode_fields(
+                if let Ok(p) = session.request(cmd::get_battery_voltage()).await
+                    && let Some(v) = catalog::decode_fields(
                         catalog::lookup(0x13, 0x03)
                             .map(|d| d.response)
                             .unwrap_or(&[]),
@@ -400,7 +397,6 @@ pub async fn run(
                     {
                         lock(&telemetry).battery_v = Some(v as f32);
                     }
-                }
                 sleep(every).await;
             }
         })
@@ -465,10 +461,9 @@ pub async fn run(
         x_cm: t.x_cm,
         y_cm: t.y_cm,
     };
-    if closed {
-        if let LinkState::Closed { reason: Some(r) } = session.state() {
+    if closed
+        && let LinkState::Closed { reason: Some(r) } = session.state() {
             return Err(MissionError(r));
         }
-    }
     Ok(summary)
 }

@@ -480,16 +480,13 @@ pub async fn run<B: Backend>(
         tokio::spawn(async move {
             let volts = catalog::lookup(0x13, 0x03).map(|d| d.response).unwrap_or(&[]);
             loop {
-                if let Ok(p) = session.request(cmd::get_battery_voltage()).await {
-                    if let Some(v) = catalog::decode_fields(volts, &p.data)
+                if let Ok(p) = session.request(cmd::get_battery_voltage()).await
+                    && let Some(v) = catalog::decode_fields(volts, &p.data)
                         .ok()
                         .and_then(|f| f.first().and_then(|(_, v)| v.as_f64()))
-                    {
-                        if battery_tx.send(v as f32).await.is_err() {
+                        && battery_tx.send(v as f32).await.is_err() {
                             return;
                         }
-                    }
-                }
                 tokio::time::sleep(BATTERY_EVERY).await;
             }
         })

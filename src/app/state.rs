@@ -137,6 +137,9 @@ pub struct AppState {
     /// Help overlay lines, from the bindings as configured.
     pub help_keys: Vec<HelpLine>,
     pub help_gamepad: Vec<HelpLine>,
+    /// Page of the help overlay shown when the bindings do not fit the terminal at once
+    /// (80×24: keyboard on page 0, gamepad on page 1). The UI clamps it to the last page.
+    pub help_page: usize,
     pub animations: Vec<Entry>,
     pub sounds: Vec<Entry>,
     /// A collision flashes this long.
@@ -164,6 +167,7 @@ impl AppState {
             hint: None,
             help_keys: Vec::new(),
             help_gamepad: Vec::new(),
+            help_page: 0,
             animations: catalog::animations(),
             sounds: catalog::sounds(),
             collision_flash: Duration::from_millis(1500),

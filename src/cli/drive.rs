@@ -97,10 +97,9 @@ pub fn run(args: DriveArgs) -> Result<i32, CliError> {
 }
 
 /// Find and connect to a real droid over Bluetooth.
-async fn connect_real(_args: &DriveArgs) -> Result<(Box<dyn Link>, Model, String), CliError> {
-    Err(CliError::failure(
-        "Bluetooth is not available in this build yet — try `droidctl --sim`",
-    ))
+async fn connect_real(args: &DriveArgs) -> Result<(Box<dyn Link>, Model, String), CliError> {
+    let c = super::connect::connect(args.name.clone(), args.address.clone(), Duration::from_secs(args.scan_timeout)).await?;
+    Ok((c.link, c.model, c.name))
 }
 
 async fn drive(
@@ -146,11 +145,10 @@ async fn drive(
     let reader = tokio::spawn(async move {
         let mut events = crossterm::event::EventStream::new();
         while let Some(Ok(e)) = events.next().await {
-            if let Some(e) = from_crossterm(&e) {
-                if term_tx.send(e).await.is_err() {
+            if let Some(e) = from_crossterm(&e)
+                && term_tx.send(e).await.is_err() {
                     break;
                 }
-            }
         }
     });
     // Gamepad.

@@ -3,6 +3,7 @@
 //! 1 for failures at run time.
 
 pub mod config_cmd;
+pub mod connect;
 pub mod drive;
 pub mod packet;
 pub mod run;
@@ -59,6 +60,17 @@ impl CliError {
         }
     }
 
+    /// An output error: a closed pipe (the reader went away) ends quietly with status 0.
+    pub fn output(e: std::io::Error) -> Self {
+        if e.kind() == std::io::ErrorKind::BrokenPipe {
+            return CliError {
+                status: 0,
+                message: String::new(),
+            };
+        }
+        CliError::failure(format!("cannot write output: {e}"))
+    }
+
     /// A failure at run time: status 1.
     pub fn failure(message: impl Into<String>) -> Self {
         CliError {
@@ -98,6 +110,8 @@ pub fn main() -> i32 {
     };
     match result {
         Ok(status) => status,
+        // `droidctl packet list | head`: the reader went away; that is not an error.
+        Err(e) if e.status == 0 => 0,
         Err(e) => {
             eprintln!("droidctl: error: {}", e.message);
             e.status

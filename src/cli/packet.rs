@@ -94,7 +94,7 @@ pub fn run(cmd: PacketCmd, out: &mut dyn Write) -> Result<i32, CliError> {
 }
 
 fn io_err(e: std::io::Error) -> CliError {
-    CliError::failure(format!("cannot write output: {e}"))
+    CliError::output(e)
 }
 
 /// One item of decoded output.

@@ -25,6 +25,15 @@ pub struct RunArgs {
     /// One JSON object per telemetry sample, then a summary object.
     #[arg(long)]
     pub json: bool,
+    /// Connect to the droid with this advertised name (without --sim).
+    #[arg(long, value_name = "NAME", conflicts_with = "sim")]
+    pub name: Option<String>,
+    /// Connect to the droid with this Bluetooth address (without --sim).
+    #[arg(long, value_name = "ADDR", conflicts_with_all = ["sim", "name"])]
+    pub address: Option<String>,
+    /// How long to scan for droids, in seconds (without --sim).
+    #[arg(long, default_value_t = 5, value_name = "SECS", value_parser = clap::value_parser!(u64).range(1..=120))]
+    pub scan_timeout: u64,
     /// Telemetry sample interval in milliseconds.
     #[arg(long, default_value_t = 100, value_name = "MS", value_parser = clap::value_parser!(u64).range(1..=60_000))]
     pub interval: u64,
@@ -75,36 +84,47 @@ pub fn run(args: RunArgs) -> Result<i32, CliError> {
         ))
     };
     let steps = crate::script::parse(&text).map_err(script_errors)?;
-    let Some(model) = sim else {
-        return Err(CliError::failure(
-            "running on a real droid needs Bluetooth, which this build cannot use yet — try `--sim`",
-        ));
-    };
-    mission::validate(model, &steps).map_err(script_errors)?;
-    let _ = crate::logging::init();
-
     let opts = MissionOptions {
         interval: Duration::from_millis(args.interval),
         ..MissionOptions::default()
     };
-    // Simulated time: the clock jumps whenever everything waits, so a 60 s mission takes a
-    // fraction of a second and behaves exactly as in real time.
-    let rt = tokio::runtime::Builder::new_current_thread()
-        .enable_time()
-        .start_paused(true)
-        .build()
-        .map_err(|e| CliError::failure(format!("cannot start the runtime: {e}")))?;
     let json = args.json;
-    let result = rt.block_on(async move {
-        let link = SimLink::new(model, SimConfig::default(), Faults::none());
-        run_on(Box::new(link), model, &steps, opts, json).await
-    });
+    let result = match sim {
+        Some(model) => {
+            mission::validate(model, &steps).map_err(script_errors)?;
+            let _ = crate::logging::init();
+            // Simulated time: the clock jumps whenever everything waits, so a 60 s mission
+            // takes a fraction of a second and behaves exactly as in real time.
+            let rt = tokio::runtime::Builder::new_current_thread()
+                .enable_time()
+                .start_paused(true)
+                .build()
+                .map_err(|e| CliError::failure(format!("cannot start the runtime: {e}")))?;
+            rt.block_on(async move {
+                let link = SimLink::new(model, SimConfig::default(), Faults::none());
+                run_on(Box::new(link), model, &steps, opts, json).await.map_err(CliError::failure)
+            })
+        }
+        None => {
+            let _ = crate::logging::init();
+            let rt = tokio::runtime::Builder::new_multi_thread()
+                .worker_threads(2)
+                .enable_all()
+                .build()
+                .map_err(|e| CliError::failure(format!("cannot start the runtime: {e}")))?;
+            rt.block_on(async move {
+                let c = super::connect::connect(args.name, args.address, Duration::from_secs(args.scan_timeout)).await?;
+                mission::validate(c.model, &steps).map_err(script_errors)?;
+                run_on(c.link, c.model, &steps, opts, json).await.map_err(CliError::failure)
+            })
+        }
+    };
     match result {
         Ok(summary) => {
             print_summary(&summary, json);
             Ok(if summary.failed_steps > 0 { 1 } else { 0 })
         }
-        Err(e) => Err(CliError::failure(e)),
+        Err(e) => Err(e),
     }
 }
 
@@ -137,7 +157,7 @@ pub async fn run_on(
             }
             MissionEvent::Sample(s) => {
                 let n = count.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                if n % samples_per_line != 0 {
+                if !n.is_multiple_of(samples_per_line) {
                     return;
                 }
                 writeln!(out, "{}", sample_line(&s))

@@ -166,10 +166,8 @@ impl Task {
     fn fail_all(&mut self, why: RequestError) {
         let queued = lock(&self.shared.queue).clear();
         let n = self.pending.len() as u64 + queued.len() as u64;
-        for p in self.pending.drain().map(|(_, p)| p.reply) {
-            if let Some(r) = p {
-                let _ = r.send(Err(why.clone()));
-            }
+        for r in self.pending.drain().filter_map(|(_, p)| p.reply) {
+            let _ = r.send(Err(why.clone()));
         }
         for q in queued {
             if let Some(r) = q.reply {

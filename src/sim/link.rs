@@ -259,11 +259,10 @@ impl Pump {
                     }
                 }
                 _ = sleep_until(next_out.unwrap_or_else(Instant::now)), if next_out.is_some() => {
-                    if let Some((_, piece)) = self.outbound.pop_front() {
-                        if events.send(LinkEvent::Data(piece)).await.is_err() {
+                    if let Some((_, piece)) = self.outbound.pop_front()
+                        && events.send(LinkEvent::Data(piece)).await.is_err() {
                             break None;
                         }
-                    }
                 }
                 _ = sleep_until(next_tick) => {
                     next_tick += self.step;

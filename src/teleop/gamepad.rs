@@ -270,11 +270,10 @@ pub fn spawn(tx: mpsc::Sender<PadEvent>) -> std::io::Result<std::thread::JoinHan
                     E::ButtonReleased(b, _) => Button::from_gilrs(b).map(PadEvent::Released),
                     _ => None,
                 };
-                if let Some(out) = out {
-                    if tx.blocking_send(out).is_err() {
+                if let Some(out) = out
+                    && tx.blocking_send(out).is_err() {
                         return;
                     }
-                }
             }
         })
 }

@@ -239,8 +239,8 @@ impl KeyMap {
                         format!("unknown key {kn:?} (e.g. \"Up\", \"Space\", \"w\", \"Ctrl+c\")"),
                     )
                 })?;
-                if let Some(other) = map.insert(key, action) {
-                    if other != action {
+                if let Some(other) = map.insert(key, action)
+                    && other != action {
                         return Err((
                             name.clone(),
                             format!(
@@ -249,7 +249,6 @@ impl KeyMap {
                             ),
                         ));
                     }
-                }
                 by_action.entry(action).or_default().push(key);
             }
         }

@@ -13,8 +13,11 @@ use ratatui::widgets::Paragraph;
 pub fn render(frame: &mut Frame, area: Rect, s: &AppState) {
     let t = &s.telemetry;
     let block = if s.flashing() {
-        theme::panel(Span::styled(format!(" COLLISION! #{} ", t.collisions), theme::alarm()))
-            .border_style(Style::new().fg(theme::ALERT))
+        theme::panel(Span::styled(
+            format!(" COLLISION! #{} ", t.collisions),
+            theme::alarm(),
+        ))
+        .border_style(Style::new().fg(theme::ALERT))
     } else {
         theme::panel(Line::from(vec![
             Span::raw(" Collisions "),
@@ -24,7 +27,10 @@ pub fn render(frame: &mut Frame, area: Rect, s: &AppState) {
     let inner = block.inner(area);
     frame.render_widget(block, area);
     let Some(seen) = t.last_collision else {
-        frame.render_widget(Paragraph::new(Span::styled("none yet", theme::dim())), inner);
+        frame.render_widget(
+            Paragraph::new(Span::styled("none yet", theme::dim())),
+            inner,
+        );
         return;
     };
     let c = seen.collision;

@@ -60,12 +60,17 @@ pub fn render(frame: &mut Frame, area: Rect, commanded: Heading, reported: Optio
                 needle(ctx, f64::from(r.degrees()), 0.62, theme::reported());
             }
             ctx.layer();
-            needle(ctx, f64::from(commanded.degrees()), 0.92, theme::commanded());
+            needle(
+                ctx,
+                f64::from(commanded.degrees()),
+                0.92,
+                theme::commanded(),
+            );
             if labels {
                 let tick = theme::dim();
                 ctx.print(-0.5 * cell, 1.18, Span::styled("0", tick));
                 ctx.print(1.12, 0.0, Span::styled("90", tick));
-                ctx.print(-1.5 * cell, -1.18, Span::styled("180", tick));
+                ctx.print(-1.5 * cell, -1.3, Span::styled("180", tick));
                 ctx.print(-1.12 - 3.0 * cell, 0.0, Span::styled("270", tick));
             }
             if tips {

@@ -42,13 +42,25 @@ pub fn render(frame: &mut Frame, area: Rect, s: &AppState) {
     let rep_col = rep.map(|r| column(r, bar_w));
     let mut lines = Vec::new();
     if inner.height >= 3 {
-        lines.push(pointer(cmd_col, bar_w, "▼", format!("cmd {}°", num(cmd, 0)), theme::commanded()));
+        lines.push(pointer(
+            cmd_col,
+            bar_w,
+            "▼",
+            format!("cmd {}°", num(cmd, 0)),
+            theme::commanded(),
+        ));
     }
     lines.push(scale(cmd_col, rep_col, bar_w));
-    if inner.height >= 3 {
-        if let (Some(c), Some(r)) = (rep_col, rep) {
-            lines.push(pointer(c, bar_w, "▲", format!("droid {}°", num(r, 1)), theme::reported()));
-        }
+    if inner.height >= 3
+        && let (Some(c), Some(r)) = (rep_col, rep)
+    {
+        lines.push(pointer(
+            c,
+            bar_w,
+            "▲",
+            format!("droid {}°", num(r, 1)),
+            theme::reported(),
+        ));
     }
     frame.render_widget(Paragraph::new(lines), inner);
 }
@@ -76,7 +88,13 @@ fn scale(cmd: usize, rep: Option<usize>, w: usize) -> Line<'static> {
 
 /// A marker row: the arrow over/under its column with the value beside it, on whichever side
 /// has room.
-fn pointer(col: usize, w: usize, arrow: &'static str, label: String, style: Style) -> Line<'static> {
+fn pointer(
+    col: usize,
+    w: usize,
+    arrow: &'static str,
+    label: String,
+    style: Style,
+) -> Line<'static> {
     let x = LEFT_LABEL.len() + col;
     let total = LEFT_LABEL.len() + w + RIGHT_LABEL.len();
     let label_w = label.chars().count() + 1;

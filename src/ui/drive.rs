@@ -13,7 +13,7 @@ use ratatui::text::{Line, Span};
 use ratatui::widgets::Paragraph;
 
 /// Columns the text block wants when it sits beside the dial.
-const TEXT_W: u16 = 21;
+const TEXT_W: u16 = 18;
 
 pub fn render(frame: &mut Frame, area: Rect, s: &AppState) {
     // Keys drive the droid unless the log has focus; say so where the eye is.
@@ -27,9 +27,13 @@ pub fn render(frame: &mut Frame, area: Rect, s: &AppState) {
     let lines = text(s);
     let n = lines.len() as u16;
     let (dial, info) = if inner.height >= n + 8 {
-        let dial_h = inner.height - n;
+        // A round dial is about half as tall as wide; more height would only be blank rows.
+        let dial_h = (inner.height - n).min(inner.width / 2 + 2);
         (
-            Rect { height: dial_h, ..inner },
+            Rect {
+                height: dial_h,
+                ..inner
+            },
             Rect {
                 y: inner.y + dial_h,
                 height: n,
@@ -37,9 +41,15 @@ pub fn render(frame: &mut Frame, area: Rect, s: &AppState) {
             },
         )
     } else {
-        let dial_w = inner.width.saturating_sub(TEXT_W).min(inner.height.saturating_mul(2) + 1);
+        let dial_w = inner
+            .width
+            .saturating_sub(TEXT_W)
+            .min(inner.height.saturating_mul(2) + 1);
         (
-            Rect { width: dial_w, ..inner },
+            Rect {
+                width: dial_w,
+                ..inner
+            },
             Rect {
                 x: inner.x + dial_w + u16::from(dial_w > 0),
                 width: inner.width.saturating_sub(dial_w + u16::from(dial_w > 0)),
@@ -53,7 +63,10 @@ pub fn render(frame: &mut Frame, area: Rect, s: &AppState) {
 
 fn flag(on: bool, name: &'static str) -> Span<'static> {
     if on {
-        Span::styled(name, theme::commanded().add_modifier(Modifier::REVERSED | Modifier::BOLD))
+        Span::styled(
+            name,
+            theme::commanded().add_modifier(Modifier::REVERSED | Modifier::BOLD),
+        )
     } else {
         Span::styled(name, theme::dim())
     }
@@ -62,11 +75,16 @@ fn flag(on: bool, name: &'static str) -> Span<'static> {
 fn text(s: &AppState) -> Vec<Line<'static>> {
     let c = &s.control;
     let t = &s.telemetry;
-    let droid = t.heading().map_or("-".to_string(), |h| format!("{}°", h.degrees()));
+    let droid = t
+        .heading()
+        .map_or("-".to_string(), |h| format!("{}°", h.degrees()));
     let mut lines = vec![
         Line::from(vec![
             Span::styled("◆ cmd   ", theme::commanded()),
-            Span::styled(format!("{}°", c.heading.degrees()), theme::commanded().add_modifier(Modifier::BOLD)),
+            Span::styled(
+                format!("{}°", c.heading.degrees()),
+                theme::commanded().add_modifier(Modifier::BOLD),
+            ),
         ]),
         Line::from(vec![
             Span::styled("● droid ", theme::reported()),
@@ -80,14 +98,25 @@ fn text(s: &AppState) -> Vec<Line<'static>> {
         Line::from(vec![
             Span::styled(" meas ", theme::label()),
             Span::styled(opt(t.speed_cm_s(), 1, ""), theme::reported()),
-            Span::styled(" cm/s", theme::dim()),
+            Span::styled(
+                if t.speed_cm_s().is_some() {
+                    " cm/s"
+                } else {
+                    ""
+                },
+                theme::dim(),
+            ),
         ]),
         Line::from(vec![
             Span::styled("cruise ", theme::label()),
             Span::raw(c.cruise.to_string()),
             Span::styled(format!(" {}", c.mode), theme::dim()),
         ]),
-        Line::from(vec![flag(c.turbo, "TURBO"), Span::raw(" "), flag(c.reverse, "REVERSE")]),
+        Line::from(vec![
+            flag(c.turbo, "TURBO"),
+            Span::raw(" "),
+            flag(c.reverse, "REVERSE"),
+        ]),
     ];
     if s.model.has_legs() {
         let style = match t.stance {
@@ -103,7 +132,10 @@ fn text(s: &AppState) -> Vec<Line<'static>> {
     if c.estop {
         lines.push(Line::from(Span::styled(" E-STOP ", theme::alarm())));
     } else if t.asleep {
-        lines.push(Line::from(Span::styled("asleep", Style::new().fg(theme::WARN))));
+        lines.push(Line::from(Span::styled(
+            "asleep",
+            Style::new().fg(theme::WARN),
+        )));
     } else if c.source != "-" {
         lines.push(Line::from(vec![
             Span::styled("input ", theme::label()),

@@ -179,17 +179,39 @@ mod tests {
     use super::*;
 
     fn inside(outer: Rect, r: Rect) -> bool {
-        r.x >= outer.x && r.y >= outer.y && r.right() <= outer.right() && r.bottom() <= outer.bottom()
+        r.x >= outer.x
+            && r.y >= outer.y
+            && r.right() <= outer.right()
+            && r.bottom() <= outer.bottom()
     }
 
     #[test]
     fn every_rect_is_inside_the_frame() {
-        for (w, h) in [(0, 0), (1, 1), (20, 5), (59, 30), (60, 16), (80, 24), (120, 36), (160, 48), (300, 100)] {
+        for (w, h) in [
+            (0, 0),
+            (1, 1),
+            (20, 5),
+            (59, 30),
+            (60, 16),
+            (80, 24),
+            (120, 36),
+            (160, 48),
+            (300, 100),
+        ] {
             let area = Rect::new(0, 0, w, h);
             let p = plan(area);
-            for r in [Some(p.status), p.drive, p.dome, p.sensors, p.collisions, p.map, Some(p.log), p.notice]
-                .into_iter()
-                .flatten()
+            for r in [
+                Some(p.status),
+                p.drive,
+                p.dome,
+                p.sensors,
+                p.collisions,
+                p.map,
+                Some(p.log),
+                p.notice,
+            ]
+            .into_iter()
+            .flatten()
             {
                 assert!(inside(area, r), "{w}x{h}: {r:?}");
             }

@@ -27,7 +27,11 @@ impl Cols {
 
     fn for_width(w: usize) -> Cols {
         let time = 8;
-        let (name, err) = if w >= 50 { ((w / 4).clamp(10, 28), (w / 8).clamp(5, 21)) } else { ((w / 3).max(4), 0) };
+        let (name, err) = if w >= 50 {
+            ((w * 28 / 100).clamp(10, 30), (w * 15 / 100).clamp(6, 19))
+        } else {
+            ((w / 3).max(4), 0)
+        };
         let gaps = if err > 0 { 5 } else { 4 };
         let used = time + Self::DIR + name + Self::SEQ + err + gaps;
         Cols {
@@ -44,7 +48,9 @@ pub fn render(frame: &mut Frame, area: Rect, s: &AppState) {
     let focused = s.focus == Focus::Log;
     let mut block = theme::panel(title(log, focused));
     if focused {
-        block = block.border_type(BorderType::Thick).border_style(Style::new().fg(theme::COMMANDED));
+        block = block
+            .border_type(BorderType::Thick)
+            .border_style(Style::new().fg(theme::COMMANDED));
     }
     let inner = block.inner(area);
     frame.render_widget(block, area);
@@ -56,7 +62,11 @@ pub fn render(frame: &mut Frame, area: Rect, s: &AppState) {
     let rows = inner.height.saturating_sub(1) as usize;
     let visible = log.visible(rows);
     if visible.is_empty() {
-        let msg = if log.filter.is_active() && !log.is_empty() { "no packets match the filter" } else { "no packets yet" };
+        let msg = if log.filter.is_active() && !log.is_empty() {
+            "no packets match the filter"
+        } else {
+            "no packets yet"
+        };
         lines.push(Line::from(Span::styled(msg, theme::dim())));
     }
     lines.extend(visible.into_iter().map(|l| row(l, &cols, log.decoded)));
@@ -65,37 +75,70 @@ pub fn render(frame: &mut Frame, area: Rect, s: &AppState) {
 
 fn title(log: &PacketLog, focused: bool) -> Line<'static> {
     let mut spans = vec![
-        Span::styled(if focused { " ▶ Packets " } else { " Packets " }, if focused { theme::bold() } else { Style::new() }),
+        Span::styled(
+            if focused {
+                " ▶ Packets "
+            } else {
+                " Packets "
+            },
+            if focused { theme::bold() } else { Style::new() },
+        ),
         Span::styled(format!("{}/{} ", log.len(), log.capacity()), theme::label()),
-        Span::styled(if log.decoded { "· decoded " } else { "· hex " }, theme::dim()),
+        Span::styled(
+            if log.decoded {
+                "· decoded "
+            } else {
+                "· hex "
+            },
+            theme::dim(),
+        ),
     ];
     if log.paused {
         spans.push(Span::styled(" PAUSED ", theme::attention()));
         spans.push(Span::raw(" "));
     }
     if log.scroll > 0 {
-        spans.push(Span::styled(format!("↑{} ", log.scroll), theme::commanded()));
+        spans.push(Span::styled(
+            format!("↑{} ", log.scroll),
+            theme::commanded(),
+        ));
     }
     if log.filter.is_active() {
         spans.push(Span::styled("· filter: ", theme::dim()));
-        spans.push(Span::styled(format!("{} ", truncate(&clean(&log.filter.describe()), 40)), theme::commanded()));
+        spans.push(Span::styled(
+            format!("{} ", truncate(&clean(&log.filter.describe()), 40)),
+            theme::commanded(),
+        ));
     }
     Line::from(spans)
 }
 
 fn header(c: &Cols, decoded: bool) -> Line<'static> {
-    let mut s = format!("{} {} {} {}", fit_right("time s", c.time), fit("", Cols::DIR), fit("name", c.name), fit("seq", Cols::SEQ));
+    let mut s = format!(
+        "{} {} {} {}",
+        fit_right("time s", c.time),
+        fit("", Cols::DIR),
+        fit("name", c.name),
+        fit("seq", Cols::SEQ)
+    );
     if c.err > 0 {
         s.push(' ');
         s.push_str(&fit("error", c.err));
     }
     s.push(' ');
     s.push_str(if decoded { "fields" } else { "hex" });
-    Line::from(Span::styled(s, theme::dim().add_modifier(Modifier::UNDERLINED)))
+    Line::from(Span::styled(
+        s,
+        theme::dim().add_modifier(Modifier::UNDERLINED),
+    ))
 }
 
 fn row(l: &LogLine, c: &Cols, decoded: bool) -> Line<'static> {
-    let base = if l.is_error { Style::new().fg(theme::ALERT) } else { Style::new() };
+    let base = if l.is_error {
+        Style::new().fg(theme::ALERT)
+    } else {
+        Style::new()
+    };
     let dir_style = match (l.is_error, l.dir) {
         (true, _) => base.add_modifier(Modifier::BOLD),
         (false, Direction::In) => theme::reported(),
@@ -104,21 +147,39 @@ fn row(l: &LogLine, c: &Cols, decoded: bool) -> Line<'static> {
     let secs = l.at.as_secs_f64();
     let seq = l.seq.map_or("-".to_string(), |s| s.to_string());
     let mut spans = vec![
-        Span::styled(fit_right(&format!("{secs:.3}"), c.time), if l.is_error { base } else { theme::dim() }),
+        Span::styled(
+            fit_right(&format!("{secs:.3}"), c.time),
+            if l.is_error { base } else { theme::dim() },
+        ),
         Span::raw(" "),
         Span::styled(l.dir.arrow(), dir_style),
         Span::raw(" "),
         Span::styled(fit(&clean(&l.name), c.name), base),
         Span::raw(" "),
-        Span::styled(fit_right(&seq, Cols::SEQ), if l.is_error { base } else { theme::label() }),
+        Span::styled(
+            fit_right(&seq, Cols::SEQ),
+            if l.is_error { base } else { theme::label() },
+        ),
     ];
     if c.err > 0 {
         let err = l.err.map(|e| e.name()).unwrap_or_default();
         spans.push(Span::raw(" "));
-        spans.push(Span::styled(fit(&err, c.err), base.add_modifier(Modifier::BOLD)));
+        spans.push(Span::styled(
+            fit(&err, c.err),
+            base.add_modifier(Modifier::BOLD),
+        ));
     }
-    let detail = if decoded { &l.decoded } else { &l.hex };
+    // An error response's decoded text repeats the code's name, already in its own column:
+    // show the explanation instead.
+    let detail = match (decoded, l.err) {
+        (true, Some(e)) if c.err > 0 => e.message(),
+        (true, _) => clean(&l.decoded),
+        (false, _) => clean(&l.hex),
+    };
     spans.push(Span::raw(" "));
-    spans.push(Span::styled(truncate(&clean(detail), c.rest), if l.is_error { base } else { Style::new() }));
+    spans.push(Span::styled(
+        truncate(&detail, c.rest),
+        if l.is_error { base } else { Style::new() },
+    ));
     Line::from(spans)
 }

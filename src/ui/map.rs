@@ -57,14 +57,24 @@ pub fn render(frame: &mut Frame, area: Rect, t: &Telemetry) {
     let title = match pos {
         Some((x, y)) => Line::from(vec![
             Span::raw(" Map "),
-            Span::styled(format!("x {} y {} cm ", num(x as f32, 0), num(y as f32, 0)), theme::reported()),
+            Span::styled(
+                format!("x {} y {} cm ", num(x as f32, 0), num(y as f32, 0)),
+                theme::reported(),
+            ),
         ]),
-        None => Line::from(vec![Span::raw(" Map "), Span::styled("no position ", theme::dim())]),
+        None => Line::from(vec![
+            Span::raw(" Map "),
+            Span::styled("no position ", theme::dim()),
+        ]),
     };
     let block = theme::panel(title);
     let inner = block.inner(area);
     let (xb, yb) = bounds(t, inner.width, inner.height);
-    let extent = format!(" {}×{} cm ", num((xb[1] - xb[0]) as f32, 0), num((yb[1] - yb[0]) as f32, 0));
+    let extent = format!(
+        " {}×{} cm ",
+        num((xb[1] - xb[0]) as f32, 0),
+        num((yb[1] - yb[0]) as f32, 0)
+    );
     let block = block.title_bottom(Line::from(Span::styled(extent, theme::dim())).right_aligned());
     let points: Vec<(f64, f64)> = finite(t).collect();
     let canvas = Canvas::default()
@@ -80,7 +90,14 @@ pub fn render(frame: &mut Frame, area: Rect, t: &Telemetry) {
                 ctx.draw(&Segment::new(w[0].0, w[0].1, w[1].0, w[1].1, TRACK));
             }
             if let Some((x, y)) = pos {
-                ctx.print(x, y, Span::styled("●", theme::reported().add_modifier(ratatui::style::Modifier::BOLD)));
+                ctx.print(
+                    x,
+                    y,
+                    Span::styled(
+                        "●",
+                        theme::reported().add_modifier(ratatui::style::Modifier::BOLD),
+                    ),
+                );
             }
         });
     frame.render_widget(canvas, area);

@@ -33,13 +33,20 @@ pub fn render(frame: &mut Frame, area: Rect, t: &Telemetry) {
 }
 
 fn packed(t: &Telemetry, rows: u16) -> Vec<Line<'static>> {
-    let trio = |name: &'static str, v: Option<[f32; 3]>, prec: usize, unit: &'static str| -> Line<'static> {
+    let trio = |name: &'static str,
+                v: Option<[f32; 3]>,
+                prec: usize,
+                unit: &'static str|
+     -> Line<'static> {
         let mut spans = vec![Span::styled(format!("{name:<5}"), theme::label())];
         match v {
             Some(v) => {
                 for (axis, x) in ["x", "y", "z"].iter().zip(v) {
                     spans.push(Span::styled(format!("{axis} "), theme::dim()));
-                    spans.push(Span::styled(format!("{} ", num(x, prec)), theme::reported()));
+                    spans.push(Span::styled(
+                        format!("{} ", num(x, prec)),
+                        theme::reported(),
+                    ));
                 }
                 spans.push(Span::styled(unit, theme::dim()));
             }
@@ -61,7 +68,10 @@ fn packed(t: &Telemetry, rows: u16) -> Vec<Line<'static>> {
         Span::styled(" cm/s", theme::dim()),
     ];
     if let Some([x, y]) = t.velocity_cm_s {
-        vel.push(Span::styled(format!("  x {} y {}", num(x, 1), num(y, 1)), theme::dim()));
+        vel.push(Span::styled(
+            format!("  x {} y {}", num(x, 1), num(y, 1)),
+            theme::dim(),
+        ));
     }
     let mut lines = vec![att, trio("acc", t.accel, 2, "g"), Line::from(vel)];
     if rows > 3 {
@@ -89,7 +99,14 @@ fn gauges(t: &Telemetry, width: usize) -> Vec<Line<'static>> {
 }
 
 /// `label  value  ─────┼━━━───`: a bar from the centre towards the value's sign.
-fn gauge(label: &str, v: Option<f32>, prec: usize, unit: &str, range: f32, w: usize) -> Line<'static> {
+fn gauge(
+    label: &str,
+    v: Option<f32>,
+    prec: usize,
+    unit: &str,
+    range: f32,
+    w: usize,
+) -> Line<'static> {
     let mut spans = vec![
         Span::styled(format!("{label:<6}"), theme::label()),
         Span::styled(fit_right(&opt(v, prec, unit), 10), theme::reported()),
@@ -99,7 +116,14 @@ fn gauge(label: &str, v: Option<f32>, prec: usize, unit: &str, range: f32, w: us
         let centre = w / 2;
         let f = v.map_or(0.0, |v| unit_fraction(v, range));
         let reach = (f.abs() * centre as f32).round() as usize;
-        let filled = |i: usize| reach > 0 && if f < 0.0 { i + reach >= centre && i < centre } else { i > centre && i <= centre + reach };
+        let filled = |i: usize| {
+            reach > 0
+                && if f < 0.0 {
+                    i + reach >= centre && i < centre
+                } else {
+                    i > centre && i <= centre + reach
+                }
+        };
         spans.extend(runs((0..w).map(|i| {
             if i == centre {
                 ('┼', theme::label())

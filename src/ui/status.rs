@@ -94,7 +94,11 @@ fn first_row(s: &AppState) -> Vec<Seg> {
     };
     let errors = Span::styled(
         format!("err {}", s.stats.errors),
-        if s.stats.errors > 0 { Style::new().fg(theme::ALERT) } else { theme::dim() },
+        if s.stats.errors > 0 {
+            Style::new().fg(theme::ALERT)
+        } else {
+            theme::dim()
+        },
     );
     vec![
         Seg::new(0, id),
@@ -106,12 +110,17 @@ fn first_row(s: &AppState) -> Vec<Seg> {
             3,
             vec![
                 Span::styled("in ", theme::label()),
-                Span::raw(format!("{}/s", num(s.rate_in, 1))),
+                Span::raw(format!("{}/s", rate(s.rate_in))),
                 Span::styled(" out ", theme::label()),
-                Span::raw(format!("{}/s", num(s.rate_out, 1))),
+                Span::raw(format!("{}/s", rate(s.rate_out))),
             ],
         ),
     ]
+}
+
+/// Packets per second: one decimal below 10, whole numbers above (the row is tight at 80).
+fn rate(v: f32) -> String {
+    num(v, if v.abs() < 10.0 { 1 } else { 0 })
 }
 
 fn link(l: &LinkState) -> Span<'static> {
@@ -149,17 +158,25 @@ fn battery(t: &Telemetry) -> Vec<Span<'static>> {
         Some(_) => theme::OK,
         None => theme::DIM,
     };
-    let mut spans = vec![Span::styled("bat ", theme::label())];
+    // The gauge says "battery" by itself; the label only appears while there is no reading.
+    let mut spans = Vec::new();
     match t.battery_v {
         Some(v) => {
             // A one-cell LiPo: 3.4 V empty, 4.2 V full.
-            let frac = if v.is_finite() { ((v - 3.4) / 0.8).clamp(0.0, 1.0) } else { 0.0 };
+            let frac = if v.is_finite() {
+                ((v - 3.4) / 0.8).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
             let full = (frac * CELLS as f32).round() as usize;
-            spans.push(Span::styled(format!("{}V ", num(v, 2)), Style::new().fg(color)));
+            spans.push(Span::styled(
+                format!("{}V ", num(v, 2)),
+                Style::new().fg(color),
+            ));
             spans.push(Span::styled("█".repeat(full), Style::new().fg(color)));
             spans.push(Span::styled("░".repeat(CELLS - full), theme::dim()));
         }
-        None => spans.push(Span::styled("-", theme::dim())),
+        None => spans.push(Span::styled("bat -", theme::dim())),
     }
     match level {
         Some(3) => spans.push(Span::styled(" CRITICAL", theme::alarm())),
@@ -172,13 +189,22 @@ fn battery(t: &Telemetry) -> Vec<Span<'static>> {
 fn second_row(s: &AppState) -> Vec<Seg> {
     let mut segs = Vec::new();
     if let Some(h) = s.current_hint() {
-        segs.push(Seg::new(0, vec![Span::styled(format!("» {}", clean(h)), theme::commanded())]));
+        segs.push(Seg::new(
+            0,
+            vec![Span::styled(format!("» {}", clean(h)), theme::commanded())],
+        ));
     }
     let pad = match &s.gamepad {
         GamepadStatus::Disabled => Span::styled("pad off", theme::dim()),
-        GamepadStatus::Unavailable(why) => Span::styled(format!("pad n/a: {}", truncate(&clean(why), 24)), theme::dim()),
+        GamepadStatus::Unavailable(why) => Span::styled(
+            format!("pad n/a: {}", truncate(&clean(why), 24)),
+            theme::dim(),
+        ),
         GamepadStatus::NoPad => Span::styled("no pad", theme::label()),
-        GamepadStatus::Connected(name) => Span::styled(format!("pad {}", truncate(&clean(name), 24)), Style::new().fg(theme::OK)),
+        GamepadStatus::Connected(name) => Span::styled(
+            format!("pad {}", truncate(&clean(name), 24)),
+            Style::new().fg(theme::OK),
+        ),
     };
     segs.push(Seg::new(2, vec![pad]));
     let keys = match s.keyboard {
@@ -196,5 +222,8 @@ fn log_path(s: &AppState, room: usize) -> Vec<Span<'static>> {
         None => "off".into(),
     };
     let path = truncate_left(&path, room.saturating_sub(width(label)));
-    vec![Span::styled(label, theme::label()), Span::styled(path, Style::new().fg(Color::Gray))]
+    vec![
+        Span::styled(label, theme::label()),
+        Span::styled(path, Style::new().fg(Color::Gray)),
+    ]
 }

@@ -21,7 +21,9 @@ fn char_width(c: char) -> usize {
 /// Replace control characters (from droid names, error strings, paths) so they cannot move
 /// the cursor or break a row.
 pub fn clean(s: &str) -> String {
-    s.chars().map(|c| if c.is_control() { '·' } else { c }).collect()
+    s.chars()
+        .map(|c| if c.is_control() { '·' } else { c })
+        .collect()
 }
 
 /// Keep the start of `s` within `max` cells, ending with `…` when cut.
@@ -101,7 +103,11 @@ pub fn num(v: f32, prec: usize) -> String {
         let _ = write!(s, "{v:.1e}");
     } else {
         // Avoid "-0.0" flicker around zero.
-        let v = if v.abs() < 0.5 * 10f32.powi(-(prec as i32)) { 0.0 } else { v };
+        let v = if v.abs() < 0.5 * 10f32.powi(-(prec as i32)) {
+            0.0
+        } else {
+            v
+        };
         let _ = write!(s, "{v:.prec$}");
     }
     s
@@ -192,7 +198,10 @@ mod tests {
         assert_eq!(fit("ab", 4), "ab  ");
         assert_eq!(fit_right("ab", 4), "  ab");
         assert_eq!(fit("abcdef", 4), "abc…");
-        assert_eq!(wrap("turn left (hold; also aims)", 10), ["turn left", "(hold;", "also aims)"]);
+        assert_eq!(
+            wrap("turn left (hold; also aims)", 10),
+            ["turn left", "(hold;", "also aims)"]
+        );
         assert_eq!(wrap("abcdefghij", 4), ["abcd", "efgh", "ij"]);
         assert_eq!(wrap("", 4), [""]);
     }

@@ -38,12 +38,18 @@ pub fn reported() -> Style {
 
 /// A latched alarm: white on red, bold (E-STOP, COLLISION!).
 pub fn alarm() -> Style {
-    Style::new().fg(Color::White).bg(ALERT).add_modifier(Modifier::BOLD)
+    Style::new()
+        .fg(Color::White)
+        .bg(ALERT)
+        .add_modifier(Modifier::BOLD)
 }
 
 /// Something to look at now but not an alarm (reconnecting).
 pub fn attention() -> Style {
-    Style::new().fg(Color::Black).bg(WARN).add_modifier(Modifier::BOLD)
+    Style::new()
+        .fg(Color::Black)
+        .bg(WARN)
+        .add_modifier(Modifier::BOLD)
 }
 
 /// The selected entry of a list.

@@ -449,7 +449,7 @@ impl Wire for F32List {
     }
     fn get(r: &mut Reader<'_>, field: &'static str) -> Result<Self, FieldError> {
         let n = r.remaining();
-        if n % 4 != 0 {
+        if !n.is_multiple_of(4) {
             return Err(FieldError::Invalid {
                 field,
                 reason: format!("{n} bytes is not a whole number of f32 values"),

@@ -23,27 +23,49 @@ pub fn render(frame: &mut Frame, area: Rect, input: &str, current: &LogFilter) {
     };
     let block = theme::panel(Span::styled(" Filter packets ", theme::bold()))
         .border_style(theme::commanded())
-        .title_bottom(Line::from(Span::styled(" Enter apply · Esc cancel ", theme::dim())).centered());
+        .title_bottom(
+            Line::from(Span::styled(" Enter apply · Esc cancel ", theme::dim())).centered(),
+        );
     let inner = block.inner(rect);
     frame.render_widget(Clear, rect);
     frame.render_widget(block, rect);
     let iw = inner.width as usize;
     let shown = truncate_left(&clean(input), iw.saturating_sub(3));
     let parsed = LogFilter::parse(input);
-    let preview = if parsed.is_active() { parsed.describe() } else { "everything".into() };
-    let now = if current.is_active() { current.describe() } else { "none".into() };
+    let preview = if parsed.is_active() {
+        parsed.describe()
+    } else {
+        "everything".into()
+    };
+    let now = if current.is_active() {
+        current.describe()
+    } else {
+        "none".into()
+    };
     let lines = vec![
-        Line::from(vec![Span::styled("> ", theme::commanded()), Span::raw(shown.clone())]),
-        Line::from(vec![Span::styled("syntax ", theme::label()), Span::styled(SYNTAX, theme::dim())]),
+        Line::from(vec![
+            Span::styled("> ", theme::commanded()),
+            Span::raw(shown.clone()),
+        ]),
+        Line::from(vec![
+            Span::styled("syntax ", theme::label()),
+            Span::styled(SYNTAX, theme::dim()),
+        ]),
         Line::from(vec![
             Span::styled("shows ", theme::label()),
             Span::styled(truncate(&clean(&preview), iw / 2), theme::commanded()),
-            Span::styled(format!("  (now: {})", truncate(&clean(&now), iw / 3)), theme::dim()),
+            Span::styled(
+                format!("  (now: {})", truncate(&clean(&now), iw / 3)),
+                theme::dim(),
+            ),
         ]),
     ];
     frame.render_widget(Paragraph::new(lines), inner);
     if inner.height > 0 && inner.width > 0 {
-        let x = inner.x.saturating_add((2 + width(&shown)) as u16).min(inner.right().saturating_sub(1));
+        let x = inner
+            .x
+            .saturating_add((2 + width(&shown)) as u16)
+            .min(inner.right().saturating_sub(1));
         frame.set_cursor_position(Position::new(x, inner.y));
     }
 }

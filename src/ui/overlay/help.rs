@@ -1,9 +1,11 @@
 //! The `?` help overlay: every key binding and every gamepad binding, in two sections.
 //!
-//! Both sections go in one column when the screen is tall enough; otherwise each section gets
-//! its own column(s). When the columns are too wide together the right-most ones narrow and
-//! wrap their descriptions, so the keyboard section (the one you need to drive) keeps its
-//! descriptions whole on 80×24. Only below that does anything get cut, and then it says so.
+//! Bindings flow down columns, a section starting a fresh column when it would not fit the
+//! rest of the current one, and long descriptions wrap under themselves. When the columns do
+//! not all fit side by side they are split into pages ([`AppState::help_page`]); on 80×24 the
+//! whole keyboard section is on the first page and the gamepad on the second.
+//!
+//! [`AppState::help_page`]: crate::app::state::AppState::help_page
 
 use super::super::layout::centered;
 use super::super::text::{clean, truncate, width, wrap};
@@ -15,146 +17,134 @@ use ratatui::style::Modifier;
 use ratatui::text::{Line, Span};
 use ratatui::widgets::{Clear, Paragraph};
 
-/// Key names wider than this are cut (a binding list of five keys does not need to fit).
-const MAX_KEYS_W: usize = 18;
-/// A narrowed column keeps at least this much room for the description.
-const MIN_ACTION_W: usize = 10;
+/// Key names wider than this are cut (five alternative keys need not fit).
+const MAX_KEYS_W: usize = 16;
+/// Columns narrower than this wrap too much to read; fewer columns and more pages instead.
+const MIN_COL_W: usize = 36;
 const GAP: usize = 2;
 
-#[derive(Clone, Copy)]
-enum Item<'a> {
-    Heading(&'static str),
-    Bind(&'a HelpLine),
-    Note(&'static str),
-    Blank,
+/// A run of lines that stays together in one column (a heading, or a wrapped binding).
+type Unit = Vec<Line<'static>>;
+
+/// A section's lines at column width `w`: the heading, then one unit per binding.
+fn section(title: &'static str, binds: &[HelpLine], w: usize) -> Vec<Unit> {
+    let heading = Line::from(Span::styled(
+        title,
+        theme::bold().add_modifier(Modifier::UNDERLINED),
+    ));
+    let mut units = vec![vec![heading]];
+    if binds.is_empty() {
+        units.push(vec![Line::from(Span::styled("no bindings", theme::dim()))]);
+    }
+    let kw = binds
+        .iter()
+        .map(|h| width(&h.keys))
+        .max()
+        .unwrap_or(0)
+        .min(MAX_KEYS_W)
+        .min(w * 2 / 5);
+    let aw = w.saturating_sub(kw + 1).max(1);
+    for h in binds {
+        let keys = truncate(&clean(&h.keys), kw);
+        let pad = " ".repeat(kw.saturating_sub(width(&keys)) + 1);
+        let unit = wrap(&clean(&h.action), aw)
+            .into_iter()
+            .enumerate()
+            .map(|(i, part)| {
+                let lead = if i == 0 {
+                    Span::styled(format!("{keys}{pad}"), theme::commanded())
+                } else {
+                    Span::raw(" ".repeat(kw + 1))
+                };
+                Line::from(vec![lead, Span::raw(part)])
+            })
+            .collect();
+        units.push(unit);
+    }
+    units
 }
 
-struct Column<'a> {
-    items: Vec<Item<'a>>,
-    keys_w: usize,
-    width: usize,
+/// Natural width of a section: keys, a space, the longest description.
+fn natural(binds: &[HelpLine]) -> usize {
+    let kw = binds
+        .iter()
+        .map(|h| width(&h.keys))
+        .max()
+        .unwrap_or(0)
+        .min(MAX_KEYS_W);
+    let aw = binds.iter().map(|h| width(&h.action)).max().unwrap_or(0);
+    (kw + 1 + aw).max(12)
 }
 
-impl<'a> Column<'a> {
-    fn new(items: Vec<Item<'a>>) -> Column<'a> {
-        let binds = || {
-            items.iter().filter_map(|i| match i {
-                Item::Bind(h) => Some(*h),
-                _ => None,
-            })
-        };
-        let keys_w = binds().map(|h| width(&h.keys)).max().unwrap_or(0).min(MAX_KEYS_W);
-        let action_w = binds().map(|h| width(&h.action)).max().unwrap_or(0);
-        let other_w = items
-            .iter()
-            .map(|i| match i {
-                Item::Heading(t) | Item::Note(t) => width(t),
-                _ => 0,
-            })
-            .max()
-            .unwrap_or(0);
-        Column {
-            width: (keys_w + 1 + action_w).max(other_w),
-            keys_w,
-            items,
+/// Flow the sections into columns of at most `rows` lines.
+fn flow(sections: Vec<Vec<Unit>>, rows: usize) -> Vec<Vec<Line<'static>>> {
+    let rows = rows.max(1);
+    let mut cols: Vec<Vec<Line>> = vec![Vec::new()];
+    for units in sections {
+        let len: usize = units.iter().map(Vec::len).sum();
+        let cur = cols.last().map_or(0, Vec::len);
+        if cur > 0 {
+            if cur + 1 + len > rows && len <= rows {
+                cols.push(Vec::new());
+            } else if cur < rows
+                && let Some(c) = cols.last_mut()
+            {
+                c.push(Line::default());
+            }
         }
-    }
-
-    fn min_width(&self) -> usize {
-        self.keys_w + 1 + MIN_ACTION_W
-    }
-
-    /// The column's lines at its current width, at most `rows` (a cut ends in `…`).
-    fn lines(&self, rows: usize) -> Vec<Line<'a>> {
-        let mut out = Vec::new();
-        let action_w = self.width.saturating_sub(self.keys_w + 1).max(1);
-        for item in &self.items {
-            match item {
-                Item::Heading(t) => out.push(Line::from(Span::styled(*t, theme::bold().add_modifier(Modifier::UNDERLINED)))),
-                Item::Note(t) => out.push(Line::from(Span::styled(*t, theme::dim()))),
-                Item::Blank => out.push(Line::default()),
-                Item::Bind(h) => {
-                    let keys = truncate(&clean(&h.keys), self.keys_w);
-                    let pad = " ".repeat(self.keys_w.saturating_sub(width(&keys)) + 1);
-                    for (i, part) in wrap(&clean(&h.action), action_w).into_iter().enumerate() {
-                        let lead = if i == 0 {
-                            Span::styled(format!("{keys}{pad}"), theme::commanded())
-                        } else {
-                            Span::raw(" ".repeat(self.keys_w + 1))
-                        };
-                        out.push(Line::from(vec![lead, Span::raw(part)]));
-                    }
+        for unit in units {
+            let cur = cols.last().map_or(0, Vec::len);
+            if cur > 0 && cur + unit.len() > rows {
+                cols.push(Vec::new());
+            }
+            for line in unit {
+                if cols.last().is_some_and(|c| c.len() >= rows) {
+                    cols.push(Vec::new());
+                }
+                if let Some(c) = cols.last_mut() {
+                    c.push(line);
                 }
             }
         }
-        if out.len() > rows {
-            out.truncate(rows.saturating_sub(1));
-            out.push(Line::from(Span::styled("…", theme::dim())));
-        }
-        out
     }
+    cols
 }
 
-fn section<'a>(title: &'static str, lines: &'a [HelpLine]) -> Vec<Item<'a>> {
-    let mut items = vec![Item::Heading(title)];
-    if lines.is_empty() {
-        items.push(Item::Note("no bindings"));
-    }
-    items.extend(lines.iter().map(Item::Bind));
-    items
-}
-
-/// One column if everything fits the height, else each section split into columns of
-/// `rows` items.
-fn columns<'a>(sections: Vec<Vec<Item<'a>>>, rows: usize) -> Vec<Column<'a>> {
-    let total: usize = sections.iter().map(Vec::len).sum::<usize>() + sections.len().saturating_sub(1);
-    if total <= rows {
-        let mut all = Vec::new();
-        for (i, s) in sections.into_iter().enumerate() {
-            if i > 0 {
-                all.push(Item::Blank);
-            }
-            all.extend(s);
-        }
-        return vec![Column::new(all)];
-    }
-    sections
-        .into_iter()
-        .flat_map(|s| s.chunks(rows.max(1)).map(|c| Column::new(c.to_vec())).collect::<Vec<_>>())
-        .collect()
-}
-
-/// Narrow the right-most columns until the row fits `avail`; drop columns that still do not.
-/// Returns whether anything was dropped.
-fn fit(cols: &mut Vec<Column>, avail: usize) -> bool {
-    let total = |cols: &[Column]| cols.iter().map(|c| c.width).sum::<usize>() + GAP * cols.len().saturating_sub(1);
-    let mut over = total(cols).saturating_sub(avail);
-    for c in cols.iter_mut().rev() {
-        let cut = over.min(c.width.saturating_sub(c.min_width()));
-        c.width -= cut;
-        over -= cut;
-    }
-    let mut dropped = false;
-    while cols.len() > 1 && total(cols) > avail {
-        cols.pop();
-        dropped = true;
-    }
-    if let Some(c) = cols.first_mut() {
-        c.width = c.width.min(avail);
-    }
-    dropped
-}
-
-pub fn render(frame: &mut Frame, area: Rect, keys: &[HelpLine], pad: &[HelpLine]) {
+pub fn render(frame: &mut Frame, area: Rect, keys: &[HelpLine], pad: &[HelpLine], page: usize) {
     let rows = area.height.saturating_sub(2) as usize;
     let avail = area.width.saturating_sub(4) as usize;
-    let mut cols = columns(vec![section("Keyboard", keys), section("Gamepad", pad)], rows);
-    let dropped = fit(&mut cols, avail);
-    let rendered: Vec<Vec<Line>> = cols.iter().map(|c| c.lines(rows)).collect();
-    let inner_w = cols.iter().map(|c| c.width).sum::<usize>() + GAP * cols.len().saturating_sub(1);
-    let inner_h = rendered.iter().map(Vec::len).max().unwrap_or(0);
+    let max_cols = ((avail + GAP) / (MIN_COL_W + GAP)).max(1);
+    let natural = natural(keys).max(natural(pad));
+    let build = |n: usize| {
+        let w = natural.min(avail.saturating_sub(GAP * (n - 1)) / n).max(1);
+        let cols = flow(
+            vec![section("Keyboard", keys, w), section("Gamepad", pad, w)],
+            rows,
+        );
+        (w, cols)
+    };
+    // The fewest columns that show everything at once, else as many as fit, paged.
+    let (col_w, cols, per_page) = (1..=max_cols)
+        .map(|n| (n, build(n)))
+        .find(|(n, (_, cols))| cols.len() <= *n)
+        .map(|(_, (w, cols))| {
+            let n = cols.len();
+            (w, cols, n)
+        })
+        .unwrap_or_else(|| {
+            let (w, cols) = build(max_cols);
+            (w, cols, max_cols)
+        });
+    let pages = cols.len().div_ceil(per_page).max(1);
+    let page = page.min(pages - 1);
+    let inner_h = cols.iter().map(Vec::len).max().unwrap_or(0);
+    let inner_w = col_w * per_page + GAP * (per_page - 1);
     let rect = centered(area, (inner_w + 4) as u16, (inner_h + 2) as u16);
-    let foot = if dropped { " more: enlarge the terminal · Esc close " } else { " ? or Esc to close " };
+    let foot = if pages > 1 {
+        format!(" page {}/{pages} · PgDn/PgUp · Esc close ", page + 1)
+    } else {
+        " ? or Esc to close ".to_string()
+    };
     let block = theme::panel(Span::styled(" Help ", theme::bold()))
         .border_style(theme::label())
         .title_bottom(Line::from(Span::styled(foot, theme::dim())).centered());
@@ -162,12 +152,57 @@ pub fn render(frame: &mut Frame, area: Rect, keys: &[HelpLine], pad: &[HelpLine]
     frame.render_widget(Clear, rect);
     frame.render_widget(block, rect);
     let mut x = inner.x.saturating_add(1);
-    for (c, lines) in cols.iter().zip(rendered) {
-        let w = (c.width as u16).min(inner.right().saturating_sub(x));
-        frame.render_widget(Paragraph::new(lines), Rect { x, width: w, ..inner });
-        x = x.saturating_add(w + GAP as u16);
-        if x >= inner.right() {
-            break;
-        }
+    for lines in cols.into_iter().skip(page * per_page).take(per_page) {
+        let w = (col_w as u16).min(inner.right().saturating_sub(x));
+        frame.render_widget(
+            Paragraph::new(lines),
+            Rect {
+                x,
+                width: w,
+                ..inner
+            },
+        );
+        x = x.saturating_add(w).saturating_add(GAP as u16);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn lines(n: usize) -> Vec<HelpLine> {
+        (0..n)
+            .map(|i| HelpLine {
+                keys: format!("k{i}"),
+                action: format!("action number {i}"),
+            })
+            .collect()
+    }
+
+    #[test]
+    fn sections_start_a_new_column_when_they_do_not_fit() {
+        let k = lines(15);
+        let g = lines(8);
+        let cols = flow(
+            vec![section("Keyboard", &k, 30), section("Gamepad", &g, 30)],
+            20,
+        );
+        assert_eq!(cols.len(), 2);
+        assert_eq!(cols[0].len(), 16);
+        assert_eq!(cols[1].len(), 9);
+        // Everything fits in one column: a blank line separates the sections.
+        let cols = flow(
+            vec![section("Keyboard", &k, 30), section("Gamepad", &g, 30)],
+            40,
+        );
+        assert_eq!(cols.len(), 1);
+        assert_eq!(cols[0].len(), 26);
+    }
+
+    #[test]
+    fn tiny_heights_still_flow() {
+        let k = lines(3);
+        let cols = flow(vec![section("Keyboard", &k, 5)], 0);
+        assert!(cols.iter().all(|c| c.len() <= 1));
     }
 }

@@ -13,9 +13,13 @@ pub fn render(frame: &mut Frame, s: &AppState) {
     let area = frame.area();
     match &s.overlay {
         Overlay::None => {}
-        Overlay::Help => help::render(frame, area, &s.help_keys, &s.help_gamepad),
-        Overlay::Animations { selected } => palette::render(frame, area, "Animations", &s.animations, *selected),
-        Overlay::Sounds { selected } => palette::render(frame, area, "Sounds", &s.sounds, *selected),
+        Overlay::Help => help::render(frame, area, &s.help_keys, &s.help_gamepad, s.help_page),
+        Overlay::Animations { selected } => {
+            palette::render(frame, area, "Animations", &s.animations, *selected)
+        }
+        Overlay::Sounds { selected } => {
+            palette::render(frame, area, "Sounds", &s.sounds, *selected)
+        }
         Overlay::Filter { input } => filter::render(frame, area, input, &s.log.filter),
     }
 }

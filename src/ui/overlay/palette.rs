@@ -16,26 +16,54 @@ pub fn offset(selected: usize, len: usize, rows: usize) -> usize {
     if rows == 0 || len <= rows {
         return 0;
     }
-    selected.min(len - 1).saturating_sub(rows / 2).min(len - rows)
+    selected
+        .min(len - 1)
+        .saturating_sub(rows / 2)
+        .min(len - rows)
 }
 
 pub fn render(frame: &mut Frame, area: Rect, title: &str, entries: &[Entry], selected: usize) {
-    let name_w = entries.iter().map(|e| width(&e.name)).max().unwrap_or(0).min(48);
-    let w = (name_w + 14).max(36) as u16;
+    let name_w = entries
+        .iter()
+        .map(|e| width(&e.name))
+        .max()
+        .unwrap_or(0)
+        .min(48);
+    let w = (name_w + 14).max(40) as u16;
     let h = (entries.len() as u16).saturating_add(2).max(3);
-    let rect = centered(area, w.min(area.width.saturating_sub(2).max(1)), h.min(area.height.saturating_sub(2).max(1)));
+    let rect = centered(
+        area,
+        w.min(area.width.saturating_sub(2).max(1)),
+        h.min(area.height.saturating_sub(2).max(1)),
+    );
     let sel = selected.min(entries.len().saturating_sub(1));
     let mut block = theme::panel(Line::from(vec![
         Span::styled(format!(" {title} "), theme::bold()),
-        Span::styled(format!("{}/{} ", sel + usize::from(!entries.is_empty()), entries.len()), theme::dim()),
+        Span::styled(
+            format!(
+                "{}/{} ",
+                sel + usize::from(!entries.is_empty()),
+                entries.len()
+            ),
+            theme::dim(),
+        ),
     ]))
     .border_style(theme::label());
-    block = block.title_bottom(Line::from(Span::styled(" ↑↓ select · Enter play · Esc close ", theme::dim())).centered());
+    block = block.title_bottom(
+        Line::from(Span::styled(
+            " ↑↓ select · Enter play · Esc close ",
+            theme::dim(),
+        ))
+        .centered(),
+    );
     let inner = block.inner(rect);
     frame.render_widget(Clear, rect);
     frame.render_widget(block, rect);
     if entries.is_empty() {
-        frame.render_widget(Paragraph::new(Span::styled("no entries", theme::dim())), inner);
+        frame.render_widget(
+            Paragraph::new(Span::styled("no entries", theme::dim())),
+            inner,
+        );
         return;
     }
     let rows = inner.height as usize;
@@ -47,11 +75,19 @@ pub fn render(frame: &mut Frame, area: Rect, title: &str, entries: &[Entry], sel
         .skip(first)
         .take(rows)
         .map(|(i, e)| {
-            let text = format!("{} {:>5}  {}", if i == sel { "▶" } else { " " }, e.id, truncate(&clean(&e.name), text_w));
+            let text = format!(
+                "{} {:>5}  {}",
+                if i == sel { "▶" } else { " " },
+                e.id,
+                truncate(&clean(&e.name), text_w)
+            );
             if i == sel {
                 // Pad so the highlight spans the whole row.
                 let pad = (inner.width as usize).saturating_sub(width(&text));
-                Line::from(Span::styled(format!("{text}{}", " ".repeat(pad)), theme::selected()))
+                Line::from(Span::styled(
+                    format!("{text}{}", " ".repeat(pad)),
+                    theme::selected(),
+                ))
             } else {
                 Line::from(text)
             }

@@ -1,0 +1,113 @@
+//! Connecting to a real droid for `droidctl`/`drive` and `run`: scan, pick, check the model
+//! speaks what droidctl drives, and build the link. Errors are one line saying what to do.
+
+use super::CliError;
+use crate::link::Link;
+use crate::link::ble::{BleAddress, DeviceSelector, ScanEntry, connect_link};
+use crate::model::{Model, Protocol};
+use std::io::{BufRead, IsTerminal, Write};
+use std::time::Duration;
+
+/// The droid to drive, ready for `session::start`.
+pub struct Connected {
+    pub link: Box<dyn Link>,
+    pub model: Model,
+    pub name: String,
+    pub pacing: Duration,
+    pub chunk_size: usize,
+}
+
+/// Find and connect to a droid. With several supported droids in range and neither `name` nor
+/// `address` given, ask which one (when standard input is a terminal).
+pub async fn connect(name: Option<String>, address: Option<String>, scan_timeout: Duration) -> Result<Connected, CliError> {
+    let address = address
+        .map(|a| a.parse::<BleAddress>().map_err(|e| CliError::usage(format!("--address: {e}"))))
+        .transpose()?;
+    let explicit = name.is_some() || address.is_some();
+    let sel = DeviceSelector {
+        name,
+        address,
+        scan_timeout,
+    };
+    // Progress for people only: piped stderr gets just the outcome.
+    let chatty = std::io::stderr().is_terminal();
+    if chatty {
+        eprintln!("droidctl: scanning for droids ({} s)…", scan_timeout.as_secs());
+    }
+    let mut found = connect_link(&sel).await.map_err(|e| CliError::failure(e.message))?;
+    let drivable: Vec<&ScanEntry> = found
+        .candidates
+        .iter()
+        .filter(|c| c.model.is_some_and(|m| m.protocol() == Protocol::SpheroV2))
+        .collect();
+    if !explicit && drivable.len() > 1 && std::io::stdin().is_terminal() {
+        if let Some(choice) = pick(&drivable)? {
+            if choice != found.address {
+                let sel = DeviceSelector {
+                    name: None,
+                    address: Some(choice),
+                    scan_timeout,
+                };
+                found = connect_link(&sel).await.map_err(|e| CliError::failure(e.message))?;
+            }
+        }
+    }
+    if found.model.protocol() != Protocol::SpheroV2 {
+        return Err(CliError::failure(format!(
+            "{} ({}) speaks Sphero API {}, which droidctl can find but not yet drive — pick an R2-D2, R2-Q5 or BB-9E with --name, or try `--sim`",
+            found.name,
+            found.model.display_name(),
+            match found.model.protocol() {
+                Protocol::SpheroV1 => "v1",
+                _ => "RSRCP",
+            }
+        )));
+    }
+    if chatty {
+        eprintln!(
+            "droidctl: connecting to {} ({}, {})",
+            found.name,
+            found.model.display_name(),
+            found.address
+        );
+    }
+    let profile = found.link.profile().clone();
+    Ok(Connected {
+        model: found.model,
+        name: found.name.clone(),
+        pacing: profile.pacing,
+        chunk_size: profile.chunk_size,
+        link: Box::new(found.link),
+    })
+}
+
+/// A numbered list on stderr, an answer on stdin; Enter takes the strongest.
+fn pick(entries: &[&ScanEntry]) -> Result<Option<BleAddress>, CliError> {
+    let mut err = std::io::stderr();
+    let _ = writeln!(err, "Several droids are in range:");
+    for (i, e) in entries.iter().enumerate() {
+        let _ = writeln!(
+            err,
+            "  {}. {:<12} {:<8} {}  {}",
+            i + 1,
+            e.name.as_deref().unwrap_or("?"),
+            e.model.map(Model::display_name).unwrap_or("?"),
+            e.address,
+            e.rssi.map(|r| format!("{r} dBm")).unwrap_or_else(|| "-".into())
+        );
+    }
+    let _ = write!(err, "Which one? [1-{}, Enter = 1] ", entries.len());
+    let _ = err.flush();
+    let mut line = String::new();
+    if std::io::stdin().lock().read_line(&mut line).is_err() {
+        return Ok(None);
+    }
+    let t = line.trim();
+    if t.is_empty() {
+        return Ok(entries.first().map(|e| e.address));
+    }
+    match t.parse::<usize>() {
+        Ok(n) if (1..=entries.len()).contains(&n) => Ok(Some(entries[n - 1].address)),
+        _ => Err(CliError::usage(format!("{t:?} is not one of 1..={}", entries.len()))),
+    }
+}

@@ -1,0 +1,550 @@
+//! Snapshot tests of the terminal UI: deterministic application states (no clocks) rendered
+//! into ratatui's `TestBackend` at 80×24 and 160×48 (plus a few extra sizes and overlays),
+//! compared with the committed `.snap` files under `tests/snapshots/`. Snapshots hold the text
+//! only, so a few assertion tests below also check the styles that carry meaning (E-STOP,
+//! error lines), the help overlay's completeness, and that odd states and sizes never panic.
+//!
+//! Update after an intended change: `INSTA_UPDATE=always cargo test --test ui_snapshots`, then
+//! read every changed `.snap`.
+
+use droidctl::app::packet_log::{LogFilter, LogLine};
+use droidctl::app::state::{AppState, Focus, GamepadStatus, HelpLine, KeyboardMode, Overlay};
+use droidctl::config::Config;
+use droidctl::model::Model;
+use droidctl::protocol::v2::notify::Collision;
+use droidctl::protocol::v2::wire::{
+    AccelRaw, AudioMode, CollisionAxis, DriveFlags, LegAction, LegState,
+};
+use droidctl::protocol::v2::{Device, ErrorCode, Packet, cmd};
+use droidctl::session::{Direction, LinkState, LogEntry, LogItem};
+use droidctl::telemetry::{CollisionSeen, Stance};
+use droidctl::teleop::keymap::KeyMap;
+use droidctl::units::{HeadAngle, Heading};
+use ratatui::Terminal;
+use ratatui::backend::TestBackend;
+use ratatui::buffer::Buffer;
+use ratatui::style::Color;
+use std::path::PathBuf;
+use std::time::Duration;
+
+fn ms(v: u64) -> Duration {
+    Duration::from_millis(v)
+}
+
+/// The help lines as the app builds them from the shipped config (mirrors `app::run`).
+fn help_lines() -> (Vec<HelpLine>, Vec<HelpLine>) {
+    let config = Config::defaults();
+    let keymap = KeyMap::from_config(&config.keys).expect("shipped keymap is valid");
+    let line = |k: &str, a: &str| HelpLine {
+        keys: k.into(),
+        action: a.into(),
+    };
+    let mut keys: Vec<HelpLine> = keymap
+        .help()
+        .into_iter()
+        .map(|(k, a)| line(&k, a))
+        .collect();
+    keys.push(line("Ctrl+c", "quit (stops the droid first)"));
+    for (k, a) in [
+        ("↑ ↓ PgUp PgDn", "in the log: scroll"),
+        ("p", "in the log: pause / resume"),
+        ("d", "in the log: decoded / hex"),
+        ("/", "in the log: filter (in|out dev:NAME text)"),
+        ("c", "in the log: clear the filter"),
+        ("↑ ↓ Enter Esc", "in a palette: choose, play, close"),
+    ] {
+        keys.push(line(k, a));
+    }
+    let g = &config.gamepad;
+    let pad = vec![
+        line("left stick", "heading and speed (polar)"),
+        line("right stick X", "turn the dome"),
+        line("right trigger", "more speed, up to turbo"),
+        line(&g.tripod, "stance: tripod"),
+        line(&g.bipod, "stance: bipod"),
+        line(&g.estop, "EMERGENCY STOP (latched while held)"),
+        line(&g.animation, "play the selected animation"),
+        line(&g.help, "this help"),
+        line(
+            "D-pad",
+            &format!(
+                "sounds {} / {} / {} / {}",
+                g.sound_up, g.sound_down, g.sound_left, g.sound_right
+            ),
+        ),
+    ];
+    (keys, pad)
+}
+
+fn entry(at_ms: u64, dir: Direction, p: Packet) -> LogLine {
+    LogLine::from_entry(
+        &LogEntry {
+            at: ms(at_ms),
+            dir,
+            item: LogItem::Packet(p),
+        },
+        None,
+    )
+}
+
+/// Builds a log with advancing time and SEQ numbers.
+#[derive(Default)]
+struct Script {
+    t: u64,
+    seq: u8,
+    lines: Vec<LogLine>,
+}
+
+impl Script {
+    /// A command out and its response in, 35 ms later.
+    fn exchange(&mut self, c: droidctl::protocol::v2::Command, err: ErrorCode, data: Vec<u8>) {
+        let p = c.to_packet(self.seq);
+        self.seq = self.seq.wrapping_add(1);
+        self.t += 120;
+        self.lines.push(entry(self.t, Direction::Out, p.clone()));
+        self.t += 35;
+        self.lines.push(entry(
+            self.t,
+            Direction::In,
+            Packet::response_to(&p, err, data),
+        ));
+    }
+
+    fn ok(&mut self, c: droidctl::protocol::v2::Command) {
+        self.exchange(c, ErrorCode::Success, vec![]);
+    }
+
+    fn notify(&mut self, p: Packet) {
+        self.t += 20;
+        self.lines.push(entry(self.t, Direction::In, p));
+    }
+}
+
+/// A realistic session: setup, driving, dome, sound, sensor stream, one error response.
+fn session_log() -> Vec<LogLine> {
+    let mut s = Script::default();
+    s.ok(cmd::wake());
+    s.ok(cmd::perform_leg_action(LegAction::Tripod));
+    s.ok(cmd::set_sensor_streaming_mask(
+        100,
+        0,
+        droidctl::protocol::v2::wire::Mask(0x0007_0000),
+    ));
+    let h90 = Heading::new(90).expect("valid heading");
+    s.ok(cmd::drive_with_heading(100, h90, DriveFlags::empty()));
+    s.ok(cmd::set_head_position(
+        HeadAngle::new(30.0).expect("in range"),
+    ));
+    s.ok(cmd::play_audio_file(1915, AudioMode::Immediate));
+    // The droid refuses an animation id it does not have.
+    s.exchange(
+        cmd::play_animation(999),
+        ErrorCode::BadParameterValue,
+        vec![],
+    );
+    let sensor = Device::parse("sensor").expect("sensor device");
+    let mut data = Vec::new();
+    for f in [2.5f32, -1.25, 87.0] {
+        data.extend_from_slice(&f.to_be_bytes());
+    }
+    s.notify(Packet::notification(sensor, 0x02, data));
+    s.notify(Packet::notification(sensor, 0x12, collision().encode()));
+    s.ok(cmd::drive_with_heading(120, h90, DriveFlags::TURBO));
+    s.exchange(
+        cmd::get_head_position(),
+        ErrorCode::Success,
+        25.4f32.to_be_bytes().to_vec(),
+    );
+    s.lines
+}
+
+fn collision() -> Collision {
+    Collision {
+        accel: [AccelRaw(5120), AccelRaw(-1230), AccelRaw(300)],
+        axis: CollisionAxis { x: true, y: false },
+        power: [180, -40, 0],
+        speed: 92,
+        time_ms: 123_456,
+    }
+}
+
+/// Connected, driving at 100 towards 90°, telemetry and log populated.
+fn driving() -> AppState {
+    let mut s = AppState::new(Model::R2D2, "D2-1A2B".into());
+    let (keys, pad) = help_lines();
+    s.help_keys = keys;
+    s.help_gamepad = pad;
+    s.now = Duration::from_secs(42);
+    s.link = LinkState::Connected;
+    s.stats.sent = 812;
+    s.stats.received = 1604;
+    s.stats.errors = 1;
+    s.rate_in = 9.8;
+    s.rate_out = 10.0;
+    s.gamepad = GamepadStatus::Connected("Xbox Wireless Controller".into());
+    s.keyboard = KeyboardMode::ReleaseEvents;
+    s.log_path = Some(PathBuf::from(
+        "/home/pilot/.local/state/droidctl/logs/2025-01-01T12-00-00-D2-1A2B.jsonl",
+    ));
+    let t = &mut s.telemetry;
+    t.pitch = Some(2.5);
+    t.roll = Some(-1.25);
+    t.yaw = Some(87.0);
+    t.accel = Some([0.02, -0.01, 0.98]);
+    t.gyro = Some([1.5, -3.0, 12.0]);
+    t.velocity_cm_s = Some([30.0, 40.0]);
+    t.head_deg = Some(25.4);
+    t.battery_v = Some(3.92);
+    t.battery_voltage_state = Some(1);
+    t.stance = Stance::Tripod;
+    t.samples = 400;
+    // An L-shaped run: 120 cm north, then curving east.
+    for i in 0..=40 {
+        t.track.push_back((0.0, i as f32 * 3.0));
+    }
+    for i in 1..=30 {
+        let a = (i as f32 / 30.0) * std::f32::consts::FRAC_PI_2;
+        t.track
+            .push_back((60.0 - 60.0 * a.cos(), 120.0 + 60.0 * a.sin()));
+    }
+    let (x, y) = *t.track.back().expect("track");
+    t.x_cm = Some(x);
+    t.y_cm = Some(y);
+    let c = &mut s.control;
+    c.speed = 100;
+    c.heading = Heading::new(90).expect("valid");
+    c.deadman = false;
+    c.head_target = 30.0;
+    c.source = "keyboard";
+    for l in session_log() {
+        s.log.push(l);
+    }
+    s
+}
+
+fn reconnecting() -> AppState {
+    let mut s = driving();
+    s.link = LinkState::Reconnecting {
+        attempt: 2,
+        reason: "device disconnected".into(),
+    };
+    s.rate_in = 0.0;
+    s.rate_out = 0.0;
+    s.control.speed = 0;
+    s.control.deadman = true;
+    s.show_hint(
+        "link lost: the droid stops by itself; reconnecting",
+        Duration::from_secs(5),
+    );
+    s
+}
+
+/// 0.3 s after a bump, e-stop latched, battery low.
+fn collision_flash() -> AppState {
+    let mut s = driving();
+    s.telemetry.collisions = 3;
+    s.telemetry.last_collision = Some(CollisionSeen {
+        at: s.now - ms(300),
+        collision: collision(),
+    });
+    s.control.estop = true;
+    s.control.speed = 0;
+    s.telemetry.battery_v = Some(3.55);
+    s.telemetry.battery_voltage_state = Some(2);
+    s.telemetry.stance = Stance::Transitioning(LegState::Bipod);
+    s
+}
+
+fn help() -> AppState {
+    let mut s = driving();
+    s.overlay = Overlay::Help;
+    s
+}
+
+/// Log focused, paused, filtered on the animatronic device (commands out, responses in,
+/// one error response).
+fn filtered() -> AppState {
+    let mut s = driving();
+    s.focus = Focus::Log;
+    s.log.set_filter(LogFilter::parse("dev:animatronic"));
+    s.log.paused = true;
+    s
+}
+
+fn render(state: &AppState, w: u16, h: u16) -> Terminal<TestBackend> {
+    let mut term = Terminal::new(TestBackend::new(w, h)).expect("test backend");
+    term.draw(|f| droidctl::ui::draw(f, state)).expect("draw");
+    term
+}
+
+fn rows(buf: &Buffer) -> Vec<String> {
+    let w = buf.area.width as usize;
+    buf.content
+        .chunks(w.max(1))
+        .map(|row| row.iter().map(|c| c.symbol()).collect())
+        .collect()
+}
+
+macro_rules! snap {
+    ($name:ident, $state:expr, $w:expr, $h:expr) => {
+        #[test]
+        fn $name() {
+            let term = render(&$state, $w, $h);
+            insta::assert_snapshot!(stringify!($name), term.backend());
+        }
+    };
+}
+
+snap!(driving_80x24, driving(), 80, 24);
+snap!(driving_160x48, driving(), 160, 48);
+snap!(reconnecting_80x24, reconnecting(), 80, 24);
+snap!(reconnecting_160x48, reconnecting(), 160, 48);
+snap!(collision_80x24, collision_flash(), 80, 24);
+snap!(collision_160x48, collision_flash(), 160, 48);
+snap!(help_80x24, help(), 80, 24);
+snap!(help_160x48, help(), 160, 48);
+snap!(filtered_log_80x24, filtered(), 80, 24);
+snap!(filtered_log_160x48, filtered(), 160, 48);
+snap!(driving_120x36, driving(), 120, 36);
+snap!(driving_200x60, driving(), 200, 60);
+snap!(
+    help_page2_80x24,
+    {
+        let mut s = help();
+        s.help_page = 1;
+        s
+    },
+    80,
+    24
+);
+snap!(
+    animations_palette_80x24,
+    {
+        let mut s = driving();
+        s.overlay = Overlay::Animations { selected: 20 };
+        s
+    },
+    80,
+    24
+);
+snap!(
+    filter_prompt_80x24,
+    {
+        let mut s = filtered();
+        s.overlay = Overlay::Filter {
+            input: "in dev:power batt".into(),
+        };
+        s
+    },
+    80,
+    24
+);
+snap!(
+    bb9e_hex_log_80x24,
+    {
+        let mut s = driving();
+        s.model = Model::BB9E;
+        s.droid_name = "GB-77AA".into();
+        s.telemetry.stance = Stance::Unknown;
+        s.log.decoded = false;
+        s
+    },
+    80,
+    24
+);
+snap!(
+    empty_state_80x24,
+    AppState::new(Model::R2D2, "D2-0000".into()),
+    80,
+    24
+);
+
+/// Words of `needle` appear in order in `hay` (a description wrapped over lines, with
+/// another column's text between its pieces, still counts).
+fn words_in_order(hay: &[String], needle: &str) -> bool {
+    let text = hay.join(" ");
+    let mut words = text.split_whitespace();
+    needle.split_whitespace().all(|w| words.any(|h| h == w))
+}
+
+#[test]
+fn help_overlay_lists_every_key_binding_at_80x24() {
+    let s = help();
+    let page1 = rows(render(&s, 80, 24).backend().buffer());
+    for h in &s.help_keys {
+        assert!(
+            words_in_order(&page1, &h.action),
+            "missing {:?} in\n{}",
+            h.action,
+            page1.join("\n")
+        );
+        assert!(
+            page1.iter().any(|r| r.contains(&h.keys)),
+            "missing keys {:?}",
+            h.keys
+        );
+    }
+    // Descriptions that fit their column stay on one line.
+    assert!(page1.iter().any(|r| r.contains("drive forward (hold)")));
+    let mut s2 = s.clone();
+    s2.help_page = 1;
+    let page2 = rows(render(&s2, 80, 24).backend().buffer());
+    for h in &s.help_gamepad {
+        assert!(
+            words_in_order(&page2, &h.action),
+            "missing {:?} in\n{}",
+            h.action,
+            page2.join("\n")
+        );
+    }
+    // At 160×48 everything is on one page.
+    let big = rows(render(&s, 160, 48).backend().buffer());
+    for h in s.help_keys.iter().chain(&s.help_gamepad) {
+        assert!(
+            big.iter().any(|r| r.contains(&h.action)),
+            "missing {:?}",
+            h.action
+        );
+    }
+}
+
+#[test]
+fn alarms_are_styled() {
+    let term = render(&collision_flash(), 80, 24);
+    let buf = term.backend().buffer();
+    let text = rows(buf);
+    let (y, row) = text
+        .iter()
+        .enumerate()
+        .find(|(_, r)| r.contains("E-STOP"))
+        .expect("E-STOP shown");
+    let x = row.chars().take_while(|_| true).collect::<Vec<_>>();
+    let col = x.iter().position(|&c| c == 'E').expect("E") as u16;
+    assert_eq!(buf[(col, y as u16)].bg, Color::Red);
+    let (y, row) = text
+        .iter()
+        .enumerate()
+        .find(|(_, r)| r.contains("COLLISION!"))
+        .expect("flash");
+    let col = row.chars().position(|c| c == 'C').expect("C") as u16;
+    assert_eq!(buf[(col, y as u16)].bg, Color::Red);
+    // The error response in the log is red.
+    let (y, row) = text
+        .iter()
+        .enumerate()
+        .find(|(_, r)| r.contains("bad_param"))
+        .expect("error line");
+    let col = row.chars().position(|c| c == '<').expect("arrow") as u16;
+    assert_eq!(buf[(col, y as u16)].fg, Color::Red);
+}
+
+#[test]
+fn reconnecting_is_highlighted() {
+    let term = render(&reconnecting(), 80, 24);
+    let buf = term.backend().buffer();
+    let row = &rows(buf)[0];
+    assert!(row.contains("reconnecting (attempt 2)"));
+    let col = row.chars().position(|c| c == 'r').expect("r") as u16;
+    assert_eq!(buf[(col, 0)].bg, Color::Yellow);
+}
+
+/// A state with every number out of range: NaN, infinities, huge values, indexes past the end.
+fn hostile() -> AppState {
+    let mut s = driving();
+    let t = &mut s.telemetry;
+    t.pitch = Some(f32::NAN);
+    t.roll = Some(f32::INFINITY);
+    t.yaw = Some(f32::NEG_INFINITY);
+    t.accel = Some([f32::NAN, f32::MAX, f32::MIN]);
+    t.gyro = Some([f32::INFINITY, f32::NAN, 1e30]);
+    t.velocity_cm_s = Some([f32::NAN, f32::INFINITY]);
+    t.x_cm = Some(f32::MAX);
+    t.y_cm = Some(f32::NAN);
+    t.head_deg = Some(f32::NEG_INFINITY);
+    t.battery_v = Some(f32::NAN);
+    t.battery_voltage_state = Some(200);
+    t.track.push_back((f32::NAN, 1.0));
+    t.track.push_back((f32::MAX, f32::MIN));
+    t.track.push_back((f32::INFINITY, 0.0));
+    t.last_collision = Some(CollisionSeen {
+        at: Duration::MAX,
+        collision: Collision {
+            accel: [AccelRaw(i16::MIN), AccelRaw(i16::MAX), AccelRaw(0)],
+            power: [i16::MIN, i16::MAX, 0],
+            ..collision()
+        },
+    });
+    t.collisions = u32::MAX;
+    s.control.head_target = f32::NAN;
+    s.rate_in = f32::INFINITY;
+    s.rate_out = f32::NAN;
+    s.stats.errors = u64::MAX;
+    s.droid_name = "\u{1b}[2J evil\nname \u{7}".repeat(10);
+    s.link = LinkState::Closed {
+        reason: Some("x".repeat(500)),
+    };
+    s.log.scroll = usize::MAX;
+    s.help_page = usize::MAX;
+    s
+}
+
+#[test]
+fn never_panics_at_any_size_or_state() {
+    let mut states = vec![
+        AppState::new(Model::R2D2, String::new()),
+        driving(),
+        hostile(),
+    ];
+    for base in [
+        driving(),
+        hostile(),
+        AppState::new(Model::BB9E, "GB".into()),
+    ] {
+        for overlay in [
+            Overlay::Help,
+            Overlay::Animations {
+                selected: usize::MAX,
+            },
+            Overlay::Sounds { selected: 3 },
+            Overlay::Filter {
+                input: "in dev:x ".repeat(40),
+            },
+        ] {
+            let mut s = base.clone();
+            s.overlay = overlay;
+            states.push(s);
+        }
+    }
+    let mut empty_palette = driving();
+    empty_palette.animations.clear();
+    empty_palette.overlay = Overlay::Animations { selected: 5 };
+    states.push(empty_palette);
+    let sizes = [
+        (1, 1),
+        (2, 2),
+        (20, 5),
+        (5, 20),
+        (40, 10),
+        (59, 15),
+        (60, 16),
+        (79, 23),
+        (80, 24),
+        (149, 39),
+        (150, 40),
+        (300, 3),
+        (3, 100),
+        (250, 80),
+    ];
+    for s in &states {
+        for (w, h) in sizes {
+            render(s, w, h);
+        }
+    }
+}
+
+#[test]
+fn hostile_values_print_bounded() {
+    let text = rows(render(&hostile(), 160, 48).backend().buffer()).join("\n");
+    assert!(text.contains("NaN"));
+    assert!(!text.contains('\u{1b}'));
+}
