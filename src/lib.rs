@@ -19,5 +19,5 @@ pub mod setup;
 pub mod sim;
 pub mod telemetry;
 pub mod teleop;
-pub mod units;
 pub mod ui;
+pub mod units;

@@ -72,6 +72,9 @@ pub struct Summary {
     pub failed_steps: u32,
     pub x_cm: Option<f32>,
     pub y_cm: Option<f32>,
+    /// The heading of the last drive command: a final stop must keep it, or the droid turns.
+    #[serde(skip)]
+    pub last_heading: Heading,
 }
 
 /// What the runner reports as it goes.
@@ -196,10 +199,11 @@ impl Runner {
             let step = (end - now).min(self.opts.heartbeat);
             sleep(step).await;
             if let Some((speed, heading)) = self.driving
-                && Instant::now() < end {
-                    self.session
-                        .set(Slot::Drive, Self::drive_cmd(speed, heading));
-                }
+                && Instant::now() < end
+            {
+                self.session
+                    .set(Slot::Drive, Self::drive_cmd(speed, heading));
+            }
         }
     }
 
@@ -378,12 +382,13 @@ pub async fn run(
         tokio::spawn(async move {
             if model.has_legs()
                 && let Ok(p) = session.request(cmd::get_leg_action()).await
-                    && let Some(s) = p.data.first().and_then(|b| LegState::from_byte(*b)) {
-                        let mut t = lock(&telemetry);
-                        if t.stance == crate::telemetry::Stance::Unknown {
-                            t.stance = crate::telemetry::Stance::from_state(s);
-                        }
-                    }
+                && let Some(s) = p.data.first().and_then(|b| LegState::from_byte(*b))
+            {
+                let mut t = lock(&telemetry);
+                if t.stance == crate::telemetry::Stance::Unknown {
+                    t.stance = crate::telemetry::Stance::from_state(s);
+                }
+            }
             loop {
                 if let Ok(p) = session.request(cmd::get_battery_voltage()).await
                     && let Some(v) = catalog::decode_fields(
@@ -394,9 +399,9 @@ pub async fn run(
                     )
                     .ok()
                     .and_then(|f| f.first().and_then(|(_, v)| v.as_f64()))
-                    {
-                        lock(&telemetry).battery_v = Some(v as f32);
-                    }
+                {
+                    lock(&telemetry).battery_v = Some(v as f32);
+                }
                 sleep(every).await;
             }
         })
@@ -460,10 +465,10 @@ pub async fn run(
         failed_steps: runner.failed,
         x_cm: t.x_cm,
         y_cm: t.y_cm,
+        last_heading: runner.last_heading,
     };
-    if closed
-        && let LinkState::Closed { reason: Some(r) } = session.state() {
-            return Err(MissionError(r));
-        }
+    if closed && let LinkState::Closed { reason: Some(r) } = session.state() {
+        return Err(MissionError(r));
+    }
     Ok(summary)
 }

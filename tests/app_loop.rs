@@ -56,7 +56,11 @@ async fn start(release: ReleaseMode, faults: Faults, pacing_ms: u64) -> Harness 
                 if let (Direction::Out, LogItem::Packet(p)) = (dir, item) {
                     if (p.did, p.cid) == (0x16, 0x07) {
                         let Packet { data, .. } = p;
-                        drives.lock().unwrap().push((start.elapsed(), data[0], u16::from_be_bytes([data[1], data[2]])));
+                        drives.lock().unwrap().push((
+                            start.elapsed(),
+                            data[0],
+                            u16::from_be_bytes([data[1], data[2]]),
+                        ));
                     }
                 }
             }
@@ -77,12 +81,27 @@ async fn start(release: ReleaseMode, faults: Faults, pacing_ms: u64) -> Harness 
     let s = session.clone();
     let app = tokio::spawn(async move {
         let mut terminal = Terminal::new(TestBackend::new(80, 24)).unwrap();
-        let inputs = AppInputs { term: term_rx, pad: pad_rx, quit: quit_rx };
-        run::run(&mut terminal, s, opts, inputs, no_draw).await.unwrap()
+        let inputs = AppInputs {
+            term: term_rx,
+            pad: pad_rx,
+            quit: quit_rx,
+        };
+        run::run(&mut terminal, s, opts, inputs, no_draw)
+            .await
+            .unwrap()
     });
     // Let it connect and stand up in tripod (the setup asks for it; a stance takes ~2 s).
     sleep(Duration::from_secs(3)).await;
-    Harness { term, pad, quit, session, probe, drives, app, start }
+    Harness {
+        term,
+        pad,
+        quit,
+        session,
+        probe,
+        drives,
+        app,
+        start,
+    }
 }
 
 fn key(c: char) -> Key {
@@ -91,16 +110,34 @@ fn key(c: char) -> Key {
 
 impl Harness {
     async fn press(&self, k: Key) {
-        self.term.send(TermEvent::Key { key: k, kind: KeyKind::Press }).await.unwrap();
+        self.term
+            .send(TermEvent::Key {
+                key: k,
+                kind: KeyKind::Press,
+            })
+            .await
+            .unwrap();
     }
     async fn release(&self, k: Key) {
-        self.term.send(TermEvent::Key { key: k, kind: KeyKind::Release }).await.unwrap();
+        self.term
+            .send(TermEvent::Key {
+                key: k,
+                kind: KeyKind::Release,
+            })
+            .await
+            .unwrap();
     }
     fn now(&self) -> Duration {
         self.start.elapsed()
     }
     fn drives_between(&self, from: Duration, to: Duration) -> Vec<(Duration, u8, u16)> {
-        self.drives.lock().unwrap().iter().copied().filter(|d| d.0 >= from && d.0 < to).collect()
+        self.drives
+            .lock()
+            .unwrap()
+            .iter()
+            .copied()
+            .filter(|d| d.0 >= from && d.0 < to)
+            .collect()
     }
     fn last_drive(&self) -> Option<(Duration, u8, u16)> {
         self.drives.lock().unwrap().last().copied()
@@ -117,16 +154,28 @@ async fn holding_forward_drives_at_the_tick_rate_and_release_stops() {
     sleep(Duration::from_secs(2)).await;
     let sent = h.drives_between(t0, h.now());
     // 10 Hz for 2 s, each with the cruise speed.
-    assert!((19..=22).contains(&sent.len()), "{} drives: {sent:?}", sent.len());
+    assert!(
+        (19..=22).contains(&sent.len()),
+        "{} drives: {sent:?}",
+        sent.len()
+    );
     assert!(sent.iter().all(|d| d.1 == 100));
     assert!(h.probe.state().y_cm > 30.0, "{:?}", h.probe.state());
     let released = h.now();
     h.release(key('w')).await;
     sleep(Duration::from_millis(50)).await;
     let after = h.drives_between(released, h.now());
-    assert_eq!(after.iter().map(|d| d.1).collect::<Vec<_>>(), vec![0], "stop sent at once on release");
+    assert_eq!(
+        after.iter().map(|d| d.1).collect::<Vec<_>>(),
+        vec![0],
+        "stop sent at once on release"
+    );
     sleep(Duration::from_secs(1)).await;
-    assert!(h.drives_between(released + Duration::from_millis(50), h.now()).is_empty(), "nothing while idle");
+    assert!(
+        h.drives_between(released + Duration::from_millis(50), h.now())
+            .is_empty(),
+        "nothing while idle"
+    );
     h.quit.send("test".into()).await.unwrap();
     let exit = h.app.await.unwrap();
     assert_eq!(exit.reason, ExitReason::Signal("test".into()));
@@ -134,17 +183,27 @@ async fn holding_forward_drives_at_the_tick_rate_and_release_stops() {
 
 #[tokio::test(start_paused = true)]
 async fn emulated_release_stops_when_repeats_stop() {
-    let mode = ReleaseMode::Emulated { first: Duration::from_millis(650), repeat: Duration::from_millis(120) };
+    let mode = ReleaseMode::Emulated {
+        first: Duration::from_millis(650),
+        repeat: Duration::from_millis(120),
+    };
     let h = start(mode, Faults::none(), 5).await;
     // One tap, no repeats: held until the first timeout, then a stop.
     let t0 = h.now();
     h.press(key('w')).await;
     sleep(Duration::from_millis(600)).await;
-    assert!(h.last_drive().unwrap().1 > 0, "still driving before the first timeout");
+    assert!(
+        h.last_drive().unwrap().1 > 0,
+        "still driving before the first timeout"
+    );
     sleep(Duration::from_millis(100)).await;
     let stop = h.last_drive().unwrap();
     assert_eq!(stop.1, 0);
-    assert!(stop.0 - t0 >= Duration::from_millis(650) && stop.0 - t0 < Duration::from_millis(700), "{:?}", stop.0 - t0);
+    assert!(
+        stop.0 - t0 >= Duration::from_millis(650) && stop.0 - t0 < Duration::from_millis(700),
+        "{:?}",
+        stop.0 - t0
+    );
     // Auto-repeat every 33 ms keeps it going; when repeats stop it stops within ~120 ms.
     let t1 = h.now();
     h.press(key('w')).await;
@@ -158,7 +217,11 @@ async fn emulated_release_stops_when_repeats_stop() {
     sleep(Duration::from_millis(200)).await;
     let stop = h.last_drive().unwrap();
     assert_eq!(stop.1, 0);
-    assert!(stop.0 - last_repeat <= Duration::from_millis(130), "{:?}", stop.0 - last_repeat);
+    assert!(
+        stop.0 - last_repeat <= Duration::from_millis(130),
+        "{:?}",
+        stop.0 - last_repeat
+    );
     h.quit.send("test".into()).await.unwrap();
     h.app.await.unwrap();
 }
@@ -177,7 +240,11 @@ async fn focus_loss_releases_every_key() {
     assert_eq!(stop.1, 0);
     assert!(stop.0 - lost < Duration::from_millis(20));
     sleep(Duration::from_secs(1)).await;
-    assert_eq!(h.drives_between(lost + Duration::from_millis(20), h.now()).len(), 0);
+    assert_eq!(
+        h.drives_between(lost + Duration::from_millis(20), h.now())
+            .len(),
+        0
+    );
     h.quit.send("test".into()).await.unwrap();
     h.app.await.unwrap();
 }
@@ -216,9 +283,15 @@ async fn quitting_sends_a_stop_first() {
     let exit = (&mut h.app).await.unwrap();
     assert_eq!(exit.reason, ExitReason::Quit);
     assert_eq!(exit.stop.data[0], 0);
-    h.session.shutdown(run::exit_commands(exit.stop, false)).await;
+    h.session
+        .shutdown(run::exit_commands(exit.stop, false))
+        .await;
     sleep(Duration::from_millis(10)).await;
-    assert_eq!(h.last_drive().unwrap().1, 0, "the last command written is a stop");
+    assert_eq!(
+        h.last_drive().unwrap().1,
+        0,
+        "the last command written is a stop"
+    );
     sleep(Duration::from_secs(1)).await;
     assert!(h.probe.state().velocity_cm_s.abs() < 1.0);
 }
@@ -226,7 +299,10 @@ async fn quitting_sends_a_stop_first() {
 #[tokio::test(start_paused = true)]
 async fn gamepad_drives_and_unplug_stops() {
     let h = start(REPORTED, Faults::none(), 5).await;
-    h.pad.send(PadEvent::Connected("Test Pad".into())).await.unwrap();
+    h.pad
+        .send(PadEvent::Connected("Test Pad".into()))
+        .await
+        .unwrap();
     h.pad.send(PadEvent::Axis(Axis::LeftX, 1.0)).await.unwrap();
     sleep(Duration::from_millis(500)).await;
     let d = h.last_drive().unwrap();
@@ -237,7 +313,10 @@ async fn gamepad_drives_and_unplug_stops() {
     sleep(Duration::from_millis(20)).await;
     assert_eq!(h.drives_between(t, h.now()).last().map(|d| d.1), Some(0));
     // Stick back in the deadzone works the same.
-    h.pad.send(PadEvent::Connected("Test Pad".into())).await.unwrap();
+    h.pad
+        .send(PadEvent::Connected("Test Pad".into()))
+        .await
+        .unwrap();
     h.pad.send(PadEvent::Axis(Axis::LeftY, 1.0)).await.unwrap();
     sleep(Duration::from_millis(300)).await;
     assert!(h.last_drive().unwrap().1 > 0);
@@ -251,7 +330,10 @@ async fn gamepad_drives_and_unplug_stops() {
 
 #[tokio::test(start_paused = true)]
 async fn link_loss_drops_speed_and_reconnects() {
-    let faults = Faults { disconnect_at: vec![Duration::from_secs(5)], ..Faults::none() };
+    let faults = Faults {
+        disconnect_at: vec![Duration::from_secs(5)],
+        ..Faults::none()
+    };
     let h = start(REPORTED, faults, 5).await;
     h.press(key('w')).await;
     let mut states = h.session.watch_state();
@@ -259,7 +341,10 @@ async fn link_loss_drops_speed_and_reconnects() {
     tokio::time::timeout(Duration::from_secs(5), async {
         loop {
             states.changed().await.unwrap();
-            if matches!(*states.borrow(), droidctl::session::LinkState::Reconnecting { .. }) {
+            if matches!(
+                *states.borrow(),
+                droidctl::session::LinkState::Reconnecting { .. }
+            ) {
                 break;
             }
         }
@@ -272,4 +357,24 @@ async fn link_loss_drops_speed_and_reconnects() {
     h.quit.send("test".into()).await.unwrap();
     let exit = h.app.await.unwrap();
     assert_eq!(exit.state.link, droidctl::session::LinkState::Connected);
+}
+
+#[tokio::test(start_paused = true)]
+async fn quick_taps_of_one_shot_keys_each_count_with_emulated_release() {
+    let mode = ReleaseMode::Emulated {
+        first: Duration::from_millis(650),
+        repeat: Duration::from_millis(120),
+    };
+    let h = start(mode, Faults::none(), 5).await;
+    // `?` opens help, a second tap 100 ms later closes it, then `q` quits.
+    h.press(key('?')).await;
+    sleep(Duration::from_millis(100)).await;
+    h.press(key('?')).await;
+    sleep(Duration::from_millis(100)).await;
+    h.press(key('q')).await;
+    let exit = tokio::time::timeout(Duration::from_secs(2), h.app)
+        .await
+        .expect("quit")
+        .unwrap();
+    assert_eq!(exit.reason, ExitReason::Quit);
 }

@@ -10,13 +10,19 @@ fn check(args: &[&str]) {
     std::fs::create_dir_all(&dir).unwrap();
     let script = dir.join("m.txt");
     std::fs::write(&script, "wake\ndrive 50 0 for 1s\n").unwrap();
-    let args: Vec<String> = args.iter().map(|a| a.replace("SCRIPT", script.to_str().unwrap())).collect();
+    let args: Vec<String> = args
+        .iter()
+        .map(|a| a.replace("SCRIPT", script.to_str().unwrap()))
+        .collect();
     let start = Instant::now();
     let out = Command::new(env!("CARGO_BIN_EXE_droidctl"))
         .args(&args)
         .env("DROIDCTL_LOG_FILE", dir.join("log"))
         .env("DROIDCTL_CONFIG", dir.join("config.toml"))
-        .env("DBUS_SYSTEM_BUS_ADDRESS", "unix:path=/nonexistent/droidctl-test-bus")
+        .env(
+            "DBUS_SYSTEM_BUS_ADDRESS",
+            "unix:path=/nonexistent/droidctl-test-bus",
+        )
         .env("RUST_BACKTRACE", "1")
         .stdin(Stdio::null())
         .output()
@@ -25,10 +31,17 @@ fn check(args: &[&str]) {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(1), "{args:?}: {stderr}");
     assert!(took < Duration::from_secs(10), "{args:?} took {took:?}");
-    assert_eq!(stderr.trim_end().lines().count(), 1, "{args:?}: one line: {stderr}");
+    assert_eq!(
+        stderr.trim_end().lines().count(),
+        1,
+        "{args:?}: one line: {stderr}"
+    );
     assert!(stderr.contains("--sim"), "{args:?}: {stderr}");
     assert!(!stderr.contains("panicked"), "{args:?}: {stderr}");
-    assert!(out.stdout.is_empty() || !String::from_utf8_lossy(&out.stdout).contains("\x1b[?1049h"), "no TUI started");
+    assert!(
+        out.stdout.is_empty() || !String::from_utf8_lossy(&out.stdout).contains("\x1b[?1049h"),
+        "no TUI started"
+    );
 }
 
 #[test]

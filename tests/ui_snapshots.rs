@@ -352,6 +352,7 @@ snap!(
     80,
     24
 );
+snap!(tiny_40x12, driving(), 40, 12);
 snap!(
     empty_state_80x24,
     AppState::new(Model::R2D2, "D2-0000".into()),

@@ -83,13 +83,40 @@ mod tests {
 
     #[test]
     fn converts_keys() {
-        let k = key_from_crossterm(&ev(CtCode::Char('q'), KeyModifiers::SHIFT, KeyEventKind::Press));
+        let k = key_from_crossterm(&ev(
+            CtCode::Char('q'),
+            KeyModifiers::SHIFT,
+            KeyEventKind::Press,
+        ));
         assert_eq!(k, Some((Key::ch('Q'), KeyKind::Press)));
-        let k = key_from_crossterm(&ev(CtCode::Char(' '), KeyModifiers::NONE, KeyEventKind::Release));
+        let k = key_from_crossterm(&ev(
+            CtCode::Char(' '),
+            KeyModifiers::NONE,
+            KeyEventKind::Release,
+        ));
         assert_eq!(k, Some((Key::plain(KeyCode::Space), KeyKind::Release)));
-        let k = key_from_crossterm(&ev(CtCode::Char('c'), KeyModifiers::CONTROL, KeyEventKind::Press));
-        assert_eq!(k, Some((Key { code: KeyCode::Char('c'), ctrl: true }, KeyKind::Press)));
-        assert_eq!(key_from_crossterm(&ev(CtCode::Insert, KeyModifiers::NONE, KeyEventKind::Press)), None);
-        assert_eq!(from_crossterm(&Event::FocusLost), Some(TermEvent::FocusLost));
+        let k = key_from_crossterm(&ev(
+            CtCode::Char('c'),
+            KeyModifiers::CONTROL,
+            KeyEventKind::Press,
+        ));
+        assert_eq!(
+            k,
+            Some((
+                Key {
+                    code: KeyCode::Char('c'),
+                    ctrl: true
+                },
+                KeyKind::Press
+            ))
+        );
+        assert_eq!(
+            key_from_crossterm(&ev(CtCode::Insert, KeyModifiers::NONE, KeyEventKind::Press)),
+            None
+        );
+        assert_eq!(
+            from_crossterm(&Event::FocusLost),
+            Some(TermEvent::FocusLost)
+        );
     }
 }

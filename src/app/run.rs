@@ -110,17 +110,44 @@ fn help_lines(config: &Config, keymap: &KeyMap) -> (Vec<HelpLine>, Vec<HelpLine>
     }
     let g = &config.gamepad;
     let pad = vec![
-        HelpLine { keys: "left stick".into(), action: "heading and speed (polar)".into() },
-        HelpLine { keys: "right stick X".into(), action: "turn the dome".into() },
-        HelpLine { keys: "right trigger".into(), action: "more speed, up to turbo".into() },
-        HelpLine { keys: g.tripod.clone(), action: "stance: tripod".into() },
-        HelpLine { keys: g.bipod.clone(), action: "stance: bipod".into() },
-        HelpLine { keys: g.estop.clone(), action: "EMERGENCY STOP (latched while held)".into() },
-        HelpLine { keys: g.animation.clone(), action: "play the selected animation".into() },
-        HelpLine { keys: g.help.clone(), action: "this help".into() },
+        HelpLine {
+            keys: "left stick".into(),
+            action: "heading and speed (polar)".into(),
+        },
+        HelpLine {
+            keys: "right stick X".into(),
+            action: "turn the dome".into(),
+        },
+        HelpLine {
+            keys: "right trigger".into(),
+            action: "more speed, up to turbo".into(),
+        },
+        HelpLine {
+            keys: g.tripod.clone(),
+            action: "stance: tripod".into(),
+        },
+        HelpLine {
+            keys: g.bipod.clone(),
+            action: "stance: bipod".into(),
+        },
+        HelpLine {
+            keys: g.estop.clone(),
+            action: "EMERGENCY STOP (latched while held)".into(),
+        },
+        HelpLine {
+            keys: g.animation.clone(),
+            action: "play the selected animation".into(),
+        },
+        HelpLine {
+            keys: g.help.clone(),
+            action: "this help".into(),
+        },
         HelpLine {
             keys: "D-pad".into(),
-            action: format!("sounds {} / {} / {} / {}", g.sound_up, g.sound_down, g.sound_left, g.sound_right),
+            action: format!(
+                "sounds {} / {} / {} / {}",
+                g.sound_up, g.sound_down, g.sound_left, g.sound_right
+            ),
         },
     ];
     (keys, pad)
@@ -194,7 +221,10 @@ impl App {
             }
         }
         inp.estop |= pad_estop;
-        inp.pad = self.pad.drive().map(|d| (d, self.pad.speed(&d, self.turbo_speed)));
+        inp.pad = self
+            .pad
+            .drive()
+            .map(|d| (d, self.pad.speed(&d, self.turbo_speed)));
         inp.pad_dome_rate = self.pad.dome_rate();
         inp
     }
@@ -202,7 +232,11 @@ impl App {
     /// The fixed-rate control tick (`heartbeat`), or an immediate update after input stopped.
     fn control(&mut self, heartbeat: bool) {
         let now = Instant::now();
-        let dt = if heartbeat { now.duration_since(self.last_tick) } else { Duration::ZERO };
+        let dt = if heartbeat {
+            now.duration_since(self.last_tick)
+        } else {
+            Duration::ZERO
+        };
         if heartbeat {
             self.last_tick = now;
         }
@@ -222,24 +256,44 @@ impl App {
                 self.control(false);
             }
             TermEvent::FocusGained | TermEvent::Resize => self.dirty = true,
-            TermEvent::Key { key, kind: KeyKind::Release } => {
+            TermEvent::Key {
+                key,
+                kind: KeyKind::Release,
+            } => {
                 self.held.release(key);
                 if let KeyCode::Char(c) = key.code {
                     // Shift may be let go first: release both cases.
-                    self.held.release(Key { code: KeyCode::Char(c.to_ascii_lowercase()), ctrl: key.ctrl });
-                    self.held.release(Key { code: KeyCode::Char(c.to_ascii_uppercase()), ctrl: key.ctrl });
+                    self.held.release(Key {
+                        code: KeyCode::Char(c.to_ascii_lowercase()),
+                        ctrl: key.ctrl,
+                    });
+                    self.held.release(Key {
+                        code: KeyCode::Char(c.to_ascii_uppercase()),
+                        ctrl: key.ctrl,
+                    });
                 }
                 self.control(false);
             }
             TermEvent::Key { key, kind } => {
-                if key == (Key { code: KeyCode::Char('c'), ctrl: true }) {
+                if key
+                    == (Key {
+                        code: KeyCode::Char('c'),
+                        ctrl: true,
+                    })
+                {
                     return Some(ExitReason::Quit);
                 }
-                let new = if kind == KeyKind::Repeat {
-                    self.held.repeat(key, now);
-                    false
-                } else {
-                    self.held.press(key, now)
+                // Only keys bound to held actions (drive, turn, dome, e-stop) track press and
+                // release; for the others every press counts, so tapping `?` twice quickly
+                // opens and closes help even when releases are only inferred.
+                let held_action = self.keymap.action(&key).is_some_and(Action::is_held);
+                let new = match (held_action, kind) {
+                    (true, KeyKind::Repeat) => {
+                        self.held.repeat(key, now);
+                        false
+                    }
+                    (true, _) => self.held.press(key, now),
+                    (false, kind) => kind == KeyKind::Press,
                 };
                 self.dirty = true;
                 return self.on_key(key, new);
@@ -250,41 +304,56 @@ impl App {
 
     fn on_key(&mut self, key: Key, new_press: bool) -> Option<ExitReason> {
         // Overlays take the keys first.
-        if let Overlay::Animations { selected } | Overlay::Sounds { selected } = self.state.overlay {
-                let animations = matches!(self.state.overlay, Overlay::Animations { .. });
-                let len = if animations { self.state.animations.len() } else { self.state.sounds.len() };
-                let mut sel = selected;
-                match key.code {
-                    KeyCode::Up => sel = sel.saturating_sub(1),
-                    KeyCode::Down => sel = (sel + 1).min(len.saturating_sub(1)),
-                    KeyCode::PageUp => sel = sel.saturating_sub(10),
-                    KeyCode::PageDown => sel = (sel + 10).min(len.saturating_sub(1)),
-                    KeyCode::Esc => {
-                        self.state.overlay = Overlay::None;
-                        return None;
-                    }
-                    KeyCode::Enter if new_press => {
-                        if animations {
-                            if let Some(e) = self.state.animations.get(sel).cloned() {
-                                self.send(cmd::play_animation(e.id), "animation");
-                                self.hint(format!("animation {} ({})", e.name, e.id));
-                            }
-                        } else if let Some(e) = self.state.sounds.get(sel).cloned() {
-                            self.send(cmd::play_audio_file(e.id, AudioMode::Immediate), "sound");
-                            self.hint(format!("sound {} ({})", e.name, e.id));
-                        }
-                        self.state.overlay = Overlay::None;
-                        return None;
-                    }
-                    _ => {}
+        if let Overlay::Animations { selected } | Overlay::Sounds { selected } = self.state.overlay
+        {
+            let animations = matches!(self.state.overlay, Overlay::Animations { .. });
+            let len = if animations {
+                self.state.animations.len()
+            } else {
+                self.state.sounds.len()
+            };
+            let mut sel = selected;
+            match key.code {
+                KeyCode::Up => sel = sel.saturating_sub(1),
+                KeyCode::Down => sel = (sel + 1).min(len.saturating_sub(1)),
+                KeyCode::PageUp => sel = sel.saturating_sub(10),
+                KeyCode::PageDown => sel = (sel + 10).min(len.saturating_sub(1)),
+                KeyCode::Esc => {
+                    self.state.overlay = Overlay::None;
+                    return None;
                 }
-                self.state.overlay = if animations { Overlay::Animations { selected: sel } } else { Overlay::Sounds { selected: sel } };
-                return None;
+                KeyCode::Enter if new_press => {
+                    if animations {
+                        if let Some(e) = self.state.animations.get(sel).cloned() {
+                            self.send(cmd::play_animation(e.id), "animation");
+                            self.hint(format!("animation {} ({})", e.name, e.id));
+                        }
+                    } else if let Some(e) = self.state.sounds.get(sel).cloned() {
+                        self.send(cmd::play_audio_file(e.id, AudioMode::Immediate), "sound");
+                        self.hint(format!("sound {} ({})", e.name, e.id));
                     }
+                    self.state.overlay = Overlay::None;
+                    return None;
+                }
+                _ => {}
+            }
+            self.state.overlay = if animations {
+                Overlay::Animations { selected: sel }
+            } else {
+                Overlay::Sounds { selected: sel }
+            };
+            return None;
+        }
         match &mut self.state.overlay {
             Overlay::Help => {
-                if new_press {
-                    self.state.overlay = Overlay::None;
+                match key.code {
+                    // At 80×24 the bindings take two pages.
+                    KeyCode::PageDown | KeyCode::Down | KeyCode::Right => self.state.help_page += 1,
+                    KeyCode::PageUp | KeyCode::Up | KeyCode::Left => {
+                        self.state.help_page = self.state.help_page.saturating_sub(1)
+                    }
+                    _ if new_press => self.state.overlay = Overlay::None,
+                    _ => {}
                 }
                 return None;
             }
@@ -320,18 +389,25 @@ impl App {
                 KeyCode::Char('p') if new_press => log.toggle_pause(),
                 KeyCode::Char('d') if new_press => log.decoded = !log.decoded,
                 KeyCode::Char('/') | KeyCode::Char('f') if new_press => {
-                    self.state.overlay = Overlay::Filter { input: log.filter_input() }
+                    self.state.overlay = Overlay::Filter {
+                        input: log.filter_input(),
+                    }
                 }
                 KeyCode::Char('c') if new_press => log.set_filter(Default::default()),
                 KeyCode::Esc => self.state.focus = Focus::Drive,
                 _ => match self.keymap.action(&key) {
                     Some(Action::Log) if new_press => self.state.focus = Focus::Drive,
-                    Some(Action::Quit) if new_press && key.code != KeyCode::Esc => return Some(ExitReason::Quit),
+                    Some(Action::Quit) if new_press && key.code != KeyCode::Esc => {
+                        return Some(ExitReason::Quit);
+                    }
                     Some(Action::EStop) => {
                         let o = self.controller.estop_now();
                         self.apply(vec![o]);
                     }
-                    Some(Action::Help) if new_press => self.state.overlay = Overlay::Help,
+                    Some(Action::Help) if new_press => {
+                        self.state.help_page = 0;
+                        self.state.overlay = Overlay::Help;
+                    }
                     _ => {}
                 },
             }
@@ -343,7 +419,10 @@ impl App {
         }
         match action {
             Action::Quit => return Some(ExitReason::Quit),
-            Action::Help => self.state.overlay = Overlay::Help,
+            Action::Help => {
+                self.state.help_page = 0;
+                self.state.overlay = Overlay::Help;
+            }
             Action::Log => {
                 self.state.focus = Focus::Log;
                 // The droid is held stopped while the log has the keys.
@@ -366,8 +445,12 @@ impl App {
 
     fn on_pad(&mut self, e: PadEvent) {
         match &e {
-            PadEvent::Unavailable(why) => self.state.gamepad = GamepadStatus::Unavailable(why.clone()),
-            PadEvent::Connected(name) => self.state.gamepad = GamepadStatus::Connected(name.clone()),
+            PadEvent::Unavailable(why) => {
+                self.state.gamepad = GamepadStatus::Unavailable(why.clone())
+            }
+            PadEvent::Connected(name) => {
+                self.state.gamepad = GamepadStatus::Connected(name.clone())
+            }
             PadEvent::Disconnected => {
                 self.state.gamepad = GamepadStatus::NoPad;
                 self.hint("gamepad unplugged — stopped");
@@ -390,7 +473,11 @@ impl App {
                 self.apply(vec![o]);
             }
             Some(PadCommand::Help) => {
-                self.state.overlay = if self.state.overlay == Overlay::Help { Overlay::None } else { Overlay::Help };
+                self.state.overlay = if self.state.overlay == Overlay::Help {
+                    Overlay::None
+                } else {
+                    Overlay::Help
+                };
             }
             Some(PadCommand::Animation) => {
                 let sel = match self.state.overlay {
@@ -402,7 +489,9 @@ impl App {
                     self.hint(format!("animation {} ({})", a.name, a.id));
                 }
             }
-            Some(PadCommand::Sound(id)) => self.send(cmd::play_audio_file(id, AudioMode::Immediate), "sound"),
+            Some(PadCommand::Sound(id)) => {
+                self.send(cmd::play_audio_file(id, AudioMode::Immediate), "sound")
+            }
             None => {}
         }
         // Stick back in its deadzone or pad unplugged: stop at once.
@@ -435,8 +524,9 @@ pub async fn run<B: Backend>(
     mut inputs: AppInputs,
     draw: DrawFn,
 ) -> std::io::Result<Exit> {
-    let keymap = KeyMap::from_config(&opts.config.keys)
-        .map_err(|(k, m)| std::io::Error::new(std::io::ErrorKind::InvalidInput, format!("keys.{k}: {m}")))?;
+    let keymap = KeyMap::from_config(&opts.config.keys).map_err(|(k, m)| {
+        std::io::Error::new(std::io::ErrorKind::InvalidInput, format!("keys.{k}: {m}"))
+    })?;
     let mut state = AppState::new(opts.model, opts.droid_name.clone());
     let (help_keys, help_gamepad) = help_lines(&opts.config, &keymap);
     state.help_keys = help_keys;
@@ -446,7 +536,11 @@ pub async fn run<B: Backend>(
         ReleaseMode::Reported => KeyboardMode::ReleaseEvents,
         ReleaseMode::Emulated { .. } => KeyboardMode::Emulated,
     };
-    state.gamepad = if opts.config.gamepad.enabled { GamepadStatus::NoPad } else { GamepadStatus::Disabled };
+    state.gamepad = if opts.config.gamepad.enabled {
+        GamepadStatus::NoPad
+    } else {
+        GamepadStatus::Disabled
+    };
     let _ = opts.tripod_on_connect;
     let start = Instant::now();
     let mut app = App {
@@ -478,15 +572,18 @@ pub async fn run<B: Backend>(
     let poller = {
         let session = session.clone();
         tokio::spawn(async move {
-            let volts = catalog::lookup(0x13, 0x03).map(|d| d.response).unwrap_or(&[]);
+            let volts = catalog::lookup(0x13, 0x03)
+                .map(|d| d.response)
+                .unwrap_or(&[]);
             loop {
                 if let Ok(p) = session.request(cmd::get_battery_voltage()).await
                     && let Some(v) = catalog::decode_fields(volts, &p.data)
                         .ok()
                         .and_then(|f| f.first().and_then(|(_, v)| v.as_f64()))
-                        && battery_tx.send(v as f32).await.is_err() {
-                            return;
-                        }
+                    && battery_tx.send(v as f32).await.is_err()
+                {
+                    return;
+                }
                 tokio::time::sleep(BATTERY_EVERY).await;
             }
         })

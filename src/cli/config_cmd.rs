@@ -33,8 +33,9 @@ pub fn run(cmd: ConfigCmd) -> Result<i32, CliError> {
                 )));
             }
             if let Some(dir) = path.parent() {
-                std::fs::create_dir_all(dir)
-                    .map_err(|e| CliError::failure(format!("cannot create {}: {e}", dir.display())))?;
+                std::fs::create_dir_all(dir).map_err(|e| {
+                    CliError::failure(format!("cannot create {}: {e}", dir.display()))
+                })?;
             }
             std::fs::write(&path, DEFAULT_TOML)
                 .map_err(|e| CliError::failure(format!("cannot write {}: {e}", path.display())))?;

@@ -19,9 +19,16 @@ pub struct Connected {
 
 /// Find and connect to a droid. With several supported droids in range and neither `name` nor
 /// `address` given, ask which one (when standard input is a terminal).
-pub async fn connect(name: Option<String>, address: Option<String>, scan_timeout: Duration) -> Result<Connected, CliError> {
+pub async fn connect(
+    name: Option<String>,
+    address: Option<String>,
+    scan_timeout: Duration,
+) -> Result<Connected, CliError> {
     let address = address
-        .map(|a| a.parse::<BleAddress>().map_err(|e| CliError::usage(format!("--address: {e}"))))
+        .map(|a| {
+            a.parse::<BleAddress>()
+                .map_err(|e| CliError::usage(format!("--address: {e}")))
+        })
         .transpose()?;
     let explicit = name.is_some() || address.is_some();
     let sel = DeviceSelector {
@@ -32,9 +39,14 @@ pub async fn connect(name: Option<String>, address: Option<String>, scan_timeout
     // Progress for people only: piped stderr gets just the outcome.
     let chatty = std::io::stderr().is_terminal();
     if chatty {
-        eprintln!("droidctl: scanning for droids ({} s)…", scan_timeout.as_secs());
+        eprintln!(
+            "droidctl: scanning for droids ({} s)…",
+            scan_timeout.as_secs()
+        );
     }
-    let mut found = connect_link(&sel).await.map_err(|e| CliError::failure(e.message))?;
+    let mut found = connect_link(&sel)
+        .await
+        .map_err(|e| CliError::failure(e.message))?;
     let drivable: Vec<&ScanEntry> = found
         .candidates
         .iter()
@@ -48,7 +60,9 @@ pub async fn connect(name: Option<String>, address: Option<String>, scan_timeout
                     address: Some(choice),
                     scan_timeout,
                 };
-                found = connect_link(&sel).await.map_err(|e| CliError::failure(e.message))?;
+                found = connect_link(&sel)
+                    .await
+                    .map_err(|e| CliError::failure(e.message))?;
             }
         }
     }
@@ -93,7 +107,9 @@ fn pick(entries: &[&ScanEntry]) -> Result<Option<BleAddress>, CliError> {
             e.name.as_deref().unwrap_or("?"),
             e.model.map(Model::display_name).unwrap_or("?"),
             e.address,
-            e.rssi.map(|r| format!("{r} dBm")).unwrap_or_else(|| "-".into())
+            e.rssi
+                .map(|r| format!("{r} dBm"))
+                .unwrap_or_else(|| "-".into())
         );
     }
     let _ = write!(err, "Which one? [1-{}, Enter = 1] ", entries.len());
@@ -108,6 +124,9 @@ fn pick(entries: &[&ScanEntry]) -> Result<Option<BleAddress>, CliError> {
     }
     match t.parse::<usize>() {
         Ok(n) if (1..=entries.len()).contains(&n) => Ok(Some(entries[n - 1].address)),
-        _ => Err(CliError::usage(format!("{t:?} is not one of 1..={}", entries.len()))),
+        _ => Err(CliError::usage(format!(
+            "{t:?} is not one of 1..={}",
+            entries.len()
+        ))),
     }
 }

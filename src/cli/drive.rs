@@ -75,7 +75,9 @@ fn install_panic_hook() {
 pub fn run(args: DriveArgs) -> Result<i32, CliError> {
     let config_path = crate::config::config_path();
     let config = Config::load(&config_path).map_err(|e| {
-        CliError::usage(format!("{e}\nFix the file (or move it away to use the defaults) and try again."))
+        CliError::usage(format!(
+            "{e}\nFix the file (or move it away to use the defaults) and try again."
+        ))
     })?;
     let model = sim_model(&args.sim)?;
     let log_path = crate::logging::init().ok();
@@ -87,7 +89,8 @@ pub fn run(args: DriveArgs) -> Result<i32, CliError> {
     rt.block_on(async move {
         let (link, model, name) = match model {
             Some(m) => {
-                let link: Box<dyn Link> = Box::new(SimLink::new(m, SimConfig::default(), Faults::none()));
+                let link: Box<dyn Link> =
+                    Box::new(SimLink::new(m, SimConfig::default(), Faults::none()));
                 (link, m, format!("{} (simulated)", m.display_name()))
             }
             None => connect_real(&args).await?,
@@ -98,7 +101,12 @@ pub fn run(args: DriveArgs) -> Result<i32, CliError> {
 
 /// Find and connect to a real droid over Bluetooth.
 async fn connect_real(args: &DriveArgs) -> Result<(Box<dyn Link>, Model, String), CliError> {
-    let c = super::connect::connect(args.name.clone(), args.address.clone(), Duration::from_secs(args.scan_timeout)).await?;
+    let c = super::connect::connect(
+        args.name.clone(),
+        args.address.clone(),
+        Duration::from_secs(args.scan_timeout),
+    )
+    .await?;
     Ok((c.link, c.model, c.name))
 }
 
@@ -129,7 +137,8 @@ async fn drive(
     let _ = PANIC_SESSION.set(session.clone());
     install_panic_hook();
 
-    let mut guard = TerminalGuard::enter().map_err(|e| CliError::failure(format!("cannot use this terminal: {e}")))?;
+    let mut guard = TerminalGuard::enter()
+        .map_err(|e| CliError::failure(format!("cannot use this terminal: {e}")))?;
     let release = if guard.release_events {
         ReleaseMode::Reported
     } else {
@@ -146,9 +155,10 @@ async fn drive(
         let mut events = crossterm::event::EventStream::new();
         while let Some(Ok(e)) = events.next().await {
             if let Some(e) = from_crossterm(&e)
-                && term_tx.send(e).await.is_err() {
-                    break;
-                }
+                && term_tx.send(e).await.is_err()
+            {
+                break;
+            }
         }
     });
     // Gamepad.
@@ -198,9 +208,17 @@ async fn drive(
     // then the terminal restored, then the message shown.
     let app = tokio::spawn(async move {
         let backend = CrosstermBackend::new(std::io::stdout());
+        // The alternate screen was cleared on entry; `Terminal::clear` would also ask the
+        // terminal for the cursor position, which some terminals never answer.
         let mut terminal = Terminal::new(backend)?;
-        terminal.clear()?;
-        run::run(&mut terminal, session_for_app(), opts, inputs, crate::ui::draw).await
+        run::run(
+            &mut terminal,
+            session_for_app(),
+            opts,
+            inputs,
+            crate::ui::draw,
+        )
+        .await
     });
     let result = app.await;
     let stop_cmds = match &result {
@@ -228,7 +246,9 @@ async fn drive(
                 .ok()
                 .and_then(|mut m| m.take())
                 .unwrap_or_else(|| join.to_string());
-            let log = log_path.map(|p| format!(" Details are in {}.", p.display())).unwrap_or_default();
+            let log = log_path
+                .map(|p| format!(" Details are in {}.", p.display()))
+                .unwrap_or_default();
             Err(CliError {
                 status: 101,
                 message: format!("internal error, the droid was sent a stop: {msg}.{log}"),
@@ -238,5 +258,8 @@ async fn drive(
 }
 
 fn session_for_app() -> SessionHandle {
-    PANIC_SESSION.get().cloned().unwrap_or_else(|| unreachable!("the session is set before the app starts"))
+    PANIC_SESSION
+        .get()
+        .cloned()
+        .unwrap_or_else(|| unreachable!("the session is set before the app starts"))
 }

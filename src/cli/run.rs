@@ -102,7 +102,9 @@ pub fn run(args: RunArgs) -> Result<i32, CliError> {
                 .map_err(|e| CliError::failure(format!("cannot start the runtime: {e}")))?;
             rt.block_on(async move {
                 let link = SimLink::new(model, SimConfig::default(), Faults::none());
-                run_on(Box::new(link), model, &steps, opts, json).await.map_err(CliError::failure)
+                run_on(Box::new(link), model, &steps, opts, json)
+                    .await
+                    .map_err(CliError::failure)
             })
         }
         None => {
@@ -113,9 +115,16 @@ pub fn run(args: RunArgs) -> Result<i32, CliError> {
                 .build()
                 .map_err(|e| CliError::failure(format!("cannot start the runtime: {e}")))?;
             rt.block_on(async move {
-                let c = super::connect::connect(args.name, args.address, Duration::from_secs(args.scan_timeout)).await?;
+                let c = super::connect::connect(
+                    args.name,
+                    args.address,
+                    Duration::from_secs(args.scan_timeout),
+                )
+                .await?;
                 mission::validate(c.model, &steps).map_err(script_errors)?;
-                run_on(c.link, c.model, &steps, opts, json).await.map_err(CliError::failure)
+                run_on(c.link, c.model, &steps, opts, json)
+                    .await
+                    .map_err(CliError::failure)
             })
         }
     };
@@ -178,11 +187,12 @@ pub async fn run_on(
         };
     });
     let result = mission::run(&session, model, steps, opts, emit).await;
-    // Stop first, then close.
+    // Stop first, then close. At the last heading: a stop at heading 0 turns the droid.
+    let heading = result.as_ref().map(|s| s.last_heading).unwrap_or_default();
     session
         .shutdown(vec![crate::protocol::v2::cmd::drive_with_heading(
             0,
-            crate::units::Heading::default(),
+            heading,
             crate::protocol::v2::wire::DriveFlags::empty(),
         )])
         .await;

@@ -6,7 +6,9 @@ use crossterm::event::{
     DisableFocusChange, EnableFocusChange, KeyboardEnhancementFlags, PopKeyboardEnhancementFlags,
     PushKeyboardEnhancementFlags,
 };
-use crossterm::terminal::{EnterAlternateScreen, LeaveAlternateScreen, disable_raw_mode, enable_raw_mode};
+use crossterm::terminal::{
+    Clear, ClearType, EnterAlternateScreen, LeaveAlternateScreen, disable_raw_mode, enable_raw_mode,
+};
 use crossterm::{cursor, execute};
 use std::io::{self, Write};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -26,19 +28,31 @@ impl TerminalGuard {
     pub fn enter() -> io::Result<TerminalGuard> {
         enable_raw_mode()?;
         ACTIVE.store(true, Ordering::SeqCst);
-        let kitty = matches!(crossterm::terminal::supports_keyboard_enhancement(), Ok(true));
+        let kitty = matches!(
+            crossterm::terminal::supports_keyboard_enhancement(),
+            Ok(true)
+        );
         let mut out = io::stdout();
-        execute!(out, EnterAlternateScreen, EnableFocusChange, cursor::Hide)?;
+        execute!(
+            out,
+            EnterAlternateScreen,
+            Clear(ClearType::All),
+            EnableFocusChange,
+            cursor::Hide
+        )?;
         if kitty {
             execute!(
                 out,
                 PushKeyboardEnhancementFlags(
-                    KeyboardEnhancementFlags::DISAMBIGUATE_ESCAPE_CODES | KeyboardEnhancementFlags::REPORT_EVENT_TYPES
+                    KeyboardEnhancementFlags::DISAMBIGUATE_ESCAPE_CODES
+                        | KeyboardEnhancementFlags::REPORT_EVENT_TYPES
                 )
             )?;
             KITTY.store(true, Ordering::SeqCst);
         }
-        Ok(TerminalGuard { release_events: kitty })
+        Ok(TerminalGuard {
+            release_events: kitty,
+        })
     }
 
     pub fn restore(&mut self) {

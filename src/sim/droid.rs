@@ -419,9 +419,10 @@ impl SimDroid {
         let mut v = values.iter();
         for bit in 0..16 {
             if mask & (1 << bit) != 0
-                && let Some(val) = v.next() {
-                    self.state.leds[bit] = *val;
-                }
+                && let Some(val) = v.next()
+            {
+                self.state.leds[bit] = *val;
+            }
         }
         (ErrorCode::Success, vec![])
     }
@@ -561,9 +562,10 @@ impl SimDroid {
         if self
             .drive
             .is_some_and(|d| now.saturating_sub(d.at) > self.cfg.motion_timeout)
-            && let Some(d) = &mut self.drive {
-                d.speed = 0.0;
-            }
+            && let Some(d) = &mut self.drive
+        {
+            d.speed = 0.0;
+        }
         let rolling = self.can_roll() && self.state.awake;
         let (target_speed, target_facing, backward) = match self.drive {
             Some(d) if rolling => (d.speed, d.facing, d.backward),

@@ -271,9 +271,10 @@ pub fn spawn(tx: mpsc::Sender<PadEvent>) -> std::io::Result<std::thread::JoinHan
                     _ => None,
                 };
                 if let Some(out) = out
-                    && tx.blocking_send(out).is_err() {
-                        return;
-                    }
+                    && tx.blocking_send(out).is_err()
+                {
+                    return;
+                }
             }
         })
 }

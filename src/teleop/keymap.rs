@@ -240,15 +240,16 @@ impl KeyMap {
                     )
                 })?;
                 if let Some(other) = map.insert(key, action)
-                    && other != action {
-                        return Err((
-                            name.clone(),
-                            format!(
-                                "key {kn:?} is bound to both {} and {name}",
-                                other.config_name()
-                            ),
-                        ));
-                    }
+                    && other != action
+                {
+                    return Err((
+                        name.clone(),
+                        format!(
+                            "key {kn:?} is bound to both {} and {name}",
+                            other.config_name()
+                        ),
+                    ));
+                }
                 by_action.entry(action).or_default().push(key);
             }
         }

@@ -46,7 +46,7 @@ pub fn draw(frame: &mut Frame, state: &AppState) {
         collisions::render(frame, r, state);
     }
     if let Some(r) = p.notice {
-        let msg = format!("enlarge the terminal to {MIN_WIDTH}×{MIN_HEIGHT} for the panels");
+        let msg = format!("panels need {MIN_WIDTH}×{MIN_HEIGHT}");
         frame.render_widget(Paragraph::new(Span::styled(msg, theme::dim())), r);
     }
     log_pane::render(frame, p.log, state);

@@ -67,10 +67,13 @@ fn packed(t: &Telemetry, rows: u16) -> Vec<Line<'static>> {
         Span::styled(opt(t.speed_cm_s(), 1, ""), theme::reported()),
         Span::styled(" cm/s", theme::dim()),
     ];
-    if let Some([x, y]) = t.velocity_cm_s {
+    // Compact layouts drop the map, so the position goes here (it matters more than the
+    // velocity components).
+    if let (Some(x), Some(y)) = (t.x_cm, t.y_cm) {
+        vel.push(Span::styled("  pos ", theme::label()));
         vel.push(Span::styled(
-            format!("  x {} y {}", num(x, 1), num(y, 1)),
-            theme::dim(),
+            format!("x {} y {} cm", num(x, 0), num(y, 0)),
+            theme::reported(),
         ));
     }
     let mut lines = vec![att, trio("acc", t.accel, 2, "g"), Line::from(vel)];

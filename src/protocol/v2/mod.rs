@@ -94,14 +94,16 @@ pub fn describe(p: &Packet, streaming: Option<&StreamingConfig>) -> Described {
         d.problem = Some(err.to_string());
         return d;
     }
-    if kind == Kind::Notification && (p.did, p.cid) == (0x18, 0x02)
-        && let Some(cfg) = streaming {
-            match sensor::decode_sample(cfg, &p.data) {
-                Ok(s) => d.fields = Some(s.fields()),
-                Err(e) => d.problem = Some(e.to_string()),
-            }
-            return d;
+    if kind == Kind::Notification
+        && (p.did, p.cid) == (0x18, 0x02)
+        && let Some(cfg) = streaming
+    {
+        match sensor::decode_sample(cfg, &p.data) {
+            Ok(s) => d.fields = Some(s.fields()),
+            Err(e) => d.problem = Some(e.to_string()),
         }
+        return d;
+    }
     match schema {
         Some(schema) => match catalog::decode_fields(schema, &p.data) {
             Ok(f) => d.fields = Some(f),

@@ -1,0 +1,245 @@
+//! End to end: the real binary with `--sim` in a pseudo-terminal. Keys go in, the screen is
+//! read back through a VT100 emulator; the simulated droid must move, the packet log must show
+//! the drive commands, `q` must quit with a stop and the terminal must be restored.
+
+use portable_pty::{CommandBuilder, PtySize, native_pty_system};
+use std::io::{Read, Write};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+struct Tui {
+    raw: Arc<Mutex<Vec<u8>>>,
+    screen: Arc<Mutex<vt100::Parser>>,
+    writer: Arc<Mutex<Box<dyn Write + Send>>>,
+    child: Box<dyn portable_pty::Child + Send + Sync>,
+    _dir: TempDir,
+}
+
+/// A scratch directory removed on drop.
+struct TempDir(std::path::PathBuf);
+
+impl TempDir {
+    fn new(tag: &str) -> TempDir {
+        let p = std::env::temp_dir().join(format!("droidctl-e2e-{tag}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&p);
+        std::fs::create_dir_all(&p).unwrap();
+        TempDir(p)
+    }
+}
+
+impl Drop for TempDir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+impl Tui {
+    /// Start `droidctl --sim` at `cols`×`rows`. `kitty`: answer the keyboard-protocol query
+    /// as a terminal that supports it.
+    fn start(cols: u16, rows: u16, kitty: bool) -> Tui {
+        let dir = TempDir::new(if kitty { "kitty" } else { "legacy" });
+        let pty = native_pty_system()
+            .openpty(PtySize {
+                rows,
+                cols,
+                pixel_width: 0,
+                pixel_height: 0,
+            })
+            .unwrap();
+        let mut cmd = CommandBuilder::new(env!("CARGO_BIN_EXE_droidctl"));
+        cmd.arg("--sim");
+        cmd.env("TERM", "xterm-256color");
+        cmd.env("DROIDCTL_LOG_FILE", dir.0.join("droidctl.log"));
+        cmd.env("DROIDCTL_CONFIG", dir.0.join("config.toml"));
+        let child = pty.slave.spawn_command(cmd).unwrap();
+        drop(pty.slave);
+        let mut reader = pty.master.try_clone_reader().unwrap();
+        // One writer, shared: the test types on it and the reader thread answers queries.
+        let writer = Arc::new(Mutex::new(pty.master.take_writer().unwrap()));
+        let raw = Arc::new(Mutex::new(Vec::new()));
+        let screen = Arc::new(Mutex::new(vt100::Parser::new(
+            rows.try_into().unwrap(),
+            cols.try_into().unwrap(),
+            0,
+        )));
+        let answer = writer.clone();
+        {
+            let (raw, screen) = (raw.clone(), screen.clone());
+            std::thread::spawn(move || {
+                let _keep_master = pty.master;
+                let mut buf = [0u8; 8192];
+                while let Ok(n) = reader.read(&mut buf) {
+                    if n == 0 {
+                        break;
+                    }
+                    let chunk = &buf[..n];
+                    raw.lock().unwrap().extend_from_slice(chunk);
+                    screen.lock().unwrap().process(chunk);
+                    // Play the terminal's part in crossterm's capability probe.
+                    if chunk.windows(4).any(|w| w == b"\x1b[?u") {
+                        let mut w = answer.lock().unwrap();
+                        if kitty {
+                            let _ = w.write_all(b"\x1b[?0u");
+                        }
+                        let _ = w.write_all(b"\x1b[?62;c");
+                        let _ = w.flush();
+                    }
+                }
+            });
+        }
+        Tui {
+            raw,
+            screen,
+            writer,
+            child,
+            _dir: dir,
+        }
+    }
+
+    fn text(&self) -> String {
+        self.screen.lock().unwrap().screen().contents()
+    }
+
+    fn wait_for(&self, what: &str, limit: Duration) -> String {
+        let start = Instant::now();
+        loop {
+            let t = self.text();
+            if t.contains(what) {
+                return t;
+            }
+            assert!(
+                start.elapsed() < limit,
+                "timed out waiting for {what:?}; screen:\n{t}"
+            );
+            std::thread::sleep(Duration::from_millis(50));
+        }
+    }
+
+    fn send(&mut self, bytes: &[u8]) {
+        let mut w = self.writer.lock().unwrap();
+        w.write_all(bytes).unwrap();
+        w.flush().unwrap();
+    }
+
+    /// Hold a key the way a legacy terminal reports it: a press, then auto-repeats.
+    fn hold(&mut self, key: &[u8], for_: Duration) {
+        let start = Instant::now();
+        while start.elapsed() < for_ {
+            self.send(key);
+            std::thread::sleep(Duration::from_millis(40));
+        }
+    }
+
+    fn wait_exit(&mut self, limit: Duration) -> portable_pty::ExitStatus {
+        let start = Instant::now();
+        loop {
+            if let Some(status) = self.child.try_wait().unwrap() {
+                // Let the reader thread take the last bytes.
+                std::thread::sleep(Duration::from_millis(200));
+                return status;
+            }
+            assert!(
+                start.elapsed() < limit,
+                "droidctl did not exit; screen:\n{}",
+                self.text()
+            );
+            std::thread::sleep(Duration::from_millis(50));
+        }
+    }
+
+    fn raw(&self) -> Vec<u8> {
+        self.raw.lock().unwrap().clone()
+    }
+}
+
+fn pos(bytes: &[u8], needle: &[u8]) -> Option<usize> {
+    bytes.windows(needle.len()).rposition(|w| w == needle)
+}
+
+/// The droid's y position as shown in the sensors panel ("pos x … y … cm").
+fn shown_y(screen: &str) -> Option<f32> {
+    let line = screen.lines().find(|l| l.contains("pos x"))?;
+    let after = &line[line.find(" y ")? + 3..];
+    after.split_whitespace().next()?.parse().ok()
+}
+
+#[test]
+fn drive_the_simulated_droid_and_quit() {
+    let mut tui = Tui::start(100, 30, false);
+    tui.wait_for("connected", Duration::from_secs(20));
+    tui.wait_for("stance tripod", Duration::from_secs(10));
+    let before = shown_y(&tui.text()).unwrap_or(0.0);
+    // Hold w for 2.5 s (press plus auto-repeat), then let go.
+    tui.hold(b"w", Duration::from_millis(2500));
+    std::thread::sleep(Duration::from_millis(800));
+    let screen = tui.text();
+    let after = shown_y(&screen).expect("position on screen");
+    assert!(
+        after > before + 30.0,
+        "the droid moved forward: {before} → {after}\n{screen}"
+    );
+    assert!(
+        screen.contains("drive-with-heading"),
+        "the packet log shows drive commands:\n{screen}"
+    );
+    assert!(
+        screen.contains("emulated"),
+        "keyboard mode shown:\n{screen}"
+    );
+    // Help overlay lists the keys.
+    tui.send(b"?");
+    let help = tui.wait_for("EMERGENCY STOP", Duration::from_secs(5));
+    assert!(
+        help.contains("drive forward (hold)") && help.contains("quit"),
+        "{help}"
+    );
+    tui.send(b"?");
+    std::thread::sleep(Duration::from_millis(300));
+    tui.send(b"q");
+    let status = tui.wait_exit(Duration::from_secs(10));
+    assert!(status.success(), "{status:?}");
+    let raw = tui.raw();
+    // Terminal restored: alternate screen left after it was entered, cursor shown.
+    let entered = pos(&raw, b"\x1b[?1049h").expect("entered the alternate screen");
+    let left = pos(&raw, b"\x1b[?1049l").expect("left the alternate screen");
+    assert!(left > entered);
+    assert!(
+        pos(&raw, b"\x1b[?25h").is_some_and(|p| p > entered),
+        "cursor shown again"
+    );
+    assert!(
+        pos(&raw, b"\x1b[?1004l").is_some(),
+        "focus reporting turned off"
+    );
+}
+
+#[test]
+fn kitty_terminal_gets_release_events_and_flags_are_popped() {
+    let mut tui = Tui::start(100, 30, true);
+    tui.wait_for("connected", Duration::from_secs(20));
+    tui.wait_for("release events", Duration::from_secs(5));
+    tui.wait_for("stance tripod", Duration::from_secs(10));
+    // Press w once (kitty: no auto-repeat needed while held) ...
+    tui.send(b"\x1b[119u");
+    std::thread::sleep(Duration::from_millis(1500));
+    let moving = tui.text();
+    assert!(
+        moving.contains("speed 100/255"),
+        "driving while held:\n{moving}"
+    );
+    // ... release it: the deadman stops the droid.
+    tui.send(b"\x1b[119;1:3u");
+    std::thread::sleep(Duration::from_millis(800));
+    let stopped = tui.text();
+    assert!(
+        stopped.contains("speed   0/255"),
+        "stopped on release:\n{stopped}"
+    );
+    tui.send(b"\x1b[113u");
+    let status = tui.wait_exit(Duration::from_secs(10));
+    assert!(status.success(), "{status:?}");
+    let raw = tui.raw();
+    let pushed = pos(&raw, b"\x1b[>").expect("keyboard flags pushed");
+    let popped = pos(&raw, b"\x1b[<1u").expect("keyboard flags popped");
+    assert!(popped > pushed);
+}
