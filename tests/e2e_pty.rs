@@ -243,3 +243,106 @@ fn kitty_terminal_gets_release_events_and_flags_are_popped() {
     let popped = pos(&raw, b"\x1b[<1u").expect("keyboard flags popped");
     assert!(popped > pushed);
 }
+
+impl Tui {
+    fn pid(&self) -> u32 {
+        self.child.process_id().expect("pid")
+    }
+
+    fn log(&self) -> String {
+        std::fs::read_to_string(self._dir.0.join("droidctl.log")).unwrap_or_default()
+    }
+}
+
+/// The final stop written by the session on the way out, per the log.
+fn final_stop_logged(log: &str) -> bool {
+    log.lines().any(|l| {
+        l.contains("final command") && l.contains("drive-with-heading") && l.contains("data=00 ")
+    }) && log.contains("final commands written")
+}
+
+#[test]
+fn sigterm_stops_the_droid_then_restores_the_terminal() {
+    let mut tui = Tui::start(100, 30, false);
+    tui.wait_for("stance tripod", Duration::from_secs(20));
+    tui.hold(b"w", Duration::from_millis(800));
+    let pid = tui.pid();
+    let _ = std::process::Command::new("kill")
+        .args(["-TERM", &pid.to_string()])
+        .status();
+    let status = tui.wait_exit(Duration::from_secs(10));
+    assert!(status.success(), "{status:?}");
+    assert!(final_stop_logged(&tui.log()), "log:\n{}", tui.log());
+    let raw = tui.raw();
+    assert!(pos(&raw, b"\x1b[?1049l") > pos(&raw, b"\x1b[?1049h"));
+    assert!(String::from_utf8_lossy(&raw).contains("SIGTERM: stopped the droid"));
+}
+
+#[test]
+fn a_crash_stops_the_droid_then_restores_the_terminal() {
+    let dir = TempDir::new("crash");
+    let pty = native_pty_system()
+        .openpty(PtySize {
+            rows: 30,
+            cols: 100,
+            pixel_width: 0,
+            pixel_height: 0,
+        })
+        .unwrap();
+    let mut cmd = CommandBuilder::new(env!("CARGO_BIN_EXE_droidctl"));
+    cmd.arg("--sim");
+    cmd.env("TERM", "xterm-256color");
+    cmd.env("DROIDCTL_LOG_FILE", dir.0.join("droidctl.log"));
+    cmd.env("DROIDCTL_CONFIG", dir.0.join("config.toml"));
+    cmd.env("DROIDCTL_TEST_PANIC_AFTER_MS", "3500");
+    let mut child = pty.slave.spawn_command(cmd).unwrap();
+    drop(pty.slave);
+    let mut reader = pty.master.try_clone_reader().unwrap();
+    let mut writer = pty.master.take_writer().unwrap();
+    let raw = Arc::new(Mutex::new(Vec::new()));
+    {
+        let raw = raw.clone();
+        std::thread::spawn(move || {
+            let mut buf = [0u8; 8192];
+            while let Ok(n) = reader.read(&mut buf) {
+                if n == 0 {
+                    break;
+                }
+                raw.lock().unwrap().extend_from_slice(&buf[..n]);
+            }
+        });
+    }
+    // Answer the start-up probe as a legacy terminal, then drive until the crash.
+    let start = Instant::now();
+    let status = loop {
+        if raw.lock().unwrap().windows(4).any(|w| w == b"\x1b[?u") {
+            let _ = writer.write_all(b"\x1b[?62;c");
+        }
+        if start.elapsed() > Duration::from_secs(3) {
+            let _ = writer.write_all(b"w");
+        }
+        let _ = writer.flush();
+        if let Some(s) = child.try_wait().unwrap() {
+            break s;
+        }
+        assert!(
+            start.elapsed() < Duration::from_secs(20),
+            "no exit after the crash"
+        );
+        std::thread::sleep(Duration::from_millis(40));
+    };
+    std::thread::sleep(Duration::from_millis(200));
+    assert_eq!(status.exit_code(), 101, "{status:?}");
+    let log = std::fs::read_to_string(dir.0.join("droidctl.log")).unwrap_or_default();
+    assert!(final_stop_logged(&log), "log:\n{log}");
+    let raw = raw.lock().unwrap().clone();
+    let text = String::from_utf8_lossy(&raw);
+    let left = pos(&raw, b"\x1b[?1049l").expect("left the alternate screen");
+    let message = text
+        .find("internal error, the droid was sent a stop")
+        .expect("crash message");
+    assert!(pos(&raw, b"\x1b[?1049h").unwrap() < left);
+    // The message comes after the terminal was restored, so it stays readable.
+    assert!(message > String::from_utf8_lossy(&raw[..left]).len());
+    drop(pty.master);
+}

@@ -594,6 +594,12 @@ pub async fn run<B: Backend>(
     // Closed channels would fire their select branch forever: disable them instead.
     let (mut events_open, mut log_open, mut link_open, mut battery_open) = (true, true, true, true);
 
+    // Test hook for the crash path (stop first, then restore the terminal): panic after this
+    // many ms. Only read from the environment, never set by droidctl itself.
+    let crash_at = std::env::var("DROIDCTL_TEST_PANIC_AFTER_MS")
+        .ok()
+        .and_then(|v| v.parse::<u64>().ok())
+        .map(|ms| start + Duration::from_millis(ms));
     let reason = loop {
         let expiry = app.held.next_expiry().map(|d| start + d);
         tokio::select! {
@@ -619,7 +625,12 @@ pub async fn run<B: Backend>(
                     app.control(false);
                 }
             }
-            _ = tick.tick() => app.control(true),
+            _ = tick.tick() => {
+                app.control(true);
+                if crash_at.is_some_and(|t| Instant::now() >= t) {
+                    panic!("test panic requested by DROIDCTL_TEST_PANIC_AFTER_MS");
+                }
+            }
             e = events_rx.recv(), if events_open => match e {
                 Ok(SessionEvent::Notification(n)) => {
                     let at = app.now();

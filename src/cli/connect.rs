@@ -52,19 +52,20 @@ pub async fn connect(
         .iter()
         .filter(|c| c.model.is_some_and(|m| m.protocol() == Protocol::SpheroV2))
         .collect();
-    if !explicit && drivable.len() > 1 && std::io::stdin().is_terminal() {
-        if let Some(choice) = pick(&drivable)? {
-            if choice != found.address {
-                let sel = DeviceSelector {
-                    name: None,
-                    address: Some(choice),
-                    scan_timeout,
-                };
-                found = connect_link(&sel)
-                    .await
-                    .map_err(|e| CliError::failure(e.message))?;
-            }
-        }
+    if !explicit
+        && drivable.len() > 1
+        && std::io::stdin().is_terminal()
+        && let Some(choice) = pick(&drivable)?
+        && choice != found.address
+    {
+        let sel = DeviceSelector {
+            name: None,
+            address: Some(choice),
+            scan_timeout,
+        };
+        found = connect_link(&sel)
+            .await
+            .map_err(|e| CliError::failure(e.message))?;
     }
     if found.model.protocol() != Protocol::SpheroV2 {
         return Err(CliError::failure(format!(

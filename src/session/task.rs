@@ -395,6 +395,7 @@ impl Task {
     ) {
         let mut wire: Vec<Vec<u8>> = chunks.into_iter().collect();
         for cmd in last {
+            tracing::info!(command = %cmd.def().map(|d| d.name.as_str()).unwrap_or("?"), data = %crate::hex::spaced(&cmd.data), "final command");
             let seq = self.next_seq(cmd.did, cmd.cid);
             let mut packet = cmd.to_packet(seq);
             // Nobody will wait for these responses.
@@ -418,5 +419,6 @@ impl Task {
         })
         .await;
         writer.close().await;
+        tracing::info!("final commands written, link closed");
     }
 }

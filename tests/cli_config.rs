@@ -1,0 +1,92 @@
+//! `droidctl config path|init|check`, and an invalid config keeping the app from starting.
+
+use std::process::{Command, Output, Stdio};
+
+fn droidctl(dir: &std::path::Path, args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_droidctl"))
+        .args(args)
+        .env("DROIDCTL_CONFIG", dir.join("droidctl/config.toml"))
+        .env("DROIDCTL_LOG_FILE", dir.join("log"))
+        .stdin(Stdio::null())
+        .output()
+        .unwrap()
+}
+
+fn tmp(tag: &str) -> std::path::PathBuf {
+    let d = std::env::temp_dir().join(format!("droidctl-cfg-{tag}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+#[test]
+fn path_init_check() {
+    let d = tmp("init");
+    let out = droidctl(&d, &["config", "path"]);
+    assert!(out.status.success());
+    assert_eq!(
+        String::from_utf8_lossy(&out.stdout).trim(),
+        d.join("droidctl/config.toml").to_str().unwrap()
+    );
+
+    let out = droidctl(&d, &["config", "init"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let written = std::fs::read_to_string(d.join("droidctl/config.toml")).unwrap();
+    assert_eq!(written, droidctl::config::DEFAULT_TOML);
+
+    let out = droidctl(&d, &["config", "init"]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--force"));
+    assert!(
+        droidctl(&d, &["config", "init", "--force"])
+            .status
+            .success()
+    );
+
+    let out = droidctl(&d, &["config", "check"]);
+    assert!(out.status.success());
+    assert!(String::from_utf8_lossy(&out.stdout).contains(": ok"));
+}
+
+#[test]
+fn an_invalid_file_is_reported_and_the_app_refuses_to_start() {
+    let d = tmp("bad");
+    std::fs::create_dir_all(d.join("droidctl")).unwrap();
+    std::fs::write(
+        d.join("droidctl/config.toml"),
+        "[control]\ncruise_speed = 50\nrate_hz = 500\n",
+    )
+    .unwrap();
+    for args in [
+        &["config", "check"][..],
+        &["--sim"][..],
+        &["drive", "--sim"][..],
+    ] {
+        let out = droidctl(&d, args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert!(
+            err.contains("config.toml:3: key `control.rate_hz`"),
+            "{args:?}: {err}"
+        );
+        assert!(err.contains("1..=50"), "{err}");
+        // Refused before taking over the terminal.
+        assert!(!String::from_utf8_lossy(&out.stdout).contains("\x1b[?1049h"));
+    }
+    std::fs::write(
+        d.join("droidctl/config.toml"),
+        "[keys]\nforward = [\"Hyper+w\"]\n",
+    )
+    .unwrap();
+    let out = droidctl(&d, &["--sim"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        err.contains(":2: key `keys.forward`") && err.contains("Hyper+w"),
+        "{err}"
+    );
+}
