@@ -95,8 +95,10 @@ pub fn run(args: RunArgs) -> Result<i32, CliError> {
             let _ = crate::logging::init();
             // Simulated time: the clock jumps whenever everything waits, so a 60 s mission
             // takes a fraction of a second and behaves exactly as in real time.
+            // IO only for the signal handlers (Ctrl-C stops the mission).
             let rt = tokio::runtime::Builder::new_current_thread()
                 .enable_time()
+                .enable_io()
                 .start_paused(true)
                 .build()
                 .map_err(|e| CliError::failure(format!("cannot start the runtime: {e}")))?;
@@ -186,16 +188,28 @@ pub async fn run_on(
             }
         };
     });
-    let result = mission::run(&session, model, steps, opts, emit).await;
-    // Stop first, then close. At the last heading: a stop at heading 0 turns the droid.
-    let heading = result.as_ref().map(|s| s.last_heading).unwrap_or_default();
-    session
-        .shutdown(vec![crate::protocol::v2::cmd::drive_with_heading(
-            0,
-            heading,
-            crate::protocol::v2::wire::DriveFlags::empty(),
-        )])
-        .await;
+    // Ctrl-C (also while reconnecting), SIGTERM and SIGHUP end the mission with a stop.
+    let interrupted = async {
+        use tokio::signal::unix::{SignalKind, signal};
+        match (
+            signal(SignalKind::interrupt()),
+            signal(SignalKind::terminate()),
+            signal(SignalKind::hangup()),
+        ) {
+            (Ok(mut int), Ok(mut term), Ok(mut hup)) => tokio::select! {
+                _ = int.recv() => "SIGINT",
+                _ = term.recv() => "SIGTERM",
+                _ = hup.recv() => "SIGHUP",
+            },
+            _ => std::future::pending().await,
+        }
+    };
+    let result = tokio::select! {
+        r = mission::run(&session, model, steps, opts, emit) => r,
+        sig = interrupted => Err(mission::MissionError(format!("{sig}: mission interrupted, the droid was stopped"))),
+    };
+    // Stop first (at the last heading: a stop at heading 0 would turn the droid), then close.
+    session.shutdown_stopped(Vec::new()).await;
     result.map_err(|e| e.to_string())
 }
 

@@ -178,6 +178,8 @@ pub(crate) struct Shared {
     pub stats: Mutex<SessionStats>,
     pub shutdown: Mutex<Option<Vec<Command>>>,
     pub shutdown_wake: Notify,
+    /// On shutdown, write a stop at the last commanded heading before the final commands.
+    pub stop_on_shutdown: std::sync::atomic::AtomicBool,
 }
 
 /// A handle to a running session. Cloning is cheap.
@@ -198,6 +200,7 @@ pub fn start(link: Box<dyn Link>, config: SessionConfig) -> SessionHandle {
         stats: Mutex::new(SessionStats::default()),
         shutdown: Mutex::new(None),
         shutdown_wake: Notify::new(),
+        stop_on_shutdown: std::sync::atomic::AtomicBool::new(false),
     });
     let (state_tx, state_rx) = watch::channel(LinkState::Connecting);
     let (events, _) = broadcast::channel(config.event_capacity.max(16));
@@ -303,6 +306,15 @@ impl SessionHandle {
 
     pub fn is_closed(&self) -> bool {
         matches!(*self.state.borrow(), LinkState::Closed { .. })
+    }
+
+    /// End the session with a stop: speed 0 at the last heading the session wrote (so the
+    /// droid does not turn), then `last`, then close. Waits for the task to finish.
+    pub async fn shutdown_stopped(&self, last: Vec<Command>) {
+        self.shared
+            .stop_on_shutdown
+            .store(true, std::sync::atomic::Ordering::SeqCst);
+        self.shutdown(last).await;
     }
 
     /// End the session: write `last` (e.g. a stop) first, best effort and bounded in time,

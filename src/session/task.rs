@@ -149,17 +149,27 @@ impl Task {
                 want_response: true,
             })
             .collect();
-        if let Some(mut stop) = self.last_drive.clone() {
-            if let Some(speed) = stop.data.first_mut() {
-                *speed = 0;
-            }
+        if self.last_drive.is_some() {
             items.push(Queued {
-                cmd: stop,
+                cmd: self.stop_command(),
                 reply: None,
                 want_response: true,
             });
         }
         lock(&self.shared.queue).push_front_all(items);
+    }
+
+    /// Speed 0 at the heading of the last drive command written (heading 0 if none).
+    fn stop_command(&self) -> Command {
+        let mut stop = self.last_drive.clone().unwrap_or_else(|| Command {
+            did: 0x16,
+            cid: 0x07,
+            data: vec![0, 0, 0, 0],
+        });
+        if let Some(speed) = stop.data.first_mut() {
+            *speed = 0;
+        }
+        stop
     }
 
     /// Fail every pending and queued request (link lost or closed).
@@ -391,9 +401,16 @@ impl Task {
         &mut self,
         conn: &mut Connection,
         chunks: VecDeque<Vec<u8>>,
-        last: Vec<Command>,
+        mut last: Vec<Command>,
     ) {
         let mut wire: Vec<Vec<u8>> = chunks.into_iter().collect();
+        if self
+            .shared
+            .stop_on_shutdown
+            .load(std::sync::atomic::Ordering::SeqCst)
+        {
+            last.insert(0, self.stop_command());
+        }
         for cmd in last {
             tracing::info!(command = %cmd.def().map(|d| d.name.as_str()).unwrap_or("?"), data = %crate::hex::spaced(&cmd.data), "final command");
             let seq = self.next_seq(cmd.did, cmd.cid);
