@@ -72,9 +72,6 @@ pub struct Summary {
     pub failed_steps: u32,
     pub x_cm: Option<f32>,
     pub y_cm: Option<f32>,
-    /// The heading of the last drive command: a final stop must keep it, or the droid turns.
-    #[serde(skip)]
-    pub last_heading: Heading,
 }
 
 /// What the runner reports as it goes.
@@ -465,7 +462,6 @@ pub async fn run(
         failed_steps: runner.failed,
         x_cm: t.x_cm,
         y_cm: t.y_cm,
-        last_heading: runner.last_heading,
     };
     if closed && let LinkState::Closed { reason: Some(r) } = session.state() {
         return Err(MissionError(r));

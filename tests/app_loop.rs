@@ -53,8 +53,8 @@ async fn start(release: ReleaseMode, faults: Faults, pacing_ms: u64) -> Harness 
         let drives = drives.clone();
         tokio::spawn(async move {
             while let Ok(LogEntry { dir, item, .. }) = log.recv().await {
-                if let (Direction::Out, LogItem::Packet(p)) = (dir, item) {
-                    if (p.did, p.cid) == (0x16, 0x07) {
+                if let (Direction::Out, LogItem::Packet(p)) = (dir, item)
+                    && (p.did, p.cid) == (0x16, 0x07) {
                         let Packet { data, .. } = p;
                         drives.lock().unwrap().push((
                             start.elapsed(),
@@ -62,7 +62,6 @@ async fn start(release: ReleaseMode, faults: Faults, pacing_ms: u64) -> Harness 
                             u16::from_be_bytes([data[1], data[2]]),
                         ));
                     }
-                }
             }
         });
     }

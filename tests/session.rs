@@ -968,22 +968,23 @@ async fn shutdown_writes_the_stop_before_closing() {
     let before = fake.writes().len();
     s.shutdown(vec![drive(0, 45)]).await;
     assert_eq!(s.state(), LinkState::Closed { reason: None });
-    let st = fake.lock();
-    assert!(st.writes.len() > before);
-    let last = &st.sent.last().unwrap().packet;
-    assert!(
-        is_drive(last) && last.data == [0, 0, 45, 0],
-        "last written: {last:?}"
-    );
-    assert!(
-        !last.flags.contains(Flags::REQUESTS_RESPONSE),
-        "nobody waits for the shutdown stop's response"
-    );
-    // The LED packet that was in flight was finished, not cut (the decoder saw it whole).
-    assert!(st.sent.iter().any(|s| s.packet.cid == 0x1A));
-    let (closed_at, _) = *st.closes.last().expect("closed");
-    assert!(closed_at >= st.writes.last().unwrap().at);
-    drop(st);
+    {
+        let st = fake.lock();
+        assert!(st.writes.len() > before);
+        let last = &st.sent.last().unwrap().packet;
+        assert!(
+            is_drive(last) && last.data == [0, 0, 45, 0],
+            "last written: {last:?}"
+        );
+        assert!(
+            !last.flags.contains(Flags::REQUESTS_RESPONSE),
+            "nobody waits for the shutdown stop's response"
+        );
+        // The LED packet that was in flight was finished, not cut (the decoder saw it whole).
+        assert!(st.sent.iter().any(|s| s.packet.cid == 0x1A));
+        let (closed_at, _) = *st.closes.last().expect("closed");
+        assert!(closed_at >= st.writes.last().unwrap().at);
+    }
     assert_eq!(s.request(cmd::ping()).await, Err(RequestError::Closed));
 }
 
@@ -1022,4 +1023,28 @@ async fn play_audio_request_roundtrip() {
         (0x1A, 0x07, &[0x07, 0x7B, 1][..])
     );
     assert_eq!(p.flags, Flags::DEFAULT_COMMAND);
+}
+
+#[tokio::test(start_paused = true)]
+async fn shutdown_stopped_stops_at_the_last_heading() {
+    let fake = Fake::new();
+    fake.auto_respond(true);
+    let s = connected(&fake, SessionConfig::default()).await;
+    s.set(Slot::Drive, drive(200, 135));
+    fake.wait_packets(1).await;
+    s.shutdown_stopped(vec![cmd::set_audio_volume(0)]).await;
+    let sent = fake.packets();
+    let n = sent.len();
+    assert!(n >= 3);
+    // The stop (speed 0 at 135, not at 0, which would turn the droid), then the extra command.
+    assert!(
+        is_drive(&sent[n - 2]) && sent[n - 2].data == [0, 0, 135, 0],
+        "{:?}",
+        sent[n - 2]
+    );
+    assert_eq!(
+        (sent[n - 1].cid, sent[n - 1].data.as_slice()),
+        (0x08, &[0u8][..])
+    );
+    assert_eq!(s.state(), LinkState::Closed { reason: None });
 }

@@ -824,7 +824,7 @@ fn sensor_streaming_follows_the_mask_rules() {
     while b.now < end {
         let before = b.notes.len();
         b.run_for(STEP);
-        for (t, p) in b.notes[before..].to_vec() {
+        for (t, p) in &b.notes[before..] {
             if (p.did, p.cid) != (0x18, 0x02) {
                 continue;
             }

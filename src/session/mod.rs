@@ -169,6 +169,8 @@ pub struct SessionStats {
     /// Requests failed because the link went down.
     pub link_lost: u64,
     pub rejected: u64,
+    /// Setup commands re-sent after a timeout or a sleeping droid.
+    pub retried: u64,
 }
 
 /// State shared between the handle and the task.
@@ -237,6 +239,7 @@ impl SessionHandle {
             cmd,
             reply: Some(tx),
             want_response: true,
+            retries: 0,
         })?;
         rx.await.unwrap_or(Err(RequestError::Closed))
     }
@@ -247,6 +250,7 @@ impl SessionHandle {
             cmd,
             reply: None,
             want_response: true,
+            retries: 0,
         })
     }
 

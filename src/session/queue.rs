@@ -25,6 +25,9 @@ pub struct Queued {
     /// Ask the droid for a response (the default); fire-and-forget sends also ask, so that
     /// errors are seen and counted.
     pub want_response: bool,
+    /// How often to re-send on a timeout, or after a wake when the droid answers
+    /// target_unavailable (asleep). Connect setup uses this; ordinary requests do not.
+    pub retries: u8,
 }
 
 /// What to write next.
@@ -154,6 +157,7 @@ mod tests {
             cmd: c,
             reply: None,
             want_response: true,
+            retries: 0,
         }
     }
 

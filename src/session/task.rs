@@ -21,7 +21,12 @@ const SHUTDOWN_BUDGET: Duration = Duration::from_secs(1);
 struct Pending {
     deadline: Instant,
     reply: Option<Reply>,
+    cmd: Command,
+    retries: u8,
 }
+
+/// Setup commands are re-sent this often before giving up until the next reconnect.
+const SETUP_RETRIES: u8 = 2;
 
 pub(super) struct Task {
     link: Box<dyn Link>,
@@ -147,6 +152,7 @@ impl Task {
                 cmd,
                 reply: None,
                 want_response: true,
+                retries: SETUP_RETRIES,
             })
             .collect();
         if self.last_drive.is_some() {
@@ -154,9 +160,37 @@ impl Task {
                 cmd: self.stop_command(),
                 reply: None,
                 want_response: true,
+                retries: SETUP_RETRIES,
             });
         }
         lock(&self.shared.queue).push_front_all(items);
+    }
+
+    /// Re-send a setup command that timed out or found the droid asleep; `wake_first` queues a
+    /// Wake ahead of it. Returns the pending entry back when it has no retries left.
+    fn retry(&mut self, p: Pending, wake_first: bool) -> Option<Pending> {
+        if p.retries == 0 {
+            return Some(p);
+        }
+        let mut items = Vec::new();
+        if wake_first {
+            items.push(Queued {
+                cmd: crate::protocol::v2::cmd::wake(),
+                reply: None,
+                want_response: true,
+                retries: 0,
+            });
+        }
+        tracing::info!(command = %p.cmd.def().map(|d| d.name.as_str()).unwrap_or("?"), wake_first, "re-sending setup command");
+        items.push(Queued {
+            cmd: p.cmd,
+            reply: p.reply,
+            want_response: true,
+            retries: p.retries - 1,
+        });
+        lock(&self.shared.queue).push_front_all(items);
+        lock(&self.shared.stats).retried += 1;
+        None
     }
 
     /// Speed 0 at the heading of the last drive command written (heading 0 if none).
@@ -216,9 +250,9 @@ impl Task {
     /// Turn the next queued item into wire chunks, registering its pending entry.
     fn take_next(&mut self) -> Option<Vec<Vec<u8>>> {
         let next = lock(&self.shared.queue).pop()?;
-        let (cmd, reply, want_response) = match next {
-            Next::Slot(_, c) => (c, None, true),
-            Next::Fifo(q) => (q.cmd, q.reply, q.want_response),
+        let (cmd, reply, want_response, retries) = match next {
+            Next::Slot(_, c) => (c, None, true, 0),
+            Next::Fifo(q) => (q.cmd, q.reply, q.want_response, q.retries),
         };
         let seq = self.next_seq(cmd.did, cmd.cid);
         let mut packet = cmd.to_packet(seq);
@@ -238,6 +272,8 @@ impl Task {
                 Pending {
                     deadline: Instant::now() + self.cfg.request_timeout + extra,
                     reply,
+                    cmd: cmd.clone(),
+                    retries,
                 },
             );
         } else if let Some(r) = reply {
@@ -302,6 +338,15 @@ impl Task {
                     if !err.is_success() {
                         tracing::warn!(did = p.did, cid = p.cid, seq = p.seq, error = %err, "droid error");
                     }
+                    // Asleep (e.g. the setup's Wake was lost): wake it and try again.
+                    let pending = if err == ErrorCode::TargetUnavailable {
+                        match self.retry(pending, true) {
+                            Some(p) => p,
+                            None => return self.log(Direction::In, LogItem::Packet(p)),
+                        }
+                    } else {
+                        pending
+                    };
                     if let Some(reply) = pending.reply {
                         let _ = reply.send(if err.is_success() {
                             Ok(p.clone())
@@ -343,6 +388,9 @@ impl Task {
             if let Some(p) = self.pending.remove(&k) {
                 lock(&self.shared.stats).timeouts += 1;
                 tracing::debug!(did = k.0, cid = k.1, seq = k.2, "request timed out");
+                let Some(p) = self.retry(p, false) else {
+                    continue;
+                };
                 if let Some(r) = p.reply {
                     let _ = r.send(Err(RequestError::Timeout));
                 }

@@ -132,6 +132,16 @@ impl Link for SimLink {
                     )));
                 }
                 s.connected = true;
+                // Scheduled drops that fell while the link was down are gone, not pending.
+                let now = Instant::now().duration_since(self.epoch);
+                while self
+                    .faults
+                    .disconnect_at
+                    .get(s.next_disconnect)
+                    .is_some_and(|d| *d <= now)
+                {
+                    s.next_disconnect += 1;
+                }
             }
             let (write_tx, write_rx) = mpsc::channel(64);
             let (event_tx, event_rx) = mpsc::channel(1024);
