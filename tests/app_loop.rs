@@ -54,14 +54,15 @@ async fn start(release: ReleaseMode, faults: Faults, pacing_ms: u64) -> Harness 
         tokio::spawn(async move {
             while let Ok(LogEntry { dir, item, .. }) = log.recv().await {
                 if let (Direction::Out, LogItem::Packet(p)) = (dir, item)
-                    && (p.did, p.cid) == (0x16, 0x07) {
-                        let Packet { data, .. } = p;
-                        drives.lock().unwrap().push((
-                            start.elapsed(),
-                            data[0],
-                            u16::from_be_bytes([data[1], data[2]]),
-                        ));
-                    }
+                    && (p.did, p.cid) == (0x16, 0x07)
+                {
+                    let Packet { data, .. } = p;
+                    drives.lock().unwrap().push((
+                        start.elapsed(),
+                        data[0],
+                        u16::from_be_bytes([data[1], data[2]]),
+                    ));
+                }
             }
         });
     }
