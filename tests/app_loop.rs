@@ -378,3 +378,16 @@ async fn quick_taps_of_one_shot_keys_each_count_with_emulated_release() {
         .unwrap();
     assert_eq!(exit.reason, ExitReason::Quit);
 }
+
+#[tokio::test(start_paused = true)]
+async fn start_up_has_no_errors() {
+    // The control loop's first drive/dome commands wait for the connect setup, so nothing
+    // reaches the droid before its Wake.
+    let h = start(REPORTED, Faults::none(), 120).await;
+    sleep(Duration::from_secs(2)).await;
+    let st = h.session.stats();
+    assert_eq!(st.errors, 0, "{st:?}");
+    assert_eq!(st.droid_errors, 0);
+    h.quit.send("test".into()).await.unwrap();
+    h.app.await.unwrap();
+}

@@ -32,48 +32,11 @@ fn ms(v: u64) -> Duration {
 }
 
 /// The help lines as the app builds them from the shipped config (mirrors `app::run`).
+/// The help lines exactly as the app builds them from the shipped config.
 fn help_lines() -> (Vec<HelpLine>, Vec<HelpLine>) {
-    let config = Config::defaults();
-    let keymap = KeyMap::from_config(&config.keys).expect("shipped keymap is valid");
-    let line = |k: &str, a: &str| HelpLine {
-        keys: k.into(),
-        action: a.into(),
-    };
-    let mut keys: Vec<HelpLine> = keymap
-        .help()
-        .into_iter()
-        .map(|(k, a)| line(&k, a))
-        .collect();
-    keys.push(line("Ctrl+c", "quit (stops the droid first)"));
-    for (k, a) in [
-        ("↑ ↓ PgUp PgDn", "in the log: scroll"),
-        ("p", "in the log: pause / resume"),
-        ("d", "in the log: decoded / hex"),
-        ("/", "in the log: filter (in|out dev:NAME text)"),
-        ("c", "in the log: clear the filter"),
-        ("↑ ↓ Enter Esc", "in a palette: choose, play, close"),
-    ] {
-        keys.push(line(k, a));
-    }
-    let g = &config.gamepad;
-    let pad = vec![
-        line("left stick", "heading and speed (polar)"),
-        line("right stick X", "turn the dome"),
-        line("right trigger", "more speed, up to turbo"),
-        line(&g.tripod, "stance: tripod"),
-        line(&g.bipod, "stance: bipod"),
-        line(&g.estop, "EMERGENCY STOP (latched while held)"),
-        line(&g.animation, "play the selected animation"),
-        line(&g.help, "this help"),
-        line(
-            "D-pad",
-            &format!(
-                "sounds {} / {} / {} / {}",
-                g.sound_up, g.sound_down, g.sound_left, g.sound_right
-            ),
-        ),
-    ];
-    (keys, pad)
+    let config = droidctl::config::Config::defaults();
+    let keymap = droidctl::teleop::keymap::KeyMap::from_config(&config.keys).unwrap();
+    droidctl::app::run::help_lines(&config, &keymap)
 }
 
 fn entry(at_ms: u64, dir: Direction, p: Packet) -> LogLine {

@@ -34,7 +34,9 @@ pub struct LogLine {
 impl LogLine {
     pub fn from_entry(e: &LogEntry, streaming: Option<&StreamingConfig>) -> LogLine {
         let mut line = Self::format(e, streaming);
-        line.search = format!("{}\n{}\n{}", line.name, line.decoded, line.hex).to_ascii_lowercase();
+        let err = line.err.map(|e| e.name()).unwrap_or_default();
+        line.search =
+            format!("{}\n{}\n{}\n{err}", line.name, line.decoded, line.hex).to_ascii_lowercase();
         line
     }
 
@@ -85,7 +87,7 @@ impl LogLine {
 pub struct LogFilter {
     pub dir: Option<Direction>,
     pub did: Option<u8>,
-    /// Case-insensitive text that must appear in the name, decoded fields or hex.
+    /// Case-insensitive text that must appear in the name, decoded fields, hex or error name.
     pub text: String,
     /// `text` in lower case.
     lower: String,

@@ -82,7 +82,8 @@ struct App {
     dirty: bool,
 }
 
-fn help_lines(config: &Config, keymap: &KeyMap) -> (Vec<HelpLine>, Vec<HelpLine>) {
+/// The help overlay's lines from the bindings as configured: keyboard, then gamepad.
+pub fn help_lines(config: &Config, keymap: &KeyMap) -> (Vec<HelpLine>, Vec<HelpLine>) {
     let mut keys: Vec<HelpLine> = keymap
         .help()
         .into_iter()

@@ -8,6 +8,32 @@ use crate::model::{Model, Protocol};
 use std::io::{BufRead, IsTerminal, Write};
 use std::time::Duration;
 
+/// How to choose a real droid (the commands that take `--sim` also take these).
+#[derive(Debug, Clone, Default, clap::Args)]
+pub struct BleArgs {
+    /// Connect to the droid with this advertised name (e.g. D2-1A2B; a unique part is enough).
+    #[arg(long, value_name = "NAME", conflicts_with = "sim")]
+    pub name: Option<String>,
+    /// Connect to the droid with this Bluetooth address.
+    #[arg(long, value_name = "ADDR", conflicts_with_all = ["sim", "name"])]
+    pub address: Option<String>,
+    /// How long to scan for droids, in seconds.
+    #[arg(long, default_value_t = 5, value_name = "SECS", value_parser = clap::value_parser!(u64).range(1..=120))]
+    pub scan_timeout: u64,
+}
+
+impl BleArgs {
+    /// Scan, pick and build the link to the droid these arguments select.
+    pub async fn connect(&self) -> Result<Connected, CliError> {
+        connect(
+            self.name.clone(),
+            self.address.clone(),
+            Duration::from_secs(self.scan_timeout),
+        )
+        .await
+    }
+}
+
 /// The droid to drive, ready for `session::start`.
 pub struct Connected {
     pub link: Box<dyn Link>,

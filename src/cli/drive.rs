@@ -24,15 +24,8 @@ pub struct DriveArgs {
     /// Drive the simulated droid in-process: r2d2 (default), r2q5 or bb9e.
     #[arg(long, num_args = 0..=1, default_missing_value = "r2d2", value_name = "MODEL")]
     pub sim: Option<String>,
-    /// Connect to the droid with this advertised name (e.g. D2-1A2B).
-    #[arg(long, value_name = "NAME", conflicts_with = "sim")]
-    pub name: Option<String>,
-    /// Connect to the droid with this Bluetooth address.
-    #[arg(long, value_name = "ADDR", conflicts_with_all = ["sim", "name"])]
-    pub address: Option<String>,
-    /// How long to scan for droids, in seconds.
-    #[arg(long, default_value_t = 5, value_name = "SECS", value_parser = clap::value_parser!(u64).range(1..=120))]
-    pub scan_timeout: u64,
+    #[command(flatten)]
+    pub ble: super::connect::BleArgs,
 }
 
 /// The simulated model asked for, if any.
@@ -101,12 +94,7 @@ pub fn run(args: DriveArgs) -> Result<i32, CliError> {
 
 /// Find and connect to a real droid over Bluetooth.
 async fn connect_real(args: &DriveArgs) -> Result<(Box<dyn Link>, Model, String), CliError> {
-    let c = super::connect::connect(
-        args.name.clone(),
-        args.address.clone(),
-        Duration::from_secs(args.scan_timeout),
-    )
-    .await?;
+    let c = args.ble.connect().await?;
     Ok((c.link, c.model, c.name))
 }
 

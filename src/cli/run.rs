@@ -25,15 +25,8 @@ pub struct RunArgs {
     /// One JSON object per telemetry sample, then a summary object.
     #[arg(long)]
     pub json: bool,
-    /// Connect to the droid with this advertised name (without --sim).
-    #[arg(long, value_name = "NAME", conflicts_with = "sim")]
-    pub name: Option<String>,
-    /// Connect to the droid with this Bluetooth address (without --sim).
-    #[arg(long, value_name = "ADDR", conflicts_with_all = ["sim", "name"])]
-    pub address: Option<String>,
-    /// How long to scan for droids, in seconds (without --sim).
-    #[arg(long, default_value_t = 5, value_name = "SECS", value_parser = clap::value_parser!(u64).range(1..=120))]
-    pub scan_timeout: u64,
+    #[command(flatten)]
+    pub ble: super::connect::BleArgs,
     /// Telemetry sample interval in milliseconds.
     #[arg(long, default_value_t = 100, value_name = "MS", value_parser = clap::value_parser!(u64).range(1..=60_000))]
     pub interval: u64,
@@ -117,12 +110,7 @@ pub fn run(args: RunArgs) -> Result<i32, CliError> {
                 .build()
                 .map_err(|e| CliError::failure(format!("cannot start the runtime: {e}")))?;
             rt.block_on(async move {
-                let c = super::connect::connect(
-                    args.name,
-                    args.address,
-                    Duration::from_secs(args.scan_timeout),
-                )
-                .await?;
+                let c = args.ble.connect().await?;
                 mission::validate(c.model, &steps).map_err(script_errors)?;
                 run_on(c.link, c.model, &steps, opts, json)
                     .await

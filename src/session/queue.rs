@@ -44,6 +44,10 @@ pub struct OutQueue {
     fifo: VecDeque<Queued>,
     capacity: usize,
     slots_turn: bool,
+    /// Connect-setup items still at the front of the FIFO. Until they are written, the slots
+    /// wait: a drive or dome command before the setup's Wake reaches a sleeping droid and
+    /// fails. The droid is not moving then (after a connect it resumes at speed 0).
+    setup_left: usize,
     /// Between the two slots, whose turn it is: a drive storm must not starve the dome.
     head_turn: bool,
     /// Continuous commands replaced before they were written.
@@ -58,6 +62,7 @@ impl OutQueue {
             fifo: VecDeque::new(),
             capacity: capacity.max(1),
             slots_turn: true,
+            setup_left: 0,
             head_turn: false,
             coalesced: 0,
         }
@@ -85,6 +90,7 @@ impl OutQueue {
 
     /// Queue ahead of everything else (connect setup).
     pub fn push_front_all(&mut self, items: Vec<Queued>) {
+        self.setup_left += items.len();
         for q in items.into_iter().rev() {
             self.fifo.push_front(q);
         }
@@ -102,6 +108,13 @@ impl OutQueue {
     /// otherwise slots and the FIFO take turns so neither starves the other, and so do the
     /// drive and head slots.
     pub fn pop(&mut self) -> Option<Next> {
+        if self.setup_left > 0 {
+            if let Some(q) = self.fifo.pop_front() {
+                self.setup_left -= 1;
+                return Some(Next::Fifo(q));
+            }
+            self.setup_left = 0;
+        }
         if self.drive.as_ref().is_some_and(is_stop) {
             return self.drive.take().map(|c| Next::Slot(Slot::Drive, c));
         }
@@ -132,6 +145,7 @@ impl OutQueue {
     pub fn clear(&mut self) -> Vec<Queued> {
         self.drive = None;
         self.head = None;
+        self.setup_left = 0;
         self.fifo.drain(..).collect()
     }
 }
@@ -233,6 +247,28 @@ mod tests {
         assert!(q.push(req(cmd::wake())).is_err());
         assert_eq!(q.clear().len(), 2);
         assert!(q.is_empty());
+    }
+
+    #[test]
+    fn slots_wait_for_the_setup() {
+        let mut q = OutQueue::new(8);
+        q.set_slot(Slot::Drive, drive(0));
+        q.set_slot(
+            Slot::Head,
+            cmd::set_head_position(crate::units::HeadAngle::clamped(10.0)),
+        );
+        q.push_front_all(vec![req(cmd::wake()), req(cmd::reset_yaw())]);
+        q.push(req(cmd::ping())).unwrap();
+        let order: Vec<u8> = std::iter::from_fn(|| q.pop())
+            .map(|n| match n {
+                Next::Fifo(q) => q.cmd.cid,
+                Next::Slot(Slot::Drive, _) => 0xD0,
+                Next::Slot(Slot::Head, _) => 0xE0,
+            })
+            .collect();
+        // Wake and reset-yaw first; then the stop, and the rest take turns.
+        assert_eq!(&order[..3], &[0x0D, 0x06, 0xD0]);
+        assert_eq!(order.len(), 5);
     }
 
     #[test]
