@@ -68,7 +68,8 @@ fn flag(on: bool, name: &'static str) -> Span<'static> {
             theme::commanded().add_modifier(Modifier::REVERSED | Modifier::BOLD),
         )
     } else {
-        Span::styled(name, theme::dim())
+        // Lower case as well as dim, so "off" reads as off without colour too.
+        Span::styled(name.to_ascii_lowercase(), theme::dim())
     }
 }
 
