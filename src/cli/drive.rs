@@ -194,6 +194,7 @@ async fn drive(
     };
     // The app runs as its own task so a panic in it is caught here: the droid is stopped first,
     // then the terminal restored, then the message shown.
+    let app_session = session.clone();
     let app = tokio::spawn(async move {
         let backend = CrosstermBackend::new(std::io::stdout());
         // The alternate screen was cleared on entry; `Terminal::clear` would also ask the
@@ -201,7 +202,7 @@ async fn drive(
         let mut terminal = Terminal::new(backend)?;
         run::run(
             &mut terminal,
-            session_for_app(),
+            app_session,
             opts,
             inputs,
             crate::ui::draw,
@@ -213,10 +214,7 @@ async fn drive(
         Ok(Ok(exit)) => run::exit_commands(exit.stop.clone(), sleep_on_exit),
         _ => run::exit_commands(run::plain_stop(), sleep_on_exit),
     };
-    let session = PANIC_SESSION.get().cloned();
-    if let Some(s) = &session {
-        let _ = tokio::time::timeout(Duration::from_secs(3), s.shutdown(stop_cmds)).await;
-    }
+    let _ = tokio::time::timeout(Duration::from_secs(3), session.shutdown(stop_cmds)).await;
     reader.abort();
     signals.abort();
     guard.restore();
@@ -243,11 +241,4 @@ async fn drive(
             })
         }
     }
-}
-
-fn session_for_app() -> SessionHandle {
-    PANIC_SESSION
-        .get()
-        .cloned()
-        .unwrap_or_else(|| unreachable!("the session is set before the app starts"))
 }
