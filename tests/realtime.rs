@@ -16,11 +16,25 @@ async fn mission() -> Summary {
     let s = session::start(
         Box::new(link),
         SessionConfig {
-            setup: connect_setup(Model::R2D2, &SetupOptions { tripod: false, streaming_interval_ms: 50 }),
+            setup: connect_setup(
+                Model::R2D2,
+                &SetupOptions {
+                    tripod: false,
+                    streaming_interval_ms: 50,
+                },
+            ),
             ..SessionConfig::default()
         },
     );
-    let summary = mission::run(&s, Model::R2D2, &steps, MissionOptions::default(), Arc::new(|_| {})).await.unwrap();
+    let summary = mission::run(
+        &s,
+        Model::R2D2,
+        &steps,
+        MissionOptions::default(),
+        Arc::new(|_| {}),
+    )
+    .await
+    .unwrap();
     s.shutdown_stopped(vec![]).await;
     summary
 }
@@ -39,12 +53,18 @@ fn simulated_time_matches_real_time() {
         .build()
         .unwrap()
         .block_on(mission());
-    assert!(wall.elapsed() > Duration::from_secs(4), "the real-time run really took its time");
+    assert!(
+        wall.elapsed() > Duration::from_secs(4),
+        "the real-time run really took its time"
+    );
     let (px, py) = (paused.x_cm.unwrap(), paused.y_cm.unwrap());
     let (rx, ry) = (real.x_cm.unwrap(), real.y_cm.unwrap());
     // Same path, to within scheduling jitter of a few ms at 75 cm/s.
     assert!(px > 50.0 && py > 30.0, "moved: ({px}, {py})");
-    assert!((px - rx).abs() < 6.0 && (py - ry).abs() < 6.0, "paused ({px}, {py}) vs real ({rx}, {ry})");
+    assert!(
+        (px - rx).abs() < 6.0 && (py - ry).abs() < 6.0,
+        "paused ({px}, {py}) vs real ({rx}, {ry})"
+    );
     assert_eq!(paused.failed_steps, 0);
     assert_eq!(real.failed_steps, 0);
 }

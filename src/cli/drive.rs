@@ -200,14 +200,7 @@ async fn drive(
         // The alternate screen was cleared on entry; `Terminal::clear` would also ask the
         // terminal for the cursor position, which some terminals never answer.
         let mut terminal = Terminal::new(backend)?;
-        run::run(
-            &mut terminal,
-            app_session,
-            opts,
-            inputs,
-            crate::ui::draw,
-        )
-        .await
+        run::run(&mut terminal, app_session, opts, inputs, crate::ui::draw).await
     });
     let result = app.await;
     let stop_cmds = match &result {
