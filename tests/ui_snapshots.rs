@@ -9,7 +9,6 @@
 
 use droidctl::app::packet_log::{LogFilter, LogLine};
 use droidctl::app::state::{AppState, Focus, GamepadStatus, HelpLine, KeyboardMode, Overlay};
-use droidctl::config::Config;
 use droidctl::model::Model;
 use droidctl::protocol::v2::notify::Collision;
 use droidctl::protocol::v2::wire::{
@@ -18,7 +17,6 @@ use droidctl::protocol::v2::wire::{
 use droidctl::protocol::v2::{Device, ErrorCode, Packet, cmd};
 use droidctl::session::{Direction, LinkState, LogEntry, LogItem};
 use droidctl::telemetry::{CollisionSeen, Stance};
-use droidctl::teleop::keymap::KeyMap;
 use droidctl::units::{HeadAngle, Heading};
 use ratatui::Terminal;
 use ratatui::backend::TestBackend;
