@@ -6,4 +6,5 @@ pub mod state;
 
 pub use state::AppState;
 pub mod input;
+pub mod picker;
 pub mod run;

@@ -22,13 +22,23 @@ pub struct BleArgs {
     pub scan_timeout: u64,
 }
 
+/// How to ask which droid, when several answer and none was named.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Chooser {
+    /// A numbered list on stderr and an answer on stdin (`run`).
+    Prompt,
+    /// A full-screen list (the app).
+    Screen,
+}
+
 impl BleArgs {
     /// Scan, pick and build the link to the droid these arguments select.
-    pub async fn connect(&self) -> Result<Connected, CliError> {
+    pub async fn connect(&self, chooser: Chooser) -> Result<Connected, CliError> {
         connect(
             self.name.clone(),
             self.address.clone(),
             Duration::from_secs(self.scan_timeout),
+            chooser,
         )
         .await
     }
@@ -49,6 +59,7 @@ pub async fn connect(
     name: Option<String>,
     address: Option<String>,
     scan_timeout: Duration,
+    chooser: Chooser,
 ) -> Result<Connected, CliError> {
     let address = address
         .map(|a| {
@@ -78,12 +89,20 @@ pub async fn connect(
         .iter()
         .filter(|c| c.model.is_some_and(|m| m.protocol() == Protocol::SpheroV2))
         .collect();
-    if !explicit
-        && drivable.len() > 1
-        && std::io::stdin().is_terminal()
-        && let Some(choice) = pick(&drivable)?
-        && choice != found.address
-    {
+    let choice = if !explicit && drivable.len() > 1 && std::io::stdin().is_terminal() {
+        match chooser {
+            Chooser::Prompt => pick(&drivable)?,
+            Chooser::Screen => {
+                let entries: Vec<ScanEntry> = drivable.iter().map(|e| (*e).clone()).collect();
+                tokio::task::spawn_blocking(move || pick_on_screen(entries))
+                    .await
+                    .map_err(|e| CliError::failure(format!("picker failed: {e}")))??
+            }
+        }
+    } else {
+        None
+    };
+    if let Some(choice) = choice.filter(|c| *c != found.address) {
         let sel = DeviceSelector {
             name: None,
             address: Some(choice),
@@ -156,4 +175,40 @@ fn pick(entries: &[&ScanEntry]) -> Result<Option<BleAddress>, CliError> {
             entries.len()
         ))),
     }
+}
+
+/// The full-screen picker: arrows and Enter (or a digit); Esc cancels.
+fn pick_on_screen(entries: Vec<ScanEntry>) -> Result<Option<BleAddress>, CliError> {
+    use crate::app::input::key_from_crossterm;
+    use crate::app::picker::{Picked, Picker};
+    use crossterm::event::{Event, KeyEventKind, read};
+    let fail = |what: &str, e: &dyn std::fmt::Display| CliError::failure(format!("{what}: {e}"));
+    let mut guard =
+        super::term::TerminalGuard::enter().map_err(|e| fail("cannot use this terminal", &e))?;
+    let mut terminal =
+        ratatui::Terminal::new(ratatui::backend::CrosstermBackend::new(std::io::stdout()))
+            .map_err(|e| fail("cannot use this terminal", &e))?;
+    let mut picker = Picker::new(entries);
+    let result = loop {
+        if let Err(e) = terminal.draw(|f| crate::ui::picker::draw(f, &picker)) {
+            break Err(fail("cannot draw", &e));
+        }
+        let ev = match read() {
+            Ok(ev) => ev,
+            Err(e) => break Err(fail("cannot read the keyboard", &e)),
+        };
+        let Event::Key(k) = ev else { continue };
+        if k.kind == KeyEventKind::Release {
+            continue;
+        }
+        if let Some((key, _)) = key_from_crossterm(&k) {
+            match picker.on_key(key) {
+                Picked::Pending => {}
+                Picked::Chosen(e) => break Ok(Some(e.address)),
+                Picked::Cancelled => break Err(CliError::failure("no droid chosen")),
+            }
+        }
+    };
+    guard.restore();
+    result
 }

@@ -94,7 +94,7 @@ pub fn run(args: DriveArgs) -> Result<i32, CliError> {
 
 /// Find and connect to a real droid over Bluetooth.
 async fn connect_real(args: &DriveArgs) -> Result<(Box<dyn Link>, Model, String), CliError> {
-    let c = args.ble.connect().await?;
+    let c = args.ble.connect(super::connect::Chooser::Screen).await?;
     Ok((c.link, c.model, c.name))
 }
 

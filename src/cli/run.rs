@@ -110,7 +110,7 @@ pub fn run(args: RunArgs) -> Result<i32, CliError> {
                 .build()
                 .map_err(|e| CliError::failure(format!("cannot start the runtime: {e}")))?;
             rt.block_on(async move {
-                let c = args.ble.connect().await?;
+                let c = args.ble.connect(super::connect::Chooser::Prompt).await?;
                 mission::validate(c.model, &steps).map_err(script_errors)?;
                 run_on(c.link, c.model, &steps, opts, json)
                     .await

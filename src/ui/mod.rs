@@ -15,6 +15,7 @@ pub mod layout;
 mod log_pane;
 mod map;
 mod overlay;
+pub mod picker;
 mod sensors;
 mod status;
 mod text;
