@@ -37,7 +37,13 @@ impl Tui {
     /// Start `droidctl --sim` at `cols`×`rows`. `kitty`: answer the keyboard-protocol query
     /// as a terminal that supports it.
     fn start(cols: u16, rows: u16, kitty: bool) -> Tui {
-        let dir = TempDir::new(if kitty { "kitty" } else { "legacy" });
+        Self::start_with(cols, rows, kitty, &[])
+    }
+
+    /// As [`Tui::start`], with extra environment variables.
+    fn start_with(cols: u16, rows: u16, kitty: bool, env: &[(&str, &str)]) -> Tui {
+        let tag = if kitty { "kitty" } else { "legacy" };
+        let dir = TempDir::new(&format!("{tag}{}", env.len()));
         let pty = native_pty_system()
             .openpty(PtySize {
                 rows,
@@ -51,6 +57,9 @@ impl Tui {
         cmd.env("TERM", "xterm-256color");
         cmd.env("DROIDCTL_LOG_FILE", dir.0.join("droidctl.log"));
         cmd.env("DROIDCTL_CONFIG", dir.0.join("config.toml"));
+        for (k, v) in env {
+            cmd.env(k, v);
+        }
         let child = pty.slave.spawn_command(cmd).unwrap();
         drop(pty.slave);
         let mut reader = pty.master.try_clone_reader().unwrap();
@@ -280,49 +289,15 @@ fn sigterm_stops_the_droid_then_restores_the_terminal() {
 
 #[test]
 fn a_crash_stops_the_droid_then_restores_the_terminal() {
-    let dir = TempDir::new("crash");
-    let pty = native_pty_system()
-        .openpty(PtySize {
-            rows: 30,
-            cols: 100,
-            pixel_width: 0,
-            pixel_height: 0,
-        })
-        .unwrap();
-    let mut cmd = CommandBuilder::new(env!("CARGO_BIN_EXE_droidctl"));
-    cmd.arg("--sim");
-    cmd.env("TERM", "xterm-256color");
-    cmd.env("DROIDCTL_LOG_FILE", dir.0.join("droidctl.log"));
-    cmd.env("DROIDCTL_CONFIG", dir.0.join("config.toml"));
-    cmd.env("DROIDCTL_TEST_PANIC_AFTER_MS", "3500");
-    let mut child = pty.slave.spawn_command(cmd).unwrap();
-    drop(pty.slave);
-    let mut reader = pty.master.try_clone_reader().unwrap();
-    let mut writer = pty.master.take_writer().unwrap();
-    let raw = Arc::new(Mutex::new(Vec::new()));
-    {
-        let raw = raw.clone();
-        std::thread::spawn(move || {
-            let mut buf = [0u8; 8192];
-            while let Ok(n) = reader.read(&mut buf) {
-                if n == 0 {
-                    break;
-                }
-                raw.lock().unwrap().extend_from_slice(&buf[..n]);
-            }
-        });
-    }
-    // Answer the start-up probe as a legacy terminal, then drive until the crash.
+    let mut tui = Tui::start_with(100, 30, false, &[("DROIDCTL_TEST_PANIC_AFTER_MS", "4000")]);
+    tui.wait_for("stance tripod", Duration::from_secs(20));
+    // Drive into the crash.
     let start = Instant::now();
     let status = loop {
-        if raw.lock().unwrap().windows(4).any(|w| w == b"\x1b[?u") {
-            let _ = writer.write_all(b"\x1b[?62;c");
-        }
-        if start.elapsed() > Duration::from_secs(3) {
-            let _ = writer.write_all(b"w");
-        }
-        let _ = writer.flush();
-        if let Some(s) = child.try_wait().unwrap() {
+        // The child may already be gone: a failed write is fine here.
+        let _ = tui.writer.lock().unwrap().write_all(b"w");
+        if let Some(s) = tui.child.try_wait().unwrap() {
+            std::thread::sleep(Duration::from_millis(200));
             break s;
         }
         assert!(
@@ -331,11 +306,9 @@ fn a_crash_stops_the_droid_then_restores_the_terminal() {
         );
         std::thread::sleep(Duration::from_millis(40));
     };
-    std::thread::sleep(Duration::from_millis(200));
     assert_eq!(status.exit_code(), 101, "{status:?}");
-    let log = std::fs::read_to_string(dir.0.join("droidctl.log")).unwrap_or_default();
-    assert!(final_stop_logged(&log), "log:\n{log}");
-    let raw = raw.lock().unwrap().clone();
+    assert!(final_stop_logged(&tui.log()), "log:\n{}", tui.log());
+    let raw = tui.raw();
     let text = String::from_utf8_lossy(&raw);
     let left = pos(&raw, b"\x1b[?1049l").expect("left the alternate screen");
     let message = text
@@ -344,5 +317,4 @@ fn a_crash_stops_the_droid_then_restores_the_terminal() {
     assert!(pos(&raw, b"\x1b[?1049h").unwrap() < left);
     // The message comes after the terminal was restored, so it stays readable.
     assert!(message > String::from_utf8_lossy(&raw[..left]).len());
-    drop(pty.master);
 }
