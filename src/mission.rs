@@ -3,7 +3,6 @@
 //! mission takes well under a second of wall time with the same results as in real time.
 
 use crate::model::Model;
-use crate::protocol::v2::catalog;
 use crate::protocol::v2::wire::{AudioMode, DriveFlags, LegAction, LegState, Mask};
 use crate::protocol::v2::{Command, Notification, cmd};
 use crate::script::{Action, LedGroup, Step};
@@ -388,16 +387,9 @@ pub async fn run(
             }
             loop {
                 if let Ok(p) = session.request(cmd::get_battery_voltage()).await
-                    && let Some(v) = catalog::decode_fields(
-                        catalog::lookup(0x13, 0x03)
-                            .map(|d| d.response)
-                            .unwrap_or(&[]),
-                        &p.data,
-                    )
-                    .ok()
-                    .and_then(|f| f.first().and_then(|(_, v)| v.as_f64()))
+                    && let Some(v) = crate::telemetry::battery_volts(&p.data)
                 {
-                    lock(&telemetry).battery_v = Some(v as f32);
+                    lock(&telemetry).battery_v = Some(v);
                 }
                 sleep(every).await;
             }

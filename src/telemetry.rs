@@ -7,6 +7,15 @@ use crate::units::Heading;
 use std::collections::VecDeque;
 use std::time::Duration;
 
+/// The voltage in a Get Battery Voltage response (u16 volts×100, `droid-facts.md` §2).
+pub fn battery_volts(response: &[u8]) -> Option<f32> {
+    use crate::protocol::v2::wire::{CentiVolts, Reader, Wire};
+    let mut r = Reader::new(response);
+    let v = CentiVolts::get(&mut r, "voltage").ok()?;
+    r.finish().ok()?;
+    Some(v.0 as f32 / 100.0)
+}
+
 /// How many locator positions the track keeps.
 pub const TRACK_LEN: usize = 600;
 
@@ -227,6 +236,13 @@ mod tests {
         }
         assert_eq!(t.track.len(), TRACK_LEN);
         assert_eq!(t.track.back(), Some(&((TRACK_LEN * 3 - 1) as f32, 0.0)));
+    }
+
+    #[test]
+    fn battery_response() {
+        assert_eq!(battery_volts(&[0x01, 0x9A]), Some(4.10));
+        assert_eq!(battery_volts(&[0x01]), None);
+        assert_eq!(battery_volts(&[0x01, 0x9A, 0]), None);
     }
 
     #[test]

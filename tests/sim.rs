@@ -190,14 +190,7 @@ impl Bench {
 /// A payload of the right length for a schema: zeros (valid for every enum, heading and dome
 /// angle in the catalogue), variable-length fields at their minimum.
 fn payload_for(schema: Schema) -> Vec<u8> {
-    let n: usize = schema
-        .iter()
-        .map(|f| match f.size {
-            Size::Fixed(n) => n,
-            Size::Rest { min } => min,
-        })
-        .sum();
-    vec![0; n]
+    droidctl::protocol::v2::catalog::minimal_payload(schema)
 }
 
 fn wrong_length(schema: Schema) -> Option<Vec<u8>> {

@@ -10,7 +10,7 @@ use crate::config::Config;
 use crate::model::Model;
 use crate::protocol::v2::sensor::StreamingConfig;
 use crate::protocol::v2::wire::{AudioMode, DriveFlags, LegAction};
-use crate::protocol::v2::{Command, catalog, cmd};
+use crate::protocol::v2::{Command, cmd};
 use crate::session::{LinkState, SessionEvent, SessionHandle, Slot};
 use crate::teleop::control::{Controller, DroidView, Inputs, Out};
 use crate::teleop::gamepad::{PadCommand, PadEvent, PadState};
@@ -573,15 +573,13 @@ pub async fn run<B: Backend>(
     let poller = {
         let session = session.clone();
         tokio::spawn(async move {
-            let volts = catalog::lookup(0x13, 0x03)
-                .map(|d| d.response)
-                .unwrap_or(&[]);
             loop {
-                if let Ok(p) = session.request(cmd::get_battery_voltage()).await
-                    && let Some(v) = catalog::decode_fields(volts, &p.data)
-                        .ok()
-                        .and_then(|f| f.first().and_then(|(_, v)| v.as_f64()))
-                    && battery_tx.send(v as f32).await.is_err()
+                let reading = match session.request(cmd::get_battery_voltage()).await {
+                    Ok(p) => crate::telemetry::battery_volts(&p.data),
+                    Err(_) => None,
+                };
+                if let Some(v) = reading
+                    && battery_tx.send(v).await.is_err()
                 {
                     return;
                 }

@@ -74,11 +74,7 @@ pub fn run(args: DriveArgs) -> Result<i32, CliError> {
     })?;
     let model = sim_model(&args.sim)?;
     let log_path = crate::logging::init().ok();
-    let rt = tokio::runtime::Builder::new_multi_thread()
-        .worker_threads(2)
-        .enable_all()
-        .build()
-        .map_err(|e| CliError::failure(format!("cannot start the runtime: {e}")))?;
+    let rt = super::realtime_runtime()?;
     rt.block_on(async move {
         let (link, model, name) = match model {
             Some(m) => {

@@ -44,6 +44,16 @@ pub enum Command {
     Config(config_cmd::ConfigCmd),
 }
 
+/// The runtime for talking to a real droid (or the simulator in real time): two workers,
+/// IO (Bluetooth, terminal, signals) and timers.
+pub(crate) fn realtime_runtime() -> Result<tokio::runtime::Runtime, CliError> {
+    tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(2)
+        .enable_all()
+        .build()
+        .map_err(|e| CliError::failure(format!("cannot start the runtime: {e}")))
+}
+
 /// A failure with the exit status it deserves.
 #[derive(Debug)]
 pub struct CliError {

@@ -104,11 +104,7 @@ pub fn run(args: RunArgs) -> Result<i32, CliError> {
         }
         None => {
             let _ = crate::logging::init();
-            let rt = tokio::runtime::Builder::new_multi_thread()
-                .worker_threads(2)
-                .enable_all()
-                .build()
-                .map_err(|e| CliError::failure(format!("cannot start the runtime: {e}")))?;
+            let rt = super::realtime_runtime()?;
             rt.block_on(async move {
                 let c = args.ble.connect(super::connect::Chooser::Prompt).await?;
                 mission::validate(c.model, &steps).map_err(script_errors)?;

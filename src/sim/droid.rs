@@ -3,10 +3,10 @@
 use super::SimConfig;
 use super::physics::{angle_diff, approach, clamp_to_room, heading_vector, wrap360};
 use crate::model::Model;
-use crate::protocol::v2::catalog::{self, Schema};
+use crate::protocol::v2::catalog;
 use crate::protocol::v2::notify::Collision;
 use crate::protocol::v2::sensor::{StreamingConfig, encode_sample};
-use crate::protocol::v2::wire::{AccelRaw, CollisionAxis, DriveFlags, LegAction, LegState, Size};
+use crate::protocol::v2::wire::{AccelRaw, CollisionAxis, DriveFlags, LegAction, LegState};
 use crate::protocol::v2::{Decoder, Device, ErrorCode, Flags, Packet};
 use crate::units::{HEAD_MAX_DEG, HEAD_MIN_DEG};
 use std::time::Duration;
@@ -399,7 +399,7 @@ impl SimDroid {
             (Device::Io, 0x1C) => self.set_leds(d[0] as u32, &d[1..]),
             (Device::Io, 0x1A) => self.set_leds(u32_at(0), &d[4..]),
             // Everything else is accepted; getters answer with a well-formed payload.
-            _ => (ErrorCode::Success, zero_payload(def.response)),
+            _ => (ErrorCode::Success, catalog::minimal_payload(def.response)),
         }
     }
 
@@ -719,17 +719,4 @@ impl SimDroid {
         let data = encode_sample(&self.streaming, &values);
         self.notify(0x18, 0x02, data);
     }
-}
-
-/// A well-formed response payload of zeros for a schema (fixed fields zeroed, variable ones
-/// at their minimum).
-fn zero_payload(schema: Schema) -> Vec<u8> {
-    let n: usize = schema
-        .iter()
-        .map(|f| match f.size {
-            Size::Fixed(n) => n,
-            Size::Rest { min } => min,
-        })
-        .sum();
-    vec![0; n]
 }

@@ -86,18 +86,29 @@ pub fn decode_fields(schema: Schema, data: &[u8]) -> Result<Fields, FieldError> 
 
 /// Whether a payload of `len` bytes can fit `schema` (the simulator's bad_data_length check).
 pub fn length_ok(schema: Schema, len: usize) -> bool {
-    let mut fixed = 0;
-    let mut rest = false;
-    for f in schema {
-        match f.size {
-            Size::Fixed(n) => fixed += n,
-            Size::Rest { min } => {
-                fixed += min;
-                rest = true;
-            }
-        }
+    let min = min_len(schema);
+    if schema.iter().any(|f| matches!(f.size, Size::Rest { .. })) {
+        len >= min
+    } else {
+        len == min
     }
-    if rest { len >= fixed } else { len == fixed }
+}
+
+/// The shortest payload a schema accepts: fixed fields plus each variable one's minimum.
+pub fn min_len(schema: Schema) -> usize {
+    schema
+        .iter()
+        .map(|f| match f.size {
+            Size::Fixed(n) => n,
+            Size::Rest { min } => min,
+        })
+        .sum()
+}
+
+/// A well-formed payload of zeros of the shortest length (zero is valid for every enum,
+/// heading and dome angle in the catalogue).
+pub fn minimal_payload(schema: Schema) -> Vec<u8> {
+    vec![0; min_len(schema)]
 }
 
 /// One command of the catalogue.
