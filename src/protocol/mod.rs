@@ -1,3 +1,8 @@
-//! The sans-IO protocol core.
+//! The sans-IO protocol core: one module per protocol family, plus what they share
+//! (wire types, decoded values, payload schemas).
 
+pub mod notify;
+pub mod schema;
 pub mod v2;
+pub mod value;
+pub mod wire;

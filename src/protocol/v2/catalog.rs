@@ -10,8 +10,7 @@
 
 use super::device::Device;
 use super::packet::Packet;
-use super::value::Fields;
-use super::wire::*;
+use crate::protocol::wire::*;
 use crate::units::{HeadAngle, Heading};
 use std::collections::HashMap;
 use std::sync::LazyLock;
@@ -36,80 +35,9 @@ impl Command {
     }
 }
 
-/// One parameter or response field.
-#[derive(Clone, Copy)]
-pub struct FieldDef {
-    /// snake_case name; the CLI option is its kebab-case form.
-    pub name: &'static str,
-    pub description: &'static str,
-    pub size: Size,
-    pub parse_put: fn(&str, &mut Vec<u8>) -> Result<(), String>,
-    pub decode: fn(&mut Reader<'_>, &'static str, &mut Fields) -> Result<(), FieldError>,
-}
-
-impl std::fmt::Debug for FieldDef {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "{}: {}", self.name, self.description)
-    }
-}
-
-impl FieldDef {
-    pub const fn of<T: Wire>(name: &'static str) -> FieldDef {
-        FieldDef {
-            name,
-            description: T::DESCRIPTION,
-            size: T::SIZE,
-            parse_put: T::parse_put,
-            decode: T::decode_into,
-        }
-    }
-
-    /// The command-line option name (`x_threshold` → `x-threshold`).
-    pub fn option(&self) -> String {
-        self.name.replace('_', "-")
-    }
-}
-
-/// A payload layout: an ordered list of fields.
-pub type Schema = &'static [FieldDef];
-
-/// Decode `data` by `schema`; the whole payload must be consumed.
-pub fn decode_fields(schema: Schema, data: &[u8]) -> Result<Fields, FieldError> {
-    let mut r = Reader::new(data);
-    let mut out = Fields::with_capacity(schema.len());
-    for f in schema {
-        (f.decode)(&mut r, f.name, &mut out)?;
-    }
-    r.finish()?;
-    Ok(out)
-}
-
-/// Whether a payload of `len` bytes can fit `schema` (the simulator's bad_data_length check).
-pub fn length_ok(schema: Schema, len: usize) -> bool {
-    let min = min_len(schema);
-    if schema.iter().any(|f| matches!(f.size, Size::Rest { .. })) {
-        len >= min
-    } else {
-        len == min
-    }
-}
-
-/// The shortest payload a schema accepts: fixed fields plus each variable one's minimum.
-pub fn min_len(schema: Schema) -> usize {
-    schema
-        .iter()
-        .map(|f| match f.size {
-            Size::Fixed(n) => n,
-            Size::Rest { min } => min,
-        })
-        .sum()
-}
-
-/// A well-formed payload of zeros of the shortest length (zero is valid for every enum,
-/// heading and dome angle in the catalogue).
-pub fn minimal_payload(schema: Schema) -> Vec<u8> {
-    vec![0; min_len(schema)]
-}
+pub use crate::protocol::schema::{
+    FieldDef, Schema, decode_fields, length_ok, min_len, minimal_payload,
+};
 
 /// One command of the catalogue.
 #[derive(Debug)]
@@ -129,39 +57,10 @@ impl CommandDef {
         self.device.id()
     }
 
-    /// Encode parameters given as (option name, text) pairs, in any order.
-    /// Every parameter is required; unknown options are errors.
+    /// Encode parameters given as (option name, text) pairs, in any order. A parameter left
+    /// out takes its default; one without a default is required. Unknown options are errors.
     pub fn encode_params(&self, given: &[(String, String)]) -> Result<Vec<u8>, String> {
-        for (k, _) in given {
-            if !self.params.iter().any(|p| p.option() == *k) {
-                let expected: Vec<String> = self
-                    .params
-                    .iter()
-                    .map(|p| format!("--{}", p.option()))
-                    .collect();
-                return Err(if expected.is_empty() {
-                    format!("{} takes no parameters, got --{k}", self.name)
-                } else {
-                    format!(
-                        "{} has no parameter --{k} (expected {})",
-                        self.name,
-                        expected.join(" ")
-                    )
-                });
-            }
-        }
-        let mut data = Vec::new();
-        for p in self.params {
-            let opt = p.option();
-            let text = given
-                .iter()
-                .rev()
-                .find(|(k, _)| *k == opt)
-                .map(|(_, v)| v)
-                .ok_or_else(|| format!("{} needs --{opt} ({})", self.name, p.description))?;
-            (p.parse_put)(text, &mut data).map_err(|e| format!("--{opt}: {e}"))?;
-        }
-        Ok(data)
+        crate::protocol::schema::encode_params(&self.name, self.params, given)
     }
 }
 
@@ -193,7 +92,7 @@ struct RawNotification {
 }
 
 macro_rules! catalogue {
-    ($( $dev:ident { $( $cid:literal $fname:ident $spec:literal ( $($p:ident : $pty:ty),* ) -> ( $($r:ident : $rty:ty),* ) ; )* } )*) => {
+    ($( $dev:ident { $( $cid:literal $fname:ident $spec:literal ( $($p:ident : $pty:ty $(= $def:literal)?),* ) -> ( $($r:ident : $rty:ty),* ) ; )* } )*) => {
         /// Typed constructors, one per catalogue command: typed parameters in, payload out.
         pub mod cmd {
             #[allow(unused_imports)]
@@ -214,7 +113,7 @@ macro_rules! catalogue {
             cid: $cid,
             fn_name: stringify!($fname),
             spec_name: $spec,
-            params: &[ $( FieldDef::of::<$pty>(stringify!($p)) ),* ],
+            params: &[ $( FieldDef::of::<$pty>(stringify!($p)) $(.with_default($def))? ),* ],
             response: &[ $( FieldDef::of::<$rty>(stringify!($r)) ),* ],
         }, )* )* ];
     };
@@ -241,9 +140,9 @@ catalogue! {
         0x11 get_bluetooth_info "Get Bluetooth Info" () -> (name_and_address: Text);
         0x20 get_power_state "Get Power State" () -> (record_version: u8, state: PowerState, voltage: CentiVolts,
             number_of_charges: u16, time_since_last_charge: u16);
-        0x21 enable_battery_changed_notify "Enable Battery Changed Notify" (enable: bool) -> ();
+        0x21 enable_battery_changed_notify "Enable Battery Changed Notify" (enable: bool = "true") -> ();
         // Same spec name as Power/Sleep: the Core one is prefixed to keep names unique.
-        0x22 core_sleep "Sleep" (interval: u16, unk: u8, unk2: u16) -> ();
+        0x22 core_sleep "Sleep" (interval: u16 = "0", unk: u8 = "0", unk2: u16 = "0") -> ();
         0x25 set_inactivity_timeout "Set Inactivity Timeout" (timeout: u16) -> ();
         0x26 core_get_charger_state "Get Charger State" () -> (state: CoreChargerState);
         0x27 get_factory_config_block_crc "Get Factory Config Block CRC" () -> (crc: Mask<4>);
@@ -273,23 +172,23 @@ catalogue! {
         0x3A get_event_log_status "Get Event Log Status" () -> (word_0: u32, word_1: u32, word_2: u32);
         0x3B get_event_log_data "Get Event Log Data" (offset: u32, size: u32) -> (data: Bytes);
         0x3C clear_event_log "Clear Event Log" () -> ();
-        0x3D enable_sos_message_notify "Enable SOS Message Notify" (enable: bool) -> ();
+        0x3D enable_sos_message_notify "Enable SOS Message Notify" (enable: bool = "true") -> ();
         0x3F get_sos_message "Get SOS Message" () -> ();
         0x44 clear_sos_message "Clear SOS Message" () -> ();
     }
     Power {
-        0x00 enter_deep_sleep "Enter Deep Sleep" (option: u8) -> ();
+        0x00 enter_deep_sleep "Enter Deep Sleep" (option: u8 = "0") -> ();
         0x01 sleep "Sleep" () -> ();
         0x03 get_battery_voltage "Get Battery Voltage" () -> (voltage: CentiVolts);
         0x04 get_battery_state "Get Battery State" () -> (state: BatteryState);
-        0x05 enable_battery_state_changed_notify "Enable Battery State Changed Notify" (enable: bool) -> ();
+        0x05 enable_battery_state_changed_notify "Enable Battery State Changed Notify" (enable: bool = "true") -> ();
         0x0C force_battery_refresh "Force Battery Refresh" () -> ();
         0x0D wake "Wake" () -> ();
         0x10 get_battery_percentage "Get Battery Percentage" () -> (percent: u8);
         0x17 get_battery_voltage_state "Get Battery Voltage State" () -> (state: BatteryVoltageState);
-        0x1B enable_battery_voltage_state_change_notify "Enable Battery Voltage State Change Notify" (enable: bool) -> ();
+        0x1B enable_battery_voltage_state_change_notify "Enable Battery Voltage State Change Notify" (enable: bool = "true") -> ();
         0x1F get_charger_state "Get Charger State" () -> (state: ChargerState);
-        0x20 enable_charger_state_changed_notify "Enable Charger State Changed Notify" (enable: bool) -> ();
+        0x20 enable_charger_state_changed_notify "Enable Charger State Changed Notify" (enable: bool = "true") -> ();
         0x22 get_battery_adc_reading "Get Battery ADC Reading" () -> (reading: u8);
         0x23 set_battery_calibration "Set Battery Calibration" (slope: u8, intercept: u8) -> ();
         0x24 get_battery_calibration "Get Battery Calibration" () -> (calibration: u8);
@@ -302,7 +201,7 @@ catalogue! {
     Drive {
         0x01 set_raw_motors "Set Raw Motors" (left_mode: RawMotorMode, left_speed: u8, right_mode: RawMotorMode, right_speed: u8) -> ();
         0x06 reset_yaw "Reset Yaw" () -> ();
-        0x07 drive_with_heading "Drive With Heading" (speed: u8, heading: Heading, flags: DriveFlags) -> ();
+        0x07 drive_with_heading "Drive With Heading" (speed: u8, heading: Heading = "0", flags: DriveFlags = "0") -> ();
         0x0B generic_raw_motor "Generic Raw Motor" (index: MotorIndex, mode: RawMotorMode, speed: Bytes) -> ();
         0x0C set_stabilization "Set Stabilization" (index: StabilizationIndex) -> ();
         0x0E set_control_system_type "Set Control System Type" (control_type: u8, controller: u8) -> ();
@@ -310,8 +209,8 @@ catalogue! {
         0x20 set_component_parameters "Set Component Parameters" (component: u8, parameter: u8, values: F32List) -> ();
         0x21 get_component_parameters "Get Component Parameters" (component: u8, parameter: u8) -> (values: F32List);
         0x22 set_custom_control_system_timeout "Set Custom Control System Timeout" (timeout_ms: u16) -> ();
-        0x25 enable_motor_stall_notify "Enable Motor Stall Notify" (enable: bool) -> ();
-        0x27 enable_motor_fault_notify "Enable Motor Fault Notify" (enable: bool) -> ();
+        0x25 enable_motor_stall_notify "Enable Motor Stall Notify" (enable: bool = "true") -> ();
+        0x27 enable_motor_fault_notify "Enable Motor Fault Notify" (enable: bool = "true") -> ();
         0x29 get_motor_fault_state "Get Motor Fault State" () -> (fault: bool);
     }
     Animatronic {
@@ -323,29 +222,29 @@ catalogue! {
         0x15 set_leg_position "Set Leg Position" (position: f32) -> ();
         0x16 get_leg_position "Get Leg Position" () -> (position: f32);
         0x25 get_leg_action "Get Leg Action" () -> (state: LegState);
-        0x2A enable_leg_action_notify "Enable Leg Action Notify" (enable: bool) -> ();
+        0x2A enable_leg_action_notify "Enable Leg Action Notify" (enable: bool = "true") -> ();
         0x2B stop_animation "Stop Animation" () -> ();
-        0x2C enable_idle_animations "Enable Idle Animations" (enable: bool) -> ();
-        0x2D enable_trophy_mode "Enable Trophy Mode" (enable: bool) -> ();
+        0x2C enable_idle_animations "Enable Idle Animations" (enable: bool = "true") -> ();
+        0x2D enable_trophy_mode "Enable Trophy Mode" (enable: bool = "true") -> ();
         0x2E get_trophy_mode_enabled "Get Trophy Mode Enabled" () -> (enabled: bool);
-        0x39 enable_head_reset_to_zero_notify "Enable Head Reset to Zero Notify" (enable: bool) -> ();
+        0x39 enable_head_reset_to_zero_notify "Enable Head Reset to Zero Notify" (enable: bool = "true") -> ();
     }
     Sensor {
-        0x00 set_sensor_streaming_mask "Set Sensor Streaming Mask" (interval_ms: u16, count: u8, mask: Mask<4>) -> ();
+        0x00 set_sensor_streaming_mask "Set Sensor Streaming Mask" (interval_ms: u16, count: u8 = "0", mask: Mask<4>) -> ();
         0x01 get_sensor_streaming_mask "Get Sensor Streaming Mask" () -> (interval_ms: u16, count: u8, mask: Mask<4>);
         0x0C set_extended_sensor_streaming_mask "Set Extended Sensor Streaming Mask" (mask: Mask<4>) -> ();
         0x0D get_extended_sensor_streaming_mask "Get Extended Sensor Streaming Mask" () -> (mask: Mask<4>);
-        0x0F enable_gyro_max_notify "Enable Gyro Max Notify" (enable: bool) -> ();
+        0x0F enable_gyro_max_notify "Enable Gyro Max Notify" (enable: bool = "true") -> ();
         // dead_time is in 10 ms units (droid-facts.md §2).
-        0x11 configure_collision_detection "Configure Collision Detection" (method: CollisionMethod, x_threshold: u8,
-            y_threshold: u8, x_speed: u8, y_speed: u8, dead_time: u8) -> ();
+        0x11 configure_collision_detection "Configure Collision Detection" (method: CollisionMethod = "1", x_threshold: u8 = "90",
+            y_threshold: u8 = "130", x_speed: u8 = "90", y_speed: u8 = "130", dead_time: u8 = "1") -> ();
         0x13 reset_locator_x_and_y "Reset Locator X and Y" () -> ();
-        0x14 enable_collision_detected_notify "Enable Collision Detected Notify" (enable: bool) -> ();
-        0x17 set_locator_flags "Set Locator Flags" (flags: bool) -> ();
+        0x14 enable_collision_detected_notify "Enable Collision Detected Notify" (enable: bool = "true") -> ();
+        0x17 set_locator_flags "Set Locator Flags" (flags: bool = "false") -> ();
         0x18 set_accelerometer_activity_threshold "Set Accelerometer Activity Threshold" (threshold: f32) -> ();
-        0x19 enable_accelerometer_activity_notify "Enable Accelerometer Activity Notify" (enable: bool) -> ();
+        0x19 enable_accelerometer_activity_notify "Enable Accelerometer Activity Notify" (enable: bool = "true") -> ();
         0x1B set_gyro_activity_threshold "Set Gyro Activity Threshold" (threshold: f32) -> ();
-        0x1C enable_gyro_activity_notify "Enable Gyro Activity Notify" (enable: bool) -> ();
+        0x1C enable_gyro_activity_notify "Enable Gyro Activity Notify" (enable: bool = "true") -> ();
         0x22 get_bot_to_bot_infrared_readings "Get Bot To Bot Infrared Readings" () -> (readings: [u8; 4]);
         0x23 get_rgbc_sensor_values "Get RGBC Sensor Values" () -> (red: u16, green: u16, blue: u16, clear: u16);
         0x25 magnetometer_calibrate_to_north "Magnetometer Calibrate To North" () -> ();
@@ -360,23 +259,23 @@ catalogue! {
         0x34 stop_robot_to_robot_ir_evading "Stop Robot To Robot IR Evading" () -> ();
         0x35 enable_color_detection_notify "Enable Color Detection Notify" (enable: bool, interval_ms: u16, confidence_threshold: u8) -> ();
         0x37 get_current_detected_color_reading "Get Current Detected Color Reading" () -> (data: Bytes);
-        0x38 enable_color_detection "Enable Color Detection" (enable: bool) -> ();
+        0x38 enable_color_detection "Enable Color Detection" (enable: bool = "true") -> ();
         0x39 configure_streaming_service "Configure Streaming Service" (config: Bytes) -> ();
         0x3A start_streaming_service "Start Streaming Service" (period_ms: u16) -> ();
         0x3B stop_streaming_service "Stop Streaming Service" () -> ();
         0x3C clear_streaming_service "Clear Streaming Service" () -> ();
-        0x3E enable_robot_ir_message_notify "Enable Robot IR Message Notify" (enable: bool) -> ();
+        0x3E enable_robot_ir_message_notify "Enable Robot IR Message Notify" (enable: bool = "true") -> ();
         0x3F send_infrared_message "Send Infrared Message" (data: [u8; 5]) -> ();
-        0x41 enable_motor_current_notify "Enable Motor Current Notify" (enable: bool) -> ();
+        0x41 enable_motor_current_notify "Enable Motor Current Notify" (enable: bool = "true") -> ();
         0x42 get_motor_temperature "Get Motor Temperature" (motor: u8) -> (case_temperature: f32, winding_temperature: f32);
         0x47 configure_sensitivity_based_collision "Configure Sensitivity Based Collision" (data: [u8; 4]) -> ();
-        0x48 enable_sensitivity_based_collision_notify "Enable Sensitivity Based Collision Notify" (enable: bool) -> ();
+        0x48 enable_sensitivity_based_collision_notify "Enable Sensitivity Based Collision Notify" (enable: bool = "true") -> ();
         0x4B get_motor_thermal_protection_status "Get Motor Thermal Protection Status" () -> (data: [u8; 10]);
-        0x4C enable_motor_thermal_protection_notify "Enable Motor Thermal Protection Notify" (enable: bool) -> ();
+        0x4C enable_motor_thermal_protection_notify "Enable Motor Thermal Protection Notify" (enable: bool = "true") -> ();
     }
     Io {
         0x04 set_led "Set LED" (data: [u8; 5]) -> ();
-        0x07 play_audio_file "Play Audio File" (sound: u16, mode: AudioMode) -> ();
+        0x07 play_audio_file "Play Audio File" (sound: u16, mode: AudioMode = "0") -> ();
         0x08 set_audio_volume "Set Audio Volume" (volume: u8) -> ();
         0x09 get_audio_volume "Get Audio Volume" () -> (volume: u8);
         0x0A stop_all_audio "Stop All Audio" () -> ();
@@ -385,7 +284,7 @@ catalogue! {
         0x19 start_idle_led_animation "Start Idle LED Animation" () -> ();
         0x1A set_all_leds_with_32_bit_mask "Set All LEDs With 32-bit Mask" (mask: Mask<4>, values: Bytes) -> ();
         0x1C set_all_leds_with_8_bit_mask "Set All LEDs With 8-bit Mask" (mask: Mask<1>, values: Bytes) -> ();
-        0x1D enable_color_tap_notify "Enable Color Tap Notify" (enable: bool) -> ();
+        0x1D enable_color_tap_notify "Enable Color Tap Notify" (enable: bool = "true") -> ();
     }
 }
 
@@ -607,8 +506,20 @@ mod tests {
             err.contains("--heading") && err.contains("0..=359"),
             "{err}"
         );
-        let err = c.encode_params(&given(&[("speed", "100")])).unwrap_err();
-        assert!(err.contains("needs --heading"), "{err}");
+        let err = c.encode_params(&given(&[("heading", "100")])).unwrap_err();
+        assert!(err.contains("needs --speed"), "{err}");
+        // Flags default to none (issue 8), so speed and heading are enough.
+        assert_eq!(
+            c.encode_params(&given(&[("speed", "100"), ("heading", "180")])),
+            Ok(vec![100, 0, 180, 0])
+        );
+        // Collision detection defaults to the common reference-client values.
+        assert_eq!(
+            by_name("configure-collision-detection")
+                .unwrap()
+                .encode_params(&[]),
+            Ok(vec![1, 90, 130, 90, 130, 1])
+        );
         let err = by_name("wake")
             .unwrap()
             .encode_params(&given(&[("x", "1")]))

@@ -9,8 +9,8 @@ pub mod flags;
 pub mod notify;
 pub mod packet;
 pub mod sensor;
-pub mod value;
-pub mod wire;
+/// Re-exported from the shared core, where v1 uses them too.
+pub use super::{value, wire};
 
 pub use catalog::{Command, CommandDef, cmd};
 pub use decoder::{DecodeError, DecodeErrorKind, Decoder, DecoderStats};

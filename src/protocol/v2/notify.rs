@@ -4,90 +4,12 @@
 use super::catalog;
 use super::device::Device;
 use super::packet::Packet;
-use super::sensor::{SensorSample, StreamingConfig, decode_sample};
-use super::wire::*;
+use super::sensor::{StreamingConfig, decode_sample};
+pub use crate::protocol::notify::{Collision, Notification, NotificationError};
 
-/// The collision notification (Sensor 0x12), 18 bytes (`droid-facts.md` §2).
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct Collision {
-    pub accel: [AccelRaw; 3],
-    pub axis: CollisionAxis,
-    pub power: [i16; 3],
-    pub speed: u8,
-    pub time_ms: u32,
-}
-
-impl Collision {
-    pub const LEN: usize = 18;
-
-    pub fn decode(data: &[u8]) -> Result<Self, FieldError> {
-        let r = &mut Reader::new(data);
-        let c = Collision {
-            accel: [
-                AccelRaw::get(r, "accel_x")?,
-                AccelRaw::get(r, "accel_y")?,
-                AccelRaw::get(r, "accel_z")?,
-            ],
-            axis: CollisionAxis::get(r, "axis")?,
-            power: [
-                i16::get(r, "power_x")?,
-                i16::get(r, "power_y")?,
-                i16::get(r, "power_z")?,
-            ],
-            speed: u8::get(r, "speed")?,
-            time_ms: u32::get(r, "time_ms")?,
-        };
-        r.finish()?;
-        Ok(c)
-    }
-
-    pub fn encode(&self) -> Vec<u8> {
-        let mut out = Vec::with_capacity(Self::LEN);
-        for a in &self.accel {
-            a.put(&mut out);
-        }
-        self.axis.put(&mut out);
-        for p in &self.power {
-            p.put(&mut out);
-        }
-        self.speed.put(&mut out);
-        self.time_ms.put(&mut out);
-        out
-    }
-}
-
-/// A notification the application understands.
-#[derive(Debug, Clone, PartialEq)]
-pub enum Notification {
-    Collision(Collision),
-    /// Sensor streaming decoded with the masks in effect.
-    Sensors(SensorSample),
-    BatteryStateChanged(u8),
-    BatteryVoltageStateChanged(u8),
-    ChargerStateChanged(u8),
-    /// The droid will sleep in about 10 s unless there is activity.
-    WillSleep,
-    DidSleep,
-    LegActionComplete,
-    AnimationComplete,
-    HeadResetToZero,
-    /// Any other (DID, CID), or a known one whose payload did not fit: bytes kept.
-    Other {
-        did: u8,
-        cid: u8,
-        data: Vec<u8>,
-    },
-}
-
-/// Why a known notification could not be decoded.
-#[derive(Debug, Clone, PartialEq)]
-pub struct NotificationError {
-    pub name: &'static str,
-    pub reason: String,
-}
-
+/// The v2 side of the common [`Notification`]: decoding from v2 packets and v2 names.
 impl Notification {
-    /// Decode a notification packet. `streaming` gives the masks in effect for sensor data.
+    /// Decode a v2 notification packet. `streaming` gives the masks in effect for sensor data.
     /// Known notifications with a malformed payload are errors (counted by the caller);
     /// unknown ones are `Other`.
     pub fn decode(
@@ -157,6 +79,7 @@ impl Notification {
             Notification::AnimationComplete => (0x17, 0x11),
             Notification::HeadResetToZero => (0x17, 0x3A),
             Notification::Other { did, cid, .. } => (*did, *cid),
+            other => return other.common_name().to_string(),
         };
         catalog::notification(did, cid)
             .map(|n| n.name.clone())

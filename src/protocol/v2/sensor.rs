@@ -4,8 +4,6 @@
 //! DESCENDING bit order, then the extended-mask fields in descending bit order. Locator and
 //! velocity are ×100 to get cm and cm/s; everything else is used as sent.
 
-use super::value::{Fields, Value};
-
 /// One streamable sensor component.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SensorField {
@@ -125,27 +123,7 @@ impl StreamingConfig {
     }
 }
 
-/// Sensor values by name, scaled to their units.
-#[derive(Debug, Clone, PartialEq, Default)]
-pub struct SensorSample {
-    pub values: Vec<(&'static str, f32)>,
-}
-
-impl SensorSample {
-    pub fn get(&self, name: &str) -> Option<f32> {
-        self.values
-            .iter()
-            .find(|(n, _)| *n == name)
-            .map(|(_, v)| *v)
-    }
-
-    pub fn fields(&self) -> Fields {
-        self.values
-            .iter()
-            .map(|(n, v)| (*n, Value::Float(*v as f64)))
-            .collect()
-    }
-}
+pub use crate::protocol::notify::SensorSample;
 
 /// Why a streaming payload does not match the masks.
 #[derive(Debug, Clone, PartialEq, Eq)]
