@@ -2,6 +2,7 @@
 //! (wire types, decoded values, payload schemas).
 
 pub mod notify;
+pub mod rsrcp;
 pub mod schema;
 pub mod v2;
 pub mod value;
