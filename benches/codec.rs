@@ -4,6 +4,11 @@
 //!
 //! `cargo bench --bench codec -- --warm-up-time 1 --measurement-time 3`
 
+// criterion is a dev-dependency on Linux only (see Cargo.toml); elsewhere this is an empty
+// program.
+#![cfg_attr(not(target_os = "linux"), allow(dead_code, unused_imports))]
+
+#[cfg(target_os = "linux")]
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use droidctl::protocol::v2::sensor::encode_sample;
 use droidctl::protocol::v2::wire::{AccelRaw, Bytes, CollisionAxis};
@@ -122,6 +127,7 @@ fn mixed_packets() -> Vec<Packet> {
     out
 }
 
+#[cfg(target_os = "linux")]
 fn codec(c: &mut Criterion) {
     let packets = mixed_packets();
     let stream: Vec<u8> = packets.iter().flat_map(Packet::encode).collect();
@@ -173,5 +179,12 @@ fn codec(c: &mut Criterion) {
     group.finish();
 }
 
+#[cfg(target_os = "linux")]
 criterion_group!(benches, codec);
+#[cfg(target_os = "linux")]
 criterion_main!(benches);
+
+#[cfg(not(target_os = "linux"))]
+fn main() {
+    eprintln!("the benchmarks run on Linux only");
+}

@@ -5,6 +5,9 @@
 //! `dbus-daemon` standing in for the system bus, with a tiny fake BlueZ on it (skipped when
 //! `dbus-daemon` is not installed). That exercises the real btleplug path end to end.
 
+// BlueZ and D-Bus exist only on Linux.
+#![cfg(target_os = "linux")]
+
 use dbus::arg::{PropMap, RefArg, Variant};
 use dbus::blocking::Connection;
 use dbus::channel::{Channel, MatchingReceiver, Sender};

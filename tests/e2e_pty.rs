@@ -2,6 +2,9 @@
 //! read back through a VT100 emulator; the simulated droid must move, the packet log must show
 //! the drive commands, `q` must quit with a stop and the terminal must be restored.
 
+// Unix pseudo-terminals and `kill`.
+#![cfg(unix)]
+
 use portable_pty::{CommandBuilder, PtySize, native_pty_system};
 use std::io::{Read, Write};
 use std::sync::{Arc, Mutex};

@@ -2,6 +2,9 @@
 //! DBUS_SYSTEM_BUS_ADDRESS at nothing), the app, `drive`, `run` and `scan` exit with status 1 within seconds and
 //! one line naming what is missing and mentioning `--sim` — never a panic or a hang.
 
+// "No Bluetooth" here is Linux's: no D-Bus system bus.
+#![cfg(target_os = "linux")]
+
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 

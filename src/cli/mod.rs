@@ -2,12 +2,14 @@
 //! dispatches, and maps errors to exit codes: 2 for bad input (usage, malformed values),
 //! 1 for failures at run time.
 
+pub mod completions;
 pub mod config_cmd;
 pub mod connect;
 pub mod drive;
 pub mod packet;
 pub mod run;
 pub mod scan;
+pub mod signals;
 pub mod term;
 
 use clap::{Parser, Subcommand};
@@ -42,6 +44,10 @@ pub enum Command {
     /// Show or create the configuration file.
     #[command(subcommand)]
     Config(config_cmd::ConfigCmd),
+    /// Print shell completions (`droidctl completions bash > …`; see README, "Installing").
+    Completions(completions::CompletionsArgs),
+    /// Print the man page, in roff (`droidctl man > droidctl.1`).
+    Man,
 }
 
 /// The runtime for talking to a real droid (or the simulator in real time): two workers,
@@ -109,6 +115,8 @@ pub fn main() -> i32 {
         }
         Some(Command::Scan(args)) => scan::run(args, &mut out),
         Some(Command::Config(cmd)) => config_cmd::run(cmd),
+        Some(Command::Completions(args)) => completions::completions(args, &mut out),
+        Some(Command::Man) => completions::man(&mut out),
         Some(Command::Drive(args)) => {
             drop(out);
             drive::run(args)

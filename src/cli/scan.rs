@@ -62,9 +62,9 @@ pub fn run(args: ScanArgs, out: &mut dyn Write) -> Result<i32, CliError> {
             Err(_) => Err(BleError::new(
                 ble::BleErrorKind::Timeout,
                 format!(
-                    "the scan did not finish within {:.0} s — check `systemctl status bluetooth`, \
-                     or try `droidctl --sim`",
-                    limit.as_secs_f64()
+                    "the scan did not finish within {:.0} s — {}, or try `droidctl --sim`",
+                    limit.as_secs_f64(),
+                    ble::Os::CURRENT.check_hint()
                 ),
             )),
         }

@@ -18,6 +18,9 @@ use std::str::FromStr;
 use std::sync::Arc;
 
 /// A Bluetooth device address, `AA:BB:CC:DD:EE:FF`.
+///
+/// On macOS, where CoreBluetooth hides real addresses, it is the first six bytes of the
+/// identifier the Mac gave the device ([`BleAddress::from_identifier`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Default)]
 pub struct BleAddress(pub [u8; 6]);
 
@@ -32,11 +35,38 @@ impl fmt::Display for BleAddress {
     }
 }
 
+impl BleAddress {
+    /// The address standing for a device known only by a UUID identifier (CoreBluetooth's,
+    /// `8E5B5B4E-1234-4A6B-9C8D-0123456789AB`): its first six bytes, `8E:5B:5B:4E:12:34`.
+    /// Unique enough among the devices in range, and stable on that Mac.
+    pub fn from_identifier(uuid: &str) -> Option<BleAddress> {
+        let groups: Vec<&str> = uuid.trim().split('-').collect();
+        let lens: Vec<usize> = groups.iter().map(|g| g.len()).collect();
+        if lens != [8, 4, 4, 4, 12]
+            || !groups
+                .iter()
+                .all(|g| g.chars().all(|c| c.is_ascii_hexdigit()))
+        {
+            return None;
+        }
+        let hex: String = groups.concat();
+        let mut out = [0u8; 6];
+        for (i, o) in out.iter_mut().enumerate() {
+            *o = u8::from_str_radix(&hex[2 * i..2 * i + 2], 16).ok()?;
+        }
+        Some(BleAddress(out))
+    }
+}
+
 impl FromStr for BleAddress {
     type Err = String;
 
-    /// Accepts `AA:BB:CC:DD:EE:FF` or `aa-bb-cc-dd-ee-ff`.
+    /// Accepts `AA:BB:CC:DD:EE:FF` or `aa-bb-cc-dd-ee-ff`, or a macOS device identifier (a
+    /// UUID; see [`BleAddress::from_identifier`]).
     fn from_str(s: &str) -> Result<Self, Self::Err> {
+        if let Some(a) = BleAddress::from_identifier(s) {
+            return Ok(a);
+        }
         let bad = || format!("`{s}` is not a Bluetooth address like AA:BB:CC:DD:EE:FF");
         let parts: Vec<&str> = s.trim().split([':', '-']).collect();
         if parts.len() != 6 {
@@ -128,5 +158,24 @@ mod tests {
         assert!("F1:22:33:44:55".parse::<BleAddress>().is_err());
         assert!("F1:22:33:44:55:GG".parse::<BleAddress>().is_err());
         assert!("F1:22:33:44:55:666".parse::<BleAddress>().is_err());
+    }
+
+    #[test]
+    fn macos_identifiers_stand_for_addresses() {
+        let id = "8e5b5b4e-1234-4a6b-9c8d-0123456789ab";
+        let a = BleAddress::from_identifier(id).unwrap();
+        assert_eq!(a.to_string(), "8E:5B:5B:4E:12:34");
+        // `--address` takes the identifier or the address shown for it.
+        assert_eq!(id.to_uppercase().parse::<BleAddress>(), Ok(a));
+        assert_eq!("8E:5B:5B:4E:12:34".parse::<BleAddress>(), Ok(a));
+        assert_eq!(
+            BleAddress::from_identifier("8e5b5b4e-1234-4a6b-9c8d-0123456789a"),
+            None
+        );
+        assert_eq!(
+            BleAddress::from_identifier("8e5b5b4e-1234-4a6b-9c8d-0123456789ag"),
+            None
+        );
+        assert_eq!(BleAddress::from_identifier("F1:22:33:44:55:66"), None);
     }
 }

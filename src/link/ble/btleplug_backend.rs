@@ -1,70 +1,123 @@
-//! The real radio: [`BleCentral`] / [`BlePeripheral`] on btleplug (BlueZ on Linux). The only
-//! file that touches btleplug or D-Bus; it translates calls and errors and holds no logic worth
-//! testing, so that the logic can be tested without a radio.
+//! The real radio: [`BleCentral`] / [`BlePeripheral`] on btleplug (BlueZ on Linux,
+//! CoreBluetooth on macOS, WinRT on Windows). The only file that touches btleplug or D-Bus; it
+//! translates calls and errors and holds no logic worth testing, so that the logic can be
+//! tested without a radio. The error texts each platform gives are mapped, and tested, in
+//! [`BleError::from_platform_text`].
 
 use super::backend::{
     Advertisement, BleAddress, BleCentral, BlePeripheral, DiscoveredChar, PeripheralEvent,
 };
-use super::error::{BleError, BleErrorKind};
+use super::error::{BleError, BleErrorKind, DBUS_MARK, Os, dbus_error_in};
 use crate::link::gatt::{CharRef, GattUuid};
 use btleplug::api::{
-    BDAddr, Central as _, CentralEvent, CentralState, Characteristic, Manager as _,
-    Peripheral as _, ScanFilter, WriteType,
+    Central as _, CentralEvent, CentralState, Characteristic, Manager as _, Peripheral as _,
+    ScanFilter, WriteType,
 };
 use btleplug::platform::{Adapter, Manager, Peripheral};
 use futures_util::future::{BoxFuture, ready};
 use futures_util::stream::{self, BoxStream, StreamExt};
 use std::sync::Arc;
 use std::time::Duration;
-use tokio::sync::oneshot;
 use tokio::time::timeout;
 
 /// Bound on getting hold of an adapter. BlueZ answers in milliseconds when it is there; the
 /// bound is what makes `droidctl scan` fail fast instead of hanging when it is not.
 const SETUP_TIMEOUT: Duration = Duration::from_secs(4);
 
+/// On macOS, listing the adapter waits for CoreBluetooth's first state report, which the first
+/// run holds back until the user answers the "allow Bluetooth" prompt for the terminal app.
+const PROMPT_TIMEOUT: Duration = Duration::from_secs(12);
+
+/// How long CoreBluetooth and WinRT may report the adapter state as unknown (starting up,
+/// resetting) before that counts as "unavailable".
+const SETTLE_TIMEOUT: Duration = Duration::from_secs(2);
+
 /// The system's first Bluetooth adapter, or a one-line reason there is none.
 ///
-/// Checks, in order: the D-Bus system bus, BlueZ on it, an adapter, the adapter powered on.
-/// Never takes much longer than [`SETUP_TIMEOUT`] twice, whatever state the system is in.
+/// Checks, in order: (Linux) the D-Bus system bus and BlueZ on it; an adapter; the adapter
+/// powered on. Never takes much longer than [`SETUP_TIMEOUT`] twice, whatever state the system
+/// is in (on macOS, [`PROMPT_TIMEOUT`] while the permission prompt is up).
 pub async fn open_central() -> Result<Arc<dyn BleCentral>, BleError> {
+    let os = Os::CURRENT;
     preflight().await?;
     let manager = timeout(SETUP_TIMEOUT, Manager::new())
         .await
-        .map_err(|_| bluez_silent("connecting to BlueZ"))?
+        .map_err(|_| stack_silent(&format!("connecting to {}", os.stack()), SETUP_TIMEOUT))?
         .map_err(map_err)?;
-    let adapters = timeout(SETUP_TIMEOUT, manager.adapters())
+    let list_timeout = if os == Os::MacOs {
+        PROMPT_TIMEOUT
+    } else {
+        SETUP_TIMEOUT
+    };
+    let adapters = timeout(list_timeout, manager.adapters())
         .await
-        .map_err(|_| bluez_silent("listing adapters"))?
+        .map_err(|_| match os {
+            Os::MacOs => BleError::new(
+                BleErrorKind::PermissionDenied,
+                format!(
+                    "CoreBluetooth did not answer within {} s — if macOS asks whether this \
+                     terminal may use Bluetooth, allow it (System Settings → Privacy & Security \
+                     → Bluetooth) and run again, or try `droidctl --sim`",
+                    list_timeout.as_secs()
+                ),
+            ),
+            _ => stack_silent("listing adapters", list_timeout),
+        })?
         .map_err(map_err)?;
     let adapter = adapters
         .into_iter()
         .next()
-        .ok_or_else(BleError::no_adapter)?;
+        .ok_or_else(|| BleError::no_adapter_on(os))?;
     // Surfaces permission errors before `adapter_state`, which reports any failure as "off".
     timeout(SETUP_TIMEOUT, adapter.adapter_info())
         .await
-        .map_err(|_| bluez_silent("reading the adapter"))?
+        .map_err(|_| stack_silent("reading the adapter", SETUP_TIMEOUT))?
         .map_err(map_err)?;
-    let state = timeout(SETUP_TIMEOUT, adapter.adapter_state())
-        .await
-        .map_err(|_| bluez_silent("reading the adapter state"))?
-        .map_err(map_err)?;
+    let read_state = || async {
+        timeout(SETUP_TIMEOUT, adapter.adapter_state())
+            .await
+            .map_err(|_| stack_silent("reading the adapter state", SETUP_TIMEOUT))?
+            .map_err(map_err)
+    };
+    let mut state = read_state().await?;
+    // BlueZ reports on or off. CoreBluetooth and WinRT also report "unknown": briefly while
+    // starting, and for good when the terminal app is not allowed Bluetooth (macOS) or the
+    // radio is disabled (Windows).
+    if os != Os::Linux {
+        let settle = tokio::time::Instant::now() + SETTLE_TIMEOUT;
+        while state == CentralState::Unknown && tokio::time::Instant::now() < settle {
+            tokio::time::sleep(Duration::from_millis(100)).await;
+            state = read_state().await?;
+        }
+        if state == CentralState::Unknown {
+            return Err(BleError::unavailable_on(os));
+        }
+    }
     if state == CentralState::PoweredOff {
-        return Err(BleError::adapter_off());
+        return Err(BleError::adapter_off_on(os));
     }
     Ok(Arc::new(BtleCentral { adapter }))
 }
 
-fn bluez_silent(what: &str) -> BleError {
+/// The platform's Bluetooth stack did not answer `what` in time.
+fn stack_silent(what: &str, after: Duration) -> BleError {
+    let os = Os::CURRENT;
     BleError::new(
         BleErrorKind::BluezNotRunning,
         format!(
-            "BlueZ did not answer ({what}) within {} s — check `systemctl status bluetooth`, or \
-             try `droidctl --sim`",
-            SETUP_TIMEOUT.as_secs()
+            "{} did not answer ({what}) within {} s — {}, or try `droidctl --sim`",
+            os.stack(),
+            after.as_secs(),
+            os.check_hint()
         ),
     )
+}
+
+/// BlueZ, and so the D-Bus check, exist only on Linux; other platforms' btleplug backends need
+/// no system bus.
+#[cfg(not(target_os = "linux"))]
+async fn preflight() -> Result<(), BleError> {
+    Ok(())
 }
 
 /// Check the system bus and BlueZ with plain D-Bus calls before btleplug.
@@ -73,13 +126,9 @@ fn bluez_silent(what: &str) -> BleError {
 /// the thread. Asking the bus ourselves gives typed D-Bus error names; doing it on a plain
 /// thread (not tokio's blocking pool, which a runtime waits for on shutdown) keeps a hung
 /// socket from hanging the program.
+#[cfg(target_os = "linux")]
 async fn preflight() -> Result<(), BleError> {
-    // BlueZ, and so this check, exist only on Linux; other platforms' btleplug backends need
-    // no system bus.
-    if !cfg!(target_os = "linux") {
-        return Ok(());
-    }
-    let (tx, rx) = oneshot::channel();
+    let (tx, rx) = tokio::sync::oneshot::channel();
     std::thread::Builder::new()
         .name("dbus-preflight".into())
         .spawn(move || {
@@ -93,6 +142,7 @@ async fn preflight() -> Result<(), BleError> {
     }
 }
 
+#[cfg(target_os = "linux")]
 fn probe_system_bus() -> Result<(), BleError> {
     let dbus_err = |e: dbus::Error| BleError::from_dbus(e.name(), e.message().unwrap_or(""));
     let conn = dbus::blocking::Connection::new_system().map_err(|e| {
@@ -127,18 +177,18 @@ fn probe_system_bus() -> Result<(), BleError> {
 
 /// Map a btleplug error.
 ///
-/// BlueZ failures arrive as `Error::Other` wrapping bluez-async's error, which wraps the D-Bus
-/// error. We do not depend on bluez-async to downcast it, so the D-Bus name and message are
-/// read back from its `Debug` text (`D-Bus error: MESSAGE (NAME)`), the one stable rendering.
+/// Typed errors map directly; the rest by their text, per platform, in
+/// [`BleError::from_platform_text`]. BlueZ failures arrive as `Error::Other` wrapping
+/// bluez-async's error, which wraps the D-Bus error. We do not depend on bluez-async to
+/// downcast it, so the D-Bus name and message are read back from its `Debug` text
+/// (`D-Bus error: MESSAGE (NAME)`), the one stable rendering.
 fn map_err(e: btleplug::Error) -> BleError {
     use btleplug::Error as E;
+    let os = Os::CURRENT;
     match e {
-        E::PermissionDenied => BleError::permission_denied(),
-        E::NoAdapterAvailable => BleError::no_adapter(),
-        E::DeviceNotFound => BleError::new(
-            BleErrorKind::NotFound,
-            "BlueZ no longer knows the device — scan again (is the droid awake?)",
-        ),
+        E::PermissionDenied => BleError::permission_denied_on(os),
+        E::NoAdapterAvailable => BleError::no_adapter_on(os),
+        E::DeviceNotFound => BleError::device_gone_on(os),
         E::NotConnected => BleError::new(BleErrorKind::Disconnected, "the droid is not connected"),
         E::TimedOut(d) => BleError::timeout("a Bluetooth operation", d.as_secs_f64()),
         E::NoSuchCharacteristic | E::UnexpectedCharacteristic => BleError::new(
@@ -147,26 +197,14 @@ fn map_err(e: btleplug::Error) -> BleError {
         ),
         E::Other(inner) => {
             let debug = format!("{inner:?}");
-            if let Some((name, message)) = dbus_error_in(&debug) {
-                return BleError::from_dbus(Some(&name), &message);
-            }
-            let text = inner.to_string();
-            let lower = text.to_ascii_lowercase();
-            if lower.contains("no bluetooth adapters") {
-                BleError::no_adapter()
-            } else if lower.contains("service discovery timed out") {
-                BleError::new(
-                    BleErrorKind::Timeout,
-                    "service discovery timed out — is the droid awake and near? tap it or put \
-                     it on its charger",
-                )
-            } else if lower.contains("not found") && lower.contains("uuid") {
-                BleError::new(BleErrorKind::MissingCharacteristic, text)
+            let text = if debug.contains(DBUS_MARK) {
+                debug
             } else {
-                BleError::new(BleErrorKind::Other, format!("Bluetooth error: {text}"))
-            }
+                inner.to_string()
+            };
+            BleError::from_platform_text(os, &text)
         }
-        other => BleError::new(BleErrorKind::Other, format!("Bluetooth error: {other}")),
+        other => BleError::from_platform_text(os, &other.to_string()),
     }
 }
 
@@ -178,17 +216,15 @@ fn dbus_name(e: &btleplug::Error) -> Option<String> {
     }
 }
 
-/// Find `D-Bus error: MESSAGE (NAME)` in a `Debug` rendering; returns (name, message).
-fn dbus_error_in(debug: &str) -> Option<(String, String)> {
-    const MARK: &str = "D-Bus error: ";
-    let rest = &debug[debug.find(MARK)? + MARK.len()..];
-    let open = rest.rfind(" (")?;
-    let after = &rest[open + 2..];
-    let name = &after[..after.find(')')?];
-    if !name.contains('.') || name.contains(' ') {
-        return None;
+/// The address droidctl shows and `--address` takes. CoreBluetooth hides devices' real
+/// addresses (it reports 00:00:00:00:00:00 for all) and names each by a UUID private to this
+/// Mac: there the address is that identifier's first six bytes ([`BleAddress::from_identifier`]).
+fn address_of(p: &Peripheral) -> BleAddress {
+    if cfg!(target_os = "macos") {
+        BleAddress::from_identifier(&p.id().to_string()).unwrap_or_default()
+    } else {
+        BleAddress(p.address().into())
     }
-    Some((name.to_string(), rest[..open].to_string()))
 }
 
 fn gatt(u: u128) -> GattUuid {
@@ -225,7 +261,7 @@ impl BleCentral for BtleCentral {
                     continue;
                 };
                 out.push(Advertisement {
-                    address: BleAddress(props.address.into()),
+                    address: address_of(&p),
                     // On BlueZ `local_name` is the Alias, which a user may have renamed and
                     // which falls back to the address for nameless devices; the advertised
                     // Name is what identifies the model.
@@ -242,9 +278,8 @@ impl BleCentral for BtleCentral {
         address: BleAddress,
     ) -> BoxFuture<'_, Result<Arc<dyn BlePeripheral>, BleError>> {
         Box::pin(async move {
-            let want = BDAddr::from(address.0);
             let peripherals = self.adapter.peripherals().await.map_err(map_err)?;
-            match peripherals.into_iter().find(|p| p.address() == want) {
+            match peripherals.into_iter().find(|p| address_of(p) == address) {
                 Some(peripheral) => Ok(Arc::new(BtlePeripheral {
                     adapter: self.adapter.clone(),
                     peripheral,
@@ -369,31 +404,6 @@ mod tests {
     use super::*;
 
     #[test]
-    fn finds_dbus_names_in_debug_text() {
-        assert_eq!(
-            dbus_error_in(
-                "DbusError(D-Bus error: le-connection-abort-by-local (org.bluez.Error.Failed))"
-            ),
-            Some((
-                "org.bluez.Error.Failed".into(),
-                "le-connection-abort-by-local".into()
-            ))
-        );
-        assert_eq!(
-            dbus_error_in("D-Bus error: Resource Not Ready (org.bluez.Error.NotReady)"),
-            Some((
-                "org.bluez.Error.NotReady".into(),
-                "Resource Not Ready".into()
-            ))
-        );
-        assert_eq!(
-            dbus_error_in("D-Bus error: a (b) c (org.bluez.Error.Failed)"),
-            Some(("org.bluez.Error.Failed".into(), "a (b) c".into()))
-        );
-        assert_eq!(dbus_error_in("ServiceDiscoveryTimedOut"), None);
-    }
-
-    #[test]
     fn maps_typed_btleplug_errors() {
         use btleplug::Error as E;
         assert_eq!(map_err(E::NoAdapterAvailable).kind, BleErrorKind::NoAdapter);
@@ -406,6 +416,12 @@ mod tests {
             map_err(E::TimedOut(Duration::from_secs(3))).kind,
             BleErrorKind::Timeout
         );
+    }
+
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn maps_wrapped_dbus_errors() {
+        use btleplug::Error as E;
         let dbus = dbus::Error::new_custom("org.bluez.Error.NotReady", "Resource Not Ready");
         assert_eq!(
             map_err(E::Other(Box::new(dbus))).kind,
@@ -414,6 +430,7 @@ mod tests {
     }
 
     /// On a machine without a system bus (containers, CI) the preflight says so, quickly.
+    #[cfg(target_os = "linux")]
     #[tokio::test]
     async fn preflight_without_a_bus_is_a_clear_fatal_error() {
         if std::env::var_os("DBUS_SYSTEM_BUS_ADDRESS").is_some()

@@ -4,7 +4,8 @@
 //! - [`crate::link::gatt`]: each model's GATT profile as data;
 //! - [`backend`]: the radio-free interface ([`BleCentral`], [`BlePeripheral`]);
 //! - [`BleLink`] and [`scan`]: the generic logic, written against that interface;
-//! - `btleplug_backend` (real BlueZ) and [`fake`] (tests): its two implementations.
+//! - `btleplug_backend` (the real radio: BlueZ, CoreBluetooth or WinRT) and [`fake`] (tests):
+//!   its two implementations.
 //!
 //! Entry points for commands: [`open_central`] + [`scan::scan`] for `droidctl scan`, and
 //! [`connect_link`] for everything that drives a droid.
@@ -20,7 +21,7 @@ pub use backend::{
     Advertisement, BleAddress, BleCentral, BlePeripheral, DiscoveredChar, PeripheralEvent,
 };
 pub use btleplug_backend::open_central;
-pub use error::{BleError, BleErrorKind};
+pub use error::{BleError, BleErrorKind, Os};
 pub use link::{BleLink, BleTimeouts};
 pub use scan::{DeviceSelector, ScanEntry};
 

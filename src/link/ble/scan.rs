@@ -2,7 +2,7 @@
 //! detection and output are tested with fake advertisements.
 
 use super::backend::{Advertisement, BleAddress, BleCentral};
-use super::error::{BleError, BleErrorKind};
+use super::error::{BleError, BleErrorKind, Os};
 use crate::model::Model;
 use serde_json::json;
 use std::collections::BTreeMap;
@@ -120,8 +120,10 @@ async fn op<T>(
         Err(BleError::new(
             BleErrorKind::Timeout,
             format!(
-                "BlueZ did not answer ({what}) within {} s — check `systemctl status bluetooth`",
-                SCAN_OP_TIMEOUT.as_secs()
+                "{} did not answer ({what}) within {} s — {}",
+                Os::CURRENT.stack(),
+                SCAN_OP_TIMEOUT.as_secs(),
+                Os::CURRENT.check_hint()
             ),
         ))
     })
