@@ -57,6 +57,8 @@ pub struct Gamepad {
     pub dome_rate_deg_s: f32,
     pub tripod: String,
     pub bipod: String,
+    /// Aim mode on rolling droids (BB-8, SPRK+, Ollie, BB-9E).
+    pub aim: String,
     pub estop: String,
     pub animation: String,
     pub help: String,

@@ -6,6 +6,7 @@
 pub mod app;
 pub mod cli;
 pub mod config;
+pub mod family;
 pub mod hex;
 pub mod link;
 pub mod logging;

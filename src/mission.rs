@@ -2,10 +2,11 @@
 //! telemetry at a fixed interval. Against the simulator under paused tokio time a 60 s
 //! mission takes well under a second of wall time with the same results as in real time.
 
+use crate::family::{Command, Family};
 use crate::model::Model;
-use crate::protocol::v2::wire::{AudioMode, DriveFlags, LegAction, LegState, Mask};
-use crate::protocol::v2::{Command, Notification, cmd};
-use crate::script::{Action, LedGroup, Step};
+use crate::protocol::notify::Notification;
+use crate::protocol::wire::{LegAction, LegState};
+use crate::script::{Action, Step};
 use crate::session::{LinkState, SessionEvent, SessionHandle, Slot};
 use crate::telemetry::Telemetry;
 use crate::units::Heading;
@@ -99,20 +100,27 @@ impl std::fmt::Display for MissionError {
     }
 }
 
-/// Check a script against a model before anything is sent (e.g. BB-9E has no legs).
+/// Check a script against a model before anything is sent (e.g. BB-9E has no legs, BB-8
+/// no dome, sounds or animations): every line the model cannot do is an error naming it.
 pub fn validate(model: Model, steps: &[Step]) -> Result<(), Vec<crate::script::ScriptError>> {
+    let family = crate::family::for_model(model);
+    let name = model.display_name();
     let errors: Vec<_> = steps
         .iter()
         .filter_map(|s| {
             let problem = match &s.action {
-                Action::Stance(_) if !model.has_legs() => {
-                    Some(format!("{} has no legs", model.display_name()))
+                Action::Stance(_) if !model.has_legs() => Some(format!("{name} has no legs")),
+                Action::Head(_) if !model.has_dome() => Some(format!("{name} has no dome to turn")),
+                Action::Animation(_) if family.animation(0).is_none() => {
+                    Some(format!("{name} has no animations"))
                 }
-                Action::Head(_) if !model.has_dome() => {
-                    Some(format!("{} has no dome to turn", model.display_name()))
+                Action::Sound(_) if family.sound(0).is_none() => {
+                    Some(format!("{name} cannot play sounds"))
                 }
-                Action::LedRgb(LedGroup::Back, _) if !model.has_legs() => {
-                    Some(format!("{} has no back LED", model.display_name()))
+                a @ (Action::LedRgb(..) | Action::LedBrightness(..))
+                    if family.led(model, a).is_none() =>
+                {
+                    Some(format!("{name} has no such LED"))
                 }
                 _ => None,
             };
@@ -129,21 +137,9 @@ pub fn validate(model: Model, steps: &[Step]) -> Result<(), Vec<crate::script::S
     }
 }
 
-/// The LED command for a script line: R2 bits 0..2 front RGB, 3 logic, 4..6 back RGB,
-/// 7 holo; BB-9E 0..2 body RGB, 3 aiming, 4 head (`droid-facts.md` §2).
+/// The LED command for a script line, from the model's family.
 pub fn led_command(model: Model, action: &Action) -> Option<Command> {
-    let r2 = model.has_legs();
-    let (mask, values): (u32, Vec<u8>) = match *action {
-        Action::LedRgb(LedGroup::Front, rgb) => (0x0007, rgb.to_vec()),
-        Action::LedRgb(LedGroup::Back, rgb) if r2 => (0x0070, rgb.to_vec()),
-        Action::LedBrightness(LedGroup::Logic, b) => (0x0008, vec![b]),
-        Action::LedBrightness(LedGroup::Holo, b) => (if r2 { 0x0080 } else { 0x0010 }, vec![b]),
-        _ => return None,
-    };
-    Some(cmd::set_all_leds_with_16_bit_mask(
-        Mask(mask),
-        crate::protocol::v2::wire::Bytes(values),
-    ))
+    crate::family::for_model(model).led(model, action)
 }
 
 type Emit = Arc<dyn Fn(MissionEvent) + Send + Sync>;
@@ -151,6 +147,7 @@ type Emit = Arc<dyn Fn(MissionEvent) + Send + Sync>;
 struct Runner {
     session: SessionHandle,
     model: Model,
+    family: &'static dyn Family,
     opts: MissionOptions,
     telemetry: Arc<Mutex<Telemetry>>,
     start: Instant,
@@ -180,8 +177,8 @@ impl Runner {
         });
     }
 
-    fn drive_cmd(speed: u8, heading: Heading) -> Command {
-        cmd::drive_with_heading(speed, heading, DriveFlags::empty())
+    fn drive_cmd(&self, speed: u8, heading: Heading) -> Command {
+        self.family.drive(speed, heading, false)
     }
 
     /// Let `d` pass, re-sending the held drive command on the heartbeat.
@@ -198,13 +195,13 @@ impl Runner {
                 && Instant::now() < end
             {
                 self.session
-                    .set(Slot::Drive, Self::drive_cmd(speed, heading));
+                    .set(Slot::Drive, self.drive_cmd(speed, heading));
             }
         }
     }
 
     async fn request(&mut self, line: usize, c: Command) -> bool {
-        let name = c.def().map(|d| d.name.clone()).unwrap_or_default();
+        let name = c.name();
         match self.session.request(c).await {
             Ok(_) => true,
             Err(e) => {
@@ -238,20 +235,27 @@ impl Runner {
         });
         match &s.action {
             Action::Wake => {
-                if self.request(s.line, cmd::wake()).await {
+                // A v1 droid has no Wake command (it wakes at the GATT level): any activity,
+                // a ping, keeps it awake.
+                let wake = self.family.wake().unwrap_or_else(|| self.family.ping());
+                if self.request(s.line, wake).await {
                     lock(&self.telemetry).woke();
                 }
             }
             Action::Sleep => {
                 self.driving = None;
-                self.request(s.line, cmd::sleep()).await;
+                if let Some(c) = self.family.sleep() {
+                    self.request(s.line, c).await;
+                }
             }
             Action::Stance(a) => {
                 self.driving = None;
                 lock(&self.telemetry).stance_requested(*a);
                 // Subscribe fresh so an old completion is not taken for this one.
                 self.events = self.events.resubscribe();
-                if self.request(s.line, cmd::perform_leg_action(*a)).await && *a != LegAction::Stop
+                if let Some(c) = self.family.stance(*a)
+                    && self.request(s.line, c).await
+                    && *a != LegAction::Stop
                 {
                     self.await_stance().await;
                 }
@@ -263,26 +267,33 @@ impl Runner {
             } => {
                 self.last_heading = *heading;
                 self.session
-                    .set(Slot::Drive, Self::drive_cmd(*speed, *heading));
+                    .set(Slot::Drive, self.drive_cmd(*speed, *heading));
                 self.driving = (*speed > 0).then_some((*speed, *heading));
                 if let Some(d) = duration {
                     self.hold(*d).await;
                     self.driving = None;
-                    self.session.set(Slot::Drive, Self::drive_cmd(0, *heading));
+                    self.session.set(Slot::Drive, self.drive_cmd(0, *heading));
                 }
             }
             Action::Stop => {
                 self.driving = None;
                 self.session
-                    .set(Slot::Drive, Self::drive_cmd(0, self.last_heading));
+                    .set(Slot::Drive, self.drive_cmd(0, self.last_heading));
             }
-            Action::Head(a) => self.session.set(Slot::Head, cmd::set_head_position(*a)),
+            Action::Head(a) => {
+                if let Some(c) = self.family.head(*a) {
+                    self.session.set(Slot::Head, c);
+                }
+            }
             Action::Animation(id) => {
-                self.request(s.line, cmd::play_animation(*id)).await;
+                if let Some(c) = self.family.animation(*id) {
+                    self.request(s.line, c).await;
+                }
             }
             Action::Sound(id) => {
-                self.request(s.line, cmd::play_audio_file(*id, AudioMode::Immediate))
-                    .await;
+                if let Some(c) = self.family.sound(*id) {
+                    self.request(s.line, c).await;
+                }
             }
             a @ (Action::LedRgb(..) | Action::LedBrightness(..)) => {
                 match led_command(self.model, a) {
@@ -370,6 +381,7 @@ pub async fn run(
             }
         })
     };
+    let family = crate::family::for_model(model);
     // Battery and stance read-back.
     let poller = {
         let session = session.clone();
@@ -377,17 +389,21 @@ pub async fn run(
         let every = opts.battery_poll;
         tokio::spawn(async move {
             if model.has_legs()
-                && let Ok(p) = session.request(cmd::get_leg_action()).await
-                && let Some(s) = p.data.first().and_then(|b| LegState::from_byte(*b))
+                && let Some(c) = family.get_stance()
+                && let Ok(p) = session.request(c).await
+                && let Some(s) = p.data().first().and_then(|b| LegState::from_byte(*b))
             {
                 let mut t = lock(&telemetry);
                 if t.stance == crate::telemetry::Stance::Unknown {
                     t.stance = crate::telemetry::Stance::from_state(s);
                 }
             }
+            let Some(battery) = family.battery_request() else {
+                return;
+            };
             loop {
-                if let Ok(p) = session.request(cmd::get_battery_voltage()).await
-                    && let Some(v) = crate::telemetry::battery_volts(&p.data)
+                if let Ok(p) = session.request(battery.clone()).await
+                    && let Some(v) = family.battery_volts(p.data())
                 {
                     lock(&telemetry).battery_v = Some(v);
                 }
@@ -414,6 +430,7 @@ pub async fn run(
     let mut runner = Runner {
         session: session.clone(),
         model,
+        family,
         opts: opts.clone(),
         telemetry: telemetry.clone(),
         start,
@@ -431,7 +448,7 @@ pub async fn run(
     }
     // Stop, and give the stop time to go out before the summary.
     if runner.driving.take().is_some() {
-        session.set(Slot::Drive, Runner::drive_cmd(0, runner.last_heading));
+        session.set(Slot::Drive, runner.drive_cmd(0, runner.last_heading));
     }
     runner.hold(Duration::from_millis(300)).await;
     sampler.abort();

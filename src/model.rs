@@ -116,6 +116,20 @@ impl Model {
         matches!(self, Model::R2D2 | Model::R2Q5)
     }
 
+    /// Whether this build can drive the model (its protocol family is implemented).
+    pub fn drivable(self) -> bool {
+        matches!(self.protocol(), Protocol::SpheroV2 | Protocol::SpheroV1)
+    }
+
+    /// A rolling droid with an aim mode (back light, turn in place, set heading 0): BB-8,
+    /// SPRK+, Ollie, and BB-9E (its aiming LED, `droid-facts.md` §2).
+    pub fn can_aim(self) -> bool {
+        matches!(
+            self,
+            Model::BB8 | Model::SprkPlus | Model::Ollie | Model::BB9E
+        )
+    }
+
     /// Whether the droid has R2's rotating dome.
     pub fn has_dome(self) -> bool {
         matches!(self, Model::R2D2 | Model::R2Q5)

@@ -1,8 +1,8 @@
 //! What the droid reports, aggregated from notifications: the live gauges of the TUI and the
 //! samples of `droidctl run --json` both read this.
 
-use crate::protocol::v2::notify::{Collision, Notification};
-use crate::protocol::v2::wire::{LegAction, LegState};
+use crate::protocol::notify::{Collision, Notification};
+use crate::protocol::wire::{LegAction, LegState};
 use crate::units::Heading;
 use std::collections::VecDeque;
 use std::time::Duration;
@@ -154,6 +154,9 @@ impl Telemetry {
             }
             Notification::AnimationComplete => self.animations_completed += 1,
             Notification::BatteryVoltageStateChanged(s) => self.battery_voltage_state = Some(*s),
+            // v1: 1 charging, 2 OK, 3 low, 4 critical → the v2 scale 1 ok, 2 low, 3 critical.
+            Notification::PowerState(s @ 2..=4) => self.battery_voltage_state = Some(s - 1),
+            Notification::PowerState(_) => {}
             Notification::WillSleep => self.will_sleep = true,
             Notification::DidSleep => {
                 self.asleep = true;
@@ -195,7 +198,7 @@ impl Telemetry {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::protocol::v2::sensor::SensorSample;
+    use crate::protocol::notify::SensorSample;
 
     fn sample(values: &[(&'static str, f32)]) -> Notification {
         Notification::Sensors(SensorSample {
@@ -262,5 +265,10 @@ mod tests {
         assert!(t.will_sleep);
         t.apply(&Notification::DidSleep, Duration::ZERO);
         assert!(t.asleep && !t.will_sleep);
+        // A v1 power notification lands on the same battery-state scale.
+        t.apply(&Notification::PowerState(3), Duration::ZERO);
+        assert_eq!(t.battery_voltage_state, Some(2));
+        t.apply(&Notification::PowerState(1), Duration::ZERO);
+        assert_eq!(t.battery_voltage_state, Some(2));
     }
 }

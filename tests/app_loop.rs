@@ -8,7 +8,7 @@ use droidctl::config::Config;
 use droidctl::model::Model;
 use droidctl::protocol::v2::Packet;
 use droidctl::session::{self, Direction, LogEntry, LogItem, SessionConfig, SessionHandle};
-use droidctl::setup::{SetupOptions, connect_setup, streaming};
+use droidctl::setup::{SetupOptions, connect_setup};
 use droidctl::sim::{Faults, SimConfig, SimLink, link::SimProbe};
 use droidctl::teleop::gamepad::{Axis, PadEvent};
 use droidctl::teleop::held::ReleaseMode;
@@ -53,7 +53,13 @@ async fn start(release: ReleaseMode, faults: Faults, pacing_ms: u64) -> Harness 
         let drives = drives.clone();
         tokio::spawn(async move {
             while let Ok(LogEntry { dir, item, .. }) = log.recv().await {
-                if let (Direction::Out, LogItem::Packet(p)) = (dir, item)
+                if let (
+                    Direction::Out,
+                    LogItem::Packet {
+                        packet: droidctl::family::Packet::V2(p),
+                        ..
+                    },
+                ) = (dir, item)
                     && (p.did, p.cid) == (0x16, 0x07)
                 {
                     let Packet { data, .. } = p;
@@ -75,7 +81,6 @@ async fn start(release: ReleaseMode, faults: Faults, pacing_ms: u64) -> Harness 
         droid_name: "R2-D2 (simulated)".into(),
         log_path: None,
         release,
-        streaming: Some(streaming(&setup)),
         tripod_on_connect: true,
     };
     let s = session.clone();
@@ -282,9 +287,9 @@ async fn quitting_sends_a_stop_first() {
     h.press(key('q')).await;
     let exit = (&mut h.app).await.unwrap();
     assert_eq!(exit.reason, ExitReason::Quit);
-    assert_eq!(exit.stop.data[0], 0);
+    assert_eq!(exit.stop.data()[0], 0);
     h.session
-        .shutdown(run::exit_commands(exit.stop, false))
+        .shutdown(run::exit_commands(Model::R2D2, exit.stop, false))
         .await;
     sleep(Duration::from_millis(10)).await;
     assert_eq!(

@@ -333,7 +333,7 @@ fn count(droid: &FakePeripheral, op: &FakeOp) -> usize {
 async fn session_reconnects_and_reruns_handshake_and_setup() {
     let (_c, droid, link) = setup(Model::R2D2);
     let cfg = SessionConfig {
-        setup: vec![cmd::wake()],
+        setup: vec![cmd::wake().into()],
         pacing: link.profile().pacing,
         chunk_size: link.profile().chunk_size,
         ..SessionConfig::default()

@@ -245,7 +245,7 @@ fn bb9e_rejects_a_stance_line() {
     let (o, _) = dir.run(&["run", path(&ok), "--sim", "bb9e"]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     // A model the simulator cannot play is a usage error.
-    let (o, _) = dir.run(&["run", path(&ok), "--sim", "bb8"]);
+    let (o, _) = dir.run(&["run", path(&ok), "--sim", "robi42"]);
     assert_eq!(o.status.code(), Some(2));
 }
 

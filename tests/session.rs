@@ -264,9 +264,9 @@ async fn out_of_order_responses_reach_their_own_callers() {
     for (volume, call) in calls {
         let resp = call.await.unwrap().expect("answered");
         let req = written.iter().find(|p| p.data == [volume]).unwrap();
-        assert_eq!(resp.seq, req.seq, "volume {volume}");
+        assert_eq!(resp.as_v2().unwrap().seq, req.seq, "volume {volume}");
         assert_eq!(
-            resp.data,
+            resp.data(),
             [volume, req.seq],
             "volume {volume} got another's response"
         );
@@ -296,7 +296,10 @@ async fn responses_match_on_did_cid_and_seq() {
     );
     fake.respond(req, ErrorCode::Success, vec![0x01, 0x9A]);
     let resp = a.await.unwrap().unwrap();
-    assert_eq!((resp.cid, resp.data.as_slice()), (0x03, &[0x01, 0x9A][..]));
+    assert_eq!(
+        (resp.as_v2().unwrap().cid, resp.data()),
+        (0x03, &[0x01, 0x9A][..])
+    );
     assert_eq!(s.stats().unmatched, 1);
 }
 
@@ -376,7 +379,9 @@ async fn error_code_becomes_droid_error() {
     fake.respond(&p, ErrorCode::TargetUnavailable, vec![]);
     assert_eq!(
         call.await.unwrap(),
-        Err(RequestError::Droid(ErrorCode::TargetUnavailable))
+        Err(RequestError::Droid(droidctl::family::DroidError::V2(
+            ErrorCode::TargetUnavailable
+        )))
     );
     let st = s.stats();
     assert_eq!(
@@ -734,7 +739,10 @@ async fn packet_log_shows_every_packet_and_decode_error() {
         .iter()
         .filter(|e| e.dir == Direction::Out)
         .filter_map(|e| match &e.item {
-            LogItem::Packet(p) => Some(p),
+            LogItem::Packet {
+                packet: droidctl::family::Packet::V2(p),
+                ..
+            } => Some(p),
             _ => None,
         })
         .collect();
@@ -750,11 +758,25 @@ async fn packet_log_shows_every_packet_and_decode_error() {
     );
     assert_eq!(outs[1].cid, 0x01);
     assert_eq!(ins.len(), 3, "{ins:?}");
+    let v2 = |item: &LogItem| match item {
+        LogItem::Packet {
+            packet: droidctl::family::Packet::V2(p),
+            ..
+        } => Some(p.clone()),
+        _ => None,
+    };
     assert!(
-        matches!(ins[0], LogItem::Packet(p) if p.is_response() && p.seq == req.seq && p.data == [0x01, 0x9A])
+        matches!(v2(ins[0]), Some(p) if p.is_response() && p.seq == req.seq && p.data == [0x01, 0x9A])
     );
-    assert!(matches!(ins[1], LogItem::Packet(p) if *p == note));
-    assert!(matches!(ins[2], LogItem::DecodeError(e) if e.kind == DecodeErrorKind::BadChecksum));
+    // The response is explained with its request: the battery voltage, by name.
+    assert!(
+        matches!(ins[0], LogItem::Packet { explained, .. } if explained.label == "get-battery-voltage")
+    );
+    assert_eq!(v2(ins[1]), Some(note));
+    assert!(matches!(
+        ins[2],
+        LogItem::DecodeError(droidctl::family::DecodeError::V2(e)) if e.kind == DecodeErrorKind::BadChecksum
+    ));
     // Times are since the session started and never go backwards.
     assert!(entries.windows(2).all(|w| w[0].at <= w[1].at));
     let st = s.stats();
@@ -769,7 +791,10 @@ async fn packet_log_shows_every_packet_and_decode_error() {
 async fn reconnects_with_backoff_setup_and_a_stop_at_the_last_heading() {
     let fake = Fake::new();
     let config = SessionConfig {
-        setup: vec![cmd::wake(), cmd::perform_leg_action(LegAction::Tripod)],
+        setup: vec![
+            cmd::wake().into(),
+            cmd::perform_leg_action(LegAction::Tripod).into(),
+        ],
         pacing: ms(120),
         ..SessionConfig::default()
     };
@@ -966,7 +991,7 @@ async fn shutdown_writes_the_stop_before_closing() {
     .unwrap();
     sleep(ms(130)).await;
     let before = fake.writes().len();
-    s.shutdown(vec![drive(0, 45)]).await;
+    s.shutdown(vec![drive(0, 45).into()]).await;
     assert_eq!(s.state(), LinkState::Closed { reason: None });
     {
         let st = fake.lock();
@@ -1003,7 +1028,7 @@ async fn shutdown_while_reconnecting_ends_at_once() {
     })
     .await;
     let t0 = Instant::now();
-    s.shutdown(vec![drive(0, 0)]).await;
+    s.shutdown(vec![drive(0, 0).into()]).await;
     assert!(t0.elapsed() < ms(5));
     assert_eq!(s.state(), LinkState::Closed { reason: None });
 }
@@ -1032,7 +1057,8 @@ async fn shutdown_stopped_stops_at_the_last_heading() {
     let s = connected(&fake, SessionConfig::default()).await;
     s.set(Slot::Drive, drive(200, 135));
     fake.wait_packets(1).await;
-    s.shutdown_stopped(vec![cmd::set_audio_volume(0)]).await;
+    s.shutdown_stopped(vec![cmd::set_audio_volume(0).into()])
+        .await;
     let sent = fake.packets();
     let n = sent.len();
     assert!(n >= 3);

@@ -125,7 +125,7 @@ async fn shutdown_stopped_stops_at_the_last_heading() {
         cmd::drive_with_heading(120, Heading::new(270).unwrap(), DriveFlags::empty()),
     );
     sleep(Duration::from_millis(500)).await;
-    s.shutdown_stopped(vec![cmd::sleep()]).await;
+    s.shutdown_stopped(vec![cmd::sleep().into()]).await;
     let all: Vec<u8> = writes.lock().unwrap().concat();
     let packets: Vec<_> = droidctl::protocol::v2::Decoder::new()
         .decode_all(&all)
@@ -144,6 +144,8 @@ async fn shutdown_stopped_stops_at_the_last_heading() {
     );
 }
 
+// Sends SIGINT with `kill`.
+#[cfg(unix)]
 #[test]
 fn ctrl_c_stops_a_running_mission() {
     let dir = std::env::temp_dir().join(format!("droidctl-sigint-{}", std::process::id()));

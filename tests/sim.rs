@@ -1486,7 +1486,7 @@ async fn end_to_end_telemetry_matches_the_droid() {
     assert!(close(sample.get("yaw").unwrap(), 45.0, 0.01));
     assert_eq!(sample.get("head_angle"), Some(60.0));
     assert_eq!(st.head_deg, 60.0);
-    s.shutdown(vec![drive(0, 45)]).await;
+    s.shutdown(vec![drive(0, 45).into()]).await;
 }
 
 #[tokio::test(start_paused = true)]
@@ -1509,6 +1509,7 @@ async fn end_to_end_every_catalogue_command_through_a_session() {
             .request(c)
             .await
             .unwrap_or_else(|e| panic!("{}: {e}", def.name));
+        let r = r.as_v2().unwrap();
         assert_eq!((r.did, r.cid), (def.did(), def.cid));
         assert!(
             catalog::decode_fields(def.response, &r.data).is_ok(),
@@ -1532,7 +1533,7 @@ async fn shutdown_stop_reaches_the_simulated_droid() {
     assert!(probe.state().velocity_cm_s > 70.0, "{:?}", probe.state());
     // The stop is the last thing written before the link closes: it must still arrive (the
     // droid's own motion timeout would only stop it after 2 s).
-    s.shutdown(vec![drive(0, 0)]).await;
+    s.shutdown(vec![drive(0, 0).into()]).await;
     assert!(!probe.connected());
     sleep(ms(700)).await;
     let st = probe.state();

@@ -104,7 +104,7 @@ async fn ten_minutes_noisy_driving_with_a_disconnect_every_minute() {
                     Err(_) => Outcome::Hung,
                     Ok(Ok(_)) => Outcome::Answered,
                     Ok(Err(RequestError::Timeout)) => Outcome::Timeout,
-                    Ok(Err(RequestError::Droid(e))) => Outcome::Droid(e.to_byte()),
+                    Ok(Err(RequestError::Droid(e))) => Outcome::Droid(e.code()),
                     Ok(Err(RequestError::LinkLost)) => Outcome::LinkLost,
                     Ok(Err(RequestError::QueueFull)) => Outcome::QueueFull,
                     Ok(Err(RequestError::Closed)) => Outcome::Closed,
@@ -132,11 +132,9 @@ async fn ten_minutes_noisy_driving_with_a_disconnect_every_minute() {
         }
     })
     .await;
-    s.shutdown(vec![cmd::drive_with_heading(
-        0,
-        Heading::default(),
-        DriveFlags::empty(),
-    )])
+    s.shutdown(vec![
+        cmd::drive_with_heading(0, Heading::default(), DriveFlags::empty()).into(),
+    ])
     .await;
     let wall = wall.elapsed();
 

@@ -38,14 +38,11 @@ fn help_lines() -> (Vec<HelpLine>, Vec<HelpLine>) {
 }
 
 fn entry(at_ms: u64, dir: Direction, p: Packet) -> LogLine {
-    LogLine::from_entry(
-        &LogEntry {
-            at: ms(at_ms),
-            dir,
-            item: LogItem::Packet(p),
-        },
-        None,
-    )
+    LogLine::from_entry(&LogEntry {
+        at: ms(at_ms),
+        dir,
+        item: LogItem::v2(p),
+    })
 }
 
 /// Builds a log with advancing time and SEQ numbers.

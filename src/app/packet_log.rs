@@ -2,8 +2,10 @@
 //! (scroll, pause, filter, decoded/hex). Entries are formatted once, when they arrive, so
 //! drawing a full log costs the same as drawing an empty one.
 
+use crate::family::{DroidError, PacketKind};
 use crate::hex;
-use crate::protocol::v2::{Device, ErrorCode, Kind, StreamingConfig, describe, value};
+use crate::protocol::v2::Device;
+use crate::protocol::value;
 use crate::session::{Direction, LogEntry, LogItem};
 use std::collections::VecDeque;
 use std::time::Duration;
@@ -20,7 +22,7 @@ pub struct LogLine {
     pub name: String,
     pub did: Option<u8>,
     pub seq: Option<u8>,
-    pub err: Option<ErrorCode>,
+    pub err: Option<DroidError>,
     /// A decode error, an error response, or a malformed payload.
     pub is_error: bool,
     pub hex: String,
@@ -32,19 +34,21 @@ pub struct LogLine {
 }
 
 impl LogLine {
-    pub fn from_entry(e: &LogEntry, streaming: Option<&StreamingConfig>) -> LogLine {
-        let mut line = Self::format(e, streaming);
+    pub fn from_entry(e: &LogEntry) -> LogLine {
+        let mut line = Self::format(e);
         let err = line.err.map(|e| e.name()).unwrap_or_default();
         line.search =
             format!("{}\n{}\n{}\n{err}", line.name, line.decoded, line.hex).to_ascii_lowercase();
         line
     }
 
-    fn format(e: &LogEntry, streaming: Option<&StreamingConfig>) -> LogLine {
+    fn format(e: &LogEntry) -> LogLine {
         match &e.item {
-            LogItem::Packet(p) => {
-                let d = describe(p, streaming);
-                let err = p.err.filter(|e| !e.is_success());
+            LogItem::Packet {
+                packet,
+                explained: d,
+            } => {
+                let err = d.error;
                 let decoded = match (&d.fields, &d.problem) {
                     (Some(f), _) if f.is_empty() => String::new(),
                     (Some(f), _) => value::fields_line(f),
@@ -52,16 +56,16 @@ impl LogLine {
                     (None, None) => String::new(),
                 };
                 let is_error = err.is_some()
-                    || (d.fields.is_none() && d.kind != Kind::Command && d.name.is_some());
+                    || (d.fields.is_none() && d.kind != PacketKind::Command && d.known);
                 LogLine {
                     at: e.at,
                     dir: e.dir,
-                    name: d.label(p),
-                    did: Some(p.did),
-                    seq: (d.kind != Kind::Notification).then_some(p.seq),
+                    name: d.label.clone(),
+                    did: d.did,
+                    seq: d.seq,
                     err,
                     is_error,
-                    hex: hex::spaced(&p.encode()),
+                    hex: hex::spaced(&packet.encode()),
                     decoded,
                     search: String::new(),
                 }
@@ -69,13 +73,13 @@ impl LogLine {
             LogItem::DecodeError(de) => LogLine {
                 at: e.at,
                 dir: e.dir,
-                name: format!("decode error: {}", de.kind.name()),
+                name: format!("decode error: {}", de.kind_name()),
                 did: None,
                 seq: None,
                 err: None,
                 is_error: true,
                 hex: String::new(),
-                decoded: de.detail.clone(),
+                decoded: de.detail().to_string(),
                 search: String::new(),
             },
         }
@@ -281,18 +285,21 @@ pub fn arrow(d: Direction) -> &'static str {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::protocol::v2::{Packet, cmd};
+    use crate::protocol::v2::{ErrorCode, Packet, cmd};
 
     fn entry(dir: Direction, p: Packet, ms: u64) -> LogEntry {
         LogEntry {
             at: Duration::from_millis(ms),
             dir,
-            item: LogItem::Packet(p),
+            item: LogItem::Packet {
+                explained: crate::family::v2::explain(&p, None),
+                packet: crate::family::Packet::V2(p),
+            },
         }
     }
 
     fn line(dir: Direction, p: Packet) -> LogLine {
-        LogLine::from_entry(&entry(dir, p, 0), None)
+        LogLine::from_entry(&entry(dir, p, 0))
     }
 
     #[test]
@@ -306,17 +313,14 @@ mod tests {
         let bad = Packet::response_to(&wake, ErrorCode::BadDataLength, vec![]);
         let l = line(Direction::In, bad);
         assert!(l.is_error);
-        assert_eq!(l.err, Some(ErrorCode::BadDataLength));
+        assert_eq!(l.err, Some(DroidError::V2(ErrorCode::BadDataLength)));
         let de = crate::protocol::v2::Decoder::new().decode_all(&[0x8D, 0x0A, 0x13, 0xD8]);
         let Err(e) = de[0].clone() else { panic!() };
-        let l = LogLine::from_entry(
-            &LogEntry {
-                at: Duration::ZERO,
-                dir: Direction::In,
-                item: LogItem::DecodeError(e),
-            },
-            None,
-        );
+        let l = LogLine::from_entry(&LogEntry {
+            at: Duration::ZERO,
+            dir: Direction::In,
+            item: LogItem::DecodeError(crate::family::DecodeError::V2(e)),
+        });
         assert!(l.is_error && l.name.contains("too_short"));
     }
 

@@ -5,12 +5,13 @@
 
 use super::input::{KeyKind, TermEvent};
 use super::packet_log::LogLine;
-use super::state::{AppState, Focus, GamepadStatus, HelpLine, KeyboardMode, Overlay};
+use super::state::{
+    AppState, Focus, GamepadStatus, HelpLine, KeyboardMode, MAIN_LED_CYCLE, Overlay,
+};
 use crate::config::Config;
+use crate::family::{Command, Family};
 use crate::model::Model;
-use crate::protocol::v2::sensor::StreamingConfig;
-use crate::protocol::v2::wire::{AudioMode, DriveFlags, LegAction};
-use crate::protocol::v2::{Command, cmd};
+use crate::protocol::wire::LegAction;
 use crate::session::{LinkState, SessionEvent, SessionHandle, Slot};
 use crate::teleop::control::{Controller, DroidView, Inputs, Out};
 use crate::teleop::gamepad::{PadCommand, PadEvent, PadState};
@@ -30,8 +31,6 @@ pub struct AppOptions {
     pub droid_name: String,
     pub log_path: Option<PathBuf>,
     pub release: ReleaseMode,
-    /// The masks the connect setup asks for, to name sensor values in the packet log.
-    pub streaming: Option<StreamingConfig>,
     /// Whether the connect setup puts R2 into tripod.
     pub tripod_on_connect: bool,
 }
@@ -75,7 +74,7 @@ struct App {
     held: HeldKeys,
     pad: PadState,
     keymap: KeyMap,
-    streaming: Option<StreamingConfig>,
+    family: &'static dyn Family,
     turbo_speed: u8,
     start: Instant,
     last_tick: Instant,
@@ -132,6 +131,10 @@ pub fn help_lines(config: &Config, keymap: &KeyMap) -> (Vec<HelpLine>, Vec<HelpL
             action: "stance: bipod".into(),
         },
         HelpLine {
+            keys: g.aim.clone(),
+            action: "aim mode on/off (rolling droids)".into(),
+        },
+        HelpLine {
             keys: g.estop.clone(),
             action: "EMERGENCY STOP (latched while held)".into(),
         },
@@ -164,6 +167,7 @@ impl App {
             connected: self.state.link == LinkState::Connected,
             has_legs: self.state.model.has_legs(),
             has_dome: self.state.model.has_dome(),
+            can_aim: self.state.model.can_aim(),
             stance: self.state.telemetry.stance,
         }
     }
@@ -180,6 +184,18 @@ impl App {
                 Out::Drive(c) => self.session.set(Slot::Drive, c),
                 Out::Head(c) => self.session.set(Slot::Head, c),
                 Out::Stance(a) => self.stance(a),
+                Out::AimBegin => {
+                    for c in self.family.aim_begin(self.state.model).unwrap_or_default() {
+                        self.send(c, "aim");
+                    }
+                    self.state.leds.back = Some(255);
+                }
+                Out::AimEnd => {
+                    for c in self.family.aim_end(self.state.model) {
+                        self.send(c, "aim");
+                    }
+                    self.state.leds.back = Some(0);
+                }
                 Out::Hint(h) => self.hint(h),
             }
         }
@@ -188,9 +204,68 @@ impl App {
     }
 
     fn stance(&mut self, a: LegAction) {
-        match self.session.send(cmd::perform_leg_action(a)) {
+        let Some(c) = self.family.stance(a) else {
+            return self.hint("this droid has no legs");
+        };
+        match self.session.send(c) {
             Ok(()) => self.state.telemetry.stance_requested(a),
             Err(e) => self.hint(format!("stance not sent: {e}")),
+        }
+    }
+
+    /// The next colour of [`MAIN_LED_CYCLE`] on the main (R2: front) LED.
+    fn cycle_colour(&mut self) {
+        let next = match self.state.leds.main {
+            Some(c) => MAIN_LED_CYCLE
+                .iter()
+                .position(|x| *x == c)
+                .map_or(0, |i| (i + 1) % MAIN_LED_CYCLE.len()),
+            None => 0,
+        };
+        let rgb = MAIN_LED_CYCLE[next];
+        let action = crate::script::Action::LedRgb(crate::script::LedGroup::Front, rgb);
+        match self.family.led(self.state.model, &action) {
+            Some(c) => {
+                self.send(c, "colour");
+                self.state.leds.main = Some(rgb);
+            }
+            None => self.hint("this droid has no main LED"),
+        }
+    }
+
+    fn toggle_back_light(&mut self) {
+        let b = if self.state.leds.back.unwrap_or(0) > 0 {
+            0
+        } else {
+            255
+        };
+        let action = crate::script::Action::LedBrightness(crate::script::LedGroup::Back, b);
+        match self.family.led(self.state.model, &action) {
+            Some(c) => {
+                self.send(c, "back light");
+                self.state.leds.back = Some(b);
+            }
+            None => self.hint("this droid has no back light to switch (R2: use the colour key)"),
+        }
+    }
+
+    fn play_animation(&mut self, id: u16, name: &str) {
+        match self.family.animation(id) {
+            Some(c) => {
+                self.send(c, "animation");
+                self.hint(format!("animation {name} ({id})"));
+            }
+            None => self.hint("this droid has no animations"),
+        }
+    }
+
+    fn play_sound(&mut self, id: u16, name: &str) {
+        match self.family.sound(id) {
+            Some(c) => {
+                self.send(c, "sound");
+                self.hint(format!("sound {name} ({id})"));
+            }
+            None => self.hint("this droid cannot play sounds"),
         }
     }
 
@@ -326,12 +401,10 @@ impl App {
                 KeyCode::Enter if new_press => {
                     if animations {
                         if let Some(e) = self.state.animations.get(sel).cloned() {
-                            self.send(cmd::play_animation(e.id), "animation");
-                            self.hint(format!("animation {} ({})", e.name, e.id));
+                            self.play_animation(e.id, &e.name);
                         }
                     } else if let Some(e) = self.state.sounds.get(sel).cloned() {
-                        self.send(cmd::play_audio_file(e.id, AudioMode::Immediate), "sound");
-                        self.hint(format!("sound {} ({})", e.name, e.id));
+                        self.play_sound(e.id, &e.name);
                     }
                     self.state.overlay = Overlay::None;
                     return None;
@@ -430,6 +503,14 @@ impl App {
                 self.held.release_all();
                 self.control(false);
             }
+            Action::Colour => self.cycle_colour(),
+            Action::BackLight => self.toggle_back_light(),
+            Action::Animations if self.family.animation(0).is_none() => {
+                self.hint("this droid has no animations")
+            }
+            Action::Sounds if self.family.sound(0).is_none() => {
+                self.hint("this droid cannot play sounds")
+            }
             Action::Animations => self.state.overlay = Overlay::Animations { selected: 0 },
             Action::Sounds => self.state.overlay = Overlay::Sounds { selected: 0 },
             a => {
@@ -469,6 +550,10 @@ impl App {
                 let o = self.controller.on_press(Action::Bipod, &view);
                 self.apply(o);
             }
+            Some(PadCommand::Aim) => {
+                let o = self.controller.on_press(Action::Aim, &view);
+                self.apply(o);
+            }
             Some(PadCommand::EStop) => {
                 let o = self.controller.estop_now();
                 self.apply(vec![o]);
@@ -486,13 +571,10 @@ impl App {
                     _ => 0,
                 };
                 if let Some(a) = self.state.animations.get(sel).cloned() {
-                    self.send(cmd::play_animation(a.id), "animation");
-                    self.hint(format!("animation {} ({})", a.name, a.id));
+                    self.play_animation(a.id, &a.name);
                 }
             }
-            Some(PadCommand::Sound(id)) => {
-                self.send(cmd::play_audio_file(id, AudioMode::Immediate), "sound")
-            }
+            Some(PadCommand::Sound(id)) => self.play_sound(id, "from the D-pad"),
             None => {}
         }
         // Stick back in its deadzone or pad unplugged: stop at once.
@@ -544,14 +626,15 @@ pub async fn run<B: Backend>(
     };
     let _ = opts.tripod_on_connect;
     let start = Instant::now();
+    let family = crate::family::for_model(opts.model);
     let mut app = App {
         state,
         session: session.clone(),
-        controller: Controller::new(opts.config.control.clone()),
+        controller: Controller::with_family(opts.config.control.clone(), family),
         held: HeldKeys::new(opts.release),
         pad: PadState::new(opts.config.gamepad.clone()),
         keymap,
-        streaming: opts.streaming,
+        family,
         turbo_speed: opts.config.control.turbo_speed,
         start,
         last_tick: start,
@@ -573,9 +656,12 @@ pub async fn run<B: Backend>(
     let poller = {
         let session = session.clone();
         tokio::spawn(async move {
+            let Some(battery) = family.battery_request() else {
+                return;
+            };
             loop {
-                let reading = match session.request(cmd::get_battery_voltage()).await {
-                    Ok(p) => crate::telemetry::battery_volts(&p.data),
+                let reading = match session.request(battery.clone()).await {
+                    Ok(p) => family.battery_volts(p.data()),
                     Err(_) => None,
                 };
                 if let Some(v) = reading
@@ -644,7 +730,7 @@ pub async fn run<B: Backend>(
             },
             e = log_rx.recv(), if log_open => match e {
                 Ok(entry) => {
-                    let line = LogLine::from_entry(&entry, app.streaming.as_ref());
+                    let line = LogLine::from_entry(&entry);
                     app.state.log.push(line);
                     app.dirty = true;
                 }
@@ -690,7 +776,7 @@ pub async fn run<B: Backend>(
         }
     };
     poller.abort();
-    let stop = cmd::drive_with_heading(0, app.controller.view().heading, DriveFlags::empty());
+    let stop = family.drive(0, app.controller.view().heading, false);
     // The operator sees the droid stopped even before the session writes it.
     app.session.set(Slot::Drive, stop.clone());
     Ok(Exit {
@@ -700,16 +786,16 @@ pub async fn run<B: Backend>(
     })
 }
 
-/// The commands to send on exit: a stop, and sleep when configured.
-pub fn exit_commands(exit_stop: Command, sleep_on_exit: bool) -> Vec<Command> {
+/// The commands to send on exit: a stop, and sleep when configured (and the family can).
+pub fn exit_commands(model: Model, exit_stop: Command, sleep_on_exit: bool) -> Vec<Command> {
     let mut v = vec![exit_stop];
-    if sleep_on_exit {
-        v.push(cmd::sleep());
+    if sleep_on_exit && let Some(sleep) = crate::family::for_model(model).sleep() {
+        v.push(sleep);
     }
     v
 }
 
 /// A stop at heading 0, for paths that have no controller (e.g. a crash before the loop).
-pub fn plain_stop() -> Command {
-    cmd::drive_with_heading(0, Heading::default(), DriveFlags::empty())
+pub fn plain_stop(model: Model) -> Command {
+    crate::family::for_model(model).drive(0, Heading::default(), false)
 }

@@ -29,8 +29,10 @@ pub struct ControlView {
     pub head_target: f32,
     /// "hold" or "latched".
     pub mode: &'static str,
-    /// Where the drive input comes from now: "keyboard", "gamepad" or "-".
+    /// Where the drive input comes from now: "keyboard", "gamepad", "aim" or "-".
     pub source: &'static str,
+    /// Aim mode is on.
+    pub aiming: bool,
 }
 
 impl Default for ControlView {
@@ -46,6 +48,7 @@ impl Default for ControlView {
             head_target: 0.0,
             mode: "hold",
             source: "-",
+            aiming: false,
         }
     }
 }
@@ -144,7 +147,26 @@ pub struct AppState {
     pub sounds: Vec<Entry>,
     /// A collision flashes this long.
     pub collision_flash: Duration,
+    /// The lights as last commanded.
+    pub leds: LedView,
 }
+
+/// The lights as droidctl last commanded them (droids do not report their LEDs).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct LedView {
+    pub main: Option<[u8; 3]>,
+    pub back: Option<u8>,
+}
+
+/// The colours the colour key cycles through.
+pub const MAIN_LED_CYCLE: [[u8; 3]; 6] = [
+    [255, 0, 0],
+    [0, 255, 0],
+    [0, 0, 255],
+    [255, 255, 255],
+    [255, 140, 0],
+    [0, 0, 0],
+];
 
 impl AppState {
     pub fn new(model: Model, droid_name: String) -> Self {
@@ -171,6 +193,7 @@ impl AppState {
             animations: catalog::animations(),
             sounds: catalog::sounds(),
             collision_flash: Duration::from_millis(1500),
+            leds: LedView::default(),
         }
     }
 

@@ -14,7 +14,8 @@ pub struct BleArgs {
     /// Connect to the droid with this advertised name (e.g. D2-1A2B; a unique part is enough).
     #[arg(long, value_name = "NAME", conflicts_with = "sim")]
     pub name: Option<String>,
-    /// Connect to the droid with this Bluetooth address.
+    /// Connect to the droid with this Bluetooth address (on macOS, the identifier `droidctl scan`
+    /// shows in its place).
     #[arg(long, value_name = "ADDR", conflicts_with_all = ["sim", "name"])]
     pub address: Option<String>,
     /// How long to scan for droids, in seconds.
@@ -87,7 +88,7 @@ pub async fn connect(
     let drivable: Vec<&ScanEntry> = found
         .candidates
         .iter()
-        .filter(|c| c.model.is_some_and(|m| m.protocol() == Protocol::SpheroV2))
+        .filter(|c| c.model.is_some_and(Model::drivable))
         .collect();
     let choice = if !explicit && drivable.len() > 1 && std::io::stdin().is_terminal() {
         match chooser {
@@ -112,14 +113,15 @@ pub async fn connect(
             .await
             .map_err(|e| CliError::failure(e.message))?;
     }
-    if found.model.protocol() != Protocol::SpheroV2 {
+    if !found.model.drivable() {
         return Err(CliError::failure(format!(
-            "{} ({}) speaks Sphero API {}, which droidctl can find but not yet drive — pick an R2-D2, R2-Q5 or BB-9E with --name, or try `--sim`",
+            "{} ({}) speaks {}, which droidctl can find but not yet drive — pick a Sphero droid with --name, or try `--sim`",
             found.name,
             found.model.display_name(),
             match found.model.protocol() {
-                Protocol::SpheroV1 => "v1",
-                _ => "RSRCP",
+                Protocol::SpheroV1 => "Sphero API v1",
+                Protocol::SpheroV2 => "Sphero API v2",
+                Protocol::Rsrcp => "RSRCP",
             }
         )));
     }

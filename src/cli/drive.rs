@@ -8,7 +8,7 @@ use crate::config::Config;
 use crate::link::Link;
 use crate::model::Model;
 use crate::session::{self, SessionConfig, SessionHandle, Slot};
-use crate::setup::{SetupOptions, connect_setup, streaming};
+use crate::setup::{SetupOptions, connect_setup};
 use crate::sim::{Faults, SimConfig, SimLink};
 use crate::teleop::held::ReleaseMode;
 use clap::Args;
@@ -21,7 +21,7 @@ use tokio::sync::mpsc;
 
 #[derive(Debug, Clone, Default, Args)]
 pub struct DriveArgs {
-    /// Drive the simulated droid in-process: r2d2 (default), r2q5 or bb9e.
+    /// Drive a simulated droid in-process: r2d2 (default), r2q5, bb9e, bb8, sprk or ollie.
     #[arg(long, num_args = 0..=1, default_missing_value = "r2d2", value_name = "MODEL")]
     pub sim: Option<String>,
     #[command(flatten)]
@@ -33,16 +33,17 @@ pub fn sim_model(sim: &Option<String>) -> Result<Option<Model>, CliError> {
     match sim {
         None => Ok(None),
         Some(m) => match Model::from_id(m) {
-            Some(model @ (Model::R2D2 | Model::R2Q5 | Model::BB9E)) => Ok(Some(model)),
+            Some(model) if crate::sim::simulates(model) => Ok(Some(model)),
             _ => Err(CliError::usage(format!(
-                "unknown simulated model {m:?}: use r2d2, r2q5 or bb9e"
+                "unknown simulated model {m:?}: use one of {}",
+                crate::sim::simulated_ids().join(", ")
             ))),
         },
     }
 }
 
 static PANIC_MESSAGE: Mutex<Option<String>> = Mutex::new(None);
-static PANIC_SESSION: OnceLock<SessionHandle> = OnceLock::new();
+static PANIC_SESSION: OnceLock<(SessionHandle, Model)> = OnceLock::new();
 
 /// On a panic: ask the session to stop the droid at once (a synchronous slot write), keep
 /// the message for after the terminal is restored; a panic outside the app task restores the
@@ -50,8 +51,8 @@ static PANIC_SESSION: OnceLock<SessionHandle> = OnceLock::new();
 fn install_panic_hook() {
     let default = std::panic::take_hook();
     std::panic::set_hook(Box::new(move |info| {
-        if let Some(s) = PANIC_SESSION.get() {
-            s.set(Slot::Drive, run::plain_stop());
+        if let Some((s, model)) = PANIC_SESSION.get() {
+            s.set(Slot::Drive, run::plain_stop(*model));
         }
         let in_app = std::thread::current().name() != Some("main");
         if in_app && term::active() {
@@ -112,13 +113,14 @@ async fn drive(
     let session = session::start(
         link,
         SessionConfig {
+            family: model.protocol(),
             request_timeout: Duration::from_millis(config.session.request_timeout_ms),
             pacing,
             setup: connect_setup(model, &setup),
             ..SessionConfig::default()
         },
     );
-    let _ = PANIC_SESSION.set(session.clone());
+    let _ = PANIC_SESSION.set((session.clone(), model));
     install_panic_hook();
 
     let mut guard = TerminalGuard::enter()
@@ -157,19 +159,7 @@ async fn drive(
     // Signals.
     let (quit_tx, quit_rx) = mpsc::channel::<String>(4);
     let signals = tokio::spawn(async move {
-        use tokio::signal::unix::{SignalKind, signal};
-        let (Ok(mut term), Ok(mut hup), Ok(mut int)) = (
-            signal(SignalKind::terminate()),
-            signal(SignalKind::hangup()),
-            signal(SignalKind::interrupt()),
-        ) else {
-            return;
-        };
-        let why = tokio::select! {
-            _ = term.recv() => "SIGTERM",
-            _ = hup.recv() => "SIGHUP",
-            _ = int.recv() => "SIGINT",
-        };
+        let why = super::signals::terminated().await;
         let _ = quit_tx.send(why.to_string()).await;
     });
 
@@ -180,7 +170,6 @@ async fn drive(
         droid_name: name,
         log_path: log_path.clone(),
         release,
-        streaming: Some(streaming(&setup)),
         tripod_on_connect: setup.tripod,
     };
     let inputs = AppInputs {
@@ -200,8 +189,8 @@ async fn drive(
     });
     let result = app.await;
     let stop_cmds = match &result {
-        Ok(Ok(exit)) => run::exit_commands(exit.stop.clone(), sleep_on_exit),
-        _ => run::exit_commands(run::plain_stop(), sleep_on_exit),
+        Ok(Ok(exit)) => run::exit_commands(model, exit.stop.clone(), sleep_on_exit),
+        _ => run::exit_commands(model, run::plain_stop(model), sleep_on_exit),
     };
     let _ = tokio::time::timeout(Duration::from_secs(3), session.shutdown(stop_cmds)).await;
     reader.abort();

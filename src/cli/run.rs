@@ -18,7 +18,7 @@ pub struct RunArgs {
     /// The mission script (see README, "Mission scripts").
     #[arg(value_name = "SCRIPT")]
     pub script: Option<PathBuf>,
-    /// Run against the simulated droid: r2d2 (default), r2q5 or bb9e. The mission runs in
+    /// Run against a simulated droid: r2d2 (default), r2q5, bb9e, bb8, sprk or ollie. The mission runs in
     /// simulated time.
     #[arg(long, num_args = 0..=1, default_missing_value = "r2d2", value_name = "MODEL")]
     pub sim: Option<String>,
@@ -39,11 +39,12 @@ fn resolve(args: &RunArgs) -> Result<(PathBuf, Option<Model>), CliError> {
     let model = match &args.sim {
         None => None,
         Some(m) => match Model::from_id(m) {
-            Some(model) if matches!(model, Model::R2D2 | Model::R2Q5 | Model::BB9E) => Some(model),
+            Some(model) if crate::sim::simulates(model) => Some(model),
             Some(other) => {
                 return Err(CliError::usage(format!(
-                    "the simulator speaks API v2 only: r2d2, r2q5 or bb9e, not {}",
-                    other.id()
+                    "{} is not simulated yet: use one of {}",
+                    other.display_name(),
+                    crate::sim::simulated_ids().join(", ")
                 )));
             }
             None if script.is_none() => {
@@ -52,7 +53,8 @@ fn resolve(args: &RunArgs) -> Result<(PathBuf, Option<Model>), CliError> {
             }
             None => {
                 return Err(CliError::usage(format!(
-                    "unknown simulated model {m:?}: use r2d2, r2q5 or bb9e"
+                    "unknown simulated model {m:?}: use one of {}",
+                    crate::sim::simulated_ids().join(", ")
                 )));
             }
         },
@@ -137,6 +139,7 @@ pub async fn run_on(
         streaming_interval_ms: interval_ms.min(100),
     };
     let config = SessionConfig {
+        family: model.protocol(),
         pacing: model.write_pacing(),
         setup: connect_setup(model, &setup),
         ..SessionConfig::default()
@@ -172,22 +175,9 @@ pub async fn run_on(
             }
         };
     });
-    // Ctrl-C (also while reconnecting), SIGTERM and SIGHUP end the mission with a stop.
-    let interrupted = async {
-        use tokio::signal::unix::{SignalKind, signal};
-        match (
-            signal(SignalKind::interrupt()),
-            signal(SignalKind::terminate()),
-            signal(SignalKind::hangup()),
-        ) {
-            (Ok(mut int), Ok(mut term), Ok(mut hup)) => tokio::select! {
-                _ = int.recv() => "SIGINT",
-                _ = term.recv() => "SIGTERM",
-                _ = hup.recv() => "SIGHUP",
-            },
-            _ => std::future::pending().await,
-        }
-    };
+    // Ctrl-C (also while reconnecting), SIGTERM and SIGHUP (console close on Windows) end the
+    // mission with a stop.
+    let interrupted = super::signals::terminated();
     let result = tokio::select! {
         r = mission::run(&session, model, steps, opts, emit) => r,
         sig = interrupted => Err(mission::MissionError(format!("{sig}: mission interrupted, the droid was stopped"))),

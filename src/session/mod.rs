@@ -10,9 +10,11 @@ mod task;
 
 pub use queue::Slot;
 
+use crate::family::{Command, DecodeError, DroidError, Explained, Packet};
 use crate::link::Link;
 use crate::link::backoff::Backoff;
-use crate::protocol::v2::{Command, DecodeError, ErrorCode, Notification, Packet};
+use crate::model::Protocol;
+use crate::protocol::notify::Notification;
 use queue::{OutQueue, Queued};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
@@ -21,6 +23,8 @@ use tokio::sync::{Notify, broadcast, oneshot, watch};
 /// Session settings. Defaults follow `droid-facts.md` §1 for R2-D2.
 #[derive(Debug, Clone)]
 pub struct SessionConfig {
+    /// The protocol family spoken on the link (from the model).
+    pub family: Protocol,
     /// How long a written request waits for its response.
     pub request_timeout: Duration,
     /// Minimum interval between writes to the link.
@@ -39,6 +43,7 @@ pub struct SessionConfig {
 impl Default for SessionConfig {
     fn default() -> Self {
         SessionConfig {
+            family: Protocol::SpheroV2,
             request_timeout: Duration::from_secs(2),
             pacing: Duration::from_millis(120),
             chunk_size: 20,
@@ -56,7 +61,7 @@ pub enum RequestError {
     /// No response within the timeout.
     Timeout,
     /// The droid answered with an error code.
-    Droid(ErrorCode),
+    Droid(DroidError),
     /// The link went down before the response came.
     LinkLost,
     /// Too many requests waiting to be written.
@@ -134,8 +139,24 @@ pub struct LogEntry {
 
 #[derive(Debug, Clone, PartialEq)]
 pub enum LogItem {
-    Packet(Packet),
+    /// A packet, explained by its family's catalogue when it was logged (a v1 response can
+    /// only be explained then: its payload layout is the request's).
+    Packet {
+        packet: Packet,
+        explained: Explained,
+    },
     DecodeError(DecodeError),
+}
+
+impl LogItem {
+    /// A v2 packet explained without context (no streaming masks): for tools and tests that
+    /// build log entries by hand.
+    pub fn v2(p: crate::protocol::v2::Packet) -> LogItem {
+        LogItem::Packet {
+            explained: crate::family::v2::explain(&p, None),
+            packet: Packet::V2(p),
+        }
+    }
 }
 
 /// Something the application acts on.
@@ -233,10 +254,10 @@ fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
 
 impl SessionHandle {
     /// Send a request and wait for its response (or a typed error).
-    pub async fn request(&self, cmd: Command) -> Result<Packet, RequestError> {
+    pub async fn request(&self, cmd: impl Into<Command>) -> Result<Packet, RequestError> {
         let (tx, rx) = oneshot::channel();
         self.enqueue(Queued {
-            cmd,
+            cmd: cmd.into(),
             reply: Some(tx),
             want_response: true,
             retries: 0,
@@ -245,9 +266,9 @@ impl SessionHandle {
     }
 
     /// Send a request without waiting. Its response (or error) is still matched and counted.
-    pub fn send(&self, cmd: Command) -> Result<(), RequestError> {
+    pub fn send(&self, cmd: impl Into<Command>) -> Result<(), RequestError> {
         self.enqueue(Queued {
-            cmd,
+            cmd: cmd.into(),
             reply: None,
             want_response: true,
             retries: 0,
@@ -273,9 +294,9 @@ impl SessionHandle {
 
     /// Set the latest value of a continuous control (drive or head): replaces any older
     /// unwritten one. Never blocks, never queues more than one per slot.
-    pub fn set(&self, slot: Slot, cmd: Command) {
+    pub fn set(&self, slot: Slot, cmd: impl Into<Command>) {
         let mut q = lock(&self.shared.queue);
-        q.set_slot(slot, cmd);
+        q.set_slot(slot, cmd.into());
         let coalesced = q.coalesced;
         drop(q);
         lock(&self.shared.stats).coalesced = coalesced;

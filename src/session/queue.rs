@@ -3,7 +3,7 @@
 //! under any input rate there is at most one drive and one head command waiting.
 
 use super::RequestError;
-use crate::protocol::v2::{Command, Packet};
+use crate::family::{Command, Packet};
 use std::collections::VecDeque;
 use tokio::sync::oneshot;
 
@@ -69,7 +69,8 @@ impl OutQueue {
     }
 
     /// Put the latest value of a continuous control; replaces any unwritten older one.
-    pub fn set_slot(&mut self, slot: Slot, cmd: Command) {
+    pub fn set_slot(&mut self, slot: Slot, cmd: impl Into<Command>) {
+        let cmd = cmd.into();
         let s = match slot {
             Slot::Drive => &mut self.drive,
             Slot::Head => &mut self.head,
@@ -150,9 +151,15 @@ impl OutQueue {
     }
 }
 
-/// A Drive With Heading whose speed byte is 0.
+/// A drive command whose speed is 0: v2 Drive With Heading and v1 Roll both start with the
+/// speed byte.
 pub fn is_stop(c: &Command) -> bool {
-    (c.did, c.cid) == (0x16, 0x07) && c.data.first() == Some(&0)
+    let drive = matches!(
+        (c.protocol(), c.did(), c.cid()),
+        (crate::model::Protocol::SpheroV2, 0x16, 0x07)
+            | (crate::model::Protocol::SpheroV1, 0x02, 0x30)
+    );
+    drive && c.data().first() == Some(&0)
 }
 
 #[cfg(test)]
@@ -163,12 +170,12 @@ mod tests {
     use crate::units::Heading;
 
     fn drive(speed: u8) -> Command {
-        cmd::drive_with_heading(speed, Heading::new(90).unwrap(), DriveFlags::empty())
+        cmd::drive_with_heading(speed, Heading::new(90).unwrap(), DriveFlags::empty()).into()
     }
 
-    fn req(c: Command) -> Queued {
+    fn req(c: impl Into<Command>) -> Queued {
         Queued {
-            cmd: c,
+            cmd: c.into(),
             reply: None,
             want_response: true,
             retries: 0,
@@ -186,7 +193,7 @@ mod tests {
         let Some(Next::Slot(Slot::Drive, c)) = q.pop() else {
             panic!()
         };
-        assert_eq!(c.data[0], 100);
+        assert_eq!(c.data()[0], 100);
         assert!(q.pop().is_none());
     }
 
@@ -261,7 +268,7 @@ mod tests {
         q.push(req(cmd::ping())).unwrap();
         let order: Vec<u8> = std::iter::from_fn(|| q.pop())
             .map(|n| match n {
-                Next::Fifo(q) => q.cmd.cid,
+                Next::Fifo(q) => q.cmd.cid(),
                 Next::Slot(Slot::Drive, _) => 0xD0,
                 Next::Slot(Slot::Head, _) => 0xE0,
             })
@@ -278,7 +285,7 @@ mod tests {
         q.push_front_all(vec![req(cmd::wake()), req(cmd::reset_yaw())]);
         let names: Vec<u8> = std::iter::from_fn(|| q.pop())
             .map(|n| match n {
-                Next::Fifo(q) => q.cmd.cid,
+                Next::Fifo(q) => q.cmd.cid(),
                 Next::Slot(..) => 0xFF,
             })
             .collect();

@@ -5,10 +5,8 @@ use super::{
     Direction, LinkState, LogEntry, LogItem, RequestError, SessionConfig, SessionEvent, Shared,
     lock,
 };
+use crate::family::{Codec, Command, Family, Incoming, Key, Packet};
 use crate::link::{Connection, Link, LinkEvent};
-use crate::protocol::v2::{
-    Command, Decoder, ErrorCode, Flags, Notification, Packet, StreamingConfig,
-};
 use std::collections::{HashMap, VecDeque};
 use std::sync::Arc;
 use std::time::Duration;
@@ -36,9 +34,9 @@ pub(super) struct Task {
     events: broadcast::Sender<SessionEvent>,
     log: broadcast::Sender<LogEntry>,
     start: Instant,
+    family: &'static dyn Family,
     seq: u8,
-    pending: HashMap<(u8, u8, u8), Pending>,
-    streaming: StreamingConfig,
+    pending: HashMap<Key, Pending>,
     /// The last drive command written, so a reconnect can resume with speed 0 at the same
     /// heading (a stop at heading 0 would spin the droid round).
     last_drive: Option<Command>,
@@ -61,6 +59,7 @@ impl Task {
     ) -> Self {
         Task {
             link,
+            family: crate::family::for_protocol(cfg.family),
             cfg,
             shared,
             state,
@@ -69,7 +68,6 @@ impl Task {
             start: Instant::now(),
             seq: 0,
             pending: HashMap::new(),
-            streaming: StreamingConfig::default(),
             last_drive: None,
         }
     }
@@ -173,15 +171,15 @@ impl Task {
             return Some(p);
         }
         let mut items = Vec::new();
-        if wake_first {
+        if wake_first && let Some(wake) = self.family.wake() {
             items.push(Queued {
-                cmd: crate::protocol::v2::cmd::wake(),
+                cmd: wake,
                 reply: None,
                 want_response: true,
                 retries: 0,
             });
         }
-        tracing::info!(command = %p.cmd.def().map(|d| d.name.as_str()).unwrap_or("?"), wake_first, "re-sending setup command");
+        tracing::info!(command = %p.cmd.name(), wake_first, "re-sending setup command");
         items.push(Queued {
             cmd: p.cmd,
             reply: p.reply,
@@ -195,15 +193,7 @@ impl Task {
 
     /// Speed 0 at the heading of the last drive command written (heading 0 if none).
     fn stop_command(&self) -> Command {
-        let mut stop = self.last_drive.clone().unwrap_or_else(|| Command {
-            did: 0x16,
-            cid: 0x07,
-            data: vec![0, 0, 0, 0],
-        });
-        if let Some(speed) = stop.data.first_mut() {
-            *speed = 0;
-        }
-        stop
+        self.family.stop_after(self.last_drive.as_ref())
     }
 
     /// Fail every pending and queued request (link lost or closed).
@@ -235,12 +225,12 @@ impl Task {
         });
     }
 
-    /// The next SEQ: 0..=254, wrapping, skipping one still pending for the same DID/CID.
-    fn next_seq(&mut self, did: u8, cid: u8) -> u8 {
+    /// The next SEQ: 0..=254, wrapping, skipping one whose response key is still pending.
+    fn next_seq(&mut self, codec: &dyn Codec, cmd: &Command) -> u8 {
         for _ in 0..255 {
             let s = self.seq;
             self.seq = if self.seq >= 254 { 0 } else { self.seq + 1 };
-            if !self.pending.contains_key(&(did, cid, s)) {
+            if !self.pending.contains_key(&codec.key(cmd, s)) {
                 return s;
             }
         }
@@ -248,19 +238,17 @@ impl Task {
     }
 
     /// Turn the next queued item into wire chunks, registering its pending entry.
-    fn take_next(&mut self) -> Option<Vec<Vec<u8>>> {
+    fn take_next(&mut self, codec: &mut dyn Codec) -> Option<Vec<Vec<u8>>> {
         let next = lock(&self.shared.queue).pop()?;
         let (cmd, reply, want_response, retries) = match next {
             Next::Slot(_, c) => (c, None, true, 0),
             Next::Fifo(q) => (q.cmd, q.reply, q.want_response, q.retries),
         };
-        let seq = self.next_seq(cmd.did, cmd.cid);
-        let mut packet = cmd.to_packet(seq);
-        if !want_response {
-            packet.flags.remove(Flags::REQUESTS_RESPONSE);
+        let seq = self.next_seq(codec, &cmd);
+        let (wire, packet) = codec.encode(&cmd, seq, want_response);
+        if self.family.is_drive(&cmd) {
+            self.last_drive = Some(cmd.clone());
         }
-        self.snoop(&cmd);
-        let wire = packet.encode();
         let chunks: Vec<Vec<u8>> = wire
             .chunks(self.cfg.chunk_size.max(1))
             .map(<[u8]>::to_vec)
@@ -268,7 +256,7 @@ impl Task {
         if want_response {
             let extra = self.cfg.pacing * (chunks.len().saturating_sub(1) as u32);
             self.pending.insert(
-                (cmd.did, cmd.cid, seq),
+                codec.key(&cmd, seq),
                 Pending {
                     deadline: Instant::now() + self.cfg.request_timeout + extra,
                     reply,
@@ -277,103 +265,110 @@ impl Task {
                 },
             );
         } else if let Some(r) = reply {
-            let _ = r.send(Ok(Packet::response_to(&packet, ErrorCode::Success, vec![])));
+            // Nothing will answer: the written packet is all there is to return.
+            let _ = r.send(Ok(packet.clone()));
         }
         {
             let mut st = lock(&self.shared.stats);
             st.sent += 1;
             st.bytes_out += wire.len() as u64;
         }
-        self.log(Direction::Out, LogItem::Packet(packet));
+        self.log_packet(codec, Direction::Out, packet, Some(&cmd));
         Some(chunks)
     }
 
-    /// Track what the droid will stream, and the last drive command.
-    fn snoop(&mut self, cmd: &Command) {
-        match (cmd.did, cmd.cid, cmd.data.as_slice()) {
-            (0x18, 0x00, [i0, i1, _count, m @ ..]) if m.len() == 4 => {
-                self.streaming.interval_ms = u16::from_be_bytes([*i0, *i1]);
-                self.streaming.mask = u32::from_be_bytes([m[0], m[1], m[2], m[3]]);
-            }
-            (0x18, 0x0C, m) if m.len() == 4 => {
-                self.streaming.ext_mask = u32::from_be_bytes([m[0], m[1], m[2], m[3]]);
-            }
-            (0x16, 0x07, _) => self.last_drive = Some(cmd.clone()),
-            _ => {}
+    fn log_packet(
+        &self,
+        codec: &dyn Codec,
+        dir: Direction,
+        packet: Packet,
+        request: Option<&Command>,
+    ) {
+        if self.log.receiver_count() == 0 {
+            return;
         }
+        let explained = codec.explain(&packet, request);
+        self.log(dir, LogItem::Packet { packet, explained });
     }
 
-    fn handle_bytes(&mut self, decoder: &mut Decoder, bytes: &[u8]) {
+    fn handle_bytes(&mut self, codec: &mut dyn Codec, bytes: &[u8]) {
         lock(&self.shared.stats).bytes_in += bytes.len() as u64;
-        for r in decoder.feed(bytes) {
-            match r {
-                Ok(p) => self.handle_packet(p),
-                Err(e) => {
-                    tracing::debug!(error = %e, "decode error");
-                    {
-                        let mut st = lock(&self.shared.stats);
-                        st.decode_errors += 1;
-                        st.errors += 1;
-                    }
-                    self.log(Direction::In, LogItem::DecodeError(e));
-                }
-            }
+        let mut found = Vec::new();
+        codec.feed(bytes, &mut found);
+        for item in found {
+            self.handle_incoming(codec, item);
         }
     }
 
-    fn handle_packet(&mut self, p: Packet) {
-        lock(&self.shared.stats).received += 1;
-        if p.is_response() {
-            let key = (p.did, p.cid, p.seq);
-            let err = p.err.unwrap_or(ErrorCode::Success);
-            match self.pending.remove(&key) {
-                Some(pending) => {
+    fn handle_incoming(&mut self, codec: &mut dyn Codec, item: Incoming) {
+        match item {
+            Incoming::Error(e) => {
+                tracing::debug!(error = %e, "decode error");
+                {
+                    let mut st = lock(&self.shared.stats);
+                    st.decode_errors += 1;
+                    st.errors += 1;
+                }
+                self.log(Direction::In, LogItem::DecodeError(e));
+            }
+            Incoming::Response { key, error, packet } => {
+                lock(&self.shared.stats).received += 1;
+                let Some(pending) = self.pending.remove(&key) else {
+                    lock(&self.shared.stats).unmatched += 1;
+                    return self.log_packet(codec, Direction::In, packet, None);
+                };
+                let request = pending.cmd.clone();
+                {
                     let mut st = lock(&self.shared.stats);
                     st.answered += 1;
-                    if !err.is_success() {
+                    if error.is_some() {
                         st.droid_errors += 1;
                         st.errors += 1;
                     }
-                    drop(st);
-                    if !err.is_success() {
-                        tracing::warn!(did = p.did, cid = p.cid, seq = p.seq, error = %err, "droid error");
-                    }
-                    // Asleep (e.g. the setup's Wake was lost): wake it and try again.
-                    let pending = if err == ErrorCode::TargetUnavailable {
-                        match self.retry(pending, true) {
-                            Some(p) => p,
-                            None => return self.log(Direction::In, LogItem::Packet(p)),
-                        }
-                    } else {
-                        pending
-                    };
-                    if let Some(reply) = pending.reply {
-                        let _ = reply.send(if err.is_success() {
-                            Ok(p.clone())
-                        } else {
-                            Err(RequestError::Droid(err))
-                        });
-                    }
                 }
-                None => lock(&self.shared.stats).unmatched += 1,
-            }
-        } else if p.is_notification() {
-            match Notification::decode(&p, &self.streaming) {
-                Ok(n) => {
-                    let _ = self.events.send(SessionEvent::Notification(n));
+                if let Some(err) = &error {
+                    tracing::warn!(command = %request.name(), seq = key.2, error = %err, "droid error");
                 }
-                Err(e) => {
-                    let mut st = lock(&self.shared.stats);
-                    st.errors += 1;
-                    drop(st);
-                    let _ = self.events.send(SessionEvent::BadNotification {
-                        name: e.name,
-                        reason: e.reason,
+                // Asleep (e.g. the setup's Wake was lost): wake it and try again.
+                let pending = if error.is_some_and(|e| e.is_target_unavailable()) {
+                    self.retry(pending, true)
+                } else {
+                    Some(pending)
+                };
+                if let Some(reply) = pending.and_then(|p| p.reply) {
+                    let _ = reply.send(match error {
+                        None => Ok(packet.clone()),
+                        Some(e) => Err(RequestError::Droid(e)),
                     });
                 }
+                self.log_packet(codec, Direction::In, packet, Some(&request));
+            }
+            Incoming::Async {
+                notifications,
+                packet,
+            } => {
+                lock(&self.shared.stats).received += 1;
+                for n in notifications {
+                    match n {
+                        Ok(n) => {
+                            let _ = self.events.send(SessionEvent::Notification(n));
+                        }
+                        Err(e) => {
+                            lock(&self.shared.stats).errors += 1;
+                            let _ = self.events.send(SessionEvent::BadNotification {
+                                name: e.name,
+                                reason: e.reason,
+                            });
+                        }
+                    }
+                }
+                self.log_packet(codec, Direction::In, packet, None);
+            }
+            Incoming::Stray(packet) => {
+                lock(&self.shared.stats).received += 1;
+                self.log_packet(codec, Direction::In, packet, None);
             }
         }
-        self.log(Direction::In, LogItem::Packet(p));
     }
 
     fn expire(&mut self) {
@@ -399,13 +394,13 @@ impl Task {
     }
 
     async fn connected(&mut self, mut conn: Connection) -> Ended {
-        let mut decoder = Decoder::new();
+        let mut codec = self.family.codec();
         let mut chunks: VecDeque<Vec<u8>> = VecDeque::new();
         let mut next_write = Instant::now();
         loop {
             let last = lock(&self.shared.shutdown).take();
             if let Some(last) = last {
-                self.finish(&mut conn, chunks, last).await;
+                self.finish(&mut *codec, &mut conn, chunks, last).await;
                 return Ended::Shutdown;
             }
             let has_work = !chunks.is_empty() || !lock(&self.shared.queue).is_empty();
@@ -419,7 +414,7 @@ impl Task {
                     }
                 }
                 ev = conn.events.recv() => match ev {
-                    Some(LinkEvent::Data(bytes)) => self.handle_bytes(&mut decoder, &bytes),
+                    Some(LinkEvent::Data(bytes)) => self.handle_bytes(&mut *codec, &bytes),
                     Some(LinkEvent::Disconnected(reason)) => {
                         conn.writer.close().await;
                         return Ended::LinkLost(reason);
@@ -428,7 +423,7 @@ impl Task {
                 },
                 _ = sleep_until(next_write), if has_work => {
                     if chunks.is_empty() {
-                        chunks.extend(self.take_next().into_iter().flatten());
+                        chunks.extend(self.take_next(&mut *codec).into_iter().flatten());
                     }
                     if let Some(chunk) = chunks.pop_front() {
                         if let Err(e) = conn.writer.write(&chunk).await {
@@ -447,6 +442,7 @@ impl Task {
     /// Shutdown: finish the packet in flight, write the final commands (a stop), close.
     async fn finish(
         &mut self,
+        codec: &mut dyn Codec,
         conn: &mut Connection,
         chunks: VecDeque<Vec<u8>>,
         mut last: Vec<Command>,
@@ -460,15 +456,13 @@ impl Task {
             last.insert(0, self.stop_command());
         }
         for cmd in last {
-            tracing::info!(command = %cmd.def().map(|d| d.name.as_str()).unwrap_or("?"), data = %crate::hex::spaced(&cmd.data), "final command");
-            let seq = self.next_seq(cmd.did, cmd.cid);
-            let mut packet = cmd.to_packet(seq);
+            tracing::info!(command = %cmd.name(), data = %crate::hex::spaced(cmd.data()), "final command");
+            let seq = self.next_seq(codec, &cmd);
             // Nobody will wait for these responses.
-            packet.flags.remove(Flags::REQUESTS_RESPONSE);
-            let bytes = packet.encode();
+            let (bytes, packet) = codec.encode(&cmd, seq, false);
             wire.extend(bytes.chunks(self.cfg.chunk_size.max(1)).map(<[u8]>::to_vec));
             lock(&self.shared.stats).sent += 1;
-            self.log(Direction::Out, LogItem::Packet(packet));
+            self.log_packet(codec, Direction::Out, packet, Some(&cmd));
         }
         let writer = &mut conn.writer;
         let pacing = self.cfg.pacing;

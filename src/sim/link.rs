@@ -1,10 +1,9 @@
 //! The simulated droid behind the [`Link`] trait: an in-process connection that delivers the
 //! droid's bytes in pieces of at most 20 bytes, with the configured faults, on tokio time.
 
-use super::{Faults, SimConfig, SimDroid, SimState};
+use super::{Faults, SimConfig, SimState, WireDroid, wire_droid};
 use crate::link::{Connection, Link, LinkError, LinkEvent, LinkWriter};
 use crate::model::Model;
-use crate::protocol::v2::Packet;
 use crate::rng::Rng;
 use futures_util::future::BoxFuture;
 use std::collections::VecDeque;
@@ -17,7 +16,7 @@ use tokio::time::{Instant, sleep_until};
 const NOTIFY_MAX: usize = 20;
 
 struct Shared {
-    droid: SimDroid,
+    droid: Box<dyn WireDroid>,
     rng: Rng,
     /// Index of the next scheduled disconnect.
     next_disconnect: usize,
@@ -75,7 +74,7 @@ impl SimLink {
         let rng = Rng::new(faults.seed);
         SimLink {
             shared: Arc::new(Mutex::new(Shared {
-                droid: SimDroid::new(model, cfg),
+                droid: wire_droid(model, cfg),
                 rng,
                 next_disconnect: 0,
                 opens: 0,
@@ -185,16 +184,13 @@ impl Pump {
         Instant::now().duration_since(self.epoch)
     }
 
-    /// Encode, mangle, cut and schedule the droid's packets.
-    fn deliver(&mut self, packets: Vec<Packet>, s: &mut Shared) {
+    /// Mangle, cut and schedule the droid's encoded packets.
+    fn deliver(&mut self, packets: Vec<Vec<u8>>, s: &mut Shared) {
         if packets.is_empty() {
             return;
         }
         let now = Instant::now();
-        let mut bytes = Vec::new();
-        for p in &packets {
-            p.encode_into(&mut bytes);
-        }
+        let bytes = packets.concat();
         let bytes = self.faults.mangle(&mut s.rng, &bytes);
         let pieces = if self.faults.split {
             self.faults.pieces(&mut s.rng, &bytes, NOTIFY_MAX)
@@ -203,7 +199,7 @@ impl Pump {
             let mut out = Vec::new();
             let mut bytes = bytes.as_slice();
             for p in &packets {
-                let len = p.encode().len().min(bytes.len());
+                let len = p.len().min(bytes.len());
                 out.extend(self.faults.pieces(&mut s.rng, &bytes[..len], NOTIFY_MAX));
                 bytes = &bytes[len..];
             }

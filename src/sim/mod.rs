@@ -1,18 +1,92 @@
-//! A faithful simulated droid: R2-D2, R2-Q5 and BB-9E speaking API v2 through the same
-//! protocol core as the real thing. [`droid::SimDroid`] is a sans-IO state machine driven by
-//! explicit time; [`link::SimLink`] runs it behind the [`crate::link::Link`] trait with fault
-//! injection, so the session, UI and scripts cannot tell it from a droid.
+//! Faithful simulated droids: R2-D2, R2-Q5 and BB-9E speaking API v2, BB-8, SPRK+ and Ollie
+//! speaking API v1, through the same protocol core as the real thing. One [`body::Body`]
+//! (motion, walls, battery, sleep, sensors) sits behind a protocol front per family
+//! ([`droid::SimDroid`] for v2, [`v1::SimDroidV1`]); both are sans-IO state machines driven
+//! by explicit time. [`link::SimLink`] runs either behind the [`crate::link::Link`] trait with
+//! fault injection, so the session, UI and scripts cannot tell it from a droid.
 
+pub mod body;
 pub mod droid;
 pub mod faults;
 pub mod link;
 mod physics;
+pub mod v1;
 
-pub use droid::{SimDroid, SimState};
+pub use body::SimState;
+pub use droid::SimDroid;
+pub use v1::SimDroidV1;
+
+/// A simulated droid seen from the link: bytes in, whole encoded packets out (the link cuts
+/// them into notifications).
+pub trait WireDroid: Send {
+    fn receive(&mut self, bytes: &[u8], now: Duration) -> Vec<Vec<u8>>;
+    fn advance(&mut self, now: Duration) -> Vec<Vec<u8>>;
+    fn state(&self) -> &SimState;
+}
+
+impl WireDroid for SimDroid {
+    fn receive(&mut self, bytes: &[u8], now: Duration) -> Vec<Vec<u8>> {
+        SimDroid::receive(self, bytes, now)
+            .iter()
+            .map(|p| p.encode())
+            .collect()
+    }
+    fn advance(&mut self, now: Duration) -> Vec<Vec<u8>> {
+        SimDroid::advance(self, now)
+            .iter()
+            .map(|p| p.encode())
+            .collect()
+    }
+    fn state(&self) -> &SimState {
+        SimDroid::state(self)
+    }
+}
+
+/// The simulator only builds packets that fit their DLEN; one that did not would be dropped.
+impl WireDroid for SimDroidV1 {
+    fn receive(&mut self, bytes: &[u8], now: Duration) -> Vec<Vec<u8>> {
+        SimDroidV1::receive(self, bytes, now)
+            .iter()
+            .filter_map(|p| p.encode().ok())
+            .collect()
+    }
+    fn advance(&mut self, now: Duration) -> Vec<Vec<u8>> {
+        SimDroidV1::advance(self, now)
+            .iter()
+            .filter_map(|p| p.encode().ok())
+            .collect()
+    }
+    fn state(&self) -> &SimState {
+        SimDroidV1::state(self)
+    }
+}
+
+/// The simulated droid of a model, speaking its family's protocol.
+pub fn wire_droid(model: Model, cfg: SimConfig) -> Box<dyn WireDroid> {
+    match model.protocol() {
+        Protocol::SpheroV1 => Box::new(SimDroidV1::new(model, cfg)),
+        _ => Box::new(SimDroid::new(model, cfg)),
+    }
+}
 pub use faults::Faults;
 pub use link::SimLink;
 
+use crate::model::{Model, Protocol};
 use std::time::Duration;
+
+/// Whether `--sim MODEL` can simulate this model.
+pub fn simulates(model: Model) -> bool {
+    matches!(model.protocol(), Protocol::SpheroV2 | Protocol::SpheroV1)
+}
+
+/// The ids of the simulated models, for messages.
+pub fn simulated_ids() -> Vec<&'static str> {
+    Model::ALL
+        .into_iter()
+        .filter(|m| simulates(*m))
+        .map(Model::id)
+        .collect()
+}
 
 /// The simulated world and the droid's physical figures. Figures marked *unverified* in
 /// `droid-facts.md` are here so they can be changed.

@@ -9,9 +9,8 @@
 use super::gamepad::PadDrive;
 use crate::app::state::ControlView;
 use crate::config::{Control as ControlConfig, DriveMode};
-use crate::protocol::v2::wire::LegState;
-use crate::protocol::v2::wire::{DriveFlags, LegAction};
-use crate::protocol::v2::{Command, cmd};
+use crate::family::{Command, Family};
+use crate::protocol::wire::{LegAction, LegState};
 use crate::telemetry::Stance;
 use crate::units::{HEAD_MAX_DEG, HEAD_MIN_DEG, HeadAngle, Heading};
 use std::time::Duration;
@@ -38,6 +37,8 @@ pub struct DroidView {
     pub connected: bool,
     pub has_legs: bool,
     pub has_dome: bool,
+    /// A rolling droid that can be aimed (BB-8, SPRK+, Ollie, BB-9E).
+    pub can_aim: bool,
     pub stance: Stance,
 }
 
@@ -50,12 +51,19 @@ pub enum Out {
     Head(Command),
     /// Change stance.
     Stance(LegAction),
+    /// Enter aim mode: back light on; turning now rotates the droid in place.
+    AimBegin,
+    /// Leave aim mode: the droid's facing becomes heading 0.
+    AimEnd,
     /// Tell the operator something.
     Hint(String),
 }
 
 pub struct Controller {
     cfg: ControlConfig,
+    family: &'static dyn Family,
+    /// In aim mode: speed is held at 0 while turning rotates the droid.
+    aiming: bool,
     heading: f32,
     cruise: u8,
     turbo: bool,
@@ -74,7 +82,16 @@ pub struct Controller {
 const TRIPOD_RETRY: Duration = Duration::from_secs(4);
 
 impl Controller {
+    /// A controller for a v2 droid; see [`Controller::with_family`].
     pub fn new(cfg: ControlConfig) -> Self {
+        Self::with_family(
+            cfg,
+            crate::family::for_protocol(crate::model::Protocol::SpheroV2),
+        )
+    }
+
+    /// A controller whose commands are built by `family`.
+    pub fn with_family(cfg: ControlConfig, family: &'static dyn Family) -> Self {
         let cruise = cfg.cruise_speed;
         let mode = match cfg.mode {
             DriveMode::Hold => "hold",
@@ -82,6 +99,8 @@ impl Controller {
         };
         Controller {
             cfg,
+            family,
+            aiming: false,
             heading: 0.0,
             cruise,
             turbo: false,
@@ -105,11 +124,12 @@ impl Controller {
     }
 
     fn stop_cmd(&self) -> Command {
-        cmd::drive_with_heading(
-            0,
-            Heading::wrapped(self.heading as f64),
-            DriveFlags::empty(),
-        )
+        self.family
+            .drive(0, Heading::wrapped(self.heading as f64), false)
+    }
+
+    pub fn aiming(&self) -> bool {
+        self.aiming
     }
 
     /// Emergency stop, now: the stop to put in the drive slot at once.
@@ -126,6 +146,8 @@ impl Controller {
     /// The link went down: forget what was sent, drop latched speed.
     pub fn link_lost(&mut self) {
         self.latched = 0;
+        self.aiming = false;
+        self.view.aiming = false;
         self.turbo = false;
         self.last_drive = None;
         self.last_head = None;
@@ -146,6 +168,31 @@ impl Controller {
                 self.latched = (self.latched - step).max(-255)
             }
             A::EStop => return vec![self.estop_now()],
+            A::Aim => {
+                if !droid.can_aim {
+                    return vec![Out::Hint("this droid has no aim mode".into())];
+                }
+                self.aiming = !self.aiming;
+                self.view.aiming = self.aiming;
+                self.latched = 0;
+                return if self.aiming {
+                    vec![
+                        Out::AimBegin,
+                        Out::Hint(
+                            "aim: ←/→ turn the droid, press the aim key again to set heading 0"
+                                .into(),
+                        ),
+                    ]
+                } else {
+                    // The droid's facing is the new heading 0.
+                    self.heading = 0.0;
+                    self.last_drive = None;
+                    vec![
+                        Out::AimEnd,
+                        Out::Hint("heading set: forward is where it faces".into()),
+                    ]
+                };
+            }
             A::Tripod | A::Bipod | A::Waddle | A::StanceStop => {
                 if !droid.has_legs {
                     return vec![Out::Hint("this droid has no legs".into())];
@@ -206,6 +253,8 @@ impl Controller {
         }
         let (mut speed, reverse, source) = if self.estop || !droid.connected {
             (0u8, false, "-")
+        } else if self.aiming {
+            (0u8, false, "aim")
         } else if let Some((_, s)) = inp.pad {
             (s, false, "gamepad")
         } else {
@@ -261,29 +310,21 @@ impl Controller {
 
         // Drive: while moving (heartbeat) and whenever it changes.
         let travel = Heading::wrapped(self.heading as f64);
-        let wire_heading = if reverse { travel.reversed() } else { travel };
-        let flags = if reverse {
-            DriveFlags::BACKWARD
-        } else {
-            DriveFlags::empty()
-        };
-        let key = (speed, wire_heading.degrees(), flags.bits());
+        let key = (speed, travel.degrees(), reverse as u8);
         if droid.connected && ((speed > 0 && heartbeat) || self.last_drive != Some(key)) {
             self.last_drive = Some(key);
-            out.push(Out::Drive(cmd::drive_with_heading(
-                speed,
-                wire_heading,
-                flags,
-            )));
+            out.push(Out::Drive(self.family.drive(speed, travel, reverse)));
         }
 
         // Dome: when the target changes by a degree or more.
         let head = self.head_target.round() as i32;
-        if droid.connected && droid.has_dome && self.last_head != Some(head) {
+        if droid.connected
+            && droid.has_dome
+            && self.last_head != Some(head)
+            && let Some(c) = self.family.head(HeadAngle::clamped(head as f32))
+        {
             self.last_head = Some(head);
-            out.push(Out::Head(cmd::set_head_position(HeadAngle::clamped(
-                head as f32,
-            ))));
+            out.push(Out::Head(c));
         }
 
         self.view = ControlView {
@@ -297,6 +338,7 @@ impl Controller {
             head_target: self.head_target,
             mode: self.view.mode,
             source,
+            aiming: self.aiming,
         };
         out
     }
@@ -312,6 +354,7 @@ mod tests {
         connected: true,
         has_legs: true,
         has_dome: true,
+        can_aim: false,
         stance: Stance::Tripod,
     };
     const TICK: Duration = Duration::from_millis(100);
@@ -324,9 +367,9 @@ mod tests {
         out.iter()
             .filter_map(|o| match o {
                 Out::Drive(c) => Some((
-                    c.data[0],
-                    u16::from_be_bytes([c.data[1], c.data[2]]),
-                    c.data[3],
+                    c.data()[0],
+                    u16::from_be_bytes([c.data()[1], c.data()[2]]),
+                    c.data()[3],
                 )),
                 _ => None,
             })
@@ -400,7 +443,7 @@ mod tests {
         let Out::Drive(stop) = c.estop_now() else {
             panic!()
         };
-        assert_eq!(stop.data[0], 0);
+        assert_eq!(stop.data()[0], 0);
         let held = Inputs {
             forward: true,
             estop: true,

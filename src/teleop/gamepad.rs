@@ -86,6 +86,7 @@ pub enum PadEvent {
 pub enum PadCommand {
     Tripod,
     Bipod,
+    Aim,
     EStop,
     Animation,
     Help,
@@ -170,6 +171,7 @@ impl PadState {
                     Button::DPadRight => PadCommand::Sound(c.sound_right),
                     _ if is(&c.tripod) => PadCommand::Tripod,
                     _ if is(&c.bipod) => PadCommand::Bipod,
+                    _ if is(&c.aim) => PadCommand::Aim,
                     _ if is(&c.estop) => PadCommand::EStop,
                     _ if is(&c.animation) => PadCommand::Animation,
                     _ if is(&c.help) => PadCommand::Help,

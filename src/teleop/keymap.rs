@@ -113,6 +113,12 @@ pub enum Action {
     StanceStop,
     EStop,
     Turbo,
+    /// Aim mode for rolling droids (toggle).
+    Aim,
+    /// Cycle the main LED colour.
+    Colour,
+    /// Back (aiming) light on/off.
+    BackLight,
     Animations,
     Sounds,
     Log,
@@ -121,7 +127,7 @@ pub enum Action {
 }
 
 impl Action {
-    pub const ALL: [Action; 19] = [
+    pub const ALL: [Action; 22] = [
         Action::Forward,
         Action::Backward,
         Action::Left,
@@ -136,6 +142,9 @@ impl Action {
         Action::StanceStop,
         Action::EStop,
         Action::Turbo,
+        Action::Aim,
+        Action::Colour,
+        Action::BackLight,
         Action::Animations,
         Action::Sounds,
         Action::Log,
@@ -160,6 +169,9 @@ impl Action {
             Action::StanceStop => "stance_stop",
             Action::EStop => "estop",
             Action::Turbo => "turbo",
+            Action::Aim => "aim",
+            Action::Colour => "colour",
+            Action::BackLight => "back_light",
             Action::Animations => "animations",
             Action::Sounds => "sounds",
             Action::Log => "log",
@@ -185,6 +197,9 @@ impl Action {
             Action::StanceStop => "stance: stop",
             Action::EStop => "EMERGENCY STOP (latched while held)",
             Action::Turbo => "turbo on/off",
+            Action::Aim => "aim mode (rolling droids)",
+            Action::Colour => "main LED colour",
+            Action::BackLight => "back light",
             Action::Animations => "animation palette",
             Action::Sounds => "sound palette",
             Action::Log => "focus the packet log",

@@ -12,6 +12,7 @@ mod compass;
 mod dome;
 mod drive;
 pub mod layout;
+mod leds;
 mod log_pane;
 mod map;
 mod overlay;
@@ -37,8 +38,13 @@ pub fn draw(frame: &mut Frame, state: &AppState) {
     if let Some(r) = p.map {
         map::render(frame, r, &state.telemetry);
     }
+    // The dome's place shows the dome, or the lights on droids without one.
     if let Some(r) = p.dome {
-        dome::render(frame, r, state);
+        if state.model.has_dome() {
+            dome::render(frame, r, state);
+        } else {
+            leds::render(frame, r, state);
+        }
     }
     if let Some(r) = p.sensors {
         sensors::render(frame, r, &state.telemetry);

@@ -201,7 +201,7 @@ catalogue! {
     Drive {
         0x01 set_raw_motors "Set Raw Motors" (left_mode: RawMotorMode, left_speed: u8, right_mode: RawMotorMode, right_speed: u8) -> ();
         0x06 reset_yaw "Reset Yaw" () -> ();
-        0x07 drive_with_heading "Drive With Heading" (speed: u8, heading: Heading = "0", flags: DriveFlags = "0") -> ();
+        0x07 drive_with_heading "Drive With Heading" (speed: u8, heading: Heading, flags: DriveFlags = "0") -> ();
         0x0B generic_raw_motor "Generic Raw Motor" (index: MotorIndex, mode: RawMotorMode, speed: Bytes) -> ();
         0x0C set_stabilization "Set Stabilization" (index: StabilizationIndex) -> ();
         0x0E set_control_system_type "Set Control System Type" (control_type: u8, controller: u8) -> ();
@@ -506,8 +506,8 @@ mod tests {
             err.contains("--heading") && err.contains("0..=359"),
             "{err}"
         );
-        let err = c.encode_params(&given(&[("heading", "100")])).unwrap_err();
-        assert!(err.contains("needs --speed"), "{err}");
+        let err = c.encode_params(&given(&[("speed", "100")])).unwrap_err();
+        assert!(err.contains("needs --heading"), "{err}");
         // Flags default to none (issue 8), so speed and heading are enough.
         assert_eq!(
             c.encode_params(&given(&[("speed", "100"), ("heading", "180")])),

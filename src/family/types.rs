@@ -1,0 +1,263 @@
+//! The family-independent values that cross the seam: commands, packets, decode errors,
+//! the droid's error answers and explained packets for the log.
+
+use crate::model::Protocol;
+use crate::protocol::notify::{Notification, NotificationError};
+use crate::protocol::value::Fields;
+use crate::protocol::{v1, v2};
+use std::fmt;
+
+/// A command to a droid, in its family's terms.
+#[derive(Debug, Clone, PartialEq, Eq, Hash)]
+pub enum Command {
+    V2(v2::Command),
+    V1(v1::Command),
+}
+
+impl From<v2::Command> for Command {
+    fn from(c: v2::Command) -> Self {
+        Command::V2(c)
+    }
+}
+
+impl From<v1::Command> for Command {
+    fn from(c: v1::Command) -> Self {
+        Command::V1(c)
+    }
+}
+
+impl Command {
+    pub fn protocol(&self) -> Protocol {
+        match self {
+            Command::V2(_) => Protocol::SpheroV2,
+            Command::V1(_) => Protocol::SpheroV1,
+        }
+    }
+
+    /// The catalogue name (`drive-with-heading`, `roll`), or `did/cid` in hex.
+    pub fn name(&self) -> String {
+        match self {
+            Command::V2(c) => c
+                .def()
+                .map(|d| d.name.clone())
+                .unwrap_or_else(|| format!("0x{:02X}/0x{:02X}", c.did, c.cid)),
+            Command::V1(c) => c
+                .def()
+                .map(|d| d.name.clone())
+                .unwrap_or_else(|| format!("0x{:02X}/0x{:02X}", c.did, c.cid)),
+        }
+    }
+
+    pub fn did(&self) -> u8 {
+        match self {
+            Command::V2(c) => c.did,
+            Command::V1(c) => c.did,
+        }
+    }
+
+    pub fn cid(&self) -> u8 {
+        match self {
+            Command::V2(c) => c.cid,
+            Command::V1(c) => c.cid,
+        }
+    }
+
+    pub fn data(&self) -> &[u8] {
+        match self {
+            Command::V2(c) => &c.data,
+            Command::V1(c) => &c.data,
+        }
+    }
+
+    pub fn as_v2(&self) -> Option<&v2::Command> {
+        match self {
+            Command::V2(c) => Some(c),
+            _ => None,
+        }
+    }
+
+    pub fn as_v1(&self) -> Option<&v1::Command> {
+        match self {
+            Command::V1(c) => Some(c),
+            _ => None,
+        }
+    }
+}
+
+/// A decoded packet of any family, as sent or received.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Packet {
+    V2(v2::Packet),
+    V1(v1::Packet),
+}
+
+impl Packet {
+    /// The wire bytes.
+    pub fn encode(&self) -> Vec<u8> {
+        match self {
+            Packet::V2(p) => p.encode(),
+            // A decoded or catalogue-built v1 packet always fits its DLEN.
+            Packet::V1(p) => p.encode().unwrap_or_default(),
+        }
+    }
+
+    pub fn as_v2(&self) -> Option<&v2::Packet> {
+        match self {
+            Packet::V2(p) => Some(p),
+            _ => None,
+        }
+    }
+
+    pub fn as_v1(&self) -> Option<&v1::Packet> {
+        match self {
+            Packet::V1(p) => Some(p),
+            _ => None,
+        }
+    }
+
+    /// The payload.
+    pub fn data(&self) -> &[u8] {
+        match self {
+            Packet::V2(p) => &p.data,
+            Packet::V1(p) => p.data(),
+        }
+    }
+}
+
+/// A stream decode error of any family.
+#[derive(Debug, Clone, PartialEq)]
+pub enum DecodeError {
+    V2(v2::DecodeError),
+    V1(v1::DecodeError),
+}
+
+impl DecodeError {
+    /// The error kind's snake_case name (`bad_checksum`).
+    pub fn kind_name(&self) -> &'static str {
+        match self {
+            DecodeError::V2(e) => e.kind.name(),
+            DecodeError::V1(e) => e.kind.name(),
+        }
+    }
+
+    pub fn offset(&self) -> u64 {
+        match self {
+            DecodeError::V2(e) => e.offset,
+            DecodeError::V1(e) => e.offset,
+        }
+    }
+
+    pub fn detail(&self) -> &str {
+        match self {
+            DecodeError::V2(e) => &e.detail,
+            DecodeError::V1(e) => &e.detail,
+        }
+    }
+}
+
+impl fmt::Display for DecodeError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            DecodeError::V2(e) => e.fmt(f),
+            DecodeError::V1(e) => e.fmt(f),
+        }
+    }
+}
+
+/// A droid's error answer to a command.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DroidError {
+    V2(v2::ErrorCode),
+    V1(v1::Mrsp),
+}
+
+impl DroidError {
+    /// The code's snake_case name.
+    pub fn name(&self) -> String {
+        match self {
+            DroidError::V2(e) => e.name(),
+            DroidError::V1(e) => e.name(),
+        }
+    }
+
+    /// A sentence for people.
+    pub fn message(&self) -> String {
+        match self {
+            DroidError::V2(e) => e.message(),
+            DroidError::V1(e) => e.message(),
+        }
+    }
+
+    /// The byte on the wire.
+    pub fn code(&self) -> u8 {
+        match self {
+            DroidError::V2(e) => e.to_byte(),
+            DroidError::V1(e) => e.to_byte(),
+        }
+    }
+
+    /// The droid is asleep and must be woken before it obeys.
+    pub fn is_target_unavailable(&self) -> bool {
+        matches!(self, DroidError::V2(v2::ErrorCode::TargetUnavailable))
+    }
+}
+
+impl fmt::Display for DroidError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            DroidError::V2(e) => e.fmt(f),
+            DroidError::V1(e) => write!(f, "{}", e.name()),
+        }
+    }
+}
+
+/// What a packet is, across families (v1 calls notifications "async messages").
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PacketKind {
+    Command,
+    Response,
+    Notification,
+}
+
+/// A packet explained with its family's catalogue, for the packet log.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Explained {
+    pub kind: PacketKind,
+    /// Catalogue name, or a `device/0xNN` label for unknown ids.
+    pub label: String,
+    /// Whether the catalogue knows it.
+    pub known: bool,
+    /// Decoded payload; `None` when it did not fit, the answer was an error, or unknown.
+    pub fields: Option<Fields>,
+    /// Why `fields` is `None`, when that is worth showing.
+    pub problem: Option<String>,
+    /// An error answer.
+    pub error: Option<DroidError>,
+    /// The device id, for the log filter (`dev:drive`).
+    pub did: Option<u8>,
+    pub seq: Option<u8>,
+}
+
+/// The response key: what a response carries to find its request. v2 echoes DID, CID and
+/// SEQ; v1 only the SEQ (its DID and CID are 0 here).
+pub type Key = (u8, u8, u8);
+
+/// What the codec found in the droid's bytes.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Incoming {
+    /// An answer to a request.
+    Response {
+        key: Key,
+        error: Option<DroidError>,
+        packet: Packet,
+    },
+    /// An unsolicited message, decoded into zero or more notifications (a v1 sensor packet
+    /// carries several frames).
+    Async {
+        notifications: Vec<Result<Notification, NotificationError>>,
+        packet: Packet,
+    },
+    /// A packet that should not come from a droid (a command); logged, otherwise ignored.
+    Stray(Packet),
+    Error(DecodeError),
+}

@@ -1,0 +1,288 @@
+//! Sphero API v1 behind the family seam (BB-8, SPRK+, Ollie).
+//!
+//! Differences from v2 that this file absorbs: a response echoes only the SEQ (no DID/CID),
+//! so its payload can be read only with the request's schema; the droid has no Wake command
+//! (it wakes at the GATT level, `droid-facts.md` §4) and no dome, legs, sounds or
+//! animations; Roll has no reverse flag, so reversing rolls toward the opposite heading.
+
+use super::{Codec, Command, DroidError, Explained, Family, Incoming, Key, Packet, PacketKind};
+use crate::model::{Model, Protocol};
+use crate::protocol::v1::{self, Decoder, Source, StreamingConfig, cmd};
+use crate::protocol::wire::LegAction;
+use crate::script::{Action, LedGroup};
+use crate::setup::SetupOptions;
+use crate::units::{HeadAngle, Heading};
+
+/// The v1 family.
+pub struct V1;
+
+/// Sensors droidctl streams from a v1 droid: accelerometer and gyro (filtered), pitch/roll/
+/// yaw, and in MASK2 the odometer and velocity (`droid-facts.md` §4).
+pub const STREAM_MASK: u32 = 0x0007_0000 | 0x0000_E000 | 0x0000_1C00;
+pub const STREAM_MASK2: u32 = 0x0C00_0000 | 0x0180_0000;
+
+/// The v1 sample clock: rate = 400 / N Hz (`droid-facts.md` §4).
+pub fn divisor_for(interval_ms: u16) -> u16 {
+    ((interval_ms as u32 * 400) / 1000).clamp(1, u16::MAX as u32) as u16
+}
+
+/// A v1 connection's codec: the decoder reads the droid's side of the stream (responses
+/// and async messages; a command would begin with the same `FF FF`).
+pub struct V1Codec {
+    decoder: Decoder,
+    streaming: StreamingConfig,
+}
+
+impl V1Codec {
+    pub fn new() -> Self {
+        V1Codec {
+            decoder: Decoder::new(Source::Droid),
+            streaming: StreamingConfig::default(),
+        }
+    }
+}
+
+impl Default for V1Codec {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+fn v1_of(c: &Command) -> v1::Command {
+    match c {
+        Command::V1(c) => c.clone(),
+        other => {
+            tracing::error!(command = %other.name(), "a non-v1 command reached the v1 codec");
+            cmd::ping()
+        }
+    }
+}
+
+/// Explain a v1 packet; `request` gives the schema of a response's payload.
+pub fn explain(
+    p: &v1::Packet,
+    streaming: Option<&StreamingConfig>,
+    request: Option<&Command>,
+) -> Explained {
+    let d = v1::describe(p, streaming, request.and_then(Command::as_v1));
+    let (kind, did, seq, error) = match p {
+        v1::Packet::Command(c) => (PacketKind::Command, Some(c.did), Some(c.seq), None),
+        v1::Packet::Response(r) => (
+            PacketKind::Response,
+            request.map(Command::did),
+            Some(r.seq),
+            (!r.mrsp.is_success()).then_some(DroidError::V1(r.mrsp)),
+        ),
+        v1::Packet::Async(_) => (PacketKind::Notification, None, None, None),
+    };
+    let label = d.name.clone().unwrap_or_else(|| match p {
+        v1::Packet::Command(c) => format!("0x{:02X}/0x{:02X}", c.did, c.cid),
+        v1::Packet::Response(_) => match request {
+            Some(r) => format!("{} (answer)", r.name()),
+            None => "response".into(),
+        },
+        v1::Packet::Async(a) => format!("async 0x{:02X}", a.id_code),
+    });
+    Explained {
+        kind,
+        label,
+        known: d.name.is_some(),
+        fields: d.fields,
+        problem: d.problem,
+        error,
+        did,
+        seq,
+    }
+}
+
+impl Codec for V1Codec {
+    fn protocol(&self) -> Protocol {
+        Protocol::SpheroV1
+    }
+
+    /// v1 responses echo only the SEQ.
+    fn key(&self, _c: &Command, seq: u8) -> Key {
+        (0, 0, seq)
+    }
+
+    fn encode(&mut self, c: &Command, seq: u8, want_response: bool) -> (Vec<u8>, Packet) {
+        let c = v1_of(c);
+        if (c.did, c.cid) == (0x02, 0x11)
+            && let Some(s) = StreamingConfig::from_command_data(&c.data)
+        {
+            self.streaming = s;
+        }
+        // Every command resets the droid's inactivity timer: driving keeps it awake.
+        let packet = v1::CommandPacket::new(c.did, c.cid, seq, c.data.clone())
+            .with_options(want_response, true);
+        let p = v1::Packet::Command(packet);
+        // The catalogue's payloads are far below the 254-byte DLEN limit; a command that is
+        // not is written as nothing (and logged) rather than as a broken frame.
+        let wire = p.encode().unwrap_or_else(|e| {
+            tracing::error!(error = %e, "v1 command too long to frame");
+            Vec::new()
+        });
+        (wire, Packet::V1(p))
+    }
+
+    fn feed(&mut self, bytes: &[u8], out: &mut Vec<Incoming>) {
+        for r in self.decoder.feed(bytes) {
+            out.push(match r {
+                Err(e) => Incoming::Error(super::DecodeError::V1(e)),
+                Ok(v1::Packet::Response(r)) => Incoming::Response {
+                    key: (0, 0, r.seq),
+                    error: (!r.mrsp.is_success()).then_some(DroidError::V1(r.mrsp)),
+                    packet: Packet::V1(v1::Packet::Response(r)),
+                },
+                Ok(v1::Packet::Async(a)) => {
+                    let notifications = match v1::decode_async(&a, &self.streaming) {
+                        Ok(ns) => ns.into_iter().map(Ok).collect(),
+                        Err(e) => vec![Err(e)],
+                    };
+                    Incoming::Async {
+                        notifications,
+                        packet: Packet::V1(v1::Packet::Async(a)),
+                    }
+                }
+                Ok(p @ v1::Packet::Command(_)) => Incoming::Stray(Packet::V1(p)),
+            });
+        }
+    }
+
+    fn explain(&self, p: &Packet, request: Option<&Command>) -> Explained {
+        match p {
+            Packet::V1(p) => explain(p, Some(&self.streaming), request),
+            other => super::explain_foreign(other),
+        }
+    }
+}
+
+impl Family for V1 {
+    fn protocol(&self) -> Protocol {
+        Protocol::SpheroV1
+    }
+
+    fn codec(&self) -> Box<dyn Codec> {
+        Box::new(V1Codec::new())
+    }
+
+    /// v1 droids wake at the GATT level (the wake sequence of `droid-facts.md` §4).
+    fn wake(&self) -> Option<Command> {
+        None
+    }
+
+    fn ping(&self) -> Command {
+        cmd::ping().into()
+    }
+
+    fn sleep(&self) -> Option<Command> {
+        Some(cmd::sleep(0, 0, 0).into())
+    }
+
+    /// Roll has no reverse flag: backing up is rolling toward the opposite heading.
+    fn drive(&self, speed: u8, heading: Heading, reverse: bool) -> Command {
+        let heading = if reverse { heading.reversed() } else { heading };
+        cmd::roll(speed, heading, v1::RollState::Go).into()
+    }
+
+    fn is_drive(&self, c: &Command) -> bool {
+        matches!(c, Command::V1(c) if (c.did, c.cid) == (0x02, 0x30))
+    }
+
+    /// Roll state 0 is the API's stop; the heading is kept so the droid does not turn.
+    fn stop_after(&self, last: Option<&Command>) -> Command {
+        let heading = match last {
+            Some(Command::V1(c)) if (c.did, c.cid) == (0x02, 0x30) && c.data.len() >= 3 => {
+                u16::from_be_bytes([c.data[1], c.data[2]])
+            }
+            _ => 0,
+        };
+        cmd::roll(0, Heading::wrapped(heading as f64), v1::RollState::Stop).into()
+    }
+
+    fn head(&self, _angle: HeadAngle) -> Option<Command> {
+        None
+    }
+
+    fn stance(&self, _action: LegAction) -> Option<Command> {
+        None
+    }
+
+    fn get_stance(&self) -> Option<Command> {
+        None
+    }
+
+    fn animation(&self, _id: u16) -> Option<Command> {
+        None
+    }
+
+    fn sound(&self, _id: u16) -> Option<Command> {
+        None
+    }
+
+    /// The main RGB LED (script group `front`) and the blue back LED (`back`, brightness).
+    fn led(&self, _model: Model, action: &Action) -> Option<Command> {
+        match *action {
+            Action::LedRgb(LedGroup::Front, [r, g, b]) => {
+                Some(cmd::set_rgb_led(r, g, b, false).into())
+            }
+            Action::LedBrightness(LedGroup::Back, b) => Some(cmd::set_back_led(b).into()),
+            _ => None,
+        }
+    }
+
+    fn battery_request(&self) -> Option<Command> {
+        Some(cmd::get_power_state().into())
+    }
+
+    /// Get Power State: record version, state, battery voltage u16 in 1/100 V, …
+    fn battery_volts(&self, response: &[u8]) -> Option<f32> {
+        let hi = *response.get(2)?;
+        let lo = *response.get(3)?;
+        Some(u16::from_be_bytes([hi, lo]) as f32 / 100.0)
+    }
+
+    fn setup(&self, _model: Model, opts: &SetupOptions) -> Vec<Command> {
+        let mut out: Vec<Command> = vec![
+            // The first answer proves the link; it also resets the inactivity timer.
+            cmd::ping().into(),
+            cmd::set_stabilization(true).into(),
+            // Equal x and y values sidestep the disputed parameter order (§2, §4).
+            cmd::configure_collision_detection(1, 100, 100, 100, 100, 10).into(),
+        ];
+        if opts.streaming_interval_ms > 0 {
+            out.push(
+                cmd::set_data_streaming(
+                    divisor_for(opts.streaming_interval_ms),
+                    1,
+                    STREAM_MASK,
+                    0,
+                    Some(STREAM_MASK2),
+                )
+                .into(),
+            );
+        }
+        out.push(cmd::set_power_notification(true).into());
+        out
+    }
+
+    fn aim_begin(&self, _model: Model) -> Option<Vec<Command>> {
+        Some(vec![
+            cmd::set_back_led(255).into(),
+            // Stabilised, a Roll at speed 0 turns the droid in place.
+            cmd::set_stabilization(true).into(),
+        ])
+    }
+
+    fn aim_turn(&self, heading: Heading) -> Command {
+        cmd::roll(0, heading, v1::RollState::Go).into()
+    }
+
+    fn aim_end(&self, _model: Model) -> Vec<Command> {
+        vec![
+            // Set Heading 0: where the droid faces now is heading 0.
+            cmd::set_heading(Heading::default()).into(),
+            cmd::set_back_led(0).into(),
+        ]
+    }
+}

@@ -1,0 +1,282 @@
+//! Sphero API v2 behind the family seam (R2-D2, R2-Q5, BB-9E).
+
+use super::{Codec, Command, DroidError, Explained, Family, Incoming, Key, Packet, PacketKind};
+use crate::model::{Model, Protocol};
+use crate::protocol::v2::sensor::StreamingConfig;
+use crate::protocol::v2::wire::{
+    AudioMode, Bytes, CollisionMethod, DriveFlags, LegAction, Mask, StabilizationIndex,
+};
+use crate::protocol::v2::{self, Decoder, Device, Flags, Kind, Notification, cmd, describe};
+use crate::script::{Action, LedGroup};
+use crate::setup::SetupOptions;
+use crate::units::{HeadAngle, Heading};
+
+/// The v2 family.
+pub struct V2;
+
+/// A v2 connection's codec: the streaming decoder and the masks in effect.
+pub struct V2Codec {
+    decoder: Decoder,
+    streaming: StreamingConfig,
+}
+
+impl V2Codec {
+    pub fn new() -> Self {
+        V2Codec {
+            decoder: Decoder::new(),
+            streaming: StreamingConfig::default(),
+        }
+    }
+
+    /// Track what the droid will stream.
+    fn snoop(&mut self, c: &v2::Command) {
+        match (c.did, c.cid, c.data.as_slice()) {
+            (0x18, 0x00, [i0, i1, _count, m @ ..]) if m.len() == 4 => {
+                self.streaming.interval_ms = u16::from_be_bytes([*i0, *i1]);
+                self.streaming.mask = u32::from_be_bytes([m[0], m[1], m[2], m[3]]);
+            }
+            (0x18, 0x0C, m) if m.len() == 4 => {
+                self.streaming.ext_mask = u32::from_be_bytes([m[0], m[1], m[2], m[3]]);
+            }
+            _ => {}
+        }
+    }
+}
+
+impl Default for V2Codec {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// The v2 part of a family command. Commands of another family cannot be framed here; the
+/// session never mixes families, so this only guards against a programming error.
+fn v2_of(c: &Command) -> v2::Command {
+    match c {
+        Command::V2(c) => c.clone(),
+        other => {
+            tracing::error!(command = %other.name(), "a non-v2 command reached the v2 codec");
+            cmd::ping()
+        }
+    }
+}
+
+/// Explain a v2 packet with the catalogue and the masks in effect.
+pub fn explain(p: &v2::Packet, streaming: Option<&StreamingConfig>) -> Explained {
+    let d = describe(p, streaming);
+    let kind = match d.kind {
+        Kind::Command => PacketKind::Command,
+        Kind::Response => PacketKind::Response,
+        Kind::Notification => PacketKind::Notification,
+    };
+    Explained {
+        kind,
+        label: d.label(p),
+        known: d.name.is_some(),
+        fields: d.fields,
+        problem: d.problem,
+        error: p.err.filter(|e| !e.is_success()).map(DroidError::V2),
+        did: Some(p.did),
+        seq: (kind != PacketKind::Notification).then_some(p.seq),
+    }
+}
+
+impl Codec for V2Codec {
+    fn protocol(&self) -> Protocol {
+        Protocol::SpheroV2
+    }
+
+    fn key(&self, c: &Command, seq: u8) -> Key {
+        (c.did(), c.cid(), seq)
+    }
+
+    fn encode(&mut self, c: &Command, seq: u8, want_response: bool) -> (Vec<u8>, Packet) {
+        let c = v2_of(c);
+        self.snoop(&c);
+        let mut packet = c.to_packet(seq);
+        if !want_response {
+            packet.flags.remove(Flags::REQUESTS_RESPONSE);
+        }
+        (packet.encode(), Packet::V2(packet))
+    }
+
+    fn feed(&mut self, bytes: &[u8], out: &mut Vec<Incoming>) {
+        for r in self.decoder.feed(bytes) {
+            out.push(match r {
+                Err(e) => Incoming::Error(super::DecodeError::V2(e)),
+                Ok(p) if p.is_response() => Incoming::Response {
+                    key: (p.did, p.cid, p.seq),
+                    error: p.err.filter(|e| !e.is_success()).map(DroidError::V2),
+                    packet: Packet::V2(p),
+                },
+                Ok(p) if p.is_notification() => Incoming::Async {
+                    notifications: vec![Notification::decode(&p, &self.streaming)],
+                    packet: Packet::V2(p),
+                },
+                Ok(p) => Incoming::Stray(Packet::V2(p)),
+            });
+        }
+    }
+
+    fn explain(&self, p: &Packet, _request: Option<&Command>) -> Explained {
+        match p {
+            Packet::V2(p) => explain(p, Some(&self.streaming)),
+            other => super::explain_foreign(other),
+        }
+    }
+}
+
+impl Family for V2 {
+    fn protocol(&self) -> Protocol {
+        Protocol::SpheroV2
+    }
+
+    fn codec(&self) -> Box<dyn Codec> {
+        Box::new(V2Codec::new())
+    }
+
+    fn wake(&self) -> Option<Command> {
+        Some(cmd::wake().into())
+    }
+
+    fn ping(&self) -> Command {
+        cmd::ping().into()
+    }
+
+    fn sleep(&self) -> Option<Command> {
+        Some(cmd::sleep().into())
+    }
+
+    fn drive(&self, speed: u8, heading: Heading, reverse: bool) -> Command {
+        // Reverse = speed with BACKWARD, and reference clients add 180° to the heading
+        // (`droid-facts.md` §2): `heading` is the direction the droid faces.
+        let (heading, flags) = if reverse {
+            (heading.reversed(), DriveFlags::BACKWARD)
+        } else {
+            (heading, DriveFlags::empty())
+        };
+        cmd::drive_with_heading(speed, heading, flags).into()
+    }
+
+    fn is_drive(&self, c: &Command) -> bool {
+        matches!(c, Command::V2(c) if (c.did, c.cid) == (0x16, 0x07))
+    }
+
+    fn stop_after(&self, last: Option<&Command>) -> Command {
+        let mut stop = match last {
+            Some(Command::V2(c)) if (c.did, c.cid) == (0x16, 0x07) => c.clone(),
+            _ => cmd::drive_with_heading(0, Heading::default(), DriveFlags::empty()),
+        };
+        if let Some(speed) = stop.data.first_mut() {
+            *speed = 0;
+        }
+        stop.into()
+    }
+
+    fn head(&self, angle: HeadAngle) -> Option<Command> {
+        Some(cmd::set_head_position(angle).into())
+    }
+
+    fn stance(&self, action: LegAction) -> Option<Command> {
+        Some(cmd::perform_leg_action(action).into())
+    }
+
+    fn get_stance(&self) -> Option<Command> {
+        Some(cmd::get_leg_action().into())
+    }
+
+    fn animation(&self, id: u16) -> Option<Command> {
+        Some(cmd::play_animation(id).into())
+    }
+
+    fn sound(&self, id: u16) -> Option<Command> {
+        Some(cmd::play_audio_file(id, AudioMode::Immediate).into())
+    }
+
+    /// R2 bits 0..2 front RGB, 3 logic, 4..6 back RGB, 7 holo; BB-9E 0..2 body RGB,
+    /// 3 aiming, 4 head (`droid-facts.md` §2).
+    fn led(&self, model: Model, action: &Action) -> Option<Command> {
+        let r2 = model.has_legs();
+        let (mask, values): (u32, Vec<u8>) = match *action {
+            Action::LedRgb(LedGroup::Front, rgb) => (0x0007, rgb.to_vec()),
+            Action::LedRgb(LedGroup::Back, rgb) if r2 => (0x0070, rgb.to_vec()),
+            Action::LedBrightness(LedGroup::Logic, b) => (0x0008, vec![b]),
+            Action::LedBrightness(LedGroup::Holo, b) => (if r2 { 0x0080 } else { 0x0010 }, vec![b]),
+            Action::LedBrightness(LedGroup::Back, b) if !r2 => (0x0008, vec![b]),
+            _ => return None,
+        };
+        Some(cmd::set_all_leds_with_16_bit_mask(Mask(mask), Bytes(values)).into())
+    }
+
+    fn battery_request(&self) -> Option<Command> {
+        Some(cmd::get_battery_voltage().into())
+    }
+
+    fn battery_volts(&self, response: &[u8]) -> Option<f32> {
+        crate::telemetry::battery_volts(response)
+    }
+
+    fn setup(&self, model: Model, opts: &SetupOptions) -> Vec<Command> {
+        let mut out = vec![cmd::wake()];
+        if model.has_legs() && opts.tripod {
+            out.push(cmd::perform_leg_action(LegAction::Tripod));
+        }
+        if model.has_dome() {
+            out.push(cmd::set_head_position(HeadAngle::clamped(0.0)));
+        }
+        // Equal x and y values sidestep the disputed parameter order (`droid-facts.md` §2).
+        out.push(cmd::configure_collision_detection(
+            CollisionMethod::Accelerometer,
+            100,
+            100,
+            100,
+            100,
+            10,
+        ));
+        out.push(cmd::enable_collision_detected_notify(true));
+        if opts.streaming_interval_ms > 0 {
+            // Reconfigure as the reference clients do: mask with interval 0, extended mask,
+            // then the mask again with the real interval (`droid-facts.md` §2).
+            let s = StreamingConfig::full(opts.streaming_interval_ms);
+            out.push(cmd::set_sensor_streaming_mask(0, 0, Mask(s.mask)));
+            out.push(cmd::set_extended_sensor_streaming_mask(Mask(s.ext_mask)));
+            out.push(cmd::set_sensor_streaming_mask(
+                s.interval_ms,
+                0,
+                Mask(s.mask),
+            ));
+        }
+        out.push(cmd::enable_battery_state_changed_notify(true));
+        out.push(cmd::enable_battery_voltage_state_change_notify(true));
+        out.into_iter().map(Command::from).collect()
+    }
+
+    /// BB-9E rolls like BB-8 and has an aiming light (LED bit 3); R2 has legs and no aim
+    /// light, so it drives without aiming.
+    fn aim_begin(&self, model: Model) -> Option<Vec<Command>> {
+        if model.has_legs() {
+            return None;
+        }
+        Some(vec![
+            cmd::set_all_leds_with_16_bit_mask(Mask(0x0008), Bytes(vec![255])).into(),
+            // Keep stabilisation on so the body turns in place without rolling.
+            cmd::set_stabilization(StabilizationIndex::Full).into(),
+        ])
+    }
+
+    fn aim_turn(&self, heading: Heading) -> Command {
+        cmd::drive_with_heading(0, heading, DriveFlags::empty()).into()
+    }
+
+    fn aim_end(&self, _model: Model) -> Vec<Command> {
+        vec![
+            cmd::reset_yaw().into(),
+            cmd::set_all_leds_with_16_bit_mask(Mask(0x0008), Bytes(vec![0])).into(),
+        ]
+    }
+}
+
+/// The v2 device name of a DID, for the log filter.
+pub fn device_name(did: u8) -> String {
+    Device::describe(did)
+}

@@ -1,0 +1,541 @@
+//! The simulated droid's body: position, motion, walls, dome, legs, battery, sleep and the
+//! sensor clock. It knows no protocol: a protocol front (`sim::v2`, `sim::v1`) turns wire
+//! commands into calls here and the [`SimEvent`]s it emits into wire notifications, so every
+//! simulated model shares one physics.
+
+use super::SimConfig;
+use super::physics::{angle_diff, approach, clamp_to_room, heading_vector, wrap360};
+use crate::model::Model;
+use crate::protocol::notify::Collision;
+use crate::protocol::wire::{AccelRaw, CollisionAxis, LegAction, LegState};
+use crate::units::{HEAD_MAX_DEG, HEAD_MIN_DEG};
+use std::time::Duration;
+
+/// Everything observable about the simulated droid (for tests, `run` and the UI's sim panel).
+#[derive(Debug, Clone, PartialEq)]
+pub struct SimState {
+    pub awake: bool,
+    pub x_cm: f32,
+    pub y_cm: f32,
+    /// Where the body faces, 0..360, clockwise from +y.
+    pub yaw_deg: f32,
+    /// Signed speed along the facing (negative when backing up), cm/s.
+    pub velocity_cm_s: f32,
+    pub stance: LegState,
+    pub head_deg: f32,
+    pub battery_v: f32,
+    pub collisions: u32,
+    pub animation_playing: bool,
+    pub sound_playing: bool,
+    /// LED values by mask bit (R2: front RGB, logic, back RGB, holo).
+    pub leds: [u8; 16],
+    pub volume: u8,
+    /// Commands received, and bytes the droid's decoder rejected.
+    pub commands: u64,
+    pub decode_errors: u64,
+}
+
+/// What the body reports; the front decides what reaches the wire (and how).
+#[derive(Debug, Clone, PartialEq)]
+pub enum SimEvent {
+    LegActionComplete,
+    AnimationComplete,
+    WillSleep,
+    DidSleep,
+    /// Battery voltage state changed: 1 ok, 2 low, 3 critical.
+    VoltageState(u8),
+    /// A collision, when collision detection is on.
+    Collision(Collision),
+    /// A sensor sample is due (streaming on): values by name, in the units of
+    /// `droid-facts.md` (degrees, g, °/s, cm, cm/s).
+    Sample(Vec<(&'static str, f32)>),
+}
+
+#[derive(Debug, Clone, Copy)]
+struct Drive {
+    /// Target speed magnitude, cm/s.
+    speed: f32,
+    /// Target facing.
+    facing: f32,
+    backward: bool,
+    at: Duration,
+}
+
+#[derive(Debug, Clone, Copy)]
+struct Transition {
+    target: LegState,
+    ends: Duration,
+}
+
+/// The simulated body.
+#[derive(Debug, Clone)]
+pub struct Body {
+    model: Model,
+    pub(super) cfg: SimConfig,
+    now: Duration,
+    pub(super) state: SimState,
+    drive: Option<Drive>,
+    head_target: f32,
+    transition: Option<Transition>,
+    last_activity: Duration,
+    inactivity_timeout: Duration,
+    will_sleep_sent: bool,
+    /// Sensor streaming period (`None`: off).
+    stream_every: Option<Duration>,
+    next_sample: Duration,
+    /// Collision detection on, and its dead time.
+    pub(super) collision_notify: bool,
+    pub(super) collision_dead_time: Duration,
+    last_collision: Option<Duration>,
+    voltage_state: u8,
+    animation_ends: Option<Duration>,
+    sound_ends: Option<Duration>,
+    sounds_queued: u32,
+    accel_fwd: f32,
+    yaw_rate: f32,
+    events: Vec<SimEvent>,
+}
+
+impl Body {
+    pub fn new(model: Model, cfg: SimConfig) -> Self {
+        let inactivity_timeout = cfg.inactivity_timeout;
+        let battery = cfg.battery_start_v;
+        Body {
+            model,
+            now: Duration::ZERO,
+            state: SimState {
+                awake: false,
+                x_cm: 0.0,
+                y_cm: 0.0,
+                yaw_deg: 0.0,
+                velocity_cm_s: 0.0,
+                // Assumption: R2 rests on two legs until told otherwise; BB-9E has none.
+                stance: if model.has_legs() {
+                    LegState::Bipod
+                } else {
+                    LegState::Unknown
+                },
+                head_deg: 0.0,
+                battery_v: battery,
+                collisions: 0,
+                animation_playing: false,
+                sound_playing: false,
+                leds: [0; 16],
+                volume: 128,
+                commands: 0,
+                decode_errors: 0,
+            },
+            cfg,
+            drive: None,
+            head_target: 0.0,
+            transition: None,
+            last_activity: Duration::ZERO,
+            inactivity_timeout,
+            will_sleep_sent: false,
+            stream_every: None,
+            next_sample: Duration::ZERO,
+            collision_notify: false,
+            collision_dead_time: Duration::from_millis(100),
+            last_collision: None,
+            voltage_state: 1,
+            animation_ends: None,
+            sound_ends: None,
+            sounds_queued: 0,
+            accel_fwd: 0.0,
+            yaw_rate: 0.0,
+            events: Vec::new(),
+        }
+    }
+
+    pub fn model(&self) -> Model {
+        self.model
+    }
+
+    pub fn state(&self) -> &SimState {
+        &self.state
+    }
+
+    pub fn now(&self) -> Duration {
+        self.now
+    }
+
+    /// Run the physics up to `now`.
+    pub fn advance_to(&mut self, now: Duration) {
+        let step = self.cfg.step.max(Duration::from_millis(1));
+        while self.now + step <= now {
+            self.now += step;
+            self.step(step.as_secs_f32());
+        }
+    }
+
+    /// What happened since the last call.
+    pub fn take_events(&mut self) -> Vec<SimEvent> {
+        std::mem::take(&mut self.events)
+    }
+
+    /// A command arrived that counts as activity (resets the inactivity timer).
+    pub fn activity(&mut self) {
+        self.last_activity = self.now;
+        self.will_sleep_sent = false;
+    }
+
+    pub fn wake(&mut self) {
+        if !self.state.awake {
+            self.state.awake = true;
+            self.last_activity = self.now;
+        }
+    }
+
+    pub fn set_inactivity_timeout(&mut self, t: Duration) {
+        self.inactivity_timeout = t.max(Duration::from_secs(1));
+    }
+
+    /// Roll at `speed` (0..=255 of top speed) facing `facing` degrees; `backward` backs up.
+    pub fn drive(&mut self, speed: u8, facing: f32, backward: bool) {
+        self.drive = Some(Drive {
+            speed: speed as f32 / 255.0 * self.cfg.top_speed_cm_s,
+            facing: wrap360(facing),
+            backward,
+            at: self.now,
+        });
+    }
+
+    /// The current facing becomes heading 0 (v2 Reset Yaw, v1 Set Heading 0).
+    pub fn reset_yaw(&mut self) {
+        self.state.yaw_deg = 0.0;
+        if let Some(dr) = &mut self.drive {
+            dr.facing = 0.0;
+        }
+    }
+
+    pub fn reset_locator(&mut self) {
+        self.state.x_cm = 0.0;
+        self.state.y_cm = 0.0;
+    }
+
+    pub fn set_head_target(&mut self, deg: f32) {
+        self.head_target = deg.clamp(HEAD_MIN_DEG, HEAD_MAX_DEG);
+    }
+
+    /// The stance now, or transitioning.
+    pub fn stance_now(&self) -> LegState {
+        if self.transition.is_some() {
+            LegState::Transitioning
+        } else {
+            self.state.stance
+        }
+    }
+
+    /// Stream samples every `every` (`None`: off).
+    pub fn set_streaming(&mut self, every: Option<Duration>) {
+        self.stream_every = every.filter(|d| !d.is_zero());
+        if let Some(d) = self.stream_every {
+            self.next_sample = self.now + d;
+        }
+    }
+
+    pub fn play_animation(&mut self) {
+        self.animation_ends = Some(self.now + self.cfg.animation_time);
+        self.state.animation_playing = true;
+    }
+
+    pub fn stop_animation(&mut self) {
+        self.animation_ends = None;
+        self.state.animation_playing = false;
+    }
+
+    pub fn stop_sounds(&mut self) {
+        self.sound_ends = None;
+        self.sounds_queued = 0;
+        self.state.sound_playing = false;
+    }
+
+    pub fn play_sound(&mut self, mode: u8) {
+        let playing = self.sound_ends.is_some();
+        match mode {
+            // Only if idle: ignored while a sound plays.
+            1 if playing => {}
+            // After current: queued.
+            2 if playing => self.sounds_queued += 1,
+            _ => {
+                self.sound_ends = Some(self.now + self.cfg.sound_time);
+                self.state.sound_playing = true;
+            }
+        }
+    }
+
+    pub fn leg_action(&mut self, a: LegAction) {
+        let current = self
+            .transition
+            .map(|t| t.target)
+            .unwrap_or(self.state.stance);
+        let (target, time) = match a {
+            LegAction::Stop => {
+                // Stop ends a waddle at once, standing on two legs.
+                if current == LegState::Waddle {
+                    self.transition = None;
+                    self.state.stance = LegState::Bipod;
+                }
+                self.events.push(SimEvent::LegActionComplete);
+                return;
+            }
+            LegAction::Tripod => (LegState::Tripod, self.cfg.stance_time),
+            LegAction::Bipod => (LegState::Bipod, self.cfg.stance_time),
+            // Waddle starts from bipod: from tripod it first has to stand up.
+            LegAction::Waddle if current == LegState::Tripod => {
+                (LegState::Waddle, self.cfg.stance_time)
+            }
+            LegAction::Waddle => (LegState::Waddle, Duration::from_millis(300)),
+        };
+        let time = if current == target {
+            Duration::from_millis(50)
+        } else {
+            time
+        };
+        self.transition = Some(Transition {
+            target,
+            ends: self.now + time,
+        });
+    }
+
+    pub fn fall_asleep(&mut self) {
+        if self.state.awake {
+            self.state.awake = false;
+            self.drive = None;
+            self.stream_every = None;
+            self.events.push(SimEvent::DidSleep);
+        }
+    }
+
+    pub fn centivolts(&self) -> u16 {
+        (self.state.battery_v * 100.0).round().clamp(0.0, 65535.0) as u16
+    }
+
+    pub fn battery_percent(&self) -> u8 {
+        (((self.state.battery_v - 3.4) / (4.2 - 3.4)) * 100.0).clamp(0.0, 100.0) as u8
+    }
+
+    /// Battery voltage state: 1 ok, 2 low, 3 critical.
+    pub fn voltage_state_now(&self) -> u8 {
+        match self.state.battery_v {
+            v if v < 3.45 => 3,
+            v if v < 3.6 => 2,
+            _ => 1,
+        }
+    }
+
+    /// Battery state for Get Battery State / the state-changed notification: 3 ok, 4 low,
+    /// 5 critical.
+    pub fn battery_state(&self) -> u8 {
+        self.voltage_state_now() + 2
+    }
+
+    /// Can the droid roll now? R2 only in tripod, not mid-transition.
+    fn can_roll(&self) -> bool {
+        !self.model.has_legs()
+            || (self.state.stance == LegState::Tripod && self.transition.is_none())
+    }
+
+    fn step(&mut self, dt: f32) {
+        let now = self.now;
+        // Stance transitions.
+        if let Some(t) = self.transition.filter(|t| now >= t.ends) {
+            self.state.stance = t.target;
+            self.transition = None;
+            self.events.push(SimEvent::LegActionComplete);
+        }
+        // Animation and sound completion. The specs define no audio-complete notification,
+        // so sounds only end (and start the next queued one).
+        if self.animation_ends.is_some_and(|e| now >= e) {
+            self.animation_ends = None;
+            self.state.animation_playing = false;
+            self.events.push(SimEvent::AnimationComplete);
+        }
+        if self.sound_ends.is_some_and(|e| now >= e) {
+            if self.sounds_queued > 0 {
+                self.sounds_queued -= 1;
+                self.sound_ends = Some(now + self.cfg.sound_time);
+            } else {
+                self.sound_ends = None;
+                self.state.sound_playing = false;
+            }
+        }
+        // Sleep on inactivity, warning 10 s before.
+        if self.state.awake {
+            let idle = now.saturating_sub(self.last_activity);
+            let warn_at = self
+                .inactivity_timeout
+                .saturating_sub(Duration::from_secs(10));
+            if idle >= self.inactivity_timeout {
+                self.fall_asleep();
+            } else if idle >= warn_at && !self.will_sleep_sent {
+                self.will_sleep_sent = true;
+                self.events.push(SimEvent::WillSleep);
+            }
+        }
+        self.motion(dt);
+        self.dome(dt);
+        self.battery(dt);
+        self.stream();
+    }
+
+    fn motion(&mut self, dt: f32) {
+        let now = self.now;
+        // The droid stops by itself when drive commands stop.
+        if self
+            .drive
+            .is_some_and(|d| now.saturating_sub(d.at) > self.cfg.motion_timeout)
+            && let Some(d) = &mut self.drive
+        {
+            d.speed = 0.0;
+        }
+        let rolling = self.can_roll() && self.state.awake;
+        let (target_speed, target_facing, backward) = match self.drive {
+            Some(d) if rolling => (d.speed, d.facing, d.backward),
+            _ => (0.0, self.state.yaw_deg, self.state.velocity_cm_s < 0.0),
+        };
+        // Turn toward the commanded facing at a finite rate.
+        let before = self.state.yaw_deg;
+        let diff = angle_diff(before, target_facing);
+        let turn = diff.clamp(
+            -self.cfg.turn_rate_deg_s * dt,
+            self.cfg.turn_rate_deg_s * dt,
+        );
+        self.state.yaw_deg = wrap360(before + turn);
+        self.yaw_rate = turn / dt;
+        // Speed with acceleration limits; signed along the facing.
+        let target_v = if backward {
+            -target_speed
+        } else {
+            target_speed
+        };
+        let v = self.state.velocity_cm_s;
+        let limit = if target_v.abs() < v.abs() || target_v.signum() != v.signum() {
+            self.cfg.brake_cm_s2
+        } else {
+            self.cfg.accel_cm_s2
+        };
+        let new_v = approach(v, target_v, limit * dt);
+        self.accel_fwd = (new_v - v) / dt;
+        self.state.velocity_cm_s = new_v;
+        // Dead reckoning.
+        let (hx, hy) = heading_vector(self.state.yaw_deg);
+        let x = self.state.x_cm + hx * new_v * dt;
+        let y = self.state.y_cm + hy * new_v * dt;
+        let half_w = self.cfg.room_cm.0 / 2.0 - self.cfg.radius_cm;
+        let half_h = self.cfg.room_cm.1 / 2.0 - self.cfg.radius_cm;
+        let ((cx, cy), hit_x, hit_y) = clamp_to_room(x, y, half_w, half_h);
+        self.state.x_cm = cx;
+        self.state.y_cm = cy;
+        if hit_x || hit_y {
+            self.collide(new_v, hx, hy, hit_x, hit_y);
+        }
+    }
+
+    fn collide(&mut self, v: f32, hx: f32, hy: f32, hit_x: bool, hit_y: bool) {
+        // A wall stops the droid; it stays stopped until the next drive command.
+        self.state.velocity_cm_s = 0.0;
+        if let Some(d) = &mut self.drive {
+            d.speed = 0.0;
+        }
+        if v.abs() < 1.0 {
+            return;
+        }
+        let now = self.now;
+        if self.last_collision.is_some_and(|t| {
+            now.saturating_sub(t) < self.collision_dead_time.max(Duration::from_millis(10))
+        }) {
+            return;
+        }
+        self.last_collision = Some(now);
+        self.state.collisions += 1;
+        if !self.collision_notify {
+            return;
+        }
+        // Impact deceleration over ~50 ms, in g (÷4096 on the wire).
+        let g = |comp: f32| {
+            AccelRaw((-(comp * v) / 0.05 / 981.0 * 4096.0).clamp(-32768.0, 32767.0) as i16)
+        };
+        let c = Collision {
+            accel: [g(hx), g(hy), AccelRaw(4096)],
+            axis: CollisionAxis { x: hit_x, y: hit_y },
+            power: [
+                (hx * v * 2.0).clamp(-32768.0, 32767.0) as i16,
+                (hy * v * 2.0).clamp(-32768.0, 32767.0) as i16,
+                0,
+            ],
+            speed: (v.abs() / self.cfg.top_speed_cm_s * 255.0).clamp(0.0, 255.0) as u8,
+            time_ms: now.as_millis() as u32,
+        };
+        self.events.push(SimEvent::Collision(c));
+    }
+
+    fn dome(&mut self, dt: f32) {
+        if self.model.has_dome() && self.state.awake {
+            self.state.head_deg = approach(
+                self.state.head_deg,
+                self.head_target,
+                self.cfg.head_rate_deg_s * dt,
+            );
+        }
+    }
+
+    fn battery(&mut self, dt: f32) {
+        if !self.state.awake {
+            return;
+        }
+        let before_state = self.voltage_state_now();
+        let load = (self.state.velocity_cm_s.abs() / self.cfg.top_speed_cm_s).min(1.0);
+        let drain = (self.cfg.drain_idle_v_s + self.cfg.drain_drive_v_s * load) * dt;
+        self.state.battery_v = (self.state.battery_v - drain).max(3.0);
+        let after = self.voltage_state_now();
+        if after != before_state || after != self.voltage_state {
+            self.voltage_state = after;
+            self.events.push(SimEvent::VoltageState(after));
+        }
+    }
+
+    fn stream(&mut self) {
+        let Some(every) = self.stream_every else {
+            return;
+        };
+        if !self.state.awake || self.now < self.next_sample {
+            return;
+        }
+        self.next_sample = self.now + every;
+        let s = &self.state;
+        let (hx, hy) = heading_vector(s.yaw_deg);
+        let lateral = s.velocity_cm_s * self.yaw_rate.to_radians();
+        let yaw = if s.yaw_deg > 180.0 {
+            s.yaw_deg - 360.0
+        } else {
+            s.yaw_deg
+        };
+        let half = s.yaw_deg.to_radians() / 2.0;
+        let values = vec![
+            ("quaternion_w", half.cos()),
+            ("quaternion_x", 0.0),
+            ("quaternion_y", 0.0),
+            ("quaternion_z", half.sin()),
+            // The body leans against acceleration.
+            ("pitch", (-self.accel_fwd / 981.0 * 30.0).clamp(-20.0, 20.0)),
+            ("roll", (lateral / 981.0 * 30.0).clamp(-20.0, 20.0)),
+            ("yaw", yaw),
+            ("accel_x", lateral / 981.0),
+            ("accel_y", self.accel_fwd / 981.0),
+            ("accel_z", 1.0),
+            ("accel_one", 1000.0),
+            ("locator_x", s.x_cm),
+            ("locator_y", s.y_cm),
+            ("velocity_x", hx * s.velocity_cm_s),
+            ("velocity_y", hy * s.velocity_cm_s),
+            ("speed", s.velocity_cm_s.abs()),
+            ("core_time", self.now.as_millis() as f32),
+            ("head_angle", s.head_deg),
+            ("gyro_x", 0.0),
+            ("gyro_y", 0.0),
+            ("gyro_z", self.yaw_rate),
+        ];
+        self.events.push(SimEvent::Sample(values));
+    }
+}

@@ -1,0 +1,59 @@
+//! The lights panel, in the dome's place on droids without a dome (BB-8, SPRK+, Ollie,
+//! BB-9E): the main LED's commanded colour as a swatch, the back (aiming) light, and whether
+//! aim mode is on. Panels follow capabilities, not models: this one is for "no dome".
+
+use super::theme;
+use crate::app::state::AppState;
+use ratatui::Frame;
+use ratatui::layout::Rect;
+use ratatui::style::{Color, Style};
+use ratatui::text::{Line, Span};
+use ratatui::widgets::Paragraph;
+
+pub fn render(frame: &mut Frame, area: Rect, s: &AppState) {
+    let title = if s.control.aiming {
+        Line::from(vec![
+            Span::raw(" Lights "),
+            Span::styled("AIMING ", theme::attention()),
+        ])
+    } else {
+        Line::from(" Lights ")
+    };
+    let block = theme::panel(title);
+    let inner = block.inner(area);
+    frame.render_widget(block, area);
+    let main = match s.leds.main {
+        Some([r, g, b]) => vec![
+            Span::styled("main ", theme::label()),
+            Span::styled("███", Style::new().fg(Color::Rgb(r, g, b))),
+            Span::raw(format!(" {r},{g},{b}")),
+        ],
+        None => vec![
+            Span::styled("main ", theme::label()),
+            Span::styled("not set", theme::dim()),
+        ],
+    };
+    let back = match s.leds.back {
+        Some(0) => Span::raw("off"),
+        Some(b) => Span::styled(
+            format!("{b}/255"),
+            Style::new().fg(Color::Rgb(90, 160, 255)),
+        ),
+        None => Span::styled("not set", theme::dim()),
+    };
+    let mut spans = main;
+    spans.push(Span::styled("   back ", theme::label()));
+    spans.push(back);
+    let mut lines = vec![Line::from(spans)];
+    if inner.height >= 2 {
+        lines.push(Line::from(Span::styled(
+            if s.control.aiming {
+                "turn to face forward, then press aim again"
+            } else {
+                "aim sets heading 0 · colour key cycles the main LED"
+            },
+            theme::dim(),
+        )));
+    }
+    frame.render_widget(Paragraph::new(lines), inner);
+}
