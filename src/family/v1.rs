@@ -135,7 +135,16 @@ impl Codec for V1Codec {
                     packet: Packet::V1(v1::Packet::Response(r)),
                 },
                 Ok(v1::Packet::Async(a)) => {
+                    // Fix: sensor data that arrives before this connection has written Set
+                    // Data Streaming (the droid keeps streaming across a reconnect until the
+                    // setup reconfigures it), or after streaming was turned off, cannot be
+                    // laid out. It used to be reported as a malformed notification, so every
+                    // reconnect to a streaming droid counted errors. It is now read as no
+                    // samples (the packet is still logged, raw).
+                    let unknown_layout =
+                        a.id_code == v1::catalog::id::SENSOR_DATA && !self.streaming.is_streaming();
                     let notifications = match v1::decode_async(&a, &self.streaming) {
+                        _ if unknown_layout => Vec::new(),
                         Ok(ns) => ns.into_iter().map(Ok).collect(),
                         Err(e) => vec![Err(e)],
                     };
@@ -151,7 +160,12 @@ impl Codec for V1Codec {
 
     fn explain(&self, p: &Packet, request: Option<&Command>) -> Explained {
         match p {
-            Packet::V1(p) => explain(p, Some(&self.streaming), request),
+            // Without a layout, sensor data is shown as its raw values.
+            Packet::V1(p) => explain(
+                p,
+                self.streaming.is_streaming().then_some(&self.streaming),
+                request,
+            ),
             other => super::explain_foreign(other),
         }
     }

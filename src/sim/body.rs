@@ -202,9 +202,18 @@ impl Body {
 
     /// The current facing becomes heading 0 (v2 Reset Yaw, v1 Set Heading 0).
     pub fn reset_yaw(&mut self) {
-        self.state.yaw_deg = 0.0;
+        self.set_heading(0.0);
+    }
+
+    /// The current facing becomes heading `deg` (v1 Set Heading). The droid does not move:
+    /// a drive in progress now holds this facing. (Fix: v1 Set Heading used to reset the yaw
+    /// to 0 and then overwrite the yaw alone, leaving the drive aiming at 0, so after Set
+    /// Heading 45 the droid turned itself back by 45°.)
+    pub fn set_heading(&mut self, deg: f32) {
+        let deg = wrap360(deg);
+        self.state.yaw_deg = deg;
         if let Some(dr) = &mut self.drive {
-            dr.facing = 0.0;
+            dr.facing = deg;
         }
     }
 

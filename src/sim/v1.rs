@@ -227,8 +227,7 @@ impl SimDroidV1 {
                 if h > 359 {
                     return (Mrsp::from_byte(0x07), vec![]);
                 }
-                self.body.reset_yaw();
-                self.body.state.yaw_deg = h as f32;
+                self.body.set_heading(h as f32);
                 ok
             }
             (0x02, 0x02) => {
