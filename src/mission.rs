@@ -57,6 +57,16 @@ pub struct Sample {
     pub stance: String,
     pub battery_v: Option<f32>,
     pub collisions: u32,
+    /// Robi 42's wheel speeds, rad/s (absent for other droids).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub motor_left_rad_s: Option<f32>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub motor_right_rad_s: Option<f32>,
+    /// Robi 42's frames received and lost so far.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub frames: Option<u64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub lost_frames: Option<u64>,
 }
 
 /// The end of a mission (`--json` prints it with `"done": true`).
@@ -109,6 +119,11 @@ pub fn validate(model: Model, steps: &[Step]) -> Result<(), Vec<crate::script::S
         .iter()
         .filter_map(|s| {
             let problem = match &s.action {
+                // A steering robot (Robi 42) only drives, stops and waits.
+                Action::Drive { .. } | Action::Stop | Action::Wait(_) => None,
+                _ if family.steers() => {
+                    Some(format!("{name} only takes drive, stop and wait lines"))
+                }
                 Action::Stance(_) if !model.has_legs() => Some(format!("{name} has no legs")),
                 Action::Head(_) if !model.has_dome() => Some(format!("{name} has no dome to turn")),
                 Action::Animation(_) if family.animation(0).is_none() => {
@@ -177,7 +192,17 @@ impl Runner {
         });
     }
 
+    /// The drive for a script's `drive SPEED HEADING`. On a steering robot (Robi 42) the
+    /// heading is read as a turn relative to straight ahead: 0 straight, 1..=180 to the right
+    /// (90 or more is full lock), 359..=180 to the left.
     fn drive_cmd(&self, speed: u8, heading: Heading) -> Command {
+        if self.family.steers() {
+            let d = heading.degrees() as f32;
+            let signed = if d > 180.0 { d - 360.0 } else { d };
+            if let Some(c) = self.family.steer(speed, (signed / 90.0).clamp(-1.0, 1.0)) {
+                return c;
+            }
+        }
         self.family.drive(speed, heading, false)
     }
 
@@ -349,6 +374,14 @@ fn sample_of(t: &Telemetry, t_ms: u64) -> Sample {
         stance: t.stance.label(),
         battery_v: t.battery_v,
         collisions: t.collisions,
+        motor_left_rad_s: t.robi.as_ref().and_then(|r| r.motors).map(|m| m.left_rad_s),
+        motor_right_rad_s: t
+            .robi
+            .as_ref()
+            .and_then(|r| r.motors)
+            .map(|m| m.right_rad_s),
+        frames: t.robi.as_ref().map(|r| r.frames),
+        lost_frames: t.robi.as_ref().map(|r| r.lost),
     }
 }
 

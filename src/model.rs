@@ -84,6 +84,12 @@ impl Model {
 
     pub fn from_id(id: &str) -> Option<Model> {
         let id = id.trim().to_ascii_lowercase().replace(['-', '_', ' '], "");
+        // Short forms people type.
+        let id = match id.as_str() {
+            "robi" => "robi42".to_string(),
+            "sprkplus" | "sprk+" => "sprk".to_string(),
+            _ => id,
+        };
         Model::ALL.into_iter().find(|m| {
             m.id() == id
                 || m.display_name()
@@ -116,9 +122,15 @@ impl Model {
         matches!(self, Model::R2D2 | Model::R2Q5)
     }
 
+    /// Reports its state as RSRCP frames (motor speeds, poti, buttons, lamps, piezo) rather
+    /// than Sphero sensor streaming.
+    pub fn reports_state_frames(self) -> bool {
+        self.protocol() == Protocol::Rsrcp
+    }
+
     /// Whether this build can drive the model (its protocol family is implemented).
     pub fn drivable(self) -> bool {
-        matches!(self.protocol(), Protocol::SpheroV2 | Protocol::SpheroV1)
+        true
     }
 
     /// A rolling droid with an aim mode (back light, turn in place, set heading 0): BB-8,
@@ -159,6 +171,9 @@ mod tests {
         assert_eq!(Model::from_id("R2-Q5"), Some(Model::R2Q5));
         assert_eq!(Model::from_id("bb9e"), Some(Model::BB9E));
         assert_eq!(Model::from_id("c3po"), None);
+        assert_eq!(Model::from_id("robi"), Some(Model::Robi42));
+        assert_eq!(Model::from_id("Robi 42"), Some(Model::Robi42));
+        assert_eq!(Model::from_id("sprk+"), Some(Model::SprkPlus));
         assert_eq!(Model::R2D2.write_pacing(), Duration::from_millis(120));
     }
 }

@@ -2,6 +2,7 @@
 //! samples of `droidctl run --json` both read this.
 
 use crate::protocol::notify::{Collision, Notification};
+use crate::protocol::rsrcp;
 use crate::protocol::wire::{LegAction, LegState};
 use crate::units::Heading;
 use std::collections::VecDeque;
@@ -52,6 +53,78 @@ impl Stance {
     }
 }
 
+/// Robi 42's wheel radius and track (distance between the wheels), for odometry from its
+/// motor speeds. *Unverified* estimates for the small school robot (no source gives them);
+/// the simulator uses the same figures, so simulated odometry is exact.
+pub const ROBI_WHEEL_RADIUS_CM: f32 = 3.0;
+pub const ROBI_TRACK_CM: f32 = 10.0;
+/// A gap longer than this between frames is not integrated (the robot's motion during a
+/// dropout is unknown).
+const ODOMETRY_MAX_STEP: Duration = Duration::from_millis(500);
+
+/// How many frames the Robi panels keep for the measured rate and the motor history.
+pub const ROBI_RATE_WINDOW: usize = 50;
+pub const ROBI_HISTORY: usize = 120;
+
+/// What a Robi 42 reports, folded from its RSRCP frames. A frame carries only the features
+/// its EFS enables, so each value keeps its last report.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct RobiTelemetry {
+    /// Version and the frame interval the robot announces (MSDT).
+    pub handshake: Option<rsrcp::Handshake>,
+    pub frame_id: Option<u32>,
+    pub motors: Option<rsrcp::Motors>,
+    pub poti: Option<u8>,
+    pub buttons: Option<rsrcp::Buttons>,
+    pub leds: Option<rsrcp::Leds>,
+    pub piezo: Option<rsrcp::Piezo>,
+    pub frames: u64,
+    /// Frames missing from the id sequence (ids are modulo 2^24).
+    pub lost: u64,
+    /// Arrival times of the last frames, for the measured rate.
+    arrivals: VecDeque<Duration>,
+    /// Recent motor speeds (left, right), oldest first.
+    pub history: VecDeque<(f32, f32)>,
+}
+
+impl RobiTelemetry {
+    fn frame(&mut self, f: &rsrcp::Frame, at: Duration) {
+        if let Some(prev) = self.frame_id {
+            self.lost += rsrcp::frame_gap(prev, f.frame_id) as u64;
+        }
+        self.frame_id = Some(f.frame_id);
+        self.frames += 1;
+        if let Some(m) = f.motors {
+            self.motors = Some(m);
+            if self.history.len() >= ROBI_HISTORY {
+                self.history.pop_front();
+            }
+            self.history.push_back((m.left_rad_s, m.right_rad_s));
+        }
+        self.poti = f.poti.or(self.poti);
+        self.buttons = f.buttons.or(self.buttons);
+        self.leds = f.leds.or(self.leds);
+        self.piezo = f.piezo.or(self.piezo);
+        if self.arrivals.len() >= ROBI_RATE_WINDOW {
+            self.arrivals.pop_front();
+        }
+        self.arrivals.push_back(at);
+    }
+
+    /// Frames per second as measured over the recent window.
+    pub fn measured_fps(&self) -> Option<f32> {
+        let (first, last) = (self.arrivals.front()?, self.arrivals.back()?);
+        let span = last.saturating_sub(*first).as_secs_f32();
+        (self.arrivals.len() >= 2 && span > 0.0).then(|| (self.arrivals.len() - 1) as f32 / span)
+    }
+
+    /// Frames per second the handshake's MSDT promises.
+    pub fn announced_fps(&self) -> Option<f32> {
+        let ms = self.handshake?.msdt_ms;
+        (ms > 0).then(|| 1000.0 / ms as f32)
+    }
+}
+
 /// The last collision and when it happened.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CollisionSeen {
@@ -82,6 +155,8 @@ pub struct Telemetry {
     pub will_sleep: bool,
     pub asleep: bool,
     pub animations_completed: u32,
+    /// Robi 42's state (`None` for other droids).
+    pub robi: Option<RobiTelemetry>,
 }
 
 impl Default for Telemetry {
@@ -106,6 +181,7 @@ impl Default for Telemetry {
             will_sleep: false,
             asleep: false,
             animations_completed: 0,
+            robi: None,
         }
     }
 }
@@ -157,12 +233,65 @@ impl Telemetry {
             // v1: 1 charging, 2 OK, 3 low, 4 critical → the v2 scale 1 ok, 2 low, 3 critical.
             Notification::PowerState(s @ 2..=4) => self.battery_voltage_state = Some(s - 1),
             Notification::PowerState(_) => {}
+            Notification::RobiHandshake(h) => {
+                self.robi.get_or_insert_with(Default::default).handshake = Some(*h)
+            }
+            Notification::RobiFrame(f) => {
+                self.samples += 1;
+                let robi = self.robi.get_or_insert_with(Default::default);
+                let prev = robi.arrivals.back().copied();
+                let before = robi.motors;
+                robi.frame(f, at);
+                // Dead reckoning from the wheel speeds the previous frame reported, over the
+                // time until this one.
+                if let (Some(m), Some(prev)) = (before, prev) {
+                    let dt = at.saturating_sub(prev);
+                    if dt <= ODOMETRY_MAX_STEP {
+                        self.odometry(m, dt.as_secs_f32());
+                    }
+                } else if self.x_cm.is_none() {
+                    self.x_cm = Some(0.0);
+                    self.y_cm = Some(0.0);
+                    self.yaw = Some(0.0);
+                }
+            }
             Notification::WillSleep => self.will_sleep = true,
             Notification::DidSleep => {
                 self.asleep = true;
                 self.will_sleep = false;
             }
             _ => {}
+        }
+    }
+
+    /// Integrate differential-drive odometry: heading 0 is +y, 90 is +x (as the locator).
+    fn odometry(&mut self, m: rsrcp::Motors, dt: f32) {
+        let (l, r) = (
+            m.left_rad_s * ROBI_WHEEL_RADIUS_CM,
+            m.right_rad_s * ROBI_WHEEL_RADIUS_CM,
+        );
+        if !(l.is_finite() && r.is_finite()) {
+            return;
+        }
+        let v = (l + r) / 2.0;
+        let yaw = self.yaw.unwrap_or(0.0) + ((l - r) / ROBI_TRACK_CM).to_degrees() * dt;
+        let yaw = (yaw + 180.0).rem_euclid(360.0) - 180.0;
+        let (sx, cy) = (yaw.to_radians().sin(), yaw.to_radians().cos());
+        let x = self.x_cm.unwrap_or(0.0) + sx * v * dt;
+        let y = self.y_cm.unwrap_or(0.0) + cy * v * dt;
+        self.yaw = Some(yaw);
+        self.velocity_cm_s = Some([sx * v, cy * v]);
+        self.x_cm = Some(x);
+        self.y_cm = Some(y);
+        let moved = self
+            .track
+            .back()
+            .is_none_or(|(px, py)| (px - x).abs() > 0.5 || (py - y).abs() > 0.5);
+        if moved {
+            if self.track.len() >= TRACK_LEN {
+                self.track.pop_front();
+            }
+            self.track.push_back((x, y));
         }
     }
 
@@ -239,6 +368,40 @@ mod tests {
         }
         assert_eq!(t.track.len(), TRACK_LEN);
         assert_eq!(t.track.back(), Some(&((TRACK_LEN * 3 - 1) as f32, 0.0)));
+    }
+
+    #[test]
+    fn robi_frames_fill_their_panel_and_count_lost_frames_across_the_wrap() {
+        let mut t = Telemetry::default();
+        t.apply(
+            &Notification::RobiHandshake(rsrcp::Handshake {
+                version: 1,
+                msdt_ms: 10,
+            }),
+            Duration::ZERO,
+        );
+        let frame = |id: u32| rsrcp::Frame::new(id).with_motors(1.0, 0.5).with_poti(9);
+        let ids = [0xFF_FFFE, 0xFF_FFFF, 0, 3, 4];
+        for (i, id) in ids.into_iter().enumerate() {
+            t.apply(
+                &Notification::RobiFrame(frame(id)),
+                Duration::from_millis(100 * i as u64),
+            );
+        }
+        // A frame without motors keeps the last motor reading.
+        t.apply(
+            &Notification::RobiFrame(rsrcp::Frame::new(5).with_poti(200)),
+            Duration::from_millis(500),
+        );
+        let r = t.robi.as_ref().unwrap();
+        assert_eq!(r.frames, 6);
+        assert_eq!(r.lost, 2, "ids 1 and 2 are missing; the wrap loses nothing");
+        assert_eq!(r.poti, Some(200));
+        assert_eq!(r.motors.map(|m| m.left_rad_s), Some(1.0));
+        assert_eq!(r.history.len(), 5);
+        // 10 ms announced, 100 ms measured: they differ on real robots too.
+        assert_eq!(r.announced_fps(), Some(100.0));
+        assert!((r.measured_fps().unwrap() - 10.0).abs() < 1e-3);
     }
 
     #[test]

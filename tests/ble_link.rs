@@ -110,7 +110,9 @@ async fn v1_handshake_is_antidos_txpower_wake_then_subscribe() {
 #[tokio::test(start_paused = true)]
 async fn robi_handshake_reads_then_confirms_then_subscribes() {
     let (_c, droid, mut link) = setup(Model::Robi42);
-    droid.set_read(gatt::ROBI_HANDSHAKE, vec![1, 0, 0, 0x7F, 0x80]);
+    // Version 1, MSDT 10 ms (`droid-facts.md` §5).
+    let handshake = vec![0x7E, 0x01, 0x00, 0x0A, 0x7F];
+    droid.set_read(gatt::ROBI_HANDSHAKE, handshake.clone());
     let mut conn = open(&mut link).await;
     assert_eq!(
         droid.ops(),
@@ -123,10 +125,38 @@ async fn robi_handshake_reads_then_confirms_then_subscribes() {
         ]
     );
     assert_eq!(gatt::ROBI_FRAMES.as_u16(), Some(0x8765));
+    // What the handshake read comes first, so the session learns the announced interval.
+    assert_eq!(conn.events.recv().await, Some(LinkEvent::Data(handshake)));
     droid.notify(gatt::ROBI_FRAMES, &[0x7E, 0x01, 0x7F]);
     assert_eq!(
         conn.events.recv().await,
         Some(LinkEvent::Data(vec![0x7E, 0x01, 0x7F]))
+    );
+    // A write names its destination: the remote control's two characteristics.
+    use droidctl::link::Endpoint;
+    conn.writer
+        .write_to(Endpoint::Velocity, &[200])
+        .await
+        .unwrap();
+    conn.writer
+        .write_to(Endpoint::Steering, &[128])
+        .await
+        .unwrap();
+    assert_eq!(
+        droid
+            .writes_to(gatt::ROBI_VELOCITY)
+            .into_iter()
+            .map(|(_, d)| d)
+            .collect::<Vec<_>>(),
+        [vec![200]]
+    );
+    assert_eq!(
+        droid
+            .writes_to(gatt::ROBI_STEERING)
+            .into_iter()
+            .map(|(_, d)| d)
+            .collect::<Vec<_>>(),
+        [vec![128]]
     );
 }
 

@@ -244,9 +244,19 @@ fn bb9e_rejects_a_stance_line() {
     let ok = dir.file("ok.txt", "wake\ndrive 100 0 for 1s\n");
     let (o, _) = dir.run(&["run", path(&ok), "--sim", "bb9e"]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-    // A model the simulator cannot play is a usage error.
-    let (o, _) = dir.run(&["run", path(&ok), "--sim", "robi42"]);
+    // A model droidctl does not know is a usage error.
+    let (o, _) = dir.run(&["run", path(&ok), "--sim", "c3po"]);
     assert_eq!(o.status.code(), Some(2));
+    // Robi 42 takes only drive, stop and wait: the wake line is refused before anything runs.
+    let (o, _) = dir.run(&["run", path(&ok), "--sim", "robi"]);
+    assert_eq!(o.status.code(), Some(2));
+    let err = stderr(&o);
+    assert!(
+        err.contains("ok.txt:1:")
+            && err.contains("Robi 42")
+            && err.contains("drive, stop and wait"),
+        "{err}"
+    );
 }
 
 #[test]

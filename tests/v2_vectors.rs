@@ -1542,6 +1542,7 @@ fn variant(n: &Notification) -> &'static str {
         Notification::Other { .. } => "Other",
         // Sent by v1 droids only (tests/v1_vectors.rs); a v2 packet never decodes to them.
         Notification::PowerState(_) | Notification::OtherAsync { .. } => "v1 only",
+        Notification::RobiHandshake(_) | Notification::RobiFrame(_) => "RSRCP only",
     }
 }
 

@@ -21,7 +21,7 @@ use tokio::sync::mpsc;
 
 #[derive(Debug, Clone, Default, Args)]
 pub struct DriveArgs {
-    /// Drive a simulated droid in-process: r2d2 (default), r2q5, bb9e, bb8, sprk or ollie.
+    /// Drive a simulated droid in-process: r2d2 (default), r2q5, bb9e, bb8, sprk, ollie or robi.
     #[arg(long, num_args = 0..=1, default_missing_value = "r2d2", value_name = "MODEL")]
     pub sim: Option<String>,
     #[command(flatten)]
@@ -80,7 +80,7 @@ pub fn run(args: DriveArgs) -> Result<i32, CliError> {
         let (link, model, name) = match model {
             Some(m) => {
                 let link: Box<dyn Link> =
-                    Box::new(SimLink::new(m, SimConfig::default(), Faults::none()));
+                    Box::new(SimLink::new(m, SimConfig::for_model(m), Faults::none()));
                 (link, m, format!("{} (simulated)", m.display_name()))
             }
             None => connect_real(&args).await?,

@@ -18,7 +18,7 @@ pub struct RunArgs {
     /// The mission script (see README, "Mission scripts").
     #[arg(value_name = "SCRIPT")]
     pub script: Option<PathBuf>,
-    /// Run against a simulated droid: r2d2 (default), r2q5, bb9e, bb8, sprk or ollie. The mission runs in
+    /// Run against a simulated droid: r2d2 (default), r2q5, bb9e, bb8, sprk, ollie or robi. The mission runs in
     /// simulated time.
     #[arg(long, num_args = 0..=1, default_missing_value = "r2d2", value_name = "MODEL")]
     pub sim: Option<String>,
@@ -98,7 +98,7 @@ pub fn run(args: RunArgs) -> Result<i32, CliError> {
                 .build()
                 .map_err(|e| CliError::failure(format!("cannot start the runtime: {e}")))?;
             rt.block_on(async move {
-                let link = SimLink::new(model, SimConfig::default(), Faults::none());
+                let link = SimLink::new(model, SimConfig::for_model(model), Faults::none());
                 run_on(Box::new(link), model, &steps, opts, json)
                     .await
                     .map_err(CliError::failure)

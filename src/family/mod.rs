@@ -9,11 +9,15 @@
 //!
 //! Everything here is sans-IO: no clocks, no tokio.
 
+pub mod robi;
 pub mod types;
 pub mod v1;
 pub mod v2;
 
-pub use types::{Command, DecodeError, DroidError, Explained, Incoming, Key, Packet, PacketKind};
+pub use types::{
+    Command, DecodeError, DroidError, Explained, Incoming, Key, Packet, PacketKind, RobiControl,
+    RobiPacket,
+};
 
 use crate::model::{Model, Protocol};
 use crate::protocol::wire::LegAction;
@@ -30,6 +34,21 @@ pub trait Codec: Send {
     /// Frame `cmd` with `seq`. `want_response` false asks the droid not to answer.
     /// Also notes what the command changes in the decoding (streaming masks).
     fn encode(&mut self, cmd: &Command, seq: u8, want_response: bool) -> (Vec<u8>, Packet);
+    /// The writes for `cmd`, each to its endpoint (Robi's drive command is a velocity and a
+    /// steering write). Sphero families write the framed packet to the command channel.
+    fn encode_writes(
+        &mut self,
+        cmd: &Command,
+        seq: u8,
+        want_response: bool,
+    ) -> (Vec<(crate::link::Endpoint, Vec<u8>)>, Packet) {
+        let (wire, packet) = self.encode(cmd, seq, want_response);
+        (vec![(crate::link::Endpoint::Api, wire)], packet)
+    }
+    /// Whether the droid answers commands at all (Robi 42 only reports its state).
+    fn answers(&self) -> bool {
+        true
+    }
     /// Bytes from the droid, in any chunking.
     fn feed(&mut self, bytes: &[u8], out: &mut Vec<Incoming>);
     /// Explain a packet for the log; `request` is the command a response answers, when known
@@ -53,6 +72,18 @@ pub trait Family: Sync {
     fn is_drive(&self, cmd: &Command) -> bool;
     /// Speed 0 keeping the heading of `last` (a stop at heading 0 would turn the droid).
     fn stop_after(&self, last: Option<&Command>) -> Command;
+    /// Driven by velocity and steering rather than toward a heading (Robi 42).
+    fn steers(&self) -> bool {
+        false
+    }
+    /// For a steering family: forward at `speed` with `turn` in −1 (left) ..= 1 (right).
+    fn steer(&self, _speed: u8, _turn: f32) -> Option<Command> {
+        None
+    }
+    /// Whether the droid can back up.
+    fn can_reverse(&self) -> bool {
+        true
+    }
     fn head(&self, angle: HeadAngle) -> Option<Command>;
     fn stance(&self, action: LegAction) -> Option<Command>;
     /// Ask the stance, and read the answer.
@@ -80,12 +111,12 @@ pub fn for_model(model: Model) -> &'static dyn Family {
     for_protocol(model.protocol())
 }
 
-/// The family of a protocol. RSRCP is not a command/response family yet: it falls back to
-/// nothing the session can drive, so callers check [`Model::protocol`] first.
+/// The family of a protocol.
 pub fn for_protocol(p: Protocol) -> &'static dyn Family {
     match p {
         Protocol::SpheroV2 => &v2::V2,
-        Protocol::SpheroV1 | Protocol::Rsrcp => &v1::V1,
+        Protocol::SpheroV1 => &v1::V1,
+        Protocol::Rsrcp => &robi::Robi,
     }
 }
 

@@ -4,7 +4,7 @@
 use crate::model::Protocol;
 use crate::protocol::notify::{Notification, NotificationError};
 use crate::protocol::value::Fields;
-use crate::protocol::{v1, v2};
+use crate::protocol::{rsrcp, v1, v2};
 use std::fmt;
 
 /// A command to a droid, in its family's terms.
@@ -12,6 +12,23 @@ use std::fmt;
 pub enum Command {
     V2(v2::Command),
     V1(v1::Command),
+    Robi(RobiControl),
+}
+
+/// Robi 42's remote control: both inputs at once, as the robot's firmware reads them
+/// (`droid-facts.md` §5): velocity 0..=255 = 0..1 forward only, steering 0 full left,
+/// 128 ≈ straight, 255 full right.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct RobiControl {
+    pub velocity: u8,
+    pub steering: u8,
+}
+
+impl RobiControl {
+    pub const STOP: RobiControl = RobiControl {
+        velocity: 0,
+        steering: rsrcp::STEERING_STRAIGHT,
+    };
 }
 
 impl From<v2::Command> for Command {
@@ -31,6 +48,16 @@ impl Command {
         match self {
             Command::V2(_) => Protocol::SpheroV2,
             Command::V1(_) => Protocol::SpheroV1,
+            Command::Robi(_) => Protocol::Rsrcp,
+        }
+    }
+
+    /// A drive command at speed 0 (a stop), in any family: the session writes those first.
+    pub fn is_stop(&self) -> bool {
+        match self {
+            Command::V2(c) => (c.did, c.cid) == (0x16, 0x07) && c.data.first() == Some(&0),
+            Command::V1(c) => (c.did, c.cid) == (0x02, 0x30) && c.data.first() == Some(&0),
+            Command::Robi(c) => c.velocity == 0,
         }
     }
 
@@ -45,27 +72,34 @@ impl Command {
                 .def()
                 .map(|d| d.name.clone())
                 .unwrap_or_else(|| format!("0x{:02X}/0x{:02X}", c.did, c.cid)),
+            Command::Robi(_) => "remote-control".into(),
         }
     }
 
+    /// The device id (0 for Robi, which has none).
     pub fn did(&self) -> u8 {
         match self {
             Command::V2(c) => c.did,
             Command::V1(c) => c.did,
+            Command::Robi(_) => 0,
         }
     }
 
+    /// The command id (0 for Robi, which has none).
     pub fn cid(&self) -> u8 {
         match self {
             Command::V2(c) => c.cid,
             Command::V1(c) => c.cid,
+            Command::Robi(_) => 0,
         }
     }
 
-    pub fn data(&self) -> &[u8] {
+    /// The payload (Robi: the velocity and steering bytes).
+    pub fn data(&self) -> std::borrow::Cow<'_, [u8]> {
         match self {
-            Command::V2(c) => &c.data,
-            Command::V1(c) => &c.data,
+            Command::V2(c) => (&c.data[..]).into(),
+            Command::V1(c) => (&c.data[..]).into(),
+            Command::Robi(c) => vec![c.velocity, c.steering].into(),
         }
     }
 
@@ -89,6 +123,15 @@ impl Command {
 pub enum Packet {
     V2(v2::Packet),
     V1(v1::Packet),
+    /// What went to or came from a Robi 42.
+    Robi(RobiPacket),
+}
+
+/// Robi 42 traffic: remote-control writes out, handshake and frames in.
+#[derive(Debug, Clone, PartialEq)]
+pub enum RobiPacket {
+    Control(RobiControl),
+    Item(rsrcp::Item),
 }
 
 impl Packet {
@@ -98,6 +141,9 @@ impl Packet {
             Packet::V2(p) => p.encode(),
             // A decoded or catalogue-built v1 packet always fits its DLEN.
             Packet::V1(p) => p.encode().unwrap_or_default(),
+            Packet::Robi(RobiPacket::Control(c)) => vec![c.velocity, c.steering],
+            Packet::Robi(RobiPacket::Item(rsrcp::Item::Handshake(h))) => h.encode().to_vec(),
+            Packet::Robi(RobiPacket::Item(rsrcp::Item::Frame(f))) => f.encode(),
         }
     }
 
@@ -120,6 +166,7 @@ impl Packet {
         match self {
             Packet::V2(p) => &p.data,
             Packet::V1(p) => p.data(),
+            Packet::Robi(_) => &[],
         }
     }
 }
@@ -129,6 +176,7 @@ impl Packet {
 pub enum DecodeError {
     V2(v2::DecodeError),
     V1(v1::DecodeError),
+    Rsrcp(rsrcp::FrameError),
 }
 
 impl DecodeError {
@@ -137,6 +185,7 @@ impl DecodeError {
         match self {
             DecodeError::V2(e) => e.kind.name(),
             DecodeError::V1(e) => e.kind.name(),
+            DecodeError::Rsrcp(e) => e.kind.name(),
         }
     }
 
@@ -144,6 +193,7 @@ impl DecodeError {
         match self {
             DecodeError::V2(e) => e.offset,
             DecodeError::V1(e) => e.offset,
+            DecodeError::Rsrcp(e) => e.offset,
         }
     }
 
@@ -151,6 +201,7 @@ impl DecodeError {
         match self {
             DecodeError::V2(e) => &e.detail,
             DecodeError::V1(e) => &e.detail,
+            DecodeError::Rsrcp(e) => &e.detail,
         }
     }
 }
@@ -160,6 +211,7 @@ impl fmt::Display for DecodeError {
         match self {
             DecodeError::V2(e) => e.fmt(f),
             DecodeError::V1(e) => e.fmt(f),
+            DecodeError::Rsrcp(e) => e.fmt(f),
         }
     }
 }

@@ -128,6 +128,8 @@ pub struct GattProfile {
     pub service: GattUuid,
     /// Where commands are written.
     pub write: CharRef,
+    /// Other inputs written by endpoint (Robi 42's remote control).
+    pub inputs: Vec<(crate::link::Endpoint, CharRef)>,
     /// Subscribed after the handshake; their values form the incoming byte stream.
     pub notify: Vec<CharRef>,
     /// Run in order after service discovery and before subscribing.
@@ -188,6 +190,7 @@ impl GattProfile {
                     service: V2_SERVICE,
                     write: api,
                     notify: vec![api],
+                    inputs: Vec::new(),
                     handshake: vec![HandshakeStep::Write {
                         ch: CharRef::any_service(V2_ANTI_DOS),
                         bytes: V2_UNLOCK.to_vec(),
@@ -211,6 +214,7 @@ impl GattProfile {
                 GattProfile {
                     service: V1_CONTROL_SERVICE,
                     write: CharRef::new(V1_CONTROL_SERVICE, V1_COMMANDS),
+                    inputs: Vec::new(),
                     notify: vec![CharRef::new(V1_CONTROL_SERVICE, V1_RESPONSES)],
                     handshake,
                     chunk_size: ATT_PAYLOAD,
@@ -223,6 +227,16 @@ impl GattProfile {
                 // The RSRC service has no command channel; the remote-control characteristics
                 // (velocity, steering) take one byte each and are the only things we write.
                 write: CharRef::new(ROBI_RC_SERVICE, ROBI_VELOCITY),
+                inputs: vec![
+                    (
+                        crate::link::Endpoint::Velocity,
+                        CharRef::new(ROBI_RC_SERVICE, ROBI_VELOCITY),
+                    ),
+                    (
+                        crate::link::Endpoint::Steering,
+                        CharRef::new(ROBI_RC_SERVICE, ROBI_STEERING),
+                    ),
+                ],
                 notify: vec![CharRef::new(ROBI_RSRC_SERVICE, ROBI_FRAMES)],
                 handshake: vec![
                     HandshakeStep::Read {
@@ -241,9 +255,22 @@ impl GattProfile {
         }
     }
 
+    /// The characteristic behind an endpoint.
+    pub fn endpoint(&self, to: crate::link::Endpoint) -> Option<CharRef> {
+        match to {
+            crate::link::Endpoint::Api => Some(self.write),
+            other => self
+                .inputs
+                .iter()
+                .find(|(e, _)| *e == other)
+                .map(|(_, c)| *c),
+        }
+    }
+
     /// Every characteristic the profile touches, for checking them after discovery.
     pub fn characteristics(&self) -> Vec<CharRef> {
         let mut all = vec![self.write];
+        all.extend(self.inputs.iter().map(|(_, c)| *c));
         all.extend(self.notify.iter().copied());
         all.extend(self.handshake.iter().map(HandshakeStep::ch));
         all.dedup();

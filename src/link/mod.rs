@@ -53,10 +53,50 @@ pub enum LinkEvent {
     Disconnected(String),
 }
 
+/// Where a write goes. Sphero droids take everything on one command channel; Robi 42 is
+/// driven through two one-byte remote-control inputs beside its (read-only) state frames.
+/// The droid's GATT profile maps each endpoint to a characteristic.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Endpoint {
+    /// The command channel (Sphero API v1/v2).
+    Api,
+    /// Robi 42 remote control: velocity, 0..=255 = 0..1, forward only.
+    Velocity,
+    /// Robi 42 remote control: steering, 0..=255, 128 ≈ straight.
+    Steering,
+}
+
+impl Endpoint {
+    pub fn name(self) -> &'static str {
+        match self {
+            Endpoint::Api => "api",
+            Endpoint::Velocity => "velocity",
+            Endpoint::Steering => "steering",
+        }
+    }
+}
+
 /// The writing half of an open connection.
 pub trait LinkWriter: Send {
-    /// Write one chunk (at most the link's chunk size, 20 bytes for BLE).
+    /// Write one chunk to the command channel (at most the link's chunk size, 20 bytes for
+    /// BLE).
     fn write<'a>(&'a mut self, chunk: &'a [u8]) -> BoxFuture<'a, Result<(), LinkError>>;
+    /// Write one chunk to `to`. Links with only a command channel need not override this.
+    fn write_to<'a>(
+        &'a mut self,
+        to: Endpoint,
+        chunk: &'a [u8],
+    ) -> BoxFuture<'a, Result<(), LinkError>> {
+        match to {
+            Endpoint::Api => self.write(chunk),
+            other => Box::pin(async move {
+                Err(LinkError::fatal(format!(
+                    "this link has no {} input",
+                    other.name()
+                )))
+            }),
+        }
+    }
     /// Close the connection (best effort).
     fn close(&mut self) -> BoxFuture<'_, ()>;
 }

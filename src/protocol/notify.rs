@@ -70,6 +70,10 @@ pub enum Notification {
     HeadResetToZero,
     /// v1 power notification (async ID 01): 1 charging, 2 OK, 3 low, 4 critical.
     PowerState(u8),
+    /// Robi 42's handshake: protocol version and the frame interval it announces.
+    RobiHandshake(super::rsrcp::Handshake),
+    /// A Robi 42 state frame.
+    RobiFrame(super::rsrcp::Frame),
     /// Any other v1 async message, bytes kept.
     OtherAsync {
         id_code: u8,
@@ -105,6 +109,8 @@ impl Notification {
             Notification::AnimationComplete => "animation-complete",
             Notification::HeadResetToZero => "head-reset-to-zero",
             Notification::PowerState(_) => "power-state",
+            Notification::RobiHandshake(_) => "rsrcp-handshake",
+            Notification::RobiFrame(_) => "rsrcp-frame",
             Notification::OtherAsync { .. } | Notification::Other { .. } => "other",
         }
     }

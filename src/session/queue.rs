@@ -151,15 +151,9 @@ impl OutQueue {
     }
 }
 
-/// A drive command whose speed is 0: v2 Drive With Heading and v1 Roll both start with the
-/// speed byte.
+/// A drive command whose speed is 0, in any family.
 pub fn is_stop(c: &Command) -> bool {
-    let drive = matches!(
-        (c.protocol(), c.did(), c.cid()),
-        (crate::model::Protocol::SpheroV2, 0x16, 0x07)
-            | (crate::model::Protocol::SpheroV1, 0x02, 0x30)
-    );
-    drive && c.data().first() == Some(&0)
+    c.is_stop()
 }
 
 #[cfg(test)]

@@ -6,7 +6,7 @@ use super::{
     lock,
 };
 use crate::family::{Codec, Command, Family, Incoming, Key, Packet};
-use crate::link::{Connection, Link, LinkEvent};
+use crate::link::{Connection, Endpoint, Link, LinkEvent};
 use std::collections::{HashMap, VecDeque};
 use std::sync::Arc;
 use std::time::Duration;
@@ -238,21 +238,20 @@ impl Task {
     }
 
     /// Turn the next queued item into wire chunks, registering its pending entry.
-    fn take_next(&mut self, codec: &mut dyn Codec) -> Option<Vec<Vec<u8>>> {
+    fn take_next(&mut self, codec: &mut dyn Codec) -> Option<Vec<(Endpoint, Vec<u8>)>> {
         let next = lock(&self.shared.queue).pop()?;
         let (cmd, reply, want_response, retries) = match next {
             Next::Slot(_, c) => (c, None, true, 0),
             Next::Fifo(q) => (q.cmd, q.reply, q.want_response, q.retries),
         };
+        let want_response = want_response && codec.answers();
         let seq = self.next_seq(codec, &cmd);
-        let (wire, packet) = codec.encode(&cmd, seq, want_response);
+        let (writes, packet) = codec.encode_writes(&cmd, seq, want_response);
         if self.family.is_drive(&cmd) {
             self.last_drive = Some(cmd.clone());
         }
-        let chunks: Vec<Vec<u8>> = wire
-            .chunks(self.cfg.chunk_size.max(1))
-            .map(<[u8]>::to_vec)
-            .collect();
+        let wire_len: usize = writes.iter().map(|(_, w)| w.len()).sum();
+        let chunks = self.chunked(writes);
         if want_response {
             let extra = self.cfg.pacing * (chunks.len().saturating_sub(1) as u32);
             self.pending.insert(
@@ -271,10 +270,22 @@ impl Task {
         {
             let mut st = lock(&self.shared.stats);
             st.sent += 1;
-            st.bytes_out += wire.len() as u64;
+            st.bytes_out += wire_len as u64;
         }
         self.log_packet(codec, Direction::Out, packet, Some(&cmd));
         Some(chunks)
+    }
+
+    /// Cut writes into link-sized chunks, each tagged with its endpoint.
+    fn chunked(&self, writes: Vec<(Endpoint, Vec<u8>)>) -> Vec<(Endpoint, Vec<u8>)> {
+        writes
+            .into_iter()
+            .flat_map(|(to, w)| {
+                w.chunks(self.cfg.chunk_size.max(1))
+                    .map(|c| (to, c.to_vec()))
+                    .collect::<Vec<_>>()
+            })
+            .collect()
     }
 
     fn log_packet(
@@ -395,7 +406,7 @@ impl Task {
 
     async fn connected(&mut self, mut conn: Connection) -> Ended {
         let mut codec = self.family.codec();
-        let mut chunks: VecDeque<Vec<u8>> = VecDeque::new();
+        let mut chunks: VecDeque<(Endpoint, Vec<u8>)> = VecDeque::new();
         let mut next_write = Instant::now();
         loop {
             let last = lock(&self.shared.shutdown).take();
@@ -425,8 +436,8 @@ impl Task {
                     if chunks.is_empty() {
                         chunks.extend(self.take_next(&mut *codec).into_iter().flatten());
                     }
-                    if let Some(chunk) = chunks.pop_front() {
-                        if let Err(e) = conn.writer.write(&chunk).await {
+                    if let Some((to, chunk)) = chunks.pop_front() {
+                        if let Err(e) = conn.writer.write_to(to, &chunk).await {
                             conn.writer.close().await;
                             return Ended::LinkLost(format!("write failed: {e}"));
                         }
@@ -444,10 +455,10 @@ impl Task {
         &mut self,
         codec: &mut dyn Codec,
         conn: &mut Connection,
-        chunks: VecDeque<Vec<u8>>,
+        chunks: VecDeque<(Endpoint, Vec<u8>)>,
         mut last: Vec<Command>,
     ) {
-        let mut wire: Vec<Vec<u8>> = chunks.into_iter().collect();
+        let mut wire: Vec<(Endpoint, Vec<u8>)> = chunks.into_iter().collect();
         if self
             .shared
             .stop_on_shutdown
@@ -456,22 +467,22 @@ impl Task {
             last.insert(0, self.stop_command());
         }
         for cmd in last {
-            tracing::info!(command = %cmd.name(), data = %crate::hex::spaced(cmd.data()), "final command");
+            tracing::info!(command = %cmd.name(), data = %crate::hex::spaced(&cmd.data()), "final command");
             let seq = self.next_seq(codec, &cmd);
             // Nobody will wait for these responses.
-            let (bytes, packet) = codec.encode(&cmd, seq, false);
-            wire.extend(bytes.chunks(self.cfg.chunk_size.max(1)).map(<[u8]>::to_vec));
+            let (writes, packet) = codec.encode_writes(&cmd, seq, false);
+            wire.extend(self.chunked(writes));
             lock(&self.shared.stats).sent += 1;
             self.log_packet(codec, Direction::Out, packet, Some(&cmd));
         }
         let writer = &mut conn.writer;
         let pacing = self.cfg.pacing;
         let _ = timeout(SHUTDOWN_BUDGET, async {
-            for (i, chunk) in wire.iter().enumerate() {
+            for (i, (to, chunk)) in wire.iter().enumerate() {
                 if i > 0 {
                     sleep(pacing).await;
                 }
-                if writer.write(chunk).await.is_err() {
+                if writer.write_to(*to, chunk).await.is_err() {
                     break;
                 }
             }

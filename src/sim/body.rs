@@ -75,6 +75,9 @@ pub struct Body {
     now: Duration,
     pub(super) state: SimState,
     drive: Option<Drive>,
+    /// Differential drive (Robi 42): left and right wheel, 0..=1 of top speed. Replaces
+    /// `drive` while set; there is no motion timeout (the robot holds its last command).
+    wheels: Option<(f32, f32)>,
     head_target: f32,
     transition: Option<Transition>,
     last_activity: Duration,
@@ -127,6 +130,7 @@ impl Body {
             },
             cfg,
             drive: None,
+            wheels: None,
             head_target: 0.0,
             transition: None,
             last_activity: Duration::ZERO,
@@ -198,6 +202,30 @@ impl Body {
             backward,
             at: self.now,
         });
+    }
+
+    /// Differential drive: each wheel at `left`/`right` (0..=1) of top speed.
+    pub fn drive_wheels(&mut self, left: f32, right: f32) {
+        let c = |v: f32| {
+            if v.is_finite() {
+                v.clamp(0.0, 1.0)
+            } else {
+                0.0
+            }
+        };
+        self.drive = None;
+        self.wheels = Some((c(left), c(right)));
+    }
+
+    /// Each wheel's commanded speed in rad/s (Robi's motor report).
+    pub fn wheel_rad_s(&self) -> (f32, f32) {
+        let (l, r) = if self.state.awake {
+            self.wheels.unwrap_or((0.0, 0.0))
+        } else {
+            (0.0, 0.0)
+        };
+        let k = self.cfg.top_speed_cm_s / self.cfg.wheel_radius_cm.max(0.1);
+        (l * k, r * k)
     }
 
     /// The current facing becomes heading 0 (v2 Reset Yaw, v1 Set Heading 0).
@@ -399,8 +427,18 @@ impl Body {
             d.speed = 0.0;
         }
         let rolling = self.can_roll() && self.state.awake;
-        let (target_speed, target_facing, backward) = match self.drive {
-            Some(d) if rolling => (d.speed, d.facing, d.backward),
+        let (target_speed, target_facing, backward) = match (self.wheels, self.drive) {
+            // Differential drive: the wheel difference turns the body at (l − r)·v / track.
+            (Some((l, r)), _) if rolling => {
+                let top = self.cfg.top_speed_cm_s;
+                let rate = (l - r) * top / self.cfg.track_cm.max(0.1) * 57.29578;
+                (
+                    (l + r) / 2.0 * top,
+                    wrap360(self.state.yaw_deg + rate * dt),
+                    false,
+                )
+            }
+            (_, Some(d)) if rolling => (d.speed, d.facing, d.backward),
             _ => (0.0, self.state.yaw_deg, self.state.velocity_cm_s < 0.0),
         };
         // Turn toward the commanded facing at a finite rate.

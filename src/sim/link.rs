@@ -2,7 +2,7 @@
 //! droid's bytes in pieces of at most 20 bytes, with the configured faults, on tokio time.
 
 use super::{Faults, SimConfig, SimState, WireDroid, wire_droid};
-use crate::link::{Connection, Link, LinkError, LinkEvent, LinkWriter};
+use crate::link::{Connection, Endpoint, Link, LinkError, LinkEvent, LinkWriter};
 use crate::model::Model;
 use crate::rng::Rng;
 use futures_util::future::BoxFuture;
@@ -96,17 +96,25 @@ impl SimLink {
 }
 
 struct SimWriter {
-    tx: Option<mpsc::Sender<Vec<u8>>>,
+    tx: Option<mpsc::Sender<(Endpoint, Vec<u8>)>>,
 }
 
 impl LinkWriter for SimWriter {
     fn write<'a>(&'a mut self, chunk: &'a [u8]) -> BoxFuture<'a, Result<(), LinkError>> {
+        self.write_to(Endpoint::Api, chunk)
+    }
+
+    fn write_to<'a>(
+        &'a mut self,
+        to: Endpoint,
+        chunk: &'a [u8],
+    ) -> BoxFuture<'a, Result<(), LinkError>> {
         Box::pin(async move {
             let tx = self
                 .tx
                 .as_ref()
                 .ok_or_else(|| LinkError::transient("the simulated link is closed"))?;
-            tx.send(chunk.to_vec())
+            tx.send((to, chunk.to_vec()))
                 .await
                 .map_err(|_| LinkError::transient("the simulated droid disconnected"))
         })
@@ -144,6 +152,15 @@ impl Link for SimLink {
             }
             let (write_tx, write_rx) = mpsc::channel(64);
             let (event_tx, event_rx) = mpsc::channel(1024);
+            // What the host reads while connecting (Robi's handshake) comes first.
+            let read = {
+                let mut s = lock(&self.shared);
+                let now = Instant::now().duration_since(self.epoch);
+                s.droid.connect(now)
+            };
+            for v in read {
+                let _ = event_tx.try_send(LinkEvent::Data(v));
+            }
             let pump = Pump {
                 shared: self.shared.clone(),
                 faults: self.faults.clone(),
@@ -173,7 +190,7 @@ struct Pump {
     faults: Arc<Faults>,
     epoch: Instant,
     step: Duration,
-    inbound: VecDeque<(Instant, Vec<u8>)>,
+    inbound: VecDeque<(Instant, Endpoint, Vec<u8>)>,
     outbound: VecDeque<(Instant, Vec<u8>)>,
     last_in: Instant,
     last_out: Instant,
@@ -192,7 +209,17 @@ impl Pump {
         let now = Instant::now();
         let bytes = packets.concat();
         let bytes = self.faults.mangle(&mut s.rng, &bytes);
-        let pieces = if self.faults.split {
+        let pieces = if s.droid.whole_notifications() {
+            // One notification per packet, never cut (RSRCP over BLE).
+            let mut out = Vec::new();
+            let mut rest = bytes.as_slice();
+            for p in &packets {
+                let len = p.len().min(rest.len());
+                out.push(rest[..len].to_vec());
+                rest = &rest[len..];
+            }
+            out
+        } else if self.faults.split {
             self.faults.pieces(&mut s.rng, &bytes, NOTIFY_MAX)
         } else {
             // One notification per packet, each cut at 20 bytes.
@@ -223,11 +250,15 @@ impl Pump {
             .map(|d| self.epoch + *d)
     }
 
-    async fn run(mut self, mut writes: mpsc::Receiver<Vec<u8>>, events: mpsc::Sender<LinkEvent>) {
+    async fn run(
+        mut self,
+        mut writes: mpsc::Receiver<(Endpoint, Vec<u8>)>,
+        events: mpsc::Sender<LinkEvent>,
+    ) {
         let mut next_tick = Instant::now() + self.step;
         let reason = loop {
             let disconnect = self.next_disconnect();
-            let next_in = self.inbound.front().map(|(t, _)| *t);
+            let next_in = self.inbound.front().map(|(t, _, _)| *t);
             let next_out = self.outbound.front().map(|(t, _)| *t);
             tokio::select! {
                 biased;
@@ -236,31 +267,31 @@ impl Pump {
                     break Some("simulated link loss".to_string());
                 }
                 w = writes.recv() => match w {
-                    Some(bytes) => {
+                    Some((to, bytes)) => {
                         let mut s = lock(&self.shared);
                         let bytes = self.faults.mangle(&mut s.rng, &bytes);
                         let at = (Instant::now() + self.faults.delay(&mut s.rng)).max(self.last_in);
                         drop(s);
                         self.last_in = at;
-                        self.inbound.push_back((at, bytes));
+                        self.inbound.push_back((at, to, bytes));
                     }
                     None => {
                         // The host closed the link: what it wrote before still reaches the
                         // droid (a final stop must not be lost).
                         let now = self.sim_time();
                         let mut s = lock(&self.shared);
-                        for (_, bytes) in self.inbound.drain(..) {
-                            let _ = s.droid.receive(&bytes, now);
+                        for (_, to, bytes) in self.inbound.drain(..) {
+                            let _ = s.droid.receive_at(to, &bytes, now);
                         }
                         break None;
                     }
                 },
                 _ = sleep_until(next_in.unwrap_or_else(Instant::now)), if next_in.is_some() => {
-                    if let Some((_, bytes)) = self.inbound.pop_front() {
+                    if let Some((_, to, bytes)) = self.inbound.pop_front() {
                         let now = self.sim_time();
                         let shared = self.shared.clone();
                         let mut s = lock(&shared);
-                        let out = s.droid.receive(&bytes, now);
+                        let out = s.droid.receive_at(to, &bytes, now);
                         self.deliver(out, &mut s);
                     }
                 }
@@ -280,7 +311,12 @@ impl Pump {
                 }
             }
         };
-        lock(&self.shared).connected = false;
+        {
+            let now = self.sim_time();
+            let mut s = lock(&self.shared);
+            s.connected = false;
+            s.droid.disconnected(now);
+        }
         if let Some(reason) = reason {
             let _ = events.send(LinkEvent::Disconnected(reason)).await;
         }

@@ -64,6 +64,8 @@ pub struct Controller {
     family: &'static dyn Family,
     /// In aim mode: speed is held at 0 while turning rotates the droid.
     aiming: bool,
+    /// "Cannot reverse" was said for the reverse input now held (said once per press).
+    reverse_refused: bool,
     heading: f32,
     cruise: u8,
     turbo: bool,
@@ -80,6 +82,10 @@ pub struct Controller {
 }
 
 const TRIPOD_RETRY: Duration = Duration::from_secs(4);
+
+/// How hard a held turn key steers a steering robot (1 = full lock, which pivots on one
+/// wheel).
+const KEY_STEER: f32 = 0.6;
 
 impl Controller {
     /// A controller for a v2 droid; see [`Controller::with_family`].
@@ -101,6 +107,7 @@ impl Controller {
             cfg,
             family,
             aiming: false,
+            reverse_refused: false,
             heading: 0.0,
             cruise,
             turbo: false,
@@ -251,7 +258,7 @@ impl Controller {
         if !droid.connected {
             self.latched = 0;
         }
-        let (mut speed, reverse, source) = if self.estop || !droid.connected {
+        let (mut speed, mut reverse, source) = if self.estop || !droid.connected {
             (0u8, false, "-")
         } else if self.aiming {
             (0u8, false, "aim")
@@ -278,6 +285,28 @@ impl Controller {
         };
         if self.estop {
             self.latched = 0;
+        }
+        // A steering robot's stick: pulled back asks to reverse.
+        if self.family.steers()
+            && let Some((pad, _)) = inp.pad
+            && pad.heading.to_radians().cos() < -0.5
+        {
+            reverse = true;
+        }
+
+        // Robi cannot back up: hold still and say so, rather than ignore the key.
+        if reverse && !self.family.can_reverse() {
+            speed = 0;
+            reverse = false;
+            self.latched = self.latched.max(0);
+            if !self.reverse_refused {
+                self.reverse_refused = true;
+                out.push(Out::Hint(
+                    "this robot cannot reverse — it only drives forward".into(),
+                ));
+            }
+        } else if !(inp.backward || self.latched < 0) {
+            self.reverse_refused = false;
         }
 
         // R2 rolls only in tripod.
@@ -310,10 +339,26 @@ impl Controller {
 
         // Drive: while moving (heartbeat) and whenever it changes.
         let travel = Heading::wrapped(self.heading as f64);
-        let key = (speed, travel.degrees(), reverse as u8);
-        if droid.connected && ((speed > 0 && heartbeat) || self.last_drive != Some(key)) {
-            self.last_drive = Some(key);
-            out.push(Out::Drive(self.family.drive(speed, travel, reverse)));
+        if self.family.steers() {
+            // Velocity and steering: the turn keys (or the stick's sideways part) steer.
+            let turn = match inp.pad {
+                Some((pad, _)) => pad.heading.to_radians().sin(),
+                None => (inp.right as i8 - inp.left as i8) as f32 * KEY_STEER,
+            };
+            let key = (speed, ((turn + 1.0) * 100.0).round() as u16, 0);
+            if droid.connected
+                && ((speed > 0 && heartbeat) || self.last_drive != Some(key))
+                && let Some(c) = self.family.steer(speed, turn)
+            {
+                self.last_drive = Some(key);
+                out.push(Out::Drive(c));
+            }
+        } else {
+            let key = (speed, travel.degrees(), reverse as u8);
+            if droid.connected && ((speed > 0 && heartbeat) || self.last_drive != Some(key)) {
+                self.last_drive = Some(key);
+                out.push(Out::Drive(self.family.drive(speed, travel, reverse)));
+            }
         }
 
         // Dome: when the target changes by a degree or more.

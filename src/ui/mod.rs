@@ -17,6 +17,7 @@ mod log_pane;
 mod map;
 mod overlay;
 pub mod picker;
+mod robi;
 mod sensors;
 mod status;
 mod text;
@@ -38,16 +39,24 @@ pub fn draw(frame: &mut Frame, state: &AppState) {
     if let Some(r) = p.map {
         map::render(frame, r, &state.telemetry);
     }
-    // The dome's place shows the dome, or the lights on droids without one.
+    // Panels by capability: the dome's place shows the dome, Robi's motors, or the lights;
+    // the sensors' place shows Sphero sensors or Robi's I/O and link quality.
+    let frames = state.model.reports_state_frames();
     if let Some(r) = p.dome {
         if state.model.has_dome() {
             dome::render(frame, r, state);
+        } else if frames {
+            robi::motors(frame, r, state);
         } else {
             leds::render(frame, r, state);
         }
     }
     if let Some(r) = p.sensors {
-        sensors::render(frame, r, &state.telemetry);
+        if frames {
+            robi::io(frame, r, state);
+        } else {
+            sensors::render(frame, r, &state.telemetry);
+        }
     }
     if let Some(r) = p.collisions {
         collisions::render(frame, r, state);

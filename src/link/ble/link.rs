@@ -203,6 +203,9 @@ impl BleLink {
         }
         // Before the handshake and subscribing, so no notification or disconnect is missed.
         let events = self.bounded("listening to", t.op, p.events()).await?;
+        // What the handshake reads is the start of the incoming stream (Robi 42's handshake
+        // announces the protocol version and the frame interval).
+        let mut read_values = Vec::new();
         for step in &self.profile.handshake {
             match step {
                 HandshakeStep::Write { ch, bytes } => {
@@ -219,6 +222,7 @@ impl BleLink {
                             "unexpected handshake read length"
                         );
                     }
+                    read_values.push(v);
                 }
             }
         }
@@ -233,11 +237,15 @@ impl BleLink {
             .iter()
             .map(|c| c.characteristic)
             .collect();
+        for v in read_values.into_iter().filter(|v| !v.is_empty()) {
+            let _ = tx.try_send(LinkEvent::Data(v));
+        }
         tokio::spawn(forward(events, notify, tx));
         Ok(Connection {
             writer: Box::new(BleWriter {
                 peripheral: Some(p.clone()),
                 ch: self.profile.write,
+                inputs: self.profile.inputs.clone(),
                 chunk_size: self.profile.chunk_size.max(1),
                 pacing: self.profile.pacing,
                 with_response: self.profile.write_with_response,
@@ -314,6 +322,7 @@ impl Link for BleLink {
 struct BleWriter {
     peripheral: Option<Arc<dyn BlePeripheral>>,
     ch: CharRef,
+    inputs: Vec<(crate::link::Endpoint, CharRef)>,
     chunk_size: usize,
     pacing: Duration,
     with_response: bool,
@@ -325,6 +334,51 @@ struct BleWriter {
 
 impl LinkWriter for BleWriter {
     fn write<'a>(&'a mut self, chunk: &'a [u8]) -> BoxFuture<'a, Result<(), LinkError>> {
+        let ch = self.ch;
+        self.write_char(ch, chunk)
+    }
+
+    fn write_to<'a>(
+        &'a mut self,
+        to: crate::link::Endpoint,
+        chunk: &'a [u8],
+    ) -> BoxFuture<'a, Result<(), LinkError>> {
+        let ch = match to {
+            crate::link::Endpoint::Api => Some(self.ch),
+            other => self
+                .inputs
+                .iter()
+                .find(|(e, _)| *e == other)
+                .map(|(_, c)| *c),
+        };
+        match ch {
+            Some(ch) => self.write_char(ch, chunk),
+            None => Box::pin(async move {
+                Err(LinkError::fatal(format!(
+                    "{} has no {} input",
+                    self.name,
+                    to.name()
+                )))
+            }),
+        }
+    }
+
+    fn close(&mut self) -> BoxFuture<'_, ()> {
+        Box::pin(async move {
+            if let Some(p) = self.peripheral.take() {
+                let _ = timeout(self.op_timeout, p.disconnect()).await;
+            }
+        })
+    }
+}
+
+impl BleWriter {
+    /// Write to `ch` in chunks, paced; every endpoint shares the one pacing clock.
+    fn write_char<'a>(
+        &'a mut self,
+        ch: CharRef,
+        chunk: &'a [u8],
+    ) -> BoxFuture<'a, Result<(), LinkError>> {
         Box::pin(async move {
             let p = self
                 .peripheral
@@ -334,7 +388,7 @@ impl LinkWriter for BleWriter {
                 if let Some(at) = self.next_write {
                     sleep_until(at).await;
                 }
-                let r = timeout(self.op_timeout, p.write(self.ch, piece, self.with_response)).await;
+                let r = timeout(self.op_timeout, p.write(ch, piece, self.with_response)).await;
                 // Pace from the end of the write: a write with response can take a while, and
                 // the droid needs the gap after it has processed the bytes.
                 self.next_write = Some(Instant::now() + self.pacing);
@@ -351,14 +405,6 @@ impl LinkWriter for BleWriter {
                 }
             }
             Ok(())
-        })
-    }
-
-    fn close(&mut self) -> BoxFuture<'_, ()> {
-        Box::pin(async move {
-            if let Some(p) = self.peripheral.take() {
-                let _ = timeout(self.op_timeout, p.disconnect()).await;
-            }
         })
     }
 }

@@ -1,0 +1,323 @@
+//! Robi 42 behind the family seam: RSRCP state frames in, remote-control writes out.
+//!
+//! Robi is not a command/response droid: it never answers, it reports its state as one
+//! RSRCP frame per BLE notification (`droid-facts.md` §5), and it is driven by writing two
+//! one-byte characteristics, velocity and steering. So its "commands" are
+//! [`RobiControl`]s, written to [`Endpoint::Velocity`] and [`Endpoint::Steering`], and its
+//! capabilities are few: drive forward and steer; no reverse, heading, dome, legs, lights,
+//! sounds or battery reading.
+
+use super::types::{RobiControl, RobiPacket};
+use super::{Codec, Command, Explained, Family, Incoming, Key, Packet, PacketKind};
+use crate::link::Endpoint;
+use crate::model::{Model, Protocol};
+use crate::protocol::notify::Notification;
+use crate::protocol::rsrcp::{self, Item};
+use crate::protocol::value::{Fields, Value};
+use crate::protocol::wire::LegAction;
+use crate::script::Action;
+use crate::setup::SetupOptions;
+use crate::units::{HeadAngle, Heading};
+
+/// The Robi 42 family.
+pub struct Robi;
+
+/// Steering byte for a turn in −1 (full left) ..= 1 (full right); 0 is straight (128).
+pub fn steering_for(turn: f32) -> u8 {
+    let t = if turn.is_finite() {
+        turn.clamp(-1.0, 1.0)
+    } else {
+        0.0
+    };
+    // 128 + t × 127: full left 1, straight 128, full right 255.
+    (rsrcp::STEERING_STRAIGHT as f32 + t * 127.0).round() as u8
+}
+
+/// A Robi connection's codec. Over BLE every notification is exactly one frame (or, first,
+/// the handshake the link read), so each `feed` is decoded as one value, not as a stream.
+#[derive(Default)]
+pub struct RobiCodec;
+
+fn control_of(c: &Command) -> RobiControl {
+    match c {
+        Command::Robi(c) => *c,
+        other => {
+            tracing::error!(command = %other.name(), "a non-Robi command reached the Robi codec");
+            RobiControl::STOP
+        }
+    }
+}
+
+/// Explain Robi traffic for the log.
+pub fn explain(p: &RobiPacket) -> Explained {
+    let (kind, label, fields) = match p {
+        RobiPacket::Control(c) => (
+            PacketKind::Command,
+            "remote-control".to_string(),
+            vec![
+                ("velocity", Value::Int(c.velocity as i64)),
+                ("steering", Value::Int(c.steering as i64)),
+            ] as Fields,
+        ),
+        RobiPacket::Item(Item::Handshake(h)) => (
+            PacketKind::Notification,
+            "handshake".to_string(),
+            h.fields(),
+        ),
+        RobiPacket::Item(Item::Frame(f)) => (
+            PacketKind::Notification,
+            format!("frame {}", f.frame_id),
+            f.fields(),
+        ),
+    };
+    Explained {
+        kind,
+        label,
+        known: true,
+        fields: Some(fields),
+        problem: None,
+        error: None,
+        did: None,
+        seq: None,
+    }
+}
+
+impl Codec for RobiCodec {
+    fn protocol(&self) -> Protocol {
+        Protocol::Rsrcp
+    }
+
+    /// Nothing is ever answered; the key is unused.
+    fn key(&self, _c: &Command, seq: u8) -> Key {
+        (0, 0, seq)
+    }
+
+    fn encode(&mut self, c: &Command, _seq: u8, _want_response: bool) -> (Vec<u8>, Packet) {
+        let c = control_of(c);
+        (
+            vec![c.velocity, c.steering],
+            Packet::Robi(RobiPacket::Control(c)),
+        )
+    }
+
+    /// Velocity first: a stop (velocity 0) takes effect before the steering changes.
+    fn encode_writes(
+        &mut self,
+        c: &Command,
+        _seq: u8,
+        _want_response: bool,
+    ) -> (Vec<(Endpoint, Vec<u8>)>, Packet) {
+        let c = control_of(c);
+        (
+            vec![
+                (Endpoint::Velocity, vec![c.velocity]),
+                (Endpoint::Steering, vec![c.steering]),
+            ],
+            Packet::Robi(RobiPacket::Control(c)),
+        )
+    }
+
+    fn answers(&self) -> bool {
+        false
+    }
+
+    fn feed(&mut self, bytes: &[u8], out: &mut Vec<Incoming>) {
+        // The handshake is 5 bytes ending in EOP where a frame has its EFS high byte; a frame
+        // with 0x7F there would enable the unsized gyro, so the two cannot be confused.
+        let is_handshake = bytes.len() == rsrcp::HANDSHAKE_LEN && bytes[4] == rsrcp::EOP;
+        let item = if is_handshake {
+            rsrcp::decode_handshake(bytes).map(Item::Handshake)
+        } else {
+            rsrcp::decode_frame(bytes).map(Item::Frame)
+        };
+        out.push(match item {
+            Ok(item) => {
+                let n = match &item {
+                    Item::Handshake(h) => Notification::RobiHandshake(*h),
+                    Item::Frame(f) => Notification::RobiFrame(f.clone()),
+                };
+                Incoming::Async {
+                    notifications: vec![Ok(n)],
+                    packet: Packet::Robi(RobiPacket::Item(item)),
+                }
+            }
+            Err(e) => Incoming::Error(super::DecodeError::Rsrcp(e)),
+        });
+    }
+
+    fn explain(&self, p: &Packet, _request: Option<&Command>) -> Explained {
+        match p {
+            Packet::Robi(p) => explain(p),
+            other => super::explain_foreign(other),
+        }
+    }
+}
+
+impl Family for Robi {
+    fn protocol(&self) -> Protocol {
+        Protocol::Rsrcp
+    }
+
+    fn codec(&self) -> Box<dyn Codec> {
+        Box::new(RobiCodec)
+    }
+
+    /// Robi needs no wake; the link's start confirmation starts the frames.
+    fn wake(&self) -> Option<Command> {
+        None
+    }
+
+    /// Robi has no ping; the nearest harmless write is "stand still".
+    fn ping(&self) -> Command {
+        Command::Robi(RobiControl::STOP)
+    }
+
+    fn sleep(&self) -> Option<Command> {
+        None
+    }
+
+    /// Forward at `speed`, straight: Robi has no heading to steer to. The controller uses
+    /// [`Family::steer`] instead; this serves stops and scripts.
+    fn drive(&self, speed: u8, _heading: Heading, reverse: bool) -> Command {
+        Command::Robi(RobiControl {
+            velocity: if reverse { 0 } else { speed },
+            steering: rsrcp::STEERING_STRAIGHT,
+        })
+    }
+
+    fn is_drive(&self, c: &Command) -> bool {
+        matches!(c, Command::Robi(_))
+    }
+
+    /// Velocity 0 and steering straight.
+    fn stop_after(&self, _last: Option<&Command>) -> Command {
+        Command::Robi(RobiControl::STOP)
+    }
+
+    fn steers(&self) -> bool {
+        true
+    }
+
+    fn steer(&self, speed: u8, turn: f32) -> Option<Command> {
+        Some(Command::Robi(RobiControl {
+            velocity: speed,
+            steering: steering_for(turn),
+        }))
+    }
+
+    fn can_reverse(&self) -> bool {
+        false
+    }
+
+    fn head(&self, _angle: HeadAngle) -> Option<Command> {
+        None
+    }
+
+    fn stance(&self, _action: LegAction) -> Option<Command> {
+        None
+    }
+
+    fn get_stance(&self) -> Option<Command> {
+        None
+    }
+
+    fn animation(&self, _id: u16) -> Option<Command> {
+        None
+    }
+
+    fn sound(&self, _id: u16) -> Option<Command> {
+        None
+    }
+
+    fn led(&self, _model: Model, _action: &Action) -> Option<Command> {
+        None
+    }
+
+    fn battery_request(&self) -> Option<Command> {
+        None
+    }
+
+    fn battery_volts(&self, _response: &[u8]) -> Option<f32> {
+        None
+    }
+
+    /// Nothing to set up: the link's handshake (read, start confirmation) is all.
+    fn setup(&self, _model: Model, _opts: &SetupOptions) -> Vec<Command> {
+        Vec::new()
+    }
+
+    fn aim_begin(&self, _model: Model) -> Option<Vec<Command>> {
+        None
+    }
+
+    fn aim_turn(&self, _heading: Heading) -> Command {
+        Command::Robi(RobiControl::STOP)
+    }
+
+    fn aim_end(&self, _model: Model) -> Vec<Command> {
+        Vec::new()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn steering_bytes() {
+        assert_eq!(steering_for(0.0), 128);
+        assert_eq!(steering_for(-1.0), 1);
+        assert_eq!(steering_for(1.0), 255);
+        assert_eq!(steering_for(5.0), 255);
+        assert_eq!(steering_for(f32::NAN), 128);
+    }
+
+    #[test]
+    fn a_drive_is_a_velocity_then_a_steering_write() {
+        let mut c = RobiCodec;
+        let cmd = Robi.steer(200, -0.5).unwrap();
+        let (writes, _) = c.encode_writes(&cmd, 0, true);
+        assert_eq!(
+            writes,
+            [
+                (Endpoint::Velocity, vec![200]),
+                (Endpoint::Steering, vec![65])
+            ]
+        );
+        assert!(!c.answers());
+        assert!(Robi.stop_after(Some(&cmd)).is_stop());
+        assert_eq!(
+            Robi.stop_after(Some(&cmd)),
+            Command::Robi(RobiControl {
+                velocity: 0,
+                steering: 128
+            })
+        );
+    }
+
+    #[test]
+    fn notifications_decode_one_value_each() {
+        let mut c = RobiCodec;
+        let mut out = Vec::new();
+        let hs = rsrcp::Handshake {
+            version: 1,
+            msdt_ms: 10,
+        };
+        c.feed(&hs.encode(), &mut out);
+        let f = rsrcp::Frame::new(0x7E7F7E)
+            .with_motors(1.25, -0.5)
+            .with_poti(0x7E)
+            .with_buttons(rsrcp::Buttons::CENTER);
+        c.feed(&f.encode(), &mut out);
+        c.feed(&[0x7E, 0, 0], &mut out);
+        assert!(matches!(
+            &out[0],
+            Incoming::Async { notifications, .. } if notifications == &[Ok(Notification::RobiHandshake(hs))]
+        ));
+        assert!(matches!(
+            &out[1],
+            Incoming::Async { notifications, .. } if notifications == &[Ok(Notification::RobiFrame(f.clone()))]
+        ));
+        assert!(matches!(&out[2], Incoming::Error(_)));
+    }
+}
