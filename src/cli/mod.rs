@@ -34,7 +34,7 @@ pub struct Cli {
 pub enum Command {
     /// Open the full-screen app and drive (the default without a subcommand).
     Drive(drive::DriveArgs),
-    /// Decode and encode Sphero API v2 packets.
+    /// Decode, encode and list packets: Sphero API v2 and v1, Robi 42 RSRCP.
     #[command(subcommand)]
     Packet(packet::PacketCmd),
     /// Run a mission script against a droid (`--sim` for the simulator, in simulated time).

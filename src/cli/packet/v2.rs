@@ -1,101 +1,16 @@
-//! `droidctl packet`: decode bytes into explained packets, encode catalogue commands.
+//! `droidctl packet` for Sphero API v2: decode, encode, list.
 
-use super::CliError;
-use crate::hex;
-use crate::protocol::v2::catalog::{self, FieldDef};
-use crate::protocol::v2::wire::parse_uint;
-use crate::protocol::v2::{
-    DecodeError, Decoder, Described, Device, Flags, Kind, Packet, StreamingConfig, describe, value,
+use super::{
+    CliError, Output, byte_opt, data_opt, expect_one, io_err, pairs, params_text, unknown_command,
 };
-use clap::Subcommand;
+use crate::hex;
+use crate::protocol::v2::catalog;
+use crate::protocol::v2::{
+    DecodeError, DecodeErrorKind, Decoder, Described, Device, Flags, Kind, Packet, StreamingConfig,
+    describe, value,
+};
 use serde_json::json;
 use std::io::Write;
-
-#[derive(Debug, Subcommand)]
-pub enum PacketCmd {
-    /// Decode hex bytes (spaces, colons and 0x prefixes are fine).
-    Decode {
-        /// The bytes, as one or more hex words.
-        #[arg(required = true, num_args = 1..)]
-        hex: Vec<String>,
-        /// Treat the input as a byte stream holding many packets and garbage.
-        #[arg(long)]
-        stream: bool,
-        /// One JSON object per line.
-        #[arg(long)]
-        json: bool,
-        /// Standard sensor-streaming mask in effect, to name sensor values (e.g. 0x0007E078).
-        #[arg(long, value_name = "MASK")]
-        sensor_mask: Option<String>,
-        /// Extended sensor-streaming mask in effect (e.g. 0x07800000).
-        #[arg(long, value_name = "MASK", requires = "sensor_mask")]
-        ext_mask: Option<String>,
-    },
-    /// Encode a catalogue command as wire bytes: `encode NAME [--param value ...]
-    /// [--seq N] [--tid N] [--sid N] [--no-response]`, or `encode raw --did N --cid N [--data HEX]`.
-    #[command(disable_help_flag = false)]
-    Encode {
-        /// Command name (see `droidctl packet list`), or `raw`.
-        name: String,
-        /// Parameters as `--name value`, plus --seq, --tid, --sid, --no-response.
-        #[arg(
-            trailing_var_arg = true,
-            allow_hyphen_values = true,
-            value_name = "ARGS"
-        )]
-        args: Vec<String>,
-    },
-    /// List every catalogue command and notification with its parameters.
-    List {
-        /// Only names containing this text.
-        filter: Option<String>,
-    },
-}
-
-pub fn run(cmd: PacketCmd, out: &mut dyn Write) -> Result<i32, CliError> {
-    match cmd {
-        PacketCmd::Decode {
-            hex,
-            stream,
-            json,
-            sensor_mask,
-            ext_mask,
-        } => {
-            let bytes = hex::parse(&hex.join(" ")).map_err(CliError::usage)?;
-            let streaming = match sensor_mask {
-                Some(m) => {
-                    let mask = parse_uint(&m, u32::MAX as u64)
-                        .map_err(|e| CliError::usage(format!("--sensor-mask: {e}")))?;
-                    let ext = match ext_mask {
-                        Some(e) => parse_uint(&e, u32::MAX as u64)
-                            .map_err(|e| CliError::usage(format!("--ext-mask: {e}")))?,
-                        None => 0,
-                    };
-                    Some(StreamingConfig {
-                        mask: mask as u32,
-                        ext_mask: ext as u32,
-                        interval_ms: 1,
-                    })
-                }
-                None => None,
-            };
-            decode(&bytes, stream, json, streaming.as_ref(), out)
-        }
-        PacketCmd::Encode { name, args } => {
-            let wire = encode(&name, &args)?;
-            writeln!(out, "{}", hex::spaced(&wire)).map_err(io_err)?;
-            Ok(0)
-        }
-        PacketCmd::List { filter } => {
-            list(filter.as_deref(), out).map_err(io_err)?;
-            Ok(0)
-        }
-    }
-}
-
-fn io_err(e: std::io::Error) -> CliError {
-    CliError::output(e)
-}
 
 /// One item of decoded output.
 enum Item {
@@ -103,13 +18,22 @@ enum Item {
     Error(DecodeError),
 }
 
-fn decode(
+/// Decode `bytes`: one packet, or a stream with `output.stream`. The masks name sensor
+/// values (`ext_mask` needs `mask`).
+pub(super) fn decode(
     bytes: &[u8],
-    stream: bool,
-    json: bool,
-    streaming: Option<&StreamingConfig>,
+    output: Output,
+    mask: Option<u32>,
+    ext_mask: Option<u32>,
     out: &mut dyn Write,
 ) -> Result<i32, CliError> {
+    let Output { stream, json } = output;
+    let streaming = mask.map(|mask| StreamingConfig {
+        mask,
+        ext_mask: ext_mask.unwrap_or(0),
+        interval_ms: 1,
+    });
+    let streaming = streaming.as_ref();
     let mut decoder = Decoder::new();
     let mut items: Vec<Item> = decoder
         .feed(bytes)
@@ -125,30 +49,18 @@ fn decode(
 
     if !stream {
         // One packet expected. A bad checksum still shows the packet, with the verdict.
-        let packets = items
-            .iter()
-            .filter(|i| matches!(i, Item::Packet { .. }))
-            .count();
-        if packets > 1 || items.len() > 1 {
-            return Err(CliError::usage(format!(
-                "the input holds {} packets or errors, not one packet; use --stream to decode a byte stream",
-                items.len()
-            )));
-        }
-        match items.pop() {
-            None => return Err(CliError::usage("no bytes to decode")),
-            Some(Item::Error(DecodeError {
+        let item = match expect_one(items, "packets or errors")? {
+            Item::Error(DecodeError {
                 packet: Some(packet),
-                kind: crate::protocol::v2::DecodeErrorKind::BadChecksum,
+                kind: DecodeErrorKind::BadChecksum,
                 ..
-            })) => {
-                items.push(Item::Packet {
-                    packet: *packet,
-                    checksum_ok: false,
-                });
-            }
-            Some(other) => items.push(other),
-        }
+            }) => Item::Packet {
+                packet: *packet,
+                checksum_ok: false,
+            },
+            other => other,
+        };
+        items = vec![item];
     }
 
     let mut status = 0;
@@ -312,42 +224,17 @@ struct Header {
     no_response: bool,
 }
 
-/// Split `--key value` / `--key=value` pairs; flags without a value are `""`.
-fn pairs(args: &[String]) -> Result<Vec<(String, String)>, CliError> {
-    let mut out = Vec::new();
-    let mut it = args.iter().peekable();
-    while let Some(a) = it.next() {
-        let Some(key) = a.strip_prefix("--") else {
-            return Err(CliError::usage(format!(
-                "unexpected argument {a:?}: parameters are given as --name value"
-            )));
-        };
-        if let Some((k, v)) = key.split_once('=') {
-            out.push((k.to_string(), v.to_string()));
-        } else if key == "no-response" {
-            out.push((key.to_string(), String::new()));
-        } else {
-            let v = it
-                .next()
-                .ok_or_else(|| CliError::usage(format!("--{key} needs a value")))?;
-            out.push((key.to_string(), v.clone()));
-        }
-    }
-    Ok(out)
-}
-
-fn byte_opt(key: &str, v: &str, max: u64) -> Result<u8, CliError> {
-    parse_uint(v, max)
-        .map(|n| n as u8)
-        .map_err(|e| CliError::usage(format!("--{key}: {e}")))
-}
-
-/// Build the wire bytes for `packet encode`.
+/// Build the wire bytes for `packet encode NAME ARGS...` (v2).
 pub fn encode(name: &str, args: &[String]) -> Result<Vec<u8>, CliError> {
+    encode_pairs(name, pairs(args)?)
+}
+
+/// Build the wire bytes from `--key value` pairs already split.
+pub(super) fn encode_pairs(name: &str, given: Vec<(String, String)>) -> Result<Vec<u8>, CliError> {
     let mut header = Header::default();
     let mut params = Vec::new();
     let mut raw = (None, None, Vec::new());
-    for (k, v) in pairs(args)? {
+    for (k, v) in given {
         match k.as_str() {
             // 0xFF marks notifications: never a request's SEQ.
             "seq" => header.seq = byte_opt(&k, &v, 254)?,
@@ -356,8 +243,11 @@ pub fn encode(name: &str, args: &[String]) -> Result<Vec<u8>, CliError> {
             "no-response" => header.no_response = true,
             "did" if name == "raw" => raw.0 = Some(byte_opt(&k, &v, 255)?),
             "cid" if name == "raw" => raw.1 = Some(byte_opt(&k, &v, 255)?),
-            "data" if name == "raw" => {
-                raw.2 = hex::parse(&v).map_err(|e| CliError::usage(format!("--data: {e}")))?
+            "data" if name == "raw" => raw.2 = data_opt(&v)?,
+            "no-reset-timeout" => {
+                return Err(CliError::usage(
+                    "--no-reset-timeout is an API v1 option (--protocol v1); v2 has no such bit",
+                ));
             }
             _ => params.push((k, v)),
         }
@@ -373,13 +263,7 @@ pub fn encode(name: &str, args: &[String]) -> Result<Vec<u8>, CliError> {
         (did, cid, raw.2)
     } else {
         let def = catalog::by_name(name).ok_or_else(|| {
-            let hint = catalog::suggestions(name);
-            let hint = if hint.is_empty() {
-                "see `droidctl packet list`".to_string()
-            } else {
-                format!("did you mean {}?", hint.join(", "))
-            };
-            CliError::usage(format!("unknown command {name:?}; {hint}"))
+            CliError::usage(unknown_command(name, catalog::suggestions(name), ""))
         })?;
         let data = def.encode_params(&params).map_err(CliError::usage)?;
         check_led_values(def.name.as_str(), &data)?;
@@ -403,7 +287,10 @@ fn check_led_values(name: &str, data: &[u8]) -> Result<(), CliError> {
         "set-all-leds-with-32-bit-mask" => 4,
         _ => return Ok(()),
     };
-    let mask = data[..width].iter().fold(0u32, |a, &b| (a << 8) | b as u32);
+    let Some(mask_bytes) = data.get(..width) else {
+        return Ok(());
+    };
+    let mask = mask_bytes.iter().fold(0u32, |a, &b| (a << 8) | b as u32);
     let values = data.len() - width;
     if values != mask.count_ones() as usize {
         return Err(CliError::usage(format!(
@@ -416,15 +303,7 @@ fn check_led_values(name: &str, data: &[u8]) -> Result<(), CliError> {
     Ok(())
 }
 
-fn params_text(params: &[FieldDef]) -> String {
-    params
-        .iter()
-        .map(|p| format!("--{} <{}>", p.option(), p.description))
-        .collect::<Vec<_>>()
-        .join(" ")
-}
-
-fn list(filter: Option<&str>, out: &mut dyn Write) -> std::io::Result<()> {
+pub(super) fn list(filter: Option<&str>, out: &mut dyn Write) -> std::io::Result<()> {
     let keep = |n: &str| filter.is_none_or(|f| n.contains(f));
     writeln!(out, "Commands (DID/CID  name  parameters):")?;
     for c in catalog::commands().iter().filter(|c| keep(&c.name)) {
