@@ -647,6 +647,25 @@ fn hitting_a_wall_sends_a_collision_async_07() {
     assert!(b.asyncs_of(ID_COLLISION).is_empty());
 }
 
+/// Holding the drive key against a wall re-sends the Roll on the heartbeat: the droid pushes
+/// against the wall, which is the one impact, not a new collision every 500 ms.
+#[test]
+fn pushing_against_a_wall_is_one_collision() {
+    let mut b = Bench::new();
+    b.ok(&cmd::configure_collision_detection(
+        1, 100, 100, 100, 100, 10,
+    ));
+    b.hold(&roll(200, 0), secs(8.0));
+    assert!(close(b.state().y_cm, 190.0, 0.01));
+    assert_eq!(b.state().collisions, 1, "{:?}", b.state());
+    assert_eq!(b.asyncs_of(ID_COLLISION).len(), 1);
+    // Backing off and hitting it again is a second collision.
+    b.hold(&roll(200, 180), secs(1.5));
+    b.hold(&roll(200, 0), secs(3.0));
+    assert_eq!(b.state().collisions, 2, "{:?}", b.state());
+    assert_eq!(b.asyncs_of(ID_COLLISION).len(), 2);
+}
+
 fn fast_drain() -> SimConfig {
     SimConfig {
         // 4.10 V → low (3.6 V) after 2.5 s, critical (3.45 V) after 3.25 s.

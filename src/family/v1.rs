@@ -240,6 +240,12 @@ impl Family for V1 {
             Action::LedRgb(LedGroup::Front, [r, g, b]) => {
                 Some(cmd::set_rgb_led(r, g, b, false).into())
             }
+            // Fix: scripts only write `led back R G B` (the parser has no brightness form for
+            // `back`), so a v1 back-LED line was refused as "no such LED". The back LED is a
+            // single blue LED: it takes the brightest channel as its brightness.
+            Action::LedRgb(LedGroup::Back, [r, g, b]) => {
+                Some(cmd::set_back_led(r.max(g).max(b)).into())
+            }
             Action::LedBrightness(LedGroup::Back, b) => Some(cmd::set_back_led(b).into()),
             _ => None,
         }

@@ -11,6 +11,9 @@ use crate::protocol::wire::{AccelRaw, CollisionAxis, LegAction, LegState};
 use crate::units::{HEAD_MAX_DEG, HEAD_MIN_DEG};
 use std::time::Duration;
 
+/// The slowest contact with a wall that counts as a collision, cm/s.
+const MIN_IMPACT_CM_S: f32 = 10.0;
+
 /// Everything observable about the simulated droid (for tests, `run` and the UI's sim panel).
 #[derive(Debug, Clone, PartialEq)]
 pub struct SimState {
@@ -485,7 +488,11 @@ impl Body {
         if let Some(d) = &mut self.drive {
             d.speed = 0.0;
         }
-        if v.abs() < 1.0 {
+        // Fix: the bar was 1 cm/s, below one physics step of acceleration (1.5 cm/s at
+        // 150 cm/s² and 10 ms), so a droid held against a wall by a drive heartbeat counted
+        // (and reported) a fresh collision on every re-sent drive command. Pushing against
+        // the wall is not an impact.
+        if v.abs() < MIN_IMPACT_CM_S {
             return;
         }
         let now = self.now;
