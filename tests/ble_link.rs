@@ -448,3 +448,260 @@ async fn a_fatal_open_error_closes_the_session() {
     }
     assert_eq!(BleError::no_adapter().kind, BleErrorKind::NoAdapter);
 }
+
+// ---------------------------------------------------------------------------------------------
+// A v1 droid (BB-8) over BleLink: wake sequence, v1 setup on 2ba1, pacing, responses on 2ba6,
+// and the reconnect path.
+// ---------------------------------------------------------------------------------------------
+
+mod v1_session {
+    use super::*;
+    use droidctl::protocol::v1::{
+        self, CommandPacket, Decoder as V1Decoder, Mrsp, Packet as V1Packet, Response, Source,
+    };
+    use droidctl::setup::{SetupOptions, connect_setup};
+
+    /// The wake sequence of `droid-facts.md` §4, then the subscription to 2ba6.
+    fn wake_sequence() -> Vec<FakeOp> {
+        vec![
+            FakeOp::Connect,
+            FakeOp::Discover,
+            write(gatt::V1_ANTI_DOS, b"011i3"),
+            write(gatt::V1_TX_POWER, &[0x07]),
+            write(gatt::V1_WAKE, &[0x01]),
+            FakeOp::Subscribe(gatt::V1_RESPONSES),
+        ]
+    }
+
+    /// Every command written to 2ba1 so far, decoded as the droid reads them.
+    fn commands_written(droid: &FakePeripheral) -> Vec<CommandPacket> {
+        let bytes: Vec<u8> = droid
+            .writes_to(gatt::V1_COMMANDS)
+            .into_iter()
+            .flat_map(|(_, d)| d)
+            .collect();
+        V1Decoder::new(Source::Host)
+            .feed(&bytes)
+            .map(|r| match r {
+                Ok(V1Packet::Command(c)) => c,
+                other => panic!("not a command on 2ba1: {other:?}"),
+            })
+            .collect()
+    }
+
+    fn ids(cmds: &[CommandPacket]) -> Vec<(u8, u8)> {
+        cmds.iter().map(|c| (c.did, c.cid)).collect()
+    }
+
+    fn setup_ids() -> Vec<(u8, u8)> {
+        connect_setup(Model::BB8, &SetupOptions::default())
+            .iter()
+            .map(|c| (c.did(), c.cid()))
+            .collect()
+    }
+
+    /// Notify a v1 response on 2ba6, cut into notifications of at most `piece` bytes.
+    fn answer(droid: &FakePeripheral, to: &CommandPacket, data: Vec<u8>, piece: usize) {
+        let wire = V1Packet::Response(Response::to(to, Mrsp::Ok, data))
+            .encode()
+            .unwrap();
+        for chunk in wire.chunks(piece) {
+            droid.notify(gatt::V1_RESPONSES, chunk);
+        }
+    }
+
+    /// Plays the droid's part: answers every command written to 2ba1 that asks for an answer
+    /// (Get Power State with 3.87 V), split over two notifications.
+    fn spawn_responder(droid: FakePeripheral) -> tokio::task::JoinHandle<()> {
+        tokio::spawn(async move {
+            let mut decoder = V1Decoder::new(Source::Host);
+            let mut seen = 0;
+            loop {
+                sleep(Duration::from_millis(5)).await;
+                let writes = droid.writes_to(gatt::V1_COMMANDS);
+                for (_, w) in &writes[seen..] {
+                    let cmds: Vec<_> = decoder.feed(w).collect();
+                    for c in cmds {
+                        let Ok(V1Packet::Command(c)) = c else {
+                            panic!("not a command: {c:?}")
+                        };
+                        if !c.answer() {
+                            continue;
+                        }
+                        let data = match (c.did, c.cid) {
+                            // Record 1, state OK, 3.87 V, 5 charges, 60 s.
+                            (0x00, 0x20) => vec![1, 2, 0x01, 0x83, 0, 5, 0, 60],
+                            _ => vec![],
+                        };
+                        answer(&droid, &c, data, 4);
+                    }
+                }
+                seen = writes.len();
+            }
+        })
+    }
+
+    fn bb8_config(link: &BleLink) -> SessionConfig {
+        SessionConfig {
+            family: Model::BB8.protocol(),
+            setup: connect_setup(Model::BB8, &SetupOptions::default()),
+            pacing: link.profile().pacing,
+            chunk_size: link.profile().chunk_size,
+            ..SessionConfig::default()
+        }
+    }
+
+    #[tokio::test(start_paused = true)]
+    async fn bb8_session_wakes_runs_the_v1_setup_paced_and_is_answered() {
+        let (_c, droid, link) = setup(Model::BB8);
+        assert_eq!(link.profile().pacing, Duration::from_millis(60));
+        let cfg = bb8_config(&link);
+        let s = session::start(Box::new(link), cfg);
+        let responder = spawn_responder(droid.clone());
+        let mut rx = s.watch_state();
+        wait_for(&mut rx, |st| *st == LinkState::Connected).await;
+        sleep(Duration::from_secs(1)).await;
+        assert_eq!(droid.ops()[..6], wake_sequence()[..], "{:?}", droid.ops());
+        // The v1 setup, in order, on 2ba1.
+        let written = commands_written(&droid);
+        assert_eq!(ids(&written), setup_ids());
+        assert_eq!(
+            written[0],
+            v1::cmd::ping().to_packet(written[0].seq),
+            "asks for an answer and resets the inactivity timeout (SOP2 FF)"
+        );
+        let streaming = written.iter().find(|c| c.cid == 0x11).unwrap();
+        let cfg = v1::StreamingConfig::from_command_data(&streaming.data).unwrap();
+        assert_eq!((cfg.n, cfg.m, cfg.pcnt), (40, 1, 0), "10 Hz, forever");
+        // Each answered by SEQ: nothing timed out, nothing retried.
+        let st = s.stats();
+        assert_eq!((st.timeouts, st.retried, st.answered), (0, 0, 5), "{st:?}");
+
+        // A request, answered through 2ba6 in pieces.
+        let power = s
+            .request(v1::cmd::get_power_state())
+            .await
+            .expect("answered");
+        let family = droidctl::family::for_model(Model::BB8);
+        assert_eq!(family.battery_volts(power.data()), Some(3.87));
+
+        // Writes are paced at the model's 60 ms, also when queued back to back.
+        for i in 0..4 {
+            s.send(v1::cmd::set_rgb_led(i, 0, 0, false)).unwrap();
+        }
+        sleep(Duration::from_secs(1)).await;
+        let times: Vec<Instant> = droid
+            .writes_to(gatt::V1_COMMANDS)
+            .into_iter()
+            .map(|(t, _)| t)
+            .collect();
+        assert!(times.len() >= 10, "{}", times.len());
+        for w in times.windows(2) {
+            assert!(
+                w[1] - w[0] >= Duration::from_millis(60),
+                "{:?}",
+                w[1] - w[0]
+            );
+        }
+        assert_eq!(s.stats().timeouts, 0);
+        responder.abort();
+        s.shutdown(vec![]).await;
+        assert!(!droid.is_connected());
+    }
+
+    #[tokio::test(start_paused = true)]
+    async fn a_v1_response_injected_on_2ba6_answers_the_request_by_seq() {
+        let (_c, droid, link) = setup(Model::BB8);
+        let cfg = SessionConfig {
+            setup: Vec::new(),
+            ..bb8_config(&link)
+        };
+        let s = session::start(Box::new(link), cfg);
+        let mut rx = s.watch_state();
+        wait_for(&mut rx, |st| *st == LinkState::Connected).await;
+        let req = {
+            let s = s.clone();
+            tokio::spawn(async move { s.request(v1::cmd::get_rgb_led()).await })
+        };
+        sleep(Duration::from_millis(100)).await;
+        let written = commands_written(&droid);
+        assert_eq!(ids(&written), [(0x02, 0x22)]);
+        // A stale answer with another SEQ matches nothing.
+        let other = v1::cmd::get_rgb_led().to_packet(written[0].seq.wrapping_add(7));
+        answer(&droid, &other, vec![9, 9, 9], 20);
+        // The real one, one byte per notification.
+        answer(&droid, &written[0], vec![255, 64, 0], 1);
+        let r = timeout(Duration::from_secs(1), req)
+            .await
+            .expect("answered in time")
+            .unwrap()
+            .expect("success");
+        assert_eq!(r.data(), [255, 64, 0]);
+        let st = s.stats();
+        assert_eq!((st.answered, st.unmatched, st.errors), (1, 1, 0), "{st:?}");
+        s.shutdown(vec![]).await;
+    }
+
+    #[tokio::test(start_paused = true)]
+    async fn bb8_reconnect_reruns_the_wake_sequence_and_the_setup() {
+        let (_c, droid, link) = setup(Model::BB8);
+        let cfg = bb8_config(&link);
+        let s = session::start(Box::new(link), cfg);
+        let responder = spawn_responder(droid.clone());
+        let mut rx = s.watch_state();
+        let seen = record(s.watch_state());
+        wait_for(&mut rx, |st| *st == LinkState::Connected).await;
+        sleep(Duration::from_secs(1)).await;
+        assert_eq!(ids(&commands_written(&droid)), setup_ids());
+        // Drive, so the reconnect also ends with a stop at the last heading.
+        let roll = v1::cmd::roll(
+            80,
+            droidctl::units::Heading::new(90).unwrap(),
+            v1::RollState::Go,
+        );
+        s.set(droidctl::session::Slot::Drive, roll);
+        sleep(Duration::from_millis(200)).await;
+
+        droid.drop_connection("BB-8 went out of range");
+        let lost = Instant::now();
+        wait_for(&mut rx, |st| matches!(st, LinkState::Reconnecting { .. })).await;
+        wait_for(&mut rx, |st| *st == LinkState::Connected).await;
+        assert_eq!(lost.elapsed(), Backoff::default().delay(1));
+        sleep(Duration::from_secs(1)).await;
+        assert_eq!(
+            *seen.lock().unwrap(),
+            [
+                LinkState::Connecting,
+                LinkState::Connected,
+                LinkState::Reconnecting {
+                    attempt: 1,
+                    reason: "BB-8 went out of range".into()
+                },
+                LinkState::Connected,
+            ]
+        );
+        // The wake sequence again, in order, after the drop.
+        let ops = droid.ops();
+        let second = ops
+            .iter()
+            .rposition(|o| *o == FakeOp::Connect)
+            .expect("reconnected");
+        assert_eq!(ops[second..second + 6], wake_sequence()[..], "{ops:?}");
+        assert_eq!(count(&droid, &FakeOp::Connect), 2);
+        // The setup again, then a stop (Roll state 0) keeping the heading.
+        let written = commands_written(&droid);
+        let setup = setup_ids();
+        let mut expected = setup.clone();
+        expected.push((0x02, 0x30));
+        expected.extend(&setup);
+        expected.push((0x02, 0x30));
+        assert_eq!(ids(&written), expected);
+        let stop = written.last().unwrap();
+        assert_eq!(stop.data, [0, 0, 90, 0], "speed 0, heading 90, state stop");
+        assert_eq!(s.stats().reconnects, 1);
+        assert_eq!(s.stats().timeouts, 0);
+        responder.abort();
+        s.shutdown(vec![]).await;
+        assert!(!droid.is_connected(), "shutdown disconnects");
+    }
+}
