@@ -45,8 +45,17 @@ impl Tui {
 
     /// As [`Tui::start`], with extra environment variables.
     fn start_with(cols: u16, rows: u16, kitty: bool, env: &[(&str, &str)]) -> Tui {
+        Self::start_full(cols, rows, kitty, env, &[])
+    }
+
+    /// As [`Tui::start_with`], with arguments after `--sim` (e.g. the model: `bb8`).
+    fn start_full(cols: u16, rows: u16, kitty: bool, env: &[(&str, &str)], args: &[&str]) -> Tui {
         let tag = if kitty { "kitty" } else { "legacy" };
-        let dir = TempDir::new(&format!("{tag}{}", env.len()));
+        // One directory per app started: tests run in parallel in one process, and two that
+        // shared a directory deleted each other's log (the SIGTERM test then read no log).
+        static STARTED: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+        let n = STARTED.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let dir = TempDir::new(&format!("{tag}{}{}-{n}", env.len(), args.join("-")));
         let pty = native_pty_system()
             .openpty(PtySize {
                 rows,
@@ -57,6 +66,7 @@ impl Tui {
             .unwrap();
         let mut cmd = CommandBuilder::new(env!("CARGO_BIN_EXE_droidctl"));
         cmd.arg("--sim");
+        cmd.args(args);
         cmd.env("TERM", "xterm-256color");
         cmd.env("DROIDCTL_LOG_FILE", dir.0.join("droidctl.log"));
         cmd.env("DROIDCTL_CONFIG", dir.0.join("config.toml"));
@@ -320,4 +330,73 @@ fn a_crash_stops_the_droid_then_restores_the_terminal() {
     assert!(pos(&raw, b"\x1b[?1049h").unwrap() < left);
     // The message comes after the terminal was restored, so it stays readable.
     assert!(message > String::from_utf8_lossy(&raw[..left]).len());
+}
+
+/// The droid's yaw as shown in the sensors panel ("… yaw 63.0°").
+fn shown_yaw(screen: &str) -> Option<f32> {
+    let line = screen.lines().find(|l| l.contains("pitch"))?;
+    let after = &line[line.find("yaw ")? + 4..];
+    after.split('°').next()?.trim().parse().ok()
+}
+
+/// A v1 droid in the app: BB-8 has no dome, so the Lights panel takes its place; aim mode
+/// (`o`) turns the back light on and, pressed again, sets heading 0 (v1 Set Heading); `w`
+/// drives it forward.
+#[test]
+fn bb8_shows_lights_aims_and_drives() {
+    let mut tui = Tui::start_full(100, 30, false, &[], &["bb8"]);
+    tui.wait_for("connected", Duration::from_secs(20));
+    let screen = tui.wait_for("Lights", Duration::from_secs(10));
+    assert!(
+        !screen.contains(" Dome "),
+        "no Dome panel on BB-8:\n{screen}"
+    );
+    assert!(screen.contains("BB-8"), "{screen}");
+    // Telemetry streams: the position readout appears.
+    tui.wait_for("pos x", Duration::from_secs(10));
+
+    // Aim mode on: the Lights panel says so, the back light is lit.
+    tui.send(b"o");
+    let aiming = tui.wait_for("AIMING", Duration::from_secs(5));
+    assert!(aiming.contains("aim"), "{aiming}");
+    tui.wait_for("back 255/255", Duration::from_secs(5));
+    // Turning while aiming rotates the droid in place.
+    tui.hold(b"d", Duration::from_millis(600));
+    std::thread::sleep(Duration::from_millis(500));
+    let turned = tui.text();
+    let yaw = shown_yaw(&turned).expect("yaw on screen");
+    assert!(yaw > 20.0, "turned right in place: yaw {yaw}\n{turned}");
+    assert_eq!(shown_y(&turned), Some(0.0), "without rolling:\n{turned}");
+    // Aim mode off: the facing becomes heading 0.
+    tui.send(b"o");
+    let set = tui.wait_for("heading set", Duration::from_secs(5));
+    assert!(!set.contains("AIMING"), "{set}");
+    let log = tui.wait_for("set-heading", Duration::from_secs(5));
+    assert!(
+        log.contains("back off"),
+        "back light off after aiming:\n{log}"
+    );
+    // The droid's facing is now its heading 0.
+    std::thread::sleep(Duration::from_millis(400));
+    let zeroed = tui.text();
+    let yaw = shown_yaw(&zeroed).expect("yaw on screen");
+    assert!(yaw.abs() < 1.0, "yaw {yaw} after Set Heading 0\n{zeroed}");
+
+    // Forward is where it faced: y grows.
+    let before = shown_y(&tui.text()).unwrap_or(0.0);
+    tui.hold(b"w", Duration::from_millis(2500));
+    std::thread::sleep(Duration::from_millis(800));
+    let screen = tui.text();
+    let after = shown_y(&screen).expect("position on screen");
+    assert!(
+        after > before + 30.0,
+        "the droid moved forward: {before} → {after}\n{screen}"
+    );
+    assert!(
+        screen.contains("roll"),
+        "the packet log shows v1 Roll commands:\n{screen}"
+    );
+    tui.send(b"q");
+    let status = tui.wait_exit(Duration::from_secs(10));
+    assert!(status.success(), "{status:?}");
 }
