@@ -507,3 +507,158 @@ fn hostile_values_print_bounded() {
     assert!(text.contains("NaN"));
     assert!(!text.contains('\u{1b}'));
 }
+
+// ---------------------------------------------------------------------------------------------
+// A Sphero API v1 droid (BB-8): the Lights panel in the dome's place, aim mode on.
+// ---------------------------------------------------------------------------------------------
+
+/// A v1 packet-log line, explained by the v1 family (a response by its request, sensor data
+/// by the streaming configuration).
+fn v1_entry(
+    at_ms: u64,
+    dir: Direction,
+    p: droidctl::protocol::v1::Packet,
+    request: Option<&droidctl::protocol::v1::Command>,
+    streaming: Option<&droidctl::protocol::v1::StreamingConfig>,
+) -> LogLine {
+    let request = request.cloned().map(droidctl::family::Command::from);
+    LogLine::from_entry(&LogEntry {
+        at: ms(at_ms),
+        dir,
+        item: LogItem::Packet {
+            explained: droidctl::family::v1::explain(&p, streaming, request.as_ref()),
+            packet: droidctl::family::Packet::V1(p),
+        },
+    })
+}
+
+/// The v1 connect setup, the colour and aim keys, and a sensor frame, as the app logs them.
+fn bb8_log() -> Vec<LogLine> {
+    use droidctl::protocol::v1::{self, Mrsp, Packet as P, Response, cmd};
+    let streaming = v1::StreamingConfig::full(40);
+    let aim = Heading::new(35).expect("valid heading");
+    let commands = [
+        cmd::ping(),
+        cmd::set_stabilization(true),
+        cmd::configure_collision_detection(1, 100, 100, 100, 100, 10),
+        streaming.command(),
+        cmd::set_power_notification(true),
+        cmd::set_rgb_led(255, 140, 0, false),
+        cmd::set_back_led(255),
+        cmd::roll(0, aim, v1::RollState::Go),
+    ];
+    let mut lines = Vec::new();
+    let mut t = 0;
+    for (seq, c) in commands.iter().enumerate() {
+        let p = c.to_packet(seq as u8);
+        t += 60;
+        lines.push(v1_entry(
+            t,
+            Direction::Out,
+            P::Command(p.clone()),
+            None,
+            None,
+        ));
+        let r = P::Response(Response::to(&p, Mrsp::Ok, vec![]));
+        lines.push(v1_entry(t + 4, Direction::In, r, Some(c), None));
+    }
+    let frame = [
+        ("pitch", 0.0),
+        ("roll", 0.0),
+        ("yaw", 35.0),
+        ("accel_z", 1.0),
+        ("locator_x", 12.0),
+        ("locator_y", 48.0),
+    ];
+    let data = v1::encode_samples(&streaming, &[frame.to_vec()]);
+    lines.push(v1_entry(
+        t + 40,
+        Direction::In,
+        P::Async(v1::AsyncPacket::new(0x03, data)),
+        None,
+        Some(&streaming),
+    ));
+    lines
+}
+
+/// BB-8 stopped and aiming: turned to 35°, back light on, main LED orange.
+fn bb8_aiming() -> AppState {
+    let mut s = AppState::new(Model::BB8, "BB-1A2B".into());
+    let (keys, pad) = help_lines();
+    s.help_keys = keys;
+    s.help_gamepad = pad;
+    s.now = Duration::from_secs(12);
+    s.link = LinkState::Connected;
+    s.stats.sent = 96;
+    s.stats.received = 240;
+    s.rate_in = 11.0;
+    s.rate_out = 2.0;
+    s.gamepad = GamepadStatus::NoPad;
+    s.keyboard = KeyboardMode::Emulated;
+    let t = &mut s.telemetry;
+    t.pitch = Some(0.0);
+    t.roll = Some(0.0);
+    t.yaw = Some(35.0);
+    t.accel = Some([0.0, 0.0, 1.0]);
+    t.gyro = Some([0.0, 0.0, 0.0]);
+    t.velocity_cm_s = Some([0.0, 0.0]);
+    t.battery_v = Some(4.05);
+    t.stance = Stance::Unknown;
+    t.samples = 120;
+    for i in 0..=16 {
+        t.track.push_back((i as f32 * 0.75, i as f32 * 3.0));
+    }
+    t.x_cm = Some(12.0);
+    t.y_cm = Some(48.0);
+    let c = &mut s.control;
+    c.speed = 0;
+    c.heading = Heading::new(35).expect("valid");
+    c.deadman = true;
+    c.source = "aim";
+    c.aiming = true;
+    s.leds.main = Some([255, 140, 0]);
+    s.leds.back = Some(255);
+    s.show_hint(
+        "aim: ←/→ turn the droid, press the aim key again to set heading 0",
+        Duration::from_secs(5),
+    );
+    for l in bb8_log() {
+        s.log.push(l);
+    }
+    s
+}
+
+snap!(bb8_lights_aiming_80x24, bb8_aiming(), 80, 24);
+
+#[test]
+fn bb8_has_the_lights_panel_in_colour_not_the_dome() {
+    for (w, h) in [(80, 24), (160, 48)] {
+        let term = render(&bb8_aiming(), w, h);
+        let buf = term.backend().buffer();
+        let text = rows(buf);
+        assert!(!text.iter().any(|r| r.contains(" Dome ")), "{text:#?}");
+        let (y, row) = text
+            .iter()
+            .enumerate()
+            .find(|(_, r)| r.contains("Lights") && r.contains("AIMING"))
+            .unwrap_or_else(|| panic!("Lights panel, aiming, at {w}×{h}: {text:#?}"));
+        let col = row.chars().position(|c| c == 'A').expect("A") as u16;
+        assert_ne!(buf[(col, y as u16)].fg, Color::Reset, "AIMING stands out");
+        // The swatch is painted in the commanded colour.
+        let (y, row) = text
+            .iter()
+            .enumerate()
+            .find(|(_, r)| r.contains("main") && r.contains("255,140,0"))
+            .expect("main LED line");
+        let col = row.chars().position(|c| c == '█').expect("swatch") as u16;
+        assert_eq!(buf[(col, y as u16)].fg, Color::Rgb(255, 140, 0));
+        assert!(row.contains("back 255/255"), "{row}");
+    }
+    // Not aiming: no AIMING, the lights stay.
+    let mut s = bb8_aiming();
+    s.control.aiming = false;
+    let term = render(&s, 80, 24);
+    let text = rows(term.backend().buffer());
+    assert!(text.iter().any(|r| r.contains("Lights")));
+    assert!(!text.iter().any(|r| r.contains("AIMING")));
+}
