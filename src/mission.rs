@@ -398,7 +398,8 @@ pub async fn run(
     let start = Instant::now();
     let telemetry = Arc::new(Mutex::new(Telemetry::default()));
 
-    // Notifications → telemetry.
+    // Notifications → telemetry; then what the droid announced at connect, before we
+    // subscribed (Robi's handshake; folding it twice is harmless).
     let collector = {
         let mut rx = session.subscribe();
         let telemetry = telemetry.clone();
@@ -414,6 +415,9 @@ pub async fn run(
             }
         })
     };
+    for n in session.greeting() {
+        lock(&telemetry).apply(&n, Duration::ZERO);
+    }
     let family = crate::family::for_model(model);
     // Battery and stance read-back.
     let poller = {

@@ -1,4 +1,5 @@
-//! Fuzz the streaming decoders, v2 and v1 (both sides): arbitrary bytes in arbitrary chunks
+//! Fuzz the streaming decoders, v2, v1 (both sides) and the RSRCP framer, plus RSRCP's
+//! one-value-per-notification decoding: arbitrary bytes in arbitrary chunks
 //! must never panic, never buffer more than the bound, keep the stats consistent, and every
 //! packet that comes out must describe without panicking and survive an encode/decode round
 //! trip.
@@ -8,6 +9,7 @@
 
 #![no_main]
 
+use droidctl::protocol::rsrcp;
 use droidctl::protocol::v1;
 use droidctl::protocol::v2::decoder::DEFAULT_MAX_BODY;
 use droidctl::protocol::v2::packet::{checksum, parse_body};
@@ -164,6 +166,83 @@ fn run_v1(source: v1::Source, max_async: usize, sizes: &[u8], stream: &[u8]) {
     assert_eq!(decoder.buffered(), 0);
 }
 
+/// An RSRCP item: describes without panicking, and a frame (which only holds sized
+/// features) encodes back to bytes that decode to it.
+fn check_rsrcp_item(item: &rsrcp::Item) {
+    let _ = rsrcp::to_json(&Ok(item.clone()));
+    match item {
+        rsrcp::Item::Handshake(h) => {
+            assert_eq!(rsrcp::decode_handshake(&h.encode()).as_ref(), Ok(h));
+        }
+        rsrcp::Item::Frame(f) => {
+            let _ = (f.summary(), f.fields(), f.sensor_sample());
+            // Encoding clamps motor speeds to the robot's ±300 rad/s; decoding keeps what was
+            // sent (up to ±327.67), so only in-range frames must survive unchanged.
+            let in_range = f.motors.is_none_or(|m| {
+                m.left_rad_s.abs() <= rsrcp::frame::MOTOR_LIMIT_RAD_S
+                    && m.right_rad_s.abs() <= rsrcp::frame::MOTOR_LIMIT_RAD_S
+            });
+            let again = rsrcp::decode_frame(&f.encode());
+            if in_range {
+                assert_eq!(again.as_ref(), Ok(f));
+            } else {
+                assert!(again.is_ok());
+            }
+        }
+    }
+}
+
+/// The RSRCP stream framer: bounded, every byte accounted for, never panics.
+fn run_rsrcp(sizes: &[u8], stream: &[u8]) {
+    let mut framer = rsrcp::Framer::new();
+    let mut items = 0u64;
+    let mut handle = |r: Result<rsrcp::Item, rsrcp::FrameError>| {
+        let _ = rsrcp::to_json(&r);
+        match r {
+            Ok(item) => {
+                items += 1;
+                check_rsrcp_item(&item);
+            }
+            Err(e) => {
+                let _ = (e.to_string(), e.to_json());
+            }
+        }
+    };
+    let mut pos = 0;
+    let mut i = 0;
+    while pos < stream.len() {
+        let size = if sizes.is_empty() {
+            stream.len()
+        } else {
+            sizes[i % sizes.len()] as usize
+        };
+        i += 1;
+        let end = (pos + size.max(1)).min(stream.len());
+        for r in framer.feed(&stream[pos..end]) {
+            handle(r);
+        }
+        assert!(framer.buffered() <= rsrcp::MAX_FRAME_LEN);
+        pos = end;
+    }
+    for r in framer.finish() {
+        handle(r);
+    }
+    let s = framer.stats();
+    assert_eq!(s.bytes, stream.len() as u64);
+    assert_eq!(s.frames + s.handshakes, items);
+    assert_eq!(framer.buffered(), 0);
+    // Over BLE each notification is one value: the same bytes as one notification.
+    match rsrcp::decode_frame(stream) {
+        Ok(f) => check_rsrcp_item(&rsrcp::Item::Frame(f)),
+        Err(e) => {
+            let _ = e.to_json();
+        }
+    }
+    if let Ok(h) = rsrcp::decode_handshake(stream) {
+        check_rsrcp_item(&rsrcp::Item::Handshake(h));
+    }
+}
+
 fuzz_target!(|data: &[u8]| {
     let Some((&head, rest)) = data.split_first() else {
         return;
@@ -181,4 +260,5 @@ fuzz_target!(|data: &[u8]| {
         run_v1(source, v1::decoder::DEFAULT_MAX_ASYNC_DLEN, sizes, stream);
         run_v1(source, SMALL_BOUND, sizes, stream);
     }
+    run_rsrcp(sizes, stream);
 });

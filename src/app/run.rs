@@ -644,6 +644,10 @@ pub async fn run<B: Backend>(
 
     let mut log_rx = session.subscribe_log();
     let mut events_rx = session.subscribe();
+    // What the droid announced before we listened (Robi's handshake).
+    for n in session.greeting() {
+        app.state.telemetry.apply(&n, Duration::ZERO);
+    }
     let mut link_rx = session.watch_state();
     let period = Duration::from_secs_f64(1.0 / opts.config.control.rate_hz.clamp(1, 50) as f64);
     let mut tick = interval(period);

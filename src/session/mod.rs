@@ -203,6 +203,9 @@ pub(crate) struct Shared {
     pub shutdown_wake: Notify,
     /// On shutdown, write a stop at the last commanded heading before the final commands.
     pub stop_on_shutdown: std::sync::atomic::AtomicBool,
+    /// What the droid said once at connect (Robi's handshake), for subscribers that arrive
+    /// later than that.
+    pub greeting: Mutex<Vec<Notification>>,
 }
 
 /// A handle to a running session. Cloning is cheap.
@@ -224,6 +227,7 @@ pub fn start(link: Box<dyn Link>, config: SessionConfig) -> SessionHandle {
         shutdown: Mutex::new(None),
         shutdown_wake: Notify::new(),
         stop_on_shutdown: std::sync::atomic::AtomicBool::new(false),
+        greeting: Mutex::new(Vec::new()),
     });
     let (state_tx, state_rx) = watch::channel(LinkState::Connecting);
     let (events, _) = broadcast::channel(config.event_capacity.max(16));
@@ -323,6 +327,13 @@ impl SessionHandle {
 
     pub fn subscribe_log(&self) -> broadcast::Receiver<LogEntry> {
         self.log.subscribe()
+    }
+
+    /// What the droid announced once when the current connection opened (Robi 42's
+    /// handshake: version and frame interval). A subscriber that starts after the connect
+    /// folds these in first; later ones arrive as notifications too.
+    pub fn greeting(&self) -> Vec<Notification> {
+        lock(&self.shared.greeting).clone()
     }
 
     pub fn stats(&self) -> SessionStats {

@@ -7,6 +7,7 @@ use super::{
 };
 use crate::family::{Codec, Command, Family, Incoming, Key, Packet};
 use crate::link::{Connection, Endpoint, Link, LinkEvent};
+use crate::protocol::notify::Notification;
 use std::collections::{HashMap, VecDeque};
 use std::sync::Arc;
 use std::time::Duration;
@@ -93,6 +94,7 @@ impl Task {
                     }
                     attempt = 0;
                     tracing::info!(link = %self.link.describe(), "connected");
+                    lock(&self.shared.greeting).clear();
                     self.state.send_replace(LinkState::Connected);
                     self.queue_setup();
                     match self.connected(conn).await {
@@ -362,6 +364,9 @@ impl Task {
                 for n in notifications {
                     match n {
                         Ok(n) => {
+                            if matches!(n, Notification::RobiHandshake(_)) {
+                                lock(&self.shared.greeting).push(n.clone());
+                            }
                             let _ = self.events.send(SessionEvent::Notification(n));
                         }
                         Err(e) => {

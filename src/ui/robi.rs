@@ -72,6 +72,20 @@ pub fn motors(frame: &mut Frame, area: Rect, s: &AppState) {
         .motors
         .map(|m| (m.left_rad_s, m.right_rad_s))
         .unwrap_or((0.0, 0.0));
+    if inner.height < 2 {
+        // One row (80×24): both wheels side by side, gauges only.
+        let w = (inner.width as usize).saturating_sub(18) / 2;
+        let line = Line::from(vec![
+            Span::styled("L ", theme::label()),
+            Span::styled(format!("{l:>5.2} "), theme::bold()),
+            Span::styled(bar(l, MOTOR_SCALE, w.max(2)), theme::reported()),
+            Span::styled("  R ", theme::label()),
+            Span::styled(format!("{rr:>5.2} "), theme::bold()),
+            Span::styled(bar(rr, MOTOR_SCALE, w.max(2)), theme::reported()),
+        ]);
+        frame.render_widget(Paragraph::new(line), inner);
+        return;
+    }
     let mut lines = Vec::new();
     for (name, v, hist) in [
         (
@@ -206,12 +220,43 @@ pub fn io(frame: &mut Frame, area: Rect, s: &AppState) {
         ]),
         link_quality(r),
     ];
-    // Short panels keep the link quality and the poti, which matter most while driving.
+    // Short panels (80×24): poti, then buttons and lamps on one row, then the link quality.
     let h = inner.height as usize;
-    if lines.len() > h && h >= 2 {
-        let last = lines.pop().unwrap_or_default();
-        lines.truncate(h - 1);
-        lines.push(last);
+    if lines.len() > h {
+        lines = vec![
+            lines[0].clone(),
+            Line::from(vec![
+                lamp(b.contains(Buttons::LEFT), "[L]"),
+                lamp(b.contains(Buttons::TOP), "[T]"),
+                lamp(b.contains(Buttons::CENTER), "[ok]"),
+                lamp(b.contains(Buttons::BOTTOM), "[B]"),
+                lamp(b.contains(Buttons::RIGHT), "[R]"),
+                Span::styled(" lamps ", theme::label()),
+                lamp(l.contains(Leds::FRONT_LEFT_BLINKER), "◀"),
+                lamp(l.contains(Leds::FRONT_LEFT_HEADLIGHT), "●"),
+                lamp(l.contains(Leds::FRONT_RIGHT_HEADLIGHT), "●"),
+                lamp(l.contains(Leds::FRONT_RIGHT_BLINKER), "▶"),
+                Span::raw("/"),
+                lamp(l.contains(Leds::BACK_LEFT_BLINKER), "◀"),
+                lamp(l.contains(Leds::BACK_LEFT_TAILLIGHT), "■"),
+                lamp(l.contains(Leds::BACK_RIGHT_TAILLIGHT), "■"),
+                lamp(l.contains(Leds::BACK_RIGHT_BLINKER), "▶"),
+                Span::styled(
+                    match r.piezo {
+                        Some(p) if p.on => format!(" ♪{}", p.hz),
+                        _ => String::new(),
+                    },
+                    theme::attention(),
+                ),
+            ]),
+            link_quality(r),
+        ];
+        if h < 3 {
+            // Keep the link quality last.
+            let last = lines.pop().unwrap_or_default();
+            lines.truncate(h.saturating_sub(1));
+            lines.push(last);
+        }
     }
     frame.render_widget(Paragraph::new(lines), inner);
 }
