@@ -339,9 +339,9 @@ fn shown_yaw(screen: &str) -> Option<f32> {
     after.split('°').next()?.trim().parse().ok()
 }
 
-/// A v1 droid in the app: BB-8 has no dome, so the Lights panel takes its place; aim mode
-/// (`o`) turns the back light on and, pressed again, sets heading 0 (v1 Set Heading); `w`
-/// drives it forward.
+/// A v1 droid in the app: BB-8 has no dome, so the Lights panel takes its place; `c` sets
+/// the main LED; aim mode (`o`) turns the back light on and, pressed again, sets heading 0
+/// (v1 Set Heading); `w` drives it forward.
 #[test]
 fn bb8_shows_lights_aims_and_drives() {
     let mut tui = Tui::start_full(100, 30, false, &[], &["bb8"]);
@@ -354,6 +354,11 @@ fn bb8_shows_lights_aims_and_drives() {
     assert!(screen.contains("BB-8"), "{screen}");
     // Telemetry streams: the position readout appears.
     tui.wait_for("pos x", Duration::from_secs(10));
+    // The colour key sets the main LED: red first.
+    assert!(screen.contains("not set"), "{screen}");
+    tui.send(b"c");
+    tui.wait_for("255,0,0", Duration::from_secs(5));
+    tui.wait_for("set-rgb-led", Duration::from_secs(5));
 
     // Aim mode on: the Lights panel says so, the back light is lit.
     tui.send(b"o");
