@@ -33,6 +33,9 @@ pub struct ControlView {
     pub source: &'static str,
     /// Aim mode is on.
     pub aiming: bool,
+    /// On a steering robot (Robi 42): the steering commanded, −1 full left ..= 1 full right
+    /// (`None` on droids driven toward a heading).
+    pub steer: Option<f32>,
 }
 
 impl Default for ControlView {
@@ -49,6 +52,7 @@ impl Default for ControlView {
             mode: "hold",
             source: "-",
             aiming: false,
+            steer: None,
         }
     }
 }

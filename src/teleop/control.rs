@@ -339,12 +339,14 @@ impl Controller {
 
         // Drive: while moving (heartbeat) and whenever it changes.
         let travel = Heading::wrapped(self.heading as f64);
+        let mut steer = None;
         if self.family.steers() {
             // Velocity and steering: the turn keys (or the stick's sideways part) steer.
             let turn = match inp.pad {
                 Some((pad, _)) => pad.heading.to_radians().sin(),
                 None => (inp.right as i8 - inp.left as i8) as f32 * KEY_STEER,
             };
+            steer = Some(turn);
             let key = (speed, ((turn + 1.0) * 100.0).round() as u16, 0);
             if droid.connected
                 && ((speed > 0 && heartbeat) || self.last_drive != Some(key))
@@ -384,6 +386,7 @@ impl Controller {
             mode: self.view.mode,
             source,
             aiming: self.aiming,
+            steer,
         };
         out
     }

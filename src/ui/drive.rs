@@ -57,7 +57,15 @@ pub fn render(frame: &mut Frame, area: Rect, s: &AppState) {
             },
         )
     };
-    compass::render(frame, dial, s.control.heading, s.telemetry.heading());
+    // A steering robot has no commanded heading: the marker shows where the steering points,
+    // relative to where the robot faces (45° per full lock).
+    let commanded = match s.control.steer {
+        Some(turn) => crate::units::Heading::wrapped(
+            s.telemetry.heading().map_or(0.0, |h| h.degrees() as f64) + turn as f64 * 45.0,
+        ),
+        None => s.control.heading,
+    };
+    compass::render(frame, dial, commanded, s.telemetry.heading());
     frame.render_widget(Paragraph::new(lines), info);
 }
 
@@ -79,13 +87,23 @@ fn text(s: &AppState) -> Vec<Line<'static>> {
     let droid = t
         .heading()
         .map_or("-".to_string(), |h| format!("{}°", h.degrees()));
+    let commanded = match c.steer {
+        Some(t) if t < -0.01 => format!("← {:.0}%", -t * 100.0),
+        Some(t) if t > 0.01 => format!("→ {:.0}%", t * 100.0),
+        Some(_) => "straight".to_string(),
+        None => format!("{}°", c.heading.degrees()),
+    };
     let mut lines = vec![
         Line::from(vec![
-            Span::styled("◆ cmd   ", theme::commanded()),
             Span::styled(
-                format!("{}°", c.heading.degrees()),
-                theme::commanded().add_modifier(Modifier::BOLD),
+                if c.steer.is_some() {
+                    "◆ steer "
+                } else {
+                    "◆ cmd   "
+                },
+                theme::commanded(),
             ),
+            Span::styled(commanded, theme::commanded().add_modifier(Modifier::BOLD)),
         ]),
         Line::from(vec![
             Span::styled("● droid ", theme::reported()),
