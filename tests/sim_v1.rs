@@ -273,10 +273,11 @@ fn unknown_commands_and_bad_payloads_are_refused_with_an_mrsp() {
         data: vec![],
     });
     assert!(!r.mrsp.is_success(), "{r:?}");
-    // Wrong lengths: Roll takes 4 bytes, Set Heading 2, Ping none.
+    // Wrong lengths: Roll takes 4 bytes (or 5, see below), Set Heading 2, Ping none.
     for (c, len) in [
         (roll(100, 90), 3usize),
-        (roll(100, 90), 5),
+        (roll(100, 90), 6),
+        (cmd::set_heading(h(0)), 1),
         (cmd::ping(), 1),
     ] {
         let mut data = c.data.clone();
@@ -345,6 +346,60 @@ fn every_catalogue_command_gets_a_success_answer() {
         }
     }
     assert_eq!(together.state().decode_errors, 0);
+}
+
+/// What spherov2.py writes to a v1 droid, byte for byte (`spherov2/commands/sphero.py`,
+/// `core.py`): its connect routine (locator flags, collision detection, power notifications,
+/// streaming, LEDs off, locator reset), then driving. Two payloads differ from the
+/// catalogue's: Set RGB LED without the persist flag (3 bytes) and Roll with a trailing
+/// reverse flag (5 bytes). Real droids take them, so the simulator must.
+#[test]
+fn accepts_what_spherov2_py_sends() {
+    let mut b = Bench::open_field();
+    let raw = |did: u8, cid: u8, data: &[u8]| Command {
+        did,
+        cid,
+        data: data.to_vec(),
+    };
+    let connect = [
+        // Locator flags, collision detection, power notifications.
+        raw(0x02, 0x13, &[0, 0, 0, 0, 0, 0, 0]),
+        raw(0x02, 0x12, &[1, 90, 130, 90, 130, 1]),
+        raw(0x00, 0x21, &[1]),
+        // Streaming, always with MASK2 (13 bytes).
+        raw(0x02, 0x11, &[0, 60, 0, 1, 0, 7, 0, 0, 0, 0, 0, 0, 0]),
+        // Main LED off without the persist flag, back LED off, locator reset.
+        raw(0x02, 0x20, &[0, 0, 0]),
+        raw(0x02, 0x21, &[0]),
+        raw(0x02, 0x13, &[0, 0, 0, 0, 0, 0, 0]),
+        // Power state, versions.
+        raw(0x00, 0x20, &[]),
+        raw(0x00, 0x02, &[]),
+    ];
+    for c in &connect {
+        let r = b.send(c);
+        assert_eq!(r.mrsp, Mrsp::Ok, "{c:02X?} → {r:?}");
+    }
+    // spherov2.py unpacks these answers as '>2B3H' and '>8B'.
+    assert_eq!(b.ok(&cmd::get_power_state()).data.len(), 8);
+    assert_eq!(b.ok(&cmd::get_versions()).data.len(), 8);
+    // Its main LED colour, three bytes.
+    b.ok(&raw(0x02, 0x20, &[0, 255, 0]));
+    assert_eq!(&b.state().leds[..3], &[0, 255, 0]);
+    // Its Roll: speed, heading, mode (1 go), reverse flag 0.
+    b.hold(&raw(0x02, 0x30, &[128, 0, 90, 1, 0]), secs(2.0));
+    let st = b.state().clone();
+    assert!(st.x_cm > 50.0 && st.velocity_cm_s > 70.0, "{st:?}");
+    // Reverse flag 1: backs up, still facing 90.
+    b.hold(&raw(0x02, 0x30, &[128, 0, 90, 1, 1]), secs(3.0));
+    let back = b.state().clone();
+    assert!(back.velocity_cm_s < -70.0, "{back:?}");
+    assert!(close(back.yaw_deg, 90.0, 0.01), "{back:?}");
+    assert!(back.x_cm < st.x_cm, "{back:?}");
+    // Mode 0 stops.
+    b.ok(&raw(0x02, 0x30, &[0, 0, 90, 0, 0]));
+    b.run_for(secs(1.0));
+    assert_eq!(b.state().velocity_cm_s, 0.0);
 }
 
 #[test]

@@ -26,6 +26,14 @@ const ID_SENSORS: u8 = 0x03;
 const ID_PRE_SLEEP: u8 = 0x05;
 const ID_COLLISION: u8 = 0x07;
 
+/// Payload lengths that real clients send besides the catalogue's, and real droids accept.
+/// Fix: the simulator refused them with "bad message format", so spherov2.py could not get
+/// through its connect routine (it turns the LEDs off with a 3-byte Set RGB LED, without the
+/// persist flag) nor drive (its Roll carries a fifth byte, the reverse flag).
+fn client_variant(did: u8, cid: u8, len: usize) -> bool {
+    matches!((did, cid, len), (0x02, 0x20, 3) | (0x02, 0x30, 5))
+}
+
 /// The simulated v1 droid.
 #[derive(Debug, Clone)]
 pub struct SimDroidV1 {
@@ -189,7 +197,9 @@ impl SimDroidV1 {
                 vec![],
             );
         };
-        if !schema::length_ok(def.params, p.data.len()) {
+        if !schema::length_ok(def.params, p.data.len())
+            && !client_variant(p.did, p.cid, p.data.len())
+        {
             return (Mrsp::from_byte(0x06), vec![]);
         }
         let d = &p.data;
@@ -274,7 +284,9 @@ impl SimDroidV1 {
                     return (Mrsp::from_byte(0x07), vec![]);
                 }
                 let speed = if d[3] == 0 { 0 } else { d[0] };
-                self.body.drive(speed, heading as f32, false);
+                // spherov2.py's fifth byte: 1 backs up along the heading.
+                let reverse = d.get(4).is_some_and(|&r| r != 0);
+                self.body.drive(speed, heading as f32, reverse);
                 ok
             }
             // Set Raw Motors: the control system lets go; the simulation stops rolling.
