@@ -204,18 +204,7 @@ impl Telemetry {
                     self.velocity_cm_s = Some([vx, vy]);
                 }
                 if let (Some(x), Some(y)) = (s.get("locator_x"), s.get("locator_y")) {
-                    self.x_cm = Some(x);
-                    self.y_cm = Some(y);
-                    let moved = self
-                        .track
-                        .back()
-                        .is_none_or(|(px, py)| (px - x).abs() > 0.5 || (py - y).abs() > 0.5);
-                    if moved {
-                        if self.track.len() >= TRACK_LEN {
-                            self.track.pop_front();
-                        }
-                        self.track.push_back((x, y));
-                    }
+                    self.moved_to(x, y);
                 }
             }
             Notification::Collision(c) => {
@@ -281,6 +270,11 @@ impl Telemetry {
         let y = self.y_cm.unwrap_or(0.0) + cy * v * dt;
         self.yaw = Some(yaw);
         self.velocity_cm_s = Some([sx * v, cy * v]);
+        self.moved_to(x, y);
+    }
+
+    /// The droid is at (x, y) cm: the position, and the track when it moved half a cm.
+    fn moved_to(&mut self, x: f32, y: f32) {
         self.x_cm = Some(x);
         self.y_cm = Some(y);
         let moved = self

@@ -65,7 +65,9 @@ pub trait Family: Sync {
     /// Cheap activity that keeps the droid awake.
     fn ping(&self) -> Command;
     /// Put the droid to sleep (sent on quit when configured).
-    fn sleep(&self) -> Option<Command>;
+    fn sleep(&self) -> Option<Command> {
+        None
+    }
     /// Roll at `speed` (0..=255) toward `heading`; `reverse` backs up along that heading.
     fn drive(&self, speed: u8, heading: Heading, reverse: bool) -> Command;
     /// Whether `cmd` is a drive command (the session remembers the last one written).
@@ -84,26 +86,49 @@ pub trait Family: Sync {
     fn can_reverse(&self) -> bool {
         true
     }
-    fn head(&self, angle: HeadAngle) -> Option<Command>;
-    fn stance(&self, action: LegAction) -> Option<Command>;
+    // Capabilities a family may lack: `None` (the default) means "this droid has none".
+    fn head(&self, _angle: HeadAngle) -> Option<Command> {
+        None
+    }
+    fn stance(&self, _action: LegAction) -> Option<Command> {
+        None
+    }
     /// Ask the stance, and read the answer.
-    fn get_stance(&self) -> Option<Command>;
-    fn animation(&self, id: u16) -> Option<Command>;
-    fn sound(&self, id: u16) -> Option<Command>;
+    fn get_stance(&self) -> Option<Command> {
+        None
+    }
+    fn animation(&self, _id: u16) -> Option<Command> {
+        None
+    }
+    fn sound(&self, _id: u16) -> Option<Command> {
+        None
+    }
     /// The LED command for a script's LED line on `model`.
-    fn led(&self, model: Model, action: &Action) -> Option<Command>;
+    fn led(&self, _model: Model, _action: &Action) -> Option<Command> {
+        None
+    }
     /// Read the battery voltage, and parse the answer.
-    fn battery_request(&self) -> Option<Command>;
-    fn battery_volts(&self, response: &[u8]) -> Option<f32>;
+    fn battery_request(&self) -> Option<Command> {
+        None
+    }
+    fn battery_volts(&self, _response: &[u8]) -> Option<f32> {
+        None
+    }
     /// What droidctl sends after every (re)connect, in order.
     fn setup(&self, model: Model, opts: &SetupOptions) -> Vec<Command>;
     /// Aim mode (rolling droids): show the back light and let turning rotate the droid in
     /// place. `None` when the family cannot aim.
-    fn aim_begin(&self, model: Model) -> Option<Vec<Command>>;
+    fn aim_begin(&self, _model: Model) -> Option<Vec<Command>> {
+        None
+    }
     /// While aiming: face `heading` without rolling.
-    fn aim_turn(&self, heading: Heading) -> Command;
+    fn aim_turn(&self, heading: Heading) -> Command {
+        self.drive(0, heading, false)
+    }
     /// Leave aim mode: the current facing becomes heading 0; back light off.
-    fn aim_end(&self, model: Model) -> Vec<Command>;
+    fn aim_end(&self, _model: Model) -> Vec<Command> {
+        Vec::new()
+    }
 }
 
 /// The family a model speaks.

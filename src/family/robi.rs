@@ -14,10 +14,8 @@ use crate::model::{Model, Protocol};
 use crate::protocol::notify::Notification;
 use crate::protocol::rsrcp::{self, Item};
 use crate::protocol::value::{Fields, Value};
-use crate::protocol::wire::LegAction;
-use crate::script::Action;
 use crate::setup::SetupOptions;
-use crate::units::{HeadAngle, Heading};
+use crate::units::Heading;
 
 /// The Robi 42 family.
 pub struct Robi;
@@ -172,10 +170,6 @@ impl Family for Robi {
         Command::Robi(RobiControl::STOP)
     }
 
-    fn sleep(&self) -> Option<Command> {
-        None
-    }
-
     /// Forward at `speed`, straight: Robi has no heading to steer to. The controller uses
     /// [`Family::steer`] instead; this serves stops and scripts.
     fn drive(&self, speed: u8, _heading: Heading, reverse: bool) -> Command {
@@ -209,52 +203,8 @@ impl Family for Robi {
         false
     }
 
-    fn head(&self, _angle: HeadAngle) -> Option<Command> {
-        None
-    }
-
-    fn stance(&self, _action: LegAction) -> Option<Command> {
-        None
-    }
-
-    fn get_stance(&self) -> Option<Command> {
-        None
-    }
-
-    fn animation(&self, _id: u16) -> Option<Command> {
-        None
-    }
-
-    fn sound(&self, _id: u16) -> Option<Command> {
-        None
-    }
-
-    fn led(&self, _model: Model, _action: &Action) -> Option<Command> {
-        None
-    }
-
-    fn battery_request(&self) -> Option<Command> {
-        None
-    }
-
-    fn battery_volts(&self, _response: &[u8]) -> Option<f32> {
-        None
-    }
-
     /// Nothing to set up: the link's handshake (read, start confirmation) is all.
     fn setup(&self, _model: Model, _opts: &SetupOptions) -> Vec<Command> {
-        Vec::new()
-    }
-
-    fn aim_begin(&self, _model: Model) -> Option<Vec<Command>> {
-        None
-    }
-
-    fn aim_turn(&self, _heading: Heading) -> Command {
-        Command::Robi(RobiControl::STOP)
-    }
-
-    fn aim_end(&self, _model: Model) -> Vec<Command> {
         Vec::new()
     }
 }

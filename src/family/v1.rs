@@ -8,10 +8,9 @@
 use super::{Codec, Command, DroidError, Explained, Family, Incoming, Key, Packet, PacketKind};
 use crate::model::{Model, Protocol};
 use crate::protocol::v1::{self, Decoder, Source, StreamingConfig, cmd};
-use crate::protocol::wire::LegAction;
 use crate::script::{Action, LedGroup};
 use crate::setup::SetupOptions;
-use crate::units::{HeadAngle, Heading};
+use crate::units::Heading;
 
 /// The v1 family.
 pub struct V1;
@@ -212,26 +211,6 @@ impl Family for V1 {
             _ => 0,
         };
         cmd::roll(0, Heading::wrapped(heading as f64), v1::RollState::Stop).into()
-    }
-
-    fn head(&self, _angle: HeadAngle) -> Option<Command> {
-        None
-    }
-
-    fn stance(&self, _action: LegAction) -> Option<Command> {
-        None
-    }
-
-    fn get_stance(&self) -> Option<Command> {
-        None
-    }
-
-    fn animation(&self, _id: u16) -> Option<Command> {
-        None
-    }
-
-    fn sound(&self, _id: u16) -> Option<Command> {
-        None
     }
 
     /// The main RGB LED (script group `front`) and the blue back LED (`back`, brightness).

@@ -593,6 +593,8 @@ macro_rules! wire_enum {
         }
     };
 }
+/// For the other families' own enumerations (v1's Roll state, motor modes).
+pub(crate) use wire_enum;
 
 wire_enum!(
     /// R2 leg actions (Animatronic 0x0D). Waddle starts from bipod (`droid-facts.md` §2).

@@ -2,64 +2,21 @@
 //! `AccelRaw`, `CollisionAxis`, `PowerState`, `CollisionMethod` …) live in
 //! [`crate::protocol::wire`].
 //!
-//! `wire_enum!` is private to `protocol::wire` (not exported), so the two v1 enums below
-//! implement [`Wire`] through a small local macro of the same shape.
+//! The enumerations use the same `wire_enum!` as the shared ones.
 
 use crate::protocol::value::{Fields, Value};
 use crate::protocol::wire::{FieldError, Reader, Size, Wire, parse_uint};
 
-macro_rules! v1_enum {
-    ($(#[$m:meta])* $name:ident { $($variant:ident = $v:literal => $label:literal $(| $alias:literal)*),+ $(,)? }) => {
-        $(#[$m])*
-        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-        pub enum $name { $($variant),+ }
+use crate::protocol::wire::wire_enum;
 
-        impl $name {
-            pub const ALL: &'static [$name] = &[$($name::$variant),+];
-            pub fn to_byte(self) -> u8 { match self { $($name::$variant => $v),+ } }
-            pub fn from_byte(b: u8) -> Option<Self> { match b { $($v => Some($name::$variant),)+ _ => None } }
-            pub fn label(self) -> &'static str { match self { $($name::$variant => $label),+ } }
-        }
-
-        impl std::fmt::Display for $name {
-            fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result { f.write_str(self.label()) }
-        }
-
-        impl Wire for $name {
-            const DESCRIPTION: &'static str = concat!("one of: ", $($label, " "),+);
-            const SIZE: Size = Size::Fixed(1);
-            fn put(&self, out: &mut Vec<u8>) { out.push(self.to_byte()); }
-            fn get(r: &mut Reader<'_>, field: &'static str) -> Result<Self, FieldError> {
-                let b = r.array::<1>(field)?[0];
-                Self::from_byte(b).ok_or(FieldError::Invalid { field, reason: format!("unknown value {b}") })
-            }
-            fn value(&self) -> Value { Value::Enum { value: self.to_byte() as u64, name: Some(self.label()) } }
-            fn parse(text: &str) -> Result<Self, String> {
-                let t = text.trim().to_ascii_lowercase().replace('_', "-");
-                $( if t == $label $(|| t == $alias)* { return Ok($name::$variant); } )+
-                if let Ok(n) = parse_uint(&t, 255) {
-                    if let Some(v) = Self::from_byte(n as u8) { return Ok(v); }
-                }
-                Err(format!("{text:?} is not one of: {}", [$($label),+].join(", ")))
-            }
-            /// Unknown values are kept (`name: None`), not rejected: nothing from a droid is lost.
-            fn decode_into(r: &mut Reader<'_>, name: &'static str, out: &mut Fields) -> Result<(), FieldError> {
-                let b = r.array::<1>(name)?[0];
-                out.push((name, Value::Enum { value: b as u64, name: Self::from_byte(b).map(Self::label) }));
-                Ok(())
-            }
-        }
-    };
-}
-
-v1_enum!(
+wire_enum!(
     /// The state byte of Roll (Sphero 0x30). `droid-facts.md` §4 names 0 stop and 1 go.
     /// spherov2.py (`commands/sphero.py`, `RollModes`) calls 2 "calibrate" (it aims with it);
     /// older clients call the same value "fast rotate". Both names are accepted.
     RollState { Stop = 0 => "stop", Go = 1 => "go", Calibrate = 2 => "calibrate" | "fast-rotate" }
 );
 
-v1_enum!(
+wire_enum!(
     /// Motor modes of Set Raw Motors (Sphero 0x33), as spherov2.py's `RawMotorModes`.
     MotorMode { Off = 0 => "off", Forward = 1 => "forward", Reverse = 2 => "reverse", Brake = 3 => "brake", Ignore = 4 => "ignore" }
 );
