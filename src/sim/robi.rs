@@ -78,7 +78,17 @@ impl SimRobi {
 
     /// The wheel speeds the firmware derives from the remote control, 0..=1 each.
     pub fn wheels(&self) -> (f32, f32) {
-        rsrcp::wheel_speeds(self.velocity, self.steering)
+        let (l, r) = rsrcp::wheel_speeds(self.velocity, self.steering);
+        // Fix: the firmware switches a side's stepper off below 100 Hz (`droid-facts.md` §5);
+        // the mix alone left a slow inner wheel creeping (velocity 100, steering 254: 92 Hz).
+        let stepper = |side: f32| {
+            if rsrcp::stepper_hz(side) > 0.0 {
+                side
+            } else {
+                0.0
+            }
+        };
+        (stepper(l), stepper(r))
     }
 
     /// A write to the remote-control service at `now`.
@@ -99,6 +109,10 @@ impl SimRobi {
     /// The host went away: the robot disables both motors.
     pub fn host_gone(&mut self, now: Duration) {
         self.advance_to(now);
+        // Fix: frames due up to now were kept and handed to the next host right after its
+        // handshake, reporting the motors running on a robot that had stopped. Nobody
+        // received them: they are lost.
+        self.out.clear();
         self.started = false;
         self.velocity = 0;
         self.steering = rsrcp::STEERING_STRAIGHT;
