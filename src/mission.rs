@@ -172,6 +172,8 @@ struct Runner {
     last_heading: Heading,
     events: broadcast::Receiver<SessionEvent>,
     failed: u32,
+    /// A `sleep` line ran: the next `wake` re-runs the connect setup.
+    slept: bool,
 }
 
 fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
@@ -265,10 +267,15 @@ impl Runner {
                 let wake = self.family.wake().unwrap_or_else(|| self.family.ping());
                 if self.request(s.line, wake).await {
                     lock(&self.telemetry).woke();
+                    // After a sleep the droid forgot its streaming and collision settings.
+                    if std::mem::take(&mut self.slept) {
+                        self.session.redo_setup();
+                    }
                 }
             }
             Action::Sleep => {
                 self.driving = None;
+                self.slept = true;
                 if let Some(c) = self.family.sleep() {
                     self.request(s.line, c).await;
                 }
@@ -476,6 +483,7 @@ pub async fn run(
         last_heading: Heading::default(),
         events,
         failed: 0,
+        slept: false,
     };
     for s in steps {
         if session.is_closed() {

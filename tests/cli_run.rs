@@ -309,3 +309,37 @@ async fn final_stop_keeps_the_last_heading() {
         st.yaw_deg
     );
 }
+
+#[test]
+fn telemetry_keeps_flowing_after_sleep_and_wake() {
+    // Sleeping turns streaming off in the droid; the wake line must set it up again, or the
+    // position stays where the droid fell asleep.
+    let dir = Scratch::new("sleepwake");
+    let script = dir.file(
+        "m.txt",
+        "wake\ndrive 80 0 for 1s\nsleep\nwait 1s\nwake\ndrive 120 0 for 2s\n",
+    );
+    let (o, _) = dir.run(&["run", path(&script), "--sim", "bb9e", "--json"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let lines = json_lines(&stdout(&o));
+    let y = |l: &serde_json::Map<String, Value>| l.get("y_cm").and_then(Value::as_f64);
+    let at_sleep = lines
+        .iter()
+        .filter(|l| {
+            l.get("t_ms")
+                .and_then(Value::as_u64)
+                .is_some_and(|t| t <= 1500)
+        })
+        .filter_map(y)
+        .last()
+        .expect("position before sleeping");
+    let end = lines
+        .iter()
+        .rev()
+        .find_map(|l| l.get("done").is_none().then(|| y(l)).flatten())
+        .expect("a final position");
+    assert!(
+        end > at_sleep + 50.0,
+        "the drive after waking shows in the telemetry: {at_sleep} → {end}"
+    );
+}

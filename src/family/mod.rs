@@ -121,10 +121,6 @@ pub trait Family: Sync {
     fn aim_begin(&self, _model: Model) -> Option<Vec<Command>> {
         None
     }
-    /// While aiming: face `heading` without rolling.
-    fn aim_turn(&self, heading: Heading) -> Command {
-        self.drive(0, heading, false)
-    }
     /// Leave aim mode: the current facing becomes heading 0; back light off.
     fn aim_end(&self, _model: Model) -> Vec<Command> {
         Vec::new()

@@ -273,10 +273,6 @@ impl Family for V1 {
         ])
     }
 
-    fn aim_turn(&self, heading: Heading) -> Command {
-        cmd::roll(0, heading, v1::RollState::Go).into()
-    }
-
     fn aim_end(&self, _model: Model) -> Vec<Command> {
         vec![
             // Set Heading 0: where the droid faces now is heading 0.

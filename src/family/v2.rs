@@ -202,7 +202,9 @@ impl Family for V2 {
             Action::LedRgb(LedGroup::Back, rgb) if r2 => (0x0070, rgb.to_vec()),
             Action::LedBrightness(LedGroup::Logic, b) => (0x0008, vec![b]),
             Action::LedBrightness(LedGroup::Holo, b) => (if r2 { 0x0080 } else { 0x0010 }, vec![b]),
+            // BB-9E's "back" light is its aiming LED (bit 3); scripts give it as R G B.
             Action::LedBrightness(LedGroup::Back, b) if !r2 => (0x0008, vec![b]),
+            Action::LedRgb(LedGroup::Back, [r, g, b]) if !r2 => (0x0008, vec![r.max(g).max(b)]),
             _ => return None,
         };
         Some(cmd::set_all_leds_with_16_bit_mask(Mask(mask), Bytes(values)).into())
@@ -262,10 +264,6 @@ impl Family for V2 {
             // Keep stabilisation on so the body turns in place without rolling.
             cmd::set_stabilization(StabilizationIndex::Full).into(),
         ])
-    }
-
-    fn aim_turn(&self, heading: Heading) -> Command {
-        cmd::drive_with_heading(0, heading, DriveFlags::empty()).into()
     }
 
     fn aim_end(&self, _model: Model) -> Vec<Command> {

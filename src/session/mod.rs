@@ -206,6 +206,8 @@ pub(crate) struct Shared {
     /// What the droid said once at connect (Robi's handshake), for subscribers that arrive
     /// later than that.
     pub greeting: Mutex<Vec<Notification>>,
+    /// Run the connect setup again at the next opportunity (after a sleep and wake).
+    pub redo_setup: std::sync::atomic::AtomicBool,
 }
 
 /// A handle to a running session. Cloning is cheap.
@@ -228,6 +230,7 @@ pub fn start(link: Box<dyn Link>, config: SessionConfig) -> SessionHandle {
         shutdown_wake: Notify::new(),
         stop_on_shutdown: std::sync::atomic::AtomicBool::new(false),
         greeting: Mutex::new(Vec::new()),
+        redo_setup: std::sync::atomic::AtomicBool::new(false),
     });
     let (state_tx, state_rx) = watch::channel(LinkState::Connecting);
     let (events, _) = broadcast::channel(config.event_capacity.max(16));
@@ -327,6 +330,15 @@ impl SessionHandle {
 
     pub fn subscribe_log(&self) -> broadcast::Receiver<LogEntry> {
         self.log.subscribe()
+    }
+
+    /// Write the connect setup again, ahead of everything queued: a droid woken from sleep
+    /// has forgotten its streaming, collision and notification settings.
+    pub fn redo_setup(&self) {
+        self.shared
+            .redo_setup
+            .store(true, std::sync::atomic::Ordering::SeqCst);
+        self.shared.wake.notify_one();
     }
 
     /// What the droid announced once when the current connection opened (Robi 42's

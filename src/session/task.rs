@@ -419,6 +419,13 @@ impl Task {
                 self.finish(&mut *codec, &mut conn, chunks, last).await;
                 return Ended::Shutdown;
             }
+            if self
+                .shared
+                .redo_setup
+                .swap(false, std::sync::atomic::Ordering::SeqCst)
+            {
+                self.queue_setup();
+            }
             let has_work = !chunks.is_empty() || !lock(&self.shared.queue).is_empty();
             let deadline = self.pending.values().map(|p| p.deadline).min();
             tokio::select! {

@@ -193,7 +193,9 @@ impl Controller {
                 } else {
                     // The droid's facing is the new heading 0.
                     self.heading = 0.0;
-                    self.last_drive = None;
+                    // As if "stopped at heading 0" had been sent: a fresh stop would overtake
+                    // the queued Set Heading (stops go first) and turn the droid back.
+                    self.last_drive = Some((0, 0, 0));
                     vec![
                         Out::AimEnd,
                         Out::Hint("heading set: forward is where it faces".into()),
@@ -478,6 +480,46 @@ mod tests {
             c.tick(&left, TICK, &R2, true);
         }
         assert_eq!(c.view().heading.degrees(), 315);
+    }
+
+    #[test]
+    fn aim_mode_turns_in_place_and_ends_without_a_drive_that_overtakes_set_heading() {
+        let mut c = Controller::with_family(
+            Config::defaults().control,
+            crate::family::for_model(crate::model::Model::BB8),
+        );
+        let bb8 = DroidView {
+            has_legs: false,
+            has_dome: false,
+            can_aim: true,
+            ..R2
+        };
+        assert!(
+            matches!(c.on_press(Action::Aim, &R2)[0], Out::Hint(_)),
+            "R2 cannot aim"
+        );
+        assert!(c.on_press(Action::Aim, &bb8).contains(&Out::AimBegin));
+        // Forward is ignored while aiming; turning rotates the droid in place (speed 0).
+        let fwd_right = Inputs {
+            forward: true,
+            right: true,
+            ..Inputs::default()
+        };
+        let mut last = Vec::new();
+        for _ in 0..5 {
+            last = drives(&c.tick(&fwd_right, TICK, &bb8, true));
+        }
+        assert_eq!(
+            last,
+            vec![(0, 45, 1)],
+            "v1 Roll: speed 0, heading 45, state go"
+        );
+        assert_eq!(c.view().source, "aim");
+        assert!(c.on_press(Action::Aim, &bb8).contains(&Out::AimEnd));
+        // The next ticks send nothing: a stop at heading 0 would jump the queue ahead of
+        // Set Heading 0 and turn the droid back.
+        assert!(drives(&c.tick(&Inputs::default(), TICK, &bb8, true)).is_empty());
+        assert_eq!(c.view().heading.degrees(), 0);
     }
 
     #[test]
