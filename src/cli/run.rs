@@ -193,6 +193,21 @@ fn opt(v: Option<f32>, prec: usize) -> String {
 }
 
 fn sample_line(s: &mission::Sample) -> String {
+    // Robi 42 reports wheels and frames, not a dome, stance or battery.
+    if let (Some(l), Some(r)) = (s.motor_left_rad_s, s.motor_right_rad_s) {
+        return format!(
+            "[{:>8.2}s] pos ({}, {}) cm  speed {} cm/s  heading {}  motors L {l:.2} R {r:.2} rad/s  frames {} lost {}",
+            s.t_ms as f64 / 1000.0,
+            opt(s.x_cm, 1),
+            opt(s.y_cm, 1),
+            opt(s.speed, 0),
+            s.heading
+                .map(|h| format!("{h}°"))
+                .unwrap_or_else(|| "-".into()),
+            s.frames.unwrap_or(0),
+            s.lost_frames.unwrap_or(0),
+        );
+    }
     format!(
         "[{:>8.2}s] pos ({}, {}) cm  speed {} cm/s  heading {}  head {}°  stance {}  battery {} V  collisions {}",
         s.t_ms as f64 / 1000.0,
