@@ -405,3 +405,94 @@ fn bb8_shows_lights_aims_and_drives() {
     let status = tui.wait_exit(Duration::from_secs(10));
     assert!(status.success(), "{status:?}");
 }
+
+/// A wheel's speed as shown in the Motors panel ("L  3.92 ████░░ …"), rad/s; `side` is
+/// "L" or "R".
+fn shown_motor(screen: &str, side: &str) -> Option<f32> {
+    let line = screen
+        .lines()
+        .find(|l| l.contains("L ") && l.contains(" R ") && l.contains('░'))?;
+    let at = line.find(&format!("{side} "))? + side.len() + 1;
+    line[at..].split_whitespace().next()?.parse().ok()
+}
+
+/// The frame id in the Robi panel's title (" Robi · frame 16777167 ").
+fn shown_frame_id(screen: &str) -> Option<u32> {
+    let at = screen.find("Robi · frame ")? + "Robi · frame ".len();
+    screen[at..].split_whitespace().next()?.parse().ok()
+}
+
+/// The measured link rate in the Robi panel ("link 10.0/s announced …").
+fn shown_link_rate(screen: &str) -> Option<f32> {
+    let line = screen.lines().find(|l| l.contains("announced"))?;
+    let at = line.find("link ")? + 5;
+    line[at..].split("/s").next()?.trim().parse().ok()
+}
+
+/// Robi 42 in the app: the Motors panel in the dome's place and the Robi panel (frame id,
+/// poti, buttons, link quality measured against the announced rate, lost frames) in the
+/// sensors' place; `w` turns both wheels, `s` is refused ("cannot reverse"), `q` quits with
+/// a final stop.
+#[test]
+fn robi_shows_motors_and_io_drives_forward_refuses_reverse() {
+    let mut tui = Tui::start_full(100, 30, false, &[], &["robi"]);
+    tui.wait_for("connected", Duration::from_secs(20));
+    let screen = tui.wait_for("Robi · frame ", Duration::from_secs(10));
+    assert!(screen.contains("Motors"), "{screen}");
+    assert!(
+        !screen.contains(" Dome ") && !screen.contains("pitch"),
+        "no dome or Sphero sensors on Robi:\n{screen}"
+    );
+    // The link quality: about 10 frames/s measured, 100/s announced (MSDT 10 ms).
+    std::thread::sleep(Duration::from_millis(1500));
+    let screen = tui.text();
+    assert!(screen.contains("announced 100/s (10 ms)"), "{screen}");
+    let rate = shown_link_rate(&screen).expect("measured rate on screen");
+    assert!((7.0..13.0).contains(&rate), "measured {rate}/s\n{screen}");
+    assert!(screen.contains(" lost "), "{screen}");
+    assert!(screen.contains("poti "), "{screen}");
+    let first = shown_frame_id(&screen).expect("frame id on screen");
+    assert_eq!(shown_motor(&screen, "L"), Some(0.0), "{screen}");
+    assert_eq!(shown_motor(&screen, "R"), Some(0.0), "{screen}");
+
+    // Forward: both wheels turn at cruise (100/255 of 10 rad/s).
+    tui.hold(b"w", Duration::from_millis(1200));
+    let driving = tui.text();
+    let (l, r) = (
+        shown_motor(&driving, "L").expect("left wheel"),
+        shown_motor(&driving, "R").expect("right wheel"),
+    );
+    assert!(l > 3.5 && r > 3.5, "wheels turning: {l} {r}\n{driving}");
+    assert!(driving.contains("speed 100/255"), "{driving}");
+    assert!(
+        driving.contains("velocity=100 steering=128"),
+        "the packet log shows the remote-control writes:\n{driving}"
+    );
+    let later = shown_frame_id(&driving).expect("frame id");
+    assert_ne!(later, first, "frames keep coming");
+    // Let go: the deadman stops the wheels.
+    std::thread::sleep(Duration::from_millis(1500));
+    let stopped = tui.text();
+    assert_eq!(shown_motor(&stopped, "L"), Some(0.0), "{stopped}");
+
+    // Backward: refused and said, the wheels stay still.
+    tui.hold(b"s", Duration::from_millis(600));
+    let refused = tui.wait_for("cannot reverse", Duration::from_secs(3));
+    assert!(refused.contains("only drives forward"), "{refused}");
+    assert!(refused.contains("speed   0/255"), "{refused}");
+    assert_eq!(shown_motor(&refused, "L"), Some(0.0), "{refused}");
+    assert_eq!(shown_motor(&refused, "R"), Some(0.0), "{refused}");
+
+    tui.send(b"q");
+    let status = tui.wait_exit(Duration::from_secs(10));
+    assert!(status.success(), "{status:?}");
+    // The way out writes a stop: velocity 0, steering straight.
+    let log = tui.log();
+    assert!(
+        log.lines()
+            .any(|l| l.contains("final command") && l.contains("remote-control data=00 80")),
+        "log:\n{log}"
+    );
+    let raw = tui.raw();
+    assert!(pos(&raw, b"\x1b[?1049l") > pos(&raw, b"\x1b[?1049h"));
+}
