@@ -8,6 +8,7 @@
 pub mod body;
 pub mod droid;
 pub mod faults;
+pub mod gatt;
 pub mod link;
 mod physics;
 pub mod robi;
