@@ -662,3 +662,196 @@ fn bb8_has_the_lights_panel_in_colour_not_the_dome() {
     assert!(text.iter().any(|r| r.contains("Lights")));
     assert!(!text.iter().any(|r| r.contains("AIMING")));
 }
+
+/// Robi 42's traffic as the app logs it: the handshake, frames and remote-control writes.
+fn robi_log() -> Vec<LogLine> {
+    use droidctl::family::{Packet as Any, RobiControl, RobiPacket};
+    use droidctl::protocol::rsrcp::{self, Item};
+    let line = |at_ms: u64, dir: Direction, p: RobiPacket| {
+        LogLine::from_entry(&LogEntry {
+            at: ms(at_ms),
+            dir,
+            item: LogItem::Packet {
+                explained: droidctl::family::robi::explain(&p),
+                packet: Any::Robi(p),
+            },
+        })
+    };
+    let mut lines = vec![line(
+        40,
+        Direction::In,
+        RobiPacket::Item(Item::Handshake(rsrcp::Handshake {
+            version: 1,
+            msdt_ms: 10,
+        })),
+    )];
+    for (i, id) in [0xFF_FFFEu32, 0xFF_FFFF, 1].into_iter().enumerate() {
+        let t = 100 + 100 * i as u64;
+        lines.push(line(
+            t,
+            Direction::Out,
+            RobiPacket::Control(RobiControl {
+                velocity: 180,
+                steering: 179,
+            }),
+        ));
+        lines.push(line(
+            t + 3,
+            Direction::In,
+            RobiPacket::Item(Item::Frame(
+                rsrcp::Frame::new(id)
+                    .with_motors(7.06, 4.24)
+                    .with_poti(200)
+                    .with_buttons(rsrcp::Buttons::LEFT | rsrcp::Buttons::CENTER),
+            )),
+        ));
+    }
+    lines
+}
+
+/// Robi 42 driving and bending right: wheels 7.06 and 4.24 rad/s, the left and centre
+/// buttons held, headlights and the left blinkers lit, the piezo sounding, one frame lost
+/// across the 24-bit wrap, 10 frames/s measured against the 100 announced.
+fn robi_driving() -> AppState {
+    use droidctl::protocol::notify::Notification;
+    use droidctl::protocol::rsrcp::{Buttons, Frame, Handshake, Leds};
+    let mut s = AppState::new(Model::Robi42, "Robi 42".into());
+    let (keys, pad) = help_lines();
+    s.help_keys = keys;
+    s.help_gamepad = pad;
+    s.now = Duration::from_secs(31);
+    s.link = LinkState::Connected;
+    s.stats.sent = 140;
+    s.stats.received = 302;
+    s.rate_in = 10.0;
+    s.rate_out = 10.0;
+    s.gamepad = GamepadStatus::NoPad;
+    s.keyboard = KeyboardMode::Emulated;
+    let t = &mut s.telemetry;
+    t.apply(
+        &Notification::RobiHandshake(Handshake {
+            version: 1,
+            msdt_ms: 10,
+        }),
+        ms(0),
+    );
+    let leds = Leds::FRONT_LEFT_HEADLIGHT
+        | Leds::FRONT_RIGHT_HEADLIGHT
+        | Leds::FRONT_LEFT_BLINKER
+        | Leds::BACK_LEFT_BLINKER;
+    // 30 frames 100 ms apart, speeding up, then bending right; id 0 is lost.
+    let mut id = 0xFF_FFF0u32;
+    for i in 0..30u64 {
+        if id == 0 {
+            id = 1;
+        }
+        let v = (i as f32 / 10.0).min(1.0);
+        let (l, r) = if i < 20 {
+            (7.06 * v, 7.06 * v)
+        } else {
+            (7.06, 4.24)
+        };
+        let buttons = if i >= 27 {
+            Buttons::LEFT | Buttons::CENTER
+        } else {
+            Buttons::empty()
+        };
+        let f = Frame::new(id)
+            .with_motors(l, r)
+            .with_poti(120 + i as u8 * 4)
+            .with_buttons(buttons)
+            .with_leds(leds)
+            .with_piezo(true, 440);
+        t.apply(&Notification::RobiFrame(f), ms(1_000 + 100 * i));
+        id = (id + 1) & 0xFF_FFFF;
+    }
+    let c = &mut s.control;
+    c.speed = 180;
+    c.cruise = 100;
+    c.deadman = false;
+    c.steer = Some(0.4);
+    c.source = "keyboard";
+    for l in robi_log() {
+        s.log.push(l);
+    }
+    s
+}
+
+snap!(robi_driving_80x24, robi_driving(), 80, 24);
+snap!(robi_driving_160x48, robi_driving(), 160, 48);
+
+/// The cell where `needle` starts on the first row containing it.
+fn find_cell(text: &[String], needle: &str) -> Option<(u16, u16)> {
+    find_after(text, "", needle)
+}
+
+/// The cell of the first `needle` after `anchor`, on the first row where both are.
+fn find_after(text: &[String], anchor: &str, needle: &str) -> Option<(u16, u16)> {
+    text.iter().enumerate().find_map(|(y, r)| {
+        let from = r.find(anchor)? + anchor.len();
+        let at = from + r[from..].find(needle)?;
+        Some((r[..at].chars().count() as u16, y as u16))
+    })
+}
+
+#[test]
+fn robi_panels_light_pressed_buttons_and_lit_lamps_and_never_cut_the_lost_count() {
+    for (w, h) in [(60, 16), (80, 24), (100, 30), (160, 48)] {
+        let term = render(&robi_driving(), w, h);
+        let buf = term.backend().buffer();
+        let text = rows(buf);
+        let all = text.join("\n");
+        assert!(!all.contains(" Dome ") && !all.contains("pitch"), "{all}");
+        assert!(
+            all.contains("Motors") && all.contains("Robi · frame 14"),
+            "{all}"
+        );
+        // Pressed: left and centre lit, the others not.
+        let lit = |(x, y): (u16, u16)| buf[(x, y)].bg == Color::Yellow;
+        let (left, ok, top) = if h < 30 {
+            ("[L]", "[ok]", "[T]")
+        } else {
+            ("[left]", "[ok]", "[top]")
+        };
+        for (label, on) in [(left, true), (ok, true), (top, false)] {
+            let cell =
+                find_cell(&text, label).unwrap_or_else(|| panic!("{label} at {w}×{h}:\n{all}"));
+            assert_eq!(lit(cell), on, "{label} at {w}×{h}");
+        }
+        // Headlights lit, taillights dark.
+        let lamps = if h < 30 { "[R]" } else { "lamps" };
+        let head = find_after(&text, lamps, "●").expect("headlight");
+        assert!(lit(head), "headlight at {w}×{h}");
+        let tail = find_after(&text, "", "■").expect("taillight");
+        assert!(!lit(tail), "taillight at {w}×{h}");
+        // All eight lamps, also at 60 columns: the back right blinker is the last.
+        let back = find_after(&text, "■■", "▶").or_else(|| find_after(&text, "■ ■", "▶"));
+        assert!(back.is_some(), "back lamps whole at {w}×{h}:\n{all}");
+        assert!(all.contains("440"), "the piezo at {w}×{h}:\n{all}");
+        // Panels with the room show the lamps as on the robot, front and back.
+        if h >= 30 {
+            assert!(
+                all.contains("lamps front") && all.contains("piezo on 440 Hz"),
+                "{w}×{h}:\n{all}"
+            );
+        }
+    }
+    // A long session's lost count is shown whole, also at 80×24.
+    for lost in [12u64, 1234, 987_654] {
+        let mut s = robi_driving();
+        s.telemetry.robi.as_mut().expect("robi").lost = lost;
+        for (w, h) in [(60, 16), (80, 24), (100, 30), (160, 48)] {
+            let text = rows(render(&s, w, h).backend().buffer());
+            let line = text
+                .iter()
+                .find(|r| r.contains(" lost "))
+                .unwrap_or_else(|| panic!("link line at {w}×{h}: {text:#?}"));
+            assert!(
+                line.contains(&format!(" lost {lost}│"))
+                    || line.contains(&format!(" lost {lost} ")),
+                "{w}×{h}: {line}"
+            );
+            assert!(line.contains("10.0/s") && line.contains("100/s"), "{line}");
+        }
+    }
+}

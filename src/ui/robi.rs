@@ -124,23 +124,53 @@ fn lamp(on: bool, label: &'static str) -> Span<'static> {
     }
 }
 
-fn link_quality(r: &RobiTelemetry) -> Line<'static> {
+/// "link 10.0/s announced 100/s (10 ms) lost 3", shortened to fit `width` columns.
+///
+/// Fix: the line was one fixed text that just fit an 80×24 panel with a one-digit count, so
+/// "lost 12" was cut to "lost 1". Now the interval in ms goes first, then "announced"
+/// becomes "of", then the "link" label: the lost count is not cut.
+fn link_quality(r: &RobiTelemetry, width: usize) -> Line<'static> {
     let measured = r
         .measured_fps()
-        .map(|f| format!("{f:.1}"))
+        .map(|f| format!("{f:.1}/s"))
+        .unwrap_or_else(|| "-/s".into());
+    let announced = r
+        .announced_fps()
+        .map(|f| format!("{f:.0}/s"))
         .unwrap_or_else(|| "-".into());
-    let announced = match (r.announced_fps(), r.handshake) {
-        (Some(f), Some(h)) => format!("{f:.0}/s ({} ms)", h.msdt_ms),
-        _ => "-".into(),
+    let ms = r
+        .handshake
+        .map(|h| format!(" ({} ms)", h.msdt_ms))
+        .unwrap_or_default();
+    let lost = r.lost.to_string();
+    // (label, between, interval), longest first.
+    let forms = [
+        ("link ", " announced ", ms.as_str()),
+        ("link ", " announced ", ""),
+        ("link ", " of ", ""),
+        ("", " of ", ""),
+    ];
+    let len = |(label, between, ms): (&str, &str, &str)| {
+        label.len()
+            + measured.chars().count()
+            + between.len()
+            + announced.chars().count()
+            + ms.len()
+            + " lost ".len()
+            + lost.len()
     };
+    let (label, between, ms) = forms
+        .into_iter()
+        .find(|f| len(*f) <= width)
+        .unwrap_or(forms[forms.len() - 1]);
     Line::from(vec![
-        Span::styled("link ", theme::label()),
-        Span::raw(format!("{measured}/s")),
-        Span::styled(" announced ", theme::label()),
-        Span::raw(announced),
+        Span::styled(label, theme::label()),
+        Span::raw(measured),
+        Span::styled(between, theme::label()),
+        Span::raw(format!("{announced}{ms}")),
         Span::styled(" lost ", theme::label()),
         Span::styled(
-            r.lost.to_string(),
+            lost,
             if r.lost > 0 {
                 theme::attention()
             } else {
@@ -218,11 +248,41 @@ pub fn io(frame: &mut Frame, area: Rect, s: &AppState) {
                 None => "-".into(),
             }),
         ]),
-        link_quality(r),
+        link_quality(r, inner.width as usize),
     ];
-    // Short panels (80×24): poti, then buttons and lamps on one row, then the link quality.
     let h = inner.height as usize;
-    if lines.len() > h {
+    if lines.len() > h && h >= 5 {
+        // Fix: a panel a row or two short of the full layout (100×30 gives 6 rows) fell back
+        // to the 3-row one and left half of it empty. The buttons go on one row instead.
+        lines = vec![
+            lines[0].clone(),
+            Line::from(vec![
+                Span::styled("buttons ", theme::label()),
+                lamp(b.contains(Buttons::LEFT), "[left]"),
+                lamp(b.contains(Buttons::TOP), "[top]"),
+                lamp(b.contains(Buttons::CENTER), "[ok]"),
+                lamp(b.contains(Buttons::BOTTOM), "[bot]"),
+                lamp(b.contains(Buttons::RIGHT), "[right]"),
+            ]),
+            lines[4].clone(),
+            lines[5].clone(),
+            lines[6].clone(),
+        ];
+    } else if lines.len() > h {
+        // Short panels (80×24): poti, then buttons and lamps on one row, then the link
+        // quality.
+        let piezo = match r.piezo {
+            Some(p) if p.on => format!(" ♪{}", p.hz),
+            _ => String::new(),
+        };
+        // "[L][T][ok][B][R]" and "◀●●▶/◀■■▶" with the piezo: the label goes when the panel
+        // is too narrow for it (60 columns), rather than the back lamps and the piezo.
+        let glyphs = 16 + 9 + piezo.chars().count();
+        let label = if glyphs + " lamps ".len() <= inner.width as usize {
+            " lamps "
+        } else {
+            " "
+        };
         lines = vec![
             lines[0].clone(),
             Line::from(vec![
@@ -231,7 +291,7 @@ pub fn io(frame: &mut Frame, area: Rect, s: &AppState) {
                 lamp(b.contains(Buttons::CENTER), "[ok]"),
                 lamp(b.contains(Buttons::BOTTOM), "[B]"),
                 lamp(b.contains(Buttons::RIGHT), "[R]"),
-                Span::styled(" lamps ", theme::label()),
+                Span::styled(label, theme::label()),
                 lamp(l.contains(Leds::FRONT_LEFT_BLINKER), "◀"),
                 lamp(l.contains(Leds::FRONT_LEFT_HEADLIGHT), "●"),
                 lamp(l.contains(Leds::FRONT_RIGHT_HEADLIGHT), "●"),
@@ -241,15 +301,9 @@ pub fn io(frame: &mut Frame, area: Rect, s: &AppState) {
                 lamp(l.contains(Leds::BACK_LEFT_TAILLIGHT), "■"),
                 lamp(l.contains(Leds::BACK_RIGHT_TAILLIGHT), "■"),
                 lamp(l.contains(Leds::BACK_RIGHT_BLINKER), "▶"),
-                Span::styled(
-                    match r.piezo {
-                        Some(p) if p.on => format!(" ♪{}", p.hz),
-                        _ => String::new(),
-                    },
-                    theme::attention(),
-                ),
+                Span::styled(piezo, theme::attention()),
             ]),
-            link_quality(r),
+            link_quality(r, inner.width as usize),
         ];
         if h < 3 {
             // Keep the link quality last.
