@@ -3,10 +3,15 @@
 //! BLE notifications are not packet boundaries (`droid-facts.md` §1), so the decoder treats
 //! its input as one byte stream. It never panics, never holds more than `max_body` bytes,
 //! resynchronises on the next SOP after any error, and counts every error kind so the UI can
-//! show them. Bytes are unescaped into one reused buffer: nothing is allocated per byte, one
-//! `Vec` per decoded packet for its payload.
+//! show them. Bytes are unescaped into one reused buffer: nothing is allocated per byte.
+//! [`Decoder::feed`] yields owned packets (one `Vec` per packet for its payload);
+//! [`Decoder::feed_with`] hands out [`PacketRef`]s borrowing that buffer, allocating nothing per
+//! packet, and skips from one framing byte to the next with `memchr`.
 
-use super::packet::{BodyError, EOP, ESC, ESC_EOP, ESC_ESC, ESC_SOP, Packet, SOP, parse_body};
+use super::packet::{
+    BodyError, EOP, ESC, ESC_EOP, ESC_ESC, ESC_SOP, Packet, PacketRef, SOP, parse_body,
+    parse_body_ref,
+};
 use std::fmt;
 
 /// Default bound on an unescaped body. Real packets are far shorter (the longest documented
@@ -164,7 +169,124 @@ impl Decoder {
 
     /// Bytes currently buffered for an unfinished packet (never more than the bound).
     pub fn buffered(&self) -> usize {
-        self.buf.len()
+        match self.state {
+            State::Body { .. } => self.buf.len(),
+            _ => 0,
+        }
+    }
+
+    /// Decode `bytes`, calling `f` with every packet and error they complete, in order. The
+    /// same decoding as [`Decoder::feed`] (same errors, offsets and statistics), but a packet
+    /// borrows the decoder's buffer for the duration of the call: nothing is allocated per
+    /// packet (errors still carry their detail text).
+    pub fn feed_with<F>(&mut self, bytes: &[u8], mut f: F)
+    where
+        F: FnMut(Decoded<'_>),
+    {
+        let base = self.offset;
+        let n = bytes.len();
+        let mut i = 0;
+        while i < n {
+            match self.state {
+                State::Hunting => match memchr::memchr(SOP, &bytes[i..]) {
+                    None => {
+                        self.garbage(base + i as u64, (n - i) as u64);
+                        i = n;
+                    }
+                    Some(k) => {
+                        if k > 0 {
+                            self.garbage(base + i as u64, k as u64);
+                        }
+                        if let Some(e) = self.take_garbage() {
+                            f(Decoded::Error(e));
+                        }
+                        self.start_packet(base + (i + k) as u64);
+                        i += k + 1;
+                    }
+                },
+                State::Discarding => match memchr::memchr2(SOP, EOP, &bytes[i..]) {
+                    None => {
+                        self.stats.skipped_bytes += (n - i) as u64;
+                        i = n;
+                    }
+                    Some(k) => {
+                        self.stats.skipped_bytes += k as u64;
+                        if bytes[i + k] == SOP {
+                            self.start_packet(base + (i + k) as u64);
+                        } else {
+                            self.stats.skipped_bytes += 1;
+                            self.state = State::Hunting;
+                        }
+                        i += k + 1;
+                    }
+                },
+                State::Body { escaped: false } => {
+                    let rest = &bytes[i..];
+                    let run = memchr::memchr3(SOP, EOP, ESC, rest).unwrap_or(rest.len());
+                    if run > 0 {
+                        let room = self.max_body - self.buf.len();
+                        if run > room {
+                            // The byte after the room is the one that does not fit.
+                            self.buf.extend_from_slice(&rest[..room]);
+                            self.packet_wire_len += room as u64 + 1;
+                            i += room + 1;
+                            let detail = format!("body longer than {} bytes", self.max_body);
+                            f(Decoded::Error(
+                                self.abandon(DecodeErrorKind::Oversize, detail),
+                            ));
+                            continue;
+                        }
+                        self.buf.extend_from_slice(&rest[..run]);
+                        self.packet_wire_len += run as u64;
+                        i += run;
+                        if i == n {
+                            break;
+                        }
+                    }
+                    let at = base + i as u64;
+                    let b = bytes[i];
+                    i += 1;
+                    if b == EOP {
+                        self.packet_wire_len += 1;
+                        self.state = State::Hunting;
+                        let offset = self.packet_start;
+                        match parse_body_ref(&self.buf) {
+                            Ok(packet) => {
+                                self.stats.packets += 1;
+                                f(Decoded::Packet { offset, packet });
+                            }
+                            Err((e, packet)) => {
+                                let packet = packet.map(|p| p.to_packet());
+                                let e = self.body_error(e, packet);
+                                self.buf.clear();
+                                f(Decoded::Error(e));
+                            }
+                        }
+                    } else if let Some(Err(e)) = self.step(b, at) {
+                        f(Decoded::Error(e));
+                    }
+                }
+                State::Body { escaped: true } => {
+                    let at = base + i as u64;
+                    let b = bytes[i];
+                    i += 1;
+                    if let Some(Err(e)) = self.step(b, at) {
+                        f(Decoded::Error(e));
+                    }
+                }
+            }
+        }
+        self.offset = base + n as u64;
+        self.stats.bytes += n as u64;
+    }
+
+    /// `len` bytes outside any packet from `at`: one pending run, reported when it ends.
+    fn garbage(&mut self, at: u64, len: u64) {
+        self.stats.skipped_bytes += len;
+        if self.garbage_start.is_none() {
+            self.garbage_start = Some(at);
+        }
+        self.garbage_len += len;
     }
 
     /// Decode `bytes`, yielding every packet and error they complete. The iterator must be
@@ -242,24 +364,29 @@ impl Decoder {
     fn end_packet(&mut self) -> Result<Packet, DecodeError> {
         self.state = State::Hunting;
         let result = parse_body(&self.buf);
-        let len = self.packet_wire_len;
         self.buf.clear();
         match result {
             Ok(p) => {
                 self.stats.packets += 1;
                 Ok(p)
             }
-            Err((BodyError::TooShort { needed, got }, _)) => {
-                self.stats.skipped_bytes += len;
+            Err((e, packet)) => Err(self.body_error(e, packet)),
+        }
+    }
+
+    /// The error for a complete body that is not a packet; its wire bytes are skipped.
+    fn body_error(&mut self, e: BodyError, packet: Option<Packet>) -> DecodeError {
+        self.stats.skipped_bytes += self.packet_wire_len;
+        match e {
+            BodyError::TooShort { needed, got } => {
                 let detail = format!("{got} body byte(s), its flags need at least {needed}");
-                Err(self.error(DecodeErrorKind::TooShort, self.packet_start, detail))
+                self.error(DecodeErrorKind::TooShort, self.packet_start, detail)
             }
-            Err((BodyError::BadChecksum { expected, got }, packet)) => {
-                self.stats.skipped_bytes += len;
+            BodyError::BadChecksum { expected, got } => {
                 let detail = format!("checksum 0x{got:02X}, expected 0x{expected:02X}");
                 let mut e = self.error(DecodeErrorKind::BadChecksum, self.packet_start, detail);
                 e.packet = packet.map(Box::new);
-                Err(e)
+                e
             }
         }
     }
@@ -331,6 +458,17 @@ impl Decoder {
             }
         }
     }
+}
+
+/// What [`Decoder::feed_with`] reports.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Decoded<'a> {
+    /// A packet, borrowing the decoder's buffer; `offset` is its SOP's stream offset.
+    Packet {
+        offset: u64,
+        packet: PacketRef<'a>,
+    },
+    Error(DecodeError),
 }
 
 /// Iterator returned by [`Decoder::feed`].
@@ -522,5 +660,103 @@ mod tests {
         let first = d.feed(&bytes).next();
         assert!(first.is_some());
         assert_eq!(d.stats().packets, 2);
+    }
+}
+
+#[cfg(test)]
+mod feed_with_tests {
+    use super::*;
+    use crate::hex;
+    use proptest::prelude::*;
+
+    /// Everything `feed` reports, with `feed_with`'s packet offsets left out.
+    fn via_feed(
+        bytes: &[u8],
+        chunk: usize,
+        max: usize,
+    ) -> (Vec<Result<Packet, DecodeError>>, DecoderStats) {
+        let mut d = Decoder::with_max_body(max);
+        let mut out = Vec::new();
+        for c in bytes.chunks(chunk.max(1)) {
+            out.extend(d.feed(c));
+        }
+        out.extend(d.finish().into_iter().map(Err));
+        (out, *d.stats())
+    }
+
+    fn via_feed_with(
+        bytes: &[u8],
+        chunk: usize,
+        max: usize,
+    ) -> (Vec<Result<Packet, DecodeError>>, DecoderStats) {
+        let mut d = Decoder::with_max_body(max);
+        let mut out = Vec::new();
+        for c in bytes.chunks(chunk.max(1)) {
+            d.feed_with(c, |e| {
+                out.push(match e {
+                    Decoded::Packet { packet, .. } => Ok(packet.to_packet()),
+                    Decoded::Error(e) => Err(e),
+                })
+            });
+            assert!(d.buffered() <= max.max(8));
+        }
+        out.extend(d.finish().into_iter().map(Err));
+        (out, *d.stats())
+    }
+
+    #[test]
+    fn packet_offsets_are_their_sops() {
+        let bytes =
+            hex::parse("01 8D 0A 13 0D 00 D5 D8 8D 0A 1A 0E AB 05 00 AB 23 AB 50 BD D8").unwrap();
+        let mut d = Decoder::new();
+        let mut offsets = Vec::new();
+        d.feed_with(&bytes, |e| {
+            if let Decoded::Packet { offset, packet } = e {
+                offsets.push((offset, packet.data.len()));
+            }
+        });
+        assert_eq!(offsets, vec![(1, 0), (8, 3)]);
+    }
+
+    fn framing_heavy() -> impl Strategy<Value = Vec<u8>> {
+        // Mostly real packets, with framing bytes and noise in between.
+        let packet = (
+            any::<u8>(),
+            any::<u8>(),
+            any::<u8>(),
+            proptest::collection::vec(any::<u8>(), 0..24),
+        )
+            .prop_map(|(did, cid, seq, data)| Packet::command(did, cid, seq, data).encode());
+        let noise = proptest::collection::vec(
+            prop_oneof![
+                Just(SOP),
+                Just(EOP),
+                Just(ESC),
+                Just(0x05u8),
+                Just(0x23u8),
+                any::<u8>()
+            ],
+            0..6,
+        );
+        proptest::collection::vec((packet, noise), 0..12).prop_map(|v| {
+            v.into_iter()
+                .flat_map(|(mut p, n)| {
+                    p.extend(n);
+                    p
+                })
+                .collect()
+        })
+    }
+
+    proptest! {
+        #[test]
+        fn feed_with_agrees_with_feed(bytes in framing_heavy(), chunk in 1usize..40, max in 8usize..40) {
+            prop_assert_eq!(via_feed(&bytes, chunk, max), via_feed_with(&bytes, chunk, max));
+        }
+
+        #[test]
+        fn feed_with_agrees_on_noise(bytes in proptest::collection::vec(any::<u8>(), 0..300), chunk in 1usize..64) {
+            prop_assert_eq!(via_feed(&bytes, chunk, 16), via_feed_with(&bytes, chunk, 16));
+        }
     }
 }

@@ -13,12 +13,12 @@ pub mod sensor;
 pub use super::{value, wire};
 
 pub use catalog::{Command, CommandDef, cmd};
-pub use decoder::{DecodeError, DecodeErrorKind, Decoder, DecoderStats};
+pub use decoder::{DecodeError, DecodeErrorKind, Decoded, Decoder, DecoderStats};
 pub use device::Device;
 pub use error::ErrorCode;
 pub use flags::Flags;
 pub use notify::{Collision, Notification};
-pub use packet::Packet;
+pub use packet::{Packet, PacketRef};
 pub use sensor::{SensorSample, StreamingConfig};
 pub use value::{Fields, Value};
 

@@ -172,10 +172,50 @@ pub enum BodyError {
     },
 }
 
-/// Parse an unescaped body (everything between SOP and EOP, checksum included).
-/// The checksum is verified; a packet whose checksum fails is still returned alongside the
-/// error so a diagnostic tool can show what it held.
-pub fn parse_body(body: &[u8]) -> Result<Packet, (BodyError, Option<Packet>)> {
+/// A decoded packet whose payload borrows the decoder's buffer: what
+/// [`Decoder::feed_with`](super::Decoder::feed_with) hands out, so decoding allocates nothing
+/// per packet. [`PacketRef::to_packet`] makes an owned [`Packet`] when one is needed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct PacketRef<'a> {
+    pub flags: Flags,
+    pub ext_flags: Option<u8>,
+    pub tid: Option<u8>,
+    pub sid: Option<u8>,
+    pub did: u8,
+    pub cid: u8,
+    pub seq: u8,
+    pub err: Option<ErrorCode>,
+    pub data: &'a [u8],
+}
+
+impl PacketRef<'_> {
+    pub fn to_packet(&self) -> Packet {
+        Packet {
+            flags: self.flags,
+            ext_flags: self.ext_flags,
+            tid: self.tid,
+            sid: self.sid,
+            did: self.did,
+            cid: self.cid,
+            seq: self.seq,
+            err: self.err,
+            data: self.data.to_vec(),
+        }
+    }
+
+    pub fn is_response(&self) -> bool {
+        self.flags.contains(Flags::IS_RESPONSE)
+    }
+
+    /// A notification: not a response, and SEQ 0xFF.
+    pub fn is_notification(&self) -> bool {
+        !self.is_response() && self.seq == NOTIFICATION_SEQ
+    }
+}
+
+/// Parse an unescaped body (everything between SOP and EOP, checksum included) without
+/// copying the payload. On a bad checksum the packet as read comes back with the error.
+pub fn parse_body_ref(body: &[u8]) -> Result<PacketRef<'_>, (BodyError, Option<PacketRef<'_>>)> {
     let got = body.len();
     let Some(&flag_byte) = body.first() else {
         return Err((BodyError::TooShort { needed: 5, got }, None));
@@ -203,21 +243,16 @@ pub fn parse_body(body: &[u8]) -> Result<Packet, (BodyError, Option<Packet>)> {
     let ext_flags = take(ext);
     let tid_v = take(tid);
     let sid_v = take(sid);
-    let did = body[i];
-    let cid = body[i + 1];
-    let seq = body[i + 2];
-    let err_v = (err == 1).then(|| ErrorCode::from_byte(body[i + 3]));
-    let data = body[header..got - 1].to_vec();
-    let packet = Packet {
+    let packet = PacketRef {
         flags,
         ext_flags,
         tid: tid_v,
         sid: sid_v,
-        did,
-        cid,
-        seq,
-        err: err_v,
-        data,
+        did: body[i],
+        cid: body[i + 1],
+        seq: body[i + 2],
+        err: (err == 1).then(|| ErrorCode::from_byte(body[i + 3])),
+        data: &body[header..got - 1],
     };
     let expected = checksum(&body[..got - 1]);
     let chk = body[got - 1];
@@ -225,6 +260,15 @@ pub fn parse_body(body: &[u8]) -> Result<Packet, (BodyError, Option<Packet>)> {
         return Err((BodyError::BadChecksum { expected, got: chk }, Some(packet)));
     }
     Ok(packet)
+}
+
+/// Parse an unescaped body (everything between SOP and EOP, checksum included).
+/// The checksum is verified; a packet whose checksum fails is still returned alongside the
+/// error so a diagnostic tool can show what it held.
+pub fn parse_body(body: &[u8]) -> Result<Packet, (BodyError, Option<Packet>)> {
+    parse_body_ref(body)
+        .map(|p| p.to_packet())
+        .map_err(|(e, p)| (e, p.map(|p| p.to_packet())))
 }
 
 #[cfg(test)]
