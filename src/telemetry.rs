@@ -81,17 +81,32 @@ pub struct RobiTelemetry {
     pub frames: u64,
     /// Frames missing from the id sequence (ids are modulo 2^24).
     pub lost: u64,
-    /// Arrival times of the last frames, for the measured rate.
+    /// Arrival times of the last frames (this connection's), for the measured rate.
     arrivals: VecDeque<Duration>,
+    /// The next frame starts a new id sequence (after a handshake: a new connection).
+    new_sequence: bool,
     /// Recent motor speeds (left, right), oldest first.
     pub history: VecDeque<(f32, f32)>,
 }
 
 impl RobiTelemetry {
+    /// A handshake: a new connection (the robot sends it once per connection).
+    ///
+    /// Fix: the frame-id gap and the rate window used to run on across a reconnect, so a
+    /// robot that had restarted (ids from 0 again) counted some 16.7 million lost frames, and
+    /// the outage itself was averaged into the measured rate for the next 5 s. The frames
+    /// before and after a reconnect are not one sequence: neither is counted across it.
+    fn handshake_seen(&mut self, h: rsrcp::Handshake) {
+        self.handshake = Some(h);
+        self.new_sequence = true;
+        self.arrivals.clear();
+    }
+
     fn frame(&mut self, f: &rsrcp::Frame, at: Duration) {
-        if let Some(prev) = self.frame_id {
+        if let Some(prev) = self.frame_id.filter(|_| !self.new_sequence) {
             self.lost += rsrcp::frame_gap(prev, f.frame_id) as u64;
         }
+        self.new_sequence = false;
         self.frame_id = Some(f.frame_id);
         self.frames += 1;
         if let Some(m) = f.motors {
@@ -222,9 +237,10 @@ impl Telemetry {
             // v1: 1 charging, 2 OK, 3 low, 4 critical → the v2 scale 1 ok, 2 low, 3 critical.
             Notification::PowerState(s @ 2..=4) => self.battery_voltage_state = Some(s - 1),
             Notification::PowerState(_) => {}
-            Notification::RobiHandshake(h) => {
-                self.robi.get_or_insert_with(Default::default).handshake = Some(*h)
-            }
+            Notification::RobiHandshake(h) => self
+                .robi
+                .get_or_insert_with(Default::default)
+                .handshake_seen(*h),
             Notification::RobiFrame(f) => {
                 self.samples += 1;
                 let robi = self.robi.get_or_insert_with(Default::default);

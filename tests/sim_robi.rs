@@ -848,9 +848,51 @@ async fn a_dropped_link_stops_the_robot_and_the_session_resumes_at_speed_0() {
         let m = f.motors.unwrap();
         assert_eq!((m.left_rad_s, m.right_rad_s), (0.0, 0.0), "at {t:?}: {f:?}");
     }
-    // The wrap and the reconnect are no lost frames beyond the air's one in 40.
+    // The wrap and the reconnect are no lost frames beyond the air's one in 40, and the
+    // measured rate is this connection's: the outage is not averaged in.
     let r = c.telemetry.robi.as_ref().unwrap();
     assert!(r.lost <= 3, "{r:?}");
+    let fps = r.measured_fps().unwrap();
+    assert!(
+        close(fps, 10.0, 0.6),
+        "measured {fps}/s after the reconnect"
+    );
     drop(c);
     s.shutdown_stopped(vec![]).await;
+}
+
+/// Link quality across a reconnect to a robot that restarted meanwhile: its frame ids begin
+/// again from 0. The new handshake starts a new sequence: nothing is lost between the two,
+/// and the measured rate is the new connection's.
+#[test]
+fn a_new_handshake_starts_a_new_frame_sequence() {
+    let hs = Notification::RobiHandshake(Handshake {
+        version: 1,
+        msdt_ms: 10,
+    });
+    let frame = |id: u32| Notification::RobiFrame(Frame::new(id).with_motors(0.0, 0.0));
+    let mut t = Telemetry::default();
+    t.apply(&hs, ms(0));
+    for (i, id) in (5_000..5_030).enumerate() {
+        // One lost on the air: 5 010 never arrives.
+        if id != 5_010 {
+            t.apply(&frame(id), ms(100 + 100 * i as u64));
+        }
+    }
+    let r = t.robi.as_ref().unwrap();
+    assert_eq!((r.frames, r.lost), (29, 1));
+    // Link down for 4 s; the robot restarted: ids from 0.
+    t.apply(&hs, ms(7_000));
+    for i in 0..10u32 {
+        t.apply(&frame(i), ms(7_100 + 100 * i as u64));
+    }
+    let r = t.robi.as_ref().unwrap();
+    assert_eq!(r.frames, 39);
+    assert_eq!(r.lost, 1, "nothing lost across the reconnect: {r:?}");
+    let fps = r.measured_fps().unwrap();
+    assert!(close(fps, 10.0, 1e-3), "the new connection's rate: {fps}");
+    assert_eq!(r.frame_id, Some(9));
+    // Within the new connection, gaps count again.
+    t.apply(&frame(12), ms(8_100));
+    assert_eq!(t.robi.as_ref().unwrap().lost, 3);
 }
