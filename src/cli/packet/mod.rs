@@ -6,9 +6,14 @@
 //! from the first start-of-packet byte) and the helpers the families share. Each family's
 //! decoding, encoding and listing lives in its own file.
 
+mod btsnoop;
+mod file;
 mod rsrcp;
 mod v1;
 mod v2;
+
+pub use file::{FileSummary, decode_reader};
+// `DecodeArgs` is public for `decode_reader`.
 
 pub use v2::{encode, packet_json};
 
@@ -21,15 +26,34 @@ use std::io::Write;
 
 #[derive(Debug, Subcommand)]
 pub enum PacketCmd {
-    /// Decode hex bytes into explained packets (v2, v1 or RSRCP).
+    /// Decode hex bytes, a file or a Bluetooth snoop log into explained packets (v2, v1 or
+    /// RSRCP).
     ///
     /// Spaces, colons and 0x prefixes are fine. Without --protocol the family is the one of
     /// the first start-of-packet byte in the input: 8D v2, FF v1, 7E RSRCP (v2 when there is
     /// none). v1 bytes are read as sent by the host unless --from droid says otherwise.
+    /// --file reads a byte stream of any size (binary or hex text) in constant memory;
+    /// --btsnoop reads an HCI snoop log and decodes the droid's traffic in it.
     Decode {
         /// The bytes, as one or more hex words.
-        #[arg(required = true, num_args = 1..)]
+        #[arg(required_unless_present_any = ["file", "btsnoop"], num_args = 1..)]
         hex: Vec<String>,
+        /// Decode the byte stream in FILE (`-` for standard input): binary, or hex text
+        /// (detected from the first 64 KiB). Implies --stream; ends with a summary.
+        #[arg(long, value_name = "FILE", conflicts_with_all = ["hex", "btsnoop"])]
+        file: Option<String>,
+        /// Decode the droid traffic in an HCI snoop log (btsnoop format: Android's
+        /// btsnoop_hci.log, `btmon -w`): ATT writes and notifications, by the characteristic
+        /// handles found in the log's GATT discovery (or --handle).
+        #[arg(long, value_name = "FILE", conflicts_with = "hex")]
+        btsnoop: Option<String>,
+        /// With --btsnoop: the ATT handle(s) of the droid's characteristics, for a log that
+        /// starts after the GATT discovery (decimal or 0x hex; repeat for several).
+        #[arg(long, value_name = "N", requires = "btsnoop")]
+        handle: Vec<String>,
+        /// With --file or --btsnoop: print only the summary (counts per kind and error kind).
+        #[arg(long)]
+        summary: bool,
         /// Protocol family: v2 (R2-D2, R2-Q5, BB-9E), v1 (BB-8, SPRK+, Ollie) or rsrcp
         /// (Robi 42). Default: detected from the first SOP byte (8D, FF or 7E).
         #[arg(long, value_name = "v2|v1|rsrcp")]
@@ -172,8 +196,11 @@ pub fn run(cmd: PacketCmd, out: &mut dyn Write) -> Result<i32, CliError> {
             mask2,
             frames,
             request,
+            file,
+            btsnoop,
+            handle,
+            summary,
         } => {
-            let bytes = hex::parse(&hex.join(" ")).map_err(CliError::usage)?;
             let opts = DecodeArgs {
                 protocol,
                 from,
@@ -183,6 +210,20 @@ pub fn run(cmd: PacketCmd, out: &mut dyn Write) -> Result<i32, CliError> {
                 frames,
                 request,
             };
+            if let Some(path) = btsnoop {
+                let handles = handle
+                    .iter()
+                    .map(|h| uint_opt("handle", h, u16::MAX as u64).map(|v| v as u16))
+                    .collect::<Result<Vec<_>, _>>()?;
+                return btsnoop::decode(&path, opts, &handles, json, summary, out);
+            }
+            if let Some(path) = file {
+                return file::decode_path(&path, opts, json, summary, out);
+            }
+            if summary {
+                return Err(CliError::usage("--summary applies to --file and --btsnoop"));
+            }
+            let bytes = hex::parse(&hex.join(" ")).map_err(CliError::usage)?;
             decode(&bytes, opts, Output { stream, json }, out)
         }
         PacketCmd::Encode {
@@ -195,23 +236,21 @@ pub fn run(cmd: PacketCmd, out: &mut dyn Write) -> Result<i32, CliError> {
 }
 
 /// `decode`'s options other than the bytes and the output form, as given.
-struct DecodeArgs {
-    protocol: Option<String>,
-    from: Option<String>,
-    sensor_mask: Option<String>,
-    ext_mask: Option<String>,
-    mask2: Option<String>,
-    frames: Option<String>,
-    request: Option<String>,
+#[derive(Debug, Clone, Default)]
+pub struct DecodeArgs {
+    pub protocol: Option<String>,
+    pub from: Option<String>,
+    pub sensor_mask: Option<String>,
+    pub ext_mask: Option<String>,
+    pub mask2: Option<String>,
+    pub frames: Option<String>,
+    pub request: Option<String>,
 }
 
-fn decode(
-    bytes: &[u8],
-    args: DecodeArgs,
-    output: Output,
-    out: &mut dyn Write,
-) -> Result<i32, CliError> {
-    let (family, why) = match &args.protocol {
+/// The family to decode `bytes` as: `--protocol`, or the first SOP byte's (v2 without one),
+/// with the reason for messages.
+fn choose_family(args: &DecodeArgs, bytes: &[u8]) -> Result<(Protocol, String), CliError> {
+    Ok(match &args.protocol {
         Some(p) => (Protocol::parse(p)?, String::new()),
         None => match Protocol::detect(bytes) {
             Some((p, at)) => (
@@ -223,7 +262,35 @@ fn decode(
             ),
             None => (Protocol::V2, String::new()),
         },
-    };
+    })
+}
+
+/// The per-family decoding options, checked against the family.
+enum FamilyOpts {
+    V2 {
+        mask: Option<u32>,
+        ext_mask: Option<u32>,
+    },
+    V1(v1::DecodeOpts),
+    Rsrcp,
+}
+
+fn decode(
+    bytes: &[u8],
+    args: DecodeArgs,
+    output: Output,
+    out: &mut dyn Write,
+) -> Result<i32, CliError> {
+    let (family, why) = choose_family(&args, bytes)?;
+    match family_opts(args, family, &why)? {
+        FamilyOpts::V2 { mask, ext_mask } => v2::decode(bytes, output, mask, ext_mask, out),
+        FamilyOpts::V1(opts) => v1::decode(bytes, output, &opts, out),
+        FamilyOpts::Rsrcp => rsrcp::decode(bytes, output, out),
+    }
+}
+
+/// Check the options against `family` (`why` says how it was chosen) and parse them.
+fn family_opts(args: DecodeArgs, family: Protocol, why: &str) -> Result<FamilyOpts, CliError> {
     // An option another family reads is refused rather than ignored: a mask given for the
     // wrong family would silently change nothing.
     let only = |flag: &str, given: bool, fams: &[Protocol]| -> Result<(), CliError> {
@@ -253,23 +320,20 @@ fn decode(
         .transpose()
     };
     let sensor_mask = mask("--sensor-mask", args.sensor_mask)?;
-    match family {
-        Protocol::V2 => {
-            let ext_mask = mask("--ext-mask", args.ext_mask)?;
-            v2::decode(bytes, output, sensor_mask, ext_mask, out)
-        }
-        Protocol::V1 => {
-            let opts = v1::DecodeOpts {
-                source: from.unwrap_or(crate::protocol::v1::Source::Host),
-                mask: sensor_mask,
-                mask2: mask("--mask2", args.mask2)?,
-                frames: args.frames.as_deref().map(v1::parse_frames).transpose()?,
-                request: args.request.as_deref().map(v1::parse_request).transpose()?,
-            };
-            v1::decode(bytes, output, &opts, out)
-        }
-        Protocol::Rsrcp => rsrcp::decode(bytes, output, out),
-    }
+    Ok(match family {
+        Protocol::V2 => FamilyOpts::V2 {
+            mask: sensor_mask,
+            ext_mask: mask("--ext-mask", args.ext_mask)?,
+        },
+        Protocol::V1 => FamilyOpts::V1(v1::DecodeOpts {
+            source: from.unwrap_or(crate::protocol::v1::Source::Host),
+            mask: sensor_mask,
+            mask2: mask("--mask2", args.mask2)?,
+            frames: args.frames.as_deref().map(v1::parse_frames).transpose()?,
+            request: args.request.as_deref().map(v1::parse_request).transpose()?,
+        }),
+        Protocol::Rsrcp => FamilyOpts::Rsrcp,
+    })
 }
 
 /// `encode`: `--protocol` may come before NAME or among its parameters.

@@ -43,7 +43,7 @@ pub(super) struct DecodeOpts {
 }
 
 impl DecodeOpts {
-    fn streaming(&self) -> Result<Option<StreamingConfig>, CliError> {
+    pub(super) fn streaming(&self) -> Result<Option<StreamingConfig>, CliError> {
         if self.mask.is_none() && self.mask2.is_none() {
             if self.frames.is_some() {
                 return Err(CliError::usage(
@@ -229,7 +229,7 @@ fn sop2_names(sop2: u8) -> String {
 }
 
 /// `received` is the wire as it arrived when the checksum failed (`None` when it was fine).
-fn packet_text(p: &Packet, received: Option<&[u8]>, d: &Described) -> String {
+pub(super) fn packet_text(p: &Packet, received: Option<&[u8]>, d: &Described) -> String {
     let encoded = p.encode().ok();
     let mut s = String::new();
     let mut line = |k: &str, v: String| s.push_str(&format!("{k:<9} {v}\n"));

@@ -128,7 +128,7 @@ pub fn packet_json(p: &Packet, checksum_ok: bool, d: &Described) -> serde_json::
 }
 
 /// `received` is the wire as it arrived when the checksum failed (`None` when it was fine).
-fn packet_text(p: &Packet, received: Option<&[u8]>, d: &Described) -> String {
+pub(super) fn packet_text(p: &Packet, received: Option<&[u8]>, d: &Described) -> String {
     let checksum_ok = received.is_none();
     let mut s = String::new();
     let mut line = |k: &str, v: String| s.push_str(&format!("{k:<9} {v}\n"));

@@ -1,0 +1,676 @@
+//! `droidctl packet decode --file FILE`: a byte stream of any size, binary or hex text, read
+//! from a file or standard input in fixed-size blocks and decoded as it comes: memory stays
+//! flat whatever the input's size. The output ends with a summary: packets per kind and
+//! decode errors per kind.
+//!
+//! v2 goes through [`Decoder::feed_with`](crate::protocol::v2::Decoder::feed_with), so with
+//! `--summary` nothing is allocated per packet.
+
+use super::{CliError, DecodeArgs, FamilyOpts, io_err, v1, v2};
+use crate::protocol::rsrcp::{FrameErrorKind, Framer};
+use crate::protocol::v1 as p1;
+use crate::protocol::v2 as p2;
+use serde_json::{Map, Value, json};
+use std::io::{Read, Write};
+
+/// How much is read at a time; also how much the hex-or-binary and family sniffing look at.
+pub const BLOCK: usize = 64 * 1024;
+
+/// What a file decode found.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct FileSummary {
+    pub protocol: &'static str,
+    /// Whether the input was hex text.
+    pub hex: bool,
+    /// Bytes decoded (after hex conversion).
+    pub bytes: u64,
+    pub packets: u64,
+    /// Packets per kind (`command`, `response`, `notification`; RSRCP `handshake`, `frame`).
+    pub kinds: Vec<(&'static str, u64)>,
+    /// Errors per kind, every kind of the family (zeros included).
+    pub errors: Vec<(&'static str, u64)>,
+}
+
+impl FileSummary {
+    pub fn error_total(&self) -> u64 {
+        self.errors.iter().map(|(_, n)| n).sum()
+    }
+
+    fn json(&self) -> Value {
+        let map = |v: &[(&'static str, u64)]| {
+            Value::Object(v.iter().map(|(k, n)| (k.to_string(), json!(n))).collect())
+        };
+        json!({"summary": {
+            "protocol": self.protocol,
+            "input": if self.hex { "hex" } else { "binary" },
+            "bytes": self.bytes,
+            "packets": self.packets,
+            "kinds": map(&self.kinds),
+            "errors": map(&self.errors),
+            "error_total": self.error_total(),
+        }})
+    }
+
+    fn text(&self) -> String {
+        let kinds: Vec<String> = self
+            .kinds
+            .iter()
+            .filter(|(_, n)| *n > 0)
+            .map(|(k, n)| format!("{k} {n}"))
+            .collect();
+        let errors: Vec<String> = self
+            .errors
+            .iter()
+            .filter(|(_, n)| *n > 0)
+            .map(|(k, n)| format!("{k} {n}"))
+            .collect();
+        format!(
+            "summary: {} {}, {} bytes, {} packets{}, {}",
+            self.protocol,
+            if self.hex { "hex text" } else { "binary" },
+            self.bytes,
+            self.packets,
+            if kinds.is_empty() {
+                String::new()
+            } else {
+                format!(" ({})", kinds.join(", "))
+            },
+            if errors.is_empty() {
+                "no errors".to_string()
+            } else {
+                format!("{} errors: {}", self.error_total(), errors.join(", "))
+            }
+        )
+    }
+}
+
+/// `--file PATH` (`-`: standard input).
+pub(super) fn decode_path(
+    path: &str,
+    args: DecodeArgs,
+    json: bool,
+    summary_only: bool,
+    out: &mut dyn Write,
+) -> Result<i32, CliError> {
+    let mut input: Box<dyn Read> = if path == "-" {
+        Box::new(std::io::stdin().lock())
+    } else {
+        Box::new(
+            std::fs::File::open(path)
+                .map_err(|e| CliError::usage(format!("cannot read {path}: {e}")))?,
+        )
+    };
+    decode_reader(&mut input, args, json, summary_only, out).map(|_| 0)
+}
+
+/// Decode everything `input` holds, printing each packet and error (unless `summary_only`)
+/// and the summary. Bytes that cannot be read or hex that is malformed end the decode with an
+/// error naming the offset, after the summary of what came before.
+pub fn decode_reader(
+    input: &mut dyn Read,
+    args: DecodeArgs,
+    json: bool,
+    summary_only: bool,
+    out: &mut dyn Write,
+) -> Result<FileSummary, CliError> {
+    let mut block = vec![0u8; BLOCK];
+    let mut bytes = Vec::with_capacity(BLOCK);
+    // The first block decides hex or binary, and the family.
+    let first = read_block(input, &mut block, 0)?;
+    if first == 0 {
+        return Err(CliError::usage("the input is empty: no bytes to decode"));
+    }
+    let is_hex = looks_like_hex(&block[..first]);
+    let mut hex = HexText::default();
+    let mut failure = None;
+    if is_hex {
+        if let Err(e) = hex.convert(&block[..first], &mut bytes) {
+            failure = Some(e);
+        }
+    } else {
+        bytes.extend_from_slice(&block[..first]);
+    }
+    let (family, why) = super::choose_family(&args, &bytes)?;
+    let mut sink = Sink::new(super::family_opts(args, family, &why)?, json, summary_only)?;
+    let mut read = first as u64;
+    loop {
+        sink.feed(&bytes, out).map_err(io_err)?;
+        bytes.clear();
+        if failure.is_some() {
+            break;
+        }
+        let n = match read_block(input, &mut block, read) {
+            Ok(0) => break,
+            Ok(n) => n,
+            Err(e) => {
+                failure = Some(e.message);
+                break;
+            }
+        };
+        read += n as u64;
+        if is_hex {
+            if let Err(e) = hex.convert(&block[..n], &mut bytes) {
+                failure = Some(e);
+            }
+        } else {
+            bytes.extend_from_slice(&block[..n]);
+        }
+    }
+    if is_hex
+        && failure.is_none()
+        && let Err(e) = hex.finish(&mut bytes)
+    {
+        failure = Some(e);
+    }
+    sink.feed(&bytes, out).map_err(io_err)?;
+    let summary = sink.finish(out, is_hex).map_err(io_err)?;
+    match failure {
+        Some(message) => Err(CliError::failure(message)),
+        None => Ok(summary),
+    }
+}
+
+/// Fill `block` as far as the input goes (a pipe returns short reads).
+fn read_block(input: &mut dyn Read, block: &mut [u8], at: u64) -> Result<usize, CliError> {
+    let mut filled = 0;
+    while filled < block.len() {
+        match input.read(&mut block[filled..]) {
+            Ok(0) => break,
+            Ok(n) => filled += n,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+            Err(e) => {
+                return Err(CliError::failure(format!(
+                    "cannot read the input at offset {}: {e}",
+                    at + filled as u64
+                )));
+            }
+        }
+    }
+    Ok(filled)
+}
+
+/// Text (printable ASCII and whitespace) with hex digits in it is read as hex; anything else
+/// as binary. Every packet family starts with a byte above 0x7E (8D, FF, 7E is `~` but its
+/// frames carry binary fields), so a binary capture is never all printable. A stray non-hex
+/// character in hex text is then reported with its offset rather than read as binary.
+fn looks_like_hex(bytes: &[u8]) -> bool {
+    bytes
+        .iter()
+        .all(|b| matches!(b, 0x20..=0x7E | b'\t' | b'\n' | b'\r'))
+        && bytes.iter().any(u8::is_ascii_hexdigit)
+}
+
+/// Hex text to bytes, a block at a time, with the rules of [`crate::hex::parse`]: separators
+/// (whitespace, `:`, `,`, `-`) and `0x` prefixes at the start of a token are skipped.
+#[derive(Debug, Default)]
+struct HexText {
+    /// The high nibble of a byte whose low nibble has not come yet.
+    high: Option<u8>,
+    /// A `0` at the start of a token, which is a digit unless an `x` follows.
+    zero: bool,
+    /// The previous character was a separator (or there was none).
+    after_sep: bool,
+    started: bool,
+    /// Characters consumed.
+    pos: u64,
+}
+
+impl HexText {
+    fn is_sep(c: u8) -> bool {
+        matches!(c, b' ' | b'\t' | b'\n' | b'\r' | b':' | b',' | b'-')
+    }
+
+    fn digit(&mut self, d: u8, out: &mut Vec<u8>) {
+        match self.high.take() {
+            Some(h) => out.push((h << 4) | d),
+            None => self.high = Some(d),
+        }
+    }
+
+    fn convert(&mut self, text: &[u8], out: &mut Vec<u8>) -> Result<(), String> {
+        for &c in text {
+            let at = self.pos;
+            self.pos += 1;
+            let token_start = self.high.is_none() && (!self.started || self.after_sep);
+            self.started = true;
+            if self.zero {
+                self.zero = false;
+                if c == b'x' || c == b'X' {
+                    self.after_sep = false;
+                    continue;
+                }
+                self.digit(0, out);
+            } else if c == b'0' && token_start {
+                self.zero = true;
+                self.after_sep = false;
+                continue;
+            }
+            if Self::is_sep(c) {
+                self.after_sep = true;
+                continue;
+            }
+            self.after_sep = false;
+            match (c as char).to_digit(16) {
+                Some(d) => self.digit(d as u8, out),
+                None => {
+                    return Err(format!(
+                        "malformed hex at offset {at}: {:?} is not a hex digit (the bytes before it were decoded)",
+                        c as char
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn finish(&mut self, out: &mut Vec<u8>) -> Result<(), String> {
+        if std::mem::take(&mut self.zero) {
+            self.digit(0, out);
+        }
+        match self.high {
+            Some(_) => Err(format!(
+                "malformed hex: the text ends at offset {} after half a byte",
+                self.pos
+            )),
+            None => Ok(()),
+        }
+    }
+}
+
+/// One family's streaming decoder and printer.
+enum Sink {
+    V2 {
+        decoder: p2::Decoder,
+        /// The masks in effect: given, or followed from the stream's own Configure Streaming.
+        streaming: p2::StreamingConfig,
+        follow: bool,
+        kinds: [u64; 3],
+    },
+    V1 {
+        decoder: p1::Decoder,
+        streaming: Option<p1::StreamingConfig>,
+        follow: bool,
+        request: Option<p1::Command>,
+    },
+    Rsrcp {
+        framer: Framer,
+    },
+}
+
+/// The sink and how it prints.
+struct Printer {
+    json: bool,
+    summary_only: bool,
+    items: u64,
+}
+
+impl Printer {
+    /// A blank line between human-readable blocks.
+    fn separate(&mut self, out: &mut dyn Write) -> std::io::Result<()> {
+        if !self.json && self.items > 0 {
+            writeln!(out)?;
+        }
+        self.items += 1;
+        Ok(())
+    }
+}
+
+struct SinkWith {
+    sink: Sink,
+    printer: Printer,
+}
+
+impl Sink {
+    fn new(opts: FamilyOpts, json: bool, summary_only: bool) -> Result<SinkWith, CliError> {
+        let sink = match opts {
+            FamilyOpts::V2 { mask, ext_mask } => Sink::V2 {
+                decoder: p2::Decoder::new(),
+                streaming: p2::StreamingConfig {
+                    mask: mask.unwrap_or(0),
+                    ext_mask: ext_mask.unwrap_or(0),
+                    interval_ms: 1,
+                },
+                follow: mask.is_none(),
+                kinds: [0; 3],
+            },
+            FamilyOpts::V1(o) => Sink::V1 {
+                decoder: p1::Decoder::new(o.source),
+                streaming: o.streaming()?,
+                follow: o.mask.is_none() && o.mask2.is_none(),
+                request: o.request.clone(),
+            },
+            FamilyOpts::Rsrcp => Sink::Rsrcp {
+                framer: Framer::new(),
+            },
+        };
+        Ok(SinkWith {
+            sink,
+            printer: Printer {
+                json,
+                summary_only,
+                items: 0,
+            },
+        })
+    }
+}
+
+impl SinkWith {
+    fn feed(&mut self, bytes: &[u8], out: &mut dyn Write) -> std::io::Result<()> {
+        if bytes.is_empty() {
+            return Ok(());
+        }
+        let printer = &mut self.printer;
+        match &mut self.sink {
+            Sink::V2 {
+                decoder,
+                streaming,
+                follow,
+                kinds,
+            } => {
+                let mut result = Ok(());
+                decoder.feed_with(bytes, |d| {
+                    if result.is_ok() {
+                        result = v2_item(d, streaming, *follow, kinds, printer, out);
+                    }
+                });
+                result
+            }
+            Sink::V1 {
+                decoder,
+                streaming,
+                follow,
+                request,
+            } => {
+                for e in decoder.feed(bytes) {
+                    v1_item(e, streaming, *follow, request.as_ref(), printer, out)?;
+                }
+                Ok(())
+            }
+            Sink::Rsrcp { framer } => {
+                for r in framer.feed(bytes) {
+                    rsrcp_item(&r, printer, out)?;
+                }
+                Ok(())
+            }
+        }
+    }
+
+    fn finish(mut self, out: &mut dyn Write, hex: bool) -> std::io::Result<FileSummary> {
+        let printer = &mut self.printer;
+        let summary = match &mut self.sink {
+            Sink::V2 {
+                decoder,
+                streaming,
+                follow,
+                kinds,
+            } => {
+                for e in decoder.finish() {
+                    v2_item(
+                        p2::Decoded::Error(e),
+                        streaming,
+                        *follow,
+                        kinds,
+                        printer,
+                        out,
+                    )?;
+                }
+                let st = decoder.stats();
+                FileSummary {
+                    protocol: "v2",
+                    hex,
+                    bytes: st.bytes,
+                    packets: st.packets,
+                    kinds: vec![
+                        ("command", kinds[0]),
+                        ("response", kinds[1]),
+                        ("notification", kinds[2]),
+                    ],
+                    errors: p2::DecodeErrorKind::ALL
+                        .iter()
+                        .map(|k| (k.name(), st.errors(*k)))
+                        .collect(),
+                }
+            }
+            Sink::V1 {
+                decoder,
+                streaming,
+                follow,
+                request,
+            } => {
+                for e in decoder.finish() {
+                    v1_item(e, streaming, *follow, request.as_ref(), printer, out)?;
+                }
+                let st = decoder.stats();
+                FileSummary {
+                    protocol: "v1",
+                    hex,
+                    bytes: st.bytes,
+                    packets: st.packets,
+                    kinds: vec![
+                        ("command", st.commands),
+                        ("response", st.responses),
+                        ("async", st.asyncs),
+                    ],
+                    errors: p1::DecodeErrorKind::ALL
+                        .iter()
+                        .map(|k| (k.name(), st.errors(*k)))
+                        .collect(),
+                }
+            }
+            Sink::Rsrcp { framer } => {
+                for r in framer.finish() {
+                    rsrcp_item(&r, printer, out)?;
+                }
+                let st = framer.stats();
+                FileSummary {
+                    protocol: "rsrcp",
+                    hex,
+                    bytes: st.bytes,
+                    packets: st.frames + st.handshakes,
+                    kinds: vec![("handshake", st.handshakes), ("frame", st.frames)],
+                    errors: FrameErrorKind::ALL
+                        .iter()
+                        .map(|k| (k.name(), st.errors(*k)))
+                        .collect(),
+                }
+            }
+        };
+        if printer.json {
+            writeln!(out, "{}", summary.json())?;
+        } else {
+            if printer.items > 0 && !printer.summary_only {
+                writeln!(out)?;
+            }
+            writeln!(out, "{}", summary.text())?;
+        }
+        Ok(summary)
+    }
+}
+
+/// A decode error, as `--stream` prints it.
+fn error_out(
+    printer: &mut Printer,
+    out: &mut dyn Write,
+    kind: &str,
+    offset: u64,
+    detail: &str,
+    shown: &dyn std::fmt::Display,
+) -> std::io::Result<()> {
+    if printer.summary_only {
+        return Ok(());
+    }
+    printer.separate(out)?;
+    if printer.json {
+        let v = json!({"error": kind, "offset": offset, "detail": detail});
+        writeln!(out, "{v}")
+    } else {
+        writeln!(out, "decode error: {shown}")
+    }
+}
+
+/// `offset` first, then the packet's keys.
+fn with_offset(offset: u64, v: Value) -> Value {
+    let mut m = Map::new();
+    m.insert("offset".into(), json!(offset));
+    if let Value::Object(rest) = v {
+        m.extend(rest);
+    }
+    Value::Object(m)
+}
+
+fn v2_item(
+    d: p2::Decoded<'_>,
+    streaming: &mut p2::StreamingConfig,
+    follow: bool,
+    kinds: &mut [u64; 3],
+    printer: &mut Printer,
+    out: &mut dyn Write,
+) -> std::io::Result<()> {
+    match d {
+        p2::Decoded::Packet { offset, packet } => {
+            let kind = if packet.is_response() {
+                1
+            } else if packet.is_notification() {
+                2
+            } else {
+                0
+            };
+            kinds[kind] += 1;
+            if follow && kind == 0 {
+                // What the stream itself tells the droid to stream (as the session tracks it).
+                match (packet.did, packet.cid, packet.data) {
+                    (0x18, 0x00, [i0, i1, _count, m @ ..]) if m.len() == 4 => {
+                        streaming.interval_ms = u16::from_be_bytes([*i0, *i1]);
+                        streaming.mask = u32::from_be_bytes([m[0], m[1], m[2], m[3]]);
+                    }
+                    (0x18, 0x0C, m) if m.len() == 4 => {
+                        streaming.ext_mask = u32::from_be_bytes([m[0], m[1], m[2], m[3]]);
+                    }
+                    _ => {}
+                }
+            }
+            if printer.summary_only {
+                return Ok(());
+            }
+            let p = packet.to_packet();
+            let masks = (streaming.mask != 0 || streaming.ext_mask != 0).then_some(&*streaming);
+            let described = p2::describe(&p, masks);
+            printer.separate(out)?;
+            if printer.json {
+                let v = v2::packet_json(&p, true, &described);
+                writeln!(out, "{}", with_offset(offset, v))
+            } else {
+                write!(
+                    out,
+                    "{:<9} {offset}\n{}",
+                    "offset",
+                    v2::packet_text(&p, None, &described)
+                )
+            }
+        }
+        p2::Decoded::Error(e) => error_out(printer, out, e.kind.name(), e.offset, &e.detail, &e),
+    }
+}
+
+fn v1_item(
+    e: Result<p1::Packet, p1::DecodeError>,
+    streaming: &mut Option<p1::StreamingConfig>,
+    follow: bool,
+    request: Option<&p1::Command>,
+    printer: &mut Printer,
+    out: &mut dyn Write,
+) -> std::io::Result<()> {
+    match e {
+        Ok(p) => {
+            if follow
+                && let p1::Packet::Command(c) = &p
+                && (c.did, c.cid) == (0x02, 0x11)
+                && let Some(s) = p1::StreamingConfig::from_command_data(&c.data)
+            {
+                *streaming = Some(s);
+            }
+            if printer.summary_only {
+                return Ok(());
+            }
+            let d = p1::describe(&p, streaming.as_ref(), request);
+            printer.separate(out)?;
+            if printer.json {
+                writeln!(out, "{}", v1::packet_json(&p, &d, true))
+            } else {
+                write!(out, "{}", v1::packet_text(&p, None, &d))
+            }
+        }
+        Err(e) => error_out(printer, out, e.kind.name(), e.offset, &e.detail, &e),
+    }
+}
+
+fn rsrcp_item(
+    r: &Result<crate::protocol::rsrcp::Item, crate::protocol::rsrcp::FrameError>,
+    printer: &mut Printer,
+    out: &mut dyn Write,
+) -> std::io::Result<()> {
+    if printer.summary_only {
+        return Ok(());
+    }
+    printer.separate(out)?;
+    if printer.json {
+        return writeln!(out, "{}", crate::protocol::rsrcp::to_json(r));
+    }
+    match r {
+        Ok(item) => writeln!(out, "{}", item.summary()),
+        Err(e) => writeln!(out, "decode error: {}", e.summary()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn hex_of(text: &str, cut: usize) -> Result<Vec<u8>, String> {
+        let mut h = HexText::default();
+        let mut out = Vec::new();
+        for c in text.as_bytes().chunks(cut.max(1)) {
+            h.convert(c, &mut out)?;
+        }
+        h.finish(&mut out)?;
+        Ok(out)
+    }
+
+    #[test]
+    fn hex_text_in_any_cut_matches_hex_parse() {
+        for text in [
+            "8D 0A 13 0D 00 D5 D8",
+            "0x8D,0x0A:0x13 0d\n00d5d8",
+            "00 0x00 00x",
+            "0a0b0c",
+            "0x0x",
+        ] {
+            let want = crate::hex::parse(text);
+            for cut in 1..6 {
+                assert_eq!(hex_of(text, cut).is_ok(), want.is_ok(), "{text} cut {cut}");
+                if let Ok(w) = &want {
+                    assert_eq!(&hex_of(text, cut).unwrap(), w, "{text} cut {cut}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn hex_errors_name_the_offset() {
+        let e = hex_of("8D 0A 1G", 3).unwrap_err();
+        assert!(e.contains("offset 7"), "{e}");
+        let e = hex_of("8D 0", 2).unwrap_err();
+        assert!(e.contains("half a byte"), "{e}");
+    }
+
+    #[test]
+    fn sniffing() {
+        assert!(looks_like_hex(b"8d 0a\n"));
+        assert!(!looks_like_hex(&[0x8D, 0x0A]));
+        assert!(!looks_like_hex(b"  \n"));
+        assert!(
+            looks_like_hex(b"8D 0A 1G"),
+            "a typo is reported, not read as binary"
+        );
+    }
+}
