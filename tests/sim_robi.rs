@@ -496,6 +496,7 @@ fn robi_session(cfg: SimConfig, faults: Faults) -> (SessionHandle, SimProbe) {
 }
 
 /// Every notification with its time since `t0`, folded into a [`Telemetry`] as the app does.
+#[derive(Clone)]
 struct Collected {
     notes: Vec<(Duration, Notification)>,
     telemetry: Telemetry,
@@ -583,7 +584,7 @@ async fn the_handshake_arrives_first_then_frames_at_the_measured_rate() {
     // Robi needs no setup: nothing is written on connect.
     assert!(robi_config().setup.is_empty());
     sleep(secs(10.0)).await;
-    let c = seen.lock().unwrap();
+    let c = seen.lock().unwrap().clone();
     let (first_at, first) = &c.notes[0];
     assert_eq!(
         *first,
@@ -625,7 +626,6 @@ async fn the_handshake_arrives_first_then_frames_at_the_measured_rate() {
     );
     // Standing still: odometry stays at the origin.
     assert_eq!((c.telemetry.x_cm, c.telemetry.y_cm), (Some(0.0), Some(0.0)));
-    drop(c);
     s.shutdown_stopped(vec![]).await;
 }
 
@@ -720,10 +720,9 @@ async fn a_drive_goes_out_as_velocity_then_steering_and_moves_the_robot() {
             "odometry ({x}, {y}) vs {rest:?}"
         );
     }
-    let c = seen.lock().unwrap();
+    let c = seen.lock().unwrap().clone();
     let m = c.telemetry.robi.as_ref().unwrap().motors.unwrap();
     assert_eq!((m.left_rad_s, m.right_rad_s), (0.0, 0.0));
-    drop(c);
     s.shutdown_stopped(vec![]).await;
 }
 
@@ -830,7 +829,7 @@ async fn a_dropped_link_stops_the_robot_and_the_session_resumes_at_speed_0() {
     let st = probe.state();
     assert_eq!(st.velocity_cm_s, 0.0, "{st:?}");
     // The new connection starts with a handshake too, and its frames say the motors are off.
-    let c = seen.lock().unwrap();
+    let c = seen.lock().unwrap().clone();
     let hs: Vec<Duration> = c
         .notes
         .iter()
@@ -857,7 +856,6 @@ async fn a_dropped_link_stops_the_robot_and_the_session_resumes_at_speed_0() {
         close(fps, 10.0, 0.6),
         "measured {fps}/s after the reconnect"
     );
-    drop(c);
     s.shutdown_stopped(vec![]).await;
 }
 
