@@ -130,8 +130,8 @@ fn forward_is_cruise_velocity_with_the_steering_straight() {
 fn the_turn_keys_steer_left_below_128_and_right_above() {
     let mut c = controller();
     let left = drives(&c.tick(&keys(true, false, true, false), TICK, &ROBI, true));
-    // ±0.6 of full lock: 128 ∓ 76.
-    assert_eq!(left, [rc(100, 52)]);
+    // ±0.6 of full lock: 127.5 ∓ 76.5.
+    assert_eq!(left, [rc(100, 51)]);
     assert_eq!(c.view().steer, Some(-0.6));
     let right = drives(&c.tick(&keys(true, false, false, true), TICK, &ROBI, true));
     assert_eq!(right, [rc(100, 204)]);
@@ -255,7 +255,7 @@ fn the_stick_steers_with_its_sideways_part_and_refuses_back() {
     // Straight left: full lock left.
     assert_eq!(
         drives(&c.tick(&pad(270.0, 120), TICK, &ROBI, true)),
-        [rc(120, 1)]
+        [rc(120, 0)]
     );
     // Pulled back: speed 0 and the refusal, once while held.
     let mut said = 0;
@@ -333,4 +333,30 @@ fn no_aim_no_legs_on_robi() {
     assert!(!c.aiming());
     let out = c.on_press(Action::Tripod, &ROBI);
     assert_eq!(hints(&out), ["this droid has no legs"]);
+}
+
+/// What the robot's firmware makes of a family steer command: each wheel 0..=1.
+fn wheels_for(speed: u8, turn: f32) -> (f32, f32) {
+    match droidctl::family::for_model(Model::Robi42).steer(speed, turn) {
+        Some(Command::Robi(c)) => droidctl::protocol::rsrcp::wheel_speeds(c.velocity, c.steering),
+        other => panic!("Robi steers with RobiControl: {other:?}"),
+    }
+}
+
+#[test]
+fn full_lock_stops_the_inner_wheel_either_way_and_turns_mirror() {
+    // Full right: the right wheel stands; full left: the left wheel stands (steering byte 0,
+    // `droid-facts.md` §5: 0 full left, 1 full right).
+    assert_eq!(wheels_for(255, 1.0), (1.0, 0.0));
+    assert_eq!(wheels_for(255, -1.0), (0.0, 1.0));
+    assert_eq!(wheels_for(100, -1.0).0, 0.0);
+    // A turn to the left is the mirror image of the same turn to the right.
+    for t in [0.25f32, 0.5, 0.6, 1.0] {
+        let (rl, rr) = wheels_for(200, t);
+        let (ll, lr) = wheels_for(200, -t);
+        assert!(
+            (rl - lr).abs() < 1e-6 && (rr - ll).abs() < 1e-6,
+            "{t}: right ({rl}, {rr}) left ({ll}, {lr})"
+        );
+    }
 }

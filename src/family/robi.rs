@@ -21,14 +21,18 @@ use crate::units::Heading;
 pub struct Robi;
 
 /// Steering byte for a turn in −1 (full left) ..= 1 (full right); 0 is straight (128).
+///
+/// Fix: this was 128 + 127·turn, so full left was byte 1, which the firmware reads as
+/// s' = −0.992: the inner wheel kept turning (235 Hz at full speed) where full right stops it,
+/// and every left turn was a little weaker than the same right turn. The codec's
+/// [`rsrcp::steering_byte`] maps −1..1 onto the whole 0..=255 (full left 0, full right 255,
+/// mirror images about the firmware's 127.5); a non-finite turn steers straight.
 pub fn steering_for(turn: f32) -> u8 {
-    let t = if turn.is_finite() {
-        turn.clamp(-1.0, 1.0)
+    if turn.is_finite() {
+        rsrcp::steering_byte(turn)
     } else {
-        0.0
-    };
-    // 128 + t × 127: full left 1, straight 128, full right 255.
-    (rsrcp::STEERING_STRAIGHT as f32 + t * 127.0).round() as u8
+        rsrcp::STEERING_STRAIGHT
+    }
 }
 
 /// A Robi connection's codec. Over BLE every notification is exactly one frame (or, first,
@@ -216,7 +220,11 @@ mod tests {
     #[test]
     fn steering_bytes() {
         assert_eq!(steering_for(0.0), 128);
-        assert_eq!(steering_for(-1.0), 1);
+        assert_eq!(steering_for(-1.0), 0);
+        assert_eq!(steering_for(f32::INFINITY), 128);
+        // Mirror images about the firmware's middle, 127.5.
+        assert_eq!(steering_for(0.6), 204);
+        assert_eq!(steering_for(-0.6), 51);
         assert_eq!(steering_for(1.0), 255);
         assert_eq!(steering_for(5.0), 255);
         assert_eq!(steering_for(f32::NAN), 128);
@@ -231,7 +239,7 @@ mod tests {
             writes,
             [
                 (Endpoint::Velocity, vec![200]),
-                (Endpoint::Steering, vec![65])
+                (Endpoint::Steering, vec![64])
             ]
         );
         assert!(!c.answers());
