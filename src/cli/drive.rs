@@ -26,6 +26,8 @@ pub struct DriveArgs {
     pub sim: Option<String>,
     #[command(flatten)]
     pub ble: super::connect::BleArgs,
+    #[command(flatten)]
+    pub record: super::replay::RecordArgs,
 }
 
 /// The simulated model asked for, if any.
@@ -54,6 +56,7 @@ fn install_panic_hook() {
         if let Some((s, model)) = PANIC_SESSION.get() {
             s.set(Slot::Drive, run::plain_stop(*model));
         }
+        crate::link::record::flush_all();
         let in_app = std::thread::current().name() != Some("main");
         if in_app && term::active() {
             if let Ok(mut m) = PANIC_MESSAGE.lock() {
@@ -74,6 +77,7 @@ pub fn run(args: DriveArgs) -> Result<i32, CliError> {
         ))
     })?;
     let model = sim_model(&args.sim)?;
+    let recorder = args.record.open()?;
     let log_path = crate::logging::init().ok();
     let rt = super::realtime_runtime()?;
     rt.block_on(async move {
@@ -85,7 +89,16 @@ pub fn run(args: DriveArgs) -> Result<i32, CliError> {
             }
             None => connect_real(&args).await?,
         };
-        drive(link, model, name, config, log_path).await
+        let link = match &recorder {
+            Some(r) => {
+                r.start(&crate::link::record::Recorder::header_for(model, &name));
+                r.wrap(link)
+            }
+            None => link,
+        };
+        let result = drive(link, model, name, config, log_path).await;
+        super::replay::finish(recorder.as_ref());
+        result
     })
 }
 

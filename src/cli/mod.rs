@@ -7,6 +7,7 @@ pub mod config_cmd;
 pub mod connect;
 pub mod drive;
 pub mod packet;
+pub mod replay;
 pub mod run;
 pub mod scan;
 pub mod signals;

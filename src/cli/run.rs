@@ -30,6 +30,8 @@ pub struct RunArgs {
     /// Telemetry sample interval in milliseconds.
     #[arg(long, default_value_t = 100, value_name = "MS", value_parser = clap::value_parser!(u64).range(1..=60_000))]
     pub interval: u64,
+    #[command(flatten)]
+    pub record: super::replay::RecordArgs,
 }
 
 /// Resolve `--sim MODEL` vs the script path: `droidctl run --sim mission.txt` puts the script
@@ -79,6 +81,8 @@ pub fn run(args: RunArgs) -> Result<i32, CliError> {
         ))
     };
     let steps = crate::script::parse(&text).map_err(script_errors)?;
+    let recorder = args.record.open()?;
+    let recorder = recorder.as_ref();
     let opts = MissionOptions {
         interval: Duration::from_millis(args.interval),
         ..MissionOptions::default()
@@ -99,9 +103,11 @@ pub fn run(args: RunArgs) -> Result<i32, CliError> {
                 .map_err(|e| CliError::failure(format!("cannot start the runtime: {e}")))?;
             rt.block_on(async move {
                 let link = SimLink::new(model, SimConfig::for_model(model), Faults::none());
-                run_on(Box::new(link), model, &steps, opts, json)
-                    .await
-                    .map_err(CliError::failure)
+                let name = format!("{} (simulated)", model.display_name());
+                let link = recorded(recorder, Box::new(link), model, &name);
+                let r = run_recorded(link, model, &steps, opts, json, recorder).await;
+                super::replay::finish(recorder);
+                r.map_err(CliError::failure)
             })
         }
         None => {
@@ -110,9 +116,10 @@ pub fn run(args: RunArgs) -> Result<i32, CliError> {
             rt.block_on(async move {
                 let c = args.ble.connect(super::connect::Chooser::Prompt).await?;
                 mission::validate(c.model, &steps).map_err(script_errors)?;
-                run_on(c.link, c.model, &steps, opts, json)
-                    .await
-                    .map_err(CliError::failure)
+                let link = recorded(recorder, c.link, c.model, &c.name);
+                let r = run_recorded(link, c.model, &steps, opts, json, recorder).await;
+                super::replay::finish(recorder);
+                r.map_err(CliError::failure)
             })
         }
     };
@@ -125,6 +132,22 @@ pub fn run(args: RunArgs) -> Result<i32, CliError> {
     }
 }
 
+/// `link` recorded by `recorder` (which starts its clock and writes its header now).
+fn recorded(
+    recorder: Option<&crate::link::record::Recorder>,
+    link: Box<dyn Link>,
+    model: Model,
+    name: &str,
+) -> Box<dyn Link> {
+    match recorder {
+        Some(r) => {
+            r.start(&crate::link::record::Recorder::header_for(model, name));
+            r.wrap(link)
+        }
+        None => link,
+    }
+}
+
 /// Run the mission over any link, printing as it goes.
 pub async fn run_on(
     link: Box<dyn Link>,
@@ -132,6 +155,19 @@ pub async fn run_on(
     steps: &[crate::script::Step],
     opts: MissionOptions,
     json: bool,
+) -> Result<Summary, String> {
+    run_recorded(link, model, steps, opts, json, None).await
+}
+
+/// [`run_on`], marking the mission's start and end in the capture being recorded (replay
+/// samples from the same start, so a replayed `--sim` mission prints the same telemetry).
+pub async fn run_recorded(
+    link: Box<dyn Link>,
+    model: Model,
+    steps: &[crate::script::Step],
+    opts: MissionOptions,
+    json: bool,
+    recorder: Option<&crate::link::record::Recorder>,
 ) -> Result<Summary, String> {
     let interval_ms = opts.interval.as_millis().clamp(20, 1000) as u16;
     let setup = SetupOptions {
@@ -147,7 +183,14 @@ pub async fn run_on(
     let session = session::start(link, config);
     let samples_per_line = (1000 / opts.interval.as_millis().max(1)).max(1) as u64;
     let count = std::sync::atomic::AtomicU64::new(0);
+    let marker = recorder.cloned();
+    let marked = std::sync::atomic::AtomicBool::new(false);
     let emit: Arc<dyn Fn(MissionEvent) + Send + Sync> = Arc::new(move |e| {
+        if let (Some(r), MissionEvent::Sample(s)) = (&marker, &e)
+            && !marked.swap(true, std::sync::atomic::Ordering::Relaxed)
+        {
+            r.mark_before(std::time::Duration::from_millis(s.t_ms), "mission-start");
+        }
         let mut out = std::io::stdout().lock();
         let _ = match e {
             MissionEvent::Sample(s) if json => {
@@ -182,6 +225,9 @@ pub async fn run_on(
         r = mission::run(&session, model, steps, opts, emit) => r,
         sig = interrupted => Err(mission::MissionError(format!("{sig}: mission interrupted, the droid was stopped"))),
     };
+    if let Some(r) = recorder {
+        r.record(crate::capture::Event::Mark("mission-end".into()));
+    }
     // Stop first (at the last heading: a stop at heading 0 would turn the droid), then close.
     session.shutdown_stopped(Vec::new()).await;
     result.map_err(|e| e.to_string())

@@ -7,6 +7,7 @@
 pub mod backoff;
 pub mod ble;
 pub mod gatt;
+pub mod record;
 
 use futures_util::future::BoxFuture;
 use std::fmt;
