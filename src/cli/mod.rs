@@ -11,6 +11,7 @@ pub mod replay;
 pub mod run;
 pub mod scan;
 pub mod signals;
+pub mod sim;
 pub mod term;
 
 use clap::{Parser, Subcommand};
@@ -42,6 +43,9 @@ pub enum Command {
     Run(run::RunArgs),
     /// List nearby droids over Bluetooth LE, strongest signal first (`--all` for every device).
     Scan(scan::ScanArgs),
+    /// Serve simulated droids on D-Bus as BlueZ does (`--bluez`), for droidctl and other
+    /// Bluetooth software to find and drive (Linux).
+    Sim(sim::SimArgs),
     /// Show or create the configuration file.
     #[command(subcommand)]
     Config(config_cmd::ConfigCmd),
@@ -115,6 +119,10 @@ pub fn main() -> i32 {
             run::run(args)
         }
         Some(Command::Scan(args)) => scan::run(args, &mut out),
+        Some(Command::Sim(args)) => {
+            drop(out);
+            sim::run(args)
+        }
         Some(Command::Config(cmd)) => config_cmd::run(cmd),
         Some(Command::Completions(args)) => completions::completions(args, &mut out),
         Some(Command::Man) => completions::man(&mut out),

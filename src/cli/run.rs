@@ -4,7 +4,7 @@ use super::CliError;
 use crate::link::Link;
 use crate::mission::{self, MissionEvent, MissionOptions, Summary};
 use crate::model::Model;
-use crate::session::{self, SessionConfig};
+use crate::session::{self, LinkState, SessionConfig};
 use crate::setup::{SetupOptions, connect_setup};
 use crate::sim::{Faults, SimConfig, SimLink};
 use clap::Args;
@@ -218,6 +218,7 @@ pub async fn run_recorded(
             }
         };
     });
+    let link_lines = tokio::spawn(report_link(session.watch_state()));
     // Ctrl-C (also while reconnecting), SIGTERM and SIGHUP (console close on Windows) end the
     // mission with a stop.
     let interrupted = super::signals::terminated();
@@ -228,9 +229,57 @@ pub async fn run_recorded(
     if let Some(r) = recorder {
         r.record(crate::capture::Event::Mark("mission-end".into()));
     }
+    link_lines.abort();
+    // Never connected: say why the last attempt failed (a droid refusing the connection).
+    let result = result.map_err(|e| match session.state() {
+        LinkState::Reconnecting { reason, .. } if e.0.starts_with("no connection within") => {
+            format!("{e}: {reason}")
+        }
+        _ => e.to_string(),
+    });
     // Stop first (at the last heading: a stop at heading 0 would turn the droid), then close.
     session.shutdown_stopped(Vec::new()).await;
-    result.map_err(|e| e.to_string())
+    result
+}
+
+/// A lost link and the reconnect, on stderr as they happen (`[    4.52s] link lost: the droid
+/// disconnected — reconnecting (attempt 1)`, `[    5.06s] reconnected`), the time counted from
+/// the first connection. Nothing before it: a droid that cannot be reached gets one error line
+/// at the end.
+async fn report_link(mut state: tokio::sync::watch::Receiver<LinkState>) {
+    let mut since: Option<tokio::time::Instant> = None;
+    let mut lost = false;
+    loop {
+        let now = state.borrow_and_update().clone();
+        match (now, since) {
+            (LinkState::Connected, None) => since = Some(tokio::time::Instant::now()),
+            (LinkState::Connected, Some(t0)) if lost => {
+                lost = false;
+                let _ = writeln!(
+                    std::io::stderr(),
+                    "[{:>8.2}s] reconnected",
+                    t0.elapsed().as_secs_f64()
+                );
+            }
+            (LinkState::Reconnecting { attempt, reason }, Some(t0)) => {
+                let what = if lost {
+                    "reconnect failed"
+                } else {
+                    "link lost"
+                };
+                lost = true;
+                let _ = writeln!(
+                    std::io::stderr(),
+                    "[{:>8.2}s] {what}: {reason} — reconnecting (attempt {attempt})",
+                    t0.elapsed().as_secs_f64()
+                );
+            }
+            _ => {}
+        }
+        if state.changed().await.is_err() {
+            return;
+        }
+    }
 }
 
 fn opt(v: Option<f32>, prec: usize) -> String {

@@ -6,6 +6,9 @@
 //! fault injection, so the session, UI and scripts cannot tell it from a droid.
 
 pub mod body;
+// The virtual BlueZ of `droidctl sim --bluez`: D-Bus exists only on Linux.
+#[cfg(target_os = "linux")]
+pub mod bluez;
 pub mod droid;
 pub mod faults;
 pub mod gatt;

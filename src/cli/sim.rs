@@ -1,0 +1,257 @@
+//! `droidctl sim --bluez [MODEL ...] [--bus ADDRESS] [--fault FAULT ...] [--seed N] [--trace]`:
+//! simulated droids served on D-Bus as BlueZ serves real ones (Linux only; see
+//! [`crate::sim::bluez`]).
+//!
+//! Prints the line to export (`DBUS_SYSTEM_BUS_ADDRESS=unix:path=…`) on stdout and nothing
+//! else there; one status line per event on stderr. Ctrl-C, SIGTERM and SIGHUP stop it:
+//! the droids disconnect, then the private `dbus-daemon` is killed and its directory removed.
+
+use super::CliError;
+use crate::model::Model;
+use crate::sim::gatt::{FAULT_SYNTAX, GattFaults};
+use clap::Args;
+
+#[derive(Debug, Clone, Args)]
+pub struct SimArgs {
+    /// Serve the droids on D-Bus as BlueZ does, for any BlueZ client (Linux).
+    #[arg(long, required = true)]
+    pub bluez: bool,
+    /// The droids: r2d2 (the default), r2q5, bb9e, bb8, sprk, ollie or robi; repeat a model
+    /// for several of it.
+    #[arg(value_name = "MODEL")]
+    pub models: Vec<String>,
+    /// Serve on this D-Bus bus (e.g. unix:path=/tmp/bus) instead of a private dbus-daemon.
+    #[arg(long, value_name = "ADDRESS")]
+    pub bus: Option<String>,
+    /// Inject a fault into every droid: disconnect-after=SECS (drop the first connection
+    /// SECS after it was made), disconnect-every=SECS (every connection), refuse-connect
+    /// (refuse every connection attempt), refuse-connect=N (the first N), slow-resolve=SECS
+    /// (services resolve SECS after a connect). Repeatable.
+    #[arg(long = "fault", value_name = "FAULT")]
+    pub faults: Vec<String>,
+    /// Seed for the droids' names, addresses and signal strengths.
+    #[arg(long, default_value_t = 42, value_name = "N")]
+    pub seed: u64,
+    /// Also report every GATT read, write and notification on stderr, in hex.
+    #[arg(long)]
+    pub trace: bool,
+}
+
+/// The checked arguments.
+struct Plan {
+    models: Vec<Model>,
+    faults: GattFaults,
+}
+
+fn check(args: &SimArgs) -> Result<Plan, CliError> {
+    let mut models = Vec::new();
+    for m in &args.models {
+        match Model::from_id(m) {
+            Some(model) if crate::sim::simulates(model) => models.push(model),
+            _ => {
+                return Err(CliError::usage(format!(
+                    "unknown simulated model {m:?}: use one of {}",
+                    crate::sim::simulated_ids().join(", ")
+                )));
+            }
+        }
+    }
+    if models.is_empty() {
+        models.push(Model::R2D2);
+    }
+    const MAX: usize = 16;
+    if models.len() > MAX {
+        return Err(CliError::usage(format!("at most {MAX} droids at once")));
+    }
+    let mut faults = GattFaults::none();
+    for f in &args.faults {
+        faults
+            .add(f)
+            .map_err(|e| CliError::usage(format!("--fault: {e} ({FAULT_SYNTAX})")))?;
+    }
+    if let Some(bus) = &args.bus
+        && bus.trim().is_empty()
+    {
+        return Err(CliError::usage(
+            "--bus: give a D-Bus address such as unix:path=/tmp/bus",
+        ));
+    }
+    Ok(Plan { models, faults })
+}
+
+pub fn run(args: SimArgs) -> Result<i32, CliError> {
+    let plan = check(&args)?;
+    serve(args, plan)
+}
+
+#[cfg(not(target_os = "linux"))]
+fn serve(_args: SimArgs, _plan: Plan) -> Result<i32, CliError> {
+    Err(CliError::failure(
+        "`droidctl sim --bluez` needs Linux: it serves the droids on D-Bus as BlueZ does; use \
+         `--sim` to drive a simulated droid here",
+    ))
+}
+
+#[cfg(target_os = "linux")]
+fn serve(args: SimArgs, plan: Plan) -> Result<i32, CliError> {
+    use crate::sim::bluez::{BluezOptions, BluezSim, MAX_DROIDS, PrivateBus, plan as plan_droids};
+    use std::io::Write;
+    use std::sync::Arc;
+    use std::sync::atomic::{AtomicBool, Ordering};
+
+    debug_assert!(MAX_DROIDS >= plan.models.len());
+    let say = |line: &str| {
+        let _ = writeln!(std::io::stderr(), "droidctl sim: {line}");
+    };
+    let droids = plan_droids(&plan.models, args.seed);
+    // The bus: the one given, or a private daemon (stopped when `private` drops).
+    let private = match &args.bus {
+        Some(_) => None,
+        None => Some(PrivateBus::start().map_err(CliError::failure)?),
+    };
+    let address = match (&args.bus, &private) {
+        (Some(a), _) => a.trim().to_string(),
+        (None, Some(p)) => p.address().to_string(),
+        (None, None) => return Err(CliError::failure("no bus to serve on")),
+    };
+    let opts = BluezOptions {
+        droids: droids.clone(),
+        faults: plan.faults.clone(),
+        seed: args.seed,
+        trace: args.trace,
+    };
+    let stop = Arc::new(AtomicBool::new(false));
+    let (ready_tx, ready_rx) = std::sync::mpsc::channel::<Result<(), String>>();
+    let (done_tx, done_rx) = tokio::sync::oneshot::channel::<Result<(), String>>();
+    let server = {
+        let stop = stop.clone();
+        let address = address.clone();
+        std::thread::Builder::new()
+            .name("bluez-sim".into())
+            .spawn(move || {
+                let report = Box::new(|line: String| {
+                    let _ = writeln!(std::io::stderr(), "droidctl sim: {line}");
+                });
+                let result = match BluezSim::connect(&address, opts, report) {
+                    Ok(sim) => {
+                        let _ = ready_tx.send(Ok(()));
+                        sim.run(&stop)
+                    }
+                    Err(e) => {
+                        let _ = ready_tx.send(Err(e.clone()));
+                        Err(e)
+                    }
+                };
+                let _ = done_tx.send(result);
+            })
+            .map_err(|e| CliError::failure(format!("cannot start a thread: {e}")))?
+    };
+    match ready_rx.recv_timeout(std::time::Duration::from_secs(10)) {
+        Ok(Ok(())) => {}
+        Ok(Err(e)) => return Err(CliError::failure(e)),
+        Err(_) => {
+            stop.store(true, Ordering::Release);
+            return Err(CliError::failure(format!(
+                "the bus {address} did not answer within 10 s"
+            )));
+        }
+    }
+    for d in &droids {
+        say(&format!(
+            "{} ({}) at {}",
+            d.name,
+            d.model.display_name(),
+            d.address_string()
+        ));
+    }
+    let faults = plan.faults.describe();
+    if !faults.is_empty() {
+        say(&format!("faults: {}", faults.join(", ")));
+    }
+    say(&format!(
+        "serving on {address}; Ctrl-C stops (export the line on stdout for droidctl, bleak …)"
+    ));
+    {
+        let mut out = std::io::stdout().lock();
+        let _ = writeln!(out, "DBUS_SYSTEM_BUS_ADDRESS={address}");
+        let _ = out.flush();
+    }
+    let rt = tokio::runtime::Builder::new_current_thread()
+        .enable_all()
+        .build()
+        .map_err(|e| CliError::failure(format!("cannot start the runtime: {e}")))?;
+    let ended = rt.block_on(async {
+        tokio::select! {
+            sig = super::signals::terminated() => Ok(Some(sig)),
+            r = done_rx => match r {
+                Ok(Ok(())) => Ok(None),
+                Ok(Err(e)) => Err(e),
+                Err(_) => Err("the simulator stopped unexpectedly".to_string()),
+            },
+        }
+    });
+    stop.store(true, Ordering::Release);
+    let _ = server.join();
+    drop(private);
+    match ended {
+        Ok(Some(sig)) => {
+            say(&format!("{sig}: stopped"));
+            Ok(0)
+        }
+        Ok(None) => Ok(0),
+        Err(e) => Err(CliError::failure(e)),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::Parser;
+
+    #[derive(Debug, Parser)]
+    struct Cli {
+        #[command(flatten)]
+        sim: SimArgs,
+    }
+
+    fn parse(args: &[&str]) -> Result<Plan, CliError> {
+        let mut all = vec!["sim"];
+        all.extend_from_slice(args);
+        let cli = Cli::try_parse_from(all).map_err(|e| CliError::usage(e.to_string()))?;
+        check(&cli.sim)
+    }
+
+    #[test]
+    fn models_and_faults() {
+        let p = parse(&["--bluez"]).unwrap_or_else(|e| panic!("{}", e.message));
+        assert_eq!(p.models, [Model::R2D2]);
+        let p = parse(&[
+            "--bluez",
+            "r2d2",
+            "bb8",
+            "robi",
+            "--fault",
+            "disconnect-after=1.5",
+            "--fault",
+            "refuse-connect=2",
+        ])
+        .unwrap_or_else(|e| panic!("{}", e.message));
+        assert_eq!(p.models, [Model::R2D2, Model::BB8, Model::Robi42]);
+        assert_eq!(p.faults.refuse_connects, 2);
+        for bad in [
+            &["--bluez", "tardis"][..],
+            &["--bluez", "--fault", "explode"],
+            &["r2d2"],
+            &["--bluez", "--bus", " "],
+        ] {
+            let e = parse(bad)
+                .err()
+                .unwrap_or_else(|| panic!("{bad:?} accepted"));
+            assert_eq!(e.status, 2, "{bad:?}: {}", e.message);
+        }
+        let many: Vec<&str> = std::iter::once("--bluez")
+            .chain(std::iter::repeat_n("bb8", 17))
+            .collect();
+        assert!(parse(&many).is_err());
+    }
+}

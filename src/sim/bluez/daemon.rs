@@ -1,0 +1,216 @@
+//! A private `dbus-daemon` for the virtual BlueZ: a session-like configuration written to a
+//! temporary directory, listening on a unix socket there. Dropping it kills the daemon and
+//! removes the directory.
+
+use std::fs;
+use std::io::{BufRead, BufReader, Read};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::sync::mpsc;
+use std::time::Duration;
+
+/// How long the daemon may take to say where it listens.
+const START_TIMEOUT: Duration = Duration::from_secs(5);
+
+/// The longest unix socket path the kernel takes (`sun_path` holds 108 bytes with its NUL).
+const MAX_SOCKET_PATH: usize = 107;
+
+/// A `dbus-daemon` of our own.
+pub struct PrivateBus {
+    child: Child,
+    dir: PathBuf,
+    address: String,
+}
+
+impl PrivateBus {
+    /// Start the daemon and wait until it listens.
+    pub fn start() -> Result<PrivateBus, String> {
+        let dir = make_dir()?;
+        match Self::start_in(&dir) {
+            Ok((child, address)) => Ok(PrivateBus {
+                child,
+                dir,
+                address,
+            }),
+            Err(e) => {
+                let _ = fs::remove_dir_all(&dir);
+                Err(e)
+            }
+        }
+    }
+
+    fn start_in(dir: &Path) -> Result<(Child, String), String> {
+        let socket = dir.join("bus");
+        let socket_text = socket.to_string_lossy().into_owned();
+        if socket_text.len() > MAX_SOCKET_PATH || socket.to_str().is_none() {
+            return Err(format!(
+                "the temporary directory {} makes too long a socket path: set TMPDIR to a \
+                 shorter one",
+                dir.display()
+            ));
+        }
+        let config = dir.join("bus.conf");
+        fs::write(&config, config_xml(&socket_text))
+            .map_err(|e| format!("cannot write {}: {e}", config.display()))?;
+        let mut cmd = Command::new("dbus-daemon");
+        cmd.arg(format!("--config-file={}", config.display()))
+            .arg("--nofork")
+            .arg("--nopidfile")
+            .arg("--print-address=1")
+            .stdin(Stdio::null())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped());
+        // Its own process group: Ctrl-C in the terminal reaches droidctl, which stops the
+        // daemon after the droids, not the daemon first.
+        {
+            use std::os::unix::process::CommandExt;
+            cmd.process_group(0);
+        }
+        let mut child = cmd.spawn().map_err(|e| {
+            if e.kind() == std::io::ErrorKind::NotFound {
+                "dbus-daemon is not installed — install it (Debian/Ubuntu: `sudo apt install \
+                 dbus-daemon`), or serve on a bus of your own with --bus ADDRESS"
+                    .to_string()
+            } else {
+                format!("cannot start dbus-daemon: {e}")
+            }
+        })?;
+        let (tx, rx) = mpsc::channel();
+        if let Some(stdout) = child.stdout.take() {
+            std::thread::spawn(move || {
+                let mut line = String::new();
+                let r = BufReader::new(stdout).read_line(&mut line).map(|_| line);
+                let _ = tx.send(r);
+            });
+        }
+        let printed = rx.recv_timeout(START_TIMEOUT);
+        let listening = matches!(&printed, Ok(Ok(line)) if !line.trim().is_empty());
+        if !listening {
+            let _ = child.kill();
+            let _ = child.wait();
+            let mut why = String::new();
+            if let Some(mut err) = child.stderr.take() {
+                let _ = err.read_to_string(&mut why);
+            }
+            let why = why.split_whitespace().collect::<Vec<_>>().join(" ");
+            return Err(if why.is_empty() {
+                format!(
+                    "dbus-daemon did not start within {} s",
+                    START_TIMEOUT.as_secs()
+                )
+            } else {
+                format!("dbus-daemon did not start: {why}")
+            });
+        }
+        // Whatever it says from now on goes nowhere (unread, a full pipe would stall it).
+        if let Some(mut err) = child.stderr.take() {
+            std::thread::spawn(move || {
+                let _ = std::io::copy(&mut err, &mut std::io::sink());
+            });
+        }
+        Ok((child, format!("unix:path={}", escape_address(&socket_text))))
+    }
+
+    /// The bus address clients use (`unix:path=/tmp/droidctl-bluez-…/bus`).
+    pub fn address(&self) -> &str {
+        &self.address
+    }
+
+    /// Whether the daemon still runs.
+    pub fn running(&mut self) -> bool {
+        matches!(self.child.try_wait(), Ok(None))
+    }
+}
+
+impl Drop for PrivateBus {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+        let _ = fs::remove_dir_all(&self.dir);
+    }
+}
+
+/// A fresh directory only we may use.
+fn make_dir() -> Result<PathBuf, String> {
+    use std::os::unix::fs::DirBuilderExt;
+    let base = std::env::temp_dir();
+    let pid = std::process::id();
+    let mut last = None;
+    for n in 0..100u32 {
+        let dir = base.join(format!("droidctl-bluez-{pid}-{n}"));
+        match fs::DirBuilder::new().mode(0o700).create(&dir) {
+            Ok(()) => return Ok(dir),
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => last = Some(e),
+            Err(e) => {
+                return Err(format!(
+                    "cannot create a directory in {}: {e}",
+                    base.display()
+                ));
+            }
+        }
+    }
+    Err(format!(
+        "cannot create a directory in {}: {}",
+        base.display(),
+        last.map(|e| e.to_string()).unwrap_or_default()
+    ))
+}
+
+/// A minimal session-like configuration: one unix socket, anyone on it may own any name and
+/// talk to anyone (the socket's directory is private to this user).
+fn config_xml(socket: &str) -> String {
+    format!(
+        r#"<!DOCTYPE busconfig PUBLIC "-//freedesktop//DTD D-Bus Bus Configuration 1.0//EN"
+ "http://www.freedesktop.org/standards/dbus/1.0/busconfig.dtd">
+<busconfig>
+  <type>session</type>
+  <listen>unix:path={}</listen>
+  <auth>EXTERNAL</auth>
+  <policy context="default">
+    <allow send_destination="*" eavesdrop="true"/>
+    <allow eavesdrop="true"/>
+    <allow own="*"/>
+  </policy>
+</busconfig>
+"#,
+        escape_xml(&escape_address(socket))
+    )
+}
+
+fn escape_xml(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+        .replace('\'', "&apos;")
+}
+
+/// A D-Bus address value: bytes outside `[-0-9A-Za-z_/.\*]` as `%XX`.
+fn escape_address(s: &str) -> String {
+    s.bytes()
+        .map(|b| {
+            if b.is_ascii_alphanumeric() || b"-_/.\\*".contains(&b) {
+                (b as char).to_string()
+            } else {
+                format!("%{b:02x}")
+            }
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn addresses_and_config_are_escaped() {
+        assert_eq!(escape_address("/tmp/a b/bus"), "/tmp/a%20b/bus");
+        assert_eq!(escape_address("/tmp/x,y=z"), "/tmp/x%2cy%3dz");
+        let xml = config_xml("/tmp/a&b/bus");
+        assert!(
+            xml.contains("<listen>unix:path=/tmp/a%26b/bus</listen>"),
+            "{xml}"
+        );
+        assert!(config_xml("/tmp/<b>").contains("unix:path=/tmp/%3cb%3e<"));
+    }
+}

@@ -1,0 +1,952 @@
+//! `droidctl sim --bluez`: the real BLE path end to end. The simulator serves droids on a
+//! private bus as BlueZ does; the real `droidctl` binary reaches it through
+//! `DBUS_SYSTEM_BUS_ADDRESS`, btleplug and bluez-async, without `--sim`: scanning, missions of
+//! each protocol family (compared with the same mission against `--sim`), the app in a
+//! pseudo-terminal, and the fault paths (a dropped link, a refused connection). A few checks
+//! talk D-Bus to it directly, as other BlueZ clients do.
+//!
+//! They need `dbus-daemon` (`.ci/run` installs it) and fail, not skip, without it.
+
+#![cfg(target_os = "linux")]
+
+use dbus::arg::{PropMap, RefArg, Variant};
+use dbus::blocking::Connection;
+use dbus::message::MatchRule;
+use droidctl::protocol::v2::{Decoder, Packet};
+use std::collections::HashMap;
+use std::io::{BufRead, BufReader, Read};
+use std::process::{Child, Command, Output, Stdio};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+// -------------------------------------------------------------------------------------------
+// Harness
+// -------------------------------------------------------------------------------------------
+
+/// `dbus-daemon` must be there: CI installs it, and these tests must not pass by skipping.
+fn require_dbus_daemon() {
+    let ok = Command::new("dbus-daemon")
+        .arg("--version")
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success());
+    assert!(
+        ok,
+        "dbus-daemon is missing: install it (`apt-get install dbus-daemon`, as .ci/run does); \
+         the tests of `droidctl sim --bluez` need it and do not skip"
+    );
+}
+
+/// A scratch directory removed on drop.
+struct TempDir(std::path::PathBuf);
+
+impl TempDir {
+    fn new(tag: &str) -> TempDir {
+        static N: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+        let n = N.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let p = std::env::temp_dir().join(format!(
+            "droidctl-simbluez-{tag}-{}-{n}",
+            std::process::id()
+        ));
+        let _ = std::fs::remove_dir_all(&p);
+        std::fs::create_dir_all(&p).unwrap();
+        TempDir(p)
+    }
+
+    fn file(&self, name: &str, text: &str) -> String {
+        let p = self.0.join(name);
+        std::fs::write(&p, text).unwrap();
+        p.to_string_lossy().into_owned()
+    }
+}
+
+impl Drop for TempDir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+/// A running `droidctl sim --bluez`, stopped with SIGTERM on drop.
+struct Sim {
+    child: Child,
+    address: String,
+    /// Its stderr so far, line by line.
+    lines: Arc<Mutex<Vec<String>>>,
+    /// Advertised names, in the order the models were given.
+    names: Vec<String>,
+    /// What it printed on stdout after the export line (nothing, once it ended).
+    stdout_rest: std::sync::mpsc::Receiver<String>,
+}
+
+impl Sim {
+    fn start(args: &[&str]) -> Sim {
+        require_dbus_daemon();
+        let mut child = Command::new(env!("CARGO_BIN_EXE_droidctl"))
+            .arg("sim")
+            .arg("--bluez")
+            .args(args)
+            .stdin(Stdio::null())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("start droidctl sim --bluez");
+        let lines = Arc::new(Mutex::new(Vec::new()));
+        {
+            let lines = lines.clone();
+            let stderr = child.stderr.take().unwrap();
+            std::thread::spawn(move || {
+                for line in BufReader::new(stderr).lines() {
+                    let Ok(line) = line else { break };
+                    lines.lock().unwrap().push(line);
+                }
+            });
+        }
+        let (tx, rx) = std::sync::mpsc::channel();
+        let stdout = child.stdout.take().unwrap();
+        std::thread::spawn(move || {
+            let mut out = BufReader::new(stdout);
+            let mut first = String::new();
+            let _ = out.read_line(&mut first);
+            let _ = tx.send(first);
+            // Anything more on stdout would break "only the export line": keep it for the
+            // check in `stop`.
+            let mut rest = String::new();
+            let _ = out.read_to_string(&mut rest);
+            let _ = tx.send(rest);
+        });
+        let first = rx
+            .recv_timeout(Duration::from_secs(10))
+            .expect("droidctl sim printed its address");
+        let address = first
+            .trim()
+            .strip_prefix("DBUS_SYSTEM_BUS_ADDRESS=")
+            .unwrap_or_else(|| panic!("export line, got {first:?}"))
+            .to_string();
+        assert!(address.starts_with("unix:path="), "{address}");
+        let mut sim = Sim {
+            child,
+            address,
+            lines,
+            names: Vec::new(),
+            stdout_rest: rx,
+        };
+        // One "NAME (MODEL) at ADDRESS" line per droid, before "serving on".
+        let serving = sim.wait_line("serving on", Duration::from_secs(5));
+        assert!(serving.contains(&sim.address), "{serving}");
+        sim.names = sim
+            .lines()
+            .iter()
+            .filter_map(|l| {
+                let rest = l.strip_prefix("droidctl sim: ")?;
+                let (name, _) = rest.split_once(" (")?;
+                rest.contains(") at ").then(|| name.to_string())
+            })
+            .collect();
+        sim
+    }
+
+    fn lines(&self) -> Vec<String> {
+        self.lines.lock().unwrap().clone()
+    }
+
+    fn wait_line(&self, what: &str, limit: Duration) -> String {
+        let start = Instant::now();
+        loop {
+            if let Some(l) = self.lines().into_iter().find(|l| l.contains(what)) {
+                return l;
+            }
+            assert!(
+                start.elapsed() < limit,
+                "no {what:?} from the simulator:\n{}",
+                self.lines().join("\n")
+            );
+            std::thread::sleep(Duration::from_millis(20));
+        }
+    }
+
+    /// SIGTERM, and it must end cleanly: exit 0, its directory gone.
+    fn stop(mut self) -> Vec<String> {
+        let dir = self
+            .address
+            .strip_prefix("unix:path=")
+            .and_then(|p| p.strip_suffix("/bus"))
+            .map(std::path::PathBuf::from);
+        let _ = Command::new("kill")
+            .args(["-TERM", &self.child.id().to_string()])
+            .status();
+        let start = Instant::now();
+        let status = loop {
+            if let Some(s) = self.child.try_wait().unwrap() {
+                break s;
+            }
+            assert!(start.elapsed() < Duration::from_secs(5), "sim did not stop");
+            std::thread::sleep(Duration::from_millis(20));
+        };
+        assert!(status.success(), "{status:?}\n{}", self.lines().join("\n"));
+        let rest = self
+            .stdout_rest
+            .recv_timeout(Duration::from_secs(2))
+            .unwrap_or_default();
+        assert_eq!(rest, "", "nothing on stdout but the export line");
+        if let Some(dir) = dir {
+            assert!(!dir.exists(), "{} left behind", dir.display());
+        }
+        self.lines()
+    }
+}
+
+impl Drop for Sim {
+    fn drop(&mut self) {
+        if matches!(self.child.try_wait(), Ok(None)) {
+            let _ = Command::new("kill")
+                .args(["-TERM", &self.child.id().to_string()])
+                .status();
+            let start = Instant::now();
+            while matches!(self.child.try_wait(), Ok(None))
+                && start.elapsed() < Duration::from_secs(3)
+            {
+                std::thread::sleep(Duration::from_millis(20));
+            }
+            let _ = self.child.kill();
+            let _ = self.child.wait();
+        }
+    }
+}
+
+/// The real binary against the virtual BlueZ (or `--sim` when `bus` is `None`).
+fn droidctl(args: &[&str], bus: Option<&str>, dir: &TempDir) -> Output {
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_droidctl"));
+    cmd.args(args)
+        .stdin(Stdio::null())
+        .env("DROIDCTL_LOG_FILE", dir.0.join("droidctl.log"))
+        .env("DROIDCTL_CONFIG", dir.0.join("config.toml"));
+    match bus {
+        Some(a) => cmd.env("DBUS_SYSTEM_BUS_ADDRESS", a),
+        // No way to a system bus: `--sim` must not need one.
+        None => cmd.env(
+            "DBUS_SYSTEM_BUS_ADDRESS",
+            "unix:path=/nonexistent/droidctl-test/bus",
+        ),
+    };
+    cmd.output().expect("run droidctl")
+}
+
+fn text(b: &[u8]) -> String {
+    String::from_utf8_lossy(b).into_owned()
+}
+
+/// A `run --json` output: the samples and the summary.
+struct Run {
+    samples: Vec<serde_json::Value>,
+    summary: serde_json::Value,
+}
+
+fn parse_run(out: &Output) -> Run {
+    let stdout = text(&out.stdout);
+    let mut values: Vec<serde_json::Value> = stdout
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap_or_else(|e| panic!("{e}: {l}")))
+        .collect();
+    let summary = values.pop().expect("a summary");
+    assert_eq!(summary["done"], true, "{stdout}");
+    Run {
+        samples: values,
+        summary,
+    }
+}
+
+fn f(v: &serde_json::Value) -> f64 {
+    v.as_f64().unwrap_or(f64::NAN)
+}
+
+/// The same mission through `sim --bluez` and against `--sim`: both complete, and the
+/// telemetry agrees within what real time allows.
+fn mission_matches(model: &str, mission: &str) -> (Run, Run) {
+    let sim = Sim::start(&[model]);
+    let name = sim.names[0].clone();
+    let dir = TempDir::new(model);
+    let script = dir.file("mission.txt", mission);
+    let t0 = Instant::now();
+    let ble = droidctl(
+        &["run", &script, "--name", &name, "--json"],
+        Some(&sim.address),
+        &dir,
+    );
+    let took = t0.elapsed();
+    assert_eq!(
+        ble.status.code(),
+        Some(0),
+        "stderr: {}\nsim: {}",
+        text(&ble.stderr),
+        sim.lines().join("\n")
+    );
+    let reference = droidctl(&["run", &script, "--sim", model, "--json"], None, &dir);
+    assert_eq!(
+        reference.status.code(),
+        Some(0),
+        "{}",
+        text(&reference.stderr)
+    );
+    let (ble, reference) = (parse_run(&ble), parse_run(&reference));
+    let (a, b) = (&ble.summary, &reference.summary);
+    // Real time: the mission takes as long as it says.
+    let t_ms = f(&a["t_ms"]);
+    assert!(
+        (t_ms - f(&b["t_ms"])).abs() < 0.1 * f(&b["t_ms"]),
+        "{a} vs {b}"
+    );
+    assert!(
+        took.as_secs_f64() * 1000.0 >= t_ms * 0.9,
+        "real time: {took:?}"
+    );
+    for key in ["collisions", "failed_steps", "errors", "timeouts"] {
+        assert_eq!(a[key], b[key], "{key}: {a} vs {b}");
+    }
+    let moved = f(&b["x_cm"]).hypot(f(&b["y_cm"]));
+    assert!(moved > 30.0, "the mission drives: {b}");
+    let off = (f(&a["x_cm"]) - f(&b["x_cm"])).hypot(f(&a["y_cm"]) - f(&b["y_cm"]));
+    assert!(off <= (0.1 * moved).max(6.0), "final position {a} vs {b}");
+    let (n, m) = (ble.samples.len() as f64, reference.samples.len() as f64);
+    assert!((n - m).abs() <= 0.2 * m + 2.0, "samples: {n} vs {m}");
+    let (last, last_ref) = (
+        &ble.samples[ble.samples.len() - 1],
+        &reference.samples[reference.samples.len() - 1],
+    );
+    assert_eq!(last["heading"], last_ref["heading"], "{last} vs {last_ref}");
+    assert_eq!(last["stance"], last_ref["stance"], "{last} vs {last_ref}");
+    // The connection ended with the mission.
+    let lines = sim.stop();
+    assert!(
+        lines
+            .iter()
+            .any(|l| l.contains(&format!("{name}: connected ("))),
+        "{lines:?}"
+    );
+    assert!(
+        lines
+            .iter()
+            .any(|l| l.contains(&format!("{name}: disconnected by the client"))),
+        "{lines:?}"
+    );
+    (ble, reference)
+}
+
+// -------------------------------------------------------------------------------------------
+// Missions through btleplug, one per family
+// -------------------------------------------------------------------------------------------
+
+/// API v2: the anti-DoS unlock, the setup, a stance change and a drive.
+#[test]
+fn r2d2_mission_through_bluez_matches_the_simulator() {
+    let (ble, _) = mission_matches("r2d2", "stance tripod\ndrive 80 90 for 1.5s\nwait 0.3s\n");
+    let last = &ble.samples[ble.samples.len() - 1];
+    assert_eq!(last["stance"], "tripod", "{last}");
+}
+
+/// API v1: the wake sequence, then driving.
+#[test]
+fn bb8_mission_through_bluez_matches_the_simulator() {
+    mission_matches("bb8", "drive 80 90 for 1.5s\nwait 0.3s\n");
+}
+
+/// RSRCP: the handshake read and the start confirmation, frames one per notification, the
+/// remote control.
+#[test]
+fn robi_mission_through_bluez_matches_the_simulator() {
+    let (ble, reference) = mission_matches("robi", "drive 200 0 for 2s\nwait 0.3s\n");
+    let frames = |r: &Run| f(&r.samples[r.samples.len() - 1]["frames"]);
+    assert!(frames(&ble) >= 20.0, "frames flow: {}", frames(&ble));
+    assert!((frames(&ble) - frames(&reference)).abs() <= 4.0);
+}
+
+// -------------------------------------------------------------------------------------------
+// Scanning
+// -------------------------------------------------------------------------------------------
+
+#[test]
+fn scan_lists_a_droid_of_each_family() {
+    let sim = Sim::start(&["r2d2", "bb8", "robi"]);
+    assert_eq!(sim.names.len(), 3, "{:?}", sim.lines());
+    let dir = TempDir::new("scan");
+    let out = droidctl(&["scan", "--timeout", "1"], Some(&sim.address), &dir);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let stdout = text(&out.stdout);
+    let rows: Vec<&str> = stdout.lines().collect();
+    assert_eq!(rows.len(), 4, "{stdout}");
+    assert!(rows[0].starts_with("NAME"), "{stdout}");
+    // Strongest first: the order they were given.
+    for (row, (name, model)) in rows[1..].iter().zip([
+        (&sim.names[0], "R2-D2"),
+        (&sim.names[1], "BB-8"),
+        (&sim.names[2], "Robi 42"),
+    ]) {
+        assert!(row.starts_with(name.as_str()), "{row}");
+        assert!(row.contains(model), "{row}");
+        assert!(row.ends_with("dBm"), "{row}");
+    }
+    assert!(sim.names[0].starts_with("D2-") && sim.names[1].starts_with("BB-"));
+    assert_eq!(sim.names[2], "Robi 42");
+    let out = droidctl(
+        &["scan", "--timeout", "0.5", "--json"],
+        Some(&sim.address),
+        &dir,
+    );
+    let models: Vec<String> = text(&out.stdout)
+        .lines()
+        .map(|l| {
+            let v: serde_json::Value = serde_json::from_str(l).unwrap();
+            v["model"].as_str().unwrap_or("?").to_string()
+        })
+        .collect();
+    assert_eq!(models, ["r2d2", "bb8", "robi42"]);
+    sim.stop();
+}
+
+// -------------------------------------------------------------------------------------------
+// Faults through btleplug
+// -------------------------------------------------------------------------------------------
+
+/// The API writes in the simulator's trace after the line containing `after`.
+fn writes_after(lines: &[String], after: &str, name: &str) -> Vec<Vec<u8>> {
+    let start = lines
+        .iter()
+        .position(|l| l.contains(after))
+        .unwrap_or_else(|| panic!("no {after:?} in\n{}", lines.join("\n")));
+    let prefix = format!("droidctl sim: {name}: write 00010002-574f-4f20-5370-6865726f2121: ");
+    lines[start..]
+        .iter()
+        .filter_map(|l| l.strip_prefix(&prefix))
+        .map(|hex| {
+            hex.split_whitespace()
+                .map(|b| u8::from_str_radix(b, 16).unwrap())
+                .collect()
+        })
+        .collect()
+}
+
+fn packets(writes: &[Vec<u8>]) -> Vec<Packet> {
+    Decoder::new()
+        .decode_all(&writes.concat())
+        .into_iter()
+        .map(|r| r.expect("droidctl writes well-formed packets"))
+        .collect()
+}
+
+/// Drive with heading (0x16/0x07): the speed byte.
+fn drive_speeds(ps: &[Packet]) -> Vec<u8> {
+    ps.iter()
+        .filter(|p| p.did == 0x16 && p.cid == 0x07)
+        .map(|p| p.data[0])
+        .collect()
+}
+
+/// The droid drops the link while driving: droidctl says so, reconnects, runs the handshake
+/// and the setup again, resumes at speed 0, and the mission completes.
+#[test]
+fn a_disconnect_mid_drive_reconnects_and_resumes_at_speed_0() {
+    // Connected at 0 s; setup ≈ 1.3 s, stance 2 s: driving from about 3.4 s to 7.4 s.
+    let sim = Sim::start(&["r2d2", "--fault", "disconnect-after=4.5", "--trace"]);
+    let name = sim.names[0].clone();
+    let dir = TempDir::new("dc");
+    let script = dir.file(
+        "mission.txt",
+        "stance tripod\ndrive 60 0\nwait 4s\nstop\nwait 0.3s\n",
+    );
+    let out = droidctl(&["run", &script, "--name", &name], Some(&sim.address), &dir);
+    let (stdout, stderr) = (text(&out.stdout), text(&out.stderr));
+    assert_eq!(out.status.code(), Some(0), "{stdout}\n{stderr}");
+    // The run shows the link going and coming back.
+    let lost = stderr
+        .find("link lost: the droid disconnected — reconnecting (attempt 1)")
+        .unwrap_or_else(|| panic!("{stderr}"));
+    let back = stderr
+        .find("] reconnected")
+        .unwrap_or_else(|| panic!("{stderr}"));
+    assert!(back > lost);
+    assert!(stdout.contains("done in"), "{stdout}");
+    assert!(stdout.contains("failed steps 0"), "{stdout}");
+    let lines = sim.stop();
+    let dropped = format!("{name}: fault disconnect-after: dropped the connection after 4.50 s");
+    assert!(lines.iter().any(|l| l.contains(&dropped)), "{lines:?}");
+    let connects = lines
+        .iter()
+        .filter(|l| l.contains(&format!("{name}: connected (")))
+        .count();
+    assert_eq!(connects, 2, "{lines:?}");
+    // Before the drop it was driving at 60.
+    let all = writes_after(&lines, "serving on", &name);
+    let before = drive_speeds(&packets(&all));
+    assert!(before.contains(&60), "{before:?}");
+    // After it: nothing until the reconnect (the droid is gone), then the handshake again
+    // (the unlock), the setup (wake first) and a drive at speed 0 before any other.
+    let drop_at = lines.iter().position(|l| l.contains(&dropped)).unwrap();
+    let reconnect = drop_at
+        + lines[drop_at..]
+            .iter()
+            .position(|l| l.contains(&format!("{name}: connected (")))
+            .unwrap();
+    assert!(
+        lines[drop_at..reconnect]
+            .iter()
+            .all(|l| !l.contains(": write ")),
+        "{lines:?}"
+    );
+    assert!(
+        lines[reconnect + 1].contains(": write 00020005-")
+            && lines[reconnect + 1]
+                .ends_with("75 73 65 74 68 65 66 6F 72 63 65 2E 2E 2E 62 61 6E 64"),
+        "unlock first: {}",
+        lines[reconnect + 1]
+    );
+    let after = packets(&writes_after(&lines[reconnect..], "connected (", &name));
+    assert_eq!((after[0].did, after[0].cid), (0x13, 0x0D), "wake first");
+    let speeds = drive_speeds(&after);
+    assert_eq!(speeds.first(), Some(&0), "resumes at speed 0: {speeds:?}");
+    assert!(speeds.contains(&60), "then drives on: {speeds:?}");
+    assert_eq!(speeds.last(), Some(&0), "and stops at the end: {speeds:?}");
+}
+
+/// A droid that refuses every connection: droidctl retries, then gives up with the
+/// documented one-line error and status 1. (Named to start first: it takes the mission's
+/// 20 s connect limit.)
+#[test]
+fn a_droid_refusing_connections_gives_one_line_and_status_1() {
+    let sim = Sim::start(&["r2d2", "--fault", "refuse-connect"]);
+    let name = sim.names[0].clone();
+    let dir = TempDir::new("refused");
+    let script = dir.file("mission.txt", "drive 60 0 for 1s\n");
+    let out = droidctl(&["run", &script, "--name", &name], Some(&sim.address), &dir);
+    let stderr = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(out.stdout.is_empty(), "{}", text(&out.stdout));
+    assert_eq!(stderr.lines().count(), 1, "one line: {stderr}");
+    assert!(
+        stderr.starts_with(
+            "droidctl: error: no connection within 20 s: the connection was aborted \
+             (le-connection-abort-by-local) — wake the droid"
+        ),
+        "{stderr}"
+    );
+    let lines = sim.stop();
+    let refused = lines
+        .iter()
+        .filter(|l| l.contains("fault refuse-connect: refusing the connection"))
+        .count();
+    assert!(refused >= 3, "droidctl retried: {lines:?}");
+    assert!(
+        !lines.iter().any(|l| l.contains(": connected (")),
+        "{lines:?}"
+    );
+}
+
+// -------------------------------------------------------------------------------------------
+// The app in a pseudo-terminal
+// -------------------------------------------------------------------------------------------
+
+mod pty {
+    use portable_pty::{CommandBuilder, PtySize, native_pty_system};
+    use std::io::{Read, Write};
+    use std::sync::{Arc, Mutex};
+    use std::time::{Duration, Instant};
+
+    pub struct Tui {
+        screen: Arc<Mutex<vt100::Parser>>,
+        writer: Arc<Mutex<Box<dyn Write + Send>>>,
+        child: Box<dyn portable_pty::Child + Send + Sync>,
+    }
+
+    impl Tui {
+        pub fn start(args: &[&str], env: &[(&str, &str)]) -> Tui {
+            let (cols, rows) = (100u16, 30u16);
+            let pty = native_pty_system()
+                .openpty(PtySize {
+                    rows,
+                    cols,
+                    pixel_width: 0,
+                    pixel_height: 0,
+                })
+                .unwrap();
+            let mut cmd = CommandBuilder::new(env!("CARGO_BIN_EXE_droidctl"));
+            cmd.args(args);
+            cmd.env("TERM", "xterm-256color");
+            for (k, v) in env {
+                cmd.env(k, v);
+            }
+            let child = pty.slave.spawn_command(cmd).unwrap();
+            drop(pty.slave);
+            let mut reader = pty.master.try_clone_reader().unwrap();
+            let writer = Arc::new(Mutex::new(pty.master.take_writer().unwrap()));
+            let screen = Arc::new(Mutex::new(vt100::Parser::new(
+                rows.try_into().unwrap(),
+                cols.try_into().unwrap(),
+                0,
+            )));
+            let (screen2, answer) = (screen.clone(), writer.clone());
+            std::thread::spawn(move || {
+                let _keep_master = pty.master;
+                let mut buf = [0u8; 8192];
+                while let Ok(n) = reader.read(&mut buf) {
+                    if n == 0 {
+                        break;
+                    }
+                    let chunk = &buf[..n];
+                    screen2.lock().unwrap().process(chunk);
+                    // Answer crossterm's capability probe as a legacy terminal.
+                    if chunk.windows(4).any(|w| w == b"\x1b[?u") {
+                        let mut w = answer.lock().unwrap();
+                        let _ = w.write_all(b"\x1b[?62;c");
+                        let _ = w.flush();
+                    }
+                }
+            });
+            Tui {
+                screen,
+                writer,
+                child,
+            }
+        }
+
+        pub fn text(&self) -> String {
+            self.screen.lock().unwrap().screen().contents()
+        }
+
+        pub fn wait_for(&self, what: &str, limit: Duration) -> String {
+            let start = Instant::now();
+            loop {
+                let t = self.text();
+                if t.contains(what) {
+                    return t;
+                }
+                assert!(
+                    start.elapsed() < limit,
+                    "timed out waiting for {what:?}; screen:\n{t}"
+                );
+                std::thread::sleep(Duration::from_millis(50));
+            }
+        }
+
+        pub fn send(&mut self, bytes: &[u8]) {
+            let mut w = self.writer.lock().unwrap();
+            let _ = w.write_all(bytes);
+            let _ = w.flush();
+        }
+
+        /// A key held the way a legacy terminal reports it: press, then auto-repeats.
+        pub fn hold(&mut self, key: &[u8], for_: Duration) {
+            let start = Instant::now();
+            while start.elapsed() < for_ {
+                self.send(key);
+                std::thread::sleep(Duration::from_millis(40));
+            }
+        }
+
+        pub fn wait_exit(&mut self, limit: Duration) -> portable_pty::ExitStatus {
+            let start = Instant::now();
+            loop {
+                if let Some(status) = self.child.try_wait().unwrap() {
+                    return status;
+                }
+                assert!(
+                    start.elapsed() < limit,
+                    "droidctl did not exit; screen:\n{}",
+                    self.text()
+                );
+                std::thread::sleep(Duration::from_millis(50));
+            }
+        }
+    }
+
+    impl Drop for Tui {
+        fn drop(&mut self) {
+            let _ = self.child.kill();
+        }
+    }
+}
+
+/// The droid's y position as the sensors panel shows it ("pos x … y … cm").
+fn shown_y(screen: &str) -> Option<f32> {
+    let line = screen.lines().find(|l| l.contains("pos x"))?;
+    let after = &line[line.find(" y ")? + 3..];
+    after.split_whitespace().next()?.parse().ok()
+}
+
+/// The app finds the R2-D2 on the virtual BlueZ, connects, shows what it notifies (sensor
+/// streaming in the packet log, the position on the sensors panel), drives it with `w`, and
+/// quits with `q`, disconnecting.
+#[test]
+fn the_app_drives_r2d2_through_the_virtual_bluez() {
+    let sim = Sim::start(&["r2d2"]);
+    let name = sim.names[0].clone();
+    let dir = TempDir::new("app");
+    let log = dir.0.join("droidctl.log").to_string_lossy().into_owned();
+    let config = dir.0.join("config.toml").to_string_lossy().into_owned();
+    let mut tui = pty::Tui::start(
+        &["--name", &name],
+        &[
+            ("DBUS_SYSTEM_BUS_ADDRESS", sim.address.as_str()),
+            ("DROIDCTL_LOG_FILE", log.as_str()),
+            ("DROIDCTL_CONFIG", config.as_str()),
+        ],
+    );
+    let screen = tui.wait_for("connected", Duration::from_secs(20));
+    assert!(
+        screen.contains(&name),
+        "the droid's name on screen:\n{screen}"
+    );
+    tui.wait_for("stance tripod", Duration::from_secs(10));
+    // Notifications arrive: sensor streaming in the log, the position on the panel.
+    tui.wait_for("sensor-streaming", Duration::from_secs(5));
+    tui.wait_for("pos x", Duration::from_secs(5));
+    let before = shown_y(&tui.text()).unwrap_or(0.0);
+    tui.hold(b"w", Duration::from_millis(2500));
+    std::thread::sleep(Duration::from_millis(800));
+    let screen = tui.text();
+    let after = shown_y(&screen).expect("position on screen");
+    assert!(
+        after > before + 30.0,
+        "the droid moved forward: {before} → {after}\n{screen}"
+    );
+    assert!(screen.contains("drive-with-heading"), "{screen}");
+    tui.send(b"q");
+    let status = tui.wait_exit(Duration::from_secs(10));
+    assert!(status.success(), "{status:?}");
+    sim.wait_line(
+        &format!("{name}: disconnected by the client"),
+        Duration::from_secs(5),
+    );
+    let lines = sim.stop();
+    assert!(
+        lines
+            .iter()
+            .any(|l| l.contains(&format!("{name}: connected ("))),
+        "{lines:?}"
+    );
+}
+
+// -------------------------------------------------------------------------------------------
+// The D-Bus API as other BlueZ clients see it
+// -------------------------------------------------------------------------------------------
+
+type Tree = HashMap<dbus::Path<'static>, HashMap<String, PropMap>>;
+
+fn managed(c: &Connection) -> Tree {
+    let p = c.with_proxy("org.bluez", "/", Duration::from_secs(2));
+    let (tree,): (Tree,) = p
+        .method_call(
+            "org.freedesktop.DBus.ObjectManager",
+            "GetManagedObjects",
+            (),
+        )
+        .expect("GetManagedObjects");
+    tree
+}
+
+fn call(c: &Connection, path: &str, iface: &str, member: &str) -> Result<(), dbus::Error> {
+    c.with_proxy("org.bluez", path, Duration::from_secs(2))
+        .method_call(iface, member, ())
+}
+
+fn prop(tree: &Tree, path: &str, iface: &str, name: &str) -> Option<String> {
+    let v = tree
+        .get(&dbus::Path::from(path.to_string()))?
+        .get(iface)?
+        .get(name)?;
+    Some(format!("{:?}", v.0))
+}
+
+fn err_name(r: Result<(), dbus::Error>) -> String {
+    r.err()
+        .and_then(|e| e.name().map(str::to_string))
+        .unwrap_or_default()
+}
+
+/// Discovery sessions, connecting, the GATT objects, reads, writes and notifications, the
+/// handshake at the D-Bus level, one connection at a time.
+#[test]
+fn the_dbus_api_as_bluez_clients_see_it() {
+    let sim = Sim::start(&["r2d2"]);
+    let name = sim.names[0].clone();
+    let a = Connection::new_address(&sim.address).unwrap();
+    let b = Connection::new_address(&sim.address).unwrap();
+    let adapter = "/org/bluez/hci0";
+    // Before any discovery only the adapter is there.
+    let tree = managed(&a);
+    assert!(prop(&tree, adapter, "org.bluez.Adapter1", "Powered").is_some());
+    assert!(!tree.keys().any(|p| p.contains("dev_")), "{tree:?}");
+    call(&a, adapter, "org.bluez.Adapter1", "StartDiscovery").unwrap();
+    assert_eq!(
+        err_name(call(&a, adapter, "org.bluez.Adapter1", "StartDiscovery")),
+        "org.bluez.Error.InProgress"
+    );
+    assert_eq!(
+        err_name(call(&b, adapter, "org.bluez.Adapter1", "StopDiscovery")),
+        "org.bluez.Error.Failed",
+        "b has no discovery session"
+    );
+    let tree = managed(&a);
+    let dev = tree
+        .keys()
+        .find(|p| p.contains("dev_"))
+        .expect("the droid is heard")
+        .to_string();
+    assert_eq!(
+        prop(&tree, &dev, "org.bluez.Device1", "Name"),
+        Some(format!("{name:?}"))
+    );
+    assert_eq!(
+        prop(&tree, &dev, "org.bluez.Device1", "Connected"),
+        Some("false".into())
+    );
+    // Notifications and property changes arrive as signals: collect them (property, bytes
+    // for byte arrays, the value as text).
+    type Seen = Arc<Mutex<Vec<(String, Vec<u8>, String)>>>;
+    let seen: Seen = Arc::default();
+    {
+        let seen = seen.clone();
+        let rule = MatchRule::new_signal("org.freedesktop.DBus.Properties", "PropertiesChanged")
+            .with_namespaced_path(dev.clone());
+        a.add_match(rule, move |(): (), _, m| {
+            let path = m.path().map(|p| p.to_string()).unwrap_or_default();
+            if let Ok((iface, changed)) = m.read2::<&str, PropMap>() {
+                for (k, v) in changed {
+                    let bytes: Vec<u8> = dbus::arg::cast::<Vec<u8>>(&v.0)
+                        .cloned()
+                        .unwrap_or_default();
+                    let shown = format!("{:?}", v.0);
+                    seen.lock()
+                        .unwrap()
+                        .push((format!("{path} {iface}.{k}"), bytes, shown));
+                }
+            }
+            true
+        })
+        .unwrap();
+    }
+    call(&a, &dev, "org.bluez.Device1", "Connect").unwrap();
+    // One connection at a time.
+    assert_eq!(
+        err_name(call(&b, &dev, "org.bluez.Device1", "Connect")),
+        "org.bluez.Error.Failed"
+    );
+    sim.wait_line("refused a connection from", Duration::from_secs(2));
+    // Services resolve; the GATT table appears under the device.
+    let start = Instant::now();
+    let tree = loop {
+        let t = managed(&a);
+        if prop(&t, &dev, "org.bluez.Device1", "ServicesResolved") == Some("true".into()) {
+            break t;
+        }
+        assert!(start.elapsed() < Duration::from_secs(3), "never resolved");
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    let find_char = |uuid: &str| -> String {
+        tree.iter()
+            .find(|(_, ifaces)| {
+                ifaces
+                    .get("org.bluez.GattCharacteristic1")
+                    .and_then(|p| p.get("UUID"))
+                    .is_some_and(|v| v.0.as_str() == Some(uuid))
+            })
+            .map(|(p, _)| p.to_string())
+            .unwrap_or_else(|| panic!("no characteristic {uuid} in {tree:?}"))
+    };
+    let api = find_char("00010002-574f-4f20-5370-6865726f2121");
+    let anti_dos = find_char("00020005-574f-4f20-5370-6865726f2121");
+    assert!(api.starts_with(&format!("{dev}/service")), "{api}");
+    let flags = prop(&tree, &api, "org.bluez.GattCharacteristic1", "Flags").unwrap();
+    assert!(
+        flags.contains("notify") && flags.contains("write"),
+        "{flags}"
+    );
+    let services: Vec<String> = tree
+        .iter()
+        .filter_map(|(_, i)| i.get("org.bluez.GattService1"))
+        .filter_map(|p| p.get("UUID").and_then(|v| v.0.as_str().map(str::to_string)))
+        .collect();
+    assert_eq!(services.len(), 2, "{services:?}");
+    fn chr<'a>(c: &'a Connection, path: &str) -> dbus::blocking::Proxy<'static, &'a Connection> {
+        c.with_proxy("org.bluez", path.to_string(), Duration::from_secs(2))
+    }
+    // Not readable.
+    let r: Result<(Vec<u8>,), _> = chr(&a, &api).method_call(
+        "org.bluez.GattCharacteristic1",
+        "ReadValue",
+        (PropMap::new(),),
+    );
+    assert_eq!(
+        r.err()
+            .and_then(|e| e.name().map(str::to_string))
+            .as_deref(),
+        Some("org.bluez.Error.NotPermitted")
+    );
+    call(&a, &api, "org.bluez.GattCharacteristic1", "StartNotify").unwrap();
+    let write = |path: &str, bytes: &[u8]| {
+        let mut opts = PropMap::new();
+        opts.insert(
+            "type".into(),
+            Variant(Box::new("request".to_string()) as Box<dyn RefArg>),
+        );
+        let r: Result<(), _> = chr(&a, path).method_call(
+            "org.bluez.GattCharacteristic1",
+            "WriteValue",
+            (bytes.to_vec(), opts),
+        );
+        r.unwrap();
+    };
+    let ping = [0x8D, 0x0A, 0x13, 0x0D, 0x00, 0xD5, 0xD8];
+    let pump = |c: &Connection, for_: Duration| {
+        let end = Instant::now() + for_;
+        while Instant::now() < end {
+            let _ = c.process(Duration::from_millis(20));
+        }
+    };
+    let values = |seen: &Seen| -> Vec<Vec<u8>> {
+        seen.lock()
+            .unwrap()
+            .iter()
+            .filter(|(k, _, _)| k.starts_with(&api) && k.ends_with(".Value"))
+            .map(|(_, v, _)| v.clone())
+            .collect()
+    };
+    // Locked: a ping goes unanswered.
+    write(&api, &ping);
+    pump(&a, Duration::from_millis(300));
+    assert!(values(&seen).is_empty(), "{:?}", seen.lock().unwrap());
+    // Unlocked: the same ping is answered, as a notification on Value.
+    write(&anti_dos, b"usetheforce...band");
+    write(&api, &ping);
+    pump(&a, Duration::from_millis(300));
+    let answers: Vec<Packet> = Decoder::new()
+        .decode_all(&values(&seen).concat())
+        .into_iter()
+        .filter_map(Result::ok)
+        .collect();
+    assert_eq!(answers.len(), 1, "{:?}", seen.lock().unwrap());
+    assert!(answers[0].is_response(), "{:?}", answers[0]);
+    assert_eq!((answers[0].did, answers[0].cid), (0x13, 0x0D));
+    assert!(
+        seen.lock()
+            .unwrap()
+            .iter()
+            .any(|(k, _, v)| k.ends_with(".Notifying") && v == "true"),
+        "{:?}",
+        seen.lock().unwrap()
+    );
+    // Disconnect: the GATT objects go, the device stays.
+    call(&a, &dev, "org.bluez.Device1", "Disconnect").unwrap();
+    assert_eq!(
+        err_name(call(&a, &dev, "org.bluez.Device1", "Disconnect")),
+        "org.bluez.Error.NotConnected"
+    );
+    let tree = managed(&a);
+    assert!(tree.contains_key(&dbus::Path::from(dev.clone())));
+    assert!(!tree.keys().any(|p| p.contains("/service")), "{tree:?}");
+    // Now b may connect.
+    call(&b, &dev, "org.bluez.Device1", "Connect").unwrap();
+    drop(b);
+    // b left the bus: its connection goes with it.
+    sim.wait_line("left the bus", Duration::from_secs(2));
+    let lines = sim.stop();
+    assert!(!lines.iter().any(|l| l.contains("panicked")), "{lines:?}");
+}
