@@ -860,8 +860,8 @@ fn the_dbus_api_as_bluez_clients_see_it() {
         "{flags}"
     );
     let services: Vec<String> = tree
-        .iter()
-        .filter_map(|(_, i)| i.get("org.bluez.GattService1"))
+        .values()
+        .filter_map(|i| i.get("org.bluez.GattService1"))
         .filter_map(|p| p.get("UUID").and_then(|v| v.0.as_str().map(str::to_string)))
         .collect();
     assert_eq!(services.len(), 2, "{services:?}");
