@@ -370,7 +370,8 @@ async fn await_connected(session: &SessionHandle, limit: Duration) -> Result<(),
     })
 }
 
-fn sample_of(t: &Telemetry, t_ms: u64) -> Sample {
+/// The sample of `t` at `t_ms` since the mission started (replay makes them too).
+pub fn sample_of(t: &Telemetry, t_ms: u64) -> Sample {
     Sample {
         t_ms,
         x_cm: t.x_cm,

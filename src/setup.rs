@@ -39,6 +39,7 @@ mod tests {
             names,
             [
                 "wake",
+                "set-custom-control-system-timeout",
                 "perform-leg-action",
                 "set-head-position",
                 "configure-collision-detection",
@@ -51,8 +52,8 @@ mod tests {
             ]
         );
         // The first mask write has interval 0, the last the real one (100 ms).
-        assert_eq!(&cmds[5].data()[..2], &[0, 0]);
-        assert_eq!(&cmds[7].data()[..2], &[0, 100]);
+        assert_eq!(&cmds[6].data()[..2], &[0, 0]);
+        assert_eq!(&cmds[8].data()[..2], &[0, 100]);
     }
 
     #[test]

@@ -565,17 +565,23 @@ mod v1_session {
         // The v1 setup, in order, on 2ba1.
         let written = commands_written(&droid);
         assert_eq!(ids(&written), setup_ids());
+        // Issue 15: the fail-safe (stop on disconnect) goes first.
         assert_eq!(
             written[0],
-            v1::cmd::ping().to_packet(written[0].seq),
+            v1::cmd::set_temporary_option_flags(1).to_packet(written[0].seq),
             "asks for an answer and resets the inactivity timeout (SOP2 FF)"
+        );
+        assert_eq!(
+            written[1],
+            v1::cmd::ping().to_packet(written[1].seq),
+            "then the ping"
         );
         let streaming = written.iter().find(|c| c.cid == 0x11).unwrap();
         let cfg = v1::StreamingConfig::from_command_data(&streaming.data).unwrap();
         assert_eq!((cfg.n, cfg.m, cfg.pcnt), (40, 1, 0), "10 Hz, forever");
         // Each answered by SEQ: nothing timed out, nothing retried.
         let st = s.stats();
-        assert_eq!((st.timeouts, st.retried, st.answered), (0, 0, 5), "{st:?}");
+        assert_eq!((st.timeouts, st.retried, st.answered), (0, 0, 6), "{st:?}");
 
         // A request, answered through 2ba6 in pieces.
         let power = s
@@ -688,15 +694,16 @@ mod v1_session {
             .expect("reconnected");
         assert_eq!(ops[second..second + 6], wake_sequence()[..], "{ops:?}");
         assert_eq!(count(&droid, &FakeOp::Connect), 2);
-        // The setup again, then a stop (Roll state 0) keeping the heading.
+        // Issue 15, stop first: after the reconnect a stop (Roll state 0) keeping the
+        // heading, then the setup again.
         let written = commands_written(&droid);
         let setup = setup_ids();
         let mut expected = setup.clone();
         expected.push((0x02, 0x30));
-        expected.extend(&setup);
         expected.push((0x02, 0x30));
+        expected.extend(&setup);
         assert_eq!(ids(&written), expected);
-        let stop = written.last().unwrap();
+        let stop = &written[setup.len() + 1];
         assert_eq!(stop.data, [0, 0, 90, 0], "speed 0, heading 90, state stop");
         assert_eq!(s.stats().reconnects, 1);
         assert_eq!(s.stats().timeouts, 0);

@@ -331,7 +331,7 @@ fn telemetry_keeps_flowing_after_sleep_and_wake() {
                 .is_some_and(|t| t <= 1500)
         })
         .filter_map(y)
-        .last()
+        .next_back()
         .expect("position before sleeping");
     let end = lines
         .iter()

@@ -376,17 +376,59 @@ async fn error_code_becomes_droid_error() {
         tokio::spawn(async move { s.request(drive(100, 90)).await })
     };
     let p = fake.wait_packets(1).await.remove(0);
-    fake.respond(&p, ErrorCode::TargetUnavailable, vec![]);
+    fake.respond(&p, ErrorCode::BadParameterValue, vec![]);
     assert_eq!(
         call.await.unwrap(),
         Err(RequestError::Droid(droidctl::family::DroidError::V2(
-            ErrorCode::TargetUnavailable
+            ErrorCode::BadParameterValue
         )))
     );
     let st = s.stats();
     assert_eq!(
         (st.droid_errors, st.errors, st.answered, st.timeouts),
         (1, 1, 1, 0)
+    );
+}
+
+#[tokio::test(start_paused = true)]
+async fn target_unavailable_wakes_the_droid_and_resends_once() {
+    // Issue 15: a drive that finds the droid in soft sleep is not lost: Wake, then the drive
+    // again, once. A second target_unavailable is the caller's answer.
+    let fake = Fake::new();
+    let s = connected(&fake, quick()).await;
+    let call = {
+        let s = s.clone();
+        tokio::spawn(async move { s.request(drive(100, 90)).await })
+    };
+    let first = fake.wait_packets(1).await.remove(0);
+    fake.respond(&first, ErrorCode::TargetUnavailable, vec![]);
+    let sent = fake.wait_packets(3).await;
+    let (wake, again) = (&sent[1], &sent[2]);
+    assert_eq!((wake.did, wake.cid), (0x13, 0x0D), "{sent:?}");
+    assert_eq!(
+        (again.did, again.cid, &again.data),
+        (first.did, first.cid, &first.data)
+    );
+    fake.respond(wake, ErrorCode::Success, vec![]);
+    fake.respond(again, ErrorCode::Success, vec![]);
+    assert!(call.await.unwrap().is_ok());
+    assert_eq!(s.stats().retried, 1);
+
+    let call = {
+        let s = s.clone();
+        tokio::spawn(async move { s.request(drive(50, 90)).await })
+    };
+    let p = fake.wait_packets(4).await.remove(3);
+    fake.respond(&p, ErrorCode::TargetUnavailable, vec![]);
+    let sent = fake.wait_packets(6).await;
+    fake.respond(&sent[4], ErrorCode::Success, vec![]);
+    fake.respond(&sent[5], ErrorCode::TargetUnavailable, vec![]);
+    assert_eq!(
+        call.await.unwrap(),
+        Err(RequestError::Droid(droidctl::family::DroidError::V2(
+            ErrorCode::TargetUnavailable
+        ))),
+        "woken and re-sent once only"
     );
 }
 
@@ -894,7 +936,8 @@ async fn reconnects_with_backoff_setup_and_a_stop_at_the_last_heading() {
         matches!(&seen[1], LinkState::Reconnecting { reason, .. } if reason == "radio silence")
     );
 
-    // On the new connection: setup again, then a stop at the last heading.
+    // On the new connection: the wake, a stop at the last heading, then the setup again
+    // (issue 15: stop first, then set up).
     fake.wait_packets(7).await;
     let after: Vec<Packet> = fake
         .sent()
@@ -904,12 +947,12 @@ async fn reconnects_with_backoff_setup_and_a_stop_at_the_last_heading() {
         .collect();
     assert_eq!(after.len(), 3, "{after:?}");
     assert_eq!((after[0].did, after[0].cid), (0x13, 0x0D));
+    assert!(is_drive(&after[1]));
+    assert_eq!(after[1].data, [0, 0, 123, 0], "speed 0 at heading 123");
     assert_eq!(
-        (after[1].did, after[1].cid, after[1].data.as_slice()),
+        (after[2].did, after[2].cid, after[2].data.as_slice()),
         (0x17, 0x0D, &[1u8][..])
     );
-    assert!(is_drive(&after[2]));
-    assert_eq!(after[2].data, [0, 0, 123, 0], "speed 0 at heading 123");
 
     let st = s.stats();
     assert_eq!(st.reconnects, 1);

@@ -650,10 +650,21 @@ fn reversing_keeps_the_facing() {
 }
 
 #[test]
-fn stops_by_itself_when_drive_commands_stop() {
-    let cfg = SimConfig::default();
-    assert_eq!(cfg.motion_timeout, Duration::from_secs(2));
+fn keeps_rolling_without_its_fail_safe() {
+    // Issue 15: a droid whose host never set the control-system timeout keeps its last
+    // motion when drive commands stop (the worst case droidctl guards against).
+    assert_eq!(SimConfig::default().motion_timeout, None);
     let mut b = Bench::awake_r2_in_tripod();
+    b.ok(drive(255, 0));
+    b.run_for(ms(5000));
+    assert!(b.state().velocity_cm_s > 150.0, "{:?}", b.state());
+}
+
+#[test]
+fn stops_by_itself_when_drive_commands_stop() {
+    let mut b = Bench::awake_r2_in_tripod();
+    // The fail-safe droidctl sets on connect (Drive 0x22, 2000 ms).
+    b.ok(cmd::set_custom_control_system_timeout(2000));
     b.ok(drive(255, 0));
     b.run_for(ms(1900));
     let before = b.state().velocity_cm_s;
@@ -671,6 +682,7 @@ fn stops_by_itself_when_drive_commands_stop() {
 
     // With a heartbeat it keeps going.
     let mut b = Bench::awake_r2_in_tripod();
+    b.ok(cmd::set_custom_control_system_timeout(2000));
     b.hold_drive(drive(255, 0), ms(4000));
     assert!(close(b.state().velocity_cm_s, 160.0, 1.0));
 }

@@ -114,6 +114,12 @@ pub trait Family: Sync {
     fn battery_volts(&self, _response: &[u8]) -> Option<f32> {
         None
     }
+    /// The droid's own fail-safe, set on every connect: it stops by itself when the link
+    /// drops or drive commands stop. Firmware that does not know it may refuse it; that is
+    /// fine.
+    fn fail_safe(&self) -> Option<Command> {
+        None
+    }
     /// What droidctl sends after every (re)connect, in order.
     fn setup(&self, model: Model, opts: &SetupOptions) -> Vec<Command>;
     /// Aim mode (rolling droids): show the back light and let turning rotate the droid in

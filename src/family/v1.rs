@@ -241,8 +241,15 @@ impl Family for V1 {
         Some(u16::from_be_bytes([hi, lo]) as f32 / 100.0)
     }
 
+    /// Set Temporary Option Flags bit 0: stop on disconnect (DID 02h, CID 37h).
+    fn fail_safe(&self) -> Option<Command> {
+        Some(cmd::set_temporary_option_flags(v1::catalog::TEMP_OPTION_STOP_ON_DISCONNECT).into())
+    }
+
     fn setup(&self, _model: Model, opts: &SetupOptions) -> Vec<Command> {
         let mut out: Vec<Command> = vec![
+            // Stop on disconnect first: from here on a dropped link stops the droid.
+            cmd::set_temporary_option_flags(v1::catalog::TEMP_OPTION_STOP_ON_DISCONNECT).into(),
             // The first answer proves the link; it also resets the inactivity timer.
             cmd::ping().into(),
             cmd::set_stabilization(true).into(),

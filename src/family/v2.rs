@@ -14,6 +14,9 @@ use crate::units::{HeadAngle, Heading};
 /// The v2 family.
 pub struct V2;
 
+/// The v2 fail-safe: stop when no drive command came for this long.
+pub const FAIL_SAFE_TIMEOUT_MS: u16 = 2000;
+
 /// A v2 connection's codec: the streaming decoder and the masks in effect.
 pub struct V2Codec {
     decoder: Decoder,
@@ -218,8 +221,18 @@ impl Family for V2 {
         crate::telemetry::battery_volts(response)
     }
 
+    /// Set Custom Control System Timeout (DID 16h, CID 22h): the droid stops by itself when
+    /// drive commands stop for this long. Comfortably above the slowest drive re-send (the
+    /// missions' 0.5 s heartbeat; the app re-sends at its control rate).
+    fn fail_safe(&self) -> Option<Command> {
+        Some(cmd::set_custom_control_system_timeout(FAIL_SAFE_TIMEOUT_MS).into())
+    }
+
     fn setup(&self, model: Model, opts: &SetupOptions) -> Vec<Command> {
-        let mut out = vec![cmd::wake()];
+        let mut out = vec![
+            cmd::wake(),
+            cmd::set_custom_control_system_timeout(FAIL_SAFE_TIMEOUT_MS),
+        ];
         if model.has_legs() && opts.tripod {
             out.push(cmd::perform_leg_action(LegAction::Tripod));
         }

@@ -264,22 +264,15 @@ impl SessionHandle {
     pub async fn request(&self, cmd: impl Into<Command>) -> Result<Packet, RequestError> {
         let (tx, rx) = oneshot::channel();
         self.enqueue(Queued {
-            cmd: cmd.into(),
             reply: Some(tx),
-            want_response: true,
-            retries: 0,
+            ..Queued::new(cmd.into())
         })?;
         rx.await.unwrap_or(Err(RequestError::Closed))
     }
 
     /// Send a request without waiting. Its response (or error) is still matched and counted.
     pub fn send(&self, cmd: impl Into<Command>) -> Result<(), RequestError> {
-        self.enqueue(Queued {
-            cmd: cmd.into(),
-            reply: None,
-            want_response: true,
-            retries: 0,
-        })
+        self.enqueue(Queued::new(cmd.into()))
     }
 
     fn enqueue(&self, q: Queued) -> Result<(), RequestError> {

@@ -28,6 +28,25 @@ pub struct Queued {
     /// How often to re-send on a timeout, or after a wake when the droid answers
     /// target_unavailable (asleep). Connect setup uses this; ordinary requests do not.
     pub retries: u8,
+    /// Already woken and re-sent once after a target_unavailable answer.
+    pub woken: bool,
+    /// An error answer is expected on some firmware (a fail-safe the droid may not know):
+    /// logged once, not counted as an error.
+    pub quiet: bool,
+}
+
+impl Queued {
+    /// A request with the defaults: answered, no retries, errors counted.
+    pub fn new(cmd: Command) -> Queued {
+        Queued {
+            cmd,
+            reply: None,
+            want_response: true,
+            retries: 0,
+            woken: false,
+            quiet: false,
+        }
+    }
 }
 
 /// What to write next.
@@ -44,9 +63,10 @@ pub struct OutQueue {
     fifo: VecDeque<Queued>,
     capacity: usize,
     slots_turn: bool,
-    /// Connect-setup items still at the front of the FIFO. Until they are written, the slots
-    /// wait: a drive or dome command before the setup's Wake reaches a sleeping droid and
-    /// fails. The droid is not moving then (after a connect it resumes at speed 0).
+    /// Items at the front of the FIFO that must go before any drive or dome command: the
+    /// wake and the stop at the last heading after a (re)connect. A drive before the Wake
+    /// reaches a sleeping droid and fails. The rest of the setup then takes turns with the
+    /// slots, so driving never waits more than one pacing slot behind it.
     setup_left: usize,
     /// Between the two slots, whose turn it is: a drive storm must not starve the dome.
     head_turn: bool,
@@ -89,12 +109,19 @@ impl OutQueue {
         Ok(())
     }
 
-    /// Queue ahead of everything else (connect setup).
-    pub fn push_front_all(&mut self, items: Vec<Queued>) {
-        self.setup_left += items.len();
+    /// Queue ahead of everything else (connect setup, retries). The first `gate` items go
+    /// before any drive or dome command; the others take turns with them.
+    pub fn push_front(&mut self, items: Vec<Queued>, gate: usize) {
+        self.setup_left += gate.min(items.len());
         for q in items.into_iter().rev() {
             self.fifo.push_front(q);
         }
+    }
+
+    /// Queue ahead of everything else, all of it before any drive or dome command.
+    pub fn push_front_all(&mut self, items: Vec<Queued>) {
+        let n = items.len();
+        self.push_front(items, n);
     }
 
     pub fn is_empty(&self) -> bool {
@@ -168,12 +195,7 @@ mod tests {
     }
 
     fn req(c: impl Into<Command>) -> Queued {
-        Queued {
-            cmd: c.into(),
-            reply: None,
-            want_response: true,
-            retries: 0,
-        }
+        Queued::new(c.into())
     }
 
     #[test]

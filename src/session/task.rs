@@ -22,6 +22,8 @@ struct Pending {
     reply: Option<Reply>,
     cmd: Command,
     retries: u8,
+    woken: bool,
+    quiet: bool,
 }
 
 /// Setup commands are re-sent this often before giving up until the next reconnect.
@@ -38,6 +40,8 @@ pub(super) struct Task {
     family: &'static dyn Family,
     seq: u8,
     pending: HashMap<Key, Pending>,
+    /// Quiet commands whose refusal was already logged.
+    quiet_logged: std::collections::HashSet<String>,
     /// The last drive command written, so a reconnect can resume with speed 0 at the same
     /// heading (a stop at heading 0 would spin the droid round).
     last_drive: Option<Command>,
@@ -69,6 +73,7 @@ impl Task {
             start: Instant::now(),
             seq: 0,
             pending: HashMap::new(),
+            quiet_logged: Default::default(),
             last_drive: None,
         }
     }
@@ -141,54 +146,62 @@ impl Task {
         }
     }
 
-    /// After a (re)connect: setup commands first, then a stop at the last heading.
+    /// After a (re)connect: stop first, then set up. The wake (when the setup starts with
+    /// one) and a stop at the last heading go before anything else, the droid's own
+    /// fail-safe next, then the rest of the setup, taking turns with drive and dome commands
+    /// so those never wait more than one pacing slot behind it.
     fn queue_setup(&mut self) {
-        let mut items: Vec<Queued> = self
-            .cfg
-            .setup
-            .iter()
-            .cloned()
-            .map(|cmd| Queued {
-                cmd,
-                reply: None,
-                want_response: true,
-                retries: SETUP_RETRIES,
-            })
-            .collect();
-        if self.last_drive.is_some() {
-            items.push(Queued {
-                cmd: self.stop_command(),
-                reply: None,
-                want_response: true,
-                retries: SETUP_RETRIES,
-            });
+        let setup = |cmd| Queued {
+            retries: SETUP_RETRIES,
+            ..Queued::new(cmd)
+        };
+        let mut rest: Vec<Command> = self.cfg.setup.clone();
+        let mut gate = Vec::new();
+        if let Some(wake) = self.family.wake()
+            && rest.first() == Some(&wake)
+        {
+            gate.push(setup(rest.remove(0)));
         }
-        lock(&self.shared.queue).push_front_all(items);
+        if self.last_drive.is_some() {
+            gate.push(setup(self.stop_command()));
+        }
+        let n = gate.len();
+        let mut items = gate;
+        let fail_safe = self.family.fail_safe();
+        items.extend(rest.into_iter().map(|cmd| Queued {
+            quiet: fail_safe.as_ref() == Some(&cmd),
+            ..setup(cmd)
+        }));
+        lock(&self.shared.queue).push_front(items, n);
     }
 
-    /// Re-send a setup command that timed out or found the droid asleep; `wake_first` queues a
-    /// Wake ahead of it. Returns the pending entry back when it has no retries left.
-    fn retry(&mut self, p: Pending, wake_first: bool) -> Option<Pending> {
-        if p.retries == 0 {
-            return Some(p);
-        }
+    /// Re-send a command that timed out (setup commands, while they have retries) or found
+    /// the droid asleep (any command, drive and dome included, once: after a fresh Wake).
+    /// Returns the pending entry back when it is not re-sent.
+    fn retry(&mut self, p: Pending, asleep: bool) -> Option<Pending> {
+        let wake = if asleep { self.family.wake() } else { None };
+        let (retries, woken) = match (asleep, wake.is_some()) {
+            (true, true) if !p.woken => (p.retries, true),
+            _ if p.retries > 0 => (p.retries - 1, p.woken),
+            _ => return Some(p),
+        };
         let mut items = Vec::new();
-        if wake_first && let Some(wake) = self.family.wake() {
-            items.push(Queued {
-                cmd: wake,
-                reply: None,
-                want_response: true,
-                retries: 0,
-            });
+        if let Some(wake) = wake.filter(|_| woken && !p.woken) {
+            items.push(Queued::new(wake));
         }
-        tracing::info!(command = %p.cmd.name(), wake_first, "re-sending setup command");
+        tracing::info!(command = %p.cmd.name(), asleep, "re-sending");
+        let gate = items.len();
         items.push(Queued {
-            cmd: p.cmd,
             reply: p.reply,
-            want_response: true,
-            retries: p.retries - 1,
+            retries,
+            woken,
+            quiet: p.quiet,
+            ..Queued::new(p.cmd)
         });
-        lock(&self.shared.queue).push_front_all(items);
+        // Only the Wake goes before the slots: a re-sent drive or dome command is itself the
+        // newest word only if nothing newer is in its slot, so it goes in the FIFO like a
+        // request.
+        lock(&self.shared.queue).push_front(items, gate);
         lock(&self.shared.stats).retried += 1;
         None
     }
@@ -242,10 +255,18 @@ impl Task {
     /// Turn the next queued item into wire chunks, registering its pending entry.
     fn take_next(&mut self, codec: &mut dyn Codec) -> Option<Vec<(Endpoint, Vec<u8>)>> {
         let next = lock(&self.shared.queue).pop()?;
-        let (cmd, reply, want_response, retries) = match next {
-            Next::Slot(_, c) => (c, None, true, 0),
-            Next::Fifo(q) => (q.cmd, q.reply, q.want_response, q.retries),
+        let q = match next {
+            Next::Slot(_, c) => Queued::new(c),
+            Next::Fifo(q) => q,
         };
+        let Queued {
+            cmd,
+            reply,
+            want_response,
+            retries,
+            woken,
+            quiet,
+        } = q;
         let want_response = want_response && codec.answers();
         let seq = self.next_seq(codec, &cmd);
         let (writes, packet) = codec.encode_writes(&cmd, seq, want_response);
@@ -263,6 +284,8 @@ impl Task {
                     reply,
                     cmd: cmd.clone(),
                     retries,
+                    woken,
+                    quiet,
                 },
             );
         } else if let Some(r) = reply {
@@ -331,16 +354,23 @@ impl Task {
                     return self.log_packet(codec, Direction::In, packet, None);
                 };
                 let request = pending.cmd.clone();
+                // A quiet command's refusal (a fail-safe this firmware does not know) is fine:
+                // said once in the log, not counted as an error.
+                let quiet = pending.quiet && error.is_some_and(|e| !e.is_target_unavailable());
                 {
                     let mut st = lock(&self.shared.stats);
                     st.answered += 1;
-                    if error.is_some() {
+                    if error.is_some() && !quiet {
                         st.droid_errors += 1;
                         st.errors += 1;
                     }
                 }
                 if let Some(err) = &error {
-                    tracing::warn!(command = %request.name(), seq = key.2, error = %err, "droid error");
+                    if !quiet {
+                        tracing::warn!(command = %request.name(), seq = key.2, error = %err, "droid error");
+                    } else if self.quiet_logged.insert(request.name()) {
+                        tracing::info!(command = %request.name(), error = %err, "the droid does not support this; going on without it");
+                    }
                 }
                 // Asleep (e.g. the setup's Wake was lost): wake it and try again.
                 let pending = if error.is_some_and(|e| e.is_target_unavailable()) {

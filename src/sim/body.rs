@@ -81,6 +81,8 @@ pub struct Body {
     /// Differential drive (Robi 42): left and right wheel, 0..=1 of top speed. Replaces
     /// `drive` while set; there is no motion timeout (the robot holds its last command).
     wheels: Option<(f32, f32)>,
+    /// Stop when drive commands stop for this long (`None`: keep the last motion).
+    control_timeout: Option<Duration>,
     head_target: f32,
     transition: Option<Transition>,
     last_activity: Duration,
@@ -105,6 +107,7 @@ pub struct Body {
 impl Body {
     pub fn new(model: Model, cfg: SimConfig) -> Self {
         let inactivity_timeout = cfg.inactivity_timeout;
+        let control_timeout = cfg.motion_timeout;
         let battery = cfg.battery_start_v;
         Body {
             model,
@@ -134,6 +137,7 @@ impl Body {
             cfg,
             drive: None,
             wheels: None,
+            control_timeout,
             head_target: 0.0,
             transition: None,
             last_activity: Duration::ZERO,
@@ -205,6 +209,21 @@ impl Body {
             backward,
             at: self.now,
         });
+    }
+
+    /// The control-system timeout (v2's fail-safe): stop when drive commands stop this long.
+    pub fn set_control_timeout(&mut self, t: Option<Duration>) {
+        self.control_timeout = t.filter(|d| !d.is_zero());
+    }
+
+    /// Stop rolling now, keeping the facing (a fail-safe firing).
+    pub fn stop_motion(&mut self) {
+        if let Some(d) = &mut self.drive {
+            d.speed = 0.0;
+        }
+        if self.wheels.is_some() {
+            self.wheels = Some((0.0, 0.0));
+        }
     }
 
     /// Differential drive: each wheel at `left`/`right` (0..=1) of top speed.
@@ -421,10 +440,9 @@ impl Body {
 
     fn motion(&mut self, dt: f32) {
         let now = self.now;
-        // The droid stops by itself when drive commands stop.
-        if self
-            .drive
-            .is_some_and(|d| now.saturating_sub(d.at) > self.cfg.motion_timeout)
+        // With a control-system timeout, the droid stops by itself when drive commands stop.
+        if let Some(limit) = self.control_timeout
+            && self.drive.is_some_and(|d| now.saturating_sub(d.at) > limit)
             && let Some(d) = &mut self.drive
         {
             d.speed = 0.0;

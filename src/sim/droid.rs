@@ -230,6 +230,12 @@ impl SimDroid {
                 self.body.drive(d[0], facing, backward);
                 ok
             }
+            // Set Custom Control System Timeout: the fail-safe droidctl sets on connect.
+            (Device::Drive, 0x22) => {
+                self.body
+                    .set_control_timeout(Some(Duration::from_millis(u16_at(0) as u64)));
+                ok
+            }
             (Device::Drive, 0x06) => {
                 // Reset Yaw: the current facing becomes heading 0.
                 self.body.reset_yaw();

@@ -68,6 +68,11 @@ impl WireDroid for SimDroid {
 
 /// The simulator only builds packets that fit their DLEN; one that did not would be dropped.
 impl WireDroid for SimDroidV1 {
+    /// With stop-on-disconnect set, the droid stops the moment the link drops.
+    fn disconnected(&mut self, now: Duration) {
+        SimDroidV1::host_gone(self, now);
+    }
+
     fn receive(&mut self, bytes: &[u8], now: Duration) -> Vec<Vec<u8>> {
         SimDroidV1::receive(self, bytes, now)
             .iter()
@@ -127,9 +132,12 @@ pub struct SimConfig {
     pub turn_rate_deg_s: f32,
     /// How fast the dome moves, °/s.
     pub head_rate_deg_s: f32,
-    /// The droid stops by itself when drive commands stop for this long (*unverified*; a
-    /// reference client re-sends at least every 0.8 s).
-    pub motion_timeout: Duration,
+    /// The droid stops by itself when drive commands stop for this long, from the start
+    /// (*unverified*: a reference client re-sends at least every 0.8 s, `droid-facts.md` §2).
+    /// `None` by default: a droid keeps its last motion until the host sets a fail-safe
+    /// (v2 Set Custom Control System Timeout; v1 stop-on-disconnect), the worst case the
+    /// host must guard against.
+    pub motion_timeout: Option<Duration>,
     /// A stance change takes this long (`droid-facts.md` §2: about 2 s).
     pub stance_time: Duration,
     /// Room size in cm; the droid starts in the middle, at locator (0, 0).
@@ -183,7 +191,7 @@ impl Default for SimConfig {
             brake_cm_s2: 300.0,
             turn_rate_deg_s: 180.0,
             head_rate_deg_s: 180.0,
-            motion_timeout: Duration::from_secs(2),
+            motion_timeout: None,
             stance_time: Duration::from_secs(2),
             room_cm: (400.0, 400.0),
             radius_cm: 10.0,

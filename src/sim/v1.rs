@@ -93,6 +93,17 @@ impl SimDroidV1 {
         self.option_flags
     }
 
+    /// The host's link dropped: with stop-on-disconnect set (Set Temporary Option Flags bit
+    /// 0) the droid stops at once; without it, it keeps its last motion. Temporary flags last
+    /// until the droid sleeps, so they are cleared with the link, as on a reconnect they are
+    /// set again.
+    pub fn host_gone(&mut self, now: Duration) {
+        self.advance_to(now);
+        if self.option_flags & crate::protocol::v1::catalog::TEMP_OPTION_STOP_ON_DISCONNECT != 0 {
+            self.body.stop_motion();
+        }
+    }
+
     /// Wire bytes from the host at time `now`; returns the packets the droid sends back.
     pub fn receive(&mut self, bytes: &[u8], now: Duration) -> Vec<Packet> {
         self.advance_to(now);
