@@ -14,6 +14,7 @@ pub mod logging;
 pub mod mission;
 pub mod model;
 pub mod protocol;
+pub mod relay;
 pub mod rng;
 pub mod script;
 pub mod session;

@@ -21,6 +21,10 @@ pub struct BleArgs {
     /// How long to scan for droids, in seconds.
     #[arg(long, default_value_t = 5, value_name = "SECS", value_parser = clap::value_parser!(u64).range(1..=120))]
     pub scan_timeout: u64,
+    /// Drive a droid behind a relay on another machine: `droidctl serve` or spherov2.py's
+    /// tcp_server at HOST[:PORT] (port 50004 by default).
+    #[arg(long, value_name = "HOST[:PORT]", conflicts_with = "sim")]
+    pub remote: Option<crate::link::remote::RelayAddr>,
 }
 
 /// How to ask which droid, when several answer and none was named.
@@ -35,6 +39,15 @@ pub enum Chooser {
 impl BleArgs {
     /// Scan, pick and build the link to the droid these arguments select.
     pub async fn connect(&self, chooser: Chooser) -> Result<Connected, CliError> {
+        if let Some(relay) = &self.remote {
+            return connect_remote(
+                relay,
+                self.name.clone(),
+                self.address.clone(),
+                Duration::from_secs(self.scan_timeout),
+            )
+            .await;
+        }
         connect(
             self.name.clone(),
             self.address.clone(),
@@ -140,6 +153,35 @@ pub async fn connect(
         pacing: profile.pacing,
         chunk_size: profile.chunk_size,
         link: Box::new(found.link),
+    })
+}
+
+/// Find the droid behind a relay and build the link to it (`--remote`).
+pub async fn connect_remote(
+    relay: &crate::link::remote::RelayAddr,
+    name: Option<String>,
+    address: Option<String>,
+    scan_timeout: Duration,
+) -> Result<Connected, CliError> {
+    use crate::link::remote::{RemoteSelector, select};
+    if std::io::stderr().is_terminal() {
+        eprintln!("droidctl: asking the relay at {relay} for droids…");
+    }
+    let sel = RemoteSelector {
+        name,
+        address,
+        scan_timeout,
+    };
+    let link = select(relay, &sel)
+        .await
+        .map_err(|e| CliError::failure(e.message))?;
+    let profile = link.profile().clone();
+    Ok(Connected {
+        model: link.model(),
+        name: link.name().to_string(),
+        pacing: profile.pacing,
+        chunk_size: profile.chunk_size,
+        link: Box::new(link),
     })
 }
 

@@ -21,6 +21,10 @@ pub struct ScanArgs {
     /// Also list devices that are not supported robots.
     #[arg(long)]
     pub all: bool,
+    /// Ask a relay on another machine (`droidctl serve`, spherov2's tcp_server) at
+    /// HOST[:PORT] instead of this machine's Bluetooth.
+    #[arg(long, value_name = "HOST[:PORT]")]
+    pub remote: Option<crate::link::remote::RelayAddr>,
 }
 
 /// Longest scan accepted: a droid advertises several times a second, so minutes are a typo.
@@ -46,6 +50,10 @@ fn parse_secs(s: &str) -> Result<Duration, String> {
 
 /// Run `droidctl scan` on the system's adapter.
 pub fn run(args: ScanArgs, out: &mut dyn Write) -> Result<i32, CliError> {
+    if let Some(relay) = &args.remote {
+        return crate::link::remote::scan_command(relay, args.timeout, args.json, args.all, out)
+            .map_err(CliError::failure);
+    }
     let rt = tokio::runtime::Builder::new_current_thread()
         .enable_all()
         .build()
@@ -132,6 +140,7 @@ mod tests {
             timeout: Duration::from_secs(2),
             json,
             all,
+            remote: None,
         }
     }
 

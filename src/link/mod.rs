@@ -8,6 +8,7 @@ pub mod backoff;
 pub mod ble;
 pub mod gatt;
 pub mod record;
+pub mod remote;
 
 use futures_util::future::BoxFuture;
 use std::fmt;

@@ -1,0 +1,11 @@
+//! The TCP relay of GATT operations that spherov2.py defined (`spherov2.adapter.tcp_server`
+//! and `tcp_adapter`): [`protocol`] is its sans-IO codec; [`server`] is `droidctl serve`,
+//! relaying to droids behind a [`backend::GattBackend`]: Bluetooth LE ([`ble_backend`]) or
+//! simulated droids at the GATT level ([`sim_backend`]). The client side is
+//! [`crate::link::remote`].
+
+pub mod backend;
+pub mod ble_backend;
+pub mod protocol;
+pub mod server;
+pub mod sim_backend;

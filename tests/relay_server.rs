@@ -1,0 +1,813 @@
+//! `droidctl serve` in-process, over loopback TCP, with simulated droids at the GATT level:
+//! droidctl's own relay link against it, ownership of droids, stopping and releasing a droid
+//! whose client goes, and hostile or broken clients (unknown opcodes, oversized lengths,
+//! invalid text, truncated and dribbled requests, slow readers, connection floods), then a
+//! soak of several clients with one killed mid-drive.
+//!
+//! Real time (TCP and paused clocks do not mix); every wait is bounded.
+
+use droidctl::family::{self, Codec};
+use droidctl::link::gatt::{V2_ANTI_DOS, V2_API, V2_UNLOCK};
+use droidctl::link::remote::{RelayAddr, RemoteLink, RemoteSelector, select};
+use droidctl::model::Model;
+use droidctl::relay::backend::GattBackend;
+use droidctl::relay::protocol::{Expect, Limits, Reply, ReplyDecoder, Request};
+use droidctl::relay::server::{self, EventSink, ServerConfig, ServerEvent};
+use droidctl::relay::sim_backend::SimBackend;
+use droidctl::session::{self, LinkState, SessionConfig, Slot};
+use droidctl::setup::{SetupOptions, connect_setup};
+use droidctl::sim::gatt::GattFaults;
+use droidctl::units::Heading;
+use std::net::SocketAddr;
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+use tokio::io::{AsyncReadExt, AsyncWriteExt};
+use tokio::net::TcpStream;
+use tokio::sync::oneshot;
+use tokio::time::{Instant, sleep, timeout};
+
+const WAIT: Duration = Duration::from_secs(5);
+
+struct Relay {
+    addr: SocketAddr,
+    sim: Arc<SimBackend>,
+    events: Arc<Mutex<Vec<ServerEvent>>>,
+    stop: Option<oneshot::Sender<()>>,
+    done: tokio::task::JoinHandle<()>,
+}
+
+impl Relay {
+    async fn start(models: &[Model], cfg: ServerConfig) -> Relay {
+        let sim = Arc::new(SimBackend::new(models, GattFaults::none()));
+        let events: Arc<Mutex<Vec<ServerEvent>>> = Arc::default();
+        let sink: EventSink = {
+            let events = events.clone();
+            Arc::new(move |e: &ServerEvent| {
+                let mut v = events.lock().unwrap();
+                if v.len() < 100_000 {
+                    v.push(e.clone());
+                }
+            })
+        };
+        let listener = server::bind("127.0.0.1:0".parse().unwrap(), &cfg)
+            .await
+            .unwrap();
+        let addr = listener.local_addr().unwrap();
+        let (stop, stopped) = oneshot::channel::<()>();
+        let backend: Arc<dyn GattBackend> = sim.clone();
+        let done = tokio::spawn(server::serve(listener, backend, cfg, sink, async {
+            let _ = stopped.await;
+        }));
+        Relay {
+            addr,
+            sim,
+            events,
+            stop: Some(stop),
+            done,
+        }
+    }
+
+    fn relay_addr(&self) -> RelayAddr {
+        RelayAddr {
+            host: "127.0.0.1".into(),
+            port: self.addr.port(),
+        }
+    }
+
+    fn address(&self, i: usize) -> String {
+        self.sim.devices()[i].1.clone()
+    }
+
+    fn events(&self) -> Vec<ServerEvent> {
+        self.events.lock().unwrap().clone()
+    }
+
+    fn any(&self, f: impl Fn(&ServerEvent) -> bool) -> bool {
+        self.events.lock().unwrap().iter().any(f)
+    }
+
+    async fn wait_event(&self, what: &str, f: impl Fn(&ServerEvent) -> bool) {
+        let deadline = Instant::now() + WAIT;
+        while !self.any(&f) {
+            assert!(
+                Instant::now() < deadline,
+                "no {what} event; events: {:#?}",
+                self.events()
+            );
+            sleep(Duration::from_millis(10)).await;
+        }
+    }
+
+    fn speed(&self, i: usize) -> f32 {
+        self.sim.state(&self.address(i)).unwrap().velocity_cm_s
+    }
+
+    async fn stop(mut self) {
+        if let Some(s) = self.stop.take() {
+            let _ = s.send(());
+        }
+        timeout(Duration::from_secs(15), &mut self.done)
+            .await
+            .expect("the server stops")
+            .unwrap();
+    }
+}
+
+fn cfg() -> ServerConfig {
+    ServerConfig::default()
+}
+
+/// A client speaking the protocol by hand.
+struct Raw {
+    s: TcpStream,
+    dec: ReplyDecoder,
+    seq: u8,
+    data: Vec<(String, Vec<u8>)>,
+    codec: Box<dyn Codec>,
+}
+
+impl Raw {
+    async fn connect(addr: SocketAddr) -> Raw {
+        Raw {
+            s: TcpStream::connect(addr).await.unwrap(),
+            dec: ReplyDecoder::new(Limits::default()),
+            seq: 0,
+            data: Vec::new(),
+            codec: family::for_model(Model::BB9E).codec(),
+        }
+    }
+
+    async fn send_raw(&mut self, bytes: &[u8]) {
+        self.s.write_all(bytes).await.unwrap();
+    }
+
+    async fn send(&mut self, r: &Request) {
+        if let Some(e) = r.expect() {
+            self.dec.expect(e);
+        }
+        let b = r.to_bytes().unwrap();
+        self.send_raw(&b).await;
+    }
+
+    /// The next reply that is not ON_DATA (those are kept); `None` at the end of the stream.
+    async fn reply(&mut self) -> Option<Reply> {
+        let deadline = Instant::now() + WAIT;
+        let mut buf = [0u8; 4096];
+        loop {
+            while let Some(r) = self.dec.next() {
+                match r {
+                    Ok(Reply::Data {
+                        characteristic,
+                        data,
+                    }) => self.data.push((characteristic, data)),
+                    Ok(r) => return Some(r),
+                    Err(e) => panic!("bad reply: {e}"),
+                }
+            }
+            let left = deadline.saturating_duration_since(Instant::now());
+            match timeout(left, self.s.read(&mut buf)).await {
+                Ok(Ok(0)) | Ok(Err(_)) => return None,
+                Ok(Ok(n)) => self.dec.push(&buf[..n]),
+                Err(_) => panic!("no reply within {WAIT:?}"),
+            }
+        }
+    }
+
+    /// A request with a seq; its OK or ERROR message.
+    async fn call(&mut self, make: impl FnOnce(u8) -> Request) -> Result<(), String> {
+        let seq = self.seq;
+        self.seq = self.seq.wrapping_add(1);
+        self.send(&make(seq)).await;
+        match self.reply().await {
+            Some(Reply::Ok { seq: s }) if s == seq => Ok(()),
+            Some(Reply::Error {
+                message,
+                seq: Some(s),
+            }) if s == seq => Err(message),
+            other => panic!("unexpected reply to seq {seq}: {other:?}"),
+        }
+    }
+
+    async fn init(&mut self, address: &str) -> Result<(), String> {
+        let address = address.to_string();
+        self.call(|seq| Request::Init { seq, address }).await
+    }
+
+    async fn write(&mut self, ch: &str, data: &[u8]) -> Result<(), String> {
+        let (characteristic, data) = (ch.to_string(), data.to_vec());
+        self.call(|seq| Request::Write {
+            seq,
+            characteristic,
+            data,
+        })
+        .await
+    }
+
+    /// INIT, the v2 unlock, notifications on the API characteristic, and the wake (a BB-9E:
+    /// an R2 would need its tripod stance before it rolls).
+    async fn v2_ready(&mut self, address: &str) {
+        self.init(address).await.unwrap();
+        self.write(&V2_ANTI_DOS.to_string(), V2_UNLOCK)
+            .await
+            .unwrap();
+        let ch = V2_API.to_string();
+        self.call(|seq| Request::SetCallback {
+            seq,
+            characteristic: ch,
+        })
+        .await
+        .unwrap();
+        // Wake it, as spherov2's toys do first.
+        let wake = family::for_model(Model::BB9E).wake().unwrap();
+        let (bytes, _) = self.codec.encode(&wake, 0xf0, true);
+        for chunk in bytes.chunks(20) {
+            self.write(&V2_API.to_string(), chunk).await.unwrap();
+        }
+    }
+
+    /// Roll at `speed` toward 0°, in 20-byte writes as a BLE client would.
+    async fn drive(&mut self, speed: u8) {
+        let f = family::for_model(Model::BB9E);
+        let cmd = f.drive(speed, Heading::new(0).unwrap(), false);
+        let (bytes, _) = self.codec.encode(&cmd, self.seq, false);
+        for chunk in bytes.chunks(20) {
+            self.write(&V2_API.to_string(), chunk).await.unwrap();
+        }
+    }
+
+    /// The stream ends (the server closed it) within the wait.
+    async fn closed(&mut self) -> bool {
+        let mut buf = [0u8; 4096];
+        let deadline = Instant::now() + WAIT;
+        loop {
+            let left = deadline.saturating_duration_since(Instant::now());
+            match timeout(left, self.s.read(&mut buf)).await {
+                Ok(Ok(0)) | Ok(Err(_)) => return true,
+                Ok(Ok(n)) => self.dec.push(&buf[..n]),
+                Err(_) => return false,
+            }
+        }
+    }
+}
+
+async fn wait_until(what: &str, mut f: impl FnMut() -> bool) {
+    let deadline = Instant::now() + WAIT;
+    while !f() {
+        assert!(Instant::now() < deadline, "timed out waiting for {what}");
+        sleep(Duration::from_millis(10)).await;
+    }
+}
+
+fn session_config(model: Model) -> SessionConfig {
+    SessionConfig {
+        family: model.protocol(),
+        pacing: Duration::from_millis(20),
+        setup: connect_setup(model, &SetupOptions::default()),
+        ..SessionConfig::default()
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// droidctl's relay link against droidctl's relay.
+// ---------------------------------------------------------------------------------------------
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn remote_link_drives_a_simulated_droid() {
+    let relay = Relay::start(&[Model::R2D2, Model::BB8], cfg()).await;
+    let sel = RemoteSelector {
+        name: Some("D2-0001".into()),
+        address: None,
+        scan_timeout: Duration::from_secs(1),
+    };
+    let link = select(&relay.relay_addr(), &sel).await.unwrap();
+    assert_eq!(link.model(), Model::R2D2);
+    assert!(link.address().eq_ignore_ascii_case(&relay.address(0)));
+    let session = session::start(Box::new(link), session_config(Model::R2D2));
+    let f = family::for_model(Model::R2D2);
+    // The wake answers through the relay: the handshake unlocked the droid and the
+    // notifications come back.
+    let wake = timeout(WAIT, session.request(f.wake().unwrap()))
+        .await
+        .unwrap();
+    assert!(wake.is_ok(), "{wake:?}");
+    assert_eq!(session.state(), LinkState::Connected);
+    session.set(Slot::Drive, f.drive(120, Heading::new(90).unwrap(), false));
+    wait_until("the droid rolls toward 90°", || {
+        let s = relay.sim.state(&relay.address(0)).unwrap();
+        s.velocity_cm_s > 20.0 && (s.yaw_deg - 90.0).abs() < 2.0
+    })
+    .await;
+    // Sensor streaming (the connect setup) arrives as notifications.
+    let mut events = session.subscribe();
+    let got = timeout(WAIT, async {
+        loop {
+            if let Ok(droidctl::session::SessionEvent::Notification(_)) = events.recv().await {
+                return;
+            }
+        }
+    })
+    .await;
+    assert!(got.is_ok(), "no notification through the relay");
+    session.shutdown_stopped(Vec::new()).await;
+    wait_until("the droid stops", || relay.speed(0).abs() < 0.5).await;
+    relay
+        .wait_event("release", |e| {
+            matches!(e, ServerEvent::DroidReleased { .. })
+        })
+        .await;
+    assert!(!relay.sim.connected(&relay.address(0)));
+    let stats = session.stats();
+    assert_eq!(stats.reconnects, 0);
+    relay.stop().await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn remote_link_reconnects_when_the_relay_drops_the_droid() {
+    // The droid drops its link after 1 s: the relay closes the client's connection, the
+    // session reconnects with backoff through a new INIT and handshake.
+    let mut faults = GattFaults::none();
+    faults.add("disconnect-after=1").unwrap();
+    let sim = Arc::new(SimBackend::new(&[Model::R2D2], faults));
+    let listener = server::bind("127.0.0.1:0".parse().unwrap(), &cfg())
+        .await
+        .unwrap();
+    let port = listener.local_addr().unwrap().port();
+    let backend: Arc<dyn GattBackend> = sim.clone();
+    let sink: EventSink = Arc::new(|_| {});
+    let server = tokio::spawn(server::serve(
+        listener,
+        backend,
+        cfg(),
+        sink,
+        std::future::pending(),
+    ));
+    let relay = RelayAddr {
+        host: "127.0.0.1".into(),
+        port,
+    };
+    let link = RemoteLink::new(relay, sim.devices()[0].1.clone(), "D2-0001", Model::R2D2);
+    let session = session::start(Box::new(link), session_config(Model::R2D2));
+    let mut states = session.watch_state();
+    let saw_reconnecting = timeout(Duration::from_secs(5), async {
+        loop {
+            if matches!(*states.borrow_and_update(), LinkState::Reconnecting { .. }) {
+                return;
+            }
+            states.changed().await.unwrap();
+        }
+    })
+    .await;
+    assert!(saw_reconnecting.is_ok(), "no reconnect after the drop");
+    wait_until("reconnected", || session.stats().reconnects >= 1).await;
+    let f = family::for_model(Model::R2D2);
+    let wake = timeout(WAIT, session.request(f.wake().unwrap()))
+        .await
+        .unwrap();
+    assert!(wake.is_ok(), "{wake:?}");
+    session.shutdown(Vec::new()).await;
+    server.abort();
+}
+
+// ---------------------------------------------------------------------------------------------
+// Ownership, release and stop.
+// ---------------------------------------------------------------------------------------------
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_droid_belongs_to_one_client_at_a_time() {
+    let relay = Relay::start(&[Model::R2D2], cfg()).await;
+    let addr = relay.address(0);
+    let mut a = Raw::connect(relay.addr).await;
+    a.init(&addr).await.unwrap();
+    let a_port = a.s.local_addr().unwrap().to_string();
+    let mut b = Raw::connect(relay.addr).await;
+    let err = b.init(&addr).await.unwrap_err();
+    assert!(err.contains("in use by client 1"), "{err}");
+    assert!(err.contains(&a_port), "{err} should name {a_port}");
+    // Case does not get around it.
+    let err = b.init(&addr.to_lowercase()).await.unwrap_err();
+    assert!(err.contains("in use"), "{err}");
+    // One droid per connection.
+    let err = a.init(&addr).await.unwrap_err();
+    assert!(err.contains("holds"), "{err}");
+    // Once A says END, B gets it.
+    a.send(&Request::End).await;
+    assert!(a.closed().await);
+    relay
+        .wait_event("release", |e| {
+            matches!(e, ServerEvent::DroidReleased { .. })
+        })
+        .await;
+    b.init(&addr).await.unwrap();
+    relay.stop().await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_client_that_disconnects_mid_drive_leaves_its_droid_stopped() {
+    let relay = Relay::start(&[Model::BB9E], cfg()).await;
+    let addr = relay.address(0);
+    let mut a = Raw::connect(relay.addr).await;
+    a.v2_ready(&addr).await;
+    a.drive(150).await;
+    wait_until("rolling", || relay.speed(0) > 50.0).await;
+    drop(a);
+    // Well before the droid's own 2 s motion timeout.
+    let t0 = Instant::now();
+    wait_until("stopped", || relay.speed(0).abs() < 0.5).await;
+    assert!(
+        t0.elapsed() < Duration::from_millis(1500),
+        "{:?}",
+        t0.elapsed()
+    );
+    relay
+        .wait_event("release with stop", |e| {
+            matches!(e, ServerEvent::DroidReleased { stopped: true, .. })
+        })
+        .await;
+    assert!(!relay.sim.connected(&addr));
+    // Released: another client may take it.
+    let mut b = Raw::connect(relay.addr).await;
+    b.init(&addr).await.unwrap();
+    relay.stop().await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_silent_client_is_dropped_and_its_droid_stopped() {
+    let relay = Relay::start(
+        &[Model::BB9E],
+        ServerConfig {
+            idle_timeout: Some(Duration::from_millis(400)),
+            ..cfg()
+        },
+    )
+    .await;
+    let addr = relay.address(0);
+    let mut a = Raw::connect(relay.addr).await;
+    a.v2_ready(&addr).await;
+    a.drive(150).await;
+    wait_until("rolling", || relay.speed(0) > 50.0).await;
+    // Silent, connection open.
+    assert!(a.closed().await, "the idle client was not closed");
+    wait_until("stopped", || relay.speed(0).abs() < 0.5).await;
+    relay
+        .wait_event(
+            "idle close",
+            |e| matches!(e, ServerEvent::ClientClosed { reason, .. } if reason.contains("silent")),
+        )
+        .await;
+    assert!(relay.any(|e| matches!(e, ServerEvent::DroidReleased { stopped: true, .. })));
+    relay.stop().await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn stopping_the_server_stops_every_droid() {
+    let relay = Relay::start(&[Model::BB9E, Model::BB9E], cfg()).await;
+    let mut a = Raw::connect(relay.addr).await;
+    a.v2_ready(&relay.address(0)).await;
+    a.drive(150).await;
+    let mut b = Raw::connect(relay.addr).await;
+    b.v2_ready(&relay.address(1)).await;
+    b.drive(150).await;
+    wait_until("both roll", || {
+        relay.speed(0) > 50.0 && relay.speed(1) > 50.0
+    })
+    .await;
+    let sim = relay.sim.clone();
+    let (a0, a1) = (relay.address(0), relay.address(1));
+    relay.stop().await;
+    assert!(a.closed().await && b.closed().await);
+    wait_until("both stopped", || {
+        sim.state(&a0).unwrap().velocity_cm_s.abs() < 0.5
+            && sim.state(&a1).unwrap().velocity_cm_s.abs() < 0.5
+    })
+    .await;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Hostile and broken clients: each answered or closed, logged, and nobody else hurt.
+// ---------------------------------------------------------------------------------------------
+
+/// A second client that must keep working whatever the first does.
+async fn bystander_works(relay: &Relay) {
+    let mut c = Raw::connect(relay.addr).await;
+    c.send(&Request::Scan { timeout: 0.1 }).await;
+    match c.reply().await {
+        Some(Reply::Devices(d)) => assert!(!d.is_empty()),
+        other => panic!("scan: {other:?}"),
+    }
+}
+
+fn protocol_error(relay: &Relay, needle: &str) -> bool {
+    relay.any(|e| matches!(e, ServerEvent::ProtocolError { error, .. } if error.contains(needle)))
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn unknown_opcode_is_answered_and_closed() {
+    let relay = Relay::start(&[Model::R2D2], cfg()).await;
+    let mut c = Raw::connect(relay.addr).await;
+    c.dec.expect(Expect::Scan); // an ERROR without seq
+    c.send_raw(&[0x42, 1, 2, 3]).await;
+    match c.reply().await {
+        Some(Reply::Error { message, .. }) => assert!(message.contains("0x42"), "{message}"),
+        other => panic!("{other:?}"),
+    }
+    assert!(c.closed().await);
+    assert!(protocol_error(&relay, "unknown request opcode 0x42"));
+    bystander_works(&relay).await;
+    relay.stop().await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn oversized_lengths_are_refused_before_the_bytes() {
+    let relay = Relay::start(&[Model::R2D2], cfg()).await;
+    // A WRITE claiming 65 535 bytes of data: refused at once (the bytes never come), with
+    // its seq, then closed.
+    let mut c = Raw::connect(relay.addr).await;
+    c.dec.expect(Expect::Seq);
+    let mut b = vec![0x03, 0x07, 0x00, 0x04];
+    b.extend_from_slice(b"2a00");
+    b.extend_from_slice(&[0xff, 0xff]);
+    c.send_raw(&b).await;
+    match c.reply().await {
+        Some(Reply::Error {
+            message,
+            seq: Some(7),
+        }) => assert!(message.contains("65535"), "{message}"),
+        other => panic!("{other:?}"),
+    }
+    assert!(c.closed().await);
+    // An INIT with a 60 000-byte address, likewise.
+    let mut c = Raw::connect(relay.addr).await;
+    c.dec.expect(Expect::Seq);
+    c.send_raw(&[0x01, 0x02, 0xea, 0x60, b'x']).await;
+    assert!(matches!(
+        c.reply().await,
+        Some(Reply::Error { seq: Some(2), .. })
+    ));
+    assert!(c.closed().await);
+    assert!(protocol_error(&relay, "more than the"));
+    bystander_works(&relay).await;
+    relay.stop().await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn invalid_text_is_answered_and_the_connection_goes_on() {
+    let relay = Relay::start(&[Model::R2D2], cfg()).await;
+    let mut c = Raw::connect(relay.addr).await;
+    // FIND with a name that is not UTF-8: ERROR without seq.
+    c.dec.expect(Expect::Find);
+    c.send_raw(&[0x04, 0x00, 0x02, 0xc3, 0x28, 0, 0, 0, 0])
+        .await;
+    match c.reply().await {
+        Some(Reply::Error { message, seq: None }) => {
+            assert!(message.contains("UTF-8"), "{message}")
+        }
+        other => panic!("{other:?}"),
+    }
+    // INIT with a non-ASCII address: ERROR with its seq.
+    c.dec.expect(Expect::Seq);
+    c.send_raw(&[0x01, 0x05, 0x00, 0x02, 0xc3, 0xa9]).await;
+    match c.reply().await {
+        Some(Reply::Error {
+            message,
+            seq: Some(5),
+        }) => assert!(message.contains("ASCII"), "{message}"),
+        other => panic!("{other:?}"),
+    }
+    // A UUID that is not one, and a WRITE before INIT: errors with their seq.
+    let err = c.write("not-a-uuid", &[1]).await.unwrap_err();
+    assert!(err.contains("not a characteristic UUID"), "{err}");
+    let err = c.write(&V2_API.to_string(), &[1]).await.unwrap_err();
+    assert!(err.contains("INIT"), "{err}");
+    // Still served.
+    c.v2_ready(&relay.address(0)).await;
+    assert!(protocol_error(&relay, "not valid UTF-8"));
+    assert!(protocol_error(&relay, "not valid ASCII"));
+    relay.stop().await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn truncated_and_dribbled_requests_are_closed() {
+    let relay = Relay::start(
+        &[Model::R2D2],
+        ServerConfig {
+            request_timeout: Duration::from_millis(300),
+            ..cfg()
+        },
+    )
+    .await;
+    // Half a WRITE, then the connection ends.
+    let mut c = Raw::connect(relay.addr).await;
+    c.send_raw(&[0x03, 0x01, 0x00, 0x24, b'0', b'0']).await;
+    c.s.shutdown().await.unwrap();
+    relay
+        .wait_event("truncated", |e| {
+            matches!(e, ServerEvent::ProtocolError { error, .. } if error.contains("6 byte(s) into a request"))
+        })
+        .await;
+    // Half a request, then nothing: closed after the request timeout, not the idle one.
+    let mut c = Raw::connect(relay.addr).await;
+    c.send_raw(&[0x04, 0x00]).await;
+    let t0 = Instant::now();
+    assert!(c.closed().await);
+    assert!(t0.elapsed() < Duration::from_secs(3));
+    assert!(protocol_error(&relay, "did not arrive whole"));
+    bystander_works(&relay).await;
+    relay.stop().await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_reader_that_cannot_keep_up_is_dropped() {
+    let relay = Relay::start(
+        &[Model::R2D2, Model::BB9E],
+        ServerConfig {
+            send_queue: 64,
+            write_timeout: Duration::from_millis(500),
+            send_buffer: Some(4096),
+            ..cfg()
+        },
+    )
+    .await;
+    // A client that drives normally the whole time.
+    let mut good = Raw::connect(relay.addr).await;
+    good.v2_ready(&relay.address(1)).await;
+    // The flooder: a small receive buffer, WRITEs pipelined and no reply ever read.
+    let sock = tokio::net::TcpSocket::new_v4().unwrap();
+    sock.set_recv_buffer_size(4096).unwrap();
+    let mut flood = sock.connect(relay.addr).await.unwrap();
+    let mut one = Vec::new();
+    Request::Write {
+        seq: 1,
+        characteristic: "not-a-uuid-but-long-enough-to-make-errors".into(),
+        data: vec![0; 8],
+    }
+    .encode(&mut one)
+    .unwrap();
+    let batch: Vec<u8> = one.repeat(1000);
+    let mut sent = 0usize;
+    let flooding = async {
+        // At most ~40 MB: the server drops us long before.
+        for _ in 0..800 {
+            if flood.write_all(&batch).await.is_err() {
+                return true;
+            }
+            sent += batch.len();
+        }
+        false
+    };
+    let driving = async {
+        for i in 0..20 {
+            good.drive(60 + i).await;
+            sleep(Duration::from_millis(20)).await;
+        }
+    };
+    let (refused, ()) = tokio::join!(timeout(Duration::from_secs(20), flooding), driving);
+    assert!(
+        matches!(refused, Ok(true)),
+        "the flooder was never dropped ({sent} bytes sent)"
+    );
+    relay
+        .wait_event("slow reader dropped", |e| {
+            matches!(e, ServerEvent::ClientClosed { reason, .. } if reason.contains("cannot keep up"))
+        })
+        .await;
+    assert!(relay.speed(1) > 20.0, "the good client's droid rolls");
+    good.drive(0).await;
+    relay.stop().await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_connection_flood_meets_the_limit() {
+    let relay = Relay::start(
+        &[Model::R2D2],
+        ServerConfig {
+            max_clients: 4,
+            ..cfg()
+        },
+    )
+    .await;
+    let mut held = Vec::new();
+    for _ in 0..4 {
+        held.push(Raw::connect(relay.addr).await);
+    }
+    // Make sure all four are counted before the flood.
+    relay
+        .wait_event("four clients", |e| {
+            matches!(e, ServerEvent::ClientConnected { clients: 4, .. })
+        })
+        .await;
+    for _ in 0..50 {
+        let mut c = Raw::connect(relay.addr).await;
+        c.dec.expect(Expect::Scan);
+        match c.reply().await {
+            Some(Reply::Error { message, .. }) => {
+                assert!(message.contains("4 clients already"), "{message}")
+            }
+            None => {} // closed before the message was read: also a refusal
+            other => panic!("{other:?}"),
+        }
+        assert!(c.closed().await);
+    }
+    let rejected = relay
+        .events()
+        .iter()
+        .filter(|e| matches!(e, ServerEvent::ClientRejected { .. }))
+        .count();
+    assert_eq!(rejected, 50);
+    // The ones inside are served; one leaving makes room.
+    held[0].v2_ready(&relay.address(0)).await;
+    let mut last = held.pop().unwrap();
+    last.send(&Request::End).await;
+    assert!(last.closed().await);
+    wait_until("room again", || {
+        relay
+            .events()
+            .iter()
+            .filter(|e| matches!(e, ServerEvent::ClientClosed { .. }))
+            .count()
+            >= 1
+    })
+    .await;
+    bystander_works(&relay).await;
+    relay.stop().await;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Soak: several clients, several droids, one client killed mid-drive.
+// ---------------------------------------------------------------------------------------------
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn soak_several_clients_one_killed() {
+    let models = [Model::BB9E, Model::R2Q5, Model::BB9E, Model::BB8];
+    let relay = Relay::start(&models, cfg()).await;
+    let ra = relay.relay_addr();
+    // Three droidctl sessions through the relay link…
+    let mut sessions = Vec::new();
+    for (i, m) in models.iter().enumerate().skip(1) {
+        let link = RemoteLink::new(ra.clone(), relay.address(i), format!("droid {i}"), *m);
+        sessions.push((i, *m, session::start(Box::new(link), session_config(*m))));
+    }
+    // …and one raw client that will be killed.
+    let mut victim = Raw::connect(relay.addr).await;
+    victim.v2_ready(&relay.address(0)).await;
+    let run = Duration::from_secs(3);
+    let t0 = Instant::now();
+    let mut killed = false;
+    let mut victim = Some(victim);
+    let mut step = 0u32;
+    while t0.elapsed() < run {
+        step += 1;
+        for (_, m, s) in &sessions {
+            let f = family::for_model(*m);
+            let heading = Heading::new(((step * 7) % 360) as u16).unwrap();
+            s.set(Slot::Drive, f.drive(90, heading, false));
+        }
+        if let Some(v) = victim.as_mut() {
+            v.drive(150).await;
+        }
+        if !killed && t0.elapsed() > Duration::from_millis(1200) {
+            assert!(relay.speed(0) > 50.0, "the victim's droid rolls");
+            // Killed: the socket goes without END.
+            victim = None;
+            killed = true;
+        }
+        sleep(Duration::from_millis(50)).await;
+    }
+    assert!(killed);
+    // The orphan stopped and was released…
+    assert!(
+        relay.speed(0).abs() < 0.5,
+        "orphan speed {}",
+        relay.speed(0)
+    );
+    let orphan = relay.address(0);
+    assert!(relay.any(
+        |e| matches!(e, ServerEvent::DroidReleased { stopped: true, address, .. } if *address == orphan)
+    ));
+    // …while the others drove on, undisturbed.
+    for (i, _, s) in &sessions {
+        assert!(
+            relay.speed(*i) > 20.0,
+            "droid {i} rolls: {}",
+            relay.speed(*i)
+        );
+        assert_eq!(s.state(), LinkState::Connected);
+        let st = s.stats();
+        assert_eq!(st.reconnects, 0, "droid {i}: {st:?}");
+        assert_eq!(st.link_lost, 0, "droid {i}: {st:?}");
+    }
+    for (_, _, s) in sessions {
+        s.shutdown_stopped(Vec::new()).await;
+    }
+    let errors: Vec<ServerEvent> = relay
+        .events()
+        .into_iter()
+        .filter(|e| {
+            matches!(
+                e,
+                ServerEvent::ProtocolError { .. } | ServerEvent::RequestFailed { .. }
+            )
+        })
+        .collect();
+    assert!(errors.is_empty(), "{errors:#?}");
+    relay.stop().await;
+}
