@@ -306,3 +306,33 @@ async fn a_refused_fail_safe_is_no_error() {
     assert_eq!(s.stats().errors, 1);
     s.shutdown(Vec::new()).await;
 }
+
+/// The droid warns 10 s before it sleeps; the session answers with a ping.
+async fn awake_after(keep_awake: bool) -> bool {
+    let model = Model::BB9E;
+    let cfg = SimConfig {
+        inactivity_timeout: secs(15.0),
+        ..SimConfig::default()
+    };
+    let link = SimLink::new(model, cfg, Faults::none());
+    let probe = link.probe();
+    let s = session::start(
+        Box::new(link),
+        SessionConfig {
+            keep_awake,
+            ..config(model, setup_of(model))
+        },
+    );
+    connected(&s).await;
+    // Three inactivity timeouts with nothing from the host.
+    sleep(secs(45.0)).await;
+    let awake = probe.state().awake;
+    s.shutdown(Vec::new()).await;
+    awake
+}
+
+#[tokio::test(start_paused = true)]
+async fn an_idle_connected_droid_is_kept_awake() {
+    assert!(awake_after(true).await, "pinged on every will-sleep");
+    assert!(!awake_after(false).await, "without the pings it sleeps");
+}

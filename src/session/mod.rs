@@ -38,6 +38,9 @@ pub struct SessionConfig {
     pub queue_capacity: usize,
     /// Capacity of the log and notification broadcast channels.
     pub event_capacity: usize,
+    /// Answer the droid's will-sleep warning with a ping, so it stays awake while droidctl
+    /// holds the connection (as spherov2's SpheroEduAPI does).
+    pub keep_awake: bool,
 }
 
 impl Default for SessionConfig {
@@ -51,6 +54,7 @@ impl Default for SessionConfig {
             setup: Vec::new(),
             queue_capacity: 64,
             event_capacity: 4096,
+            keep_awake: true,
         }
     }
 }

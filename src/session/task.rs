@@ -397,6 +397,12 @@ impl Task {
                             if matches!(n, Notification::RobiHandshake(_)) {
                                 lock(&self.shared.greeting).push(n.clone());
                             }
+                            if n == Notification::WillSleep && self.cfg.keep_awake {
+                                tracing::info!("the droid wants to sleep: keeping it awake");
+                                let _ =
+                                    lock(&self.shared.queue).push(Queued::new(self.family.ping()));
+                                self.shared.wake.notify_one();
+                            }
                             let _ = self.events.send(SessionEvent::Notification(n));
                         }
                         Err(e) => {
