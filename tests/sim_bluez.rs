@@ -166,14 +166,20 @@ impl Sim {
     }
 
     /// SIGTERM, and it must end cleanly: exit 0, its directory gone.
-    fn stop(mut self) -> Vec<String> {
+    fn stop(self) -> Vec<String> {
+        self.stop_with("-TERM")
+    }
+
+    /// Stop with a signal (`-TERM`, `-INT` as Ctrl-C sends): exit 0, the private daemon's
+    /// directory gone, nothing on stdout but the export line.
+    fn stop_with(mut self, signal: &str) -> Vec<String> {
         let dir = self
             .address
             .strip_prefix("unix:path=")
             .and_then(|p| p.strip_suffix("/bus"))
             .map(std::path::PathBuf::from);
         let _ = Command::new("kill")
-            .args(["-TERM", &self.child.id().to_string()])
+            .args([signal, &self.child.id().to_string()])
             .status();
         let start = Instant::now();
         let status = loop {
@@ -400,7 +406,12 @@ fn scan_lists_a_droid_of_each_family() {
         })
         .collect();
     assert_eq!(models, ["r2d2", "bb8", "robi42"]);
-    sim.stop();
+    // Ctrl-C: a clean stop.
+    let lines = sim.stop_with("-INT");
+    assert!(
+        lines.last().is_some_and(|l| l.ends_with("SIGINT: stopped")),
+        "{lines:?}"
+    );
 }
 
 // -------------------------------------------------------------------------------------------
@@ -933,6 +944,68 @@ fn the_dbus_api_as_bluez_clients_see_it() {
         "{:?}",
         seen.lock().unwrap()
     );
+    // What no client should send gets an error, never a crash.
+    let bad: Result<(), _> = chr(&a, &api).method_call(
+        "org.bluez.GattCharacteristic1",
+        "WriteValue",
+        ("not bytes", 7u32),
+    );
+    assert_eq!(
+        bad.err()
+            .and_then(|e| e.name().map(str::to_string))
+            .as_deref(),
+        Some("org.freedesktop.DBus.Error.InvalidArgs")
+    );
+    let props = chr(&a, &dev);
+    let r: Result<(Variant<Box<dyn RefArg>>,), _> = props.method_call(
+        "org.freedesktop.DBus.Properties",
+        "Get",
+        ("org.bluez.Device1", "Nope"),
+    );
+    assert_eq!(
+        r.err()
+            .and_then(|e| e.name().map(str::to_string))
+            .as_deref(),
+        Some("org.freedesktop.DBus.Error.InvalidArgs")
+    );
+    let r: Result<(), _> = props.method_call(
+        "org.freedesktop.DBus.Properties",
+        "Set",
+        (
+            "org.bluez.Device1",
+            "Address",
+            Variant("00:00:00:00:00:00".to_string()),
+        ),
+    );
+    assert_eq!(
+        r.err()
+            .and_then(|e| e.name().map(str::to_string))
+            .as_deref(),
+        Some("org.freedesktop.DBus.Error.PropertyReadOnly")
+    );
+    let r: Result<(), _> = props.method_call(
+        "org.freedesktop.DBus.Properties",
+        "Set",
+        ("org.bluez.Device1", "Trusted", Variant("yes".to_string())),
+    );
+    assert!(r.is_err());
+    assert_eq!(
+        err_name(call(
+            &a,
+            &format!("{dev}/nothing"),
+            "org.bluez.Device1",
+            "Connect"
+        )),
+        "org.freedesktop.DBus.Error.UnknownObject"
+    );
+    let (xml,): (String,) = props
+        .method_call("org.freedesktop.DBus.Introspectable", "Introspect", ())
+        .unwrap();
+    assert!(
+        xml.contains("<interface name=\"org.bluez.Device1\">"),
+        "{xml}"
+    );
+    assert!(xml.contains("<node name=\"service"), "{xml}");
     // Disconnect: the GATT objects go, the device stays.
     call(&a, &dev, "org.bluez.Device1", "Disconnect").unwrap();
     assert_eq!(
