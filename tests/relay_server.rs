@@ -811,3 +811,117 @@ async fn soak_several_clients_one_killed() {
     assert!(errors.is_empty(), "{errors:#?}");
     relay.stop().await;
 }
+
+// ---------------------------------------------------------------------------------------------
+// The Bluetooth backend, over droidctl's BLE layer (its fake peripheral here).
+// ---------------------------------------------------------------------------------------------
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_ble_backend_relays_gatt_operations() {
+    use droidctl::link::ble::fake::{FakeCentral, FakeOp, FakePeripheral};
+    use droidctl::link::ble::{Advertisement, BleAddress};
+    use droidctl::link::gatt::GattProfile;
+    use droidctl::relay::ble_backend::BleBackend;
+
+    let central = FakeCentral::new();
+    let droid = FakePeripheral::for_profile(&GattProfile::for_model(Model::R2D2));
+    let address = BleAddress([0xD2, 0, 0, 0, 0x1A, 0x2B]);
+    central.add_device(
+        Advertisement {
+            address,
+            name: Some("D2-1A2B".into()),
+            rssi: Some(-60),
+        },
+        droid.clone(),
+    );
+    let backend: Arc<dyn GattBackend> = Arc::new(BleBackend::new(Arc::new(central)));
+    let listener = server::bind("127.0.0.1:0".parse().unwrap(), &cfg())
+        .await
+        .unwrap();
+    let addr = listener.local_addr().unwrap();
+    let events: Arc<Mutex<Vec<ServerEvent>>> = Arc::default();
+    let sink: EventSink = {
+        let events = events.clone();
+        Arc::new(move |e: &ServerEvent| events.lock().unwrap().push(e.clone()))
+    };
+    let server = tokio::spawn(server::serve(
+        listener,
+        backend,
+        cfg(),
+        sink,
+        std::future::pending(),
+    ));
+
+    let mut c = Raw::connect(addr).await;
+    // FIND answers as soon as the name is heard.
+    c.send(&Request::Find {
+        name: "D2-1A2B".into(),
+        timeout: 2.0,
+    })
+    .await;
+    let found = match c.reply().await {
+        Some(Reply::Found(d)) => d,
+        other => panic!("{other:?}"),
+    };
+    assert_eq!(found.address, "D2:00:00:00:1A:2B");
+    // Unknown names: ERROR with an empty message, spherov2's "not found".
+    c.send(&Request::Find {
+        name: "nobody".into(),
+        timeout: 0.2,
+    })
+    .await;
+    assert_eq!(
+        c.reply().await,
+        Some(Reply::Error {
+            message: String::new(),
+            seq: None
+        })
+    );
+    c.init(&found.address).await.unwrap();
+    c.write(&V2_ANTI_DOS.to_string(), V2_UNLOCK).await.unwrap();
+    let ch = V2_API.to_string();
+    c.call(|seq| Request::SetCallback {
+        seq,
+        characteristic: ch,
+    })
+    .await
+    .unwrap();
+    // A notification from the droid reaches the client as ON_DATA.
+    droid.notify(V2_API, &[0x8d, 0x0a, 0xd8]);
+    let deadline = Instant::now() + WAIT;
+    while c.data.is_empty() {
+        assert!(Instant::now() < deadline, "no ON_DATA");
+        c.send(&Request::Scan { timeout: 0.0 }).await;
+        let _ = c.reply().await;
+    }
+    assert_eq!(c.data[0], (V2_API.to_string(), vec![0x8d, 0x0a, 0xd8]));
+    // Writes reach the characteristic the client named.
+    let anti_dos: Vec<Vec<u8>> = droid
+        .writes_to(V2_ANTI_DOS)
+        .into_iter()
+        .map(|(_, d)| d)
+        .collect();
+    assert_eq!(anti_dos, [V2_UNLOCK.to_vec()]);
+    // The client goes: the family's stop is written to the API characteristic, then the
+    // droid is disconnected.
+    drop(c);
+    let deadline = Instant::now() + WAIT;
+    while droid.is_connected() {
+        assert!(Instant::now() < deadline, "still connected");
+        sleep(Duration::from_millis(10)).await;
+    }
+    let f = family::for_model(Model::R2D2);
+    let (stop, _) = f.codec().encode(&f.stop_after(None), 0, false);
+    let api: Vec<u8> = droid
+        .writes_to(V2_API)
+        .into_iter()
+        .flat_map(|(_, d)| d)
+        .collect();
+    assert_eq!(api, stop);
+    assert!(matches!(droid.ops().last(), Some(FakeOp::Disconnect)));
+    assert!(events.lock().unwrap().iter().any(|e| matches!(
+        e,
+        ServerEvent::DroidConnected { model: Some("r2d2"), name, .. } if name == "D2-1A2B"
+    )));
+    server.abort();
+}
