@@ -754,7 +754,14 @@ async fn notifications_fan_out_to_every_subscriber() {
 #[tokio::test(start_paused = true)]
 async fn packet_log_shows_every_packet_and_decode_error() {
     let fake = Fake::new();
-    let s = session::start(fake.link(), quick());
+    // Without the keep-awake ping the will-sleep below would trigger (tested in failsafe.rs).
+    let s = session::start(
+        fake.link(),
+        SessionConfig {
+            keep_awake: false,
+            ..quick()
+        },
+    );
     let mut log = s.subscribe_log();
     wait_state(&s, |st| *st == LinkState::Connected).await;
     let call = {
