@@ -7,4 +7,5 @@ pub mod state;
 pub use state::AppState;
 pub mod input;
 pub mod picker;
+pub mod replay;
 pub mod run;

@@ -4,15 +4,19 @@
 //! paused time and render into ratatui's `TestBackend`.
 
 use super::input::{KeyKind, TermEvent};
-use super::packet_log::LogLine;
+use super::packet_log::{LogLine, PacketLog};
+use super::replay::{Player, ReplayKey, replay_key};
 use super::state::{
     AppState, Focus, GamepadStatus, HelpLine, KeyboardMode, MAIN_LED_CYCLE, Overlay,
 };
+use crate::capture::mirror::Output;
+use crate::capture::replay::Replay;
 use crate::config::Config;
 use crate::family::{Command, Family};
 use crate::model::Model;
+use crate::protocol::notify::Notification;
 use crate::protocol::wire::LegAction;
-use crate::session::{LinkState, SessionEvent, SessionHandle, Slot};
+use crate::session::{LinkState, LogEntry, SessionEvent, SessionHandle, SessionStats, Slot};
 use crate::teleop::control::{Controller, DroidView, Inputs, Out};
 use crate::teleop::gamepad::{PadCommand, PadEvent, PadState};
 use crate::teleop::held::{HeldKeys, ReleaseMode};
@@ -21,7 +25,7 @@ use crate::units::Heading;
 use ratatui::{Frame, Terminal, backend::Backend};
 use std::path::PathBuf;
 use std::time::Duration;
-use tokio::sync::{broadcast, mpsc};
+use tokio::sync::{broadcast, mpsc, watch};
 use tokio::time::{Instant, MissedTickBehavior, interval, sleep_until};
 
 /// How the app is set up.
@@ -63,13 +67,25 @@ pub struct Exit {
 
 pub type DrawFn = fn(&mut Frame, &AppState);
 
+/// Where the app's droid comes from.
+pub enum Source {
+    /// A live session: the droid is driven.
+    Live(SessionHandle),
+    /// A capture played back: nothing is sent anywhere. The string names the file.
+    Replay(Box<Replay>, String),
+}
+
+/// Frames are drawn at most this often, and only when something visible changed.
 const RENDER_EVERY: Duration = Duration::from_millis(50);
 const HINT_TIME: Duration = Duration::from_secs(4);
 const BATTERY_EVERY: Duration = Duration::from_secs(10);
 
 struct App {
     state: AppState,
-    session: SessionHandle,
+    /// The live session; `None` in replay.
+    session: Option<SessionHandle>,
+    /// The capture played back, in replay.
+    player: Option<Player>,
     controller: Controller,
     held: HeldKeys,
     pad: PadState,
@@ -79,6 +95,8 @@ struct App {
     start: Instant,
     last_tick: Instant,
     dirty: bool,
+    /// Replay: what the last advance produced (kept to reuse its allocation).
+    replayed: Vec<(Duration, Output)>,
 }
 
 /// The help overlay's lines from the bindings as configured: keyboard, then gamepad.
@@ -173,7 +191,7 @@ impl App {
     }
 
     fn hint(&mut self, text: impl Into<String>) {
-        self.state.now = self.now();
+        self.state.now = self.clock();
         self.state.show_hint(text, HINT_TIME);
         self.dirty = true;
     }
@@ -181,8 +199,8 @@ impl App {
     fn apply(&mut self, outs: Vec<Out>) {
         for o in outs {
             match o {
-                Out::Drive(c) => self.session.set(Slot::Drive, c),
-                Out::Head(c) => self.session.set(Slot::Head, c),
+                Out::Drive(c) => self.set(Slot::Drive, c),
+                Out::Head(c) => self.set(Slot::Head, c),
                 Out::Stance(a) => self.stance(a),
                 Out::AimBegin => {
                     for c in self.family.aim_begin(self.state.model).unwrap_or_default() {
@@ -199,15 +217,30 @@ impl App {
                 Out::Hint(h) => self.hint(h),
             }
         }
-        self.state.control = self.controller.view().clone();
-        self.dirty = true;
+        // Redraw only when what the screen shows of the control changed: an idle control
+        // loop ticks without drawing.
+        let view = self.controller.view();
+        if *view != self.state.control {
+            self.state.control = view.clone();
+            self.dirty = true;
+        }
+    }
+
+    /// Set a continuous control's latest value (nothing in replay).
+    fn set(&self, slot: Slot, c: Command) {
+        if let Some(s) = &self.session {
+            s.set(slot, c);
+        }
     }
 
     fn stance(&mut self, a: LegAction) {
         let Some(c) = self.family.stance(a) else {
             return self.hint("this droid has no legs");
         };
-        match self.session.send(c) {
+        let Some(session) = &self.session else {
+            return;
+        };
+        match session.send(c) {
             Ok(()) => self.state.telemetry.stance_requested(a),
             Err(e) => self.hint(format!("stance not sent: {e}")),
         }
@@ -270,15 +303,144 @@ impl App {
     }
 
     fn send(&mut self, c: Command, what: &str) {
-        if let Err(e) = self.session.send(c) {
+        let Some(session) = &self.session else {
+            return;
+        };
+        if let Err(e) = session.send(c) {
             self.hint(format!("{what} not sent: {e}"));
         }
+    }
+
+    /// The time telemetry and the screen run on: since the start live, capture time in
+    /// replay (so the same capture always folds and draws the same).
+    fn clock(&self) -> Duration {
+        match &self.player {
+            Some(p) => p.clock(Instant::now()),
+            None => self.now(),
+        }
+    }
+
+    /// A notification, from the session or the replay, received at `at`.
+    fn on_notification(&mut self, n: &Notification, at: Duration) {
+        self.state.telemetry.apply(n, at);
+        self.dirty = true;
+    }
+
+    /// A packet-log entry, from the session or the replay.
+    fn on_log(&mut self, entry: &LogEntry) {
+        let line = LogLine::from_entry(entry);
+        self.state.log.push(line);
+        self.dirty = true;
+    }
+
+    /// What the replay produced, through the same paths as a live session's events.
+    fn on_replayed(&mut self, outs: &mut Vec<(Duration, Output)>) {
+        for (at, o) in outs.drain(..) {
+            match o {
+                Output::Log(entry) => self.on_log(&entry),
+                Output::Notification(n) => self.on_notification(&n, at),
+                Output::BadNotification { name, reason } => {
+                    tracing::debug!(name, %reason, "malformed notification in the capture")
+                }
+                Output::Link(s) => self.on_link(s),
+                Output::Battery(v) => {
+                    self.state.telemetry.battery_v = Some(v);
+                    self.dirty = true;
+                }
+                Output::StanceRequested(a) => self.state.telemetry.stance_requested(a),
+                Output::StanceRead(s) => {
+                    if self.state.telemetry.stance == crate::telemetry::Stance::Unknown {
+                        self.state.telemetry.stance = crate::telemetry::Stance::from_state(s);
+                    }
+                }
+                Output::Mark(_) => {}
+            }
+        }
+        if let Some(p) = &self.player {
+            let st = p.replay.mirror().stats();
+            if st != self.state.stats {
+                self.state.stats = st;
+                self.dirty = true;
+            }
+        }
+    }
+
+    /// Replay: bring the capture up to the clock, and the status bar's position.
+    fn replay_frame(&mut self) {
+        let Some(p) = self.player.as_mut() else {
+            return;
+        };
+        let mut outs = std::mem::take(&mut self.replayed);
+        p.advance(Instant::now(), &mut outs);
+        let view = p.view(Instant::now());
+        self.on_replayed(&mut outs);
+        self.replayed = outs;
+        self.show_replay(view);
+    }
+
+    fn show_replay(&mut self, view: super::state::ReplayView) {
+        // The position is shown to a tenth of a second: redraw when that changes.
+        let shown = |v: &super::state::ReplayView| {
+            (
+                v.position.as_millis() / 100,
+                v.paused,
+                (v.speed * 100.0) as u64,
+                v.events_done,
+            )
+        };
+        if self.state.replay.as_ref().map(shown) != Some(shown(&view)) {
+            self.dirty = true;
+        }
+        self.state.now = view.position;
+        self.state.replay = Some(view);
+    }
+
+    /// A replay key.
+    fn on_replay_key(&mut self, k: ReplayKey) {
+        let now = Instant::now();
+        let Some(p) = self.player.as_mut() else {
+            return;
+        };
+        let mut outs = std::mem::take(&mut self.replayed);
+        let mut restart = false;
+        match k {
+            ReplayKey::TogglePause => p.toggle_pause(now),
+            ReplayKey::Faster => p.faster(now),
+            ReplayKey::Slower => p.slower(now),
+            ReplayKey::Step => p.step(now, &mut outs),
+            ReplayKey::Forward(d) => restart = p.seek(p.clock(now) + d, now),
+            ReplayKey::Back(d) => restart = p.seek(p.clock(now).saturating_sub(d), now),
+            ReplayKey::Start => restart = p.seek(Duration::ZERO, now),
+            ReplayKey::End => restart = p.seek(p.replay.duration(), now),
+        }
+        if restart {
+            // Back in time: forget what the capture showed, then play it again up to there.
+            p.replay_from_start();
+            outs.clear();
+            let log = &self.state.log;
+            let mut fresh = PacketLog::with_capacity(log.capacity());
+            fresh.decoded = log.decoded;
+            fresh.filter = log.filter.clone();
+            self.state.log = fresh;
+            self.state.telemetry = Default::default();
+            self.state.stats = SessionStats::default();
+            self.state.link = LinkState::Connecting;
+            self.state.rate_in = 0.0;
+            self.state.rate_out = 0.0;
+        }
+        self.replayed = outs;
+        self.replay_frame();
+        self.dirty = true;
     }
 
     /// The driving input right now, from held keys and the pad. Nothing drives while the log
     /// has focus or an overlay is open.
     fn inputs(&self) -> Inputs {
         let mut inp = Inputs::default();
+        if self.player.is_some() {
+            // Nothing drives a replay.
+            return inp;
+        }
         let pad_estop = self.pad.estop_held();
         if self.state.focus != Focus::Drive || self.state.overlay != Overlay::None {
             inp.estop = pad_estop;
@@ -487,6 +649,27 @@ impl App {
             }
             return None;
         }
+        if self.player.is_some() {
+            // Replay: the quit, help and log keys as configured, then the replay keys;
+            // nothing drives.
+            if !new_press {
+                return None;
+            }
+            match self.keymap.action(&key) {
+                Some(Action::Quit) => return Some(ExitReason::Quit),
+                Some(Action::Help) => {
+                    self.state.help_page = 0;
+                    self.state.overlay = Overlay::Help;
+                }
+                Some(Action::Log) => self.state.focus = Focus::Log,
+                _ => {
+                    if let Some(k) = replay_key(&key) {
+                        self.on_replay_key(k);
+                    }
+                }
+            }
+            return None;
+        }
         let action = self.keymap.action(&key)?;
         if !new_press {
             return None;
@@ -526,6 +709,9 @@ impl App {
     }
 
     fn on_pad(&mut self, e: PadEvent) {
+        if self.player.is_some() {
+            return;
+        }
         match &e {
             PadEvent::Unavailable(why) => {
                 self.state.gamepad = GamepadStatus::Unavailable(why.clone())
@@ -604,6 +790,17 @@ pub async fn run<B: Backend>(
     terminal: &mut Terminal<B>,
     session: SessionHandle,
     opts: AppOptions,
+    inputs: AppInputs,
+    draw: DrawFn,
+) -> std::io::Result<Exit> {
+    run_source(terminal, Source::Live(session), opts, inputs, draw).await
+}
+
+/// Run the app on a live session or a replay (the status bar says REPLAY; nothing is sent).
+pub async fn run_source<B: Backend>(
+    terminal: &mut Terminal<B>,
+    source: Source,
+    opts: AppOptions,
     mut inputs: AppInputs,
     draw: DrawFn,
 ) -> std::io::Result<Exit> {
@@ -627,9 +824,26 @@ pub async fn run<B: Backend>(
     let _ = opts.tripod_on_connect;
     let start = Instant::now();
     let family = crate::family::for_model(opts.model);
+    let (session, player) = match source {
+        Source::Live(s) => (Some(s), None),
+        Source::Replay(r, file) => {
+            let quit = keymap.keys(Action::Quit).first().map(|k| k.to_string());
+            let help = keymap.keys(Action::Help).first().map(|k| k.to_string());
+            let log = keymap.keys(Action::Log).first().map(|k| k.to_string());
+            state.help_gamepad = Vec::new();
+            state.help_keys = super::replay::help_lines(
+                quit.as_deref().unwrap_or("q"),
+                help.as_deref().unwrap_or("?"),
+                log.as_deref().unwrap_or("l"),
+            );
+            (None, Some(Player::new(*r, file, start)))
+        }
+    };
     let mut app = App {
         state,
         session: session.clone(),
+        player,
+        replayed: Vec::new(),
         controller: Controller::with_family(opts.config.control.clone(), family),
         held: HeldKeys::new(opts.release),
         pad: PadState::new(opts.config.gamepad.clone()),
@@ -642,24 +856,33 @@ pub async fn run<B: Backend>(
     };
     app.state.control = app.controller.view().clone();
 
-    let mut log_rx = session.subscribe_log();
-    let mut events_rx = session.subscribe();
+    // A replay has no session: its channels are closed from the start.
+    let (mut log_rx, mut events_rx, mut link_rx) = match &session {
+        Some(s) => (s.subscribe_log(), s.subscribe(), s.watch_state()),
+        None => (
+            broadcast::channel(1).1,
+            broadcast::channel(1).1,
+            watch::channel(LinkState::Connecting).1,
+        ),
+    };
     // What the droid announced before we listened (Robi's handshake).
-    for n in session.greeting() {
+    for n in session.iter().flat_map(SessionHandle::greeting) {
         app.state.telemetry.apply(&n, Duration::ZERO);
     }
-    let mut link_rx = session.watch_state();
     let period = Duration::from_secs_f64(1.0 / opts.config.control.rate_hz.clamp(1, 50) as f64);
     let mut tick = interval(period);
     tick.set_missed_tick_behavior(MissedTickBehavior::Delay);
-    let mut render = interval(RENDER_EVERY);
-    render.set_missed_tick_behavior(MissedTickBehavior::Skip);
+    // The next frame may be drawn from here on.
+    let mut frame_at = Instant::now();
     let mut second = interval(Duration::from_secs(1));
     second.set_missed_tick_behavior(MissedTickBehavior::Skip);
     let (battery_tx, mut battery_rx) = mpsc::channel::<f32>(4);
     let poller = {
         let session = session.clone();
         tokio::spawn(async move {
+            let Some(session) = session else {
+                return;
+            };
             let Some(battery) = family.battery_request() else {
                 return;
             };
@@ -677,11 +900,17 @@ pub async fn run<B: Backend>(
             }
         })
     };
-    let mut prev = session.stats();
+    let stats = |app: &App| match &app.session {
+        Some(s) => s.stats(),
+        None => app.state.stats,
+    };
+    let mut prev = stats(&app);
     let mut prev_at = Instant::now();
+    let mut prev_clock = app.clock();
     let mut pad_open = true;
     // Closed channels would fire their select branch forever: disable them instead.
-    let (mut events_open, mut log_open, mut link_open, mut battery_open) = (true, true, true, true);
+    let live = app.session.is_some();
+    let (mut events_open, mut log_open, mut link_open, mut battery_open) = (live, live, live, true);
 
     // Test hook for the crash path (stop first, then restore the terminal): panic after this
     // many ms. Only read from the environment, never set by droidctl itself.
@@ -691,6 +920,17 @@ pub async fn run<B: Backend>(
         .map(|ms| start + Duration::from_millis(ms));
     let reason = loop {
         let expiry = app.held.next_expiry().map(|d| start + d);
+        // Something on screen ends by itself (a hint, the collision flash): redraw then. In
+        // replay the screen's clock is capture time, which moves only while playing.
+        let change = app.state.next_change().and_then(|t| match &app.player {
+            None => Some(start + t),
+            Some(p) if p.running() => {
+                let ahead = t.saturating_sub(app.state.now).div_f64(p.speed());
+                Some(Instant::now() + ahead)
+            }
+            Some(_) => None,
+        });
+        let playing = app.player.as_ref().is_some_and(Player::running);
         tokio::select! {
             e = inputs.term.recv() => match e {
                 Some(e) => {
@@ -723,8 +963,7 @@ pub async fn run<B: Backend>(
             e = events_rx.recv(), if events_open => match e {
                 Ok(SessionEvent::Notification(n)) => {
                     let at = app.now();
-                    app.state.telemetry.apply(&n, at);
-                    app.dirty = true;
+                    app.on_notification(&n, at);
                 }
                 Ok(SessionEvent::BadNotification { name, reason }) => {
                     tracing::warn!(name, %reason, "malformed notification");
@@ -733,11 +972,7 @@ pub async fn run<B: Backend>(
                 Err(broadcast::error::RecvError::Closed) => events_open = false,
             },
             e = log_rx.recv(), if log_open => match e {
-                Ok(entry) => {
-                    let line = LogLine::from_entry(&entry);
-                    app.state.log.push(line);
-                    app.dirty = true;
-                }
+                Ok(entry) => app.on_log(&entry),
                 Err(broadcast::error::RecvError::Lagged(n)) => app.state.log.dropped += n,
                 Err(broadcast::error::RecvError::Closed) => log_open = false,
             },
@@ -758,19 +993,38 @@ pub async fn run<B: Backend>(
                 None => battery_open = false,
             },
             _ = second.tick() => {
-                let st = session.stats();
-                let secs = prev_at.elapsed().as_secs_f32().max(1e-3);
-                app.state.rate_in = (st.received - prev.received) as f32 / secs;
-                app.state.rate_out = (st.sent - prev.sent) as f32 / secs;
-                app.state.stats = st;
-                prev = st;
-                prev_at = Instant::now();
+                let st = stats(&app);
+                // Rates per second of the session's time: capture time in replay.
+                let secs = match &app.player {
+                    Some(_) => app.clock().saturating_sub(prev_clock).as_secs_f32(),
+                    None => prev_at.elapsed().as_secs_f32().max(1e-3),
+                };
+                if secs > 0.0 || st.received < prev.received {
+                    let rate_in = st.received.saturating_sub(prev.received) as f32 / secs.max(1e-3);
+                    let rate_out = st.sent.saturating_sub(prev.sent) as f32 / secs.max(1e-3);
+                    if (rate_in, rate_out) != (app.state.rate_in, app.state.rate_out) {
+                        app.state.rate_in = rate_in;
+                        app.state.rate_out = rate_out;
+                        app.dirty = true;
+                    }
+                    prev = st;
+                    prev_at = Instant::now();
+                    prev_clock = app.clock();
+                }
+                if st != app.state.stats {
+                    app.state.stats = st;
+                    app.dirty = true;
+                }
+            }
+            _ = sleep_until(change.unwrap_or_else(Instant::now)), if change.is_some() && !app.dirty => {
                 app.dirty = true;
             }
-            _ = render.tick() => {
+            _ = sleep_until(frame_at), if app.dirty || playing => {
+                frame_at = Instant::now() + RENDER_EVERY;
+                app.replay_frame();
                 if app.dirty {
-                    app.state.now = app.now();
-                    app.state.stats = session.stats();
+                    app.state.now = app.clock();
+                    app.state.stats = stats(&app);
                     terminal
                         .draw(|f| draw(f, &app.state))
                         .map_err(|e| std::io::Error::other(e.to_string()))?;
@@ -782,7 +1036,7 @@ pub async fn run<B: Backend>(
     poller.abort();
     let stop = family.drive(0, app.controller.view().heading, false);
     // The operator sees the droid stopped even before the session writes it.
-    app.session.set(Slot::Drive, stop.clone());
+    app.set(Slot::Drive, stop.clone());
     Ok(Exit {
         reason,
         state: app.state,

@@ -153,6 +153,23 @@ pub struct AppState {
     pub collision_flash: Duration,
     /// The lights as last commanded.
     pub leds: LedView,
+    /// Replaying a capture (nothing is sent): where, how fast.
+    pub replay: Option<ReplayView>,
+}
+
+/// A replay, for the status bar.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ReplayView {
+    /// The capture file, as given.
+    pub file: String,
+    /// Capture time shown, and the capture's length.
+    pub position: Duration,
+    pub duration: Duration,
+    pub speed: f64,
+    pub paused: bool,
+    /// Events applied so far, and in all.
+    pub events_done: usize,
+    pub events: usize,
 }
 
 /// The lights as droidctl last commanded them (droids do not report their LEDs).
@@ -198,6 +215,7 @@ impl AppState {
             sounds: catalog::sounds(),
             collision_flash: Duration::from_millis(1500),
             leds: LedView::default(),
+            replay: None,
         }
     }
 
@@ -206,6 +224,20 @@ impl AppState {
         self.telemetry
             .last_collision
             .is_some_and(|c| self.now.saturating_sub(c.at) < self.collision_flash)
+    }
+
+    /// When the screen changes by itself next (a hint or the collision flash ends), if ever.
+    pub fn next_change(&self) -> Option<Duration> {
+        let hint = self.hint.as_ref().map(|h| h.until);
+        let flash = self
+            .telemetry
+            .last_collision
+            .map(|c| c.at + self.collision_flash);
+        [hint, flash]
+            .into_iter()
+            .flatten()
+            .filter(|t| *t > self.now)
+            .min()
     }
 
     /// The hint to show now, if any.

@@ -397,10 +397,15 @@ impl Capture {
 
     /// Read a capture file of either kind (droidctl or btsnoop, told by their first bytes).
     pub fn load(path: &std::path::Path) -> Result<Capture, String> {
+        Capture::load_with(path, &[])
+    }
+
+    /// [`Capture::load`]; a btsnoop log's droid characteristics are `handles` when given.
+    pub fn load_with(path: &std::path::Path, handles: &[u16]) -> Result<Capture, String> {
         let bytes =
             std::fs::read(path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
         if btsnoop::sniff(&bytes) {
-            return hci::capture_from_btsnoop(&bytes, &[]);
+            return hci::capture_from_btsnoop(&bytes, handles);
         }
         if TextReader::sniff(&bytes) {
             let text = String::from_utf8_lossy(&bytes);

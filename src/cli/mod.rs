@@ -41,6 +41,9 @@ pub enum Command {
     Packet(packet::PacketCmd),
     /// Run a mission script against a droid (`--sim` for the simulator, in simulated time).
     Run(run::RunArgs),
+    /// Play a capture back in the app (droidctl's `--record` files and btsnoop logs); `--json`
+    /// prints its telemetry samples instead.
+    Replay(replay::ReplayArgs),
     /// List nearby droids over Bluetooth LE, strongest signal first (`--all` for every device).
     Scan(scan::ScanArgs),
     /// Serve simulated droids on D-Bus as BlueZ does (`--bluez`), for droidctl and other
@@ -117,6 +120,10 @@ pub fn main() -> i32 {
         Some(Command::Run(args)) => {
             drop(out);
             run::run(args)
+        }
+        Some(Command::Replay(args)) => {
+            drop(out);
+            replay::run(args)
         }
         Some(Command::Scan(args)) => scan::run(args, &mut out),
         Some(Command::Sim(args)) => {

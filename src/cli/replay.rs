@@ -35,3 +35,191 @@ pub fn finish(rec: Option<&Recorder>) {
         eprintln!("droidctl: {e}");
     }
 }
+
+/// `droidctl replay FILE`.
+#[derive(Debug, Clone, Args)]
+pub struct ReplayArgs {
+    /// A capture: droidctl's (`--record`) or an HCI snoop log (btsnoop).
+    #[arg(value_name = "FILE")]
+    pub file: PathBuf,
+    /// Print the telemetry samples as JSON, one per line, then a summary, without the app
+    /// (the same samples as `droidctl run --json`).
+    #[arg(long)]
+    pub json: bool,
+    /// With --json: the sample interval in milliseconds.
+    #[arg(long, default_value_t = 100, value_name = "MS", value_parser = clap::value_parser!(u64).range(1..=60_000))]
+    pub interval: u64,
+    /// The droid model, for a capture that does not name it (a btsnoop log names only the
+    /// protocol family): r2d2, r2q5, bb9e, bb8, sprk, ollie or robi.
+    #[arg(long, value_name = "MODEL")]
+    pub model: Option<String>,
+    /// For a btsnoop log that starts after the GATT discovery: the ATT handle(s) of the
+    /// droid's characteristics (decimal or 0x hex; repeat for several).
+    #[arg(long, value_name = "N")]
+    pub handle: Vec<String>,
+}
+
+/// Load the capture and pick the model: `--model`, the capture's, or one of its family's.
+pub fn load(args: &ReplayArgs) -> Result<(crate::capture::Capture, crate::model::Model), CliError> {
+    let handles = args
+        .handle
+        .iter()
+        .map(|h| {
+            crate::protocol::wire::parse_uint(h, u16::MAX as u64)
+                .map(|v| v as u16)
+                .map_err(|e| CliError::usage(format!("--handle: {e}")))
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    let capture =
+        crate::capture::Capture::load_with(&args.file, &handles).map_err(CliError::failure)?;
+    let model = match &args.model {
+        Some(m) => crate::model::Model::from_id(m)
+            .ok_or_else(|| CliError::usage(format!("unknown model {m:?}")))?,
+        None => match (capture.header.model, capture.family()) {
+            (Some(m), _) => m,
+            (None, Some(f)) => crate::capture::representative(f),
+            (None, None) => {
+                return Err(CliError::failure(format!(
+                    "{}: no droid traffic found in this {}",
+                    args.file.display(),
+                    capture.kind
+                )));
+            }
+        },
+    };
+    if let Some(f) = capture.header.family
+        && f != model.protocol()
+    {
+        return Err(CliError::usage(format!(
+            "the capture holds {} traffic; {} speaks {}",
+            crate::capture::family_name(f),
+            model.display_name(),
+            crate::capture::family_name(model.protocol())
+        )));
+    }
+    Ok((capture, model))
+}
+
+pub fn run(args: ReplayArgs) -> Result<i32, CliError> {
+    let (capture, model) = load(&args)?;
+    for w in &capture.warnings {
+        eprintln!("droidctl: {}: {w}", args.file.display());
+    }
+    if args.json {
+        let (samples, summary) = crate::capture::replay::samples(
+            &capture,
+            model,
+            std::time::Duration::from_millis(args.interval),
+        );
+        let mut out = std::io::stdout().lock();
+        use std::io::Write;
+        for s in &samples {
+            writeln!(out, "{}", serde_json::to_string(s).unwrap_or_default())
+                .map_err(CliError::output)?;
+        }
+        writeln!(
+            out,
+            "{}",
+            serde_json::to_string(&summary).unwrap_or_default()
+        )
+        .map_err(CliError::output)?;
+        return Ok(0);
+    }
+    play(capture, model, args.file.display().to_string())
+}
+
+/// The app on the capture: the terminal and its keys as `drive` has them, no droid, no
+/// gamepad, nothing sent.
+fn play(
+    capture: crate::capture::Capture,
+    model: crate::model::Model,
+    file: String,
+) -> Result<i32, CliError> {
+    use crate::app::input::{TermEvent, from_crossterm};
+    use crate::app::run::{self, AppInputs, AppOptions, ExitReason, Source};
+    use futures_util::StreamExt;
+    use ratatui::Terminal;
+    use ratatui::backend::CrosstermBackend;
+    use tokio::sync::mpsc;
+
+    let config = crate::config::Config::load(&crate::config::config_path()).map_err(|e| {
+        CliError::usage(format!(
+            "{e}\nFix the file (or move it away to use the defaults) and try again."
+        ))
+    })?;
+    let log_path = crate::logging::init().ok();
+    let name = capture
+        .header
+        .droid
+        .clone()
+        .unwrap_or_else(|| format!("{} ({})", model.display_name(), capture.kind));
+    let rt = super::realtime_runtime()?;
+    rt.block_on(async move {
+        let mut guard = super::term::TerminalGuard::enter()
+            .map_err(|e| CliError::failure(format!("cannot use this terminal: {e}")))?;
+        let release = if guard.release_events {
+            crate::teleop::held::ReleaseMode::Reported
+        } else {
+            crate::teleop::held::ReleaseMode::Emulated {
+                first: std::time::Duration::from_millis(config.keyboard.release_first_ms),
+                repeat: std::time::Duration::from_millis(config.keyboard.release_repeat_ms),
+            }
+        };
+        let (term_tx, term_rx) = mpsc::channel::<TermEvent>(256);
+        let reader = tokio::spawn(async move {
+            let mut events = crossterm::event::EventStream::new();
+            while let Some(Ok(e)) = events.next().await {
+                if let Some(e) = from_crossterm(&e)
+                    && term_tx.send(e).await.is_err()
+                {
+                    break;
+                }
+            }
+        });
+        let (_pad_tx, pad_rx) = mpsc::channel(1);
+        let (quit_tx, quit_rx) = mpsc::channel::<String>(4);
+        let signals = tokio::spawn(async move {
+            let why = super::signals::terminated().await;
+            let _ = quit_tx.send(why.to_string()).await;
+        });
+        let mut config = config;
+        config.gamepad.enabled = false;
+        let opts = AppOptions {
+            config,
+            model,
+            droid_name: name,
+            log_path,
+            release,
+            tripod_on_connect: false,
+        };
+        let inputs = AppInputs {
+            term: term_rx,
+            pad: pad_rx,
+            quit: quit_rx,
+        };
+        let replay = crate::capture::replay::Replay::new(capture, model);
+        let app = tokio::spawn(async move {
+            let backend = CrosstermBackend::new(std::io::stdout());
+            let mut terminal = Terminal::new(backend)?;
+            let source = Source::Replay(Box::new(replay), file);
+            run::run_source(&mut terminal, source, opts, inputs, crate::ui::draw).await
+        });
+        let result = app.await;
+        reader.abort();
+        signals.abort();
+        guard.restore();
+        match result {
+            Ok(Ok(exit)) => {
+                if let ExitReason::Signal(s) = &exit.reason {
+                    eprintln!("droidctl: {s}: replay ended");
+                }
+                Ok(0)
+            }
+            Ok(Err(e)) => Err(CliError::failure(format!("terminal error: {e}"))),
+            Err(join) => Err(CliError {
+                status: 101,
+                message: format!("internal error in the replay: {join}"),
+            }),
+        }
+    })
+}

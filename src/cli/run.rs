@@ -186,10 +186,17 @@ pub async fn run_recorded(
     let marker = recorder.cloned();
     let marked = std::sync::atomic::AtomicBool::new(false);
     let emit: Arc<dyn Fn(MissionEvent) + Send + Sync> = Arc::new(move |e| {
-        if let (Some(r), MissionEvent::Sample(s)) = (&marker, &e)
-            && !marked.swap(true, std::sync::atomic::Ordering::Relaxed)
-        {
-            r.mark_before(std::time::Duration::from_millis(s.t_ms), "mission-start");
+        match (&marker, &e) {
+            (Some(r), MissionEvent::Sample(s))
+                if !marked.swap(true, std::sync::atomic::Ordering::Relaxed) =>
+            {
+                r.mark_before(std::time::Duration::from_millis(s.t_ms), "mission-start");
+            }
+            // Steps too: a replay needs the stance changes the mission asked for when it did.
+            (Some(r), MissionEvent::Step { line, text, .. }) => {
+                r.record(crate::capture::Event::Mark(format!("step {line} {text}")));
+            }
+            _ => {}
         }
         let mut out = std::io::stdout().lock();
         let _ = match e {

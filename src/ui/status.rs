@@ -100,10 +100,20 @@ fn first_row(s: &AppState) -> Vec<Seg> {
             theme::dim()
         },
     );
-    vec![
-        Seg::new(0, id),
-        Seg::new(0, vec![link(&s.link)]),
-        Seg::new(0, vec![drive]),
+    // Replaying: say so first; nothing is driven, so no drive state.
+    let (replay, drive) = match &s.replay {
+        Some(r) => (Some(Seg::new(0, replay_spans(r))), None),
+        None => (None, Some(Seg::new(0, vec![drive]))),
+    };
+    [
+        Some(Seg::new(0, id)),
+        replay,
+        Some(Seg::new(0, vec![link(&s.link)])),
+        drive,
+    ]
+    .into_iter()
+    .flatten()
+    .chain([
         Seg::new(1, battery(&s.telemetry)),
         Seg::new(2, vec![errors]),
         Seg::new(
@@ -115,7 +125,32 @@ fn first_row(s: &AppState) -> Vec<Seg> {
                 Span::raw(format!("{}/s", rate(s.rate_out))),
             ],
         ),
+    ])
+    .collect()
+}
+
+/// `REPLAY ▶ 2× 0:12.3/1:40.0`: paused shows ‖.
+fn replay_spans(r: &crate::app::state::ReplayView) -> Vec<Span<'static>> {
+    let speed = if r.speed < 1.0 {
+        format!("{}×", r.speed)
+    } else {
+        format!("{}×", r.speed as u32)
+    };
+    vec![
+        Span::styled(" REPLAY ", theme::attention()),
+        Span::raw(format!(
+            " {} {speed} {}/{}",
+            if r.paused { "‖" } else { "▶" },
+            clock(r.position),
+            clock(r.duration)
+        )),
     ]
+}
+
+/// m:ss.t
+fn clock(d: std::time::Duration) -> String {
+    let tenths = d.as_millis() / 100;
+    format!("{}:{:02}.{}", tenths / 600, tenths / 10 % 60, tenths % 10)
 }
 
 /// Packets per second: one decimal below 10, whole numbers above (the row is tight at 80).
@@ -206,6 +241,17 @@ fn second_row(s: &AppState) -> Vec<Seg> {
             Style::new().fg(theme::OK),
         ),
     };
+    if let Some(r) = &s.replay {
+        // No pad or keyboard mode in a replay: the capture's name instead.
+        segs.push(Seg::new(
+            2,
+            vec![
+                Span::styled("capture ", theme::label()),
+                Span::raw(truncate_left(&clean(&r.file), 40)),
+            ],
+        ));
+        return segs;
+    }
     segs.push(Seg::new(2, vec![pad]));
     let keys = match s.keyboard {
         KeyboardMode::ReleaseEvents => "keys: release events",

@@ -117,10 +117,12 @@ pub fn render(frame: &mut Frame, area: Rect, keys: &[HelpLine], pad: &[HelpLine]
     let natural = natural(keys).max(natural(pad));
     let build = |n: usize| {
         let w = natural.min(avail.saturating_sub(GAP * (n - 1)) / n).max(1);
-        let cols = flow(
-            vec![section("Keyboard", keys, w), section("Gamepad", pad, w)],
-            rows,
-        );
+        // No gamepad section when there is nothing to say (a replay drives nothing).
+        let mut sections = vec![section("Keyboard", keys, w)];
+        if !pad.is_empty() {
+            sections.push(section("Gamepad", pad, w));
+        }
+        let cols = flow(sections, rows);
         (w, cols)
     };
     // The fewest columns that show everything at once, else as many as fit, paged.
