@@ -164,3 +164,199 @@ fn file_decode_refuses_what_makes_no_sense() {
     let o = droidctl(&["packet", "decode", "8D", "--summary"]);
     assert_eq!(o.status.code(), Some(2));
 }
+
+mod btsnoop {
+    use super::*;
+    use droidctl::capture::btsnoop::Datalink;
+    use droidctl::capture::hci::build::Log;
+    use droidctl::capture::{Capture, Event};
+    use droidctl::link::Endpoint;
+    use droidctl::link::gatt;
+
+    const CONN: u16 = 0x0041;
+
+    /// A droidctl capture as a phone's HCI log of the same session: discovery at the connect,
+    /// writes as Write Commands, what came in as notifications (Robi's handshake as a read).
+    pub fn as_btsnoop(c: &Capture, datalink: Datalink, acl_mtu: usize) -> Vec<u8> {
+        let mut log = Log::new(datalink);
+        log.acl_mtu = acl_mtu;
+        let t0 = log.t_us;
+        let robi = c.header.family == Some(droidctl::model::Protocol::Rsrcp);
+        let chars = if robi {
+            vec![
+                (0x20, gatt::ROBI_HANDSHAKE),
+                (0x22, gatt::ROBI_FRAMES),
+                (0x30, gatt::ROBI_VELOCITY),
+                (0x32, gatt::ROBI_STEERING),
+            ]
+        } else if c.header.family == Some(droidctl::model::Protocol::SpheroV1) {
+            vec![(0x0E, gatt::V1_COMMANDS), (0x10, gatt::V1_RESPONSES)]
+        } else {
+            vec![(0x0E, gatt::V2_API)]
+        };
+        let (write_h, notify_h) = (chars[0].0, chars[chars.len().min(2) - 1].0);
+        let mut read_handshake = robi;
+        for t in &c.events {
+            log.t_us = t0 + t.at.as_micros() as i64;
+            match &t.event {
+                Event::Connect => {
+                    log.le_connected(CONN);
+                    log.declare(CONN, &chars);
+                }
+                Event::Out(Endpoint::Velocity, v) => log.write_cmd(CONN, 0x30, v),
+                Event::Out(Endpoint::Steering, v) => log.write_cmd(CONN, 0x32, v),
+                Event::Out(_, v) => log.write_cmd(CONN, if robi { 0x30 } else { write_h }, v),
+                Event::In(v) if read_handshake => {
+                    read_handshake = false;
+                    log.read(CONN, 0x20, v);
+                }
+                Event::In(v) => log.notify(CONN, if robi { 0x22 } else { notify_h }, v),
+                Event::Disconnect(_) => log.disconnected(CONN, 0x13),
+                _ => {}
+            }
+        }
+        log.bytes
+    }
+
+    fn record(dir: &std::path::Path, model: &str, script: &str) -> PathBuf {
+        let s = dir.join(format!("{model}.txt"));
+        std::fs::write(&s, script).unwrap();
+        let cap = dir.join(format!("{model}.capture"));
+        let o = droidctl(&[
+            "run",
+            s.to_str().unwrap(),
+            "--sim",
+            model,
+            "--record",
+            cap.to_str().unwrap(),
+        ]);
+        assert_eq!(o.status.code(), Some(0), "{}", err(&o));
+        cap
+    }
+
+    #[test]
+    fn a_phone_log_of_a_session_decodes_and_replays_like_its_capture() {
+        let dir = tmp("btsnoop");
+        for (model, script, datalink, mtu) in [
+            (
+                "r2d2",
+                "wake\nstance tripod\ndrive 80 0 for 2s\nstop\n",
+                Datalink::H4,
+                27,
+            ),
+            ("bb8", "wake\ndrive 100 90 for 2s\n", Datalink::H1, 23),
+            ("robi", "drive 100 0 for 2s\nstop\n", Datalink::Monitor, 251),
+        ] {
+            let cap = record(&dir, model, script);
+            let c = Capture::load(&cap).unwrap();
+            let snoop = dir.join(format!("{model}.btsnoop"));
+            std::fs::write(&snoop, as_btsnoop(&c, datalink, mtu)).unwrap();
+
+            // Decoded: the same packets as the capture's own replay logs, with time and way.
+            let o = droidctl(&[
+                "packet",
+                "decode",
+                "--btsnoop",
+                snoop.to_str().unwrap(),
+                "--json",
+            ]);
+            assert_eq!(o.status.code(), Some(0), "{model}: {}", err(&o));
+            let lines = json_lines(&o);
+            let summary = &lines.last().unwrap()["summary"];
+            assert_eq!(summary["decode_errors"], serde_json::json!({}), "{model}");
+            let outs = lines.iter().filter(|l| l["dir"] == "out").count();
+            let ins = lines.iter().filter(|l| l["dir"] == "in").count();
+            assert!(outs >= 3 && ins >= 10, "{model}: {outs} out, {ins} in");
+            assert_eq!(summary["packets_out"], outs);
+            assert!(lines.iter().any(|l| l["note"] == "connected"), "{model}");
+
+            // Replayed: the samples of the capture it was made from, from the connect on.
+            let from_capture = json_lines(&droidctl(&["replay", cap.to_str().unwrap(), "--json"]));
+            let from_snoop = json_lines(&droidctl(&[
+                "replay",
+                snoop.to_str().unwrap(),
+                "--json",
+                "--model",
+                model,
+            ]));
+            assert!(from_snoop.len() > 10, "{model}");
+            // The log has no mission marks: compare the samples that do not depend on them,
+            // those of a capture replayed without its marks.
+            let unmarked = dir.join(format!("{model}-unmarked.capture"));
+            let mut plain = c.clone();
+            plain.events.retain(|t| !matches!(t.event, Event::Mark(_)));
+            std::fs::write(&unmarked, plain.to_text()).unwrap();
+            let from_plain =
+                json_lines(&droidctl(&["replay", unmarked.to_str().unwrap(), "--json"]));
+            assert_eq!(from_snoop.len(), from_plain.len(), "{model}");
+            for (a, b) in from_snoop
+                .iter()
+                .zip(&from_plain)
+                .take(from_plain.len() - 1)
+            {
+                assert_eq!(a, b, "{model}");
+            }
+            assert!(!from_capture.is_empty());
+        }
+    }
+
+    #[test]
+    fn damaged_logs_show_what_came_before_and_name_the_offset() {
+        let dir = tmp("btsnoop-damaged");
+        let cap = record(&dir, "r2d2", "wake\ndrive 80 0 for 1s\n");
+        let c = Capture::load(&cap).unwrap();
+        let whole = as_btsnoop(&c, Datalink::H4, 27);
+        let cut = dir.join("cut.btsnoop");
+        std::fs::write(&cut, &whole[..whole.len() - 10]).unwrap();
+        let o = droidctl(&["packet", "decode", "--btsnoop", cut.to_str().unwrap()]);
+        assert_eq!(o.status.code(), Some(1));
+        let e = err(&o);
+        assert!(e.contains("is damaged: truncated at offset"), "{e}");
+        assert!(out(&o).contains("-> wake"), "{}", out(&o));
+        assert!(out(&o).contains("summary:"), "{}", out(&o));
+        // Replay takes what could be read, with a warning.
+        let o = droidctl(&["replay", cut.to_str().unwrap(), "--json"]);
+        assert_eq!(o.status.code(), Some(0), "{}", err(&o));
+        assert!(err(&o).contains("damaged"), "{}", err(&o));
+
+        let bad = dir.join("bad.btsnoop");
+        let mut b = whole.clone();
+        b[3] = b'X';
+        std::fs::write(&bad, &b).unwrap();
+        let o = droidctl(&["packet", "decode", "--btsnoop", bad.to_str().unwrap()]);
+        assert_eq!(o.status.code(), Some(1));
+        assert!(err(&o).contains("bad_magic at offset 0"), "{}", err(&o));
+
+        // An impossible length in the first record (included > original).
+        let mut b = whole.clone();
+        b[20..24].copy_from_slice(&[0x7F, 0, 0, 0]);
+        let path = dir.join("long.btsnoop");
+        std::fs::write(&path, &b).unwrap();
+        let o = droidctl(&["packet", "decode", "--btsnoop", path.to_str().unwrap()]);
+        assert_eq!(o.status.code(), Some(1));
+        assert!(
+            err(&o).contains("impossible_length at offset"),
+            "{}",
+            err(&o)
+        );
+
+        // A log that starts after the discovery: the hint, then --handle.
+        let mut late = Log::new(Datalink::H4);
+        late.write_cmd(CONN, 0x0E, &Packet::command(0x13, 0x0D, 0, vec![]).encode());
+        let path = dir.join("late.btsnoop");
+        std::fs::write(&path, &late.bytes).unwrap();
+        let o = droidctl(&["packet", "decode", "--btsnoop", path.to_str().unwrap()]);
+        assert_eq!(o.status.code(), Some(1));
+        assert!(err(&o).contains("--handle"), "{}", err(&o));
+        let o = droidctl(&[
+            "packet",
+            "decode",
+            "--btsnoop",
+            path.to_str().unwrap(),
+            "--handle",
+            "0x0e",
+        ]);
+        assert_eq!(o.status.code(), Some(0), "{}", err(&o));
+        assert!(out(&o).contains("-> wake"), "{}", out(&o));
+    }
+}

@@ -1,15 +1,357 @@
-//! `droidctl packet decode --btsnoop FILE`.
+//! `droidctl packet decode --btsnoop FILE`: the droid's traffic in an HCI snoop log, decoded
+//! as droidctl's own session would log it: time, direction, the packet explained by its
+//! family (masks learnt from the log's own streaming commands, v1 answers read with their
+//! requests). Read in blocks: a log of any size goes through in bounded memory.
 
-use super::{CliError, DecodeArgs};
-use std::io::Write;
+use super::{CliError, DecodeArgs, Protocol, io_err};
+use crate::app::packet_log::LogLine;
+use crate::capture::btsnoop::{Item, Reader};
+use crate::capture::hci::{self, Decoder};
+use crate::capture::mirror::{Mirror, Output};
+use crate::capture::{Event, Timed, representative};
+use crate::session::{Direction, LinkState, LogEntry, LogItem};
+use serde_json::{Value, json};
+use std::collections::BTreeMap;
+use std::io::{Read, Write};
+use std::time::Duration;
+
+struct Printer<'a> {
+    out: &'a mut dyn Write,
+    json: bool,
+    summary_only: bool,
+    decode_errors: BTreeMap<&'static str, u64>,
+    packets: (u64, u64),
+}
+
+fn secs(at: Duration) -> String {
+    format!("{:.6}", at.as_secs_f64())
+}
+
+impl Printer<'_> {
+    fn note(&mut self, at: Duration, what: &str) -> std::io::Result<()> {
+        if self.summary_only {
+            return Ok(());
+        }
+        if self.json {
+            writeln!(
+                self.out,
+                "{}",
+                json!({"t_s": at.as_secs_f64(), "note": what})
+            )
+        } else {
+            writeln!(self.out, "{:>12} -- {what}", secs(at))
+        }
+    }
+
+    fn entry(&mut self, e: &LogEntry) -> std::io::Result<()> {
+        match &e.item {
+            LogItem::DecodeError(de) => {
+                *self.decode_errors.entry(de.kind_name()).or_default() += 1;
+            }
+            LogItem::Packet { .. } if e.dir == Direction::Out => self.packets.0 += 1,
+            LogItem::Packet { .. } => self.packets.1 += 1,
+        }
+        if self.summary_only {
+            return Ok(());
+        }
+        let dir = match e.dir {
+            Direction::Out => "out",
+            Direction::In => "in",
+        };
+        if self.json {
+            let v = match &e.item {
+                LogItem::Packet { packet, explained } => json!({
+                    "t_s": e.at.as_secs_f64(),
+                    "dir": dir,
+                    "kind": format!("{:?}", explained.kind).to_ascii_lowercase(),
+                    "name": explained.label,
+                    "known": explained.known,
+                    "did": explained.did,
+                    "seq": explained.seq,
+                    "error": explained.error.map(|x| x.name()),
+                    "fields": explained.fields.as_ref().map(crate::protocol::value::fields_json),
+                    "problem": explained.problem,
+                    "wire": crate::hex::compact(&packet.encode()),
+                }),
+                LogItem::DecodeError(de) => json!({
+                    "t_s": e.at.as_secs_f64(),
+                    "dir": dir,
+                    "error": de.kind_name(),
+                    "offset": de.offset(),
+                    "detail": de.detail(),
+                }),
+            };
+            return writeln!(self.out, "{v}");
+        }
+        let l = LogLine::from_entry(e);
+        let seq = l.seq.map(|s| format!(" seq {s}")).unwrap_or_default();
+        let err = l
+            .err
+            .map(|x| format!(" ERROR {}", x.name()))
+            .unwrap_or_default();
+        let fields = if l.decoded.is_empty() {
+            String::new()
+        } else {
+            format!("  {}", l.decoded)
+        };
+        let hex = if l.hex.is_empty() {
+            String::new()
+        } else {
+            format!("  [{}]", l.hex)
+        };
+        writeln!(
+            self.out,
+            "{:>12} {} {}{seq}{err}{fields}{hex}",
+            secs(e.at),
+            e.dir.arrow(),
+            l.name
+        )
+    }
+
+    fn outputs(&mut self, at: Duration, outs: &[Output]) -> std::io::Result<()> {
+        for o in outs {
+            match o {
+                Output::Log(e) => self.entry(e)?,
+                Output::Link(LinkState::Connected) => self.note(at, "connected")?,
+                Output::Link(LinkState::Reconnecting { reason, .. }) => {
+                    self.note(at, &format!("link lost: {reason}"))?
+                }
+                Output::Link(LinkState::Closed { .. }) => self.note(at, "closed")?,
+                Output::Mark(m) => self.note(at, m)?,
+                Output::BadNotification { name, reason } => {
+                    self.note(at, &format!("malformed {name}: {reason}"))?
+                }
+                _ => {}
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The family to decode with, once known.
+enum State {
+    /// Events held until the family is known (a connect, notes).
+    Waiting(Vec<Timed>),
+    Decoding(Box<Mirror>),
+}
 
 pub(super) fn decode(
-    _path: &str,
-    _args: DecodeArgs,
-    _handles: &[u16],
-    _json: bool,
-    _summary: bool,
-    _out: &mut dyn Write,
+    path: &str,
+    args: DecodeArgs,
+    handles: &[u16],
+    json: bool,
+    summary_only: bool,
+    out: &mut dyn Write,
 ) -> Result<i32, CliError> {
-    Err(CliError::failure("not yet"))
+    for (flag, given) in [
+        ("--from", args.from.is_some()),
+        ("--sensor-mask", args.sensor_mask.is_some()),
+        ("--ext-mask", args.ext_mask.is_some()),
+        ("--mask2", args.mask2.is_some()),
+        ("--frames", args.frames.is_some()),
+        ("--request", args.request.is_some()),
+    ] {
+        if given {
+            return Err(CliError::usage(format!(
+                "{flag} does not apply to --btsnoop: a log says who sent what, and its own commands set the masks and name the requests"
+            )));
+        }
+    }
+    let forced = args
+        .protocol
+        .as_deref()
+        .map(Protocol::parse)
+        .transpose()?
+        .map(|p| match p {
+            Protocol::V2 => crate::model::Protocol::SpheroV2,
+            Protocol::V1 => crate::model::Protocol::SpheroV1,
+            Protocol::Rsrcp => crate::model::Protocol::Rsrcp,
+        });
+    let mut input: Box<dyn Read> = if path == "-" {
+        Box::new(std::io::stdin().lock())
+    } else {
+        Box::new(
+            std::fs::File::open(path)
+                .map_err(|e| CliError::usage(format!("cannot read {path}: {e}")))?,
+        )
+    };
+    let mut printer = Printer {
+        out,
+        json,
+        summary_only,
+        decode_errors: BTreeMap::new(),
+        packets: (0, 0),
+    };
+    let mut reader = Reader::new();
+    let mut decoder: Option<Decoder> = None;
+    let mut state = State::Waiting(Vec::new());
+    let mut events = Vec::new();
+    let mut outs = Vec::new();
+    let mut block = vec![0u8; 64 * 1024];
+    let mut damage = None;
+    let mut read_error = None;
+    'read: loop {
+        let n = match input.read(&mut block) {
+            Ok(0) => break,
+            Ok(n) => n,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+            Err(e) => {
+                read_error = Some(format!(
+                    "cannot read {path} at offset {}: {e}",
+                    reader.offset()
+                ));
+                break;
+            }
+        };
+        reader.feed(&block[..n]);
+        while let Some(item) = reader.next() {
+            match item {
+                Ok(Item::Header(h)) => decoder = Some(Decoder::new(h.datalink, handles)),
+                Ok(Item::Record(r)) => {
+                    let Some(d) = decoder.as_mut() else { continue };
+                    d.record(&r, &mut events);
+                    for t in events.drain(..) {
+                        let family = forced.or(d.family()).or_else(|| sniff(&t));
+                        step(&mut state, t, family, &mut outs, &mut printer).map_err(io_err)?;
+                    }
+                }
+                Err(e) => {
+                    damage = Some(e);
+                    break 'read;
+                }
+            }
+        }
+    }
+    if damage.is_none() && read_error.is_none() {
+        damage = reader.finish();
+    }
+    let Some(decoder) = decoder else {
+        let why = damage
+            .map(|e| e.to_string())
+            .or(read_error)
+            .unwrap_or_else(|| "the file is empty".into());
+        return Err(CliError::failure(format!("{path}: {why}")));
+    };
+    // Summary.
+    let mirror_stats = match &state {
+        State::Decoding(m) => Some(m.stats()),
+        State::Waiting(_) => None,
+    };
+    let found = mirror_stats.is_some();
+    let family = match &state {
+        State::Decoding(m) => crate::capture::family_name(m.model().protocol()),
+        State::Waiting(_) => "none",
+    };
+    let st = &decoder.stats;
+    let damage_text = damage.as_ref().map(|e| e.to_string());
+    if printer.json {
+        let errors: serde_json::Map<String, Value> = printer
+            .decode_errors
+            .iter()
+            .map(|(k, v)| (k.to_string(), json!(v)))
+            .collect();
+        let v = json!({"summary": {
+            "datalink": reader.header().map(|h| h.datalink.code()),
+            "records": st.records,
+            "att_pdus": st.att_pdus,
+            "droid_values": st.droid_values,
+            "family": family,
+            "packets_out": printer.packets.0,
+            "packets_in": printer.packets.1,
+            "decode_errors": errors,
+            "malformed_hci": st.malformed,
+            "damage": damage_text,
+        }});
+        writeln!(printer.out, "{v}").map_err(io_err)?;
+    } else {
+        let errors: Vec<String> = printer
+            .decode_errors
+            .iter()
+            .map(|(k, v)| format!("{k} {v}"))
+            .collect();
+        writeln!(
+            printer.out,
+            "summary: {} records, {} ATT PDUs, {} droid values ({family}): {} packets out, {} in, {}{}",
+            st.records,
+            st.att_pdus,
+            st.droid_values,
+            printer.packets.0,
+            printer.packets.1,
+            if errors.is_empty() {
+                "no decode errors".to_string()
+            } else {
+                format!("decode errors: {}", errors.join(", "))
+            },
+            if st.malformed > 0 {
+                format!("; {} malformed HCI packets skipped", st.malformed)
+            } else {
+                String::new()
+            }
+        )
+        .map_err(io_err)?;
+        for w in &decoder.warnings {
+            writeln!(printer.out, "warning: {w}").map_err(io_err)?;
+        }
+    }
+    if let Some(e) = damage {
+        return Err(CliError::failure(format!(
+            "{path} is damaged: {e} (the {} record(s) before it were decoded)",
+            reader.records()
+        )));
+    }
+    if let Some(e) = read_error {
+        return Err(CliError::failure(e));
+    }
+    if !found {
+        return Err(CliError::failure(format!(
+            "{path}: {}",
+            hci::no_traffic_hint(&decoder.stats)
+        )));
+    }
+    Ok(0)
+}
+
+/// The family of a payload by its first byte, for handles given without a discovery.
+fn sniff(t: &Timed) -> Option<crate::model::Protocol> {
+    use crate::model::Protocol as P;
+    match &t.event {
+        Event::Out(crate::link::Endpoint::Api, b) | Event::In(b) => match b.first() {
+            Some(0x8D) => Some(P::SpheroV2),
+            Some(0xFF) => Some(P::SpheroV1),
+            Some(0x7E) => Some(P::Rsrcp),
+            _ => None,
+        },
+        Event::Out(_, _) => Some(P::Rsrcp),
+        _ => None,
+    }
+}
+
+/// One event through the mirror (made when the family is known).
+fn step(
+    state: &mut State,
+    t: Timed,
+    family: Option<crate::model::Protocol>,
+    outs: &mut Vec<Output>,
+    printer: &mut Printer,
+) -> std::io::Result<()> {
+    if let State::Waiting(held) = state {
+        let Some(f) = family.filter(|_| matches!(t.event, Event::Out(..) | Event::In(_))) else {
+            // Keep a few events (a connect, the setup notes) for when it is known.
+            if held.len() < 64 {
+                held.push(t);
+            }
+            return Ok(());
+        };
+        let held = std::mem::take(held);
+        *state = State::Decoding(Box::new(Mirror::new(representative(f))));
+        for h in held {
+            step(state, h, family, outs, printer)?;
+        }
+    }
+    let State::Decoding(m) = state else {
+        return Ok(());
+    };
+    outs.clear();
+    m.event(&t, outs);
+    printer.outputs(t.at, outs)
 }
