@@ -289,7 +289,7 @@ async fn quitting_sends_a_stop_first() {
     assert_eq!(exit.reason, ExitReason::Quit);
     assert_eq!(exit.stop.data()[0], 0);
     h.session
-        .shutdown(run::exit_commands(Model::R2D2, exit.stop, false))
+        .shutdown(run::exit_commands(Model::R2D2, Some(exit.stop), false))
         .await;
     sleep(Duration::from_millis(10)).await;
     assert_eq!(

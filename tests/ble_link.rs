@@ -712,3 +712,22 @@ mod v1_session {
         assert!(!droid.is_connected(), "shutdown disconnects");
     }
 }
+
+/// Issue 15: quitting while a connect is still pending cancels that attempt too, so BlueZ is
+/// not left connecting (which hides the droid from the phone app).
+#[tokio::test(start_paused = true)]
+async fn quitting_mid_connect_cancels_the_attempt() {
+    let (_c, droid, link) = setup(Model::R2D2);
+    droid.hang_connect(true);
+    let s = session::start(Box::new(link), SessionConfig::default());
+    sleep(Duration::from_secs(2)).await;
+    assert_eq!(droid.ops(), [FakeOp::Connect], "still connecting");
+    let t0 = Instant::now();
+    s.shutdown(vec![]).await;
+    assert!(t0.elapsed() <= Duration::from_secs(3), "{:?}", t0.elapsed());
+    assert_eq!(
+        droid.ops(),
+        [FakeOp::Connect, FakeOp::Disconnect],
+        "the pending connect was cancelled"
+    );
+}

@@ -336,3 +336,25 @@ async fn an_idle_connected_droid_is_kept_awake() {
     assert!(awake_after(true).await, "pinged on every will-sleep");
     assert!(!awake_after(false).await, "without the pings it sleeps");
 }
+
+/// The droid keeps streaming across a dropped link, with the masks it was told before; the
+/// samples that arrive before the setup sets them again are still understood.
+#[tokio::test(start_paused = true)]
+async fn sensor_data_right_after_a_reconnect_is_not_an_error() {
+    let model = Model::R2D2;
+    let faults = Faults {
+        disconnect_at: vec![secs(4.0)],
+        ..Faults::none()
+    };
+    let link = SimLink::new(model, SimConfig::default(), faults);
+    let s = session::start(
+        Box::new(link),
+        config(model, connect_setup(model, &SetupOptions::default())),
+    );
+    connected(&s).await;
+    sleep(secs(8.0)).await;
+    let st = s.stats();
+    assert_eq!(st.reconnects, 1);
+    assert_eq!((st.errors, st.decode_errors), (0, 0), "{st:?}");
+    s.shutdown(Vec::new()).await;
+}

@@ -1124,3 +1124,16 @@ async fn shutdown_stopped_stops_at_the_last_heading() {
     );
     assert_eq!(s.state(), LinkState::Closed { reason: None });
 }
+
+#[tokio::test(start_paused = true)]
+async fn stop_now_keeps_the_last_heading() {
+    // The panic hook's stop (issue 15): at the heading last written, never heading 0.
+    let fake = Fake::new();
+    let s = connected(&fake, quick()).await;
+    s.set(Slot::Drive, drive(120, 123));
+    fake.wait_packets(1).await;
+    s.stop_now(droidctl::family::for_model(droidctl::model::Model::R2D2));
+    let sent = fake.wait_packets(2).await;
+    assert!(is_drive(&sent[1]));
+    assert_eq!(sent[1].data, [0, 0, 123, 0], "speed 0 at heading 123");
+}

@@ -21,7 +21,6 @@ use crate::teleop::control::{Controller, DroidView, Inputs, Out};
 use crate::teleop::gamepad::{PadCommand, PadEvent, PadState};
 use crate::teleop::held::{HeldKeys, ReleaseMode};
 use crate::teleop::keymap::{Action, Key, KeyCode, KeyMap};
-use crate::units::Heading;
 use ratatui::{Frame, Terminal, backend::Backend};
 use std::path::PathBuf;
 use std::time::Duration;
@@ -1044,16 +1043,17 @@ pub async fn run_source<B: Backend>(
     })
 }
 
-/// The commands to send on exit: a stop, and sleep when configured (and the family can).
-pub fn exit_commands(model: Model, exit_stop: Command, sleep_on_exit: bool) -> Vec<Command> {
-    let mut v = vec![exit_stop];
+/// The commands to send on exit after the session's stop at its last heading: the app's own
+/// stop (its heading, which the operator saw), and sleep when configured (and the family
+/// can).
+pub fn exit_commands(
+    model: Model,
+    exit_stop: impl IntoIterator<Item = Command>,
+    sleep_on_exit: bool,
+) -> Vec<Command> {
+    let mut v: Vec<Command> = exit_stop.into_iter().collect();
     if sleep_on_exit && let Some(sleep) = crate::family::for_model(model).sleep() {
         v.push(sleep);
     }
     v
-}
-
-/// A stop at heading 0, for paths that have no controller (e.g. a crash before the loop).
-pub fn plain_stop(model: Model) -> Command {
-    crate::family::for_model(model).drive(0, Heading::default(), false)
 }

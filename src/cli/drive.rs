@@ -7,7 +7,7 @@ use crate::app::run::{self, AppInputs, AppOptions, ExitReason};
 use crate::config::Config;
 use crate::link::Link;
 use crate::model::Model;
-use crate::session::{self, SessionConfig, SessionHandle, Slot};
+use crate::session::{self, SessionConfig, SessionHandle};
 use crate::setup::{SetupOptions, connect_setup};
 use crate::sim::{Faults, SimConfig, SimLink};
 use crate::teleop::held::ReleaseMode;
@@ -54,7 +54,8 @@ fn install_panic_hook() {
     let default = std::panic::take_hook();
     std::panic::set_hook(Box::new(move |info| {
         if let Some((s, model)) = PANIC_SESSION.get() {
-            s.set(Slot::Drive, run::plain_stop(*model));
+            // At the last heading written: a stop at heading 0 would turn the droid.
+            s.stop_now(crate::family::for_model(*model));
         }
         crate::link::record::flush_all();
         let in_app = std::thread::current().name() != Some("main");
@@ -202,10 +203,12 @@ async fn drive(
     });
     let result = app.await;
     let stop_cmds = match &result {
-        Ok(Ok(exit)) => run::exit_commands(model, exit.stop.clone(), sleep_on_exit),
-        _ => run::exit_commands(model, run::plain_stop(model), sleep_on_exit),
+        Ok(Ok(exit)) => run::exit_commands(model, Some(exit.stop.clone()), sleep_on_exit),
+        // A crash: no controller to ask; the session stops at the last heading it wrote.
+        _ => run::exit_commands(model, Vec::new(), sleep_on_exit),
     };
-    let _ = tokio::time::timeout(Duration::from_secs(3), session.shutdown(stop_cmds)).await;
+    // The session's own budget (1 s of final writes, 1.5 s to close) fits inside this one.
+    let _ = tokio::time::timeout(Duration::from_secs(3), session.shutdown_stopped(stop_cmds)).await;
     reader.abort();
     signals.abort();
     guard.restore();

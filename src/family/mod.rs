@@ -49,6 +49,9 @@ pub trait Codec: Send {
     fn answers(&self) -> bool {
         true
     }
+    /// A new connection: drop any partial packet of the old byte stream, keep what the droid
+    /// was told (streaming masks).
+    fn reset_stream(&mut self) {}
     /// Bytes from the droid, in any chunking.
     fn feed(&mut self, bytes: &[u8], out: &mut Vec<Incoming>);
     /// Explain a packet for the log; `request` is the command a response answers, when known

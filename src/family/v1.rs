@@ -124,6 +124,10 @@ impl Codec for V1Codec {
         (wire, Packet::V1(p))
     }
 
+    fn reset_stream(&mut self) {
+        self.decoder = Decoder::new(Source::Droid);
+    }
+
     fn feed(&mut self, bytes: &[u8], out: &mut Vec<Incoming>) {
         for r in self.decoder.feed(bytes) {
             out.push(match r {

@@ -103,6 +103,10 @@ impl Codec for V2Codec {
         (packet.encode(), Packet::V2(packet))
     }
 
+    fn reset_stream(&mut self) {
+        self.decoder = Decoder::new();
+    }
+
     fn feed(&mut self, bytes: &[u8], out: &mut Vec<Incoming>) {
         for r in self.decoder.feed(bytes) {
             out.push(match r {

@@ -114,6 +114,11 @@ pub trait Link: Send {
     /// Connect, including the model's handshake (e.g. the v2 anti-DoS write), and subscribe to
     /// notifications. Called again after a disconnect to reconnect.
     fn open(&mut self) -> BoxFuture<'_, Result<Connection, LinkError>>;
+    /// Cancel a connect that `open` was still making when the caller gave up on it (the
+    /// future was dropped): the radio stack may still be connecting.
+    fn abort_open(&mut self) -> BoxFuture<'_, ()> {
+        Box::pin(async {})
+    }
     /// A name for the status bar: "R2-D2 D2-1A2B (simulated)".
     fn describe(&self) -> String;
 }

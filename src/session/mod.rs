@@ -212,6 +212,9 @@ pub(crate) struct Shared {
     pub greeting: Mutex<Vec<Notification>>,
     /// Run the connect setup again at the next opportunity (after a sleep and wake).
     pub redo_setup: std::sync::atomic::AtomicBool,
+    /// The last drive command written, for a stop at its heading from outside the task
+    /// (the panic hook).
+    pub last_drive: Mutex<Option<Command>>,
 }
 
 /// A handle to a running session. Cloning is cheap.
@@ -235,6 +238,7 @@ pub fn start(link: Box<dyn Link>, config: SessionConfig) -> SessionHandle {
         stop_on_shutdown: std::sync::atomic::AtomicBool::new(false),
         greeting: Mutex::new(Vec::new()),
         redo_setup: std::sync::atomic::AtomicBool::new(false),
+        last_drive: Mutex::new(None),
     });
     let (state_tx, state_rx) = watch::channel(LinkState::Connecting);
     let (events, _) = broadcast::channel(config.event_capacity.max(16));
@@ -327,6 +331,13 @@ impl SessionHandle {
 
     pub fn subscribe_log(&self) -> broadcast::Receiver<LogEntry> {
         self.log.subscribe()
+    }
+
+    /// Stop now, at the heading of the last drive command written (a stop at heading 0
+    /// would turn the droid). Synchronous and lock-free of the task, for the panic hook.
+    pub fn stop_now(&self, family: &dyn crate::family::Family) {
+        let last = lock(&self.shared.last_drive).clone();
+        self.set(Slot::Drive, family.stop_after(last.as_ref()));
     }
 
     /// Write the connect setup again, ahead of everything queued: a droid woken from sleep

@@ -14,8 +14,10 @@ use std::time::Duration;
 use tokio::sync::{broadcast, watch};
 use tokio::time::{Instant, sleep, sleep_until, timeout};
 
-/// How long the final commands on shutdown may take.
+/// How long the final commands on shutdown may take, and then closing the link. Together
+/// they stay inside the callers' outer limit (3 s), so the stop is never cut short by it.
 const SHUTDOWN_BUDGET: Duration = Duration::from_secs(1);
+const CLOSE_BUDGET: Duration = Duration::from_millis(1500);
 
 struct Pending {
     deadline: Instant,
@@ -42,6 +44,8 @@ pub(super) struct Task {
     pending: HashMap<Key, Pending>,
     /// Quiet commands whose refusal was already logged.
     quiet_logged: std::collections::HashSet<String>,
+    /// Kept across connections (see `connected`).
+    codec: Option<Box<dyn Codec>>,
     /// The last drive command written, so a reconnect can resume with speed 0 at the same
     /// heading (a stop at heading 0 would spin the droid round).
     last_drive: Option<Command>,
@@ -74,6 +78,7 @@ impl Task {
             seq: 0,
             pending: HashMap::new(),
             quiet_logged: Default::default(),
+            codec: None,
             last_drive: None,
         }
     }
@@ -90,7 +95,12 @@ impl Task {
             }
             let opened = tokio::select! {
                 r = self.link.open() => r,
-                _ = self.shared.shutdown_wake.notified() => break,
+                _ = self.shared.shutdown_wake.notified() => {
+                    // Quitting mid-connect: cancel the attempt too, so the Bluetooth stack
+                    // is not left holding a link that hides the droid from other apps.
+                    let _ = timeout(CLOSE_BUDGET, self.link.abort_open()).await;
+                    break;
+                }
             };
             match opened {
                 Ok(conn) => {
@@ -272,6 +282,7 @@ impl Task {
         let (writes, packet) = codec.encode_writes(&cmd, seq, want_response);
         if self.family.is_drive(&cmd) {
             self.last_drive = Some(cmd.clone());
+            *lock(&self.shared.last_drive) = Some(cmd.clone());
         }
         let wire_len: usize = writes.iter().map(|(_, w)| w.len()).sum();
         let chunks = self.chunked(writes);
@@ -446,13 +457,23 @@ impl Task {
     }
 
     async fn connected(&mut self, mut conn: Connection) -> Ended {
-        let mut codec = self.family.codec();
+        // One codec for the whole session: what the droid was told to stream outlives a
+        // dropped link (it keeps streaming with the old masks until the setup sets them
+        // again), only the byte stream starts afresh.
+        let mut codec = self.codec.take().unwrap_or_else(|| self.family.codec());
+        codec.reset_stream();
+        let ended = self.connected_with(&mut *codec, &mut conn).await;
+        self.codec = Some(codec);
+        ended
+    }
+
+    async fn connected_with(&mut self, codec: &mut dyn Codec, conn: &mut Connection) -> Ended {
         let mut chunks: VecDeque<(Endpoint, Vec<u8>)> = VecDeque::new();
         let mut next_write = Instant::now();
         loop {
             let last = lock(&self.shared.shutdown).take();
             if let Some(last) = last {
-                self.finish(&mut *codec, &mut conn, chunks, last).await;
+                self.finish(&mut *codec, conn, chunks, last).await;
                 return Ended::Shutdown;
             }
             if self
@@ -473,7 +494,7 @@ impl Task {
                     }
                 }
                 ev = conn.events.recv() => match ev {
-                    Some(LinkEvent::Data(bytes)) => self.handle_bytes(&mut *codec, &bytes),
+                    Some(LinkEvent::Data(bytes)) => self.handle_bytes(codec, &bytes),
                     Some(LinkEvent::Disconnected(reason)) => {
                         conn.writer.close().await;
                         return Ended::LinkLost(reason);
@@ -482,7 +503,7 @@ impl Task {
                 },
                 _ = sleep_until(next_write), if has_work => {
                     if chunks.is_empty() {
-                        chunks.extend(self.take_next(&mut *codec).into_iter().flatten());
+                        chunks.extend(self.take_next(codec).into_iter().flatten());
                     }
                     if let Some((to, chunk)) = chunks.pop_front() {
                         if let Err(e) = conn.writer.write_to(to, &chunk).await {
@@ -536,7 +557,9 @@ impl Task {
             }
         })
         .await;
-        writer.close().await;
+        if timeout(CLOSE_BUDGET, writer.close()).await.is_err() {
+            tracing::warn!("closing the link took too long; leaving it");
+        }
         tracing::info!("final commands written, link closed");
     }
 }

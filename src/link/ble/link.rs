@@ -59,6 +59,9 @@ pub struct BleLink {
     model: Model,
     profile: GattProfile,
     timeouts: BleTimeouts,
+    /// The peripheral `open` is connecting to, until it returns: what `abort_open` cancels
+    /// when the caller drops the open future (quitting mid-connect).
+    connecting: Option<Arc<dyn BlePeripheral>>,
 }
 
 impl BleLink {
@@ -76,6 +79,7 @@ impl BleLink {
             model,
             profile: GattProfile::for_model(model),
             timeouts: BleTimeouts::default(),
+            connecting: None,
         }
     }
 
@@ -163,21 +167,25 @@ impl BleLink {
 
     async fn open_ble(&mut self) -> Result<Connection, BleError> {
         let p = self.find().await?;
+        self.connecting = Some(p.clone());
         if let Err(e) = self
             .bounded("connecting to", self.timeouts.connect, p.connect())
             .await
         {
             // A timed-out connect may still be pending inside BlueZ: cancel it.
             let _ = timeout(self.timeouts.op, p.disconnect()).await;
+            self.connecting = None;
             return Err(e);
         }
-        match self.after_connect(&p).await {
+        let r = match self.after_connect(&p).await {
             Ok(conn) => Ok(conn),
             Err(e) => {
                 let _ = timeout(self.timeouts.op, p.disconnect()).await;
                 Err(e)
             }
-        }
+        };
+        self.connecting = None;
+        r
     }
 
     async fn after_connect(&self, p: &Arc<dyn BlePeripheral>) -> Result<Connection, BleError> {
@@ -298,6 +306,15 @@ async fn forward(
 }
 
 impl Link for BleLink {
+    fn abort_open(&mut self) -> BoxFuture<'_, ()> {
+        Box::pin(async move {
+            if let Some(p) = self.connecting.take() {
+                tracing::info!(name = %self.name, "cancelling the connect in progress");
+                let _ = timeout(self.timeouts.op, p.disconnect()).await;
+            }
+        })
+    }
+
     fn open(&mut self) -> BoxFuture<'_, Result<Connection, LinkError>> {
         Box::pin(async move {
             self.open_ble().await.map_err(|e| {
