@@ -10,6 +10,7 @@ pub mod packet;
 pub mod replay;
 pub mod run;
 pub mod scan;
+pub mod serve;
 pub mod signals;
 pub mod sim;
 pub mod term;
@@ -49,6 +50,9 @@ pub enum Command {
     /// Serve simulated droids on D-Bus as BlueZ does (`--bluez`), for droidctl and other
     /// Bluetooth software to find and drive (Linux).
     Sim(sim::SimArgs),
+    /// Relay droids to other machines over TCP (spherov2.py's relay protocol): Bluetooth
+    /// droids, or simulated ones with `--sim`. Clients use `--remote HOST`.
+    Serve(serve::ServeArgs),
     /// Show or create the configuration file.
     #[command(subcommand)]
     Config(config_cmd::ConfigCmd),
@@ -126,6 +130,10 @@ pub fn main() -> i32 {
             replay::run(args)
         }
         Some(Command::Scan(args)) => scan::run(args, &mut out),
+        Some(Command::Serve(args)) => {
+            drop(out);
+            serve::run(args)
+        }
         Some(Command::Sim(args)) => {
             drop(out);
             sim::run(args)

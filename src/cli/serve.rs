@@ -1,0 +1,179 @@
+//! `droidctl serve [--listen ADDR:PORT] [--sim [MODEL ...]] [--json]`: relay GATT operations
+//! from TCP clients (droidctl's `--remote`, spherov2.py's `tcp_adapter`) to droids over
+//! Bluetooth LE, or to simulated droids. See [`crate::relay`].
+
+use super::CliError;
+use crate::model::Model;
+use crate::relay::backend::GattBackend;
+use crate::relay::ble_backend::BleBackend;
+use crate::relay::protocol::DEFAULT_PORT;
+use crate::relay::server::{self, EventSink, ServerConfig, ServerEvent};
+use crate::relay::sim_backend::SimBackend;
+use crate::sim::gatt::GattFaults;
+use clap::Args;
+use std::io::Write;
+use std::net::{IpAddr, Ipv4Addr, SocketAddr};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+#[derive(Debug, Args)]
+pub struct ServeArgs {
+    /// Where to listen: ADDR:PORT, or ADDR for port 50004 (spherov2's). Anything but a
+    /// loopback address lets other machines drive your droids: the protocol has no
+    /// authentication.
+    #[arg(long, value_name = "ADDR:PORT", default_value = "127.0.0.1:50004", value_parser = parse_listen)]
+    pub listen: SocketAddr,
+    /// Relay to simulated droids instead of Bluetooth: one per MODEL given (r2d2, r2q5, bb9e,
+    /// bb8, sprk, ollie, robi), one R2-D2 without.
+    #[arg(long, num_args = 0.., value_name = "MODEL")]
+    pub sim: Option<Vec<String>>,
+    /// A fault for the simulated droids, as `droidctl sim --bluez` takes them
+    /// (e.g. disconnect-after=5); repeatable.
+    #[arg(long = "fault", value_name = "FAULT", requires = "sim")]
+    pub faults: Vec<String>,
+    /// One JSON object per event on stdout (clients, droids, errors), for scripts.
+    #[arg(long)]
+    pub json: bool,
+    /// Close a client that sends nothing for this long, stopping its droid (0: never).
+    #[arg(long, value_name = "SECS", default_value_t = 60)]
+    pub idle_timeout: u64,
+    /// Most clients served at once.
+    #[arg(long, value_name = "N", default_value_t = 16, value_parser = clap::value_parser!(u16).range(1..=1024))]
+    pub max_clients: u16,
+}
+
+fn parse_listen(s: &str) -> Result<SocketAddr, String> {
+    if let Ok(a) = s.parse::<SocketAddr>() {
+        return Ok(a);
+    }
+    if let Ok(ip) = s.trim_matches(['[', ']']).parse::<IpAddr>() {
+        return Ok(SocketAddr::new(ip, DEFAULT_PORT));
+    }
+    if s == "localhost" {
+        return Ok(SocketAddr::new(
+            IpAddr::V4(Ipv4Addr::LOCALHOST),
+            DEFAULT_PORT,
+        ));
+    }
+    Err(format!(
+        "`{s}` is not ADDR:PORT or ADDR (e.g. 127.0.0.1:50004, 0.0.0.0, [::1]:50004)"
+    ))
+}
+
+/// The simulated models asked for: none given is one R2-D2.
+fn sim_models(ids: &[String]) -> Result<Vec<Model>, CliError> {
+    if ids.is_empty() {
+        return Ok(vec![Model::R2D2]);
+    }
+    ids.iter()
+        .map(|m| match Model::from_id(m) {
+            Some(model) if crate::sim::simulates(model) => Ok(model),
+            _ => Err(CliError::usage(format!(
+                "unknown simulated model {m:?}: use one of {}",
+                crate::sim::simulated_ids().join(", ")
+            ))),
+        })
+        .collect()
+}
+
+/// The warning for a listener other machines can reach.
+pub fn exposure_warning(addr: &SocketAddr) -> Option<String> {
+    (!addr.ip().is_loopback()).then(|| {
+        format!(
+            "droidctl: warning: listening on {addr}: the relay protocol has no authentication or \
+             encryption — anyone who can reach this port can drive your droids. Listen on a \
+             trusted network only."
+        )
+    })
+}
+
+pub fn run(args: ServeArgs) -> Result<i32, CliError> {
+    let models = args.sim.as_deref().map(sim_models).transpose()?;
+    let mut faults = GattFaults::none();
+    for f in &args.faults {
+        faults
+            .add(f)
+            .map_err(|e| CliError::usage(format!("--fault {f}: {e}")))?;
+    }
+    let _ = crate::logging::init();
+    let cfg = ServerConfig {
+        max_clients: args.max_clients as usize,
+        idle_timeout: (args.idle_timeout > 0).then(|| Duration::from_secs(args.idle_timeout)),
+        ..ServerConfig::default()
+    };
+    let json = args.json;
+    let listen = args.listen;
+    let rt = super::realtime_runtime()?;
+    rt.block_on(async move {
+        let backend: Arc<dyn GattBackend> = match models {
+            Some(models) => Arc::new(SimBackend::new(&models, faults)),
+            None => {
+                let central = crate::link::ble::open_central()
+                    .await
+                    .map_err(|e| CliError::failure(e.message))?;
+                Arc::new(BleBackend::new(central))
+            }
+        };
+        let listener = server::bind(listen, &cfg)
+            .await
+            .map_err(|e| CliError::failure(format!("cannot listen on {listen}: {e}")))?;
+        if let Some(w) = exposure_warning(&listen) {
+            eprintln!("{w}");
+        }
+        let start = Instant::now();
+        let sink: EventSink = Arc::new(move |e: &ServerEvent| print_event(e, json, start));
+        let stopped = async {
+            let sig = super::signals::terminated().await;
+            eprintln!("droidctl: {sig}: stopping every droid and closing");
+        };
+        server::serve(listener, backend, cfg, sink, stopped).await;
+        Ok(0)
+    })
+}
+
+/// A status line on stderr; with `json`, the event as one JSON object on stdout too.
+fn print_event(e: &ServerEvent, json: bool, start: Instant) {
+    eprintln!("{}", e.status_line());
+    if json {
+        let mut v = serde_json::to_value(e).unwrap_or_default();
+        if let Some(o) = v.as_object_mut() {
+            o.insert(
+                "time_ms".into(),
+                serde_json::Value::from(start.elapsed().as_millis() as u64),
+            );
+        }
+        let mut out = std::io::stdout().lock();
+        let _ = writeln!(out, "{v}");
+        let _ = out.flush();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn listen_addresses() {
+        assert_eq!(
+            parse_listen("0.0.0.0").unwrap(),
+            "0.0.0.0:50004".parse().unwrap()
+        );
+        assert_eq!(
+            parse_listen("[::1]:6000").unwrap(),
+            "[::1]:6000".parse().unwrap()
+        );
+        assert_eq!(parse_listen("::1").unwrap().port(), 50004);
+        assert!(parse_listen("pi.local:1").is_err());
+        assert!(exposure_warning(&"0.0.0.0:50004".parse().unwrap()).is_some());
+        assert!(exposure_warning(&"127.0.0.1:50004".parse().unwrap()).is_none());
+        assert!(exposure_warning(&"[::1]:50004".parse().unwrap()).is_none());
+    }
+
+    #[test]
+    fn sim_models_default_to_one_r2d2() {
+        assert_eq!(sim_models(&[]).unwrap(), [Model::R2D2]);
+        let m = sim_models(&["bb8".into(), "r2q5".into()]).unwrap();
+        assert_eq!(m, [Model::BB8, Model::R2Q5]);
+        assert!(sim_models(&["c3po".into()]).is_err());
+    }
+}

@@ -1,0 +1,824 @@
+//! End to end through the real binaries over loopback: `droidctl serve --sim` with
+//! `droidctl run --remote` (the same telemetry as `--sim`), `droidctl scan --remote`, the app
+//! driving through the relay in a pseudo-terminal, and a Python client written from the
+//! protocol (`tests/relay_client.py`) driving a simulated R2-D2 through `serve`.
+
+// Unix: pseudo-terminals and `kill -TERM`.
+#![cfg(unix)]
+
+use serde_json::Value;
+use std::io::{BufRead, BufReader};
+use std::process::{Child, Command, Output, Stdio};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+/// A scratch directory per test, removed on drop.
+struct TempDir(std::path::PathBuf);
+
+impl TempDir {
+    fn new(tag: &str) -> TempDir {
+        let p = std::env::temp_dir().join(format!("droidctl-relay-{tag}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&p);
+        std::fs::create_dir_all(&p).unwrap();
+        TempDir(p)
+    }
+
+    fn file(&self, name: &str, text: &str) -> String {
+        let p = self.0.join(name);
+        std::fs::write(&p, text).unwrap();
+        p.to_string_lossy().into_owned()
+    }
+
+    fn path(&self, name: &str) -> String {
+        self.0.join(name).to_string_lossy().into_owned()
+    }
+}
+
+impl Drop for TempDir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+/// A running `droidctl serve --sim … --json` on a free loopback port.
+struct Serve {
+    child: Child,
+    /// `127.0.0.1:PORT`.
+    address: String,
+    events: Arc<Mutex<Vec<Value>>>,
+    stderr: Arc<Mutex<Vec<String>>>,
+}
+
+impl Serve {
+    fn start(models: &[&str], extra: &[&str], dir: &TempDir) -> Serve {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_droidctl"))
+            .args(["serve", "--listen", "127.0.0.1:0", "--json", "--sim"])
+            .args(models)
+            .args(extra)
+            .env("DROIDCTL_LOG_FILE", dir.path("serve.log"))
+            .stdin(Stdio::null())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("start droidctl serve");
+        let events = Arc::new(Mutex::new(Vec::new()));
+        let stderr = Arc::new(Mutex::new(Vec::new()));
+        {
+            let events = events.clone();
+            let out = child.stdout.take().unwrap();
+            std::thread::spawn(move || {
+                for line in BufReader::new(out).lines() {
+                    let Ok(line) = line else { break };
+                    let v: Value = serde_json::from_str(&line)
+                        .unwrap_or_else(|e| panic!("not JSON on stdout: {e}: {line}"));
+                    events.lock().unwrap().push(v);
+                }
+            });
+            let lines = stderr.clone();
+            let err = child.stderr.take().unwrap();
+            std::thread::spawn(move || {
+                for line in BufReader::new(err).lines() {
+                    let Ok(line) = line else { break };
+                    lines.lock().unwrap().push(line);
+                }
+            });
+        }
+        let mut s = Serve {
+            child,
+            address: String::new(),
+            events,
+            stderr,
+        };
+        let listening = s.wait_event("listening", |e| e["event"] == "listening");
+        s.address = listening["address"].as_str().unwrap().to_string();
+        s
+    }
+
+    fn events(&self) -> Vec<Value> {
+        self.events.lock().unwrap().clone()
+    }
+
+    fn wait_event(&self, what: &str, f: impl Fn(&Value) -> bool) -> Value {
+        let start = Instant::now();
+        loop {
+            if let Some(e) = self.events().into_iter().find(&f) {
+                return e;
+            }
+            assert!(
+                start.elapsed() < Duration::from_secs(10),
+                "no {what} event from serve: {:#?}\n{}",
+                self.events(),
+                self.stderr.lock().unwrap().join("\n")
+            );
+            std::thread::sleep(Duration::from_millis(20));
+        }
+    }
+
+    /// SIGTERM: it must stop every droid and exit 0. Its stderr lines.
+    fn stop(mut self) -> Vec<String> {
+        let _ = Command::new("kill")
+            .args(["-TERM", &self.child.id().to_string()])
+            .status();
+        let start = Instant::now();
+        let status = loop {
+            if let Some(s) = self.child.try_wait().unwrap() {
+                break s;
+            }
+            assert!(
+                start.elapsed() < Duration::from_secs(10),
+                "serve did not stop"
+            );
+            std::thread::sleep(Duration::from_millis(20));
+        };
+        // Let the reader threads take the last lines.
+        std::thread::sleep(Duration::from_millis(100));
+        let lines = self.stderr.lock().unwrap().clone();
+        assert!(status.success(), "{status:?}\n{}", lines.join("\n"));
+        lines
+    }
+}
+
+impl Drop for Serve {
+    fn drop(&mut self) {
+        if matches!(self.child.try_wait(), Ok(None)) {
+            let _ = self.child.kill();
+            let _ = self.child.wait();
+        }
+    }
+}
+
+fn droidctl(args: &[&str], dir: &TempDir) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_droidctl"))
+        .args(args)
+        .stdin(Stdio::null())
+        .env("DROIDCTL_LOG_FILE", dir.path("droidctl.log"))
+        .env("DROIDCTL_CONFIG", dir.path("config.toml"))
+        // No Bluetooth is needed for any of this.
+        .env(
+            "DBUS_SYSTEM_BUS_ADDRESS",
+            "unix:path=/nonexistent/droidctl-test/bus",
+        )
+        .output()
+        .expect("run droidctl")
+}
+
+fn text(b: &[u8]) -> String {
+    String::from_utf8_lossy(b).into_owned()
+}
+
+struct Run {
+    samples: Vec<Value>,
+    summary: Value,
+}
+
+fn parse_run(out: &Output) -> Run {
+    let stdout = text(&out.stdout);
+    let mut values: Vec<Value> = stdout
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap_or_else(|e| panic!("{e}: {l}")))
+        .collect();
+    let summary = values.pop().expect("a summary");
+    assert_eq!(summary["done"], true, "{stdout}");
+    Run {
+        samples: values,
+        summary,
+    }
+}
+
+fn f(v: &Value) -> f64 {
+    v.as_f64().unwrap_or(f64::NAN)
+}
+
+/// The same mission through `serve --sim` + `run --remote` and against `--sim`.
+fn mission_matches(model: &str, mission: &str) -> (Run, Run) {
+    let dir = TempDir::new(model);
+    let serve = Serve::start(&[model], &[], &dir);
+    let script = dir.file("mission.txt", mission);
+    let t0 = Instant::now();
+    let remote = droidctl(
+        &["run", &script, "--remote", &serve.address, "--json"],
+        &dir,
+    );
+    let took = t0.elapsed();
+    assert_eq!(
+        remote.status.code(),
+        Some(0),
+        "stderr: {}\nserve: {}",
+        text(&remote.stderr),
+        serve.stderr.lock().unwrap().join("\n")
+    );
+    let reference = droidctl(&["run", &script, "--sim", model, "--json"], &dir);
+    assert_eq!(
+        reference.status.code(),
+        Some(0),
+        "{}",
+        text(&reference.stderr)
+    );
+    let (remote, reference) = (parse_run(&remote), parse_run(&reference));
+    let (a, b) = (&remote.summary, &reference.summary);
+    let t_ms = f(&a["t_ms"]);
+    assert!(
+        (t_ms - f(&b["t_ms"])).abs() < 0.1 * f(&b["t_ms"]),
+        "{a} vs {b}"
+    );
+    assert!(
+        took.as_secs_f64() * 1000.0 >= t_ms * 0.9,
+        "real time: {took:?}"
+    );
+    for key in ["collisions", "failed_steps", "errors", "timeouts"] {
+        assert_eq!(a[key], b[key], "{key}: {a} vs {b}");
+    }
+    let moved = f(&b["x_cm"]).hypot(f(&b["y_cm"]));
+    assert!(moved > 30.0, "the mission drives: {b}");
+    let off = (f(&a["x_cm"]) - f(&b["x_cm"])).hypot(f(&a["y_cm"]) - f(&b["y_cm"]));
+    assert!(off <= (0.1 * moved).max(6.0), "final position {a} vs {b}");
+    let (n, m) = (remote.samples.len() as f64, reference.samples.len() as f64);
+    assert!((n - m).abs() <= 0.2 * m + 2.0, "samples: {n} vs {m}");
+    let (last, last_ref) = (
+        &remote.samples[remote.samples.len() - 1],
+        &reference.samples[reference.samples.len() - 1],
+    );
+    assert_eq!(last["heading"], last_ref["heading"], "{last} vs {last_ref}");
+    assert_eq!(last["stance"], last_ref["stance"], "{last} vs {last_ref}");
+    // The relay saw one droid connected, and released it stopped when the mission ended.
+    serve.wait_event("droid connected", |e| e["event"] == "droid_connected");
+    serve.wait_event("droid released", |e| {
+        e["event"] == "droid_released" && e["stopped"] == true
+    });
+    let lines = serve.stop();
+    assert!(
+        lines.iter().any(|l| l.contains("stopped and released")),
+        "{lines:?}"
+    );
+    (remote, reference)
+}
+
+/// API v2: the anti-DoS unlock, sensor streaming, a stance change and a drive.
+#[test]
+fn r2d2_mission_through_the_relay_matches_the_simulator() {
+    let (remote, _) = mission_matches("r2d2", "stance tripod\ndrive 80 90 for 1.5s\nwait 0.3s\n");
+    let last = &remote.samples[remote.samples.len() - 1];
+    assert_eq!(last["stance"], "tripod", "{last}");
+}
+
+/// API v1: the wake sequence over three characteristics, then driving.
+#[test]
+fn bb8_mission_through_the_relay_matches_the_simulator() {
+    mission_matches("bb8", "drive 80 90 for 1.5s\nwait 0.3s\n");
+}
+
+/// Robi 42: the relay has no read, so the handshake read is skipped; the start
+/// confirmation still starts the frames, and the remote control drives.
+#[test]
+fn robi_mission_through_the_relay_matches_the_simulator() {
+    let (remote, reference) = mission_matches("robi", "drive 200 0 for 2s\nwait 0.3s\n");
+    let frames = |r: &Run| f(&r.samples[r.samples.len() - 1]["frames"]);
+    assert!(frames(&remote) >= 15.0, "frames flow: {}", frames(&remote));
+    assert!((frames(&remote) - frames(&reference)).abs() <= 5.0);
+}
+
+#[test]
+fn scan_lists_the_droids_behind_the_relay() {
+    let dir = TempDir::new("scan");
+    let serve = Serve::start(&["r2d2", "bb8", "robi"], &[], &dir);
+    let out = droidctl(
+        &[
+            "scan",
+            "--remote",
+            &serve.address,
+            "--json",
+            "--timeout",
+            "1",
+        ],
+        &dir,
+    );
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let rows: Vec<Value> = text(&out.stdout)
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    let models: Vec<&str> = rows.iter().map(|r| r["model"].as_str().unwrap()).collect();
+    assert_eq!(models, ["r2d2", "bb8", "robi42"]);
+    assert_eq!(rows[0]["name"], "D2-0001");
+    assert_eq!(rows[0]["address"], "5E:D0:00:00:00:01");
+    // The table, for people.
+    let out = droidctl(&["scan", "--remote", &serve.address], &dir);
+    let table = text(&out.stdout);
+    assert!(table.starts_with("NAME"), "{table}");
+    assert!(
+        table.contains("BB-0002") && table.contains("BB-8"),
+        "{table}"
+    );
+    // Nobody there: one line, status 1.
+    let port = serve.address.rsplit(':').next().unwrap().to_string();
+    serve.stop();
+    let out = droidctl(&["scan", "--remote", &format!("127.0.0.1:{port}")], &dir);
+    assert_eq!(out.status.code(), Some(1));
+    let err = text(&out.stderr);
+    assert!(err.contains("cannot reach the relay"), "{err}");
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+}
+
+#[test]
+fn two_droids_need_a_name_and_a_held_droid_waits_its_turn() {
+    let dir = TempDir::new("choose");
+    let serve = Serve::start(&["r2d2", "r2q5"], &[], &dir);
+    let script = dir.file("m.txt", "wait 2s\n");
+    // Several droids and no --name: one line saying so.
+    let out = droidctl(&["run", &script, "--remote", &serve.address], &dir);
+    assert_eq!(out.status.code(), Some(1));
+    let err = text(&out.stderr);
+    assert!(err.contains("several droids behind the relay"), "{err}");
+    assert!(err.contains("D2-0001") && err.contains("Q5-0002"), "{err}");
+    // One client holds Q5-0002…
+    let mut first = Command::new(env!("CARGO_BIN_EXE_droidctl"))
+        .args(["run", &script, "--remote", &serve.address, "--name", "Q5"])
+        .env("DROIDCTL_LOG_FILE", dir.path("first.log"))
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    serve.wait_event("the first holds it", |e| e["event"] == "droid_connected");
+    // …so the relay refuses it to a second one, naming the holder; the second retries with
+    // its backoff and gets it once the first is done.
+    let short = dir.file("short.txt", "wait 0.2s\n");
+    let second = droidctl(
+        &[
+            "run",
+            &short,
+            "--remote",
+            &serve.address,
+            "--name",
+            "Q5-0002",
+        ],
+        &dir,
+    );
+    assert_eq!(second.status.code(), Some(0), "{}", text(&second.stderr));
+    assert!(first.wait().unwrap().success());
+    let refused = serve.wait_event("refusal", |e| e["event"] == "request_failed");
+    assert_eq!(refused["request"], "INIT");
+    let why = refused["error"].as_str().unwrap();
+    assert!(why.contains("in use by client"), "{why}");
+    let connected = serve
+        .events()
+        .iter()
+        .filter(|e| e["event"] == "droid_connected")
+        .count();
+    assert_eq!(connected, 2);
+    serve.stop();
+}
+
+#[test]
+fn listening_beyond_loopback_warns() {
+    let dir = TempDir::new("warn");
+    let serve = {
+        // Bound on every interface, but nothing but this check talks to it.
+        let mut child = Command::new(env!("CARGO_BIN_EXE_droidctl"))
+            .args(["serve", "--listen", "0.0.0.0:0", "--sim"])
+            .env("DROIDCTL_LOG_FILE", dir.path("serve.log"))
+            .stdin(Stdio::null())
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        let mut err = BufReader::new(child.stderr.take().unwrap());
+        let mut first = String::new();
+        err.read_line(&mut first).unwrap();
+        let _ = child.kill();
+        let _ = child.wait();
+        first
+    };
+    assert!(
+        serve.contains("warning") && serve.contains("no authentication"),
+        "{serve}"
+    );
+}
+
+// ---------------------------------------------------------------------------------------------
+// A Python client written from the protocol (spherov2's relay is a Python program).
+// ---------------------------------------------------------------------------------------------
+
+fn python3() -> Option<&'static str> {
+    let ok = Command::new("python3")
+        .arg("--version")
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success());
+    ok.then_some("python3")
+}
+
+/// `tests/relay_client.py` scans, finds, inits, unlocks, subscribes, wakes, changes the
+/// stance, turns streaming on and drives the simulated R2-D2 through `serve`, reading back
+/// the wake and stance responses and the locator samples.
+#[test]
+fn a_python_client_drives_r2d2_through_serve() {
+    let Some(py) = python3() else {
+        println!("SKIPPED a_python_client_drives_r2d2_through_serve: no python3 on PATH");
+        return;
+    };
+    let dir = TempDir::new("python");
+    let serve = Serve::start(&["r2d2", "bb8"], &[], &dir);
+    let (host, port) = serve.address.rsplit_once(':').unwrap();
+    let script = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/relay_client.py");
+    let mut child = Command::new(py)
+        .args([script, host, port])
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let start = Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if start.elapsed() > Duration::from_secs(30) {
+            let _ = child.kill();
+            panic!("the Python client did not finish");
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    let out = child.wait_with_output().unwrap();
+    assert!(
+        out.status.success(),
+        "python: {}\nserve: {}",
+        text(&out.stderr),
+        serve.stderr.lock().unwrap().join("\n")
+    );
+    let seen: Value = serde_json::from_str(text(&out.stdout).trim()).unwrap();
+    assert_eq!(seen["scanned"], serde_json::json!(["D2-0001", "BB-0002"]));
+    assert_eq!(seen["not_found"], true, "{seen}");
+    assert_eq!(seen["wake_response"], true, "{seen}");
+    assert_eq!(seen["stance_response"], true, "{seen}");
+    assert!(f(&seen["samples"]) >= 5.0, "{seen}");
+    // Driving toward 0° moves it along +y.
+    assert!(f(&seen["y_cm"]) > 40.0, "{seen}");
+    serve.wait_event("released stopped", |e| {
+        e["event"] == "droid_released" && e["stopped"] == true
+    });
+    serve.stop();
+}
+
+// ---------------------------------------------------------------------------------------------
+// The app through the relay, in a pseudo-terminal.
+// ---------------------------------------------------------------------------------------------
+
+mod pty {
+    use portable_pty::{CommandBuilder, PtySize, native_pty_system};
+    use std::io::{Read, Write};
+    use std::sync::{Arc, Mutex};
+    use std::time::{Duration, Instant};
+
+    pub struct Tui {
+        screen: Arc<Mutex<vt100::Parser>>,
+        writer: Arc<Mutex<Box<dyn Write + Send>>>,
+        child: Box<dyn portable_pty::Child + Send + Sync>,
+    }
+
+    impl Tui {
+        pub fn start(args: &[&str], env: &[(&str, &str)]) -> Tui {
+            let (cols, rows) = (100u16, 30u16);
+            let pty = native_pty_system()
+                .openpty(PtySize {
+                    rows,
+                    cols,
+                    pixel_width: 0,
+                    pixel_height: 0,
+                })
+                .unwrap();
+            let mut cmd = CommandBuilder::new(env!("CARGO_BIN_EXE_droidctl"));
+            cmd.args(args);
+            cmd.env("TERM", "xterm-256color");
+            for (k, v) in env {
+                cmd.env(k, v);
+            }
+            let child = pty.slave.spawn_command(cmd).unwrap();
+            drop(pty.slave);
+            let mut reader = pty.master.try_clone_reader().unwrap();
+            let writer = Arc::new(Mutex::new(pty.master.take_writer().unwrap()));
+            let screen = Arc::new(Mutex::new(vt100::Parser::new(
+                rows.try_into().unwrap(),
+                cols.try_into().unwrap(),
+                0,
+            )));
+            let (screen2, answer) = (screen.clone(), writer.clone());
+            std::thread::spawn(move || {
+                let _keep_master = pty.master;
+                let mut buf = [0u8; 8192];
+                while let Ok(n) = reader.read(&mut buf) {
+                    if n == 0 {
+                        break;
+                    }
+                    let chunk = &buf[..n];
+                    screen2.lock().unwrap().process(chunk);
+                    // Answer crossterm's capability probe as a legacy terminal.
+                    if chunk.windows(4).any(|w| w == b"\x1b[?u") {
+                        let mut w = answer.lock().unwrap();
+                        let _ = w.write_all(b"\x1b[?62;c");
+                        let _ = w.flush();
+                    }
+                }
+            });
+            Tui {
+                screen,
+                writer,
+                child,
+            }
+        }
+
+        pub fn text(&self) -> String {
+            self.screen.lock().unwrap().screen().contents()
+        }
+
+        pub fn wait_for(&self, what: &str, limit: Duration) -> String {
+            let start = Instant::now();
+            loop {
+                let t = self.text();
+                if t.contains(what) {
+                    return t;
+                }
+                assert!(
+                    start.elapsed() < limit,
+                    "timed out waiting for {what:?}; screen:\n{t}"
+                );
+                std::thread::sleep(Duration::from_millis(50));
+            }
+        }
+
+        pub fn send(&mut self, bytes: &[u8]) {
+            let mut w = self.writer.lock().unwrap();
+            let _ = w.write_all(bytes);
+            let _ = w.flush();
+        }
+
+        /// A key held the way a legacy terminal reports it: press, then auto-repeats.
+        pub fn hold(&mut self, key: &[u8], for_: Duration) {
+            let start = Instant::now();
+            while start.elapsed() < for_ {
+                self.send(key);
+                std::thread::sleep(Duration::from_millis(40));
+            }
+        }
+
+        pub fn wait_exit(&mut self, limit: Duration) -> portable_pty::ExitStatus {
+            let start = Instant::now();
+            loop {
+                if let Some(status) = self.child.try_wait().unwrap() {
+                    return status;
+                }
+                assert!(
+                    start.elapsed() < limit,
+                    "droidctl did not exit; screen:\n{}",
+                    self.text()
+                );
+                std::thread::sleep(Duration::from_millis(50));
+            }
+        }
+    }
+
+    impl Drop for Tui {
+        fn drop(&mut self) {
+            let _ = self.child.kill();
+        }
+    }
+}
+
+/// The droid's y position as the sensors panel shows it ("pos x … y … cm").
+fn shown_y(screen: &str) -> Option<f32> {
+    let line = screen.lines().find(|l| l.contains("pos x"))?;
+    let after = &line[line.find(" y ")? + 3..];
+    after.split_whitespace().next()?.parse().ok()
+}
+
+/// `droidctl --remote HOST:PORT --name D2-0001`: the app connects through the relay, shows
+/// the droid's notifications (the packet log, the position), drives it with `w`, and `q`
+/// quits, the relay releasing the droid stopped.
+#[test]
+fn the_app_drives_through_the_relay() {
+    let dir = TempDir::new("app");
+    let serve = Serve::start(&["r2d2"], &[], &dir);
+    let log = dir.path("app.log");
+    let config = dir.path("config.toml");
+    let mut tui = pty::Tui::start(
+        &["--remote", &serve.address, "--name", "D2-0001"],
+        &[
+            ("DROIDCTL_LOG_FILE", log.as_str()),
+            ("DROIDCTL_CONFIG", config.as_str()),
+            (
+                "DBUS_SYSTEM_BUS_ADDRESS",
+                "unix:path=/nonexistent/droidctl-test/bus",
+            ),
+        ],
+    );
+    let screen = tui.wait_for("connected", Duration::from_secs(20));
+    assert!(screen.contains("D2-0001"), "the droid's name:\n{screen}");
+    tui.wait_for("stance tripod", Duration::from_secs(10));
+    tui.wait_for("sensor-streaming", Duration::from_secs(5));
+    tui.wait_for("pos x", Duration::from_secs(5));
+    let before = shown_y(&tui.text()).unwrap_or(0.0);
+    tui.hold(b"w", Duration::from_millis(2500));
+    std::thread::sleep(Duration::from_millis(800));
+    let screen = tui.text();
+    let after = shown_y(&screen).expect("position on screen");
+    assert!(
+        after > before + 30.0,
+        "the droid moved forward: {before} → {after}\n{screen}"
+    );
+    assert!(screen.contains("drive-with-heading"), "{screen}");
+    tui.send(b"q");
+    let status = tui.wait_exit(Duration::from_secs(10));
+    assert!(status.success(), "{status:?}");
+    let released = serve.wait_event("released", |e| e["event"] == "droid_released");
+    assert_eq!(released["stopped"], true);
+    let closed = serve.wait_event("closed", |e| {
+        e["event"] == "client_closed" && e["writes"].as_u64().unwrap_or(0) > 0
+    });
+    assert!(
+        closed["notifications"].as_u64().unwrap_or(0) > 10,
+        "{closed}"
+    );
+    serve.stop();
+}
+
+// ---------------------------------------------------------------------------------------------
+// spherov2.py itself, when a Python with it is at hand (`pip install spherov2`, and bleak for
+// its server). Point DROIDCTL_TEST_SPHEROV2_PYTHON at that Python (default python3); without
+// it these tests say they are skipped.
+// ---------------------------------------------------------------------------------------------
+
+/// A Python that imports all of `modules`, or why not.
+fn python_with(modules: &str) -> Result<String, String> {
+    let py =
+        std::env::var("DROIDCTL_TEST_SPHEROV2_PYTHON").unwrap_or_else(|_| "python3".to_string());
+    let ok = Command::new(&py)
+        .args(["-c", &format!("import {modules}")])
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success());
+    if ok {
+        Ok(py)
+    } else {
+        Err(format!(
+            "{py} cannot import {modules} (set DROIDCTL_TEST_SPHEROV2_PYTHON to a Python with \
+             spherov2 installed)"
+        ))
+    }
+}
+
+/// Wait for a child with a limit; its output.
+fn finish(mut child: Child, limit: Duration, what: &str) -> Output {
+    let start = Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if start.elapsed() > limit {
+            let _ = child.kill();
+            let out = child.wait_with_output().unwrap();
+            panic!("{what} did not finish: {}", text(&out.stderr));
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    child.wait_with_output().unwrap()
+}
+
+/// spherov2's `tcp_adapter` and Sphero Edu API drive the simulated R2-D2 through
+/// `droidctl serve`.
+#[test]
+fn spherov2_tcp_adapter_drives_through_serve() {
+    let py = match python_with("spherov2.adapter.tcp_adapter, spherov2.sphero_edu") {
+        Ok(py) => py,
+        Err(why) => {
+            println!("SKIPPED spherov2_tcp_adapter_drives_through_serve: {why}");
+            return;
+        }
+    };
+    let dir = TempDir::new("spherov2-adapter");
+    let serve = Serve::start(&["r2d2"], &[], &dir);
+    let port = serve.address.rsplit(':').next().unwrap().to_string();
+    let script = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/relay_spherov2.py");
+    let child = Command::new(&py)
+        .args([script, &port, "D2-0001"])
+        .current_dir(&dir.0)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let out = finish(child, Duration::from_secs(60), "the spherov2 client");
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let seen: Value = serde_json::from_str(text(&out.stdout).trim()).unwrap();
+    assert_eq!(seen["listed"], serde_json::json!(["D2-0001"]), "{seen}");
+    assert_eq!(seen["class"], "R2D2", "{seen}");
+    assert!(
+        f(&seen["location"]["y"]) > 30.0,
+        "it rolled forward: {seen}"
+    );
+    serve.wait_event("released stopped", |e| {
+        e["event"] == "droid_released" && e["stopped"] == true
+    });
+    serve.stop();
+}
+
+/// `droidctl run --remote` through spherov2's own `tcp_server` (bleak), which reaches the
+/// droid on the virtual BlueZ of `droidctl sim --bluez`: the same telemetry as `--sim`.
+#[test]
+fn droidctl_drives_through_spherov2_tcp_server() {
+    let py = match python_with("spherov2.adapter.tcp_server, bleak") {
+        Ok(py) => py,
+        Err(why) => {
+            println!("SKIPPED droidctl_drives_through_spherov2_tcp_server: {why}");
+            return;
+        }
+    };
+    let dbus = Command::new("dbus-daemon")
+        .arg("--version")
+        .stdout(Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success());
+    if !dbus {
+        println!("SKIPPED droidctl_drives_through_spherov2_tcp_server: no dbus-daemon");
+        return;
+    }
+    let dir = TempDir::new("spherov2-server");
+    // The virtual BlueZ with one R2-D2.
+    let mut bluez = Command::new(env!("CARGO_BIN_EXE_droidctl"))
+        .args(["sim", "--bluez", "r2d2"])
+        .env("DROIDCTL_LOG_FILE", dir.path("bluez.log"))
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut first = String::new();
+    BufReader::new(bluez.stdout.take().unwrap())
+        .read_line(&mut first)
+        .unwrap();
+    let bus = first
+        .trim()
+        .strip_prefix("DBUS_SYSTEM_BUS_ADDRESS=")
+        .unwrap_or_else(|| panic!("export line, got {first:?}"))
+        .to_string();
+    let mut name = String::new();
+    let mut err = BufReader::new(bluez.stderr.take().unwrap());
+    while name.is_empty() {
+        let mut line = String::new();
+        if err.read_line(&mut line).unwrap() == 0 {
+            panic!("sim --bluez ended");
+        }
+        if let Some(rest) = line.strip_prefix("droidctl sim: ")
+            && let Some((n, _)) = rest.split_once(" (R2-D2)")
+        {
+            name = n.to_string();
+        }
+    }
+    // spherov2's server on a free loopback port (it listens on 0.0.0.0 unless told).
+    let port = std::net::TcpListener::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port();
+    let mut server = Command::new(&py)
+        .args([
+            "-m",
+            "spherov2.adapter.tcp_server",
+            "127.0.0.1",
+            &port.to_string(),
+        ])
+        .env("DBUS_SYSTEM_BUS_ADDRESS", &bus)
+        .current_dir(&dir.0)
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let relay = format!("127.0.0.1:{port}");
+    let start = Instant::now();
+    while std::net::TcpStream::connect(&relay).is_err() {
+        assert!(
+            start.elapsed() < Duration::from_secs(20),
+            "spherov2's server did not listen"
+        );
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    let script = dir.file(
+        "mission.txt",
+        "stance tripod\ndrive 80 90 for 1.5s\nwait 0.3s\n",
+    );
+    let remote = droidctl(
+        &[
+            "run", &script, "--remote", &relay, "--name", &name, "--json",
+        ],
+        &dir,
+    );
+    let reference = droidctl(&["run", &script, "--sim", "--json"], &dir);
+    let _ = server.kill();
+    let _ = server.wait();
+    let _ = Command::new("kill")
+        .args(["-TERM", &bluez.id().to_string()])
+        .status();
+    let _ = finish(bluez, Duration::from_secs(10), "sim --bluez");
+    assert_eq!(remote.status.code(), Some(0), "{}", text(&remote.stderr));
+    let (a, b) = (parse_run(&remote).summary, parse_run(&reference).summary);
+    let off = (f(&a["x_cm"]) - f(&b["x_cm"])).hypot(f(&a["y_cm"]) - f(&b["y_cm"]));
+    assert!(f(&b["x_cm"]).abs() > 30.0, "{b}");
+    assert!(off <= 8.0, "final position {a} vs {b}");
+    assert_eq!(a["errors"], b["errors"]);
+}
