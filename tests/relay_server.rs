@@ -473,6 +473,7 @@ async fn stopping_the_server_stops_every_droid() {
     .await;
     let sim = relay.sim.clone();
     let (a0, a1) = (relay.address(0), relay.address(1));
+    let t0 = Instant::now();
     relay.stop().await;
     assert!(a.closed().await && b.closed().await);
     wait_until("both stopped", || {
@@ -480,6 +481,8 @@ async fn stopping_the_server_stops_every_droid() {
             && sim.state(&a1).unwrap().velocity_cm_s.abs() < 0.5
     })
     .await;
+    // By the relay's stop, not by the droids' own 2 s motion timeout.
+    assert!(t0.elapsed() < Duration::from_millis(1200), "{:?}", t0.elapsed());
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -751,7 +754,8 @@ async fn soak_several_clients_one_killed() {
     victim.v2_ready(&relay.address(0)).await;
     let run = Duration::from_secs(3);
     let t0 = Instant::now();
-    let mut killed = false;
+    let mut killed = None;
+    let mut stopped = None;
     let mut victim = Some(victim);
     let mut step = 0u32;
     while t0.elapsed() < run {
@@ -764,16 +768,27 @@ async fn soak_several_clients_one_killed() {
         if let Some(v) = victim.as_mut() {
             v.drive(150).await;
         }
-        if !killed && t0.elapsed() > Duration::from_millis(1200) {
+        if killed.is_none() && t0.elapsed() > Duration::from_millis(1200) {
             assert!(relay.speed(0) > 50.0, "the victim's droid rolls");
             // Killed: the socket goes without END.
             victim = None;
-            killed = true;
+            killed = Some(Instant::now());
+        }
+        if let Some(k) = killed
+            && stopped.is_none()
+            && relay.speed(0).abs() < 0.5
+        {
+            stopped = Some(k.elapsed());
         }
         sleep(Duration::from_millis(50)).await;
     }
-    assert!(killed);
-    // The orphan stopped and was released…
+    // The orphan stopped (well before the droid's own 2 s motion timeout would have stopped
+    // it) and was released…
+    let stopped = stopped.expect("the orphan stopped");
+    assert!(
+        stopped < Duration::from_millis(1000),
+        "stopped {stopped:?} after the kill"
+    );
     assert!(
         relay.speed(0).abs() < 0.5,
         "orphan speed {}",
