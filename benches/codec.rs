@@ -3,6 +3,12 @@
 //! escaping. Reported in bytes/s; the stream's packet count is printed so packets/s follows.
 //!
 //! `cargo bench --bench codec -- --warm-up-time 1 --measurement-time 3`
+//!
+//! `v2/decode_borrowed*` is the borrowing decoder `packet decode --file` uses (nothing
+//! allocated per packet); `capture/file_summary` is all of `packet decode --file --summary`
+//! (64 KiB blocks from a reader, the decoder, the counts) over a 16 MiB capture. With
+//! `DROIDCTL_CODEC_STREAM=PATH` the stream is also written to PATH, for
+//! `benches/spherov2_compare.sh` to time another parser on the same bytes.
 
 // criterion is a dev-dependency on Linux only (see Cargo.toml); elsewhere this is an empty
 // program.
@@ -13,7 +19,9 @@ use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use droidctl::protocol::v2::sensor::encode_sample;
 use droidctl::protocol::v2::wire::{AccelRaw, Bytes, CollisionAxis};
 use droidctl::protocol::v2::wire::{DriveFlags, LegState, Mask};
-use droidctl::protocol::v2::{Collision, Decoder, ErrorCode, Packet, StreamingConfig, cmd};
+use droidctl::protocol::v2::{
+    Collision, Decoded, Decoder, ErrorCode, Packet, StreamingConfig, cmd,
+};
 use droidctl::units::Heading;
 use std::hint::black_box;
 
@@ -140,8 +148,44 @@ fn codec(c: &mut Criterion) {
         stream.len() as f64 / packets.len() as f64
     );
 
+    if let Some(path) = std::env::var_os("DROIDCTL_CODEC_STREAM") {
+        std::fs::write(&path, &stream).expect("write the stream");
+    }
+
     let mut group = c.benchmark_group("v2");
     group.throughput(Throughput::Bytes(stream.len() as u64));
+
+    // The borrowing API: packets borrow the decoder's buffer, nothing is allocated.
+    group.bench_function("decode_borrowed", |b| {
+        b.iter(|| {
+            let mut d = Decoder::new();
+            let mut n = 0;
+            d.feed_with(black_box(&stream), |e| {
+                if let Decoded::Packet { packet, .. } = e {
+                    n += 1;
+                    black_box(packet.data);
+                }
+            });
+            assert_eq!(n, packets.len());
+            n
+        })
+    });
+
+    group.bench_function("decode_borrowed_ble_chunks", |b| {
+        b.iter(|| {
+            let mut d = Decoder::new();
+            let mut n = 0;
+            for chunk in black_box(&stream).chunks(20) {
+                d.feed_with(chunk, |e| {
+                    if let Decoded::Packet { .. } = e {
+                        n += 1;
+                    }
+                });
+            }
+            assert_eq!(n, packets.len());
+            n
+        })
+    });
 
     group.bench_function("decode", |b| {
         b.iter(|| {
@@ -174,6 +218,33 @@ fn codec(c: &mut Criterion) {
             }
             assert_eq!(buf.len(), stream.len());
             buf.len()
+        })
+    });
+    group.finish();
+
+    // A large capture through `packet decode --file --summary`, from memory.
+    let big: Vec<u8> = stream
+        .iter()
+        .copied()
+        .cycle()
+        .take(stream.len() * ((16 << 20) / stream.len()))
+        .collect();
+    let mut group = c.benchmark_group("capture");
+    group.throughput(Throughput::Bytes(big.len() as u64));
+    group.sample_size(20);
+    group.bench_function("file_summary", |b| {
+        b.iter(|| {
+            let mut input = std::io::Cursor::new(black_box(&big));
+            let summary = droidctl::cli::packet::decode_reader(
+                &mut input,
+                Default::default(),
+                false,
+                true,
+                &mut std::io::sink(),
+            )
+            .expect("decodes");
+            assert_eq!(summary.error_total(), 0);
+            summary.packets
         })
     });
     group.finish();

@@ -1,0 +1,87 @@
+#!/usr/bin/env bash
+# droidctl's v2 decoder against spherov2.py's, on the same bytes, in the same run.
+#
+# The stream is the codec benchmark's mixed one (benches/codec.rs: sensor streaming, drive
+# commands, responses, collisions, escaped LED values). Prints:
+#   - droidctl's decoder (Decoder::feed_with, criterion's median throughput);
+#   - the whole `droidctl packet decode --file FILE --summary` on a large file (wall time,
+#     peak RSS: memory stays flat whatever the size);
+#   - spherov2.py's own parser (spherov2/controls/v2.py, Packet.Collector.add, which calls
+#     Packet.parse_response per packet) on the same stream, installed with pip in a venv;
+#   - the ratio.
+# The Python half is skipped with a message when spherov2 cannot be installed.
+#
+# Usage: bash benches/spherov2_compare.sh [CLI_FILE_MB]   (default 256)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+mb=${1:-256}
+work=target/spherov2-compare
+mkdir -p "$work"
+stream=$work/stream.bin
+
+echo "building (release) and measuring droidctl's decoder with criterion..."
+cargo build --release -q
+bench_out=$(DROIDCTL_CODEC_STREAM="$PWD/$stream" cargo bench -q --bench codec -- \
+  --warm-up-time 1 --measurement-time 3 'v2/decode_borrowed$' 2>&1)
+# criterion: "thrpt:  [low MiB/s  median MiB/s  high MiB/s]"
+rust_mibs=$(echo "$bench_out" | awk '/thrpt:/ {gsub(/\[/, ""); print $4; exit}')
+rust_unit=$(echo "$bench_out" | awk '/thrpt:/ {print $5; exit}')
+case $rust_unit in
+  GiB/s) rust_mbs=$(echo "$rust_mibs * 1073.741824" | bc -l) ;;
+  MiB/s) rust_mbs=$(echo "$rust_mibs * 1.048576" | bc -l) ;;
+  *) echo "cannot read criterion's throughput:"; echo "$bench_out"; exit 1 ;;
+esac
+bytes=$(stat -c %s "$stream")
+
+# The CLI on a large file made of the same stream.
+big=$work/big.bin
+if [ ! -f "$big" ] || [ "$(stat -c %s "$big")" -lt $((mb * 1000000)) ]; then
+  : > "$big"
+  reps=$((mb * 1000000 / bytes + 1))
+  for _ in $(seq "$reps"); do cat "$stream"; done > "$big"
+fi
+big_bytes=$(stat -c %s "$big")
+cat "$big" > /dev/null   # warm the page cache
+timing=$( { /usr/bin/time -f '%e %M' target/release/droidctl packet decode --file "$big" --summary > "$work/cli.out"; } 2>&1 )
+secs=$(echo "$timing" | tail -n1 | awk '{print $1}')
+rss_kb=$(echo "$timing" | tail -n1 | awk '{print $2}')
+cli_mbs=$(echo "$big_bytes / $secs / 1000000" | bc -l)
+
+echo "stream: $bytes bytes (benches/codec.rs); the CLI on the large file: $(cat "$work/cli.out")"
+printf 'droidctl  Decoder::feed_with (criterion median):             %8.1f MB/s\n' "$rust_mbs"
+printf 'droidctl  packet decode --file --summary, %4d MB file:        %8.1f MB/s, peak RSS %.1f MiB\n' \
+  "$((big_bytes / 1000000))" "$cli_mbs" "$(echo "$rss_kb / 1024" | bc -l)"
+
+# spherov2.py in a venv.
+venv=$work/venv
+py=${PYTHON:-python3}
+if [ ! -x "$venv/bin/python" ]; then
+  "$py" -m venv "$venv" > /dev/null 2>&1 || true
+fi
+if [ -x "$venv/bin/python" ] && "$venv/bin/python" -c 'import spherov2' 2> /dev/null \
+   || { [ -x "$venv/bin/pip" ] && "$venv/bin/pip" install -q spherov2 > "$work/pip.log" 2>&1; }; then
+  sv2_version=$("$venv/bin/python" -c 'import importlib.metadata as m; print(m.version("spherov2"))')
+  pyver=$("$venv/bin/python" -c 'import platform; print(platform.python_version())')
+  read -r py_mbs py_packets py_bytes py_secs < <("$venv/bin/python" - "$stream" <<'EOF'
+import sys, time
+from spherov2.controls.v2 import Packet
+data = open(sys.argv[1], 'rb').read()
+reps = max(1, int(4e6 // len(data)))
+count = [0]
+def counted(packet):
+    count[0] += 1
+collector = Packet.Collector(counted)
+start = time.perf_counter()
+for _ in range(reps):
+    collector.add(data)
+took = time.perf_counter() - start
+print(f"{reps * len(data) / took / 1e6:.4f} {count[0] // reps} {reps * len(data)} {took:.3f}")
+EOF
+)
+  printf 'spherov2.py %s Packet.Collector (Python %s, %s MB):   %8.3f MB/s (%s packets per stream)\n' \
+    "$sv2_version" "$pyver" "$((py_bytes / 1000000))" "$py_mbs" "$py_packets"
+  printf 'ratio: droidctl decoder / spherov2.py = %.0f×; droidctl CLI / spherov2.py = %.0f×\n' \
+    "$(echo "$rust_mbs / $py_mbs" | bc -l)" "$(echo "$cli_mbs / $py_mbs" | bc -l)"
+else
+  echo "spherov2.py: skipped (cannot create a venv or pip install spherov2; see $work/pip.log)"
+fi
