@@ -482,7 +482,11 @@ async fn stopping_the_server_stops_every_droid() {
     })
     .await;
     // By the relay's stop, not by the droids' own 2 s motion timeout.
-    assert!(t0.elapsed() < Duration::from_millis(1200), "{:?}", t0.elapsed());
+    assert!(
+        t0.elapsed() < Duration::from_millis(1200),
+        "{:?}",
+        t0.elapsed()
+    );
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -938,5 +942,56 @@ async fn the_ble_backend_relays_gatt_operations() {
         e,
         ServerEvent::DroidConnected { model: Some("r2d2"), name, .. } if name == "D2-1A2B"
     )));
+    server.abort();
+}
+
+/// A droid whose name does not say its model (no name heard, say) is still stopped when its
+/// client goes: the family is read from its GATT table.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_droid_without_a_known_name_is_stopped_by_its_family() {
+    use droidctl::link::ble::fake::{FakeCentral, FakePeripheral};
+    use droidctl::link::ble::{Advertisement, BleAddress};
+    use droidctl::link::gatt::{GattProfile, V1_COMMANDS};
+    use droidctl::relay::ble_backend::BleBackend;
+
+    let central = FakeCentral::new();
+    let droid = FakePeripheral::for_profile(&GattProfile::for_model(Model::BB8));
+    central.add_device(
+        Advertisement {
+            address: BleAddress([0xBB, 8, 0, 0, 0, 1]),
+            name: None,
+            rssi: Some(-50),
+        },
+        droid.clone(),
+    );
+    let backend: Arc<dyn GattBackend> = Arc::new(BleBackend::new(Arc::new(central)));
+    let listener = server::bind("127.0.0.1:0".parse().unwrap(), &cfg())
+        .await
+        .unwrap();
+    let addr = listener.local_addr().unwrap();
+    let sink: EventSink = Arc::new(|_| {});
+    let server = tokio::spawn(server::serve(
+        listener,
+        backend,
+        cfg(),
+        sink,
+        std::future::pending(),
+    ));
+    let mut c = Raw::connect(addr).await;
+    c.init("BB:08:00:00:00:01").await.unwrap();
+    drop(c);
+    let deadline = Instant::now() + WAIT;
+    while droid.is_connected() {
+        assert!(Instant::now() < deadline, "still connected");
+        sleep(Duration::from_millis(10)).await;
+    }
+    let f = family::for_model(Model::BB8);
+    let (stop, _) = f.codec().encode(&f.stop_after(None), 0, false);
+    let written: Vec<u8> = droid
+        .writes_to(V1_COMMANDS)
+        .into_iter()
+        .flat_map(|(_, d)| d)
+        .collect();
+    assert_eq!(written, stop);
     server.abort();
 }

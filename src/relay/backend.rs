@@ -65,8 +65,11 @@ pub struct Connected {
     pub events: mpsc::Receiver<DroidEvent>,
     /// The advertised name, when known.
     pub name: String,
-    /// The model, when the name says it: needed to stop the droid when its client goes.
+    /// The model, when the name says it.
     pub model: Option<Model>,
+    /// A model of the droid's family, to stop it when its client goes (the stop command is
+    /// the family's): the model, else what the GATT table shows.
+    pub stop_as: Option<Model>,
 }
 
 /// The droids behind the relay.

@@ -8,7 +8,7 @@ use crate::link::ble::{
     BleAddress, BleCentral, BleErrorKind, BlePeripheral, DiscoveredChar, PeripheralEvent,
     ScanEntry, scan,
 };
-use crate::link::gatt::{CharRef, GattUuid};
+use crate::link::gatt::{CharRef, GattUuid, ROBI_VELOCITY, V1_COMMANDS, V2_API};
 use crate::model::Model;
 use futures_util::StreamExt;
 use futures_util::future::BoxFuture;
@@ -141,17 +141,31 @@ impl BleBackend {
                 }
             }
         });
-        let name = self
+        let mut name = self
             .names
             .lock()
             .unwrap_or_else(|e| e.into_inner())
             .get(&addr)
             .cloned()
             .unwrap_or_default();
+        if name.is_empty() {
+            // A client that knew the address without scanning through us: the adapter may
+            // still know the name (the model decides which stop to write).
+            if let Ok(Ok(ads)) = timeout(OP, self.central.advertisements()).await
+                && let Some(n) = ads
+                    .into_iter()
+                    .find(|a| a.address == addr)
+                    .and_then(|a| a.name)
+            {
+                name = n;
+            }
+        }
+        let model = Model::from_advertised_name(&name);
         Ok(Connected {
+            stop_as: model.or_else(|| family_of(&chars)),
             connection: Box::new(BleConnection { p, chars }),
             events: rx,
-            model: Model::from_advertised_name(&name),
+            model,
             name,
         })
     }
@@ -192,6 +206,21 @@ impl GattBackend for BleBackend {
 
     fn describe(&self) -> String {
         "droids over Bluetooth LE".to_string()
+    }
+}
+
+/// A model of the family whose command characteristic the device has (each family's stop
+/// command is the same for all its models).
+fn family_of(chars: &[DiscoveredChar]) -> Option<Model> {
+    let has = |c: GattUuid| chars.iter().any(|d| d.characteristic == c);
+    if has(V2_API) {
+        Some(Model::R2D2)
+    } else if has(V1_COMMANDS) {
+        Some(Model::BB8)
+    } else if has(ROBI_VELOCITY) {
+        Some(Model::Robi42)
+    } else {
+        None
     }
 }
 

@@ -341,7 +341,8 @@ struct Held {
     name: String,
     address: String,
     key: String,
-    model: Option<Model>,
+    /// The model whose stop command is written when the client goes.
+    stop_as: Option<Model>,
     /// Characteristics subscribed to, with the UUID as the client wrote it (ON_DATA echoes
     /// it, so a client that subscribed to `2a00` hears about `2a00`).
     subscribed: HashMap<GattUuid, String>,
@@ -703,7 +704,7 @@ impl ClientTask {
             name,
             address,
             key,
-            model: c.model,
+            stop_as: c.stop_as,
             subscribed: HashMap::new(),
         });
         self.send(&Reply::Ok { seq })
@@ -755,7 +756,7 @@ impl ClientTask {
             return;
         };
         let gone = reason.starts_with("the droid disconnected");
-        let stopped = match held.model {
+        let stopped = match held.stop_as {
             Some(model) if !gone => stop(&mut *held.conn, model, self.cfg().op_timeout).await,
             _ => false,
         };

@@ -161,6 +161,7 @@ impl SimBackend {
             events: rx,
             name: slot.name.clone(),
             model: Some(slot.model),
+            stop_as: Some(slot.model),
         })
     }
 }
