@@ -418,51 +418,65 @@ fn scan_lists_a_droid_of_each_family() {
 // Faults through btleplug
 // -------------------------------------------------------------------------------------------
 
-/// The API writes in the simulator's trace after the line containing `after`.
-fn writes_after(lines: &[String], after: &str, name: &str) -> Vec<Vec<u8>> {
-    let start = lines
+/// The trace records (`--trace --json`) of device `name` in `lines`, with their line index.
+fn trace_of(lines: &[String], name: &str) -> Vec<(usize, serde_json::Value)> {
+    lines
         .iter()
-        .position(|l| l.contains(after))
-        .unwrap_or_else(|| panic!("no {after:?} in\n{}", lines.join("\n")));
-    let prefix = format!("droidctl sim: {name}: write 00010002-574f-4f20-5370-6865726f2121: ");
-    lines[start..]
-        .iter()
-        .filter_map(|l| l.strip_prefix(&prefix))
-        .map(|hex| {
-            hex.split_whitespace()
-                .map(|b| u8::from_str_radix(b, 16).unwrap())
-                .collect()
+        .enumerate()
+        .filter(|(_, l)| l.starts_with('{'))
+        .filter_map(|(i, l)| {
+            let v: serde_json::Value =
+                serde_json::from_str(l).unwrap_or_else(|e| panic!("{e}: {l}"));
+            (v["device"] == name).then_some((i, v))
         })
         .collect()
 }
 
-fn packets(writes: &[Vec<u8>]) -> Vec<Packet> {
-    Decoder::new()
-        .decode_all(&writes.concat())
+/// The commands `name` received, in order: (line index, the `packet decode --json` object).
+fn commands_in(lines: &[String], name: &str) -> Vec<(usize, serde_json::Value)> {
+    trace_of(lines, name)
         .into_iter()
-        .map(|r| r.expect("droidctl writes well-formed packets"))
+        .filter(|(_, v)| v["dir"] == "in" && v["packet"]["kind"] == "command")
+        .map(|(i, v)| (i, v["packet"].clone()))
         .collect()
 }
 
-/// Drive with heading (0x16/0x07): the speed byte.
-fn drive_speeds(ps: &[Packet]) -> Vec<u8> {
-    ps.iter()
-        .filter(|p| p.did == 0x16 && p.cid == 0x07)
-        .map(|p| p.data[0])
+/// The speeds of the drive commands among `commands`.
+fn drive_speeds(commands: &[(usize, serde_json::Value)]) -> Vec<u64> {
+    commands
+        .iter()
+        .filter(|(_, p)| p["command"] == "drive-with-heading")
+        .map(|(_, p)| p["fields"]["speed"].as_u64().unwrap_or(u64::MAX))
         .collect()
+}
+
+/// The index of the first line containing `what` at or after `from`.
+fn line_at(lines: &[String], from: usize, what: &str) -> usize {
+    from + lines[from..]
+        .iter()
+        .position(|l| l.contains(what))
+        .unwrap_or_else(|| panic!("no {what:?} after line {from} in\n{}", lines.join("\n")))
 }
 
 /// The droid drops the link while driving: droidctl says so, reconnects, runs the handshake
-/// and the setup again, resumes at speed 0, and the mission completes.
+/// and the setup again, resumes at speed 0, and the mission completes. The trace shows the
+/// order: after the reconnect the unlock, the wake, then a stop at the last heading before
+/// any other setup command, the fail-safe among the setup.
 #[test]
 fn a_disconnect_mid_drive_reconnects_and_resumes_at_speed_0() {
     // Connected at 0 s; setup ≈ 1.3 s, stance 2 s: driving from about 3.4 s to 7.4 s.
-    let sim = Sim::start(&["r2d2", "--fault", "disconnect-after=4.5", "--trace"]);
+    let sim = Sim::start(&[
+        "r2d2",
+        "--fault",
+        "disconnect-after=4.5",
+        "--trace",
+        "--json",
+    ]);
     let name = sim.names[0].clone();
     let dir = TempDir::new("dc");
     let script = dir.file(
         "mission.txt",
-        "stance tripod\ndrive 60 0\nwait 4s\nstop\nwait 0.3s\n",
+        "stance tripod\ndrive 60 90\nwait 4s\nstop\nwait 0.3s\n",
     );
     let out = droidctl(&["run", &script, "--name", &name], Some(&sim.address), &dir);
     let (stdout, stderr) = (text(&out.stdout), text(&out.stderr));
@@ -479,41 +493,56 @@ fn a_disconnect_mid_drive_reconnects_and_resumes_at_speed_0() {
     assert!(stdout.contains("failed steps 0"), "{stdout}");
     let lines = sim.stop();
     let dropped = format!("{name}: fault disconnect-after: dropped the connection after 4.50 s");
-    assert!(lines.iter().any(|l| l.contains(&dropped)), "{lines:?}");
-    let connects = lines
-        .iter()
-        .filter(|l| l.contains(&format!("{name}: connected (")))
-        .count();
+    let drop_at = line_at(&lines, 0, &dropped);
+    let connected = format!("{name}: connected (");
+    let connects = lines.iter().filter(|l| l.contains(&connected)).count();
     assert_eq!(connects, 2, "{lines:?}");
-    // Before the drop it was driving at 60.
-    let all = writes_after(&lines, "serving on", &name);
-    let before = drive_speeds(&packets(&all));
-    assert!(before.contains(&60), "{before:?}");
-    // After it: nothing until the reconnect (the droid is gone), then the handshake again
-    // (the unlock), the setup (wake first) and a drive at speed 0 before any other.
-    let drop_at = lines.iter().position(|l| l.contains(&dropped)).unwrap();
-    let reconnect = drop_at
-        + lines[drop_at..]
-            .iter()
-            .position(|l| l.contains(&format!("{name}: connected (")))
-            .unwrap();
+    let reconnect = line_at(&lines, drop_at, &connected);
+    // Before the drop it was driving at 60, with the fail-safe set.
+    let before = commands_in(&lines[..drop_at], &name);
+    assert!(drive_speeds(&before).contains(&60), "{before:?}");
     assert!(
-        lines[drop_at..reconnect]
+        before
             .iter()
-            .all(|l| !l.contains(": write ")),
+            .any(|(_, p)| p["command"] == "set-custom-control-system-timeout"
+                && p["fields"]["timeout_ms"] == 2000),
+        "the fail-safe: {before:?}"
+    );
+    // Nothing reaches the droid while it is gone.
+    assert!(
+        trace_of(&lines[drop_at..reconnect], &name)
+            .iter()
+            .all(|(_, v)| v["dir"] != "in"),
         "{lines:?}"
     );
-    assert!(
-        lines[reconnect + 1].contains(": write 00020005-")
-            && lines[reconnect + 1]
-                .ends_with("75 73 65 74 68 65 66 6F 72 63 65 2E 2E 2E 62 61 6E 64"),
-        "unlock first: {}",
-        lines[reconnect + 1]
+    // Then the handshake again: the unlock, as a GATT write that is no API packet.
+    let after = trace_of(&lines[reconnect..], &name);
+    let first_in = &after
+        .iter()
+        .find(|(_, v)| v["dir"] == "in")
+        .expect("writes after the reconnect")
+        .1["packet"];
+    assert_eq!(first_in["kind"], "gatt-write", "{first_in}");
+    assert_eq!(first_in["uuid"], "00020005-574f-4f20-5370-6865726f2121");
+    assert_eq!(
+        first_in["hex"],
+        droidctl::hex::compact(b"usetheforce...band"),
+        "unlock first"
     );
-    let after = packets(&writes_after(&lines[reconnect..], "connected (", &name));
-    assert_eq!((after[0].did, after[0].cid), (0x13, 0x0D), "wake first");
-    let speeds = drive_speeds(&after);
-    assert_eq!(speeds.first(), Some(&0), "resumes at speed 0: {speeds:?}");
+    // The wake, then a stop at the last heading before any other setup command.
+    let cmds = commands_in(&lines[reconnect..], &name);
+    let names: Vec<&str> = cmds
+        .iter()
+        .map(|(_, p)| p["command"].as_str().unwrap_or("?"))
+        .collect();
+    assert_eq!(&names[..2], ["wake", "drive-with-heading"], "{names:?}");
+    assert_eq!(cmds[1].1["fields"]["speed"], 0, "stop first: {:?}", cmds[1]);
+    assert_eq!(cmds[1].1["fields"]["heading"], 90, "at the last heading");
+    assert!(
+        names.contains(&"set-custom-control-system-timeout"),
+        "the fail-safe again: {names:?}"
+    );
+    let speeds = drive_speeds(&cmds);
     assert!(speeds.contains(&60), "then drives on: {speeds:?}");
     assert_eq!(speeds.last(), Some(&0), "and stops at the end: {speeds:?}");
 }

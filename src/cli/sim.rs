@@ -1,10 +1,11 @@
-//! `droidctl sim --bluez [MODEL ...] [--bus ADDRESS] [--fault FAULT ...] [--seed N] [--trace]`:
-//! simulated droids served on D-Bus as BlueZ serves real ones (Linux only; see
-//! [`crate::sim::bluez`]).
+//! `droidctl sim --bluez [MODEL ...] [--remembered MODEL ...] [--bus ADDRESS] [--fault FAULT
+//! ...] [--idle-sleep SECS] [--seed N] [--trace [--json]]`: simulated droids served on D-Bus
+//! as BlueZ serves real ones (Linux only; see [`crate::sim::bluez`]).
 //!
 //! Prints the line to export (`DBUS_SYSTEM_BUS_ADDRESS=unix:path=…`) on stdout and nothing
-//! else there; one status line per event on stderr. Ctrl-C, SIGTERM and SIGHUP stop it:
-//! the droids disconnect, then the private `dbus-daemon` is killed and its directory removed.
+//! else there; one status line per event on stderr (`--trace`: one per packet, decoded; with
+//! `--json` as JSON lines). Ctrl-C, SIGTERM and SIGHUP stop it: the droids disconnect, then
+//! the private `dbus-daemon` is killed and its directory removed.
 
 use super::CliError;
 use crate::model::Model;
@@ -20,6 +21,17 @@ pub struct SimArgs {
     /// for several of it.
     #[arg(value_name = "MODEL")]
     pub models: Vec<String>,
+    /// Add a device of MODEL that BlueZ remembers but that is not in range: listed without
+    /// a signal strength, never advertising; connecting to it fails after a few seconds.
+    /// Repeatable.
+    #[arg(long, value_name = "MODEL")]
+    pub remembered: Vec<String>,
+    /// A droid that receives no command for SECS sends its will-sleep warning (v2 Power
+    /// will-sleep, v1 the pre-sleep async message; Robi 42 has no sleep timer and ignores
+    /// this), and 5 s later, with still nothing received, falls asleep: it drops the
+    /// connection and stops advertising until the simulator stops.
+    #[arg(long, value_name = "SECS", value_parser = parse_idle)]
+    pub idle_sleep: Option<std::time::Duration>,
     /// Serve on this D-Bus bus (e.g. unix:path=/tmp/bus) instead of a private dbus-daemon.
     #[arg(long, value_name = "ADDRESS")]
     pub bus: Option<String>,
@@ -32,21 +44,39 @@ pub struct SimArgs {
     /// Seed for the droids' names, addresses and signal strengths.
     #[arg(long, default_value_t = 42, value_name = "N")]
     pub seed: u64,
-    /// Also report every GATT read, write and notification on stderr, in hex.
+    /// Also report every packet each droid receives and sends on stderr, decoded (writes
+    /// and reads that carry no packet, such as the handshake's, in hex).
     #[arg(long)]
     pub trace: bool,
+    /// With --trace: one JSON object per line, {"t_ms", "device", "dir": "in"|"out",
+    /// "packet"}, where packet is what `droidctl packet decode --json` prints for it (or
+    /// {"kind": "gatt-write"|"gatt-read", "uuid", "hex"}).
+    #[arg(long, requires = "trace")]
+    pub json: bool,
+}
+
+fn parse_idle(s: &str) -> Result<std::time::Duration, String> {
+    let v: f64 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("`{s}` is not a number of seconds"))?;
+    if !v.is_finite() || !(0.5..=86_400.0).contains(&v) {
+        return Err(format!("`{s}`: give 0.5 to 86400 seconds"));
+    }
+    Ok(std::time::Duration::from_secs_f64(v))
 }
 
 /// The checked arguments (served only on Linux; elsewhere they are checked, then refused).
 #[cfg_attr(not(target_os = "linux"), allow(dead_code))]
 struct Plan {
     models: Vec<Model>,
+    remembered: Vec<Model>,
     faults: GattFaults,
 }
 
-fn check(args: &SimArgs) -> Result<Plan, CliError> {
+fn models_of(names: &[String]) -> Result<Vec<Model>, CliError> {
     let mut models = Vec::new();
-    for m in &args.models {
+    for m in names {
         match Model::from_id(m) {
             Some(model) if crate::sim::simulates(model) => models.push(model),
             _ => {
@@ -57,11 +87,17 @@ fn check(args: &SimArgs) -> Result<Plan, CliError> {
             }
         }
     }
+    Ok(models)
+}
+
+fn check(args: &SimArgs) -> Result<Plan, CliError> {
+    let mut models = models_of(&args.models)?;
+    let remembered = models_of(&args.remembered)?;
     if models.is_empty() {
         models.push(Model::R2D2);
     }
     const MAX: usize = 16;
-    if models.len() > MAX {
+    if models.len() + remembered.len() > MAX {
         return Err(CliError::usage(format!("at most {MAX} droids at once")));
     }
     let mut faults = GattFaults::none();
@@ -77,7 +113,12 @@ fn check(args: &SimArgs) -> Result<Plan, CliError> {
             "--bus: give a D-Bus address such as unix:path=/tmp/bus",
         ));
     }
-    Ok(Plan { models, faults })
+    faults.idle_sleep = args.idle_sleep;
+    Ok(Plan {
+        models,
+        remembered,
+        faults,
+    })
 }
 
 pub fn run(args: SimArgs) -> Result<i32, CliError> {
@@ -95,16 +136,18 @@ fn serve(_args: SimArgs, _plan: Plan) -> Result<i32, CliError> {
 
 #[cfg(target_os = "linux")]
 fn serve(args: SimArgs, plan: Plan) -> Result<i32, CliError> {
-    use crate::sim::bluez::{BluezOptions, BluezSim, MAX_DROIDS, PrivateBus, plan as plan_droids};
+    use crate::sim::bluez::{
+        BluezOptions, BluezSim, MAX_DROIDS, PrivateBus, Report, plan_with_remembered,
+    };
     use std::io::Write;
     use std::sync::Arc;
     use std::sync::atomic::{AtomicBool, Ordering};
 
-    debug_assert!(MAX_DROIDS >= plan.models.len());
+    debug_assert!(MAX_DROIDS >= plan.models.len() + plan.remembered.len());
     let say = |line: &str| {
         let _ = writeln!(std::io::stderr(), "droidctl sim: {line}");
     };
-    let droids = plan_droids(&plan.models, args.seed);
+    let (droids, remembered) = plan_with_remembered(&plan.models, &plan.remembered, args.seed);
     // The bus: the one given, or a private daemon (stopped when `private` drops).
     let private = match &args.bus {
         Some(_) => None,
@@ -117,9 +160,11 @@ fn serve(args: SimArgs, plan: Plan) -> Result<i32, CliError> {
     };
     let opts = BluezOptions {
         droids: droids.clone(),
+        remembered: remembered.clone(),
         faults: plan.faults.clone(),
         seed: args.seed,
         trace: args.trace,
+        json: args.json,
     };
     let stop = Arc::new(AtomicBool::new(false));
     let (ready_tx, ready_rx) = std::sync::mpsc::channel::<Result<(), String>>();
@@ -130,8 +175,13 @@ fn serve(args: SimArgs, plan: Plan) -> Result<i32, CliError> {
         std::thread::Builder::new()
             .name("bluez-sim".into())
             .spawn(move || {
-                let report = Box::new(|line: String| {
-                    let _ = writeln!(std::io::stderr(), "droidctl sim: {line}");
+                let report = Box::new(|line: Report| {
+                    let _ = match line {
+                        Report::Status(line) => {
+                            writeln!(std::io::stderr(), "droidctl sim: {line}")
+                        }
+                        Report::Trace(json) => writeln!(std::io::stderr(), "{json}"),
+                    };
                 });
                 let result = match BluezSim::connect(&address, opts, report) {
                     Ok(sim) => {
@@ -165,9 +215,23 @@ fn serve(args: SimArgs, plan: Plan) -> Result<i32, CliError> {
             d.address_string()
         ));
     }
+    for d in &remembered {
+        say(&format!(
+            "{} ({}) at {}: remembered, not in range",
+            d.name,
+            d.model.display_name(),
+            d.address_string()
+        ));
+    }
     let faults = plan.faults.describe();
     if !faults.is_empty() {
         say(&format!("faults: {}", faults.join(", ")));
+    }
+    if let Some(idle) = plan.faults.idle_sleep {
+        say(&format!(
+            "idle sleep: a droid warns after {} s without a command and sleeps 5 s later",
+            idle.as_secs_f64()
+        ));
     }
     say(&format!(
         "serving on {address}; Ctrl-C stops (export the line on stdout for droidctl, bleak …)"
@@ -249,6 +313,31 @@ mod tests {
                 .err()
                 .unwrap_or_else(|| panic!("{bad:?} accepted"));
             assert_eq!(e.status, 2, "{bad:?}: {}", e.message);
+        }
+        let p = parse(&[
+            "--bluez",
+            "r2d2",
+            "--remembered",
+            "bb8",
+            "--idle-sleep",
+            "2.5",
+            "--trace",
+            "--json",
+        ])
+        .unwrap_or_else(|e| panic!("{}", e.message));
+        assert_eq!(p.models, [Model::R2D2]);
+        assert_eq!(p.remembered, [Model::BB8]);
+        assert_eq!(
+            p.faults.idle_sleep,
+            Some(std::time::Duration::from_millis(2500))
+        );
+        for bad in [
+            &["--bluez", "--json"][..],
+            &["--bluez", "--idle-sleep", "0"],
+            &["--bluez", "--idle-sleep", "soon"],
+            &["--bluez", "--remembered", "tardis"],
+        ] {
+            assert!(parse(bad).is_err(), "{bad:?} accepted");
         }
         let many: Vec<&str> = std::iter::once("--bluez")
             .chain(std::iter::repeat_n("bb8", 17))

@@ -147,7 +147,16 @@ pub struct GattFaults {
     pub disconnect_every: bool,
     /// Service discovery takes this long after a connect.
     pub slow_resolve: Duration,
+    /// Not a fault but a droid's habit (`sim --bluez --idle-sleep SECS`): after this long
+    /// without a command (a write; counted from its first connection on) the droid sends its
+    /// will-sleep warning, and [`SLEEP_GRACE`] later, with still nothing received, it falls
+    /// asleep for good: it drops the connection and stops advertising. Robi 42 has no sleep
+    /// timer and ignores it.
+    pub idle_sleep: Option<Duration>,
 }
+
+/// How long after its will-sleep warning an idle droid falls asleep.
+pub const SLEEP_GRACE: Duration = Duration::from_secs(5);
 
 /// The `--fault` forms, for messages.
 pub const FAULT_SYNTAX: &str = "disconnect-after=SECS, disconnect-every=SECS, refuse-connect[=N] \
@@ -248,6 +257,8 @@ pub enum GattError {
     NotNotifying,
     /// A write longer than [`MAX_WRITE`].
     InvalidLength(usize),
+    /// The droid fell asleep ([`GattFaults::idle_sleep`]): it no longer answers.
+    Asleep,
 }
 
 impl fmt::Display for GattError {
@@ -265,6 +276,7 @@ impl fmt::Display for GattError {
             GattError::InvalidLength(n) => {
                 write!(f, "a write of {n} bytes (at most {MAX_WRITE})")
             }
+            GattError::Asleep => f.write_str("the droid is asleep"),
         }
     }
 }
@@ -299,6 +311,9 @@ pub struct GattStatus {
     pub connects: u32,
     pub refused: u32,
     pub dropped: u32,
+    /// Fell asleep for good ([`GattFaults::idle_sleep`]): no connections any more, no
+    /// advertising. A [`GattEvent::Dropped`] with this set is the droid falling asleep.
+    pub asleep: bool,
 }
 
 /// A droid behind its GATT table.
@@ -320,6 +335,9 @@ pub struct GattDroid {
     attempts: u32,
     now: Duration,
     outbox: VecDeque<GattEvent>,
+    /// The last command (any write) or connect, for the idle sleep.
+    last_activity: Duration,
+    will_sleep_sent: bool,
 }
 
 impl GattDroid {
@@ -366,6 +384,8 @@ impl GattDroid {
             attempts: 0,
             now: Duration::ZERO,
             outbox: VecDeque::new(),
+            last_activity: Duration::ZERO,
+            will_sleep_sent: false,
         }
     }
 
@@ -424,6 +444,9 @@ impl GattDroid {
     /// the next [`advance`](Self::advance) without it).
     pub fn connect(&mut self, now: Duration) -> Result<(), GattError> {
         let now = self.tick(now);
+        if self.status.asleep {
+            return Err(GattError::Asleep);
+        }
         if self.status.connected {
             return Err(GattError::AlreadyConnected);
         }
@@ -440,6 +463,7 @@ impl GattDroid {
         self.status.notifying.clear();
         self.progress = 0;
         self.connected_at = now;
+        self.activity(now);
         self.resolve_at = now + self.faults.slow_resolve;
         self.drop_at = self
             .faults
@@ -509,6 +533,7 @@ impl GattDroid {
         if bytes.len() > MAX_WRITE {
             return Err(GattError::InvalidLength(bytes.len()));
         }
+        self.activity(now);
         if !self.status.unlocked {
             if let Some((c, want)) = self.unlock.get(self.progress)
                 && *c == ch
@@ -590,11 +615,72 @@ impl GattDroid {
         }
     }
 
+    fn activity(&mut self, now: Duration) {
+        self.last_activity = now;
+        self.will_sleep_sent = false;
+    }
+
+    /// The idle droid's will-sleep warning, as its family sends it: v2 Power/will-sleep
+    /// (13h/19h), v1 the pre-sleep async message (ID 05h). Robi has none.
+    fn will_sleep_packet(&self) -> Option<Vec<u8>> {
+        match self.model.protocol() {
+            Protocol::SpheroV2 => {
+                Some(crate::protocol::v2::Packet::notification(0x13, 0x19, Vec::new()).encode())
+            }
+            Protocol::SpheroV1 => {
+                use crate::protocol::v1::{AsyncPacket, Packet};
+                Packet::Async(AsyncPacket::new(0x05, Vec::new()))
+                    .encode()
+                    .ok()
+            }
+            Protocol::Rsrcp => None,
+        }
+    }
+
+    /// The idle sleep: the warning when due, then falling asleep. Returns when it fell
+    /// asleep while connected (the connection's drop time).
+    fn idle(&mut self, now: Duration) -> Option<Duration> {
+        let limit = self.faults.idle_sleep?;
+        // The timer starts with the first connection (a droid just switched on waits for
+        // its host), then runs connected or not.
+        if self.status.asleep
+            || self.status.connects == 0
+            || self.model.protocol() == Protocol::Rsrcp
+        {
+            return None;
+        }
+        let idle = now.saturating_sub(self.last_activity);
+        if idle >= limit + SLEEP_GRACE {
+            self.status.asleep = true;
+            if self.status.connected {
+                return Some(self.last_activity + limit + SLEEP_GRACE);
+            }
+        } else if idle >= limit && self.status.connected && !self.will_sleep_sent {
+            self.will_sleep_sent = true;
+            if let Some(p) = self.will_sleep_packet() {
+                self.deliver(vec![p]);
+            }
+        }
+        None
+    }
+
     /// Let time pass: what is due, in order (services resolved, notifications, a dropped
     /// link). The droid keeps moving whether anyone is connected or not.
     pub fn advance(&mut self, now: Duration) -> Vec<GattEvent> {
         let now = self.tick(now);
         let mut out = Vec::new();
+        if let Some(at) = self.idle(now) {
+            // Fell asleep: whatever the droid had to say is lost with the link.
+            let packets = self.droid.advance(at);
+            self.deliver(packets);
+            out.extend(self.outbox.drain(..));
+            self.status.dropped += 1;
+            let after = at.saturating_sub(self.connected_at);
+            self.link_gone(at);
+            let _ = self.droid.advance(now);
+            out.push(GattEvent::Dropped { after });
+            return out;
+        }
         if self.status.connected && !self.status.services_resolved && now >= self.resolve_at {
             self.status.services_resolved = true;
             out.push(GattEvent::ServicesResolved);
@@ -951,5 +1037,44 @@ mod tests {
         d.write(V2_ANTI_DOS, V2_UNLOCK, ms(10)).unwrap();
         d.advance(ms(5));
         assert!(d.status().unlocked);
+    }
+
+    #[test]
+    fn an_idle_droid_warns_then_falls_asleep_for_good() {
+        let secs = |n: u64| Duration::from_secs(n);
+        let faults = GattFaults {
+            idle_sleep: Some(secs(2)),
+            ..GattFaults::none()
+        };
+        let mut d = droid(Model::R2D2, faults.clone());
+        d.connect(ms(0)).unwrap();
+        d.advance(ms(1));
+        let api = d.profile().notify[0].characteristic;
+        d.start_notify(api, ms(1)).unwrap();
+        d.write(V2_ANTI_DOS, V2_UNLOCK, ms(2)).unwrap();
+        assert!(notifications(&d.advance(ms(1900))).is_empty());
+        // The warning at 2 s without a command, once.
+        let warned = v2_packets(&notifications(&d.advance(ms(2100))).concat());
+        assert_eq!(warned.len(), 1);
+        assert_eq!((warned[0].did, warned[0].cid), (0x13, 0x19));
+        assert!(notifications(&d.advance(ms(3000))).is_empty());
+        // A command puts it off; then nothing more: asleep 5 s after the next warning.
+        d.write(V2_API, &ping_v2(), ms(4000)).unwrap();
+        let evs = d.advance(ms(6100));
+        assert!(
+            v2_packets(&notifications(&evs).concat())
+                .iter()
+                .any(|p| (p.did, p.cid) == (0x13, 0x19))
+        );
+        assert!(!d.status().asleep);
+        let evs = d.advance(ms(11_100));
+        assert_eq!(evs.last(), Some(&GattEvent::Dropped { after: ms(11_000) }));
+        assert!(d.status().asleep && !d.status().connected);
+        assert_eq!(d.connect(ms(12_000)), Err(GattError::Asleep));
+        // Robi has no sleep timer.
+        let mut robi = droid(Model::Robi42, faults);
+        robi.connect(ms(0)).unwrap();
+        robi.advance(secs(60));
+        assert!(robi.status().connected && !robi.status().asleep);
     }
 }

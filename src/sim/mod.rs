@@ -15,6 +15,7 @@ pub mod gatt;
 pub mod link;
 mod physics;
 pub mod robi;
+pub mod trace;
 pub mod v1;
 
 pub use body::SimState;

@@ -15,6 +15,7 @@ mod v2;
 pub use file::{FileSummary, decode_reader};
 // `DecodeArgs` is public for `decode_reader`.
 
+pub use v1::packet_json as v1_packet_json;
 pub use v2::{encode, packet_json};
 
 use super::CliError;

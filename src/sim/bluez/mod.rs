@@ -8,7 +8,14 @@
 //!   StartDiscovery, StopDiscovery, SetDiscoveryFilter, GetDiscoveryFilters, RemoveDevice),
 //!   with BlueZ's per-client discovery sessions;
 //! - one `org.bluez.Device1` per droid, appearing once a client starts discovery (Address,
-//!   Name, Alias, RSSI, Connected, ServicesResolved, UUIDs …; Connect, Disconnect);
+//!   Name, Alias, RSSI, Connected, ServicesResolved, UUIDs …; Connect, Disconnect). As in
+//!   BlueZ, a device has an RSSI only while a discovery hears it: it goes (invalidated) when
+//!   discovery stops, and a connected or sleeping droid does not advertise. Remembered
+//!   devices (`--remembered`) are on the bus from the start, never advertise, and a Connect
+//!   to them (or to a droid that fell asleep, `--idle-sleep`) fails after a few seconds with
+//!   `le-connection-abort-by-local`;
+//! - `Powered` can be set as `bluetoothctl power off|on` does: powering off fails pending
+//!   connection attempts, disconnects every droid, ends discovery and signals it all;
 //! - while a connection's services are resolved, the droid's GATT table below its device:
 //!   `org.bluez.GattService1` (UUID, Primary, Device) and `org.bluez.GattCharacteristic1`
 //!   (UUID, Service, Flags, Value, Notifying; ReadValue, WriteValue, StartNotify, StopNotify),
@@ -18,7 +25,8 @@
 //!   PropertiesChanged) and `org.freedesktop.DBus.Introspectable` on every object.
 //!
 //! Behind each device is a [`GattDroid`](super::gatt::GattDroid): the `--sim` droid with its
-//! handshake, notification cutting and faults. The service runs on one thread of its own,
+//! handshake, notification cutting, faults and idle sleep; `--trace` decodes what it receives
+//! and sends with [`PacketTracer`](super::trace::PacketTracer). The service runs on one thread of its own,
 //! on the wall clock. Without `--bus`, [`PrivateBus`] starts a `dbus-daemon` for it.
 //!
 //! Differences from BlueZ worth knowing: a second client asking to connect a droid someone
@@ -98,16 +106,43 @@ pub fn plan(models: &[Model], seed: u64) -> Vec<DroidSpec> {
     out
 }
 
+/// Split a plan of droids in range followed by `remembered` remembered ones.
+pub fn plan_with_remembered(
+    models: &[Model],
+    remembered: &[Model],
+    seed: u64,
+) -> (Vec<DroidSpec>, Vec<DroidSpec>) {
+    let all: Vec<Model> = models.iter().chain(remembered).copied().collect();
+    let mut droids = plan(&all, seed);
+    let remembered = droids.split_off(models.len());
+    (droids, remembered)
+}
+
+/// A line the service reports.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Report {
+    /// A status line for people (connections, faults; the text trace).
+    Status(String),
+    /// One JSON line of the trace (`--trace --json`).
+    Trace(String),
+}
+
 /// What to serve.
 #[derive(Debug, Clone)]
 pub struct BluezOptions {
+    /// The droids in range.
     pub droids: Vec<DroidSpec>,
+    /// Devices BlueZ remembers that are not in range: on the bus from the start, no RSSI,
+    /// never advertising; connecting to them fails after a few seconds.
+    pub remembered: Vec<DroidSpec>,
     /// The same faults for every droid.
     pub faults: GattFaults,
     /// Seed for the signal-strength jitter.
     pub seed: u64,
-    /// Report every read, write and notification.
+    /// Report every packet received and sent, decoded.
     pub trace: bool,
+    /// The trace as JSON lines.
+    pub json: bool,
 }
 
 #[cfg(test)]

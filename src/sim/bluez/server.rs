@@ -9,11 +9,12 @@ use super::xml::{
     self, ADAPTER, AGENT_MANAGER, CHARACTERISTIC, DEVICE, INTROSPECTABLE, OBJECT_MANAGER, PEER,
     PROPERTIES, SERVICE,
 };
-use super::{BluezOptions, DroidSpec};
+use super::{BluezOptions, DroidSpec, Report};
 use crate::link::gatt::GattUuid;
 use crate::rng::Rng;
 use crate::sim::SimConfig;
-use crate::sim::gatt::{CharFlags, GattDroid, GattError, GattEvent};
+use crate::sim::gatt::{CharFlags, GattDroid, GattError, GattEvent, SLEEP_GRACE};
+use crate::sim::trace::{PacketTracer, TraceRecord};
 use dbus::arg::{PropMap, RefArg, Variant, cast};
 use dbus::blocking::Connection;
 use dbus::blocking::stdintf::org_freedesktop_dbus::{
@@ -39,6 +40,9 @@ const ADAPTER_MODALIAS: &str = "usb:v1D6Bp0246d0540";
 const TICK: Duration = Duration::from_millis(10);
 /// A refused connection fails after this long, as an aborted connection attempt does.
 const REFUSE_AFTER: Duration = Duration::from_millis(300);
+/// A connection to a device that is not advertising (remembered but out of range, or
+/// asleep) fails after this long, as BlueZ gives up on an LE connection nobody answers.
+const ABSENT_AFTER: Duration = Duration::from_secs(3);
 /// While discovering, signal strengths are heard again this often.
 const RSSI_EVERY: Duration = Duration::from_secs(1);
 /// The default ATT MTU.
@@ -135,6 +139,7 @@ fn gatt_error(msg: &Message, e: &GattError) -> Message {
         GattError::NotifyNotSupported => (ERR_NOT_SUPPORTED, "Operation is not supported"),
         GattError::NotNotifying => (ERR_FAILED, "No notify session started"),
         GattError::InvalidLength(_) => (ERR_INVALID_LENGTH, "Invalid Length"),
+        GattError::Asleep => (ERR_FAILED, ABORTED),
     };
     error(msg, name, text)
 }
@@ -185,8 +190,13 @@ struct Device {
     spec: DroidSpec,
     path: String,
     droid: GattDroid,
-    /// Heard by a discovery: on the bus.
+    /// Heard by a discovery (or remembered): on the bus.
     known: bool,
+    /// Remembered by BlueZ but not in range: on the bus from the start, never advertising.
+    remembered: bool,
+    /// Its falling asleep was reported.
+    asleep_said: bool,
+    tracer: PacketTracer,
     /// The GATT objects are on the bus.
     exported: bool,
     /// The client that connected.
@@ -194,14 +204,16 @@ struct Device {
     /// A refused connection attempt is under way.
     refusing: bool,
     services: Vec<ServiceObj>,
-    rssi: i16,
+    /// Heard in the current discovery at this strength; `None` when it was not (BlueZ
+    /// invalidates RSSI when discovery stops).
+    rssi: Option<i16>,
     alias: Option<String>,
     trusted: bool,
     blocked: bool,
 }
 
 impl Device {
-    fn new(spec: DroidSpec, faults: &crate::sim::gatt::GattFaults) -> Device {
+    fn new(spec: DroidSpec, faults: &crate::sim::gatt::GattFaults, remembered: bool) -> Device {
         let droid = GattDroid::new(spec.model, SimConfig::for_model(spec.model), faults.clone());
         let path = format!(
             "{ADAPTER_PATH}/dev_{}",
@@ -240,11 +252,15 @@ impl Device {
             handle += 1;
         }
         Device {
-            rssi: spec.rssi,
+            rssi: None,
+            tracer: PacketTracer::new(spec.model),
             spec,
             path,
             droid,
-            known: false,
+            known: remembered,
+            remembered,
+            // Remembered devices are never there to fall asleep.
+            asleep_said: remembered,
             exported: false,
             owner: None,
             refusing: false,
@@ -261,6 +277,11 @@ impl Device {
 
     fn connected(&self) -> bool {
         self.droid.status().connected
+    }
+
+    /// In range and advertising (so a discovery hears it).
+    fn advertising(&self) -> bool {
+        !self.remembered && !self.droid.status().asleep && !self.connected()
     }
 }
 
@@ -292,16 +313,18 @@ pub struct BluezSim {
     rng: Rng,
     next_rssi: Instant,
     trace: bool,
-    report: Box<dyn FnMut(String) + Send>,
+    json: bool,
+    report: Box<dyn FnMut(Report) + Send>,
 }
 
 impl BluezSim {
     /// Connect to the bus at `address` and own `org.bluez` there. `report` receives one line
-    /// per event (connections, disconnections, faults; every GATT operation with `trace`).
+    /// per event (connections, disconnections, faults; with `trace` every packet received
+    /// and sent, decoded, as text or JSON lines).
     pub fn connect(
         address: &str,
         opts: BluezOptions,
-        report: Box<dyn FnMut(String) + Send>,
+        report: Box<dyn FnMut(Report) + Send>,
     ) -> Result<BluezSim, String> {
         let why = |e: dbus::Error| {
             e.message()
@@ -329,7 +352,12 @@ impl BluezSim {
         let devices = opts
             .droids
             .into_iter()
-            .map(|spec| Device::new(spec, &opts.faults))
+            .map(|spec| Device::new(spec, &opts.faults, false))
+            .chain(
+                opts.remembered
+                    .into_iter()
+                    .map(|spec| Device::new(spec, &opts.faults, true)),
+            )
             .collect();
         let now = Instant::now();
         Ok(BluezSim {
@@ -347,6 +375,7 @@ impl BluezSim {
             rng: Rng::new(opts.seed),
             next_rssi: now,
             trace: opts.trace,
+            json: opts.json,
             report,
         })
     }
@@ -390,7 +419,21 @@ impl BluezSim {
     }
 
     fn say(&mut self, line: String) {
-        (self.report)(line);
+        (self.report)(Report::Status(line));
+    }
+
+    /// Trace what device `i` received or sent (with `trace`).
+    fn trace_records(&mut self, i: usize, records: Vec<TraceRecord>) {
+        let t_ms = self.now().as_millis() as u64;
+        for r in records {
+            let name = self.devices[i].name().to_string();
+            let line = if self.json {
+                Report::Trace(r.json_line(t_ms, &name).to_string())
+            } else {
+                Report::Status(format!("{name}: {:<3} {}", r.dir.name(), r.text))
+            };
+            (self.report)(line);
+        }
     }
 
     fn send(&self, m: Message) {
@@ -542,10 +585,13 @@ impl BluezSim {
             ("Trusted", Val::Bool(d.trusted)),
             ("Blocked", Val::Bool(d.blocked)),
             ("LegacyPairing", Val::Bool(false)),
-            ("RSSI", Val::I16(d.rssi)),
             ("Adapter", Val::Obj(ADAPTER_PATH.into())),
             ("ServicesResolved", Val::Bool(d.exported)),
         ]
+        .into_iter()
+        // BlueZ has an RSSI only for a device heard in the current discovery.
+        .chain(d.rssi.map(|r| ("RSSI", Val::I16(r))))
+        .collect()
     }
 
     fn service_props(&self, i: usize, j: usize) -> Props {
@@ -608,6 +654,16 @@ impl BluezSim {
             interface_name: iface.to_string(),
             changed_properties: propmap(&props),
             invalidated_properties: Vec::new(),
+        };
+        self.send(sig.to_emit_message(&obj_path(path)));
+    }
+
+    /// Properties that no longer exist (BlueZ's way of saying an RSSI is gone).
+    fn invalidated(&self, path: &str, iface: &str, names: &[&str]) {
+        let sig = PropertiesPropertiesChanged {
+            interface_name: iface.to_string(),
+            changed_properties: PropMap::new(),
+            invalidated_properties: names.iter().map(|s| s.to_string()).collect(),
         };
         self.send(sig.to_emit_message(&obj_path(path)));
     }
@@ -892,7 +948,12 @@ impl BluezSim {
             ("PowerState", Val::Str(if on { "on" } else { "off" }.into())),
         ];
         if !on {
+            // As BlueZ powering the controller off: attempts under way fail, connections
+            // drop, discovery ends (and with it every RSSI).
             for i in 0..self.devices.len() {
+                if self.devices[i].refusing {
+                    self.answer_refusals(i, Some("Software caused connection abort"));
+                }
                 if self.devices[i].connected() {
                     self.teardown(i, "org.bluez.Reason.Local");
                     let line = format!("{}: disconnected (adapter off)", self.devices[i].name());
@@ -902,9 +963,21 @@ impl BluezSim {
             if !self.adapter.discovering.is_empty() {
                 self.adapter.discovering.clear();
                 props.push(("Discovering", Val::Bool(false)));
+                self.discovery_ended();
             }
         }
+        self.say(format!("adapter powered {}", if on { "on" } else { "off" }));
         self.changed(ADAPTER_PATH, ADAPTER, props);
+    }
+
+    /// The adapter's discovery stopped: BlueZ forgets what it heard (the RSSIs).
+    fn discovery_ended(&mut self) {
+        for i in 0..self.devices.len() {
+            if self.devices[i].rssi.take().is_some() && self.devices[i].known {
+                let path = self.devices[i].path.clone();
+                self.invalidated(&path, DEVICE, &["RSSI"]);
+            }
+        }
     }
 
     fn adapter_call(&mut self, msg: &Message, member: &str, client: &str) -> Message {
@@ -922,8 +995,10 @@ impl BluezSim {
                         ADAPTER,
                         vec![("Discovering", Val::Bool(true))],
                     );
+                    // Droids advertise several times a second: heard at once.
+                    self.hear_devices();
+                    self.next_rssi = Instant::now() + RSSI_EVERY;
                 }
-                self.hear_devices();
                 msg.method_return()
             }
             "StopDiscovery" => {
@@ -939,6 +1014,7 @@ impl BluezSim {
                         ADAPTER,
                         vec![("Discovering", Val::Bool(false))],
                     );
+                    self.discovery_ended();
                 }
                 msg.method_return()
             }
@@ -991,12 +1067,24 @@ impl BluezSim {
         }
     }
 
-    /// A discovery hears every droid not yet on the bus.
+    /// A discovery hears every droid that advertises: new ones appear on the bus, the
+    /// others' signal strength varies a little. Connected, asleep and remembered ones are
+    /// not heard.
     fn hear_devices(&mut self) {
         for i in 0..self.devices.len() {
-            if !self.devices[i].known {
-                self.devices[i].known = true;
+            if !self.devices[i].advertising() {
+                continue;
+            }
+            let jitter = self.rng.below(7) as i16 - 3;
+            let d = &mut self.devices[i];
+            let rssi = d.spec.rssi + jitter;
+            d.rssi = Some(rssi);
+            if !d.known {
+                d.known = true;
                 self.added(Obj::Device(i));
+            } else {
+                let path = d.path.clone();
+                self.changed(&path, DEVICE, vec![("RSSI", Val::I16(rssi))]);
             }
         }
     }
@@ -1057,6 +1145,28 @@ impl BluezSim {
         if d.blocked {
             return Some(error(&msg, ERR_FAILED, "Device is blocked"));
         }
+        if d.remembered || d.droid.status().asleep {
+            // Nobody answers: BlueZ gives up after a while.
+            let why = if d.remembered {
+                "remembered, not in range"
+            } else {
+                "asleep"
+            };
+            let line = format!(
+                "{}: connection attempt from {client}: {why}, it fails in {} s",
+                d.name(),
+                ABSENT_AFTER.as_secs()
+            );
+            self.say(line);
+            self.devices[i].refusing = true;
+            self.delayed.push(Delayed {
+                at: Instant::now() + ABSENT_AFTER,
+                dev: i,
+                client,
+                call: msg,
+            });
+            return None;
+        }
         if d.connected() {
             if d.owner.as_deref() == Some(client.as_str()) {
                 return Some(msg.method_return());
@@ -1073,6 +1183,7 @@ impl BluezSim {
         match self.devices[i].droid.connect(now) {
             Ok(()) => {
                 let d = &mut self.devices[i];
+                d.tracer.reset();
                 d.owner = Some(client.clone());
                 let path = d.path.clone();
                 let slow = d.droid.faults().slow_resolve;
@@ -1150,12 +1261,8 @@ impl BluezSim {
                     return error(msg, ERR_INVALID_OFFSET, "Invalid offset");
                 };
                 if self.trace {
-                    let line = format!(
-                        "{}: read {uuid}: {}",
-                        self.devices[i].name(),
-                        crate::hex::spaced(&value)
-                    );
-                    self.say(line);
+                    let records = self.devices[i].tracer.read(uuid, &value);
+                    self.trace_records(i, records);
                 }
                 self.devices[i].services[j].chars[k].value = value.clone();
                 self.changed(
@@ -1189,12 +1296,8 @@ impl BluezSim {
                     return gatt_error(msg, &e);
                 }
                 if self.trace {
-                    let line = format!(
-                        "{}: write {uuid}: {}",
-                        self.devices[i].name(),
-                        crate::hex::spaced(&value)
-                    );
-                    self.say(line);
+                    let records = self.devices[i].tracer.write(uuid, &value);
+                    self.trace_records(i, records);
                 }
                 msg.method_return()
             }
@@ -1307,12 +1410,8 @@ impl BluezSim {
                 c.value = value.clone();
                 let path = c.path.clone();
                 if self.trace {
-                    let line = format!(
-                        "{}: notify {characteristic}: {}",
-                        self.devices[i].name(),
-                        crate::hex::spaced(&value)
-                    );
-                    self.say(line);
+                    let records = self.devices[i].tracer.notify(characteristic, &value);
+                    self.trace_records(i, records);
                 }
                 self.changed(&path, CHARACTERISTIC, vec![("Value", Val::Bytes(value))]);
             }
@@ -1347,6 +1446,24 @@ impl BluezSim {
                     self.say(line);
                 }
             }
+            GattEvent::Dropped { after } if self.devices[i].droid.status().asleep => {
+                let line = format!(
+                    "{}: fell asleep after {:.1} s without a command: dropped the connection \
+                     after {:.2} s; no longer advertising",
+                    self.devices[i].name(),
+                    (self.devices[i]
+                        .droid
+                        .faults()
+                        .idle_sleep
+                        .unwrap_or_default()
+                        + SLEEP_GRACE)
+                        .as_secs_f64(),
+                    after.as_secs_f64()
+                );
+                self.devices[i].asleep_said = true;
+                self.link_down(i, "org.bluez.Reason.Remote");
+                self.say(line);
+            }
             GattEvent::Dropped { after } => {
                 let d = &self.devices[i];
                 let fault = if d.droid.faults().disconnect_every {
@@ -1378,20 +1495,22 @@ impl BluezSim {
                 self.on_event(i, e);
             }
         }
+        for i in 0..self.devices.len() {
+            let d = &self.devices[i];
+            if d.droid.status().asleep && !d.asleep_said {
+                let line = format!(
+                    "{}: fell asleep after {:.1} s without a command; no longer advertising",
+                    d.name(),
+                    (d.droid.faults().idle_sleep.unwrap_or_default() + SLEEP_GRACE).as_secs_f64()
+                );
+                self.devices[i].asleep_said = true;
+                self.say(line);
+            }
+        }
         if !self.adapter.discovering.is_empty() && Instant::now() >= self.next_rssi {
             self.next_rssi = Instant::now() + RSSI_EVERY;
             // Removed devices are heard again; the others' signal varies a little.
             self.hear_devices();
-            for i in 0..self.devices.len() {
-                if self.devices[i].connected() {
-                    continue;
-                }
-                let jitter = self.rng.below(7) as i16 - 3;
-                let d = &mut self.devices[i];
-                d.rssi = d.spec.rssi + jitter;
-                let (path, rssi) = (d.path.clone(), d.rssi);
-                self.changed(&path, DEVICE, vec![("RSSI", Val::I16(rssi))]);
-            }
         }
     }
 
@@ -1404,6 +1523,7 @@ impl BluezSim {
                 ADAPTER,
                 vec![("Discovering", Val::Bool(false))],
             );
+            self.discovery_ended();
         }
         let now = self.now();
         for i in 0..self.devices.len() {
