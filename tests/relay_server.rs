@@ -995,3 +995,95 @@ async fn a_droid_without_a_known_name_is_stopped_by_its_family() {
     assert_eq!(written, stop);
     server.abort();
 }
+
+/// A backend whose scans take a while, and which has no droids.
+struct SlowScans;
+
+impl GattBackend for SlowScans {
+    fn scan(
+        &self,
+        t: Duration,
+    ) -> futures_util::future::BoxFuture<
+        '_,
+        Result<
+            Vec<droidctl::relay::backend::BackendDevice>,
+            droidctl::relay::backend::BackendError,
+        >,
+    > {
+        Box::pin(async move {
+            sleep(t).await;
+            Ok(vec![droidctl::relay::backend::BackendDevice {
+                name: "D2-SLOW".into(),
+                address: "AA:BB:CC:DD:EE:FF".into(),
+            }])
+        })
+    }
+    fn find<'a>(
+        &'a self,
+        _name: &'a str,
+        _t: Duration,
+    ) -> futures_util::future::BoxFuture<
+        'a,
+        Result<
+            Option<droidctl::relay::backend::BackendDevice>,
+            droidctl::relay::backend::BackendError,
+        >,
+    > {
+        Box::pin(async { Ok(None) })
+    }
+    fn connect<'a>(
+        &'a self,
+        _address: &'a str,
+    ) -> futures_util::future::BoxFuture<
+        'a,
+        Result<droidctl::relay::backend::Connected, droidctl::relay::backend::BackendError>,
+    > {
+        Box::pin(async { Err("no droids here".into()) })
+    }
+    fn describe(&self) -> String {
+        "slow scans".into()
+    }
+}
+
+/// A client waiting for a long scan is not silent: the idle timeout counts from the answer.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn waiting_for_a_scan_is_not_silence() {
+    let cfg = ServerConfig {
+        idle_timeout: Some(Duration::from_millis(400)),
+        ..cfg()
+    };
+    let listener = server::bind("127.0.0.1:0".parse().unwrap(), &cfg)
+        .await
+        .unwrap();
+    let addr = listener.local_addr().unwrap();
+    let sink: EventSink = Arc::new(|_| {});
+    let server = tokio::spawn(server::serve(
+        listener,
+        Arc::new(SlowScans),
+        cfg,
+        sink,
+        std::future::pending(),
+    ));
+    let mut c = Raw::connect(addr).await;
+    c.send(&Request::Scan { timeout: 0.8 }).await;
+    match c.reply().await {
+        Some(Reply::Devices(d)) => assert_eq!(d[0].name, "D2-SLOW"),
+        other => panic!("{other:?}"),
+    }
+    // Still served right after the answer…
+    let t0 = Instant::now();
+    c.send(&Request::Find {
+        name: "x".into(),
+        timeout: 0.0,
+    })
+    .await;
+    assert!(matches!(c.reply().await, Some(Reply::Error { .. })));
+    // …and closed once silent for the timeout.
+    assert!(c.closed().await);
+    assert!(
+        t0.elapsed() >= Duration::from_millis(300),
+        "{:?}",
+        t0.elapsed()
+    );
+    server.abort();
+}

@@ -394,8 +394,11 @@ impl ClientTask {
         let mut partial_since: Option<Instant> = None;
         let mut writer_done = false;
         let reason = 'client: loop {
-            // Whole requests first, in order.
+            // Whole requests first, in order. Time spent serving them (a scan, a connect) is
+            // not the client's silence.
+            let mut served = false;
             while let Some(r) = decoder.next() {
+                served = true;
                 let flow = match r {
                     Ok(req) => {
                         self.requests += 1;
@@ -406,6 +409,9 @@ impl ClientTask {
                 if let Err(Close(why)) = flow {
                     break 'client why;
                 }
+            }
+            if served {
+                last_heard = Instant::now();
             }
             partial_since = match (decoder.buffered(), partial_since) {
                 (0, _) => None,
