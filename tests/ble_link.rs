@@ -449,6 +449,118 @@ async fn a_fatal_open_error_closes_the_session() {
     assert_eq!(BleError::no_adapter().kind, BleErrorKind::NoAdapter);
 }
 
+/// The drive commands (speed, heading) written to the API characteristic since `from`.
+fn drives_written(droid: &FakePeripheral, from: Instant) -> Vec<(u8, u16)> {
+    let bytes: Vec<u8> = droid
+        .writes_to(gatt::V2_API)
+        .into_iter()
+        .filter(|(t, _)| *t >= from)
+        .flat_map(|(_, d)| d)
+        .collect();
+    Decoder::new()
+        .feed(&bytes)
+        .flatten()
+        .filter(|p| (p.did, p.cid) == (0x16, 0x07))
+        .map(|p| (p.data[0], u16::from_be_bytes([p.data[1], p.data[2]])))
+        .collect()
+}
+
+/// The adapter switched off mid-session is not fatal: the link says it waits, and reconnects
+/// as soon as the adapter is powered again (not after the backoff), resuming at speed 0 at
+/// the last heading.
+#[tokio::test(start_paused = true)]
+async fn the_adapter_switched_off_mid_session_is_waited_for() {
+    use droidctl::protocol::v2::wire::DriveFlags;
+    use droidctl::session::Slot;
+    use droidctl::units::Heading;
+    let (central, droid, link) = setup(Model::R2D2);
+    let cfg = SessionConfig {
+        setup: vec![cmd::wake().into()],
+        pacing: link.profile().pacing,
+        chunk_size: link.profile().chunk_size,
+        ..SessionConfig::default()
+    };
+    let s = session::start(Box::new(link), cfg);
+    let mut rx = s.watch_state();
+    wait_for(&mut rx, |st| *st == LinkState::Connected).await;
+    let heading = Heading::new(90).unwrap();
+    s.set(
+        Slot::Drive,
+        cmd::drive_with_heading(60, heading, DriveFlags::empty()),
+    );
+    sleep(Duration::from_millis(500)).await;
+    central.set_powered(false);
+    wait_for(&mut rx, |st| {
+        matches!(st, LinkState::Reconnecting { reason, .. } if reason == droidctl::link::ADAPTER_OFF_WAITING)
+    })
+    .await;
+    assert_eq!(s.state().label(), "Bluetooth adapter is off — waiting");
+    // Long after the backoff's cap it still waits, never gives up.
+    sleep(Duration::from_secs(60)).await;
+    assert!(
+        matches!(s.state(), LinkState::Reconnecting { .. }),
+        "{:?}",
+        s.state()
+    );
+    let on = Instant::now();
+    central.set_powered(true);
+    wait_for(&mut rx, |st| *st == LinkState::Connected).await;
+    assert!(
+        on.elapsed() <= Duration::from_millis(500),
+        "reconnects once the adapter is on: {:?}",
+        on.elapsed()
+    );
+    sleep(Duration::from_millis(500)).await;
+    assert_eq!(
+        drives_written(&droid, on).first(),
+        Some(&(0, 90)),
+        "resumes at speed 0 at the last heading"
+    );
+    s.shutdown(vec![]).await;
+}
+
+/// At the first open the adapter off is fatal, one line naming the fix.
+#[tokio::test(start_paused = true)]
+async fn the_adapter_off_at_the_first_open_is_fatal() {
+    let (central, _droid, mut link) = setup(Model::R2D2);
+    central.set_powered(false);
+    let e = link.open().await.err().unwrap();
+    assert!(e.fatal, "{e}");
+    assert!(e.message.contains("bluetoothctl power on"), "{e}");
+    assert!(!e.message.contains('\n'));
+}
+
+/// A characteristic missing on a reconnect (services half-resolved) is retried with the
+/// backoff; on the first open it stays fatal (`the_wrong_device_is_fatal`).
+#[tokio::test(start_paused = true)]
+async fn a_characteristic_missing_on_a_reconnect_is_retried() {
+    let (_central, droid, link) = setup(Model::R2D2);
+    let s = session::start(Box::new(link), SessionConfig::default());
+    let mut rx = s.watch_state();
+    wait_for(&mut rx, |st| *st == LinkState::Connected).await;
+    droid.set_chars(vec![DiscoveredChar {
+        service: gatt::V2_SERVICE,
+        characteristic: gatt::V2_API,
+    }]);
+    droid.drop_connection("link loss");
+    wait_for(&mut rx, |st| {
+        matches!(st, LinkState::Reconnecting { attempt: 3, reason } if reason.contains("has no characteristic"))
+    })
+    .await;
+    droid.set_chars(
+        GattProfile::for_model(Model::R2D2)
+            .characteristics()
+            .into_iter()
+            .map(|c| DiscoveredChar {
+                service: c.service.unwrap_or(gatt::V2_SERVICE),
+                characteristic: c.characteristic,
+            })
+            .collect(),
+    );
+    wait_for(&mut rx, |st| *st == LinkState::Connected).await;
+    s.shutdown(vec![]).await;
+}
+
 // ---------------------------------------------------------------------------------------------
 // A v1 droid (BB-8) over BleLink: wake sequence, v1 setup on 2ba1, pacing, responses on 2ba6,
 // and the reconnect path.

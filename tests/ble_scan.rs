@@ -4,7 +4,7 @@
 use droidctl::link::ble::fake::{FakeCentral, FakePeripheral};
 use droidctl::link::ble::scan::{self, summarize};
 use droidctl::link::ble::{
-    Advertisement, BleAddress, BleErrorKind, DeviceSelector, connect_link_with,
+    Advertisement, BleAddress, BleErrorKind, DeviceId, DeviceSelector, connect_link_with,
 };
 use droidctl::link::gatt::GattProfile;
 use droidctl::link::{Link, LinkEvent};
@@ -150,4 +150,94 @@ async fn late_advertisers_are_heard_within_the_timeout() {
         .unwrap();
     let names: Vec<String> = got.iter().map(|e| e.label()).collect();
     assert_eq!(names, ["D2-SLOW"]);
+}
+
+/// CoreBluetooth reports the address 00:00:00:00:00:00 for every device: two droids with
+/// that address are still two droids, told apart and chosen by their identifiers.
+#[tokio::test(start_paused = true)]
+async fn two_droids_with_one_address_are_two_droids() {
+    let c = FakeCentral::new();
+    let zero = Some(BleAddress::default());
+    let near = FakePeripheral::for_profile(&GattProfile::for_model(Model::R2D2));
+    let far = FakePeripheral::for_profile(&GattProfile::for_model(Model::R2D2));
+    let near_id = DeviceId::new("8e5b5b4e-1234-4a6b-9c8d-0123456789ab", zero);
+    let far_id = DeviceId::new("0f000000-5678-4a6b-9c8d-0123456789ab", zero);
+    c.add_device_as(near_id.clone(), Some("D2-NEAR"), Some(-40), near.clone());
+    c.add_device_as(far_id.clone(), Some("D2-FAR0"), Some(-80), far.clone());
+    let got = scan::scan(&c, Duration::from_secs(1), |_| false)
+        .await
+        .unwrap();
+    let names: Vec<String> = got.iter().map(|e| e.label()).collect();
+    assert_eq!(names, ["D2-NEAR", "D2-FAR0"]);
+    assert_eq!(got[1].id, far_id);
+    assert_eq!(
+        got[1].id.to_string(),
+        "0f000000-5678-4a6b-9c8d-0123456789ab"
+    );
+    // --address takes the identifier (any case), and the link goes to that droid.
+    let sel = DeviceSelector {
+        address: Some("0F000000-5678-4A6B-9C8D-0123456789AB".into()),
+        ..DeviceSelector::default()
+    };
+    let found = connect_link_with(Arc::new(c.clone()), &sel).await.unwrap();
+    assert_eq!(found.name, "D2-FAR0");
+    assert_eq!(found.id, far_id);
+    let mut link = found.link;
+    let _conn = link.open().await.unwrap();
+    assert!(far.is_connected() && !near.is_connected());
+}
+
+/// A droid the computer remembers but does not hear is neither listed nor picked; asked for
+/// by name or address it fails once the scan is over, with one line, and no connection is
+/// attempted.
+#[tokio::test(start_paused = true)]
+async fn remembered_droids_are_neither_listed_nor_picked() {
+    let c = FakeCentral::new();
+    let asleep = FakePeripheral::for_profile(&GattProfile::for_model(Model::R2D2));
+    asleep.hang_connect(true);
+    c.remember(ad("D2-GONE", 1, -30), Some(asleep.clone()));
+    c.add_device(
+        ad("BB-HERE", 2, -70),
+        FakePeripheral::for_profile(&GattProfile::for_model(Model::BB8)),
+    );
+    let heard = scan::scan(&c, Duration::from_secs(1), |_| false)
+        .await
+        .unwrap();
+    assert_eq!(heard.len(), 1, "{heard:?}");
+    let found = connect_link_with(Arc::new(c.clone()), &DeviceSelector::default())
+        .await
+        .unwrap();
+    assert_eq!(found.name, "BB-HERE");
+    assert!(found.candidates.iter().all(|e| e.heard));
+    for sel in [
+        DeviceSelector {
+            name: Some("D2-GONE".into()),
+            ..DeviceSelector::default()
+        },
+        DeviceSelector {
+            address: Some("E0:00:00:00:00:01".into()),
+            ..DeviceSelector::default()
+        },
+    ] {
+        let t0 = Instant::now();
+        let e = connect_link_with(Arc::new(c.clone()), &sel)
+            .await
+            .err()
+            .unwrap();
+        assert_eq!(t0.elapsed(), Duration::from_secs(5), "after the scan");
+        assert_eq!(e.kind, BleErrorKind::NotFound);
+        assert!(!e.fatal());
+        assert!(
+            e.message.starts_with(
+                "D2-GONE (E0:00:00:00:00:01) is known to this computer but not in range"
+            ),
+            "{e}"
+        );
+        assert!(e.message.contains("wake it"), "{e}");
+    }
+    assert!(
+        asleep.ops().is_empty(),
+        "never connected to: {:?}",
+        asleep.ops()
+    );
 }

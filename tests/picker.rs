@@ -7,11 +7,14 @@ use droidctl::teleop::keymap::{Key, KeyCode};
 use ratatui::{Terminal, backend::TestBackend};
 
 fn entry(name: &str, addr: u8, rssi: i16) -> ScanEntry {
+    let address = BleAddress([0xF1, 0x22, 0x33, 0x44, 0x55, addr]);
     ScanEntry {
         name: Some(name.into()),
         model: Model::from_advertised_name(name),
-        address: BleAddress([0xF1, 0x22, 0x33, 0x44, 0x55, addr]),
+        id: address.into(),
+        address,
         rssi: Some(rssi),
+        heard: true,
     }
 }
 

@@ -62,11 +62,14 @@ mod tests {
     use crate::model::Model;
 
     fn entry(name: &str, rssi: i16) -> ScanEntry {
+        let address = BleAddress([0, 0, 0, 0, 0, rssi.unsigned_abs() as u8]);
         ScanEntry {
             name: Some(name.into()),
             model: Model::from_advertised_name(name),
-            address: BleAddress([0, 0, 0, 0, 0, rssi.unsigned_abs() as u8]),
+            id: address.into(),
+            address,
             rssi: Some(rssi),
+            heard: true,
         }
     }
 

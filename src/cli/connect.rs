@@ -3,7 +3,7 @@
 
 use super::CliError;
 use crate::link::Link;
-use crate::link::ble::{BleAddress, DeviceSelector, ScanEntry, connect_link};
+use crate::link::ble::{DeviceId, DeviceSelector, ScanEntry, connect_link};
 use crate::model::{Model, Protocol};
 use std::io::{BufRead, IsTerminal, Write};
 use std::time::Duration;
@@ -14,8 +14,8 @@ pub struct BleArgs {
     /// Connect to the droid with this advertised name (e.g. D2-1A2B; a unique part is enough).
     #[arg(long, value_name = "NAME", conflicts_with = "sim")]
     pub name: Option<String>,
-    /// Connect to the droid with this Bluetooth address (on macOS, the identifier `droidctl scan`
-    /// shows in its place).
+    /// Connect to the droid with this Bluetooth address (on macOS, the device identifier
+    /// `droidctl scan` shows in its place).
     #[arg(long, value_name = "ADDR", conflicts_with_all = ["sim", "name"])]
     pub address: Option<String>,
     /// How long to scan for droids, in seconds.
@@ -75,12 +75,14 @@ pub async fn connect(
     scan_timeout: Duration,
     chooser: Chooser,
 ) -> Result<Connected, CliError> {
-    let address = address
-        .map(|a| {
-            a.parse::<BleAddress>()
-                .map_err(|e| CliError::usage(format!("--address: {e}")))
-        })
-        .transpose()?;
+    if let Some(a) = &address
+        && !DeviceId::is_query(a)
+    {
+        return Err(CliError::usage(format!(
+            "--address: `{a}` is not a Bluetooth address like AA:BB:CC:DD:EE:FF (or, on macOS, \
+             a device identifier as `droidctl scan` shows)"
+        )));
+    }
     let explicit = name.is_some() || address.is_some();
     let sel = DeviceSelector {
         name,
@@ -116,10 +118,10 @@ pub async fn connect(
     } else {
         None
     };
-    if let Some(choice) = choice.filter(|c| *c != found.address) {
+    if let Some(choice) = choice.filter(|c| *c != found.id) {
         let sel = DeviceSelector {
             name: None,
-            address: Some(choice),
+            address: Some(choice.key().to_string()),
             scan_timeout,
         };
         found = connect_link(&sel)
@@ -143,7 +145,7 @@ pub async fn connect(
             "droidctl: connecting to {} ({}, {})",
             found.name,
             found.model.display_name(),
-            found.address
+            found.id
         );
     }
     let profile = found.link.profile().clone();
@@ -186,7 +188,7 @@ pub async fn connect_remote(
 }
 
 /// A numbered list on stderr, an answer on stdin; Enter takes the strongest.
-fn pick(entries: &[&ScanEntry]) -> Result<Option<BleAddress>, CliError> {
+fn pick(entries: &[&ScanEntry]) -> Result<Option<DeviceId>, CliError> {
     let mut err = std::io::stderr();
     let _ = writeln!(err, "Several droids are in range:");
     for (i, e) in entries.iter().enumerate() {
@@ -196,7 +198,7 @@ fn pick(entries: &[&ScanEntry]) -> Result<Option<BleAddress>, CliError> {
             i + 1,
             e.name.as_deref().unwrap_or("?"),
             e.model.map(Model::display_name).unwrap_or("?"),
-            e.address,
+            e.id,
             e.rssi
                 .map(|r| format!("{r} dBm"))
                 .unwrap_or_else(|| "-".into())
@@ -210,10 +212,10 @@ fn pick(entries: &[&ScanEntry]) -> Result<Option<BleAddress>, CliError> {
     }
     let t = line.trim();
     if t.is_empty() {
-        return Ok(entries.first().map(|e| e.address));
+        return Ok(entries.first().map(|e| e.id.clone()));
     }
     match t.parse::<usize>() {
-        Ok(n) if (1..=entries.len()).contains(&n) => Ok(Some(entries[n - 1].address)),
+        Ok(n) if (1..=entries.len()).contains(&n) => Ok(Some(entries[n - 1].id.clone())),
         _ => Err(CliError::usage(format!(
             "{t:?} is not one of 1..={}",
             entries.len()
@@ -222,7 +224,7 @@ fn pick(entries: &[&ScanEntry]) -> Result<Option<BleAddress>, CliError> {
 }
 
 /// The full-screen picker: arrows and Enter (or a digit); Esc cancels.
-fn pick_on_screen(entries: Vec<ScanEntry>) -> Result<Option<BleAddress>, CliError> {
+fn pick_on_screen(entries: Vec<ScanEntry>) -> Result<Option<DeviceId>, CliError> {
     use crate::app::input::key_from_crossterm;
     use crate::app::picker::{Picked, Picker};
     use crossterm::event::{Event, KeyEventKind, read};
@@ -248,7 +250,7 @@ fn pick_on_screen(entries: Vec<ScanEntry>) -> Result<Option<BleAddress>, CliErro
         if let Some((key, _)) = key_from_crossterm(&k) {
             match picker.on_key(key) {
                 Picked::Pending => {}
-                Picked::Chosen(e) => break Ok(Some(e.address)),
+                Picked::Chosen(e) => break Ok(Some(e.id)),
                 Picked::Cancelled => break Err(CliError::failure("no droid chosen")),
             }
         }

@@ -256,17 +256,33 @@ pub async fn run_recorded(
 async fn report_link(mut state: tokio::sync::watch::Receiver<LinkState>) {
     let mut since: Option<tokio::time::Instant> = None;
     let mut lost = false;
+    let mut waiting = false;
     loop {
         let now = state.borrow_and_update().clone();
         match (now, since) {
             (LinkState::Connected, None) => since = Some(tokio::time::Instant::now()),
             (LinkState::Connected, Some(t0)) if lost => {
                 lost = false;
+                waiting = false;
                 let _ = writeln!(
                     std::io::stderr(),
                     "[{:>8.2}s] reconnected",
                     t0.elapsed().as_secs_f64()
                 );
+            }
+            // Said once: the link waits for the adapter, whatever the attempts.
+            (LinkState::Reconnecting { reason, .. }, Some(t0))
+                if reason == crate::link::ADAPTER_OFF_WAITING =>
+            {
+                if !waiting {
+                    waiting = true;
+                    lost = true;
+                    let _ = writeln!(
+                        std::io::stderr(),
+                        "[{:>8.2}s] {reason}",
+                        t0.elapsed().as_secs_f64()
+                    );
+                }
             }
             (LinkState::Reconnecting { attempt, reason }, Some(t0)) => {
                 let what = if lost {

@@ -1,4 +1,7 @@
-//! `droidctl scan`: list nearby robots droidctl can drive, strongest signal first.
+//! `droidctl scan`: list nearby robots droidctl can drive, strongest signal first. Only
+//! devices that are really there count: heard advertising during the scan, or connected.
+//! `--all` adds the rest (devices that are not robots, and the ones this computer remembers
+//! but did not hear, marked `"heard": false`).
 //!
 //! Exits 1 with one line naming what is missing when there is no usable Bluetooth (no D-Bus
 //! system bus, BlueZ not running, no adapter, adapter off, permission denied), within a few
@@ -15,10 +18,11 @@ pub struct ScanArgs {
     /// How long to listen, in seconds (fractions allowed).
     #[arg(long, value_name = "SECS", default_value = "5", value_parser = parse_secs)]
     pub timeout: Duration,
-    /// One JSON object per line: name, model, model_name, address, rssi.
+    /// One JSON object per line: name, model, model_name, address, rssi, heard.
     #[arg(long)]
     pub json: bool,
-    /// Also list devices that are not supported robots.
+    /// Also list devices that are not supported robots, and those this computer remembers
+    /// but did not hear (not in range, asleep; `"heard": false`).
     #[arg(long)]
     pub all: bool,
     /// Ask a relay on another machine (`droidctl serve`, spherov2's tcp_server) at
@@ -62,7 +66,7 @@ pub fn run(args: ScanArgs, out: &mut dyn Write) -> Result<i32, CliError> {
     let result = rt.block_on(async {
         match tokio::time::timeout(limit, async {
             let central = ble::open_central().await?;
-            scan::scan(central.as_ref(), args.timeout, |_| false).await
+            scan::scan_known(central.as_ref(), args.timeout, |_| false).await
         })
         .await
         {
@@ -90,7 +94,7 @@ pub async fn run_with(
     out: &mut dyn Write,
     err: &mut dyn Write,
 ) -> Result<i32, CliError> {
-    let entries = scan::scan(central, args.timeout, |_| false)
+    let entries = scan::scan_known(central, args.timeout, |_| false)
         .await
         .map_err(|e| CliError::failure(e.message))?;
     report(&entries, args, out, err)
@@ -104,15 +108,23 @@ fn report(
 ) -> Result<i32, CliError> {
     let shown: Vec<ble::ScanEntry> = entries
         .iter()
-        .filter(|e| args.all || e.is_supported())
+        .filter(|e| args.all || (e.is_supported() && e.heard))
         .cloned()
         .collect();
     let write_err = |e: std::io::Error| CliError::failure(format!("cannot write output: {e}"));
     if shown.is_empty() {
         // A hint, not an error: "nothing here" is a valid answer to a scan.
-        let others = entries.len();
-        let tail = if others > 0 && !args.all {
-            format!(" ({others} other device(s) heard: --all lists them)")
+        let heard = entries.iter().filter(|e| e.heard).count();
+        let remembered = entries.len() - heard;
+        let mut others = Vec::new();
+        if heard > 0 {
+            others.push(format!("{heard} other device(s) heard"));
+        }
+        if remembered > 0 {
+            others.push(format!("{remembered} remembered but not in range"));
+        }
+        let tail = if !others.is_empty() && !args.all {
+            format!(" ({}: --all lists them)", others.join(", "))
         } else {
             String::new()
         };
@@ -161,6 +173,15 @@ mod tests {
         ad("GB-0001", 3, -55, 1500);
         // Heard only after the scan ends: not listed.
         ad("Q5-LATE", 4, -30, 5000);
+        // Remembered by the computer, switched off in a drawer: only with --all.
+        c.remember(
+            Advertisement {
+                address: BleAddress([0xC0, 0, 0, 0, 0, 5]),
+                name: Some("D2-OLD0".into()),
+                rssi: None,
+            },
+            None,
+        );
         c
     }
 
@@ -192,13 +213,17 @@ mod tests {
             .lines()
             .map(|l| serde_json::from_str(l).unwrap())
             .collect();
-        assert_eq!(v.len(), 3);
+        assert_eq!(v.len(), 4);
         assert_eq!(v[0]["name"], "Keyboard");
         assert_eq!(v[0]["model"], serde_json::Value::Null);
         assert_eq!(v[1]["model"], "bb9e");
         assert_eq!(v[2]["model_name"], "R2-D2");
         assert_eq!(v[2]["address"], "C0:00:00:00:00:01");
         assert_eq!(v[2]["rssi"], -70);
+        assert_eq!(v[2]["heard"], true);
+        assert_eq!(v[3]["name"], "D2-OLD0");
+        assert_eq!(v[3]["rssi"], serde_json::Value::Null);
+        assert_eq!(v[3]["heard"], false);
     }
 
     #[tokio::test(start_paused = true)]
@@ -221,6 +246,27 @@ mod tests {
         let err = String::from_utf8(err).unwrap();
         assert!(
             err.starts_with("no droids found in 2 s (1 other device(s) heard"),
+            "{err}"
+        );
+        c.remember(
+            Advertisement {
+                address: BleAddress([2; 6]),
+                name: Some("D2-OLD0".into()),
+                rssi: None,
+            },
+            None,
+        );
+        let (mut out, mut err) = (Vec::new(), Vec::new());
+        run_with(&c, &args(false, false), &mut out, &mut err)
+            .await
+            .unwrap();
+        assert!(out.is_empty(), "a remembered droid is not listed");
+        let err = String::from_utf8(err).unwrap();
+        assert!(
+            err.starts_with(
+                "no droids found in 2 s (1 other device(s) heard, 1 remembered but not in \
+                 range: --all lists them)"
+            ),
             "{err}"
         );
     }

@@ -14,6 +14,11 @@ use futures_util::future::BoxFuture;
 use std::fmt;
 use tokio::sync::mpsc;
 
+/// What a link says while the Bluetooth adapter is switched off during a session (shown as
+/// the link state, instead of "reconnecting"): not fatal, it reconnects once the adapter is
+/// powered again.
+pub const ADAPTER_OFF_WAITING: &str = "Bluetooth adapter is off — waiting";
+
 /// Why a link failed.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct LinkError {
@@ -118,6 +123,11 @@ pub trait Link: Send {
     /// future was dropped): the radio stack may still be connecting.
     fn abort_open(&mut self) -> BoxFuture<'_, ()> {
         Box::pin(async {})
+    }
+    /// Resolves when retrying now is worthwhile although the backoff delay has not run out
+    /// (the Bluetooth adapter that was switched off is powered again). Never, by default.
+    fn retry_hint(&mut self) -> BoxFuture<'_, ()> {
+        Box::pin(std::future::pending())
     }
     /// A name for the status bar: "R2-D2 D2-1A2B (simulated)".
     fn describe(&self) -> String;

@@ -109,6 +109,12 @@ impl LinkState {
         match self {
             LinkState::Connecting => "connecting".into(),
             LinkState::Connected => "connected".into(),
+            // Waiting for the adapter says so: reconnecting would be misleading.
+            LinkState::Reconnecting { reason, .. }
+                if reason == crate::link::ADAPTER_OFF_WAITING =>
+            {
+                reason.clone()
+            }
             LinkState::Reconnecting { attempt, .. } => format!("reconnecting (attempt {attempt})"),
             LinkState::Closed { reason: None } => "closed".into(),
             LinkState::Closed { reason: Some(r) } => format!("closed: {r}"),

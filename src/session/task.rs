@@ -145,15 +145,18 @@ impl Task {
         self.state.send_replace(LinkState::Closed { reason: None });
     }
 
-    /// Show "reconnecting (attempt N)" and wait the backoff delay; false on shutdown.
+    /// Show "reconnecting (attempt N)" and wait the backoff delay, or less when the link
+    /// says retrying is worthwhile now (the Bluetooth adapter is back); false on shutdown.
     async fn wait_retry(&mut self, attempt: u32, reason: String) -> bool {
         self.state
             .send_replace(LinkState::Reconnecting { attempt, reason });
         let delay = self.cfg.backoff.delay(attempt);
-        tokio::select! {
-            _ = sleep(delay) => !self.shutdown_requested(),
+        let go_on = tokio::select! {
+            _ = sleep(delay) => true,
+            _ = self.link.retry_hint() => true,
             _ = self.shared.shutdown_wake.notified() => false,
-        }
+        };
+        go_on && !self.shutdown_requested()
     }
 
     /// After a (re)connect: stop first, then set up. The wake (when the setup starts with

@@ -33,7 +33,7 @@ pub fn draw(frame: &mut Frame, picker: &Picker) {
             i + 1,
             clean(e.name.as_deref().unwrap_or("?")),
             e.model.map(|m| m.display_name()).unwrap_or("?"),
-            e.address,
+            clean(&e.id.to_string()),
             e.rssi
                 .map(|r| format!("{r} dBm"))
                 .unwrap_or_else(|| "-".into())

@@ -5,7 +5,7 @@
 //! [`BleError::from_platform_text`].
 
 use super::backend::{
-    Advertisement, BleAddress, BleCentral, BlePeripheral, DiscoveredChar, PeripheralEvent,
+    BleAddress, BleCentral, BlePeripheral, DeviceId, DiscoveredChar, KnownDevice, PeripheralEvent,
 };
 use super::error::{BleError, BleErrorKind, DBUS_MARK, Os, dbus_error_in};
 use crate::link::gatt::{CharRef, GattUuid};
@@ -216,15 +216,12 @@ fn dbus_name(e: &btleplug::Error) -> Option<String> {
     }
 }
 
-/// The address droidctl shows and `--address` takes. CoreBluetooth hides devices' real
-/// addresses (it reports 00:00:00:00:00:00 for all) and names each by a UUID private to this
-/// Mac: there the address is that identifier's first six bytes ([`BleAddress::from_identifier`]).
-fn address_of(p: &Peripheral) -> BleAddress {
-    if cfg!(target_os = "macos") {
-        BleAddress::from_identifier(&p.id().to_string()).unwrap_or_default()
-    } else {
-        BleAddress(p.address().into())
-    }
+/// Who a peripheral is: btleplug's `PeripheralId` as a string (BlueZ's `hci0/dev_…`,
+/// CoreBluetooth's UUID, WinRT's address) with the address where the platform tells it.
+/// CoreBluetooth hides devices' real addresses and reports 00:00:00:00:00:00 for all, which
+/// [`DeviceId::new`] takes as none: there the identifier is the name `--address` takes.
+fn id_of(p: &Peripheral) -> DeviceId {
+    DeviceId::new(p.id().to_string(), Some(BleAddress(p.address().into())))
 }
 
 fn gatt(u: u128) -> GattUuid {
@@ -251,7 +248,7 @@ impl BleCentral for BtleCentral {
         Box::pin(async move { self.adapter.stop_scan().await.map_err(map_err) })
     }
 
-    fn advertisements(&self) -> BoxFuture<'_, Result<Vec<Advertisement>, BleError>> {
+    fn devices(&self) -> BoxFuture<'_, Result<Vec<KnownDevice>, BleError>> {
         Box::pin(async move {
             let peripherals = self.adapter.peripherals().await.map_err(map_err)?;
             let mut out = Vec::with_capacity(peripherals.len());
@@ -260,35 +257,49 @@ impl BleCentral for BtleCentral {
                 let Ok(Some(props)) = p.properties().await else {
                     continue;
                 };
-                out.push(Advertisement {
-                    address: address_of(&p),
+                // BlueZ has an RSSI only for a device heard in the current discovery; one
+                // without may still be there because it is connected (it stops advertising).
+                let connected = props.rssi.is_none() && p.is_connected().await.unwrap_or(false);
+                out.push(KnownDevice {
+                    id: id_of(&p),
                     // On BlueZ `local_name` is the Alias, which a user may have renamed and
                     // which falls back to the address for nameless devices; the advertised
                     // Name is what identifies the model.
                     name: props.advertisement_name.or(props.local_name),
                     rssi: props.rssi,
+                    connected,
                 });
             }
             Ok(out)
         })
     }
 
-    fn peripheral(
-        &self,
-        address: BleAddress,
-    ) -> BoxFuture<'_, Result<Arc<dyn BlePeripheral>, BleError>> {
+    fn device<'a>(
+        &'a self,
+        id: &'a DeviceId,
+    ) -> BoxFuture<'a, Result<Arc<dyn BlePeripheral>, BleError>> {
         Box::pin(async move {
             let peripherals = self.adapter.peripherals().await.map_err(map_err)?;
-            match peripherals.into_iter().find(|p| address_of(p) == address) {
+            match peripherals
+                .into_iter()
+                .find(|p| p.id().to_string() == id.key())
+            {
                 Some(peripheral) => Ok(Arc::new(BtlePeripheral {
                     adapter: self.adapter.clone(),
                     peripheral,
                 }) as Arc<dyn BlePeripheral>),
                 None => Err(BleError::new(
                     BleErrorKind::NotFound,
-                    format!("the adapter does not know {address}"),
+                    format!("the adapter does not know {id}"),
                 )),
             }
+        })
+    }
+
+    fn powered(&self) -> BoxFuture<'_, Result<bool, BleError>> {
+        Box::pin(async move {
+            let state = self.adapter.adapter_state().await.map_err(map_err)?;
+            Ok(state == CentralState::PoweredOn)
         })
     }
 }

@@ -4,7 +4,8 @@
 //! without a radio.
 
 use super::backend::{
-    Advertisement, BleAddress, BleCentral, BlePeripheral, DiscoveredChar, PeripheralEvent,
+    Advertisement, BleAddress, BleCentral, BlePeripheral, DeviceId, DiscoveredChar, KnownDevice,
+    PeripheralEvent,
 };
 use super::error::{BleError, BleErrorKind};
 use crate::link::gatt::{CharRef, GattProfile, GattUuid};
@@ -42,6 +43,8 @@ struct PeripheralState {
     fail_connects: u32,
     hang_connect: bool,
     fail_next_write: Option<BleError>,
+    /// The adapter is off ([`FakeCentral::set_powered`]): connects fail as BlueZ's do.
+    adapter_off: bool,
 }
 
 impl PeripheralState {
@@ -106,6 +109,11 @@ impl FakePeripheral {
             })
             .collect();
         FakePeripheral::new(chars)
+    }
+
+    /// Replace the characteristics service discovery finds (from the next discovery on).
+    pub fn set_chars(&self, chars: Vec<DiscoveredChar>) {
+        lock(&self.state).chars = chars;
     }
 
     /// What a read of `ch` returns (empty otherwise).
@@ -189,6 +197,12 @@ impl BlePeripheral for FakePeripheral {
             let hang = {
                 let mut s = lock(&self.state);
                 s.record(FakeOp::Connect);
+                if s.adapter_off {
+                    return Err(BleError::from_dbus(
+                        Some("org.bluez.Error.NotReady"),
+                        "Resource Not Ready",
+                    ));
+                }
                 if s.fail_connects > 0 {
                     s.fail_connects -= 1;
                     return Err(BleError::from_dbus(
@@ -281,14 +295,36 @@ impl BlePeripheral for FakePeripheral {
     }
 }
 
-#[derive(Default)]
+/// One device the fake adapter knows.
+struct FakeDevice {
+    id: DeviceId,
+    name: Option<String>,
+    rssi: Option<i16>,
+    /// How long after the scan starts it is first heard; `None`: only remembered, never
+    /// heard (listed whether scanning or not, without an RSSI).
+    after: Option<Duration>,
+}
+
 struct CentralState {
-    /// Advertisements and how long after the scan starts each is first heard.
-    ads: Vec<(Duration, Advertisement)>,
-    devices: HashMap<BleAddress, FakePeripheral>,
+    devices: Vec<FakeDevice>,
+    peripherals: HashMap<DeviceId, FakePeripheral>,
     scan_started: Option<Instant>,
     scans: u32,
     fail_scan: Option<BleError>,
+    powered: bool,
+}
+
+impl Default for CentralState {
+    fn default() -> Self {
+        CentralState {
+            devices: Vec::new(),
+            peripherals: HashMap::new(),
+            scan_started: None,
+            scans: 0,
+            fail_scan: None,
+            powered: true,
+        }
+    }
 }
 
 /// A fake adapter with scripted advertisements.
@@ -304,19 +340,77 @@ impl FakeCentral {
 
     /// A device heard `after` the scan starts.
     pub fn advertise(&self, ad: Advertisement, after: Duration) {
-        lock(&self.state).ads.push((after, ad));
+        lock(&self.state).devices.push(FakeDevice {
+            id: DeviceId::from_address(ad.address),
+            name: ad.name,
+            rssi: ad.rssi,
+            after: Some(after),
+        });
     }
 
     /// A connectable device: its advertisement (heard at once) and its peripheral.
     pub fn add_device(&self, ad: Advertisement, peripheral: FakePeripheral) {
+        let id = DeviceId::from_address(ad.address);
+        self.add_device_as(id, ad.name.as_deref(), ad.rssi, peripheral);
+    }
+
+    /// A connectable device known by a platform identifier (as CoreBluetooth names devices,
+    /// all with the address 00:00:00:00:00:00), heard at once at `rssi`.
+    pub fn add_device_as(
+        &self,
+        id: DeviceId,
+        name: Option<&str>,
+        rssi: Option<i16>,
+        peripheral: FakePeripheral,
+    ) {
         let mut s = lock(&self.state);
-        s.devices.insert(ad.address, peripheral);
-        s.ads.push((Duration::ZERO, ad));
+        s.peripherals.insert(id.clone(), peripheral);
+        s.devices.push(FakeDevice {
+            id,
+            name: name.map(String::from),
+            rssi,
+            after: Some(Duration::ZERO),
+        });
+    }
+
+    /// A device the adapter remembers but never hears (a droid asleep in a drawer): listed
+    /// without an RSSI; connecting to it is the peripheral's business (give one that fails).
+    pub fn remember(&self, ad: Advertisement, peripheral: Option<FakePeripheral>) {
+        let id = DeviceId::from_address(ad.address);
+        let mut s = lock(&self.state);
+        if let Some(p) = peripheral {
+            s.peripherals.insert(id.clone(), p);
+        }
+        s.devices.push(FakeDevice {
+            id,
+            name: ad.name,
+            rssi: None,
+            after: None,
+        });
     }
 
     /// Make scanning fail (adapter off, permission denied, …).
     pub fn fail_scan(&self, err: BleError) {
         lock(&self.state).fail_scan = Some(err);
+    }
+
+    /// Power the adapter off or on, as `bluetoothctl power off|on`: off drops every
+    /// connection and fails scans and connects with BlueZ's `NotReady`.
+    pub fn set_powered(&self, on: bool) {
+        let peripherals: Vec<FakePeripheral> = {
+            let mut s = lock(&self.state);
+            s.powered = on;
+            if !on {
+                s.scan_started = None;
+            }
+            s.peripherals.values().cloned().collect()
+        };
+        for p in peripherals {
+            lock(&p.state).adapter_off = !on;
+            if !on && p.is_connected() {
+                p.drop_connection("the Bluetooth adapter was switched off");
+            }
+        }
     }
 
     /// How many scans were started.
@@ -332,6 +426,9 @@ impl BleCentral for FakeCentral {
             if let Some(e) = s.fail_scan.clone() {
                 return Err(e);
             }
+            if !s.powered {
+                return Err(BleError::adapter_off());
+            }
             s.scans += 1;
             s.scan_started = Some(Instant::now());
             Ok(())
@@ -345,28 +442,69 @@ impl BleCentral for FakeCentral {
         })
     }
 
-    fn advertisements(&self) -> BoxFuture<'_, Result<Vec<Advertisement>, BleError>> {
+    fn devices(&self) -> BoxFuture<'_, Result<Vec<KnownDevice>, BleError>> {
         Box::pin(async move {
             let s = lock(&self.state);
-            let Some(started) = s.scan_started else {
-                return Ok(Vec::new());
-            };
             let now = Instant::now();
-            Ok(s.ads
+            let connected = |id: &DeviceId| {
+                s.peripherals
+                    .get(id)
+                    .is_some_and(FakePeripheral::is_connected)
+            };
+            Ok(s.devices
                 .iter()
-                .filter(|(after, _)| started + *after <= now)
-                .map(|(_, a)| a.clone())
+                .filter_map(|d| {
+                    let heard = match (d.after, s.scan_started) {
+                        (Some(after), Some(started)) => started + after <= now,
+                        _ => false,
+                    };
+                    if d.after.is_some() && !heard {
+                        return None;
+                    }
+                    Some(KnownDevice {
+                        id: d.id.clone(),
+                        name: d.name.clone(),
+                        rssi: if heard { d.rssi } else { None },
+                        connected: connected(&d.id),
+                    })
+                })
                 .collect())
         })
     }
 
+    fn device<'a>(
+        &'a self,
+        id: &'a DeviceId,
+    ) -> BoxFuture<'a, Result<Arc<dyn BlePeripheral>, BleError>> {
+        Box::pin(async move {
+            match lock(&self.state).peripherals.get(id) {
+                Some(p) => Ok(Arc::new(p.clone()) as Arc<dyn BlePeripheral>),
+                None => Err(BleError::new(
+                    BleErrorKind::NotFound,
+                    format!("no device {id}"),
+                )),
+            }
+        })
+    }
+
+    fn powered(&self) -> BoxFuture<'_, Result<bool, BleError>> {
+        Box::pin(async move { Ok(lock(&self.state).powered) })
+    }
+
+    /// Any connectable device by address, heard now or not (BlueZ keeps devices it heard a
+    /// while ago).
     fn peripheral(
         &self,
         address: BleAddress,
     ) -> BoxFuture<'_, Result<Arc<dyn BlePeripheral>, BleError>> {
         Box::pin(async move {
-            match lock(&self.state).devices.get(&address) {
-                Some(p) => Ok(Arc::new(p.clone()) as Arc<dyn BlePeripheral>),
+            let s = lock(&self.state);
+            match s
+                .peripherals
+                .iter()
+                .find(|(id, _)| id.stand_in() == address)
+            {
+                Some((_, p)) => Ok(Arc::new(p.clone()) as Arc<dyn BlePeripheral>),
                 None => Err(BleError::new(
                     BleErrorKind::NotFound,
                     format!("no device {address}"),

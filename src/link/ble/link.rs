@@ -6,7 +6,7 @@
 //! Every step is bounded by a timeout, and any failure after connecting disconnects again so
 //! BlueZ is not left holding a half-open connection that would make the next attempt fail.
 
-use super::backend::{BleAddress, BleCentral, BlePeripheral, PeripheralEvent};
+use super::backend::{BleAddress, BleCentral, BlePeripheral, DeviceId, PeripheralEvent};
 use super::error::{BleError, BleErrorKind};
 use crate::link::gatt::{CharRef, GattProfile, GattUuid, HandshakeStep};
 use crate::link::{Connection, Link, LinkError, LinkEvent, LinkWriter};
@@ -47,14 +47,23 @@ impl Default for BleTimeouts {
 /// How often a rescan looks for the device it lost.
 const RESCAN_POLL: Duration = Duration::from_millis(250);
 
+/// How often a link waiting for a switched-off adapter asks whether it is back.
+const POWER_POLL: Duration = Duration::from_millis(250);
+
 /// Capacity of the event channel: notifications arrive at most every few ms.
 const EVENT_CAPACITY: usize = 1024;
 
 /// A droid over Bluetooth LE. Each `open()` connects afresh, so the session's reconnects re-run
 /// the whole handshake.
+///
+/// The first `open()` fails for good on what retrying cannot fix (the adapter off, a device
+/// lacking the droid's characteristics). Once a connection was made, those are passing: the
+/// adapter switched off mid-session is waited for ([`crate::link::ADAPTER_OFF_WAITING`], and
+/// [`Link::retry_hint`] fires when it is powered again), a characteristic missing on a
+/// reconnect (services half-resolved) is retried with the session's backoff.
 pub struct BleLink {
     central: Arc<dyn BleCentral>,
-    address: BleAddress,
+    id: DeviceId,
     name: String,
     model: Model,
     profile: GattProfile,
@@ -62,24 +71,30 @@ pub struct BleLink {
     /// The peripheral `open` is connecting to, until it returns: what `abort_open` cancels
     /// when the caller drops the open future (quitting mid-connect).
     connecting: Option<Arc<dyn BlePeripheral>>,
+    /// A connection was made once: what was fatal on the first open is passing now.
+    opened_once: bool,
+    /// The last open found the adapter switched off.
+    adapter_off: bool,
 }
 
 impl BleLink {
-    /// A link to the device at `address`, speaking `model`'s profile.
+    /// A link to the device `id` (or a [`BleAddress`]), speaking `model`'s profile.
     pub fn new(
         central: Arc<dyn BleCentral>,
-        address: BleAddress,
+        id: impl Into<DeviceId>,
         name: impl Into<String>,
         model: Model,
     ) -> Self {
         BleLink {
             central,
-            address,
+            id: id.into(),
             name: name.into(),
             model,
             profile: GattProfile::for_model(model),
             timeouts: BleTimeouts::default(),
             connecting: None,
+            opened_once: false,
+            adapter_off: false,
         }
     }
 
@@ -102,8 +117,13 @@ impl BleLink {
         &self.name
     }
 
+    /// The device's address (its stand-in where the platform hides it).
     pub fn address(&self) -> BleAddress {
-        self.address
+        self.id.stand_in()
+    }
+
+    pub fn id(&self) -> &DeviceId {
+        &self.id
     }
 
     pub fn profile(&self) -> &GattProfile {
@@ -130,22 +150,22 @@ impl BleLink {
     async fn find(&self) -> Result<Arc<dyn BlePeripheral>, BleError> {
         let op = self.timeouts.op;
         match self
-            .bounded("looking up", op, self.central.peripheral(self.address))
+            .bounded("looking up", op, self.central.device(&self.id))
             .await
         {
             Err(e) if e.kind == BleErrorKind::NotFound => {}
             other => return other,
         }
-        tracing::info!(address = %self.address, "device unknown to the adapter; scanning for it");
+        tracing::info!(device = %self.id, "device unknown to the adapter; scanning for it");
         self.bounded("scanning for", op, self.central.start_scan())
             .await?;
         let deadline = Instant::now() + self.timeouts.rescan;
         let mut seen = false;
         while Instant::now() < deadline {
-            let ads = self
-                .bounded("scanning for", op, self.central.advertisements())
+            let devices = self
+                .bounded("scanning for", op, self.central.devices())
                 .await?;
-            if ads.iter().any(|a| a.address == self.address) {
+            if devices.iter().any(|d| d.id == self.id) {
                 seen = true;
                 break;
             }
@@ -157,11 +177,11 @@ impl BleLink {
                 BleErrorKind::NotFound,
                 format!(
                     "{} ({}) is not advertising — wake it (tap it or put it on its charger)",
-                    self.name, self.address
+                    self.name, self.id
                 ),
             ));
         }
-        self.bounded("looking up", op, self.central.peripheral(self.address))
+        self.bounded("looking up", op, self.central.device(&self.id))
             .await
     }
 
@@ -317,20 +337,49 @@ impl Link for BleLink {
 
     fn open(&mut self) -> BoxFuture<'_, Result<Connection, LinkError>> {
         Box::pin(async move {
-            self.open_ble().await.map_err(|e| {
-                tracing::warn!(error = %e, fatal = e.fatal(), "BLE open failed");
-                LinkError::from(e)
-            })
+            let r = self.open_ble().await;
+            self.adapter_off = matches!(&r, Err(e) if e.kind == BleErrorKind::AdapterOff);
+            match r {
+                Ok(conn) => {
+                    self.opened_once = true;
+                    Ok(conn)
+                }
+                // Mid-session the adapter may come back: wait for it.
+                Err(e) if self.opened_once && e.kind == BleErrorKind::AdapterOff => {
+                    tracing::warn!(error = %e, "the Bluetooth adapter is off; waiting for it");
+                    Err(LinkError::transient(crate::link::ADAPTER_OFF_WAITING))
+                }
+                // A reconnect that finds the services half-resolved: try again.
+                Err(e) if self.opened_once && e.kind == BleErrorKind::MissingCharacteristic => {
+                    tracing::warn!(error = %e, "a characteristic is missing on reconnect; retrying");
+                    Err(LinkError::transient(e.message))
+                }
+                Err(e) => {
+                    tracing::warn!(error = %e, fatal = e.fatal(), "BLE open failed");
+                    Err(LinkError::from(e))
+                }
+            }
+        })
+    }
+
+    fn retry_hint(&mut self) -> BoxFuture<'_, ()> {
+        Box::pin(async move {
+            if !self.adapter_off {
+                return std::future::pending().await;
+            }
+            loop {
+                sleep(POWER_POLL).await;
+                if let Ok(Ok(true)) = timeout(self.timeouts.op, self.central.powered()).await {
+                    tracing::info!("the Bluetooth adapter is on again; reconnecting");
+                    self.adapter_off = false;
+                    return;
+                }
+            }
         })
     }
 
     fn describe(&self) -> String {
-        format!(
-            "{} {} ({})",
-            self.model.display_name(),
-            self.name,
-            self.address
-        )
+        format!("{} {} ({})", self.model.display_name(), self.name, self.id)
     }
 }
 

@@ -18,7 +18,8 @@ mod link;
 pub mod scan;
 
 pub use backend::{
-    Advertisement, BleAddress, BleCentral, BlePeripheral, DiscoveredChar, PeripheralEvent,
+    Advertisement, BleAddress, BleCentral, BlePeripheral, DeviceId, DiscoveredChar, KnownDevice,
+    PeripheralEvent,
 };
 pub use btleplug_backend::open_central;
 pub use error::{BleError, BleErrorKind, Os};
@@ -35,18 +36,24 @@ pub struct FoundDroid {
     pub link: BleLink,
     pub model: Model,
     pub name: String,
+    /// Who it is: what `--address` matches.
+    pub id: DeviceId,
+    /// Its address (the stand-in where the platform hides it).
     pub address: BleAddress,
     /// Every device heard, strongest first, unsupported ones included (`model: None`): what a
-    /// picker would offer.
+    /// picker would offer. Devices only remembered by the computer are not in it.
     pub candidates: Vec<ScanEntry>,
 }
 
 /// Find the droid `sel` asks for and build a [`BleLink`] to it.
 ///
 /// Opens the system's Bluetooth adapter, scans for up to `sel.scan_timeout` (stopping early
-/// once a droid asked for by `--name` or `--address` is heard), then picks: `sel.address`,
-/// else `sel.name` (case-insensitive, exact or a unique part such as `1A2B`), else the
-/// strongest supported droid. The returned link is not connected yet; the session connects it.
+/// once a droid asked for by `--name` or `--address` is heard), then picks among the devices
+/// heard (advertising during the scan, or connected): `sel.address`, else `sel.name`
+/// (case-insensitive, exact or a unique part such as `1A2B`), else the strongest droid this
+/// build can drive. A name or address matching only a device the computer remembers fails
+/// with one line saying it is not in range. The returned link is not connected yet; the
+/// session connects it.
 ///
 /// Errors are one line for the user, ending in what to do. `BleError::fatal()` is true for
 /// "no Bluetooth here" (no D-Bus system bus, BlueZ not running, no adapter, adapter off,
@@ -74,19 +81,21 @@ pub async fn connect_link_with(
     central: Arc<dyn BleCentral>,
     sel: &DeviceSelector,
 ) -> Result<FoundDroid, BleError> {
-    let candidates =
-        scan::scan(central.as_ref(), sel.scan_timeout, |e| sel.satisfied_by(e)).await?;
-    let chosen = scan::pick(&candidates, sel)?.clone();
+    let mut known =
+        scan::scan_known(central.as_ref(), sel.scan_timeout, |e| sel.satisfied_by(e)).await?;
+    let chosen = scan::pick(&known, sel)?.clone();
     let model = chosen.model.ok_or_else(|| {
         BleError::new(BleErrorKind::Selection, "the chosen device is not a droid")
     })?;
     let name = chosen.label();
-    tracing::info!(%name, address = %chosen.address, model = model.display_name(), "chose droid");
+    tracing::info!(%name, device = %chosen.id, model = model.display_name(), "chose droid");
+    known.retain(|e| e.heard);
     Ok(FoundDroid {
-        link: BleLink::new(central, chosen.address, name.clone(), model),
+        link: BleLink::new(central, chosen.id.clone(), name.clone(), model),
         model,
         name,
+        id: chosen.id,
         address: chosen.address,
-        candidates,
+        candidates: known,
     })
 }

@@ -1,7 +1,7 @@
 //! Scanning and picking a droid, over [`BleCentral`] so that sorting, filtering, model
 //! detection and output are tested with fake advertisements.
 
-use super::backend::{Advertisement, BleAddress, BleCentral};
+use super::backend::{Advertisement, BleAddress, BleCentral, DeviceId, KnownDevice};
 use super::error::{BleError, BleErrorKind, Os};
 use crate::model::Model;
 use serde_json::json;
@@ -22,29 +22,45 @@ pub struct ScanEntry {
     pub name: Option<String>,
     /// `None` for devices droidctl cannot drive.
     pub model: Option<Model>,
+    /// Who it is: what scan merging, the picker and `--address` key on.
+    pub id: DeviceId,
+    /// Its address, or where the platform hides it (macOS) a six-byte stand-in: for callers
+    /// keyed on addresses.
     pub address: BleAddress,
     pub rssi: Option<i16>,
+    /// Really there: it advertised during this scan or is connected now. A device the
+    /// computer only remembers is not.
+    pub heard: bool,
 }
 
 impl ScanEntry {
-    pub fn from_advertisement(ad: &Advertisement) -> Self {
+    pub fn from_device(d: &KnownDevice) -> Self {
         ScanEntry {
-            name: ad.name.clone(),
-            model: ad.name.as_deref().and_then(Model::from_advertised_name),
-            address: ad.address,
-            rssi: ad.rssi,
+            name: d.name.clone(),
+            model: d.name.as_deref().and_then(Model::from_advertised_name),
+            address: d.id.stand_in(),
+            id: d.id.clone(),
+            rssi: d.rssi,
+            heard: d.heard(),
         }
+    }
+
+    pub fn from_advertisement(ad: &Advertisement) -> Self {
+        ScanEntry::from_device(&KnownDevice::from(ad))
     }
 
     pub fn is_supported(&self) -> bool {
         self.model.is_some()
     }
 
-    /// The name, or the address for nameless devices.
+    /// A droid this build can drive.
+    pub fn is_drivable(&self) -> bool {
+        self.model.is_some_and(Model::drivable)
+    }
+
+    /// The name, or the id for nameless devices.
     pub fn label(&self) -> String {
-        self.name
-            .clone()
-            .unwrap_or_else(|| self.address.to_string())
+        self.name.clone().unwrap_or_else(|| self.id.to_string())
     }
 
     pub fn to_json(&self) -> serde_json::Value {
@@ -52,44 +68,69 @@ impl ScanEntry {
             "name": self.name,
             "model": self.model.map(Model::id),
             "model_name": self.model.map(Model::display_name),
-            "address": self.address.to_string(),
+            "address": self.id.to_string(),
             "rssi": self.rssi,
+            "heard": self.heard,
         })
     }
 }
 
-/// Merge advertisements per address (the newest name and RSSI win, older ones fill gaps),
-/// drop unsupported devices unless `all`, and sort strongest first (unknown RSSI last, then by
-/// name and address so the order is stable).
-pub fn summarize(ads: &[Advertisement], all: bool) -> Vec<ScanEntry> {
-    let mut by_addr: BTreeMap<BleAddress, Advertisement> = BTreeMap::new();
-    for ad in ads {
-        by_addr
-            .entry(ad.address)
+/// Merge what the adapter reported per device (the newest name and RSSI win, older ones fill
+/// gaps; heard once is heard), drop unsupported devices unless `all`, and sort: heard before
+/// remembered, strongest first (unknown RSSI last), then by name and id so the order is
+/// stable.
+pub fn summarize_devices(devices: &[KnownDevice], all: bool) -> Vec<ScanEntry> {
+    let mut by_id: BTreeMap<&DeviceId, KnownDevice> = BTreeMap::new();
+    for d in devices {
+        by_id
+            .entry(&d.id)
             .and_modify(|old| {
-                old.name = ad.name.clone().or(old.name.take());
-                old.rssi = ad.rssi.or(old.rssi);
+                old.name = d.name.clone().or(old.name.take());
+                old.rssi = d.rssi.or(old.rssi);
+                old.connected |= d.connected;
             })
-            .or_insert_with(|| ad.clone());
+            .or_insert_with(|| d.clone());
     }
-    let mut out: Vec<ScanEntry> = by_addr
+    let mut out: Vec<ScanEntry> = by_id
         .values()
-        .map(ScanEntry::from_advertisement)
+        .map(ScanEntry::from_device)
         .filter(|e| all || e.is_supported())
         .collect();
     out.sort_by(|a, b| {
         let strength = |e: &ScanEntry| std::cmp::Reverse(e.rssi.map_or(i32::MIN, i32::from));
-        strength(a)
-            .cmp(&strength(b))
+        b.heard
+            .cmp(&a.heard)
+            .then_with(|| strength(a).cmp(&strength(b)))
             .then_with(|| a.name.cmp(&b.name))
-            .then_with(|| a.address.cmp(&b.address))
+            .then_with(|| a.id.cmp(&b.id))
     });
     out
 }
 
-/// Listen for `duration` (or until `done` says enough) and return every device heard,
-/// summarized with `all = true`: callers filter.
+/// [`summarize_devices`] for advertisements by address (an advertisement without an RSSI is
+/// a remembered device, not heard).
+pub fn summarize(ads: &[Advertisement], all: bool) -> Vec<ScanEntry> {
+    let devices: Vec<KnownDevice> = ads.iter().map(KnownDevice::from).collect();
+    summarize_devices(&devices, all)
+}
+
+/// Listen for `duration` (or until `done` says enough of what was heard) and return every
+/// device heard, summarized with `all = true`: callers filter. Devices the adapter only
+/// remembers are left out ([`scan_known`] keeps them).
 pub async fn scan(
+    central: &dyn BleCentral,
+    duration: Duration,
+    done: impl Fn(&[ScanEntry]) -> bool,
+) -> Result<Vec<ScanEntry>, BleError> {
+    let mut entries = scan_known(central, duration, done).await?;
+    entries.retain(|e| e.heard);
+    Ok(entries)
+}
+
+/// [`scan`], keeping the devices the adapter remembers but did not hear (`heard: false`,
+/// last). `done` sees only the heard ones: a remembered droid may still wake up and be
+/// heard before the scan ends.
+pub async fn scan_known(
     central: &dyn BleCentral,
     duration: Duration,
     done: impl Fn(&[ScanEntry]) -> bool,
@@ -98,9 +139,10 @@ pub async fn scan(
     let deadline = Instant::now() + duration;
     let result = async {
         loop {
-            let ads = op("listing devices", central.advertisements()).await?;
-            let entries = summarize(&ads, true);
-            if Instant::now() >= deadline || done(&entries) {
+            let devices = op("listing devices", central.devices()).await?;
+            let entries = summarize_devices(&devices, true);
+            let heard = entries.iter().take_while(|e| e.heard).count();
+            if Instant::now() >= deadline || done(&entries[..heard]) {
                 return Ok(entries);
             }
             sleep(SCAN_POLL.min(deadline.saturating_duration_since(Instant::now()))).await;
@@ -108,6 +150,10 @@ pub async fn scan(
     }
     .await;
     let _ = timeout(SCAN_OP_TIMEOUT, central.stop_scan()).await;
+    // Switched off while listening: that, not "nothing heard", is the news.
+    if let Ok(Ok(false)) = timeout(SCAN_OP_TIMEOUT, central.powered()).await {
+        return Err(BleError::adapter_off_on(Os::CURRENT));
+    }
     result
 }
 
@@ -134,7 +180,9 @@ async fn op<T>(
 pub struct DeviceSelector {
     /// Advertised name (case-insensitive; a unique part of it is enough: `1A2B`).
     pub name: Option<String>,
-    pub address: Option<BleAddress>,
+    /// `--address`: a Bluetooth address, or the platform's identifier for the device (the
+    /// UUID macOS gives it), any case; see [`DeviceId::matches`].
+    pub address: Option<String>,
     /// How long to scan.
     pub scan_timeout: Duration,
 }
@@ -149,17 +197,22 @@ impl Default for DeviceSelector {
     }
 }
 
+/// Whether `entry`'s name is `name` (case-insensitive).
+fn named(entry: &ScanEntry, name: &str) -> bool {
+    entry
+        .name
+        .as_deref()
+        .is_some_and(|x| x.eq_ignore_ascii_case(name.trim()))
+}
+
 impl DeviceSelector {
-    /// Whether `entries` already hold what the user asked for by name or address, so the scan
+    /// Whether `heard` already holds what the user asked for by name or address, so the scan
     /// can stop early. "The strongest" needs the full scan to compare.
-    pub fn satisfied_by(&self, entries: &[ScanEntry]) -> bool {
+    pub fn satisfied_by(&self, heard: &[ScanEntry]) -> bool {
+        let heard = heard.iter().filter(|e| e.heard);
         match (&self.address, &self.name) {
-            (Some(a), _) => entries.iter().any(|e| e.address == *a),
-            (None, Some(n)) => entries.iter().any(|e| {
-                e.name
-                    .as_deref()
-                    .is_some_and(|x| x.eq_ignore_ascii_case(n.trim()))
-            }),
+            (Some(a), _) => heard.into_iter().any(|e| e.id.matches(a)),
+            (None, Some(n)) => heard.into_iter().any(|e| named(e, n)),
             (None, None) => false,
         }
     }
@@ -167,67 +220,82 @@ impl DeviceSelector {
 
 const WAKE_HINT: &str = "wake it (tap it or put it on its charger) and keep it near";
 
-/// Choose the droid `sel` asks for from a scan (`entries` sorted strongest first, all devices).
+/// The one line for a droid this computer remembers that did not answer the scan.
+fn not_in_range(e: &ScanEntry, secs: f64) -> BleError {
+    BleError::new(
+        BleErrorKind::NotFound,
+        format!(
+            "{} ({}) is known to this computer but not in range: not heard in {secs:.0} s — \
+             {WAKE_HINT}, and close any phone app holding it",
+            e.label(),
+            e.id
+        ),
+    )
+}
+
+/// Choose the droid `sel` asks for from a scan (`entries` sorted heard and strongest first,
+/// all devices, remembered ones included with `heard: false`). Only heard devices are
+/// chosen; a name or address that matches only a remembered one says so.
 pub fn pick<'a>(entries: &'a [ScanEntry], sel: &DeviceSelector) -> Result<&'a ScanEntry, BleError> {
     let secs = sel.scan_timeout.as_secs_f64();
-    let chosen = if let Some(addr) = sel.address {
-        entries.iter().find(|e| e.address == addr).ok_or_else(|| {
-            BleError::new(
-                BleErrorKind::NotFound,
-                format!("nothing with address {addr} heard in {secs:.0} s — {WAKE_HINT}"),
-            )
-        })?
+    let (heard, remembered): (Vec<&ScanEntry>, Vec<&ScanEntry>) =
+        entries.iter().partition(|e| e.heard);
+    let chosen = if let Some(addr) = sel.address.as_deref() {
+        match heard.iter().find(|e| e.id.matches(addr)) {
+            Some(e) => *e,
+            None => {
+                if let Some(e) = remembered.iter().find(|e| e.id.matches(addr)) {
+                    return Err(not_in_range(e, secs));
+                }
+                return Err(BleError::new(
+                    BleErrorKind::NotFound,
+                    format!(
+                        "nothing with address {} heard in {secs:.0} s — {WAKE_HINT}",
+                        addr.trim()
+                    ),
+                ));
+            }
+        }
     } else if let Some(name) = sel.name.as_deref() {
         let name = name.trim();
-        let lower = name.to_ascii_lowercase();
-        let exact = entries.iter().find(|e| {
-            e.name
-                .as_deref()
-                .is_some_and(|n| n.eq_ignore_ascii_case(name))
-        });
-        match exact {
+        match find_named(&heard, name)? {
             Some(e) => e,
             None => {
-                let partial: Vec<&ScanEntry> = entries
-                    .iter()
-                    .filter(|e| {
-                        e.name
-                            .as_deref()
-                            .is_some_and(|n| n.to_ascii_lowercase().contains(&lower))
-                    })
-                    .collect();
-                match partial.as_slice() {
-                    [one] => *one,
-                    [] => {
-                        return Err(BleError::new(
-                            BleErrorKind::NotFound,
-                            format!("no device named `{name}` heard in {secs:.0} s — {WAKE_HINT}"),
-                        ));
-                    }
-                    many => {
-                        let names: Vec<String> = many.iter().map(|e| e.label()).collect();
-                        return Err(BleError::new(
-                            BleErrorKind::Selection,
-                            format!(
-                                "`{name}` matches {}: {} — give the full name or --address",
-                                many.len(),
-                                names.join(", ")
-                            ),
-                        ));
-                    }
+                if let Ok(Some(e)) = find_named(&remembered, name) {
+                    return Err(not_in_range(e, secs));
                 }
+                return Err(BleError::new(
+                    BleErrorKind::NotFound,
+                    format!("no device named `{name}` heard in {secs:.0} s — {WAKE_HINT}"),
+                ));
             }
         }
     } else {
-        entries.iter().find(|e| e.is_supported()).ok_or_else(|| {
-            BleError::new(
-                BleErrorKind::NotFound,
-                format!(
-                    "no droid found in {secs:.0} s — {WAKE_HINT}; `droidctl scan --all` lists \
-                     everything heard, `droidctl --sim` needs no droid"
-                ),
-            )
-        })?
+        match heard.iter().find(|e| e.is_drivable()) {
+            Some(e) => *e,
+            None => {
+                let known: Vec<String> = remembered
+                    .iter()
+                    .filter(|e| e.is_drivable())
+                    .map(|e| e.label())
+                    .collect();
+                let known = if known.is_empty() {
+                    String::new()
+                } else {
+                    format!(
+                        " ({} known to this computer but not in range)",
+                        known.join(", ")
+                    )
+                };
+                return Err(BleError::new(
+                    BleErrorKind::NotFound,
+                    format!(
+                        "no droid found in {secs:.0} s{known} — {WAKE_HINT}; `droidctl scan \
+                         --all` lists everything heard, `droidctl --sim` needs no droid"
+                    ),
+                ));
+            }
+        }
     };
     if chosen.model.is_none() {
         return Err(BleError::new(
@@ -236,11 +304,47 @@ pub fn pick<'a>(entries: &'a [ScanEntry], sel: &DeviceSelector) -> Result<&'a Sc
                 "{} ({}) is not a droid droidctl knows (names start D2-, Q5-, GB-, BB-, SK-, 2B- \
                  or are `Robi 42`)",
                 chosen.label(),
-                chosen.address
+                chosen.id
             ),
         ));
     }
     Ok(chosen)
+}
+
+/// The entry named `name` among `entries`: exactly (case-insensitive), else the only one
+/// whose name contains it. More than one is an error.
+fn find_named<'a>(
+    entries: &[&'a ScanEntry],
+    name: &str,
+) -> Result<Option<&'a ScanEntry>, BleError> {
+    if let Some(e) = entries.iter().find(|e| named(e, name)) {
+        return Ok(Some(*e));
+    }
+    let lower = name.to_ascii_lowercase();
+    let partial: Vec<&ScanEntry> = entries
+        .iter()
+        .copied()
+        .filter(|e| {
+            e.name
+                .as_deref()
+                .is_some_and(|n| n.to_ascii_lowercase().contains(&lower))
+        })
+        .collect();
+    match partial.as_slice() {
+        [] => Ok(None),
+        [one] => Ok(Some(*one)),
+        many => {
+            let names: Vec<String> = many.iter().map(|e| e.label()).collect();
+            Err(BleError::new(
+                BleErrorKind::Selection,
+                format!(
+                    "`{name}` matches {}: {} — give the full name or --address",
+                    many.len(),
+                    names.join(", ")
+                ),
+            ))
+        }
+    }
 }
 
 /// Print a scan result as a table (or one JSON object per line, like `packet decode --json`).
@@ -257,8 +361,12 @@ pub fn render(entries: &[ScanEntry], json: bool, out: &mut dyn Write) -> io::Res
             [
                 e.name.clone().unwrap_or_else(|| "(no name)".into()),
                 e.model.map_or("-", Model::display_name).to_string(),
-                e.address.to_string(),
-                e.rssi.map_or("-".into(), |r| format!("{r} dBm")),
+                e.id.to_string(),
+                match (e.rssi, e.heard) {
+                    (Some(r), _) => format!("{r} dBm"),
+                    (None, true) => "connected".into(),
+                    (None, false) => "not in range (remembered)".into(),
+                },
             ]
         })
         .collect();
@@ -298,7 +406,7 @@ mod tests {
     }
 
     #[test]
-    fn summarize_sorts_strongest_first_and_filters() {
+    fn summarize_sorts_heard_and_strongest_first_and_filters() {
         let ads = [
             ad(Some("D2-AAAA"), 1, Some(-70)),
             ad(Some("JBL Flip"), 2, Some(-30)),
@@ -328,10 +436,13 @@ mod tests {
         assert_eq!(s[1].model, Some(Model::Robi42));
         assert_eq!(s[2].model, Some(Model::R2D2));
         assert_eq!(s[3].model, Some(Model::R2Q5));
+        // No RSSI: remembered, not heard.
+        assert!(s[..3].iter().all(|e| e.heard));
+        assert!(!s[3].heard);
     }
 
     #[test]
-    fn summarize_merges_per_address() {
+    fn summarize_merges_per_device() {
         let ads = [
             ad(Some("D2-AAAA"), 1, Some(-70)),
             ad(None, 1, Some(-40)),
@@ -341,6 +452,42 @@ mod tests {
         assert_eq!(s.len(), 1);
         assert_eq!(s[0].rssi, Some(-40));
         assert_eq!(s[0].name.as_deref(), Some("D2-AAAA"));
+        assert!(s[0].heard);
+    }
+
+    /// CoreBluetooth gives every device the address 00:00:00:00:00:00: the platform's
+    /// identifier keeps them apart.
+    #[test]
+    fn the_same_address_is_two_devices_with_two_identifiers() {
+        let dev = |key: &str, name: &str, rssi| KnownDevice {
+            id: DeviceId::new(key, Some(BleAddress::default())),
+            name: Some(name.into()),
+            rssi: Some(rssi),
+            connected: false,
+        };
+        let s = summarize_devices(
+            &[
+                dev("8e5b5b4e-1234-4a6b-9c8d-0123456789ab", "D2-AAAA", -50),
+                dev("0f000000-1234-4a6b-9c8d-0123456789ab", "D2-BBBB", -60),
+            ],
+            false,
+        );
+        assert_eq!(s.len(), 2);
+        assert_eq!(s[0].id.to_string(), "8e5b5b4e-1234-4a6b-9c8d-0123456789ab");
+        let by = |a: &str| sel_addr(a);
+        assert_eq!(
+            pick(&s, &by("0F000000-1234-4A6B-9C8D-0123456789AB"))
+                .unwrap()
+                .label(),
+            "D2-BBBB"
+        );
+    }
+
+    fn sel_addr(a: &str) -> DeviceSelector {
+        DeviceSelector {
+            address: Some(a.into()),
+            ..DeviceSelector::default()
+        }
     }
 
     #[test]
@@ -356,8 +503,8 @@ mod tests {
         assert_eq!(
             lines,
             [
-                r#"{"name":"D2-AAAA","model":"r2d2","model_name":"R2-D2","address":"F1:00:00:00:00:01","rssi":-70}"#,
-                r#"{"name":null,"model":null,"model_name":null,"address":"F1:00:00:00:00:02","rssi":null}"#,
+                r#"{"name":"D2-AAAA","model":"r2d2","model_name":"R2-D2","address":"F1:00:00:00:00:01","rssi":-70,"heard":true}"#,
+                r#"{"name":null,"model":null,"model_name":null,"address":"F1:00:00:00:00:02","rssi":null,"heard":false}"#,
             ]
         );
     }
@@ -368,6 +515,7 @@ mod tests {
             &[
                 ad(Some("D2-AAAA"), 1, Some(-70)),
                 ad(Some("BB-1"), 2, Some(-48)),
+                ad(Some("D2-OLD0"), 3, None),
             ],
             false,
         );
@@ -377,14 +525,15 @@ mod tests {
             String::from_utf8(out).unwrap(),
             "NAME     MODEL  ADDRESS            RSSI\n\
              BB-1     BB-8   F1:00:00:00:00:02  -48 dBm\n\
-             D2-AAAA  R2-D2  F1:00:00:00:00:01  -70 dBm\n"
+             D2-AAAA  R2-D2  F1:00:00:00:00:01  -70 dBm\n\
+             D2-OLD0  R2-D2  F1:00:00:00:00:03  not in range (remembered)\n"
         );
     }
 
-    fn sel(name: Option<&str>, address: Option<BleAddress>) -> DeviceSelector {
+    fn sel(name: Option<&str>, address: Option<&str>) -> DeviceSelector {
         DeviceSelector {
             name: name.map(String::from),
-            address,
+            address: address.map(String::from),
             scan_timeout: Duration::from_secs(5),
         }
     }
@@ -409,8 +558,12 @@ mod tests {
             pick(&all, &sel(Some("cccc"), None)).unwrap().label(),
             "GB-CCCC"
         );
-        let a = BleAddress([0xF1, 0, 0, 0, 0, 4]);
-        assert_eq!(pick(&all, &sel(None, Some(a))).unwrap().label(), "GB-CCCC");
+        assert_eq!(
+            pick(&all, &sel(None, Some("f1-00-00-00-00-04")))
+                .unwrap()
+                .label(),
+            "GB-CCCC"
+        );
 
         let e = pick(&all, &sel(Some("D2-"), None)).unwrap_err();
         assert_eq!(e.kind, BleErrorKind::Selection);
@@ -426,12 +579,50 @@ mod tests {
         assert!(e.message.contains("--sim"), "{e}");
     }
 
+    /// BlueZ lists the droids it remembers, heard or not: only heard ones are picked, and
+    /// asking for a remembered one by name or address says it is not in range.
+    #[test]
+    fn remembered_droids_are_neither_picked_nor_connected_to() {
+        let all = summarize(
+            &[
+                ad(Some("D2-GONE"), 1, None),
+                ad(Some("BB-HERE"), 2, Some(-80)),
+            ],
+            true,
+        );
+        assert_eq!(pick(&all, &sel(None, None)).unwrap().label(), "BB-HERE");
+        for s in [
+            sel(Some("d2-gone"), None),
+            sel(Some("GONE"), None),
+            sel(None, Some("F1:00:00:00:00:01")),
+        ] {
+            let e = pick(&all, &s).unwrap_err();
+            assert_eq!(e.kind, BleErrorKind::NotFound, "{s:?}");
+            assert_eq!(
+                e.message,
+                "D2-GONE (F1:00:00:00:00:01) is known to this computer but not in range: not \
+                 heard in 5 s — wake it (tap it or put it on its charger) and keep it near, and \
+                 close any phone app holding it"
+            );
+        }
+        let only_remembered = summarize(&[ad(Some("D2-GONE"), 1, None)], true);
+        let e = pick(&only_remembered, &sel(None, None)).unwrap_err();
+        assert!(
+            e.message.starts_with(
+                "no droid found in 5 s (D2-GONE known to this computer but not in range)"
+            ),
+            "{e}"
+        );
+        // A remembered match does not end the scan early: it may still wake up.
+        assert!(!sel(Some("D2-GONE"), None).satisfied_by(&all));
+    }
+
     #[test]
     fn satisfied_by() {
         let all = summarize(&[ad(Some("D2-AAAA"), 1, Some(-70))], true);
         assert!(sel(Some("d2-aaaa"), None).satisfied_by(&all));
         assert!(!sel(Some("aaaa"), None).satisfied_by(&all));
         assert!(!sel(None, None).satisfied_by(&all));
-        assert!(sel(None, Some(BleAddress([0xF1, 0, 0, 0, 0, 1]))).satisfied_by(&all));
+        assert!(sel(None, Some("F1:00:00:00:00:01")).satisfied_by(&all));
     }
 }
