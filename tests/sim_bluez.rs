@@ -1052,3 +1052,505 @@ fn the_dbus_api_as_bluez_clients_see_it() {
     let lines = sim.stop();
     assert!(!lines.iter().any(|l| l.contains("panicked")), "{lines:?}");
 }
+
+// -------------------------------------------------------------------------------------------
+// The real world (issue 15): remembered devices, the adapter switched off, fail-safes, a
+// droid that wants to sleep, leaving cleanly
+// -------------------------------------------------------------------------------------------
+
+/// Start the real binary against the bus in the background (a mission that runs while the
+/// test does something to the adapter).
+fn spawn_droidctl(args: &[&str], bus: &str, dir: &TempDir) -> Child {
+    Command::new(env!("CARGO_BIN_EXE_droidctl"))
+        .args(args)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .env("DROIDCTL_LOG_FILE", dir.0.join("droidctl.log"))
+        .env("DROIDCTL_CONFIG", dir.0.join("config.toml"))
+        .env("DBUS_SYSTEM_BUS_ADDRESS", bus)
+        .spawn()
+        .expect("start droidctl")
+}
+
+/// `bluetoothctl power on|off`, as it does it: a Set of the adapter's Powered.
+fn set_powered(c: &Connection, on: bool) {
+    let p = c.with_proxy("org.bluez", "/org/bluez/hci0", Duration::from_secs(2));
+    let r: Result<(), dbus::Error> = p.method_call(
+        "org.freedesktop.DBus.Properties",
+        "Set",
+        ("org.bluez.Adapter1", "Powered", Variant(on)),
+    );
+    r.expect("Set Powered");
+}
+
+/// Wait until `pred` holds for the simulator's lines.
+fn wait_lines(sim: &Sim, limit: Duration, what: &str, pred: impl Fn(&[String]) -> bool) {
+    let start = Instant::now();
+    while !pred(&sim.lines()) {
+        assert!(
+            start.elapsed() < limit,
+            "no {what}:\n{}",
+            sim.lines().join("\n")
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+/// BlueZ lists devices it remembers even when they are nowhere near: droidctl neither lists
+/// nor picks them, `--all` shows them as not heard, and asking for one by name fails after
+/// the scan with one line instead of a connection attempt.
+#[test]
+fn remembered_devices_are_neither_listed_nor_picked() {
+    let sim = Sim::start(&["bb8", "--remembered", "r2d2"]);
+    let (here, gone) = (sim.names[0].clone(), sim.names[1].clone());
+    assert!(gone.starts_with("D2-"), "{:?}", sim.names);
+    let dir = TempDir::new("remembered");
+    let out = droidctl(&["scan", "--timeout", "1"], Some(&sim.address), &dir);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let stdout = text(&out.stdout);
+    let rows: Vec<&str> = stdout.lines().collect();
+    assert_eq!(rows.len(), 2, "{stdout}");
+    assert!(rows[1].starts_with(&here), "{stdout}");
+    let out = droidctl(
+        &["scan", "--timeout", "1", "--all", "--json"],
+        Some(&sim.address),
+        &dir,
+    );
+    let all: Vec<serde_json::Value> = text(&out.stdout)
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert_eq!(all.len(), 2, "{all:?}");
+    assert_eq!(
+        (all[0]["name"].as_str(), &all[0]["heard"]),
+        (Some(here.as_str()), &serde_json::json!(true))
+    );
+    assert_eq!(all[1]["name"], gone.as_str());
+    assert_eq!(all[1]["heard"], false);
+    assert_eq!(all[1]["rssi"], serde_json::Value::Null);
+    // The default pick is the droid that is there.
+    let script = dir.file("mission.txt", "wait 0.2s\n");
+    let out = droidctl(
+        &["run", &script, "--scan-timeout", "1"],
+        Some(&sim.address),
+        &dir,
+    );
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    // By name: one line once the scan is over, no connection attempt.
+    let t0 = Instant::now();
+    let out = droidctl(
+        &["run", &script, "--name", &gone, "--scan-timeout", "1"],
+        Some(&sim.address),
+        &dir,
+    );
+    let took = t0.elapsed();
+    let stderr = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert_eq!(stderr.lines().count(), 1, "one line: {stderr}");
+    assert!(
+        stderr.contains(&format!("{gone} ("))
+            && stderr.contains("is known to this computer but not in range"),
+        "{stderr}"
+    );
+    assert!(stderr.contains("wake it"), "{stderr}");
+    assert!(
+        took < Duration::from_secs(4),
+        "no connection attempt: {took:?}"
+    );
+    let lines = sim.stop();
+    assert_eq!(
+        lines
+            .iter()
+            .filter(|l| l.contains(&format!("{here}: connected (")))
+            .count(),
+        1,
+        "{lines:?}"
+    );
+    assert!(
+        !lines
+            .iter()
+            .any(|l| l.contains(&format!("{gone}: connection attempt"))),
+        "{lines:?}"
+    );
+}
+
+/// The adapter switched off mid-drive (`bluetoothctl power off`) and on again: the run says
+/// it waits, reconnects by itself once the adapter is on, and the trace shows the droid
+/// resuming with a stop at the last heading before anything else. An adapter that is off at
+/// the start is one line naming the fix.
+#[test]
+fn the_adapter_switched_off_mid_drive_is_waited_for() {
+    let sim = Sim::start(&["r2d2", "--trace", "--json"]);
+    let name = sim.names[0].clone();
+    let dir = TempDir::new("power");
+    let script = dir.file(
+        "mission.txt",
+        "stance tripod\ndrive 60 90\nwait 6s\nstop\nwait 0.3s\n",
+    );
+    let run = spawn_droidctl(&["run", &script, "--name", &name], &sim.address, &dir);
+    wait_lines(&sim, Duration::from_secs(20), "drive at 60", |lines| {
+        drive_speeds(&commands_in(lines, &name)).contains(&60)
+    });
+    let bus = Connection::new_address(&sim.address).unwrap();
+    set_powered(&bus, false);
+    sim.wait_line(
+        &format!("{name}: disconnected (adapter off)"),
+        Duration::from_secs(2),
+    );
+    std::thread::sleep(Duration::from_millis(1500));
+    set_powered(&bus, true);
+    let out = run.wait_with_output().unwrap();
+    let (stdout, stderr) = (text(&out.stdout), text(&out.stderr));
+    assert_eq!(out.status.code(), Some(0), "{stdout}\n{stderr}");
+    assert!(
+        stderr.contains("] Bluetooth adapter is off — waiting"),
+        "{stderr}"
+    );
+    assert!(stderr.contains("] reconnected"), "{stderr}");
+    assert!(stdout.contains("failed steps 0"), "{stdout}");
+    // Off at the start: one line naming the fix, at once.
+    set_powered(&bus, false);
+    for args in [
+        &["scan", "--timeout", "1"][..],
+        &["run", &script, "--name", &name],
+    ] {
+        let t0 = Instant::now();
+        let out = droidctl(args, Some(&sim.address), &dir);
+        let stderr = text(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {stderr}");
+        assert_eq!(stderr.lines().count(), 1, "{stderr}");
+        assert!(stderr.contains("`bluetoothctl power on`"), "{stderr}");
+        assert!(t0.elapsed() < Duration::from_secs(3), "{args:?}");
+    }
+    let lines = sim.stop();
+    let on = line_at(&lines, 0, "adapter powered on");
+    let reconnect = line_at(&lines, on, &format!("{name}: connected ("));
+    let cmds = commands_in(&lines[reconnect..], &name);
+    let names: Vec<&str> = cmds
+        .iter()
+        .map(|(_, p)| p["command"].as_str().unwrap_or("?"))
+        .collect();
+    assert_eq!(&names[..2], ["wake", "drive-with-heading"], "{names:?}");
+    assert_eq!(cmds[1].1["fields"]["speed"], 0, "stop first: {:?}", cmds[1]);
+    assert_eq!(cmds[1].1["fields"]["heading"], 90, "at the last heading");
+    let speeds = drive_speeds(&cmds);
+    assert!(speeds.contains(&60), "then drives on: {speeds:?}");
+    assert_eq!(speeds.last(), Some(&0), "{speeds:?}");
+}
+
+/// A v1 droid: the wake sequence as GATT writes that are no API packets, then the
+/// stop-on-disconnect fail-safe among the setup, and its answers as decoded responses.
+#[test]
+fn a_v1_droid_is_woken_and_given_its_fail_safe() {
+    let sim = Sim::start(&["bb8", "--trace", "--json"]);
+    let name = sim.names[0].clone();
+    let dir = TempDir::new("v1trace");
+    let script = dir.file("mission.txt", "drive 60 0 for 0.5s\nwait 0.2s\n");
+    let out = droidctl(&["run", &script, "--name", &name], Some(&sim.address), &dir);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let lines = sim.stop();
+    let trace = trace_of(&lines, &name);
+    let writes: Vec<(String, String)> = trace
+        .iter()
+        .filter(|(_, v)| v["packet"]["kind"] == "gatt-write")
+        .map(|(_, v)| {
+            let p = &v["packet"];
+            (
+                p["uuid"].as_str().unwrap_or("").to_string(),
+                p["hex"].as_str().unwrap_or("").to_string(),
+            )
+        })
+        .collect();
+    assert_eq!(
+        writes,
+        [
+            (
+                "22bb746f-2bbd-7554-2d6f-726568705327".to_string(),
+                droidctl::hex::compact(b"011i3")
+            ),
+            (
+                "22bb746f-2bb2-7554-2d6f-726568705327".to_string(),
+                "07".to_string()
+            ),
+            (
+                "22bb746f-2bbf-7554-2d6f-726568705327".to_string(),
+                "01".to_string()
+            ),
+        ]
+    );
+    let cmds = commands_in(&lines, &name);
+    let fail_safe = cmds
+        .iter()
+        .find(|(_, p)| p["command"] == "set-temporary-option-flags")
+        .unwrap_or_else(|| panic!("no fail-safe: {cmds:?}"));
+    assert_eq!(
+        fail_safe.1["fields"]["flags"].as_u64().map(|f| f & 1),
+        Some(1)
+    );
+    let first_drive = cmds
+        .iter()
+        .position(|(_, p)| p["command"] == "roll")
+        .unwrap_or(usize::MAX);
+    assert!(first_drive < cmds.len(), "{cmds:?}");
+    assert!(
+        trace
+            .iter()
+            .any(|(_, v)| v["dir"] == "out" && v["packet"]["kind"] == "response"),
+        "answers decoded"
+    );
+}
+
+/// A droid that sleeps after 2 s without a command stays connected through an idle app for
+/// three times that (droidctl answers each will-sleep warning with a ping); `q` then stops
+/// it and disconnects within 2 s, the last drive command written at speed 0.
+#[test]
+fn an_idle_app_keeps_the_droid_awake_and_q_leaves_it_stopped() {
+    let sim = Sim::start(&["r2d2", "--idle-sleep", "2", "--trace", "--json"]);
+    let name = sim.names[0].clone();
+    let dir = TempDir::new("idle");
+    let log = dir.0.join("droidctl.log").to_string_lossy().into_owned();
+    let config = dir.0.join("config.toml").to_string_lossy().into_owned();
+    let mut tui = pty::Tui::start(
+        &["--name", &name],
+        &[
+            ("DBUS_SYSTEM_BUS_ADDRESS", sim.address.as_str()),
+            ("DROIDCTL_LOG_FILE", log.as_str()),
+            ("DROIDCTL_CONFIG", config.as_str()),
+        ],
+    );
+    tui.wait_for("connected", Duration::from_secs(20));
+    tui.wait_for("stance tripod", Duration::from_secs(10));
+    tui.hold(b"w", Duration::from_millis(1500));
+    let idle_from = sim.lines().len();
+    std::thread::sleep(Duration::from_secs(7));
+    let lines = sim.lines();
+    assert!(
+        !lines.iter().any(|l| l.contains("fell asleep")),
+        "{lines:?}"
+    );
+    let after = trace_of(&lines[idle_from..], &name);
+    let warnings: Vec<usize> = after
+        .iter()
+        .enumerate()
+        .filter(|(_, (_, v))| v["dir"] == "out" && v["packet"]["command"] == "will-sleep")
+        .map(|(i, _)| i)
+        .collect();
+    assert!(
+        warnings.len() >= 2,
+        "the droid warned while idle: {after:?}"
+    );
+    for w in &warnings {
+        assert!(
+            after[*w..]
+                .iter()
+                .any(|(_, v)| v["dir"] == "in" && v["packet"]["command"] == "ping"),
+            "a ping answers each warning: {after:?}"
+        );
+    }
+    assert!(tui.text().contains("connected"), "{}", tui.text());
+    let q = Instant::now();
+    tui.send(b"q");
+    sim.wait_line(
+        &format!("{name}: disconnected by the client"),
+        Duration::from_secs(2),
+    );
+    assert!(q.elapsed() <= Duration::from_secs(2), "{:?}", q.elapsed());
+    let status = tui.wait_exit(Duration::from_secs(10));
+    assert!(status.success(), "{status:?}");
+    let lines = sim.stop();
+    let speeds = drive_speeds(&commands_in(&lines, &name));
+    assert!(speeds.iter().any(|s| *s > 0), "it drove: {speeds:?}");
+    assert_eq!(
+        speeds.last(),
+        Some(&0),
+        "the last drive written stops: {speeds:?}"
+    );
+}
+
+/// The virtual BlueZ as other clients see the real world: a remembered device is there
+/// without an RSSI and a Connect to it fails after a few seconds; powering the adapter off
+/// ends discovery and says so in PropertiesChanged; an idle droid warns, falls asleep
+/// (drops the connection) and cannot be reached any more.
+#[test]
+fn the_dbus_view_of_power_remembered_devices_and_sleep() {
+    let sim = Sim::start(&["r2d2", "--remembered", "bb8", "--idle-sleep", "1"]);
+    let (name, old) = (sim.names[0].clone(), sim.names[1].clone());
+    let a = Connection::new_address(&sim.address).unwrap();
+    let adapter = "/org/bluez/hci0";
+    let devices = |tree: &Tree| -> Vec<String> {
+        tree.keys()
+            .filter(|p| p.rsplit('/').next().is_some_and(|l| l.starts_with("dev_")))
+            .map(|p| p.to_string())
+            .collect()
+    };
+    let tree = managed(&a);
+    let known = devices(&tree);
+    assert_eq!(
+        known.len(),
+        1,
+        "only the remembered one before a discovery: {known:?}"
+    );
+    let old_dev = known[0].clone();
+    assert_eq!(
+        prop(&tree, &old_dev, "org.bluez.Device1", "Name"),
+        Some(format!("{old:?}"))
+    );
+    assert_eq!(prop(&tree, &old_dev, "org.bluez.Device1", "RSSI"), None);
+    // Changes arrive as signals: (path, property changed or invalidated, value).
+    type Seen = Arc<Mutex<Vec<(String, String, String)>>>;
+    let seen: Seen = Arc::default();
+    {
+        let seen = seen.clone();
+        let rule = MatchRule::new_signal("org.freedesktop.DBus.Properties", "PropertiesChanged")
+            .with_namespaced_path("/org/bluez");
+        a.add_match(rule, move |(): (), _, m| {
+            let path = m.path().map(|p| p.to_string()).unwrap_or_default();
+            if let Ok((_, changed, invalidated)) = m.read3::<&str, PropMap, Vec<String>>() {
+                let mut s = seen.lock().unwrap();
+                for (k, v) in changed {
+                    s.push((path.clone(), k, format!("{:?}", v.0)));
+                }
+                for k in invalidated {
+                    s.push((path.clone(), k, "invalidated".into()));
+                }
+            }
+            true
+        })
+        .unwrap();
+    }
+    let pump = |for_: Duration| {
+        let end = Instant::now() + for_;
+        while Instant::now() < end {
+            let _ = a.process(Duration::from_millis(20));
+        }
+    };
+    let saw = |path: &str, key: &str, value: &str| {
+        seen.lock()
+            .unwrap()
+            .iter()
+            .any(|(p, k, v)| p == path && k == key && v == value)
+    };
+    call(&a, adapter, "org.bluez.Adapter1", "StartDiscovery").unwrap();
+    let tree = managed(&a);
+    let dev = devices(&tree)
+        .into_iter()
+        .find(|p| *p != old_dev)
+        .expect("the droid in range is heard");
+    assert_eq!(
+        prop(&tree, &dev, "org.bluez.Device1", "Name"),
+        Some(format!("{name:?}"))
+    );
+    assert!(prop(&tree, &dev, "org.bluez.Device1", "RSSI").is_some());
+    assert_eq!(
+        prop(&tree, &old_dev, "org.bluez.Device1", "RSSI"),
+        None,
+        "never heard"
+    );
+    // Nobody answers a connection to the remembered device: it fails as BlueZ's does.
+    let t0 = Instant::now();
+    let r: Result<(), dbus::Error> = a
+        .with_proxy("org.bluez", old_dev.clone(), Duration::from_secs(10))
+        .method_call("org.bluez.Device1", "Connect", ());
+    let e = r.expect_err("no connection to a device out of range");
+    assert_eq!(e.name(), Some("org.bluez.Error.Failed"));
+    assert_eq!(e.message(), Some("le-connection-abort-by-local"));
+    assert!(
+        t0.elapsed() >= Duration::from_millis(2500),
+        "{:?}",
+        t0.elapsed()
+    );
+    // `bluetoothctl power off`: discovery stops, the RSSIs go, and the signals say so.
+    set_powered(&a, false);
+    pump(Duration::from_millis(300));
+    assert!(
+        saw(adapter, "Powered", "false"),
+        "{:?}",
+        seen.lock().unwrap()
+    );
+    assert!(
+        saw(adapter, "Discovering", "false"),
+        "{:?}",
+        seen.lock().unwrap()
+    );
+    assert!(
+        saw(&dev, "RSSI", "invalidated"),
+        "{:?}",
+        seen.lock().unwrap()
+    );
+    assert_eq!(
+        err_name(call(&a, adapter, "org.bluez.Adapter1", "StartDiscovery")),
+        "org.bluez.Error.NotReady"
+    );
+    assert_eq!(
+        err_name(call(&a, &dev, "org.bluez.Device1", "Connect")),
+        "org.bluez.Error.NotReady"
+    );
+    set_powered(&a, true);
+    pump(Duration::from_millis(300));
+    assert!(
+        saw(adapter, "Powered", "true"),
+        "{:?}",
+        seen.lock().unwrap()
+    );
+    // A droid left alone after connecting: the warning after 1 s, asleep 5 s later.
+    call(&a, &dev, "org.bluez.Device1", "Connect").unwrap();
+    let start = Instant::now();
+    let api = loop {
+        let t = managed(&a);
+        let api = t.iter().find_map(|(p, i)| {
+            let uuid = i.get("org.bluez.GattCharacteristic1")?.get("UUID")?;
+            (uuid.0.as_str() == Some("00010002-574f-4f20-5370-6865726f2121")).then(|| p.to_string())
+        });
+        if let Some(api) = api {
+            break api;
+        }
+        assert!(start.elapsed() < Duration::from_secs(3), "never resolved");
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    call(&a, &api, "org.bluez.GattCharacteristic1", "StartNotify").unwrap();
+    let start = Instant::now();
+    while !saw(&dev, "Connected", "false") {
+        assert!(
+            start.elapsed() < Duration::from_secs(9),
+            "{:?}",
+            seen.lock().unwrap()
+        );
+        pump(Duration::from_millis(50));
+    }
+    let notified: Vec<u8> = seen
+        .lock()
+        .unwrap()
+        .iter()
+        .filter(|(p, k, _)| *p == api && k == "Value")
+        .flat_map(|(_, _, v)| {
+            // `[141, 0, 19, 25, …]`: the bytes as the variant prints them.
+            v.trim_matches(|c| c == '[' || c == ']')
+                .split(',')
+                .filter_map(|b| b.trim().parse::<u8>().ok())
+                .collect::<Vec<_>>()
+        })
+        .collect();
+    let warned = Decoder::new()
+        .decode_all(&notified)
+        .into_iter()
+        .filter_map(Result::ok)
+        .any(|p| (p.did, p.cid) == (0x13, 0x19));
+    assert!(warned, "the will-sleep warning: {notified:?}");
+    sim.wait_line(&format!("{name}: fell asleep"), Duration::from_secs(1));
+    // Asleep: not heard by a new discovery, and a connection fails.
+    call(&a, adapter, "org.bluez.Adapter1", "StartDiscovery").unwrap();
+    pump(Duration::from_millis(300));
+    assert_eq!(prop(&managed(&a), &dev, "org.bluez.Device1", "RSSI"), None);
+    let r: Result<(), dbus::Error> = a
+        .with_proxy("org.bluez", dev.clone(), Duration::from_secs(10))
+        .method_call("org.bluez.Device1", "Connect", ());
+    assert_eq!(
+        r.err()
+            .and_then(|e| e.name().map(str::to_string))
+            .as_deref(),
+        Some("org.bluez.Error.Failed")
+    );
+    let lines = sim.stop();
+    assert!(!lines.iter().any(|l| l.contains("panicked")), "{lines:?}");
+}
