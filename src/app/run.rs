@@ -74,8 +74,13 @@ pub enum Source {
     Replay(Box<Replay>, String),
 }
 
-/// Frames are drawn at most this often, and only when something visible changed.
+/// Frames are drawn only when something visible changed, at most this often while someone is
+/// at the keys (or the droid is driven, or a replay plays)...
 const RENDER_EVERY: Duration = Duration::from_millis(50);
+/// ...and at most this often when nobody has touched anything for [`ACTIVE_FOR`]: an idle app
+/// shows what the droid streams at a few frames per second.
+const IDLE_RENDER_EVERY: Duration = Duration::from_millis(250);
+const ACTIVE_FOR: Duration = Duration::from_secs(3);
 const HINT_TIME: Duration = Duration::from_secs(4);
 const BATTERY_EVERY: Duration = Duration::from_secs(10);
 
@@ -96,6 +101,8 @@ struct App {
     dirty: bool,
     /// Replay: what the last advance produced (kept to reuse its allocation).
     replayed: Vec<(Duration, Output)>,
+    /// The operator touched something: frames come fast until then.
+    active_until: Instant,
 }
 
 /// The help overlay's lines from the bindings as configured: keyboard, then gamepad.
@@ -485,6 +492,7 @@ impl App {
 
     /// Returns an exit reason when the app should stop.
     fn on_term(&mut self, e: TermEvent) -> Option<ExitReason> {
+        self.active_until = Instant::now() + ACTIVE_FOR;
         let now = self.now();
         match e {
             TermEvent::FocusLost => {
@@ -711,6 +719,7 @@ impl App {
         if self.player.is_some() {
             return;
         }
+        self.active_until = Instant::now() + ACTIVE_FOR;
         match &e {
             PadEvent::Unavailable(why) => {
                 self.state.gamepad = GamepadStatus::Unavailable(why.clone())
@@ -843,6 +852,7 @@ pub async fn run_source<B: Backend>(
         session: session.clone(),
         player,
         replayed: Vec::new(),
+        active_until: start + ACTIVE_FOR,
         controller: Controller::with_family(opts.config.control.clone(), family),
         held: HeldKeys::new(opts.release),
         pad: PadState::new(opts.config.gamepad.clone()),
@@ -871,8 +881,10 @@ pub async fn run_source<B: Backend>(
     let period = Duration::from_secs_f64(1.0 / opts.config.control.rate_hz.clamp(1, 50) as f64);
     let mut tick = interval(period);
     tick.set_missed_tick_behavior(MissedTickBehavior::Delay);
-    // The next frame may be drawn from here on.
-    let mut frame_at = Instant::now();
+    // When the last frame was drawn.
+    let mut last_frame = Instant::now()
+        .checked_sub(IDLE_RENDER_EVERY)
+        .unwrap_or_else(Instant::now);
     let mut second = interval(Duration::from_secs(1));
     second.set_missed_tick_behavior(MissedTickBehavior::Skip);
     let (battery_tx, mut battery_rx) = mpsc::channel::<f32>(4);
@@ -930,6 +942,13 @@ pub async fn run_source<B: Backend>(
             Some(_) => None,
         });
         let playing = app.player.as_ref().is_some_and(Player::running);
+        let active = playing || !app.state.control.deadman || Instant::now() < app.active_until;
+        let frame_at = last_frame
+            + if active {
+                RENDER_EVERY
+            } else {
+                IDLE_RENDER_EVERY
+            };
         tokio::select! {
             e = inputs.term.recv() => match e {
                 Some(e) => {
@@ -1019,7 +1038,7 @@ pub async fn run_source<B: Backend>(
                 app.dirty = true;
             }
             _ = sleep_until(frame_at), if app.dirty || playing => {
-                frame_at = Instant::now() + RENDER_EVERY;
+                last_frame = Instant::now();
                 app.replay_frame();
                 if app.dirty {
                     app.state.now = app.clock();

@@ -179,6 +179,54 @@ impl Body {
         }
     }
 
+    /// When the body next has something to say: `None` while it must be stepped every step
+    /// (rolling: a wall can come at any step), else the earliest time an event can come (a
+    /// sample, the end of a stance change or an animation, the sleep warning, a battery level
+    /// crossed; `Duration::MAX` for none). Integration does not depend on how often
+    /// [`Body::advance_to`] is called, so a host may call it only then.
+    pub fn next_due(&self) -> Option<Duration> {
+        let rolling = self.state.velocity_cm_s != 0.0
+            || self.drive.is_some_and(|d| d.speed != 0.0)
+            || self.wheels.is_some_and(|(l, r)| l != 0.0 || r != 0.0);
+        if rolling {
+            return None;
+        }
+        let mut due = Duration::MAX;
+        let mut at = |t: Duration| due = due.min(t);
+        if let Some(t) = self.transition {
+            at(t.ends);
+        }
+        if let Some(t) = self.animation_ends {
+            at(t);
+        }
+        if let Some(t) = self.sound_ends {
+            at(t);
+        }
+        if self.state.awake {
+            if self.stream_every.is_some() {
+                at(self.next_sample);
+            }
+            let sleep = self.last_activity + self.inactivity_timeout;
+            if !self.will_sleep_sent {
+                at(sleep.saturating_sub(Duration::from_secs(10)));
+            }
+            at(sleep);
+            // The battery drains at the idle rate: the next level it crosses (3.6 V, 3.45 V).
+            let v = self.state.battery_v;
+            if self.voltage_state_now() != self.voltage_state {
+                at(self.now);
+            } else if let Some(threshold) = [3.6f32, 3.45].into_iter().find(|t| v >= *t)
+                && self.cfg.drain_idle_v_s > 0.0
+            {
+                let secs = ((v - threshold) / self.cfg.drain_idle_v_s).max(0.0) as f64;
+                // A step early, against rounding.
+                at((self.now + Duration::from_secs_f64(secs.min(1e9)))
+                    .saturating_sub(self.cfg.step));
+            }
+        }
+        Some(due)
+    }
+
     /// What happened since the last call.
     pub fn take_events(&mut self) -> Vec<SimEvent> {
         std::mem::take(&mut self.events)

@@ -257,6 +257,31 @@ impl Pump {
     ) {
         let mut next_tick = Instant::now() + self.step;
         let reason = loop {
+            // Step the droid only when it has something to say: at rest, the next physics
+            // step on the same grid at or after its next event (a sample, a stance change
+            // ending); rolling, every step. Its notifications come out at the same times.
+            let now = Instant::now();
+            if next_tick < now {
+                // Slept past ticks at rest: back onto the grid.
+                let behind = (now - next_tick).as_nanos().div_ceil(self.step.as_nanos());
+                next_tick += self.step * behind.min(u32::MAX as u128) as u32;
+            }
+            let due = lock(&self.shared).droid.next_due();
+            let wake = match due {
+                None => next_tick,
+                Some(d) => {
+                    let at = self
+                        .epoch
+                        .checked_add(d)
+                        .unwrap_or(next_tick + self.step * 1000);
+                    if at <= next_tick {
+                        next_tick
+                    } else {
+                        let steps = (at - next_tick).as_nanos().div_ceil(self.step.as_nanos());
+                        next_tick + self.step * steps.min(u32::MAX as u128) as u32
+                    }
+                }
+            };
             let disconnect = self.next_disconnect();
             let next_in = self.inbound.front().map(|(t, _, _)| *t);
             let next_out = self.outbound.front().map(|(t, _)| *t);
@@ -301,8 +326,8 @@ impl Pump {
                             break None;
                         }
                 }
-                _ = sleep_until(next_tick) => {
-                    next_tick += self.step;
+                _ = sleep_until(wake) => {
+                    next_tick = wake + self.step;
                     let now = self.sim_time();
                     let shared = self.shared.clone();
                     let mut s = lock(&shared);

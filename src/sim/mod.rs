@@ -47,6 +47,12 @@ pub trait WireDroid: Send {
     }
     fn advance(&mut self, now: Duration) -> Vec<Vec<u8>>;
     fn state(&self) -> &SimState;
+    /// When [`WireDroid::advance`] next has something to return: `None` to be advanced every
+    /// physics step (the default), else the earliest time (`Duration::MAX`: nothing pending).
+    /// The link steps the droid no more often than that.
+    fn next_due(&self) -> Option<Duration> {
+        None
+    }
 }
 
 impl WireDroid for SimDroid {
@@ -64,6 +70,9 @@ impl WireDroid for SimDroid {
     }
     fn state(&self) -> &SimState {
         SimDroid::state(self)
+    }
+    fn next_due(&self) -> Option<Duration> {
+        SimDroid::next_due(self)
     }
 }
 
@@ -88,6 +97,9 @@ impl WireDroid for SimDroidV1 {
     }
     fn state(&self) -> &SimState {
         SimDroidV1::state(self)
+    }
+    fn next_due(&self) -> Option<Duration> {
+        SimDroidV1::next_due(self)
     }
 }
 

@@ -75,6 +75,11 @@ impl SimDroidV1 {
         self.body.model()
     }
 
+    /// When the droid next has something to send ([`super::body::Body::next_due`]).
+    pub fn next_due(&self) -> Option<Duration> {
+        self.body.next_due()
+    }
+
     pub fn state(&self) -> &SimState {
         self.body.state()
     }
