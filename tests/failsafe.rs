@@ -40,8 +40,11 @@ fn setup_of(model: Model) -> Vec<Command> {
     )
 }
 
+/// What the session wrote: when, the command's name, its payload.
+type Written = Arc<Mutex<Vec<(Duration, String, Vec<u8>)>>>;
+
 /// Every command the session wrote, by name, with when.
-fn record_out(s: &session::SessionHandle) -> Arc<Mutex<Vec<(Duration, String, Vec<u8>)>>> {
+fn record_out(s: &session::SessionHandle) -> Written {
     let out = Arc::new(Mutex::new(Vec::new()));
     let mut rx = s.subscribe_log();
     let seen = out.clone();

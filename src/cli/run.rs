@@ -271,18 +271,18 @@ async fn report_link(mut state: tokio::sync::watch::Receiver<LinkState>) {
                 );
             }
             // Said once: the link waits for the adapter, whatever the attempts.
+            (LinkState::Reconnecting { reason, .. }, Some(_))
+                if reason == crate::link::ADAPTER_OFF_WAITING && waiting => {}
             (LinkState::Reconnecting { reason, .. }, Some(t0))
                 if reason == crate::link::ADAPTER_OFF_WAITING =>
             {
-                if !waiting {
-                    waiting = true;
-                    lost = true;
-                    let _ = writeln!(
-                        std::io::stderr(),
-                        "[{:>8.2}s] {reason}",
-                        t0.elapsed().as_secs_f64()
-                    );
-                }
+                waiting = true;
+                lost = true;
+                let _ = writeln!(
+                    std::io::stderr(),
+                    "[{:>8.2}s] {reason}",
+                    t0.elapsed().as_secs_f64()
+                );
             }
             (LinkState::Reconnecting { attempt, reason }, Some(t0)) => {
                 let what = if lost {
