@@ -1554,3 +1554,81 @@ fn the_dbus_view_of_power_remembered_devices_and_sleep() {
     let lines = sim.stop();
     assert!(!lines.iter().any(|l| l.contains("panicked")), "{lines:?}");
 }
+
+/// The fail-safe through btleplug: droidctl driving a BB-9E dies without a word (SIGKILL),
+/// and the droid's control-system timeout stops it; another BB-9E, driven by a client that
+/// never set one, keeps rolling after its client disconnects.
+#[test]
+fn the_fail_safe_stops_a_droid_whose_host_vanished() {
+    use droidctl::protocol::v2::cmd;
+    use droidctl::protocol::v2::wire::DriveFlags;
+    use droidctl::units::Heading;
+    let sim = Sim::start(&["bb9e", "bb9e", "--trace", "--json"]);
+    let (name, other) = (sim.names[0].clone(), sim.names[1].clone());
+    let dir = TempDir::new("failsafe");
+    let script = dir.file("mission.txt", "drive 60 0\nwait 20s\n");
+    let mut run = spawn_droidctl(&["run", &script, "--name", &name], &sim.address, &dir);
+    wait_lines(&sim, Duration::from_secs(20), "drive at 60", |lines| {
+        drive_speeds(&commands_in(lines, &name)).contains(&60)
+    });
+    std::thread::sleep(Duration::from_millis(600));
+    run.kill().unwrap();
+    let _ = run.wait();
+    let stopped = format!("{name}: 3.0 s after the disconnect: stopped");
+    sim.wait_line(&stopped, Duration::from_secs(6));
+    // Another client drives the other droid: unlock, wake, drive, and leave without the
+    // fail-safe.
+    let a = Connection::new_address(&sim.address).unwrap();
+    let tree = managed(&a);
+    let dev = tree
+        .keys()
+        .find(|p| prop(&tree, p, "org.bluez.Device1", "Name") == Some(format!("{other:?}")))
+        .expect("the other droid")
+        .to_string();
+    call(&a, &dev, "org.bluez.Device1", "Connect").unwrap();
+    let start = Instant::now();
+    let chars = loop {
+        let t = managed(&a);
+        let find = |uuid: &str| {
+            t.iter().find_map(|(p, i)| {
+                let u = i.get("org.bluez.GattCharacteristic1")?.get("UUID")?;
+                (u.0.as_str() == Some(uuid)).then(|| p.to_string())
+            })
+        };
+        if let (Some(api), Some(unlock)) = (
+            find("00010002-574f-4f20-5370-6865726f2121"),
+            find("00020005-574f-4f20-5370-6865726f2121"),
+        ) {
+            break (api, unlock);
+        }
+        assert!(start.elapsed() < Duration::from_secs(3), "never resolved");
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    let write = |path: &str, bytes: Vec<u8>| {
+        let r: Result<(), dbus::Error> = a
+            .with_proxy("org.bluez", path.to_string(), Duration::from_secs(2))
+            .method_call(
+                "org.bluez.GattCharacteristic1",
+                "WriteValue",
+                (bytes, PropMap::new()),
+            );
+        r.unwrap();
+    };
+    write(&chars.1, b"usetheforce...band".to_vec());
+    write(&chars.0, cmd::wake().to_packet(1).encode());
+    let drive = cmd::drive_with_heading(40, Heading::new(0).unwrap(), DriveFlags::empty());
+    write(&chars.0, drive.to_packet(2).encode());
+    std::thread::sleep(Duration::from_millis(500));
+    call(&a, &dev, "org.bluez.Device1", "Disconnect").unwrap();
+    sim.wait_line(
+        &format!("{other}: 3.0 s after the disconnect: still rolling at"),
+        Duration::from_secs(6),
+    );
+    let lines = sim.stop();
+    assert!(
+        commands_in(&lines, &name)
+            .iter()
+            .any(|(_, p)| p["command"] == "set-custom-control-system-timeout"),
+        "droidctl set the fail-safe"
+    );
+}

@@ -650,10 +650,11 @@ impl GattDroid {
             return None;
         }
         let idle = now.saturating_sub(self.last_activity);
-        if idle >= limit + SLEEP_GRACE {
+        let asleep_after = limit.saturating_add(SLEEP_GRACE);
+        if idle >= asleep_after {
             self.status.asleep = true;
             if self.status.connected {
-                return Some(self.last_activity + limit + SLEEP_GRACE);
+                return Some(self.last_activity.saturating_add(asleep_after));
             }
         } else if idle >= limit && self.status.connected && !self.will_sleep_sent {
             self.will_sleep_sent = true;

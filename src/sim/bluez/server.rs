@@ -43,6 +43,9 @@ const REFUSE_AFTER: Duration = Duration::from_millis(300);
 /// A connection to a device that is not advertising (remembered but out of range, or
 /// asleep) fails after this long, as BlueZ gives up on an LE connection nobody answers.
 const ABSENT_AFTER: Duration = Duration::from_secs(3);
+/// How long after a disconnect the simulator says whether the droid still rolls (its
+/// fail-safe stops it, or nothing does).
+const MOTION_REPORT_AFTER: Duration = Duration::from_secs(3);
 /// While discovering, signal strengths are heard again this often.
 const RSSI_EVERY: Duration = Duration::from_secs(1);
 /// The default ATT MTU.
@@ -196,6 +199,8 @@ struct Device {
     remembered: bool,
     /// Its falling asleep was reported.
     asleep_said: bool,
+    /// When to say whether it still rolls, after a disconnect.
+    motion_report: Option<Instant>,
     tracer: PacketTracer,
     /// The GATT objects are on the bus.
     exported: bool,
@@ -261,6 +266,7 @@ impl Device {
             remembered,
             // Remembered devices are never there to fall asleep.
             asleep_said: remembered,
+            motion_report: None,
             exported: false,
             owner: None,
             refusing: false,
@@ -1184,6 +1190,7 @@ impl BluezSim {
             Ok(()) => {
                 let d = &mut self.devices[i];
                 d.tracer.reset();
+                d.motion_report = None;
                 d.owner = Some(client.clone());
                 let path = d.path.clone();
                 let slow = d.droid.faults().slow_resolve;
@@ -1355,6 +1362,7 @@ impl BluezSim {
     fn link_down(&mut self, i: usize, reason: &str) {
         let d = &mut self.devices[i];
         d.owner = None;
+        d.motion_report = Some(Instant::now() + MOTION_REPORT_AFTER);
         for s in &mut d.services {
             for c in &mut s.chars {
                 c.sessions.clear();
@@ -1493,6 +1501,28 @@ impl BluezSim {
             let events = self.devices[i].droid.advance(now);
             for e in events {
                 self.on_event(i, e);
+            }
+        }
+        // A while after a disconnect: does the droid still roll? (Its fail-safe, if the host
+        // set it, has stopped it by then.)
+        for i in 0..self.devices.len() {
+            let d = &mut self.devices[i];
+            if d.motion_report.is_some_and(|t| Instant::now() >= t) {
+                d.motion_report = None;
+                if !d.connected() && !d.droid.status().asleep {
+                    let v = d.droid.state().velocity_cm_s.abs();
+                    let motion = if v >= 1.0 {
+                        format!("still rolling at {v:.0} cm/s")
+                    } else {
+                        "stopped".to_string()
+                    };
+                    let line = format!(
+                        "{}: {:.1} s after the disconnect: {motion}",
+                        d.name(),
+                        MOTION_REPORT_AFTER.as_secs_f64()
+                    );
+                    self.say(line);
+                }
             }
         }
         for i in 0..self.devices.len() {
