@@ -259,6 +259,16 @@ impl Link for RecordingLink {
         })
     }
 
+    /// Recording changes nothing about how the link connects: cancelling and the wait
+    /// before a retry are the inner link's.
+    fn abort_open(&mut self) -> BoxFuture<'_, ()> {
+        self.inner.abort_open()
+    }
+
+    fn retry_hint(&mut self) -> BoxFuture<'_, ()> {
+        self.inner.retry_hint()
+    }
+
     fn describe(&self) -> String {
         self.inner.describe()
     }
