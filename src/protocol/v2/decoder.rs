@@ -9,8 +9,8 @@
 //! packet, and skips from one framing byte to the next with `memchr`.
 
 use super::packet::{
-    BodyError, EOP, ESC, ESC_EOP, ESC_ESC, ESC_SOP, Packet, PacketRef, SOP, parse_body,
-    parse_body_ref,
+    BodyError, EOP, ESC, ESC_EOP, ESC_ESC, ESC_SOP, Packet, PacketRef, SOP, body_ref_unchecked,
+    parse_body, parse_body_ref,
 };
 use std::fmt;
 
@@ -183,101 +183,118 @@ impl Decoder {
     where
         F: FnMut(Decoded<'_>),
     {
-        let base = self.offset;
-        let n = bytes.len();
-        let mut i = 0;
-        while i < n {
+        let mut pos = 0;
+        while let Some(d) = self.next_in(bytes, &mut pos) {
+            f(d);
+        }
+    }
+
+    /// The next packet or error in `bytes[*pos..]`, moving `pos` past what it consumed.
+    fn next_in(&mut self, bytes: &[u8], pos: &mut usize) -> Option<Decoded<'_>> {
+        match self.scan(bytes, pos)? {
+            Err(e) => Some(Decoded::Error(e)),
+            // A body ended: `buf` holds it until the next packet starts.
+            Ok(()) => {
+                // Checked first, then handed out: a packet borrows `buf`, an error needs the
+                // decoder mutably.
+                if let Err((e, packet)) = parse_body_ref(&self.buf) {
+                    let packet = packet.map(|p| p.to_packet());
+                    let e = self.body_error(e, packet);
+                    self.buf.clear();
+                    return Some(Decoded::Error(e));
+                }
+                self.stats.packets += 1;
+                let offset = self.packet_start;
+                body_ref_unchecked(&self.buf).map(|packet| Decoded::Packet { offset, packet })
+            }
+        }
+    }
+
+    /// Consume `n` bytes of the input.
+    fn advance(&mut self, pos: &mut usize, n: usize) {
+        *pos += n;
+        self.offset += n as u64;
+        self.stats.bytes += n as u64;
+    }
+
+    /// Run through `bytes[*pos..]` until a body ends (`Ok`) or an error is due, skipping from
+    /// one framing byte to the next; `None` when the input is used up.
+    fn scan(&mut self, bytes: &[u8], pos: &mut usize) -> Option<Result<(), DecodeError>> {
+        while *pos < bytes.len() {
+            let rest = &bytes[*pos..];
+            let at = self.offset;
             match self.state {
-                State::Hunting => match memchr::memchr(SOP, &bytes[i..]) {
+                State::Hunting => match memchr::memchr(SOP, rest) {
                     None => {
-                        self.garbage(base + i as u64, (n - i) as u64);
-                        i = n;
+                        self.garbage(at, rest.len() as u64);
+                        self.advance(pos, rest.len());
                     }
                     Some(k) => {
                         if k > 0 {
-                            self.garbage(base + i as u64, k as u64);
+                            self.garbage(at, k as u64);
                         }
-                        if let Some(e) = self.take_garbage() {
-                            f(Decoded::Error(e));
+                        self.advance(pos, k + 1);
+                        let garbage = self.take_garbage();
+                        self.start_packet(at + k as u64);
+                        if let Some(e) = garbage {
+                            return Some(Err(e));
                         }
-                        self.start_packet(base + (i + k) as u64);
-                        i += k + 1;
                     }
                 },
-                State::Discarding => match memchr::memchr2(SOP, EOP, &bytes[i..]) {
+                State::Discarding => match memchr::memchr2(SOP, EOP, rest) {
                     None => {
-                        self.stats.skipped_bytes += (n - i) as u64;
-                        i = n;
+                        self.stats.skipped_bytes += rest.len() as u64;
+                        self.advance(pos, rest.len());
                     }
                     Some(k) => {
                         self.stats.skipped_bytes += k as u64;
-                        if bytes[i + k] == SOP {
-                            self.start_packet(base + (i + k) as u64);
+                        self.advance(pos, k + 1);
+                        if rest[k] == SOP {
+                            self.start_packet(at + k as u64);
                         } else {
                             self.stats.skipped_bytes += 1;
                             self.state = State::Hunting;
                         }
-                        i += k + 1;
                     }
                 },
                 State::Body { escaped: false } => {
-                    let rest = &bytes[i..];
                     let run = memchr::memchr3(SOP, EOP, ESC, rest).unwrap_or(rest.len());
-                    if run > 0 {
-                        let room = self.max_body - self.buf.len();
-                        if run > room {
-                            // The byte after the room is the one that does not fit.
-                            self.buf.extend_from_slice(&rest[..room]);
-                            self.packet_wire_len += room as u64 + 1;
-                            i += room + 1;
-                            let detail = format!("body longer than {} bytes", self.max_body);
-                            f(Decoded::Error(
-                                self.abandon(DecodeErrorKind::Oversize, detail),
-                            ));
-                            continue;
-                        }
-                        self.buf.extend_from_slice(&rest[..run]);
-                        self.packet_wire_len += run as u64;
-                        i += run;
-                        if i == n {
-                            break;
-                        }
+                    let room = self.max_body - self.buf.len();
+                    if run > room {
+                        // The byte after the room is the one that does not fit.
+                        self.buf.extend_from_slice(&rest[..room]);
+                        self.packet_wire_len += room as u64 + 1;
+                        self.advance(pos, room + 1);
+                        let detail = format!("body longer than {} bytes", self.max_body);
+                        return Some(Err(self.abandon(DecodeErrorKind::Oversize, detail)));
                     }
-                    let at = base + i as u64;
-                    let b = bytes[i];
-                    i += 1;
+                    self.buf.extend_from_slice(&rest[..run]);
+                    self.packet_wire_len += run as u64;
+                    self.advance(pos, run);
+                    let Some(&b) = rest.get(run) else {
+                        continue;
+                    };
+                    let at = self.offset;
+                    self.advance(pos, 1);
                     if b == EOP {
                         self.packet_wire_len += 1;
                         self.state = State::Hunting;
-                        let offset = self.packet_start;
-                        match parse_body_ref(&self.buf) {
-                            Ok(packet) => {
-                                self.stats.packets += 1;
-                                f(Decoded::Packet { offset, packet });
-                            }
-                            Err((e, packet)) => {
-                                let packet = packet.map(|p| p.to_packet());
-                                let e = self.body_error(e, packet);
-                                self.buf.clear();
-                                f(Decoded::Error(e));
-                            }
-                        }
-                    } else if let Some(Err(e)) = self.step(b, at) {
-                        f(Decoded::Error(e));
+                        return Some(Ok(()));
+                    }
+                    if let Some(Err(e)) = self.step(b, at) {
+                        return Some(Err(e));
                     }
                 }
                 State::Body { escaped: true } => {
-                    let at = base + i as u64;
-                    let b = bytes[i];
-                    i += 1;
+                    let b = rest[0];
+                    self.advance(pos, 1);
                     if let Some(Err(e)) = self.step(b, at) {
-                        f(Decoded::Error(e));
+                        return Some(Err(e));
                     }
                 }
             }
         }
-        self.offset = base + n as u64;
-        self.stats.bytes += n as u64;
+        None
     }
 
     /// `len` bytes outside any packet from `at`: one pending run, reported when it ends.
@@ -482,17 +499,11 @@ impl Iterator for Feed<'_> {
     type Item = Result<Packet, DecodeError>;
 
     fn next(&mut self) -> Option<Self::Item> {
-        while self.pos < self.bytes.len() {
-            let b = self.bytes[self.pos];
-            self.pos += 1;
-            let at = self.decoder.offset;
-            self.decoder.offset += 1;
-            self.decoder.stats.bytes += 1;
-            if let Some(event) = self.decoder.step(b, at) {
-                return Some(event);
-            }
-        }
-        None
+        let d = self.decoder.next_in(self.bytes, &mut self.pos)?;
+        Some(match d {
+            Decoded::Packet { packet, .. } => Ok(packet.to_packet()),
+            Decoded::Error(e) => Err(e),
+        })
     }
 }
 
@@ -669,6 +680,27 @@ mod feed_with_tests {
     use crate::hex;
     use proptest::prelude::*;
 
+    /// The decoder one byte at a time through `step` (the plain state machine the fast path
+    /// must agree with).
+    fn via_bytes(
+        bytes: &[u8],
+        chunk: usize,
+        max: usize,
+    ) -> (Vec<Result<Packet, DecodeError>>, DecoderStats) {
+        let mut d = Decoder::with_max_body(max);
+        let mut out = Vec::new();
+        for c in bytes.chunks(chunk.max(1)) {
+            for &b in c {
+                let at = d.offset;
+                d.offset += 1;
+                d.stats.bytes += 1;
+                out.extend(d.step(b, at));
+            }
+        }
+        out.extend(d.finish().into_iter().map(Err));
+        (out, *d.stats())
+    }
+
     /// Everything `feed` reports, with `feed_with`'s packet offsets left out.
     fn via_feed(
         bytes: &[u8],
@@ -751,12 +783,16 @@ mod feed_with_tests {
     proptest! {
         #[test]
         fn feed_with_agrees_with_feed(bytes in framing_heavy(), chunk in 1usize..40, max in 8usize..40) {
-            prop_assert_eq!(via_feed(&bytes, chunk, max), via_feed_with(&bytes, chunk, max));
+            let reference = via_bytes(&bytes, chunk, max);
+            prop_assert_eq!(&via_feed(&bytes, chunk, max), &reference);
+            prop_assert_eq!(&via_feed_with(&bytes, chunk, max), &reference);
         }
 
         #[test]
         fn feed_with_agrees_on_noise(bytes in proptest::collection::vec(any::<u8>(), 0..300), chunk in 1usize..64) {
-            prop_assert_eq!(via_feed(&bytes, chunk, 16), via_feed_with(&bytes, chunk, 16));
+            let reference = via_bytes(&bytes, chunk, 16);
+            prop_assert_eq!(&via_feed(&bytes, chunk, 16), &reference);
+            prop_assert_eq!(&via_feed_with(&bytes, chunk, 16), &reference);
         }
     }
 }

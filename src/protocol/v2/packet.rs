@@ -213,12 +213,30 @@ impl PacketRef<'_> {
     }
 }
 
+/// A body [`parse_body_ref`] accepted, read again without checking its checksum.
+pub(crate) fn body_ref_unchecked(body: &[u8]) -> Option<PacketRef<'_>> {
+    header_ref(body).ok()
+}
+
 /// Parse an unescaped body (everything between SOP and EOP, checksum included) without
 /// copying the payload. On a bad checksum the packet as read comes back with the error.
 pub fn parse_body_ref(body: &[u8]) -> Result<PacketRef<'_>, (BodyError, Option<PacketRef<'_>>)> {
+    let packet = header_ref(body).map_err(|e| (e, None))?;
+    let got = body.len();
+    let expected = checksum(&body[..got - 1]);
+    let chk = body[got - 1];
+    if expected != chk {
+        return Err((BodyError::BadChecksum { expected, got: chk }, Some(packet)));
+    }
+    Ok(packet)
+}
+
+/// The header fields and payload of a body, its length checked against its flags (the
+/// checksum is not looked at).
+fn header_ref(body: &[u8]) -> Result<PacketRef<'_>, BodyError> {
     let got = body.len();
     let Some(&flag_byte) = body.first() else {
-        return Err((BodyError::TooShort { needed: 5, got }, None));
+        return Err(BodyError::TooShort { needed: 5, got });
     };
     let flags = Flags::from_bits_retain(flag_byte);
     let ext = flags.contains(Flags::EXTENDED_FLAGS) as usize;
@@ -229,7 +247,7 @@ pub fn parse_body_ref(body: &[u8]) -> Result<PacketRef<'_>, (BodyError, Option<P
     let header = 1 + ext + tid + sid + 3 + err;
     let needed = header + 1;
     if got < needed {
-        return Err((BodyError::TooShort { needed, got }, None));
+        return Err(BodyError::TooShort { needed, got });
     }
     let mut i = 1;
     let mut take = |present: usize| {
@@ -243,7 +261,7 @@ pub fn parse_body_ref(body: &[u8]) -> Result<PacketRef<'_>, (BodyError, Option<P
     let ext_flags = take(ext);
     let tid_v = take(tid);
     let sid_v = take(sid);
-    let packet = PacketRef {
+    Ok(PacketRef {
         flags,
         ext_flags,
         tid: tid_v,
@@ -253,13 +271,7 @@ pub fn parse_body_ref(body: &[u8]) -> Result<PacketRef<'_>, (BodyError, Option<P
         seq: body[i + 2],
         err: (err == 1).then(|| ErrorCode::from_byte(body[i + 3])),
         data: &body[header..got - 1],
-    };
-    let expected = checksum(&body[..got - 1]);
-    let chk = body[got - 1];
-    if expected != chk {
-        return Err((BodyError::BadChecksum { expected, got: chk }, Some(packet)));
-    }
-    Ok(packet)
+    })
 }
 
 /// Parse an unescaped body (everything between SOP and EOP, checksum included).
