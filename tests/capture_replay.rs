@@ -265,6 +265,7 @@ fn record_refuses_to_overwrite_without_force() {
 #[test]
 fn a_killed_recording_is_readable_up_to_the_last_flush() {
     use portable_pty::{CommandBuilder, PtySize, native_pty_system};
+    use std::io::Read as _;
     let dir = tmp("killed");
     let capture = dir.join("killed.capture");
     let pty = native_pty_system()
@@ -313,4 +314,3 @@ fn a_killed_recording_is_readable_up_to_the_last_flush() {
     );
 }
 
-use std::io::Read as _;
