@@ -156,7 +156,7 @@ pub enum Item {
     Record(Record),
 }
 
-/// The push parser: [`Reader::feed`] bytes as they come, take items with [`Reader::next`]
+/// The push parser: [`Reader::feed`] bytes as they come, take items with [`Reader::next_item`]
 /// until it returns `None`, and call [`Reader::finish`] at the end of the input.
 #[derive(Debug, Default)]
 pub struct Reader {
@@ -214,7 +214,7 @@ impl Reader {
     }
 
     /// The next header or record, an error, or `None` when more bytes are needed.
-    pub fn next(&mut self) -> Option<Result<Item, Error>> {
+    pub fn next_item(&mut self) -> Option<Result<Item, Error>> {
         if self.failed {
             return None;
         }
@@ -362,7 +362,7 @@ mod tests {
         let mut items = Vec::new();
         for p in bytes.chunks(piece.max(1)) {
             r.feed(p);
-            while let Some(i) = r.next() {
+            while let Some(i) = r.next_item() {
                 match i {
                     Ok(i) => items.push(i),
                     Err(e) => return (items, Some(e)),

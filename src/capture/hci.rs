@@ -523,7 +523,7 @@ pub fn capture_from_btsnoop(bytes: &[u8], handles: &[u16]) -> Result<Capture, St
     let mut events = Vec::new();
     let mut warnings = Vec::new();
     let mut damage = None;
-    while let Some(item) = reader.next() {
+    while let Some(item) = reader.next_item() {
         match item {
             Ok(btsnoop::Item::Header(h)) => decoder = Some(Decoder::new(h.datalink, handles)),
             Ok(btsnoop::Item::Record(r)) => {

@@ -300,7 +300,7 @@ impl TextReader {
         }
         self.last = at;
         let (kind, args) = rest.split_once(' ').unwrap_or((rest, ""));
-        let hex = |s: &str| crate::hex::parse(s).map_err(|e| err(e));
+        let hex = |s: &str| crate::hex::parse(s).map_err(&err);
         let event = match kind {
             "connect" => Event::Connect,
             "connect-failed" => Event::ConnectFailed(args.to_string()),

@@ -135,10 +135,8 @@ pub fn fold(t: &mut Telemetry, o: &Output, at: Duration, steps: bool) {
                 t.stance_requested(a);
             }
         }
-        Output::StanceRead(s) => {
-            if t.stance == Stance::Unknown {
-                t.stance = Stance::from_state(*s);
-            }
+        Output::StanceRead(s) if t.stance == Stance::Unknown => {
+            t.stance = Stance::from_state(*s);
         }
         _ => {}
     }

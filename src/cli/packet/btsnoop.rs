@@ -204,7 +204,7 @@ pub(super) fn decode(
             }
         };
         reader.feed(&block[..n]);
-        while let Some(item) = reader.next() {
+        while let Some(item) = reader.next_item() {
             match item {
                 Ok(Item::Header(h)) => decoder = Some(Decoder::new(h.datalink, handles)),
                 Ok(Item::Record(r)) => {

@@ -131,7 +131,7 @@ pub fn decode_reader(
         bytes.extend_from_slice(&block[..first]);
     }
     let (family, why) = super::choose_family(&args, &bytes)?;
-    let mut sink = Sink::new(super::family_opts(args, family, &why)?, json, summary_only)?;
+    let mut sink = Sink::with_printer(super::family_opts(args, family, &why)?, json, summary_only)?;
     let mut read = first as u64;
     loop {
         sink.feed(&bytes, out).map_err(io_err)?;
@@ -321,7 +321,11 @@ struct SinkWith {
 }
 
 impl Sink {
-    fn new(opts: FamilyOpts, json: bool, summary_only: bool) -> Result<SinkWith, CliError> {
+    fn with_printer(
+        opts: FamilyOpts,
+        json: bool,
+        summary_only: bool,
+    ) -> Result<SinkWith, CliError> {
         let sink = match opts {
             FamilyOpts::V2 { mask, ext_mask } => Sink::V2 {
                 decoder: p2::Decoder::new(),
