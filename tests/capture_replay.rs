@@ -313,4 +313,3 @@ fn a_killed_recording_is_readable_up_to_the_last_flush() {
         c.duration()
     );
 }
-
