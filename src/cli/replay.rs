@@ -38,6 +38,11 @@ pub fn finish(rec: Option<&Recorder>) {
 
 /// `droidctl replay FILE`.
 #[derive(Debug, Clone, Args)]
+#[command(
+    after_help = "Keys in the app: Space or p pause/play; + and - speed (0.25x to 16x); \
+Left/Right seek 5 s; PgUp/PgDn (or Down/Up) seek 60 s; Home/End start/end; . or s single step; \
+l the packet log; ? help; q or Esc quit. Nothing is sent anywhere: the status bar says REPLAY."
+)]
 pub struct ReplayArgs {
     /// A capture: droidctl's (`--record`) or an HCI snoop log (btsnoop).
     #[arg(value_name = "FILE")]
