@@ -822,3 +822,61 @@ fn droidctl_drives_through_spherov2_tcp_server() {
     assert!(off <= 8.0, "final position {a} vs {b}");
     assert_eq!(a["errors"], b["errors"]);
 }
+
+/// `serve --record`: each droid session becomes a capture that `droidctl replay` plays back to
+/// where the droid went; an existing capture is not overwritten.
+#[test]
+fn serve_records_each_droid_session_for_replay() {
+    let dir = TempDir::new("record");
+    let cap = dir.path("serve.txt");
+    let cap_arg = cap.clone();
+    let serve = Serve::start(&["bb9e"], &["--record", &cap_arg], &dir);
+    let script = dir.file("mission.txt", "drive 100 90 for 1.5s\nwait 0.3s\n");
+    let live = droidctl(
+        &["run", &script, "--remote", &serve.address, "--json"],
+        &dir,
+    );
+    assert_eq!(live.status.code(), Some(0), "{}", text(&live.stderr));
+    let live = parse_run(&live);
+    serve.wait_event("droid released", |e| e["event"] == "droid_released");
+    serve.stop();
+
+    let capture = std::fs::read_to_string(&cap).expect("the capture was written");
+    assert!(capture.starts_with("droidctl-capture 1\n"), "{capture}");
+    assert!(capture.contains("# model: bb9e"), "{capture}");
+    assert!(
+        capture.contains(" mark gatt-write 00020005-"),
+        "the unlock: {capture}"
+    );
+    assert!(capture.contains(" out api 8d"), "commands: {capture}");
+    assert!(capture.contains(" in notify "), "notifications: {capture}");
+    assert!(capture.trim_end().ends_with(" end"), "finished: {capture}");
+
+    let replay = droidctl(&["replay", &cap_arg, "--json"], &dir);
+    assert_eq!(replay.status.code(), Some(0), "{}", text(&replay.stderr));
+    let replayed = parse_run(&replay);
+    let last = |r: &Run| r.samples[r.samples.len() - 1].clone();
+    let (a, b) = (last(&replayed), last(&live));
+    let off = (f(&a["x_cm"]) - f(&b["x_cm"])).hypot(f(&a["y_cm"]) - f(&b["y_cm"]));
+    assert!(f(&b["x_cm"]) > 30.0, "the droid drove east: {b}");
+    assert!(off < 5.0, "replay ends where the live run did: {a} vs {b}");
+
+    // A second server may not overwrite it.
+    let again = droidctl(
+        &[
+            "serve",
+            "--listen",
+            "127.0.0.1:0",
+            "--sim",
+            "--record",
+            &cap_arg,
+        ],
+        &dir,
+    );
+    assert_eq!(again.status.code(), Some(2), "{}", text(&again.stderr));
+    assert!(
+        text(&again.stderr).contains("exists"),
+        "{}",
+        text(&again.stderr)
+    );
+}

@@ -40,6 +40,10 @@ pub struct ServeArgs {
     /// Most clients served at once.
     #[arg(long, value_name = "N", default_value_t = 16, value_parser = clap::value_parser!(u16).range(1..=1024))]
     pub max_clients: u16,
+    /// Record every droid session in droidctl's capture format: FILE for the first, then
+    /// FILE-2, FILE-3 … (see README, "Captures"). Existing files are kept unless --force.
+    #[command(flatten)]
+    pub record: super::replay::RecordArgs,
 }
 
 fn parse_listen(s: &str) -> Result<SocketAddr, String> {
@@ -113,6 +117,13 @@ pub fn run(args: ServeArgs) -> Result<i32, CliError> {
                     .map_err(|e| CliError::failure(e.message))?;
                 Arc::new(BleBackend::new(central))
             }
+        };
+        let backend: Arc<dyn GattBackend> = match &args.record.record {
+            Some(path) => Arc::new(
+                crate::relay::record::RecordingBackend::new(backend, path, args.record.force)
+                    .map_err(CliError::usage)?,
+            ),
+            None => backend,
         };
         let listener = server::bind(listen, &cfg)
             .await
