@@ -1,63 +1,11 @@
 //! `droidctl run SCRIPT --sim [MODEL] [--json] [--interval MS]` end to end, as a user runs it.
 
 use serde_json::Value;
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
-/// A scratch directory per test (no tempfile crate in this project).
-struct Scratch(PathBuf);
-
-impl Scratch {
-    fn new(name: &str) -> Self {
-        let dir =
-            std::env::temp_dir().join(format!("droidctl-cli-run-{}-{name}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        Scratch(dir)
-    }
-
-    fn file(&self, name: &str, text: &str) -> PathBuf {
-        let p = self.0.join(name);
-        std::fs::write(&p, text).unwrap();
-        p
-    }
-
-    fn log(&self) -> PathBuf {
-        self.0.join("droidctl.log")
-    }
-
-    /// Run droidctl in this directory with the log file inside it.
-    fn run(&self, args: &[&str]) -> (Output, Duration) {
-        let t0 = Instant::now();
-        let out = Command::new(env!("CARGO_BIN_EXE_droidctl"))
-            .args(args)
-            .current_dir(&self.0)
-            .env("DROIDCTL_LOG_FILE", self.log())
-            .env_remove("DROIDCTL_LOG")
-            .output()
-            .expect("run droidctl");
-        (out, t0.elapsed())
-    }
-}
-
-impl Drop for Scratch {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
-
-fn stdout(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn path(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
+#[path = "common/scratch.rs"]
+mod scratch;
+use scratch::{Scratch, json_lines, path, stderr, stdout};
 
 /// About a minute of mission: 2 s stance, 5 + 5 + 8 + 3 s of driving, 10 + 25 s of waiting.
 const MINUTE: &str = "\
@@ -79,22 +27,13 @@ wait 25s
 drive 80 0 for 3s
 ";
 
-fn json_lines(text: &str) -> Vec<serde_json::Map<String, Value>> {
-    text.lines()
-        .map(|l| match serde_json::from_str::<Value>(l) {
-            Ok(Value::Object(m)) => m,
-            other => panic!("not a JSON object: {l:?} ({other:?})"),
-        })
-        .collect()
-}
-
 #[test]
 fn a_minute_long_mission_runs_in_simulated_time_and_is_deterministic() {
-    let dir = Scratch::new("minute");
+    let dir = Scratch::new("cli-run", "minute");
     let script = dir.file("mission.txt", MINUTE);
-    let (a, wall_a) = dir.run(&["run", path(&script), "--sim", "--json"]);
+    let (a, wall_a) = dir.run_timed(&["run", path(&script), "--sim", "--json"]);
     assert_eq!(a.status.code(), Some(0), "stderr: {}", stderr(&a));
-    let (b, wall_b) = dir.run(&["run", path(&script), "--sim", "--json"]);
+    let (b, wall_b) = dir.run_timed(&["run", path(&script), "--sim", "--json"]);
     assert_eq!(b.status.code(), Some(0), "stderr: {}", stderr(&b));
     eprintln!("wall: {wall_a:?}, {wall_b:?}");
     assert!(
@@ -121,7 +60,7 @@ fn a_minute_long_mission_runs_in_simulated_time_and_is_deterministic() {
     assert_eq!(stdout(&a), stdout(&b));
 
     // The human-readable run ends at the same place.
-    let (h, _) = dir.run(&["run", path(&script), "--sim"]);
+    let (h, _) = dir.run_timed(&["run", path(&script), "--sim"]);
     assert_eq!(h.status.code(), Some(0));
     let text = stdout(&h);
     let last = text.lines().last().unwrap();
@@ -138,12 +77,12 @@ fn a_minute_long_mission_runs_in_simulated_time_and_is_deterministic() {
 
 #[test]
 fn json_prints_one_sample_per_interval_then_a_summary() {
-    let dir = Scratch::new("json");
+    let dir = Scratch::new("cli-run", "json");
     let script = dir.file(
         "m.txt",
         "wake\nstance tripod\ndrive 120 90 for 3s\nhead 30\nwait 2s\n",
     );
-    let (o, _) = dir.run(&["run", path(&script), "--sim", "--json", "--interval", "250"]);
+    let (o, _) = dir.run_timed(&["run", path(&script), "--sim", "--json", "--interval", "250"]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     let lines = json_lines(&stdout(&o));
     let (summary, samples) = lines.split_last().unwrap();
@@ -196,9 +135,9 @@ fn json_prints_one_sample_per_interval_then_a_summary() {
 
 #[test]
 fn malformed_script_exits_2_naming_the_line_and_sends_nothing() {
-    let dir = Scratch::new("malformed");
+    let dir = Scratch::new("cli-run", "malformed");
     let script = dir.file("bad.txt", "wake\n# fine\ndrive 300 90\nfly away\nwait 1s\n");
-    let (o, _) = dir.run(&["run", path(&script), "--sim", "--json"]);
+    let (o, _) = dir.run_timed(&["run", path(&script), "--sim", "--json"]);
     assert_eq!(o.status.code(), Some(2));
     let err = stderr(&o);
     assert!(
@@ -218,21 +157,21 @@ fn malformed_script_exits_2_naming_the_line_and_sends_nothing() {
 
 #[test]
 fn missing_script_exits_2() {
-    let dir = Scratch::new("missing");
-    let (o, _) = dir.run(&["run", "no-such-mission.txt", "--sim"]);
+    let dir = Scratch::new("cli-run", "missing");
+    let (o, _) = dir.run_timed(&["run", "no-such-mission.txt", "--sim"]);
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("no-such-mission.txt"), "{}", stderr(&o));
     assert_eq!(stdout(&o), "");
     // No script at all is a usage error too.
-    let (o, _) = dir.run(&["run", "--sim"]);
+    let (o, _) = dir.run_timed(&["run", "--sim"]);
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
 }
 
 #[test]
 fn bb9e_rejects_a_stance_line() {
-    let dir = Scratch::new("bb9e");
+    let dir = Scratch::new("cli-run", "bb9e");
     let script = dir.file("legs.txt", "wake\nstance tripod\ndrive 100 0 for 1s\n");
-    let (o, _) = dir.run(&["run", path(&script), "--sim", "bb9e", "--json"]);
+    let (o, _) = dir.run_timed(&["run", path(&script), "--sim", "bb9e", "--json"]);
     assert_eq!(o.status.code(), Some(2));
     let err = stderr(&o);
     assert!(
@@ -242,13 +181,13 @@ fn bb9e_rejects_a_stance_line() {
     assert_eq!(stdout(&o), "");
     // The same script without the stance runs on BB-9E.
     let ok = dir.file("ok.txt", "wake\ndrive 100 0 for 1s\n");
-    let (o, _) = dir.run(&["run", path(&ok), "--sim", "bb9e"]);
+    let (o, _) = dir.run_timed(&["run", path(&ok), "--sim", "bb9e"]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     // A model droidctl does not know is a usage error.
-    let (o, _) = dir.run(&["run", path(&ok), "--sim", "c3po"]);
+    let (o, _) = dir.run_timed(&["run", path(&ok), "--sim", "c3po"]);
     assert_eq!(o.status.code(), Some(2));
     // Robi 42 takes only drive, stop and wait: the wake line is refused before anything runs.
-    let (o, _) = dir.run(&["run", path(&ok), "--sim", "robi"]);
+    let (o, _) = dir.run_timed(&["run", path(&ok), "--sim", "robi"]);
     assert_eq!(o.status.code(), Some(2));
     let err = stderr(&o);
     assert!(
@@ -261,17 +200,17 @@ fn bb9e_rejects_a_stance_line() {
 
 #[test]
 fn script_may_follow_a_bare_sim_flag() {
-    let dir = Scratch::new("order");
+    let dir = Scratch::new("cli-run", "order");
     dir.file("mission.txt", "wake\nstance tripod\ndrive 100 90 for 1s\n");
-    let (o, _) = dir.run(&["run", "--sim", "mission.txt"]);
+    let (o, _) = dir.run_timed(&["run", "--sim", "mission.txt"]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     let out = stdout(&o);
     assert!(out.lines().last().unwrap().starts_with("done in"), "{out}");
     assert!(out.contains("line 3: drive 100 90 for 1s"));
     // And with the model named explicitly, before or after the script.
-    let (o, _) = dir.run(&["run", "--sim", "r2q5", "mission.txt"]);
+    let (o, _) = dir.run_timed(&["run", "--sim", "r2q5", "mission.txt"]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-    let (o, _) = dir.run(&["run", "mission.txt", "--sim", "r2d2", "--json"]);
+    let (o, _) = dir.run_timed(&["run", "mission.txt", "--sim", "r2d2", "--json"]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     assert_eq!(
         json_lines(&stdout(&o)).last().unwrap()["done"],
@@ -314,12 +253,12 @@ async fn final_stop_keeps_the_last_heading() {
 fn telemetry_keeps_flowing_after_sleep_and_wake() {
     // Sleeping turns streaming off in the droid; the wake line must set it up again, or the
     // position stays where the droid fell asleep.
-    let dir = Scratch::new("sleepwake");
+    let dir = Scratch::new("cli-run", "sleepwake");
     let script = dir.file(
         "m.txt",
         "wake\ndrive 80 0 for 1s\nsleep\nwait 1s\nwake\ndrive 120 0 for 2s\n",
     );
-    let (o, _) = dir.run(&["run", path(&script), "--sim", "bb9e", "--json"]);
+    let (o, _) = dir.run_timed(&["run", path(&script), "--sim", "bb9e", "--json"]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     let lines = json_lines(&stdout(&o));
     let y = |l: &serde_json::Map<String, Value>| l.get("y_cm").and_then(Value::as_f64);

@@ -10,74 +10,12 @@ use droidctl::session::{self, SessionConfig};
 use droidctl::setup::{SetupOptions, connect_setup};
 use droidctl::sim::{Faults, SimConfig, SimLink};
 use serde_json::Value;
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
-/// A scratch directory per test (no tempfile crate in this project).
-struct Scratch(PathBuf);
-
-impl Scratch {
-    fn new(name: &str) -> Self {
-        let dir = std::env::temp_dir().join(format!(
-            "droidctl-cli-run-robi-{}-{name}",
-            std::process::id()
-        ));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        Scratch(dir)
-    }
-
-    fn file(&self, name: &str, text: &str) -> PathBuf {
-        let p = self.0.join(name);
-        std::fs::write(&p, text).unwrap();
-        p
-    }
-
-    fn log(&self) -> PathBuf {
-        self.0.join("droidctl.log")
-    }
-
-    fn run(&self, args: &[&str]) -> Output {
-        Command::new(env!("CARGO_BIN_EXE_droidctl"))
-            .args(args)
-            .current_dir(&self.0)
-            .env("DROIDCTL_LOG_FILE", self.log())
-            .env_remove("DROIDCTL_LOG")
-            .output()
-            .expect("run droidctl")
-    }
-}
-
-impl Drop for Scratch {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
-
-fn stdout(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn path(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
-
-type Obj = serde_json::Map<String, Value>;
-
-fn json_lines(text: &str) -> Vec<Obj> {
-    text.lines()
-        .map(|l| match serde_json::from_str::<Value>(l) {
-            Ok(Value::Object(m)) => m,
-            other => panic!("not a JSON object: {l:?} ({other:?})"),
-        })
-        .collect()
-}
+#[path = "common/scratch.rs"]
+mod scratch;
+use scratch::{Obj, Scratch, json_lines, path, stderr, stdout};
 
 fn f(s: &Obj, k: &str) -> f64 {
     s[k].as_f64()
@@ -118,7 +56,7 @@ fn run_robi(dir: &Scratch, name: &str, text: &str) -> (Vec<Obj>, Obj) {
 
 #[test]
 fn a_right_turn_while_driving_bends_the_path_right() {
-    let dir = Scratch::new("right");
+    let dir = Scratch::new("cli-run-robi", "right");
     let (samples, summary) = run_robi(&dir, "right.txt", RIGHT);
     // 2 + 1 + 1 s of steps and the final stop's 0.3 s.
     let t_ms = summary["t_ms"].as_u64().unwrap();
@@ -197,7 +135,7 @@ fn a_right_turn_while_driving_bends_the_path_right() {
 
 #[test]
 fn a_left_turn_while_driving_bends_the_path_left() {
-    let dir = Scratch::new("left");
+    let dir = Scratch::new("cli-run-robi", "left");
     let (samples, summary) = run_robi(&dir, "left.txt", LEFT);
     let (x, y) = (f(&summary, "x_cm"), f(&summary, "y_cm"));
     assert!(y > 45.0, "{summary:?}");
@@ -228,7 +166,7 @@ fn a_left_turn_while_driving_bends_the_path_left() {
 
 #[test]
 fn lines_robi_cannot_do_are_refused_before_anything_is_sent() {
-    let dir = Scratch::new("refused");
+    let dir = Scratch::new("cli-run-robi", "refused");
     for line in ["stance tripod", "sound 1", "head 30", "led front 0 0 255"] {
         let script = dir.file("bad.txt", &format!("drive 100 0 for 1s\n{line}\nstop\n"));
         let o = dir.run(&["run", path(&script), "--sim", "robi", "--json"]);

@@ -9,70 +9,12 @@ use droidctl::session::{self, SessionConfig};
 use droidctl::setup::{SetupOptions, connect_setup};
 use droidctl::sim::{Faults, SimConfig, SimLink};
 use serde_json::Value;
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
-/// A scratch directory per test (no tempfile crate in this project).
-struct Scratch(PathBuf);
-
-impl Scratch {
-    fn new(name: &str) -> Self {
-        let dir =
-            std::env::temp_dir().join(format!("droidctl-cli-run-v1-{}-{name}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        Scratch(dir)
-    }
-
-    fn file(&self, name: &str, text: &str) -> PathBuf {
-        let p = self.0.join(name);
-        std::fs::write(&p, text).unwrap();
-        p
-    }
-
-    fn log(&self) -> PathBuf {
-        self.0.join("droidctl.log")
-    }
-
-    fn run(&self, args: &[&str]) -> Output {
-        Command::new(env!("CARGO_BIN_EXE_droidctl"))
-            .args(args)
-            .current_dir(&self.0)
-            .env("DROIDCTL_LOG_FILE", self.log())
-            .env_remove("DROIDCTL_LOG")
-            .output()
-            .expect("run droidctl")
-    }
-}
-
-impl Drop for Scratch {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
-
-fn stdout(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn path(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
-
-fn json_lines(text: &str) -> Vec<serde_json::Map<String, Value>> {
-    text.lines()
-        .map(|l| match serde_json::from_str::<Value>(l) {
-            Ok(Value::Object(m)) => m,
-            other => panic!("not a JSON object: {l:?} ({other:?})"),
-        })
-        .collect()
-}
+#[path = "common/scratch.rs"]
+mod scratch;
+use scratch::{Scratch, json_lines, path, stderr, stdout};
 
 /// East for 2 s, a pause, then north into the wall (4 m room: the droid's centre stops
 /// 190 cm from the middle), then a pause against it.
@@ -97,7 +39,7 @@ const END_Y: f64 = 190.0;
 
 #[test]
 fn bb8_mission_drives_turns_hits_the_wall_and_streams() {
-    let dir = Scratch::new("patrol");
+    let dir = Scratch::new("cli-run-v1", "patrol");
     let script = dir.file("mission.txt", PATROL);
     let o = dir.run(&["run", path(&script), "--sim", "bb8", "--json"]);
     assert_eq!(o.status.code(), Some(0), "stderr: {}", stderr(&o));
@@ -162,7 +104,7 @@ fn bb8_mission_drives_turns_hits_the_wall_and_streams() {
 
 #[test]
 fn sprk_and_ollie_run_the_same_mission() {
-    let dir = Scratch::new("others");
+    let dir = Scratch::new("cli-run-v1", "others");
     let script = dir.file(
         "mission.txt",
         "wake\nled front 0 255 0\ndrive 100 180 for 2s\n",
@@ -182,7 +124,7 @@ fn sprk_and_ollie_run_the_same_mission() {
 
 #[test]
 fn lines_a_bb8_cannot_do_are_refused_before_anything_is_sent() {
-    let dir = Scratch::new("refused");
+    let dir = Scratch::new("cli-run-v1", "refused");
     for (line, why) in [
         ("head 30", "no dome"),
         ("stance tripod", "no legs"),
