@@ -162,32 +162,9 @@ fn droidctl(args: &[&str], dir: &TempDir) -> Output {
         .expect("run droidctl")
 }
 
-fn text(b: &[u8]) -> String {
-    String::from_utf8_lossy(b).into_owned()
-}
-
-struct Run {
-    samples: Vec<Value>,
-    summary: Value,
-}
-
-fn parse_run(out: &Output) -> Run {
-    let stdout = text(&out.stdout);
-    let mut values: Vec<Value> = stdout
-        .lines()
-        .map(|l| serde_json::from_str(l).unwrap_or_else(|e| panic!("{e}: {l}")))
-        .collect();
-    let summary = values.pop().expect("a summary");
-    assert_eq!(summary["done"], true, "{stdout}");
-    Run {
-        samples: values,
-        summary,
-    }
-}
-
-fn f(v: &Value) -> f64 {
-    v.as_f64().unwrap_or(f64::NAN)
-}
+#[path = "common/mission_run.rs"]
+mod mission_run;
+use mission_run::{Run, f, parse_run, text};
 
 /// The same mission through `serve --sim` + `run --remote` and against `--sim`.
 fn mission_matches(model: &str, mission: &str) -> (Run, Run) {
@@ -215,31 +192,7 @@ fn mission_matches(model: &str, mission: &str) -> (Run, Run) {
         text(&reference.stderr)
     );
     let (remote, reference) = (parse_run(&remote), parse_run(&reference));
-    let (a, b) = (&remote.summary, &reference.summary);
-    let t_ms = f(&a["t_ms"]);
-    assert!(
-        (t_ms - f(&b["t_ms"])).abs() < 0.1 * f(&b["t_ms"]),
-        "{a} vs {b}"
-    );
-    assert!(
-        took.as_secs_f64() * 1000.0 >= t_ms * 0.9,
-        "real time: {took:?}"
-    );
-    for key in ["collisions", "failed_steps", "errors", "timeouts"] {
-        assert_eq!(a[key], b[key], "{key}: {a} vs {b}");
-    }
-    let moved = f(&b["x_cm"]).hypot(f(&b["y_cm"]));
-    assert!(moved > 30.0, "the mission drives: {b}");
-    let off = (f(&a["x_cm"]) - f(&b["x_cm"])).hypot(f(&a["y_cm"]) - f(&b["y_cm"]));
-    assert!(off <= (0.1 * moved).max(6.0), "final position {a} vs {b}");
-    let (n, m) = (remote.samples.len() as f64, reference.samples.len() as f64);
-    assert!((n - m).abs() <= 0.2 * m + 2.0, "samples: {n} vs {m}");
-    let (last, last_ref) = (
-        &remote.samples[remote.samples.len() - 1],
-        &reference.samples[reference.samples.len() - 1],
-    );
-    assert_eq!(last["heading"], last_ref["heading"], "{last} vs {last_ref}");
-    assert_eq!(last["stance"], last_ref["stance"], "{last} vs {last_ref}");
+    mission_run::assert_matches(&remote, &reference, took);
     // The relay saw one droid connected, and released it stopped when the mission ended.
     serve.wait_event("droid connected", |e| e["event"] == "droid_connected");
     serve.wait_event("droid released", |e| {

@@ -238,33 +238,9 @@ fn droidctl(args: &[&str], bus: Option<&str>, dir: &TempDir) -> Output {
     cmd.output().expect("run droidctl")
 }
 
-fn text(b: &[u8]) -> String {
-    String::from_utf8_lossy(b).into_owned()
-}
-
-/// A `run --json` output: the samples and the summary.
-struct Run {
-    samples: Vec<serde_json::Value>,
-    summary: serde_json::Value,
-}
-
-fn parse_run(out: &Output) -> Run {
-    let stdout = text(&out.stdout);
-    let mut values: Vec<serde_json::Value> = stdout
-        .lines()
-        .map(|l| serde_json::from_str(l).unwrap_or_else(|e| panic!("{e}: {l}")))
-        .collect();
-    let summary = values.pop().expect("a summary");
-    assert_eq!(summary["done"], true, "{stdout}");
-    Run {
-        samples: values,
-        summary,
-    }
-}
-
-fn f(v: &serde_json::Value) -> f64 {
-    v.as_f64().unwrap_or(f64::NAN)
-}
+#[path = "common/mission_run.rs"]
+mod mission_run;
+use mission_run::{Run, f, parse_run, text};
 
 /// The same mission through `sim --bluez` and against `--sim`: both complete, and the
 /// telemetry agrees within what real time allows.
@@ -295,32 +271,7 @@ fn mission_matches(model: &str, mission: &str) -> (Run, Run) {
         text(&reference.stderr)
     );
     let (ble, reference) = (parse_run(&ble), parse_run(&reference));
-    let (a, b) = (&ble.summary, &reference.summary);
-    // Real time: the mission takes as long as it says.
-    let t_ms = f(&a["t_ms"]);
-    assert!(
-        (t_ms - f(&b["t_ms"])).abs() < 0.1 * f(&b["t_ms"]),
-        "{a} vs {b}"
-    );
-    assert!(
-        took.as_secs_f64() * 1000.0 >= t_ms * 0.9,
-        "real time: {took:?}"
-    );
-    for key in ["collisions", "failed_steps", "errors", "timeouts"] {
-        assert_eq!(a[key], b[key], "{key}: {a} vs {b}");
-    }
-    let moved = f(&b["x_cm"]).hypot(f(&b["y_cm"]));
-    assert!(moved > 30.0, "the mission drives: {b}");
-    let off = (f(&a["x_cm"]) - f(&b["x_cm"])).hypot(f(&a["y_cm"]) - f(&b["y_cm"]));
-    assert!(off <= (0.1 * moved).max(6.0), "final position {a} vs {b}");
-    let (n, m) = (ble.samples.len() as f64, reference.samples.len() as f64);
-    assert!((n - m).abs() <= 0.2 * m + 2.0, "samples: {n} vs {m}");
-    let (last, last_ref) = (
-        &ble.samples[ble.samples.len() - 1],
-        &reference.samples[reference.samples.len() - 1],
-    );
-    assert_eq!(last["heading"], last_ref["heading"], "{last} vs {last_ref}");
-    assert_eq!(last["stance"], last_ref["stance"], "{last} vs {last_ref}");
+    mission_run::assert_matches(&ble, &reference, took);
     // The connection ended with the mission.
     let lines = sim.stop();
     assert!(
