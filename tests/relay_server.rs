@@ -117,6 +117,43 @@ fn cfg() -> ServerConfig {
     ServerConfig::default()
 }
 
+/// A server on a free loopback port that runs until aborted.
+async fn serve_forever(
+    backend: Arc<dyn GattBackend>,
+    cfg: ServerConfig,
+    sink: EventSink,
+) -> (std::net::SocketAddr, tokio::task::JoinHandle<()>) {
+    let listener = server::bind("127.0.0.1:0".parse().unwrap(), &cfg)
+        .await
+        .unwrap();
+    let addr = listener.local_addr().unwrap();
+    let server = tokio::spawn(server::serve(
+        listener,
+        backend,
+        cfg,
+        sink,
+        std::future::pending(),
+    ));
+    (addr, server)
+}
+
+/// Wait until the fake droid's connection is gone, and return everything written to `ch`.
+async fn written_after_release(
+    droid: &droidctl::link::ble::fake::FakePeripheral,
+    ch: droidctl::link::gatt::GattUuid,
+) -> Vec<u8> {
+    let deadline = Instant::now() + WAIT;
+    while droid.is_connected() {
+        assert!(Instant::now() < deadline, "still connected");
+        sleep(Duration::from_millis(10)).await;
+    }
+    droid
+        .writes_to(ch)
+        .into_iter()
+        .flat_map(|(_, d)| d)
+        .collect()
+}
+
 /// A client speaking the protocol by hand.
 struct Raw {
     s: TcpStream,
@@ -328,19 +365,9 @@ async fn remote_link_reconnects_when_the_relay_drops_the_droid() {
     let mut faults = GattFaults::none();
     faults.add("disconnect-after=1").unwrap();
     let sim = Arc::new(SimBackend::new(&[Model::R2D2], faults));
-    let listener = server::bind("127.0.0.1:0".parse().unwrap(), &cfg())
-        .await
-        .unwrap();
-    let port = listener.local_addr().unwrap().port();
     let backend: Arc<dyn GattBackend> = sim.clone();
-    let sink: EventSink = Arc::new(|_| {});
-    let server = tokio::spawn(server::serve(
-        listener,
-        backend,
-        cfg(),
-        sink,
-        std::future::pending(),
-    ));
+    let (addr, server) = serve_forever(backend, cfg(), Arc::new(|_| {})).await;
+    let port = addr.port();
     let relay = RelayAddr {
         host: "127.0.0.1".into(),
         port,
@@ -854,22 +881,12 @@ async fn the_ble_backend_relays_gatt_operations() {
         droid.clone(),
     );
     let backend: Arc<dyn GattBackend> = Arc::new(BleBackend::new(Arc::new(central)));
-    let listener = server::bind("127.0.0.1:0".parse().unwrap(), &cfg())
-        .await
-        .unwrap();
-    let addr = listener.local_addr().unwrap();
     let events: Arc<Mutex<Vec<ServerEvent>>> = Arc::default();
     let sink: EventSink = {
         let events = events.clone();
         Arc::new(move |e: &ServerEvent| events.lock().unwrap().push(e.clone()))
     };
-    let server = tokio::spawn(server::serve(
-        listener,
-        backend,
-        cfg(),
-        sink,
-        std::future::pending(),
-    ));
+    let (addr, server) = serve_forever(backend, cfg(), sink).await;
 
     let mut c = Raw::connect(addr).await;
     // FIND answers as soon as the name is heard.
@@ -924,18 +941,9 @@ async fn the_ble_backend_relays_gatt_operations() {
     // The client goes: the family's stop is written to the API characteristic, then the
     // droid is disconnected.
     drop(c);
-    let deadline = Instant::now() + WAIT;
-    while droid.is_connected() {
-        assert!(Instant::now() < deadline, "still connected");
-        sleep(Duration::from_millis(10)).await;
-    }
+    let api = written_after_release(&droid, V2_API).await;
     let f = family::for_model(Model::R2D2);
     let (stop, _) = f.codec().encode(&f.stop_after(None), 0, false);
-    let api: Vec<u8> = droid
-        .writes_to(V2_API)
-        .into_iter()
-        .flat_map(|(_, d)| d)
-        .collect();
     assert_eq!(api, stop);
     assert!(matches!(droid.ops().last(), Some(FakeOp::Disconnect)));
     assert!(events.lock().unwrap().iter().any(|e| matches!(
@@ -965,33 +973,13 @@ async fn a_droid_without_a_known_name_is_stopped_by_its_family() {
         droid.clone(),
     );
     let backend: Arc<dyn GattBackend> = Arc::new(BleBackend::new(Arc::new(central)));
-    let listener = server::bind("127.0.0.1:0".parse().unwrap(), &cfg())
-        .await
-        .unwrap();
-    let addr = listener.local_addr().unwrap();
-    let sink: EventSink = Arc::new(|_| {});
-    let server = tokio::spawn(server::serve(
-        listener,
-        backend,
-        cfg(),
-        sink,
-        std::future::pending(),
-    ));
+    let (addr, server) = serve_forever(backend, cfg(), Arc::new(|_| {})).await;
     let mut c = Raw::connect(addr).await;
     c.init("BB:08:00:00:00:01").await.unwrap();
     drop(c);
-    let deadline = Instant::now() + WAIT;
-    while droid.is_connected() {
-        assert!(Instant::now() < deadline, "still connected");
-        sleep(Duration::from_millis(10)).await;
-    }
+    let written = written_after_release(&droid, V1_COMMANDS).await;
     let f = family::for_model(Model::BB8);
     let (stop, _) = f.codec().encode(&f.stop_after(None), 0, false);
-    let written: Vec<u8> = droid
-        .writes_to(V1_COMMANDS)
-        .into_iter()
-        .flat_map(|(_, d)| d)
-        .collect();
     assert_eq!(written, stop);
     server.abort();
 }
@@ -1052,18 +1040,7 @@ async fn waiting_for_a_scan_is_not_silence() {
         idle_timeout: Some(Duration::from_millis(400)),
         ..cfg()
     };
-    let listener = server::bind("127.0.0.1:0".parse().unwrap(), &cfg)
-        .await
-        .unwrap();
-    let addr = listener.local_addr().unwrap();
-    let sink: EventSink = Arc::new(|_| {});
-    let server = tokio::spawn(server::serve(
-        listener,
-        Arc::new(SlowScans),
-        cfg,
-        sink,
-        std::future::pending(),
-    ));
+    let (addr, server) = serve_forever(Arc::new(SlowScans), cfg, Arc::new(|_| {})).await;
     let mut c = Raw::connect(addr).await;
     c.send(&Request::Scan { timeout: 0.8 }).await;
     match c.reply().await {
