@@ -6,7 +6,7 @@ use crate::protocol::v2::sensor::StreamingConfig;
 use crate::protocol::v2::wire::{
     AudioMode, Bytes, CollisionMethod, DriveFlags, LegAction, Mask, StabilizationIndex,
 };
-use crate::protocol::v2::{self, Decoder, Device, Flags, Kind, Notification, cmd, describe};
+use crate::protocol::v2::{self, Decoder, Flags, Kind, Notification, cmd, describe};
 use crate::script::{Action, LedGroup};
 use crate::setup::SetupOptions;
 use crate::units::{HeadAngle, Heading};
@@ -289,9 +289,4 @@ impl Family for V2 {
             cmd::set_all_leds_with_16_bit_mask(Mask(0x0008), Bytes(vec![0])).into(),
         ]
     }
-}
-
-/// The v2 device name of a DID, for the log filter.
-pub fn device_name(did: u8) -> String {
-    Device::describe(did)
 }

@@ -218,8 +218,8 @@ pub(crate) struct Shared {
     pub greeting: Mutex<Vec<Notification>>,
     /// Run the connect setup again at the next opportunity (after a sleep and wake).
     pub redo_setup: std::sync::atomic::AtomicBool,
-    /// The last drive command written, for a stop at its heading from outside the task
-    /// (the panic hook).
+    /// The last drive command written: the task's stop after a reconnect or on shutdown, and
+    /// the panic hook's, keep its heading.
     pub last_drive: Mutex<Option<Command>>,
 }
 

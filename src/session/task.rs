@@ -46,9 +46,6 @@ pub(super) struct Task {
     quiet_logged: std::collections::HashSet<String>,
     /// Kept across connections (see `connected`).
     codec: Option<Box<dyn Codec>>,
-    /// The last drive command written, so a reconnect can resume with speed 0 at the same
-    /// heading (a stop at heading 0 would spin the droid round).
-    last_drive: Option<Command>,
 }
 
 /// Why the connected loop ended.
@@ -79,7 +76,6 @@ impl Task {
             pending: HashMap::new(),
             quiet_logged: Default::default(),
             codec: None,
-            last_drive: None,
         }
     }
 
@@ -175,7 +171,7 @@ impl Task {
         {
             gate.push(setup(rest.remove(0)));
         }
-        if self.last_drive.is_some() {
+        if lock(&self.shared.last_drive).is_some() {
             gate.push(setup(self.stop_command()));
         }
         let n = gate.len();
@@ -221,7 +217,8 @@ impl Task {
 
     /// Speed 0 at the heading of the last drive command written (heading 0 if none).
     fn stop_command(&self) -> Command {
-        self.family.stop_after(self.last_drive.as_ref())
+        self.family
+            .stop_after(lock(&self.shared.last_drive).as_ref())
     }
 
     /// Fail every pending and queued request (link lost or closed).
@@ -284,7 +281,6 @@ impl Task {
         let seq = self.next_seq(codec, &cmd);
         let (writes, packet) = codec.encode_writes(&cmd, seq, want_response);
         if self.family.is_drive(&cmd) {
-            self.last_drive = Some(cmd.clone());
             *lock(&self.shared.last_drive) = Some(cmd.clone());
         }
         let wire_len: usize = writes.iter().map(|(_, w)| w.len()).sum();
