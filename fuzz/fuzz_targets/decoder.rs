@@ -19,6 +19,28 @@ use libfuzzer_sys::fuzz_target;
 /// A small bound as well as the default one, so the oversize path is reached often.
 const SMALL_BOUND: usize = 24;
 
+/// The stream cut as the input's sizes say (cycled; none: one feed). A zero size is an empty
+/// feed, followed by at least one byte so every feed loop makes progress.
+fn feeds<'a>(sizes: &[u8], stream: &'a [u8]) -> Vec<&'a [u8]> {
+    let mut out = Vec::new();
+    let (mut pos, mut i) = (0, 0);
+    while pos < stream.len() {
+        let size = if sizes.is_empty() {
+            stream.len()
+        } else {
+            sizes[i % sizes.len()] as usize
+        };
+        i += 1;
+        if size == 0 {
+            out.push(&stream[pos..pos]);
+        }
+        let end = (pos + size.max(1)).min(stream.len());
+        out.push(&stream[pos..end]);
+        pos = end;
+    }
+    out
+}
+
 fn check_packet(p: &Packet, streaming: &StreamingConfig) {
     let _ = describe(p, None);
     let _ = describe(p, Some(streaming));
@@ -54,27 +76,11 @@ fn run(decoder: &mut Decoder, bound: usize, sizes: &[u8], stream: &[u8]) {
             }
         }
     };
-    let mut pos = 0;
-    let mut i = 0;
-    while pos < stream.len() {
-        let size = if sizes.is_empty() {
-            stream.len()
-        } else {
-            sizes[i % sizes.len()] as usize
-        };
-        i += 1;
-        // A zero size is an empty feed (allowed), then at least one byte to make progress.
-        if size == 0 {
-            for e in decoder.feed(&[]) {
-                handle(e);
-            }
-        }
-        let end = (pos + size.max(1)).min(stream.len());
-        for e in decoder.feed(&stream[pos..end]) {
+    for feed in feeds(sizes, stream) {
+        for e in decoder.feed(feed) {
             handle(e);
         }
         assert!(decoder.buffered() <= bound);
-        pos = end;
     }
     for e in decoder.finish() {
         handle(Err(e));
@@ -134,26 +140,11 @@ fn run_v1(source: v1::Source, max_async: usize, sizes: &[u8], stream: &[u8]) {
             }
         }
     };
-    let mut pos = 0;
-    let mut i = 0;
-    while pos < stream.len() {
-        let size = if sizes.is_empty() {
-            stream.len()
-        } else {
-            sizes[i % sizes.len()] as usize
-        };
-        i += 1;
-        if size == 0 {
-            for e in decoder.feed(&[]) {
-                handle(e);
-            }
-        }
-        let end = (pos + size.max(1)).min(stream.len());
-        for e in decoder.feed(&stream[pos..end]) {
+    for feed in feeds(sizes, stream) {
+        for e in decoder.feed(feed) {
             handle(e);
         }
         assert!(decoder.buffered() <= bound);
-        pos = end;
     }
     for e in decoder.finish() {
         handle(e);
@@ -208,21 +199,11 @@ fn run_rsrcp(sizes: &[u8], stream: &[u8]) {
             }
         }
     };
-    let mut pos = 0;
-    let mut i = 0;
-    while pos < stream.len() {
-        let size = if sizes.is_empty() {
-            stream.len()
-        } else {
-            sizes[i % sizes.len()] as usize
-        };
-        i += 1;
-        let end = (pos + size.max(1)).min(stream.len());
-        for r in framer.feed(&stream[pos..end]) {
+    for feed in feeds(sizes, stream) {
+        for r in framer.feed(feed) {
             handle(r);
         }
         assert!(framer.buffered() <= rsrcp::MAX_FRAME_LEN);
-        pos = end;
     }
     for r in framer.finish() {
         handle(r);
