@@ -3,25 +3,10 @@
 use droidctl::hex;
 use droidctl::protocol::v2::{Flags, Packet};
 use serde_json::{Value, json};
-use std::process::{Command, Output};
 
-fn droidctl(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_droidctl"))
-        .args(args)
-        // A panic would print a backtrace note: make sure it would show up.
-        .env("RUST_BACKTRACE", "1")
-        .env_remove("RUST_LOG")
-        .output()
-        .expect("run droidctl")
-}
-
-fn stdout(o: &Output) -> String {
-    String::from_utf8(o.stdout.clone()).expect("utf-8 stdout")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8(o.stderr.clone()).expect("utf-8 stderr")
-}
+#[path = "common/cli.rs"]
+mod cli;
+use cli::{droidctl, stderr, stdout, usage_error};
 
 /// Run, expect `status`, no stderr; return stdout.
 fn ok_with(args: &[&str], status: i32) -> String {
@@ -466,21 +451,6 @@ fn encode_header_options() {
 }
 
 // --- errors -----------------------------------------------------------------------------------
-
-/// Exit status 2, one line on stderr, nothing on stdout, no panic.
-fn usage_error(args: &[&str]) -> String {
-    let o = droidctl(args);
-    let err = stderr(&o);
-    assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
-    assert_eq!(stdout(&o), "", "{args:?}");
-    assert!(err.ends_with('\n'), "{args:?}: {err:?}");
-    assert_eq!(err.lines().count(), 1, "{args:?}: {err:?}");
-    assert!(err.starts_with("droidctl: error: "), "{args:?}: {err:?}");
-    for bad in ["panicked", "backtrace", "RUST_BACKTRACE", "thread '"] {
-        assert!(!err.contains(bad), "{args:?}: {err:?}");
-    }
-    err
-}
 
 #[test]
 fn error_unknown_command() {

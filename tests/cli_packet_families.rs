@@ -6,24 +6,10 @@ use droidctl::hex;
 use droidctl::protocol::rsrcp;
 use droidctl::protocol::v1::{self, AsyncPacket, CommandPacket, Mrsp, Packet, Response};
 use serde_json::{Value, json};
-use std::process::{Command, Output};
 
-fn droidctl(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_droidctl"))
-        .args(args)
-        .env("RUST_BACKTRACE", "1")
-        .env_remove("RUST_LOG")
-        .output()
-        .expect("run droidctl")
-}
-
-fn stdout(o: &Output) -> String {
-    String::from_utf8(o.stdout.clone()).expect("utf-8 stdout")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8(o.stderr.clone()).expect("utf-8 stderr")
-}
+#[path = "common/cli.rs"]
+mod cli;
+use cli::{droidctl, stderr, stdout};
 
 /// Run `packet ARGS`, expect `status` and no stderr; return stdout.
 fn packet_with(args: &[&str], status: i32) -> String {
@@ -61,17 +47,7 @@ fn keys(v: &Value) -> Vec<&str> {
 fn usage_error(args: &[&str]) -> String {
     let mut full = vec!["packet"];
     full.extend_from_slice(args);
-    let o = droidctl(&full);
-    let err = stderr(&o);
-    assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
-    assert_eq!(stdout(&o), "", "{args:?}");
-    assert!(err.ends_with('\n'), "{args:?}: {err:?}");
-    assert_eq!(err.lines().count(), 1, "{args:?}: {err:?}");
-    assert!(err.starts_with("droidctl: error: "), "{args:?}: {err:?}");
-    for bad in ["panicked", "backtrace", "RUST_BACKTRACE", "thread '"] {
-        assert!(!err.contains(bad), "{args:?}: {err:?}");
-    }
-    err
+    cli::usage_error(&full)
 }
 
 fn wire(p: Packet) -> String {
