@@ -2,7 +2,6 @@
 
 use super::CliError;
 use super::term::{self, TerminalGuard};
-use crate::app::input::{TermEvent, from_crossterm};
 use crate::app::run::{self, AppInputs, AppOptions, ExitReason};
 use crate::config::Config;
 use crate::link::Link;
@@ -10,9 +9,7 @@ use crate::model::Model;
 use crate::session::{self, SessionConfig, SessionHandle};
 use crate::setup::{SetupOptions, connect_setup};
 use crate::sim::{Faults, SimConfig, SimLink};
-use crate::teleop::held::ReleaseMode;
 use clap::Args;
-use futures_util::StreamExt;
 use ratatui::Terminal;
 use ratatui::backend::CrosstermBackend;
 use std::sync::{Mutex, OnceLock};
@@ -139,28 +136,10 @@ async fn drive(
 
     let mut guard = TerminalGuard::enter()
         .map_err(|e| CliError::failure(format!("cannot use this terminal: {e}")))?;
-    let release = if guard.release_events {
-        ReleaseMode::Reported
-    } else {
-        ReleaseMode::Emulated {
-            first: Duration::from_millis(config.keyboard.release_first_ms),
-            repeat: Duration::from_millis(config.keyboard.release_repeat_ms),
-        }
-    };
+    let release = guard.release_mode(&config.keyboard);
     tracing::info!(?release, %name, "starting the TUI");
 
-    // Terminal input.
-    let (term_tx, term_rx) = mpsc::channel::<TermEvent>(256);
-    let reader = tokio::spawn(async move {
-        let mut events = crossterm::event::EventStream::new();
-        while let Some(Ok(e)) = events.next().await {
-            if let Some(e) = from_crossterm(&e)
-                && term_tx.send(e).await.is_err()
-            {
-                break;
-            }
-        }
-    });
+    let (term_rx, reader) = term::spawn_reader();
     // Gamepad.
     let (pad_tx, pad_rx) = mpsc::channel(256);
     if config.gamepad.enabled {

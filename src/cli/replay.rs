@@ -140,9 +140,7 @@ fn play(
     model: crate::model::Model,
     file: String,
 ) -> Result<i32, CliError> {
-    use crate::app::input::{TermEvent, from_crossterm};
     use crate::app::run::{self, AppInputs, AppOptions, ExitReason, Source};
-    use futures_util::StreamExt;
     use ratatui::Terminal;
     use ratatui::backend::CrosstermBackend;
     use tokio::sync::mpsc;
@@ -162,25 +160,8 @@ fn play(
     rt.block_on(async move {
         let mut guard = super::term::TerminalGuard::enter()
             .map_err(|e| CliError::failure(format!("cannot use this terminal: {e}")))?;
-        let release = if guard.release_events {
-            crate::teleop::held::ReleaseMode::Reported
-        } else {
-            crate::teleop::held::ReleaseMode::Emulated {
-                first: std::time::Duration::from_millis(config.keyboard.release_first_ms),
-                repeat: std::time::Duration::from_millis(config.keyboard.release_repeat_ms),
-            }
-        };
-        let (term_tx, term_rx) = mpsc::channel::<TermEvent>(256);
-        let reader = tokio::spawn(async move {
-            let mut events = crossterm::event::EventStream::new();
-            while let Some(Ok(e)) = events.next().await {
-                if let Some(e) = from_crossterm(&e)
-                    && term_tx.send(e).await.is_err()
-                {
-                    break;
-                }
-            }
-        });
+        let release = guard.release_mode(&config.keyboard);
+        let (term_rx, reader) = super::term::spawn_reader();
         let (_pad_tx, pad_rx) = mpsc::channel(1);
         let (quit_tx, quit_rx) = mpsc::channel::<String>(4);
         let signals = tokio::spawn(async move {

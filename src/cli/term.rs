@@ -85,3 +85,43 @@ pub fn restore() {
 pub fn active() -> bool {
     ACTIVE.load(Ordering::SeqCst)
 }
+
+impl TerminalGuard {
+    /// How key releases are known on this terminal: reported (kitty protocol), or inferred
+    /// from the end of auto-repeat with the configured delays.
+    pub fn release_mode(
+        &self,
+        keyboard: &crate::config::Keyboard,
+    ) -> crate::teleop::held::ReleaseMode {
+        use crate::teleop::held::ReleaseMode;
+        use std::time::Duration;
+        if self.release_events {
+            ReleaseMode::Reported
+        } else {
+            ReleaseMode::Emulated {
+                first: Duration::from_millis(keyboard.release_first_ms),
+                repeat: Duration::from_millis(keyboard.release_repeat_ms),
+            }
+        }
+    }
+}
+
+/// Terminal input as app events, read on a task of its own until the receiver goes.
+pub fn spawn_reader() -> (
+    tokio::sync::mpsc::Receiver<crate::app::input::TermEvent>,
+    tokio::task::JoinHandle<()>,
+) {
+    use futures_util::StreamExt;
+    let (tx, rx) = tokio::sync::mpsc::channel(256);
+    let reader = tokio::spawn(async move {
+        let mut events = crossterm::event::EventStream::new();
+        while let Some(Ok(e)) = events.next().await {
+            if let Some(e) = crate::app::input::from_crossterm(&e)
+                && tx.send(e).await.is_err()
+            {
+                break;
+            }
+        }
+    });
+    (rx, reader)
+}
