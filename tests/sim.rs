@@ -223,7 +223,7 @@ fn answers_every_catalogue_command() {
         for def in commands {
             let mut b = Bench::new(model);
             b.ok(cmd::wake());
-            let req = Packet::command(def.did(), def.cid, 77, payload_for(def.params));
+            let req = Packet::command(def.did, def.cid, 77, payload_for(def.params));
             let responses = b.send_packet(&req);
             assert_eq!(responses.len(), 1, "{model:?} {}: {responses:?}", def.name);
             let r = &responses[0];
@@ -234,7 +234,7 @@ fn answers_every_catalogue_command() {
                 "{}",
                 def.name
             );
-            if model_knows(model, def.did(), def.cid) {
+            if model_knows(model, def.did, def.cid) {
                 assert_eq!(r.err, Some(ErrorCode::Success), "{model:?} {}", def.name);
                 // Getters (and everything else) answer with a payload their schema accepts.
                 let fields = catalog::decode_fields(def.response, &r.data);
@@ -258,9 +258,9 @@ fn answers_every_catalogue_command() {
                 let mut b = Bench::new(model);
                 b.ok(cmd::wake());
                 let r = b
-                    .send_packet(&Packet::command(def.did(), def.cid, 9, bad))
+                    .send_packet(&Packet::command(def.did, def.cid, 9, bad))
                     .remove(0);
-                let want = if model_knows(model, def.did(), def.cid) {
+                let want = if model_knows(model, def.did, def.cid) {
                     ErrorCode::BadDataLength
                 } else {
                     ErrorCode::BadCommandId
@@ -1513,7 +1513,7 @@ async fn end_to_end_every_catalogue_command_through_a_session() {
     for def in catalog::commands() {
         s.request(cmd::wake()).await.unwrap();
         let c = Command {
-            did: def.did(),
+            did: def.did,
             cid: def.cid,
             data: payload_for(def.params),
         };
@@ -1522,7 +1522,7 @@ async fn end_to_end_every_catalogue_command_through_a_session() {
             .await
             .unwrap_or_else(|e| panic!("{}: {e}", def.name));
         let r = r.as_v2().unwrap();
-        assert_eq!((r.did, r.cid), (def.did(), def.cid));
+        assert_eq!((r.did, r.cid), (def.did, def.cid));
         assert!(
             catalog::decode_fields(def.response, &r.data).is_ok(),
             "{}",

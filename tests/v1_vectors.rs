@@ -125,10 +125,8 @@ fn golden_roll_comes_from_the_typed_constructor_and_the_cli_defaults() {
     assert_eq!(typed.to_packet(0).sop2, 0xFF);
     assert_eq!(Packet::Command(typed.to_packet(0)).encode().unwrap(), wire);
     // `packet encode --protocol v1 roll --speed 128 --heading 90`: the state defaults to go.
-    let cli = catalog::by_name("roll")
-        .unwrap()
-        .command(&given(&[("speed", "128"), ("heading", "90")]))
-        .unwrap();
+    let roll = catalog::by_name("roll").unwrap();
+    let cli = catalog::command(roll, &given(&[("speed", "128"), ("heading", "90")])).unwrap();
     assert_eq!(cli, typed);
     assert_eq!(Packet::Command(cli.to_packet(0)).encode().unwrap(), wire);
     // Heading and state default too; speed is required.
@@ -373,7 +371,7 @@ fn every_command_typed_constructor_equals_cli_path() {
             .def()
             .expect("typed constructor has a catalogue entry");
         covered.insert(def.name.clone());
-        let cli = def.command(&given(&pairs)).unwrap();
+        let cli = catalog::command(def, &given(&pairs)).unwrap();
         assert_eq!(cli, typed, "{}", def.name);
         assert_eq!(typed.data, h(bytes), "{}", def.name);
         // The payload fits its schema and describes without a problem.

@@ -304,7 +304,7 @@ fn check_constructor(fn_name: &str, c: Command, did: u8, cid: u8, data: &[u8]) {
 
     let name = fn_name.replace('_', "-");
     let def = catalog::by_name(&name).unwrap_or_else(|| panic!("{name} not in the catalogue"));
-    assert_eq!((def.did(), def.cid), (did, cid), "{name}: by_name ids");
+    assert_eq!((def.did, def.cid), (did, cid), "{name}: by_name ids");
     let by_id = catalog::lookup(did, cid).unwrap_or_else(|| panic!("{did:02X}/{cid:02X} unknown"));
     assert_eq!(by_id.name, name, "{name}: lookup by id");
     assert_eq!(c.def().map(|d| d.name.as_str()), Some(name.as_str()));
@@ -946,7 +946,7 @@ fn response_decoders() {
         );
         // Through the whole path: request, response on the wire, decoder, describe.
         let request = Command {
-            did: def.did(),
+            did: def.did,
             cid: def.cid,
             data: vec![],
         }
@@ -986,7 +986,7 @@ fn response_decoders_reject_wrong_lengths() {
                     "{name}: {} bytes accepted: {result:?}",
                     data.len()
                 );
-                let request = Packet::command(def.did(), def.cid, 1, vec![]);
+                let request = Packet::command(def.did, def.cid, 1, vec![]);
                 let d = describe(
                     &Packet::response_to(&request, ErrorCode::Success, data),
                     None,

@@ -4,6 +4,7 @@
 pub mod notify;
 pub mod rsrcp;
 pub mod schema;
+pub mod table;
 pub mod v1;
 pub mod v2;
 pub mod value;

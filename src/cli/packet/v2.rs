@@ -267,7 +267,7 @@ pub(super) fn encode_pairs(name: &str, given: Vec<(String, String)>) -> Result<V
         })?;
         let data = def.encode_params(&params).map_err(CliError::usage)?;
         check_led_values(def.name.as_str(), &data)?;
-        (def.did(), def.cid, data)
+        (def.did, def.cid, data)
     };
     let mut p = Packet::command(did, cid, header.seq, data);
     if header.no_response {
@@ -310,7 +310,7 @@ pub(super) fn list(filter: Option<&str>, out: &mut dyn Write) -> std::io::Result
         writeln!(
             out,
             "  {:02X}/{:02X}  {:<44} {}",
-            c.did(),
+            c.did,
             c.cid,
             c.name,
             params_text(c.params)

@@ -14,7 +14,6 @@ use super::packet::CommandPacket;
 use super::types::*;
 use crate::protocol::wire::*;
 use crate::units::Heading;
-use std::collections::HashMap;
 use std::sync::LazyLock;
 
 pub use crate::protocol::schema::{
@@ -45,51 +44,18 @@ impl Command {
 }
 
 /// One command of the catalogue.
-#[derive(Debug)]
-pub struct CommandDef {
-    /// kebab-case name, e.g. `set-rgb-led`.
-    pub name: String,
-    /// The name as the API document writes it, e.g. "Set RGB LED".
-    pub spec_name: &'static str,
-    pub did: u8,
-    pub cid: u8,
-    pub params: Schema,
-    pub response: Schema,
+pub use crate::protocol::table::CommandDef;
+use crate::protocol::table::{CommandTable, RawCommand};
+
+/// A catalogue command with its parameters encoded.
+pub fn command(def: &CommandDef, given: &[(String, String)]) -> Result<Command, String> {
+    Ok(Command {
+        did: def.did,
+        cid: def.cid,
+        data: def.encode_params(given)?,
+    })
 }
 
-impl CommandDef {
-    pub fn device(&self) -> Option<Device> {
-        Device::from_id(self.did)
-    }
-
-    /// Encode parameters given as (option name, text) pairs, in any order. A parameter left
-    /// out takes its default; one without a default is required. Unknown options are errors.
-    pub fn encode_params(&self, given: &[(String, String)]) -> Result<Vec<u8>, String> {
-        crate::protocol::schema::encode_params(&self.name, self.params, given)
-    }
-
-    /// The command with these parameters (see [`CommandDef::encode_params`]).
-    pub fn command(&self, given: &[(String, String)]) -> Result<Command, String> {
-        Ok(Command {
-            did: self.did,
-            cid: self.cid,
-            data: self.encode_params(given)?,
-        })
-    }
-}
-
-struct RawDef {
-    did: u8,
-    cid: u8,
-    fn_name: &'static str,
-    spec_name: &'static str,
-    params: Schema,
-    response: Schema,
-}
-
-/// How a typed constructor's argument becomes its wire type. A parameter may be declared
-/// `name: WireType as PlainType` so the constructor takes the plain type (masks as `u32`,
-/// MASK2 as `Option<u32>`) while the schema keeps the wire type (shown in hex).
 pub trait IntoWire<T> {
     fn into_wire(self) -> T;
 }
@@ -139,7 +105,7 @@ macro_rules! catalogue {
             )* )*
         }
 
-        static RAW_COMMANDS: &[RawDef] = &[ $( $( RawDef {
+        static RAW_COMMANDS: &[RawCommand] = &[ $( $( RawCommand {
             did: Device::$dev.id(),
             cid: $cid,
             fn_name: stringify!($fname),
@@ -222,72 +188,26 @@ catalogue! {
     }
 }
 
-struct Catalogue {
-    commands: Vec<CommandDef>,
-    by_id: HashMap<(u8, u8), usize>,
-    by_name: HashMap<String, usize>,
-}
-
-static CATALOGUE: LazyLock<Catalogue> = LazyLock::new(|| {
-    let commands: Vec<CommandDef> = RAW_COMMANDS
-        .iter()
-        .map(|r| CommandDef {
-            name: r.fn_name.replace('_', "-"),
-            spec_name: r.spec_name,
-            did: r.did,
-            cid: r.cid,
-            params: r.params,
-            response: r.response,
-        })
-        .collect();
-    let by_id = commands
-        .iter()
-        .enumerate()
-        .map(|(i, c)| ((c.did, c.cid), i))
-        .collect();
-    let by_name = commands
-        .iter()
-        .enumerate()
-        .map(|(i, c)| (c.name.clone(), i))
-        .collect();
-    Catalogue {
-        commands,
-        by_id,
-        by_name,
-    }
-});
+static COMMANDS: LazyLock<CommandTable> = LazyLock::new(|| CommandTable::new(RAW_COMMANDS));
 
 /// Every command, in table order.
 pub fn commands() -> &'static [CommandDef] {
-    &CATALOGUE.commands
+    COMMANDS.commands()
 }
 
 /// The command with this DID/CID.
 pub fn lookup(did: u8, cid: u8) -> Option<&'static CommandDef> {
-    CATALOGUE
-        .by_id
-        .get(&(did, cid))
-        .map(|&i| &CATALOGUE.commands[i])
+    COMMANDS.lookup(did, cid)
 }
 
 /// The command with this kebab-case name.
 pub fn by_name(name: &str) -> Option<&'static CommandDef> {
-    CATALOGUE.by_name.get(name).map(|&i| &CATALOGUE.commands[i])
+    COMMANDS.by_name(name)
 }
 
 /// Command names closest to `name`, for "did you mean" hints.
 pub fn suggestions(name: &str) -> Vec<&'static str> {
-    let words: Vec<&str> = name.split('-').filter(|w| w.len() > 2).collect();
-    let mut scored: Vec<(usize, &'static str)> = commands()
-        .iter()
-        .map(|c| {
-            let score = words.iter().filter(|w| c.name.contains(*w)).count();
-            (score, c.name.as_str())
-        })
-        .filter(|(s, _)| *s > 0)
-        .collect();
-    scored.sort_by(|a, b| b.0.cmp(&a.0).then(a.1.len().cmp(&b.1.len())));
-    scored.into_iter().take(3).map(|(_, n)| n).collect()
+    COMMANDS.suggestions(name)
 }
 
 // -------------------------------------------------------------------------------------------

@@ -39,39 +39,8 @@ pub use crate::protocol::schema::{
     FieldDef, Schema, decode_fields, length_ok, min_len, minimal_payload,
 };
 
-/// One command of the catalogue.
-#[derive(Debug)]
-pub struct CommandDef {
-    /// kebab-case name, e.g. `drive-with-heading`.
-    pub name: String,
-    /// The name as the spec writes it, e.g. "Drive With Heading".
-    pub spec_name: &'static str,
-    pub device: Device,
-    pub cid: u8,
-    pub params: Schema,
-    pub response: Schema,
-}
-
-impl CommandDef {
-    pub fn did(&self) -> u8 {
-        self.device.id()
-    }
-
-    /// Encode parameters given as (option name, text) pairs, in any order. A parameter left
-    /// out takes its default; one without a default is required. Unknown options are errors.
-    pub fn encode_params(&self, given: &[(String, String)]) -> Result<Vec<u8>, String> {
-        crate::protocol::schema::encode_params(&self.name, self.params, given)
-    }
-}
-
-struct RawDef {
-    device: Device,
-    cid: u8,
-    fn_name: &'static str,
-    spec_name: &'static str,
-    params: Schema,
-    response: Schema,
-}
+pub use crate::protocol::table::CommandDef;
+use crate::protocol::table::{CommandTable, RawCommand};
 
 /// One notification of the catalogue.
 #[derive(Debug)]
@@ -108,8 +77,8 @@ macro_rules! catalogue {
             )* )*
         }
 
-        static RAW_COMMANDS: &[RawDef] = &[ $( $( RawDef {
-            device: Device::$dev,
+        static RAW_COMMANDS: &[RawCommand] = &[ $( $( RawCommand {
+            did: Device::$dev.id(),
             cid: $cid,
             fn_name: stringify!($fname),
             spec_name: $spec,
@@ -335,27 +304,16 @@ notifications! {
     }
 }
 
-struct Catalogue {
-    commands: Vec<CommandDef>,
-    notifications: Vec<NotificationDef>,
+/// The notifications, indexed by id.
+struct Notifications {
+    all: Vec<NotificationDef>,
     by_id: HashMap<(u8, u8), usize>,
-    by_name: HashMap<String, usize>,
-    notif_by_id: HashMap<(u8, u8), usize>,
 }
 
-static CATALOGUE: LazyLock<Catalogue> = LazyLock::new(|| {
-    let commands: Vec<CommandDef> = RAW_COMMANDS
-        .iter()
-        .map(|r| CommandDef {
-            name: r.fn_name.replace('_', "-"),
-            spec_name: r.spec_name,
-            device: r.device,
-            cid: r.cid,
-            params: r.params,
-            response: r.response,
-        })
-        .collect();
-    let notifications: Vec<NotificationDef> = RAW_NOTIFICATIONS
+static COMMANDS: LazyLock<CommandTable> = LazyLock::new(|| CommandTable::new(RAW_COMMANDS));
+
+static NOTIFICATIONS: LazyLock<Notifications> = LazyLock::new(|| {
+    let all: Vec<NotificationDef> = RAW_NOTIFICATIONS
         .iter()
         .map(|r| NotificationDef {
             name: r.fn_name.replace('_', "-"),
@@ -365,74 +323,45 @@ static CATALOGUE: LazyLock<Catalogue> = LazyLock::new(|| {
             fields: r.fields,
         })
         .collect();
-    let by_id = commands
-        .iter()
-        .enumerate()
-        .map(|(i, c)| ((c.did(), c.cid), i))
-        .collect();
-    let by_name = commands
-        .iter()
-        .enumerate()
-        .map(|(i, c)| (c.name.clone(), i))
-        .collect();
-    let notif_by_id = notifications
+    let by_id = all
         .iter()
         .enumerate()
         .map(|(i, n)| ((n.device.id(), n.cid), i))
         .collect();
-    Catalogue {
-        commands,
-        notifications,
-        by_id,
-        by_name,
-        notif_by_id,
-    }
+    Notifications { all, by_id }
 });
 
 /// Every command, in table order.
 pub fn commands() -> &'static [CommandDef] {
-    &CATALOGUE.commands
+    COMMANDS.commands()
 }
 
 /// Every notification, in table order.
 pub fn notifications() -> &'static [NotificationDef] {
-    &CATALOGUE.notifications
+    &NOTIFICATIONS.all
 }
 
 /// The command with this DID/CID.
 pub fn lookup(did: u8, cid: u8) -> Option<&'static CommandDef> {
-    CATALOGUE
-        .by_id
-        .get(&(did, cid))
-        .map(|&i| &CATALOGUE.commands[i])
+    COMMANDS.lookup(did, cid)
 }
 
 /// The command with this kebab-case name.
 pub fn by_name(name: &str) -> Option<&'static CommandDef> {
-    CATALOGUE.by_name.get(name).map(|&i| &CATALOGUE.commands[i])
+    COMMANDS.by_name(name)
 }
 
 /// The notification with this DID/CID.
 pub fn notification(did: u8, cid: u8) -> Option<&'static NotificationDef> {
-    CATALOGUE
-        .notif_by_id
+    NOTIFICATIONS
+        .by_id
         .get(&(did, cid))
-        .map(|&i| &CATALOGUE.notifications[i])
+        .map(|&i| &NOTIFICATIONS.all[i])
 }
 
 /// Command names closest to `name`, for "did you mean" hints.
 pub fn suggestions(name: &str) -> Vec<&'static str> {
-    let words: Vec<&str> = name.split('-').filter(|w| w.len() > 2).collect();
-    let mut scored: Vec<(usize, &'static str)> = commands()
-        .iter()
-        .map(|c| {
-            let score = words.iter().filter(|w| c.name.contains(*w)).count();
-            (score, c.name.as_str())
-        })
-        .filter(|(s, _)| *s > 0)
-        .collect();
-    scored.sort_by(|a, b| b.0.cmp(&a.0).then(a.1.len().cmp(&b.1.len())));
-    scored.into_iter().take(3).map(|(_, n)| n).collect()
+    COMMANDS.suggestions(name)
 }
 
 #[cfg(test)]
@@ -457,8 +386,7 @@ mod tests {
             assert!(seen.insert(c.name.clone()), "duplicate {}", c.name);
             assert!(seen.len() <= commands().len());
         }
-        let ids: std::collections::HashSet<_> =
-            commands().iter().map(|c| (c.did(), c.cid)).collect();
+        let ids: std::collections::HashSet<_> = commands().iter().map(|c| (c.did, c.cid)).collect();
         assert_eq!(ids.len(), commands().len(), "duplicate DID/CID");
         for n in notifications() {
             assert_eq!(n.name, kebab(n.spec_name));
@@ -468,7 +396,12 @@ mod tests {
     #[test]
     fn catalogue_covers_every_seed_table_row() {
         // Counts of rows in r2d2-v2-protocol.md §4.2–§4.8.
-        let count = |d: Device| commands().iter().filter(|c| c.device == d).count();
+        let count = |d: Device| {
+            commands()
+                .iter()
+                .filter(|c| Device::from_id(c.did) == Some(d))
+                .count()
+        };
         assert_eq!(count(Device::Core), 11);
         assert_eq!(count(Device::SystemInfo), 26);
         assert_eq!(count(Device::Power), 20);
