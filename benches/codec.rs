@@ -248,6 +248,39 @@ fn codec(c: &mut Criterion) {
         })
     });
     group.finish();
+
+    // The same stream printed as JSON lines (`packet decode --file - --json`), one object per
+    // packet written straight into the output buffer; 2 MiB per iteration.
+    let json_input: Vec<u8> = stream
+        .iter()
+        .copied()
+        .cycle()
+        .take(stream.len() * ((2 << 20) / stream.len()))
+        .collect();
+    let packets_per_iter = packets.len() as u64 * ((2 << 20) / stream.len()) as u64;
+    let mut group = c.benchmark_group("capture");
+    group.throughput(Throughput::Elements(packets_per_iter));
+    group.sample_size(20);
+    group.bench_function("file_json", |b| {
+        b.iter(|| {
+            let mut input = std::io::Cursor::new(black_box(&json_input));
+            let summary = droidctl::cli::packet::decode_reader(
+                &mut input,
+                droidctl::cli::packet::DecodeArgs {
+                    sensor_mask: Some(format!("0x{:08X}", StreamingConfig::full(150).mask)),
+                    ext_mask: Some(format!("0x{:08X}", StreamingConfig::full(150).ext_mask)),
+                    ..Default::default()
+                },
+                true,
+                false,
+                &mut std::io::sink(),
+            )
+            .expect("decodes");
+            assert_eq!(summary.packets, packets_per_iter);
+            summary.packets
+        })
+    });
+    group.finish();
 }
 
 #[cfg(target_os = "linux")]

@@ -29,7 +29,7 @@ fn line(at_ms: u64, dir: Direction, p: Packet) -> LogLine {
     LogLine::from_entry(&LogEntry {
         at: Duration::from_millis(at_ms),
         dir,
-        item: LogItem::v2(p),
+        item: LogItem::packet(p),
     })
 }
 

@@ -4,9 +4,9 @@
 
 use droidctl::hex;
 use droidctl::protocol::rsrcp::{
-    self, Buttons, Efs, Feature, Frame, FrameError, FrameErrorKind, Framer, Handshake, Item,
-    JSON_KEYS, Leds, MAX_FRAME_LEN, Motors, Piezo, decode_frame, decode_handshake, frame_delta,
-    frame_gap, steering_byte, to_json, velocity_byte, wheel_speeds,
+    self, Buttons, Efs, ErrorKind, Feature, Frame, FrameError, Framer, Handshake, Item, JSON_KEYS,
+    Leds, MAX_FRAME_LEN, Motors, Piezo, decode_frame, decode_handshake, frame_delta, frame_gap,
+    steering_byte, to_json, velocity_byte, wheel_speeds,
 };
 use serde_json::json;
 
@@ -68,11 +68,11 @@ fn handshake_decodes_and_encodes() {
     assert_eq!(h.encode().to_vec(), bytes("7E 02 01 2C 7F"));
 
     let kind = |s: &str| decode_handshake(&bytes(s)).unwrap_err().kind;
-    assert_eq!(kind(""), FrameErrorKind::Truncated);
-    assert_eq!(kind("7E 01 00 0A"), FrameErrorKind::Truncated);
-    assert_eq!(kind("7F 01 00 0A 7F"), FrameErrorKind::BadSop);
-    assert_eq!(kind("7E 01 00 0A 7E"), FrameErrorKind::BadEop);
-    assert_eq!(kind("7E 01 00 0A 7F 00"), FrameErrorKind::Overlong);
+    assert_eq!(kind(""), ErrorKind::Truncated);
+    assert_eq!(kind("7E 01 00 0A"), ErrorKind::Truncated);
+    assert_eq!(kind("7F 01 00 0A 7F"), ErrorKind::BadSop);
+    assert_eq!(kind("7E 01 00 0A 7E"), ErrorKind::BadEop);
+    assert_eq!(kind("7E 01 00 0A 7F 00"), ErrorKind::Overlong);
 }
 
 #[test]
@@ -215,7 +215,7 @@ fn every_subset_of_sized_features_round_trips() {
     let (out, framer) = frame_stream(&stream);
     assert_eq!(frames(&out), expected);
     assert_eq!(out.len(), 32);
-    assert_eq!(framer.stats().frames, 32);
+    assert_eq!(framer.stats().packets, 32);
     assert_eq!(framer.stats().skipped_bytes, 0);
     assert_eq!(framer.stats().total_errors(), 0);
 }
@@ -248,27 +248,24 @@ fn truncated_and_overlong_single_frames() {
     let good = bytes(FIRMWARE_FRAME);
     let short = &good[..good.len() - 1];
     let e = decode_frame(short).unwrap_err();
-    assert_eq!((e.kind, e.at), (FrameErrorKind::Truncated, 12));
+    assert_eq!((e.kind, e.at()), (ErrorKind::Truncated, 12));
     assert!(e.detail.contains("implies 13"), "{}", e.detail);
     let e = decode_frame(&good[..4]).unwrap_err();
-    assert_eq!(e.kind, FrameErrorKind::Truncated);
+    assert_eq!(e.kind, ErrorKind::Truncated);
 
     let mut long = good.clone();
     long.push(0x7F);
     let e = decode_frame(&long).unwrap_err();
-    assert_eq!((e.kind, e.at), (FrameErrorKind::Overlong, 13));
+    assert_eq!((e.kind, e.at()), (ErrorKind::Overlong, 13));
 
     let mut bad = good.clone();
     bad[12] = 0x7E;
     let e = decode_frame(&bad).unwrap_err();
-    assert_eq!((e.kind, e.at), (FrameErrorKind::BadEop, 12));
+    assert_eq!((e.kind, e.at()), (ErrorKind::BadEop, 12));
 
     let e = decode_frame(&bytes("00 7E 00 04 D2")).unwrap_err();
-    assert_eq!(e.kind, FrameErrorKind::BadSop);
-    assert_eq!(
-        decode_frame(&[]).unwrap_err().kind,
-        FrameErrorKind::Truncated
-    );
+    assert_eq!(e.kind, ErrorKind::BadSop);
+    assert_eq!(decode_frame(&[]).unwrap_err().kind, ErrorKind::Truncated);
 }
 
 #[test]
@@ -310,9 +307,9 @@ fn truncated_and_overlong_frames_in_a_stream() {
     assert_eq!(e.offset, (dropped.len() + good.len() + 13) as u64);
     let Err(e) = &out[5] else { unreachable!() };
     assert_eq!(e.offset, (stream.len() - 7) as u64);
-    assert_eq!(framer.stats().frames, 2);
-    assert_eq!(framer.stats().errors(FrameErrorKind::BadEop), 2);
-    assert_eq!(framer.stats().errors(FrameErrorKind::Truncated), 1);
+    assert_eq!(framer.stats().packets, 2);
+    assert_eq!(framer.stats().errors(ErrorKind::BadEop), 2);
+    assert_eq!(framer.stats().errors(ErrorKind::Truncated), 1);
     // Every byte is in a frame or skipped.
     assert_eq!(
         framer.stats().skipped_bytes + 2 * good.len() as u64,
@@ -327,12 +324,12 @@ fn unsized_features_stop_decoding() {
     assert!(decode_frame(&bytes(FIRMWARE_FRAME)).is_ok());
     let gyro = bytes("7E 00 04 D2 63 00 00 7D 00 50 01 02 03 04 80 C0 7F");
     let e = decode_frame(&gyro).unwrap_err();
-    assert_eq!(e.kind, FrameErrorKind::UnsizedFeature);
+    assert_eq!(e.kind, ErrorKind::UnsizedFeature);
     assert_eq!(e.kind.name(), "unsized_feature");
-    assert_eq!(e.feature, Some(Feature::Gyro));
-    assert_eq!(e.at, 10);
+    assert_eq!(e.feature(), Some(Feature::Gyro));
+    assert_eq!(e.at(), 10);
     assert!(e.detail.contains("gyro"), "{}", e.detail);
-    let p = e.partial.as_deref().unwrap();
+    let p = e.partial().unwrap();
     assert_eq!(p.frame_id, 1234);
     assert_eq!(p.efs.bits(), 0x6300);
     assert_eq!(
@@ -360,8 +357,8 @@ fn unsized_features_stop_decoding() {
         wire.extend_from_slice(&[0x11; 12]);
         wire.push(0x7F);
         let e = decode_frame(&wire).unwrap_err();
-        assert_eq!(e.feature, Some(feature), "{bit:04X}");
-        let p = e.partial.unwrap();
+        assert_eq!(e.feature(), Some(feature), "{bit:04X}");
+        let p = e.partial().unwrap();
         let got = [
             p.motors.is_some(),
             p.poti.is_some(),
@@ -374,9 +371,9 @@ fn unsized_features_stop_decoding() {
 
     // Reserved bits: all defined features read, then stop.
     let e = decode_frame(&bytes("7E 00 04 D2 43 01 00 7D 00 50 80 C0 99 7F")).unwrap_err();
-    assert_eq!(e.kind, FrameErrorKind::ReservedBits);
+    assert_eq!(e.kind, ErrorKind::ReservedBits);
     assert_eq!(
-        e.partial.as_ref().unwrap().buttons,
+        e.partial().unwrap().buttons,
         Some(Buttons::CENTER | Buttons::LEFT)
     );
     assert_eq!(Frame::len_for(Efs::from_bits_retain(0x4301)), None);
@@ -395,7 +392,7 @@ fn unsized_features_in_a_stream() {
     );
     let Err(e) = &out[0] else { unreachable!() };
     assert_eq!(e.offset, 0);
-    assert!(e.partial.as_ref().unwrap().motors.is_some());
+    assert!(e.partial().unwrap().motors.is_some());
     let Err(g) = &out[1] else { unreachable!() };
     assert_eq!(g.offset, 10);
     assert_eq!(frames(&out)[0], decode_frame(&good).unwrap());
@@ -422,9 +419,9 @@ fn garbage_before_between_and_after() {
         .filter_map(|e| e.as_ref().err().map(|e| e.offset))
         .collect();
     assert_eq!(offsets, [0, 16, 23]);
-    assert_eq!(framer.stats().handshakes, 1);
+    assert_eq!(framer.stats().packets, 2);
     assert_eq!(framer.stats().skipped_bytes, 6);
-    assert_eq!(framer.stats().errors(FrameErrorKind::Garbage), 3);
+    assert_eq!(framer.stats().errors(ErrorKind::Garbage), 3);
 }
 
 #[test]

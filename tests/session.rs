@@ -8,7 +8,7 @@ use droidctl::link::backoff::Backoff;
 use droidctl::link::{Connection, Link, LinkError, LinkEvent, LinkWriter};
 use droidctl::protocol::v2::wire::{AudioMode, Bytes, DriveFlags, LegAction, Mask};
 use droidctl::protocol::v2::{
-    Command, DecodeErrorKind, Decoder, ErrorCode, Flags, Notification, Packet, cmd,
+    Command, Decoder, ErrorCode, ErrorKind, Flags, Notification, Packet, cmd,
 };
 use droidctl::session::{
     self, Direction, LinkState, LogItem, RequestError, SessionConfig, SessionEvent, SessionHandle,
@@ -824,7 +824,7 @@ async fn packet_log_shows_every_packet_and_decode_error() {
     assert_eq!(v2(ins[1]), Some(note));
     assert!(matches!(
         ins[2],
-        LogItem::DecodeError(droidctl::family::DecodeError::V2(e)) if e.kind == DecodeErrorKind::BadChecksum
+        LogItem::DecodeError(e) if e.kind == ErrorKind::BadChecksum
     ));
     // Times are since the session started and never go backwards.
     assert!(entries.windows(2).all(|w| w[0].at <= w[1].at));

@@ -41,7 +41,7 @@ fn entry(at_ms: u64, dir: Direction, p: Packet) -> LogLine {
     LogLine::from_entry(&LogEntry {
         at: ms(at_ms),
         dir,
-        item: LogItem::v2(p),
+        item: LogItem::packet(p),
     })
 }
 

@@ -9,7 +9,7 @@ use droidctl::hex;
 use droidctl::protocol::v1::catalog::{self, Command, cmd};
 use droidctl::protocol::v1::packet::{self, Kind};
 use droidctl::protocol::v1::{
-    AsyncPacket, Collision, CommandPacket, DecodeError, DecodeErrorKind, Decoder, MotorMode, Mrsp,
+    AsyncPacket, Collision, CommandPacket, DecodeError, Decoder, ErrorKind, MotorMode, Mrsp,
     Notification, Packet, Response, RollState, Source, StreamingConfig, Value, decode_async,
     decode_samples, describe, encode_async, encode_samples, to_json,
 };
@@ -45,7 +45,7 @@ fn only_packet(source: Source, bytes: &[u8]) -> Packet {
     out.into_iter().next().unwrap().unwrap()
 }
 
-fn kinds(events: &[Result<Packet, DecodeError>]) -> Vec<Result<Kind, DecodeErrorKind>> {
+fn kinds(events: &[Result<Packet, DecodeError>]) -> Vec<Result<Kind, ErrorKind>> {
     events
         .iter()
         .map(|e| match e {
@@ -110,7 +110,7 @@ fn golden_vectors_decode_whole_and_split_everywhere() {
                 "{what} split {split}"
             );
             let s = d.stats();
-            assert_eq!((s.packets, s.commands, s.skipped_bytes), (1, 1, 0));
+            assert_eq!((s.packets, s.skipped_bytes), (1, 0));
             assert_eq!(s.bytes, wire.len() as u64);
         }
         // Default SOP2 FF: answer and reset timeout.
@@ -169,7 +169,7 @@ fn checksum_rule_for_every_shape() {
     // A wrong checksum is never accepted.
     for wire in [h("FF FF 00 52 01 AD"), h("FF FE 01 00 02 02 FB")] {
         let out = decode(Source::Droid, &wire);
-        assert_eq!(kinds(&out)[0], Err(DecodeErrorKind::BadChecksum));
+        assert_eq!(kinds(&out)[0], Err(ErrorKind::BadChecksum));
         assert!(out.iter().all(|e| e.is_err()));
     }
 }
@@ -382,7 +382,7 @@ fn every_command_typed_constructor_equals_cli_path() {
         );
         let p = Packet::Command(typed.to_packet(7));
         let d = describe(&p, None, None);
-        assert_eq!(d.name.as_deref(), Some(def.name.as_str()));
+        assert_eq!(d.name, Some(def.name.as_str()));
         assert_eq!(d.problem, None, "{}", def.name);
         // Framed and decoded back unchanged.
         assert_eq!(only_packet(Source::Host, &p.encode().unwrap()), p);
@@ -449,7 +449,7 @@ fn responses_with_mrsp_codes() {
         None,
         Some(&cmd::set_heading(heading(1))),
     );
-    assert_eq!(d.name.as_deref(), Some("set-heading"));
+    assert_eq!(d.name, Some("set-heading"));
     assert_eq!(d.fields, None);
     assert!(d.problem.unwrap().starts_with("parameter_invalid"));
 
@@ -493,7 +493,7 @@ fn response_fields_come_from_the_request() {
     let wire = h("FF FF 00 05 09 01 02 02 F0 00 10 01 00 EB");
     let p = only_packet(Source::Droid, &wire);
     let d = describe(&p, None, Some(&cmd::get_power_state()));
-    assert_eq!(d.name.as_deref(), Some("get-power-state"));
+    assert_eq!(d.name, Some("get-power-state"));
     let f = d.fields.unwrap();
     let names: Vec<_> = f.iter().map(|(n, _)| *n).collect();
     assert_eq!(
@@ -559,7 +559,7 @@ fn async_dlen_is_two_bytes() {
     // A bound below it is reported as oversize, without buffering the rest.
     let mut d = Decoder::with_max_async_dlen(Source::Droid, 100);
     let out = d.decode_all(&wire);
-    assert_eq!(kinds(&out)[0], Err(DecodeErrorKind::Oversize));
+    assert_eq!(kinds(&out)[0], Err(ErrorKind::Oversize));
     assert!(out.iter().all(|e| e.is_err()));
 }
 
@@ -614,7 +614,7 @@ fn sensor_frames_mask_then_mask2_high_to_low_m_frames() {
 
     // describe: one list per name when M > 1.
     let d = describe(&Packet::Async(a.clone()), Some(&cfg), None);
-    assert_eq!(d.name.as_deref(), Some("sensor-data-streaming"));
+    assert_eq!(d.name, Some("sensor-data-streaming"));
     let f = d.fields.unwrap();
     assert_eq!(f[0].0, "pitch");
     assert_eq!(
@@ -703,7 +703,7 @@ fn collision_is_16_bytes_with_v2_names() {
     assert_eq!(encode_async(&n[0], &StreamingConfig::default()).unwrap(), a);
 
     let d = describe(&Packet::Async(a.clone()), None, None);
-    assert_eq!(d.name.as_deref(), Some("collision-detected"));
+    assert_eq!(d.name, Some("collision-detected"));
     let f = d.fields.unwrap();
     let names: Vec<_> = f.iter().map(|(n, _)| *n).collect();
     assert_eq!(
@@ -739,7 +739,7 @@ fn power_pre_sleep_and_unknown_async() {
         Ok(vec![Notification::PowerState(3)])
     );
     let d = describe(&Packet::Async(power), None, None);
-    assert_eq!(d.name.as_deref(), Some("power-notification"));
+    assert_eq!(d.name, Some("power-notification"));
     assert_eq!(
         d.fields.unwrap()[0].1,
         Value::Enum {
@@ -758,7 +758,7 @@ fn power_pre_sleep_and_unknown_async() {
         Ok(vec![Notification::WillSleep])
     );
     assert_eq!(
-        describe(&Packet::Async(sleep), None, None).name.as_deref(),
+        describe(&Packet::Async(sleep), None, None).name,
         Some("pre-sleep-warning")
     );
 
@@ -778,7 +778,7 @@ fn power_pre_sleep_and_unknown_async() {
     assert_eq!(d.fields, Some(vec![("data", Value::Bytes(vec![1, 2, 3]))]));
     // Known ids without a payload layout are raw too.
     let d = describe(&Packet::Async(AsyncPacket::new(0x04, vec![9])), None, None);
-    assert_eq!(d.name.as_deref(), Some("config-block-contents"));
+    assert_eq!(d.name, Some("config-block-contents"));
     assert_eq!(d.fields, Some(vec![("data", Value::Bytes(vec![9]))]));
 }
 
@@ -837,7 +837,7 @@ fn corrupted_checksum_then_valid_packet_is_recovered() {
     let out = d.decode_all(&stream);
     assert_eq!(
         kinds(&out),
-        vec![Err(DecodeErrorKind::BadChecksum), Ok(Kind::Command)]
+        vec![Err(ErrorKind::BadChecksum), Ok(Kind::Command)]
     );
     let Err(e) = &out[0] else { panic!() };
     assert_eq!(e.offset, 0);
@@ -856,13 +856,13 @@ fn corrupted_checksum_then_valid_packet_is_recovered() {
     stream.extend(&ping_wire);
     let mut d = Decoder::new(Source::Host);
     let mut out = d.decode_all(&stream);
-    assert_eq!(kinds(&out), vec![Err(DecodeErrorKind::BadChecksum)]);
+    assert_eq!(kinds(&out), vec![Err(ErrorKind::BadChecksum)]);
     out.extend(d.finish());
     // One error for the damaged packet (the bogus candidate inside it is not reported
     // again), then the ping.
     assert_eq!(
         kinds(&out),
-        vec![Err(DecodeErrorKind::BadChecksum), Ok(Kind::Command)]
+        vec![Err(ErrorKind::BadChecksum), Ok(Kind::Command)]
     );
     assert_eq!(out[1], Ok(ping.clone()));
     let s = d.stats();
@@ -881,7 +881,7 @@ fn corrupted_checksum_then_valid_packet_is_recovered() {
     out.extend(d.finish());
     assert_eq!(
         kinds(&out),
-        vec![Err(DecodeErrorKind::BadChecksum), Ok(Kind::Command)]
+        vec![Err(ErrorKind::BadChecksum), Ok(Kind::Command)]
     );
     assert_eq!(out[1], Ok(ping));
 }
@@ -893,14 +893,14 @@ fn truncated_tail_reported_by_finish() {
     assert!(d.decode_all(&wire[..10]).is_empty());
     assert_eq!(d.buffered(), 10);
     let tail = d.finish();
-    assert_eq!(kinds(&tail), vec![Err(DecodeErrorKind::Truncated)]);
+    assert_eq!(kinds(&tail), vec![Err(ErrorKind::Truncated)]);
     let Err(e) = &tail[0] else { panic!() };
     assert_eq!(e.offset, 0);
     assert_eq!(d.buffered(), 0);
     assert_eq!(d.stats().skipped_bytes, 10);
     // A lone SOP1 at the end is a truncated packet too; after finish the decoder goes on.
     assert_eq!(kinds(&d.decode_all(&[0xFF])), vec![]);
-    assert_eq!(kinds(&d.finish()), vec![Err(DecodeErrorKind::Truncated)]);
+    assert_eq!(kinds(&d.finish()), vec![Err(ErrorKind::Truncated)]);
     assert_eq!(kinds(&d.decode_all(&wire)), vec![Ok(Kind::Command)]);
     assert!(d.finish().is_empty());
 }
@@ -915,9 +915,9 @@ fn garbage_runs_and_bad_lengths() {
     assert_eq!(
         kinds(&out),
         vec![
-            Err(DecodeErrorKind::Garbage),
-            Err(DecodeErrorKind::BadLength),
-            Err(DecodeErrorKind::Garbage),
+            Err(ErrorKind::Garbage),
+            Err(ErrorKind::BadLength),
+            Err(ErrorKind::Garbage),
             Ok(Kind::Response)
         ]
     );

@@ -8,8 +8,8 @@ use droidctl::protocol::v2::packet::{self, BodyError, parse_body};
 use droidctl::protocol::v2::sensor::{self, StreamingConfig, decode_sample, mask};
 use droidctl::protocol::v2::wire::*;
 use droidctl::protocol::v2::{
-    Collision, DecodeErrorKind, Decoder, ErrorCode, Fields, Flags, Kind, Notification, Packet,
-    Value, describe,
+    Collision, Decoder, ErrorCode, ErrorKind, Fields, Flags, Kind, Notification, Packet, Value,
+    describe,
 };
 use droidctl::units::{HeadAngle, Heading};
 use std::collections::BTreeSet;
@@ -266,25 +266,25 @@ fn golden_vectors_from_constructors() {
 fn golden_vectors_describe() {
     let v = golden();
     let d = describe(&v[0].packet, None);
-    assert_eq!((d.kind, d.name.as_deref()), (Kind::Command, Some("wake")));
+    assert_eq!((d.kind, d.name), (Kind::Command, Some("wake")));
     assert_eq!(d.fields, Some(vec![]));
     assert_eq!(d.problem, None);
 
     let d = describe(&v[1].packet, None);
-    assert_eq!((d.kind, d.name.as_deref()), (Kind::Response, Some("wake")));
+    assert_eq!((d.kind, d.name), (Kind::Response, Some("wake")));
     assert_eq!(d.fields, Some(vec![]));
     assert_eq!(d.problem, None);
 
     let d = describe(&v[2].packet, None);
     assert_eq!(
-        (d.kind, d.name.as_deref()),
+        (d.kind, d.name),
         (Kind::Command, Some("set-head-position"))
     );
     assert_eq!(d.fields, Some(vec![("degrees", float(0.5))]));
 
     let d = describe(&v[3].packet, None);
     assert_eq!(
-        (d.kind, d.name.as_deref()),
+        (d.kind, d.name),
         (Kind::Command, Some("set-all-leds-with-16-bit-mask"))
     );
     assert_eq!(
@@ -330,7 +330,7 @@ fn check_constructor(fn_name: &str, c: Command, did: u8, cid: u8, data: &[u8]) {
     assert_eq!(p.flags, Flags::DEFAULT_COMMAND);
     let d = describe(p, None);
     assert_eq!(d.kind, Kind::Command);
-    assert_eq!(d.name.as_deref(), Some(name.as_str()));
+    assert_eq!(d.name, Some(name.as_str()));
     assert_eq!(d.fields, Some(fields), "{name}: describe");
 }
 
@@ -959,7 +959,7 @@ fn response_decoders() {
         assert_eq!(p, &response, "{name}");
         let d = describe(p, None);
         assert_eq!(d.kind, Kind::Response, "{name}");
-        assert_eq!(d.name.as_deref(), Some(name), "{name}");
+        assert_eq!(d.name, Some(name), "{name}");
         assert_eq!(d.fields.as_ref(), Some(&expected), "{name}: describe");
         assert_eq!(d.problem, None, "{name}");
     }
@@ -1038,7 +1038,7 @@ fn error_responses_are_described_not_decoded() {
         let p = Packet::response_to(&request, err, vec![]);
         let d = describe(&p, None);
         assert_eq!(d.kind, Kind::Response);
-        assert_eq!(d.name.as_deref(), Some("get-battery-voltage"));
+        assert_eq!(d.name, Some("get-battery-voltage"));
         assert_eq!(d.fields, None);
         assert!(
             d.problem.as_deref().unwrap().contains(&err.name()),
@@ -1277,7 +1277,7 @@ fn notification_decoders() {
         assert!(p.is_notification());
         let d = describe(p, None);
         assert_eq!(d.kind, Kind::Notification, "{name}");
-        assert_eq!(d.name.as_deref(), Some(name), "{name}");
+        assert_eq!(d.name, Some(name), "{name}");
         assert_eq!(d.fields.as_ref(), Some(&expected), "{name}: describe");
         assert_eq!(d.problem, None, "{name}");
     }
@@ -1424,7 +1424,7 @@ fn sensor_streaming_typical_full_set() {
     let out = Decoder::new().decode_all(&p.encode());
     let [Ok(p)] = &out[..] else { panic!("{out:?}") };
     let with = describe(p, Some(&cfg));
-    assert_eq!(with.name.as_deref(), Some("sensor-streaming-data"));
+    assert_eq!(with.name, Some("sensor-streaming-data"));
     let expected: Fields = decoded
         .iter()
         .map(|(n, v)| (*n, float(*v as f64)))
@@ -1692,7 +1692,7 @@ fn notifications_in_a_mixed_stream() {
     }
     assert_eq!(out, packets);
     assert_eq!(d.stats().total_errors(), 0);
-    assert_eq!(d.stats().errors(DecodeErrorKind::Garbage), 0);
+    assert_eq!(d.stats().errors(ErrorKind::Garbage), 0);
     let typed: Vec<Notification> = out[1..]
         .iter()
         .map(|p| Notification::decode(p, &cfg).unwrap())

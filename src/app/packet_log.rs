@@ -73,13 +73,13 @@ impl LogLine {
             LogItem::DecodeError(de) => LogLine {
                 at: e.at,
                 dir: e.dir,
-                name: format!("decode error: {}", de.kind_name()),
+                name: format!("decode error: {}", de.kind.name()),
                 did: None,
                 seq: None,
                 err: None,
                 is_error: true,
                 hex: String::new(),
-                decoded: de.detail().to_string(),
+                decoded: de.detail.clone(),
                 search: String::new(),
             },
         }
@@ -319,7 +319,7 @@ mod tests {
         let l = LogLine::from_entry(&LogEntry {
             at: Duration::ZERO,
             dir: Direction::In,
-            item: LogItem::DecodeError(crate::family::DecodeError::V2(e)),
+            item: LogItem::DecodeError(crate::family::v2::read::seam_error(e)),
         });
         assert!(l.is_error && l.name.contains("too_short"));
     }

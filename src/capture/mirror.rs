@@ -9,12 +9,11 @@
 //! Sans-IO: no clocks; times come with the events.
 
 use super::{Event, Timed};
-use crate::family::{Codec, Command, Family, Incoming, Key, Packet, RobiControl, RobiPacket};
+use crate::family::{Codec, Command, Family, Incoming, Key, Packet, Reader, Side};
 use crate::link::Endpoint;
-use crate::model::{Model, Protocol};
+use crate::model::Model;
 use crate::protocol::notify::Notification;
 use crate::protocol::wire::{LegAction, LegState};
-use crate::protocol::{v1, v2};
 use crate::session::{Direction, LinkState, LogEntry, LogItem, SessionStats};
 use std::collections::HashMap;
 use std::time::Duration;
@@ -39,22 +38,12 @@ pub enum Output {
     Mark(String),
 }
 
-/// The host's side of the stream.
-enum HostDecoder {
-    V2(v2::Decoder),
-    V1(v1::Decoder),
-    /// Robi 42: a velocity write waiting for its steering write.
-    Robi {
-        velocity: Option<u8>,
-        steering: u8,
-    },
-}
-
 pub struct Mirror {
     model: Model,
     family: &'static dyn Family,
     codec: Box<dyn Codec>,
-    host: HostDecoder,
+    /// The host's side of the stream, reassembled into commands.
+    host: Box<dyn Reader>,
     pending: HashMap<Key, Command>,
     stats: SessionStats,
     link: LinkState,
@@ -67,7 +56,7 @@ impl Mirror {
             model,
             family,
             codec: family.codec(),
-            host: host_decoder(model.protocol()),
+            host: host_reader(family),
             pending: HashMap::new(),
             stats: SessionStats::default(),
             link: LinkState::Connecting,
@@ -102,7 +91,7 @@ impl Mirror {
     /// connection).
     fn reconnected(&mut self) {
         self.codec = self.family.codec();
-        self.host = host_decoder(self.model.protocol());
+        self.host = host_reader(self.family);
         self.pending.clear();
     }
 
@@ -164,73 +153,19 @@ impl Mirror {
         let mut errors = Vec::new();
         // Responses or notifications in the host's stream: logged as they are.
         let mut odd = Vec::new();
-        match &mut self.host {
-            HostDecoder::V2(d) => {
-                for r in d.feed(bytes) {
-                    match r {
-                        Ok(p) if !p.is_response() && !p.is_notification() => {
-                            let cmd = Command::V2(v2::Command {
-                                did: p.did,
-                                cid: p.cid,
-                                data: p.data.clone(),
-                            });
-                            let want = p.flags.contains(v2::Flags::REQUESTS_RESPONSE);
-                            let seq = p.seq;
-                            found.push((cmd, Packet::V2(p), seq, want));
-                        }
-                        Ok(p) => odd.push(Packet::V2(p)),
-                        Err(e) => errors.push(crate::family::DecodeError::V2(e)),
-                    }
+        let mut take = |f: &dyn crate::family::Found| {
+            if let Some(e) = f.decode_error() {
+                errors.push(e);
+            } else if let Some(p) = f.packet() {
+                match p.as_command() {
+                    Some((cmd, seq, want)) => found.push((cmd, p, seq, want)),
+                    None => odd.push(p),
                 }
             }
-            HostDecoder::V1(d) => {
-                for r in d.feed(bytes) {
-                    match r {
-                        Ok(v1::Packet::Command(c)) => {
-                            let cmd = Command::V1(v1::Command {
-                                did: c.did,
-                                cid: c.cid,
-                                data: c.data.clone(),
-                            });
-                            let want = c.sop2 & v1::packet::SOP2_ANSWER != 0;
-                            let seq = c.seq;
-                            found.push((cmd, Packet::V1(v1::Packet::Command(c)), seq, want));
-                        }
-                        Ok(p) => odd.push(Packet::V1(p)),
-                        Err(e) => errors.push(crate::family::DecodeError::V1(e)),
-                    }
-                }
-            }
-            HostDecoder::Robi { velocity, steering } => {
-                let byte = bytes.first().copied();
-                let emit = |v: u8, s: u8, found: &mut Vec<_>| {
-                    let c = RobiControl {
-                        velocity: v,
-                        steering: s,
-                    };
-                    found.push((
-                        Command::Robi(c),
-                        Packet::Robi(RobiPacket::Control(c)),
-                        0,
-                        false,
-                    ));
-                };
-                match (to, byte) {
-                    (Endpoint::Velocity, Some(v)) => {
-                        // Two velocities in a row: the first went without a steering write.
-                        if let Some(prev) = velocity.replace(v) {
-                            emit(prev, *steering, &mut found);
-                        }
-                    }
-                    (Endpoint::Steering, Some(s)) => {
-                        *steering = s;
-                        let v = velocity.take().unwrap_or(0);
-                        emit(v, s, &mut found);
-                    }
-                    _ => {}
-                }
-            }
-        }
+            Ok(())
+        };
+        // Only the reader's own bookkeeping fails; there is no output to fail.
+        let _ = self.host.write(to, bytes, Some(&mut take));
         for p in odd {
             self.log_packet(at, Direction::Out, p, None, out);
         }
@@ -331,21 +266,16 @@ impl Mirror {
     }
 }
 
-fn host_decoder(p: Protocol) -> HostDecoder {
-    match p {
-        Protocol::SpheroV2 => HostDecoder::V2(v2::Decoder::new()),
-        Protocol::SpheroV1 => HostDecoder::V1(v1::Decoder::new(v1::Source::Host)),
-        Protocol::Rsrcp => HostDecoder::Robi {
-            velocity: None,
-            steering: crate::protocol::rsrcp::STEERING_STRAIGHT,
-        },
-    }
+/// A reader of what the host wrote: commands, reassembled across writes.
+fn host_reader(family: &dyn Family) -> Box<dyn Reader> {
+    family.side_reader(Side::Host, false)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::protocol::v2::{ErrorCode, cmd};
+    use crate::family::{RobiControl, RobiPacket};
+    use crate::protocol::v2::{self, ErrorCode, cmd};
 
     fn t(ms: u64, event: Event) -> Timed {
         Timed {

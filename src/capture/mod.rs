@@ -81,6 +81,18 @@ pub enum Event {
     End,
 }
 
+impl Event {
+    /// The family the event's bytes show (see [`crate::family::of_traffic`]).
+    pub fn family(&self) -> Option<Protocol> {
+        let f = match self {
+            Event::Out(to, b) => crate::family::of_traffic(Some(*to), b),
+            Event::In(b) => crate::family::of_traffic(None, b),
+            _ => None,
+        };
+        f.map(|f| f.protocol())
+    }
+}
+
 /// An event and when it happened (since the recording started).
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Timed {
@@ -96,33 +108,6 @@ pub struct Header {
     pub family: Option<Protocol>,
     pub droid: Option<String>,
     pub started: Option<String>,
-}
-
-/// The short name of a family in captures and on the command line.
-pub fn family_name(p: Protocol) -> &'static str {
-    match p {
-        Protocol::SpheroV2 => "v2",
-        Protocol::SpheroV1 => "v1",
-        Protocol::Rsrcp => "rsrcp",
-    }
-}
-
-pub fn family_from_name(s: &str) -> Option<Protocol> {
-    match s.trim().to_ascii_lowercase().as_str() {
-        "v2" => Some(Protocol::SpheroV2),
-        "v1" => Some(Protocol::SpheroV1),
-        "rsrcp" => Some(Protocol::Rsrcp),
-        _ => None,
-    }
-}
-
-/// A model that speaks `p`, for a capture that names only the family (btsnoop).
-pub fn representative(p: Protocol) -> Model {
-    match p {
-        Protocol::SpheroV2 => Model::R2D2,
-        Protocol::SpheroV1 => Model::BB8,
-        Protocol::Rsrcp => Model::Robi42,
-    }
 }
 
 fn endpoint_from_name(s: &str) -> Option<Endpoint> {
@@ -168,7 +153,10 @@ pub fn header_text(h: &Header) -> String {
     };
     line("droidctl", h.droidctl.as_deref());
     line("model", h.model.map(Model::id));
-    line("family", h.family.map(family_name));
+    line(
+        "family",
+        h.family.map(|p| crate::family::for_protocol(p).name()),
+    );
     line("droid", h.droid.as_deref());
     line("started", h.started.as_deref());
     s
@@ -278,7 +266,8 @@ impl TextReader {
                     }
                     "family" => {
                         self.header.family = Some(
-                            family_from_name(&v)
+                            crate::family::by_name(&v)
+                                .map(|f| f.protocol())
                                 .ok_or_else(|| err(format!("unknown family {v:?}")))?,
                         )
                     }
@@ -344,18 +333,7 @@ impl Capture {
         self.header
             .family
             .or(self.header.model.map(Model::protocol))
-            .or_else(|| {
-                self.events.iter().find_map(|t| match &t.event {
-                    Event::Out(Endpoint::Api, b) | Event::In(b) => match b.first() {
-                        Some(0x8D) => Some(Protocol::SpheroV2),
-                        Some(0xFF) => Some(Protocol::SpheroV1),
-                        Some(0x7E) => Some(Protocol::Rsrcp),
-                        _ => None,
-                    },
-                    Event::Out(_, _) => Some(Protocol::Rsrcp),
-                    _ => None,
-                })
-            })
+            .or_else(|| self.events.iter().find_map(|t| t.event.family()))
     }
 
     /// The time of the last event.

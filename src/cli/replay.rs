@@ -82,7 +82,7 @@ pub fn load(args: &ReplayArgs) -> Result<(crate::capture::Capture, crate::model:
             .ok_or_else(|| CliError::usage(format!("unknown model {m:?}")))?,
         None => match (capture.header.model, capture.family()) {
             (Some(m), _) => m,
-            (None, Some(f)) => crate::capture::representative(f),
+            (None, Some(f)) => crate::family::for_protocol(f).representative(),
             (None, None) => {
                 return Err(CliError::failure(format!(
                     "{}: no droid traffic found in this {}",
@@ -97,9 +97,9 @@ pub fn load(args: &ReplayArgs) -> Result<(crate::capture::Capture, crate::model:
     {
         return Err(CliError::usage(format!(
             "the capture holds {} traffic; {} speaks {}",
-            crate::capture::family_name(f),
+            crate::family::for_protocol(f).name(),
             model.display_name(),
-            crate::capture::family_name(model.protocol())
+            crate::family::for_model(model).name()
         )));
     }
     Ok((capture, model))

@@ -1,25 +1,36 @@
-//! The seam between protocol families (Sphero v2, Sphero v1, later RSRCP).
+//! The seam between protocol families: Sphero API v2, Sphero API v1 and RSRCP.
 //!
-//! The session, packet log, telemetry, mission runner and UI serve every family through
-//! this one interface; the model picks the family ([`for_model`]). A family supplies:
-//! - a [`Codec`]: framing and a streaming decoder, how a response is matched to its
-//!   request, and how its asynchronous messages map onto the common [`Notification`]s;
+//! Everything that differs between the families is reached through this one interface; the
+//! model picks the family ([`for_model`]), a name or a captured byte stream finds one
+//! ([`by_name`], [`detect`]). A family supplies:
+//! - who it is: its short and display names, its start-of-packet byte, a model that speaks
+//!   it;
+//! - a [`Codec`] for a live connection: framing and a streaming decoder, how a response is
+//!   matched to its request, and how its asynchronous messages map onto the common
+//!   [`Notification`](crate::protocol::notify::Notification)s;
+//! - a [`Reader`] for traffic seen from outside (captures, traces, `packet decode`): either
+//!   side's bytes into packets explained as text or JSON;
+//! - packets built by name and its catalogue listed (`packet encode`, `packet list`);
 //! - the commands behind each capability (drive, stop, dome, stance, LEDs, aim, sleep …),
 //!   built from its own catalogue, or `None` when the family has no such thing.
 //!
 //! Everything here is sans-IO: no clocks, no tokio.
 
+pub mod named;
+pub mod read;
 pub mod robi;
 pub mod types;
 pub mod v1;
 pub mod v2;
 
+pub use read::{Found, ReadOption, ReadOptions, Reader, Side};
 pub use types::{
     Command, DecodeError, DroidError, Explained, Incoming, Key, Packet, PacketKind, RobiControl,
     RobiPacket,
 };
 
 use crate::model::{Model, Protocol};
+use crate::protocol::decode::ErrorKind;
 use crate::protocol::wire::LegAction;
 use crate::script::Action;
 use crate::setup::SetupOptions;
@@ -59,9 +70,31 @@ pub trait Codec: Send {
     fn explain(&self, p: &Packet, request: Option<&Command>) -> Explained;
 }
 
-/// One protocol family: its codec and the commands behind each capability.
+/// One protocol family: who it is, its codec and reader, and the commands behind each
+/// capability.
 pub trait Family: Sync {
     fn protocol(&self) -> Protocol;
+    /// The short name on the command line and in captures (`v2`).
+    fn name(&self) -> &'static str;
+    /// The name for people (`Sphero API v2`).
+    fn display_name(&self) -> &'static str;
+    /// The first byte of every packet: how a byte stream shows its family.
+    fn sop(&self) -> u8;
+    /// A model that speaks the family, for a capture that names only the family.
+    fn representative(&self) -> Model;
+    /// The decode errors its readers report, in the order summaries list them.
+    fn error_kinds(&self) -> &'static [ErrorKind];
+    /// The [`ReadOptions`] its readers use; a caller refuses the others.
+    fn read_options(&self) -> &'static [ReadOption];
+    /// A reader of one side's bytes; `Err` says which option makes no sense.
+    fn reader(&self, opts: &ReadOptions) -> Result<Box<dyn Reader>, String>;
+    /// A reader told nothing but the side (and whether values come whole), as captures and
+    /// traces read: it cannot fail.
+    fn side_reader(&self, side: Side, whole_values: bool) -> Box<dyn Reader>;
+    /// `packet encode`: the wire bytes of the packet `name` with `--key value` parameters.
+    fn encode_named(&self, name: &str, params: Vec<(String, String)>) -> Result<Vec<u8>, String>;
+    /// `packet list`: the catalogue, names containing `filter` only.
+    fn list(&self, filter: Option<&str>, out: &mut dyn std::io::Write) -> std::io::Result<()>;
     fn codec(&self) -> Box<dyn Codec>;
     /// The command that wakes a droid from soft sleep, first after every connect.
     fn wake(&self) -> Option<Command>;
@@ -136,6 +169,53 @@ pub trait Family: Sync {
     }
 }
 
+/// Every family, in the order they are listed and detected.
+pub fn all() -> [&'static dyn Family; 3] {
+    [&v2::V2, &v1::V1, &robi::Robi]
+}
+
+/// The family with this short name (`v2`, `V1`, `rsrcp`).
+pub fn by_name(name: &str) -> Option<&'static dyn Family> {
+    all()
+        .into_iter()
+        .find(|f| f.name().eq_ignore_ascii_case(name.trim()))
+}
+
+/// The short names, for messages: `v2, v1 or rsrcp`.
+pub fn names() -> String {
+    let names: Vec<&str> = all().iter().map(|f| f.name()).collect();
+    match names.split_last() {
+        Some((last, rest)) if !rest.is_empty() => format!("{} or {last}", rest.join(", ")),
+        _ => names.join(""),
+    }
+}
+
+/// The family of the first start-of-packet byte in `bytes`, and its offset.
+pub fn detect(bytes: &[u8]) -> Option<(&'static dyn Family, usize)> {
+    bytes
+        .iter()
+        .enumerate()
+        .find_map(|(i, &b)| all().into_iter().find(|f| f.sop() == b).map(|f| (f, i)))
+}
+
+/// The family of bytes seen on a link: a write to one of a family's own inputs (Robi's remote
+/// control) names it; otherwise the first byte, a start of packet, does. `to` is where the
+/// host wrote them, `None` for what the droid sent.
+pub fn of_traffic(to: Option<crate::link::Endpoint>, bytes: &[u8]) -> Option<&'static dyn Family> {
+    match to {
+        Some(e) if e != crate::link::Endpoint::Api => all().into_iter().find(|f| {
+            crate::link::gatt::GattProfile::for_model(f.representative())
+                .inputs
+                .iter()
+                .any(|(input, _)| *input == e)
+        }),
+        _ => {
+            let first = *bytes.first()?;
+            all().into_iter().find(|f| f.sop() == first)
+        }
+    }
+}
+
 /// The family a model speaks.
 pub fn for_model(model: Model) -> &'static dyn Family {
     for_protocol(model.protocol())
@@ -148,6 +228,11 @@ pub fn for_protocol(p: Protocol) -> &'static dyn Family {
         Protocol::SpheroV1 => &v1::V1,
         Protocol::Rsrcp => &robi::Robi,
     }
+}
+
+/// A packet explained by its own family without context (no streaming masks, no request).
+pub fn explain(p: &Packet) -> Explained {
+    for_protocol(p.protocol()).codec().explain(p, None)
 }
 
 /// A packet of another family than the codec's: never produced by a session (it speaks one
@@ -165,5 +250,32 @@ pub fn explain_foreign(p: &Packet) -> Explained {
         error: None,
         did: None,
         seq: None,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn detect_takes_the_first_sop() {
+        let name = |b: &[u8]| detect(b).map(|(f, at)| (f.name(), at));
+        assert_eq!(name(&[]), None);
+        assert_eq!(name(&[1, 2, 3]), None);
+        assert_eq!(name(&[1, 0x7E, 0x8D, 0xFF]), Some(("rsrcp", 1)));
+        assert_eq!(name(&[0xFF, 0x8D]), Some(("v1", 0)));
+        assert_eq!(name(&[0, 0, 0x8D]), Some(("v2", 2)));
+    }
+
+    #[test]
+    fn families_are_found_by_name_and_protocol() {
+        for f in all() {
+            assert_eq!(by_name(f.name()).map(|g| g.protocol()), Some(f.protocol()));
+            assert_eq!(for_protocol(f.protocol()).name(), f.name());
+            assert_eq!(f.representative().protocol(), f.protocol());
+        }
+        assert_eq!(by_name("V1").map(|f| f.name()), Some("v1"));
+        assert!(by_name("v3").is_none());
+        assert_eq!(names(), "v2, v1 or rsrcp");
     }
 }

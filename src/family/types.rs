@@ -134,7 +134,56 @@ pub enum RobiPacket {
     Item(rsrcp::Item),
 }
 
+impl From<v2::Packet> for Packet {
+    fn from(p: v2::Packet) -> Self {
+        Packet::V2(p)
+    }
+}
+
+impl From<v1::Packet> for Packet {
+    fn from(p: v1::Packet) -> Self {
+        Packet::V1(p)
+    }
+}
+
 impl Packet {
+    /// The family the packet belongs to.
+    pub fn protocol(&self) -> Protocol {
+        match self {
+            Packet::V2(_) => Protocol::SpheroV2,
+            Packet::V1(_) => Protocol::SpheroV1,
+            Packet::Robi(_) => Protocol::Rsrcp,
+        }
+    }
+
+    /// A packet the host sent, as the command it carries, with its SEQ and whether it asked
+    /// for an answer; `None` for what only a droid sends.
+    pub fn as_command(&self) -> Option<(Command, u8, bool)> {
+        match self {
+            Packet::V2(p) if !p.is_response() && !p.is_notification() => Some((
+                Command::V2(v2::Command {
+                    did: p.did,
+                    cid: p.cid,
+                    data: p.data.clone(),
+                }),
+                p.seq,
+                p.flags.contains(v2::Flags::REQUESTS_RESPONSE),
+            )),
+            Packet::V1(v1::Packet::Command(c)) => Some((
+                Command::V1(v1::Command {
+                    did: c.did,
+                    cid: c.cid,
+                    data: c.data.clone(),
+                }),
+                c.seq,
+                c.sop2 & v1::packet::SOP2_ANSWER != 0,
+            )),
+            // Robi never answers.
+            Packet::Robi(RobiPacket::Control(c)) => Some((Command::Robi(*c), 0, false)),
+            _ => None,
+        }
+    }
+
     /// The wire bytes.
     pub fn encode(&self) -> Vec<u8> {
         match self {
@@ -171,50 +220,8 @@ impl Packet {
     }
 }
 
-/// A stream decode error of any family.
-#[derive(Debug, Clone, PartialEq)]
-pub enum DecodeError {
-    V2(v2::DecodeError),
-    V1(v1::DecodeError),
-    Rsrcp(rsrcp::FrameError),
-}
-
-impl DecodeError {
-    /// The error kind's snake_case name (`bad_checksum`).
-    pub fn kind_name(&self) -> &'static str {
-        match self {
-            DecodeError::V2(e) => e.kind.name(),
-            DecodeError::V1(e) => e.kind.name(),
-            DecodeError::Rsrcp(e) => e.kind.name(),
-        }
-    }
-
-    pub fn offset(&self) -> u64 {
-        match self {
-            DecodeError::V2(e) => e.offset,
-            DecodeError::V1(e) => e.offset,
-            DecodeError::Rsrcp(e) => e.offset,
-        }
-    }
-
-    pub fn detail(&self) -> &str {
-        match self {
-            DecodeError::V2(e) => &e.detail,
-            DecodeError::V1(e) => &e.detail,
-            DecodeError::Rsrcp(e) => &e.detail,
-        }
-    }
-}
-
-impl fmt::Display for DecodeError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            DecodeError::V2(e) => e.fmt(f),
-            DecodeError::V1(e) => e.fmt(f),
-            DecodeError::Rsrcp(e) => e.fmt(f),
-        }
-    }
-}
+/// A stream decode error of any family; it keeps what was read of the damaged packet.
+pub type DecodeError = crate::protocol::decode::DecodeError<Packet>;
 
 /// A droid's error answer to a command.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -269,6 +276,17 @@ pub enum PacketKind {
     Command,
     Response,
     Notification,
+}
+
+impl PacketKind {
+    /// snake_case name for JSON.
+    pub fn name(self) -> &'static str {
+        match self {
+            PacketKind::Command => "command",
+            PacketKind::Response => "response",
+            PacketKind::Notification => "notification",
+        }
+    }
 }
 
 /// A packet explained with its family's catalogue, for the packet log.

@@ -1,6 +1,7 @@
 //! The sans-IO protocol core: one module per protocol family, plus what they share
 //! (wire types, decoded values, payload schemas).
 
+pub mod decode;
 pub mod notify;
 pub mod rsrcp;
 pub mod schema;

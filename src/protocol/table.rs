@@ -111,6 +111,17 @@ impl CommandTable {
     }
 }
 
+/// "unknown command X; did you mean …?" from a catalogue's suggestions; `list` is what
+/// follows `droidctl packet list` to see that catalogue (` --protocol v1`).
+pub fn unknown_command(name: &str, suggestions: Vec<&str>, list: &str) -> String {
+    let hint = if suggestions.is_empty() {
+        format!("see `droidctl packet list{list}`")
+    } else {
+        format!("did you mean {}?", suggestions.join(", "))
+    };
+    format!("unknown command {name:?}; {hint}")
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

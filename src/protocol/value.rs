@@ -112,6 +112,42 @@ impl Serialize for Value {
 /// Named field values in wire order.
 pub type Fields = Vec<(&'static str, Value)>;
 
+/// Fields serialized straight to a JSON object (order kept), without building a
+/// `serde_json::Value` tree: what every JSON output of packets writes.
+pub struct FieldsJson<'a>(pub &'a [(&'static str, Value)]);
+
+impl Serialize for FieldsJson<'_> {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let mut m = s.serialize_map(Some(self.0.len()))?;
+        for (name, value) in self.0 {
+            m.serialize_entry(name, value)?;
+        }
+        m.end()
+    }
+}
+
+/// Bytes serialized as a lower-case hex string without separators (`8d0a13`).
+pub struct HexJson<'a>(pub &'a [u8]);
+
+impl Serialize for HexJson<'_> {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        const DIGITS: &[u8; 16] = b"0123456789abcdef";
+        let mut buf = [0u8; 128];
+        if self.0.len() * 2 <= buf.len() {
+            for (i, b) in self.0.iter().enumerate() {
+                buf[2 * i] = DIGITS[(b >> 4) as usize];
+                buf[2 * i + 1] = DIGITS[(b & 0xF) as usize];
+            }
+            // Only ASCII hex digits were written.
+            let text = std::str::from_utf8(&buf[..self.0.len() * 2]).unwrap_or_default();
+            s.serialize_str(text)
+        } else {
+            s.serialize_str(&crate::hex::compact(self.0))
+        }
+    }
+}
+
 /// Fields as a JSON object (order kept as inserted).
 pub fn fields_json(fields: &Fields) -> serde_json::Value {
     let mut map = serde_json::Map::new();

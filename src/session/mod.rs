@@ -159,12 +159,13 @@ pub enum LogItem {
 }
 
 impl LogItem {
-    /// A v2 packet explained without context (no streaming masks): for tools and tests that
-    /// build log entries by hand.
-    pub fn v2(p: crate::protocol::v2::Packet) -> LogItem {
+    /// A packet of any family explained without context (no streaming masks, no request):
+    /// for tools and tests that build log entries by hand.
+    pub fn packet(p: impl Into<Packet>) -> LogItem {
+        let packet = p.into();
         LogItem::Packet {
-            explained: crate::family::v2::explain(&p, None),
-            packet: Packet::V2(p),
+            explained: crate::family::explain(&packet),
+            packet,
         }
     }
 }

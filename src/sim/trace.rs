@@ -11,13 +11,13 @@
 //!   `gatt-read`).
 //!
 //! Each record carries the JSON object `droidctl packet decode --json` prints for the packet
-//! (with the packet CLI's own builders, so the two cannot drift apart) and a one-line text.
+//! (the family's reader writes both, so the two cannot drift apart) and a one-line text.
 
+use crate::family::{self, Found, Reader, Side};
 use crate::hex;
-use crate::link::gatt::{GattProfile, GattUuid, ROBI_HANDSHAKE};
-use crate::model::{Model, Protocol};
-use crate::protocol::{rsrcp, v1, v2, value};
-use serde_json::{Value, json};
+use crate::link::gatt::{GattProfile, GattUuid, HandshakeStep};
+use crate::model::Model;
+use serde::Serialize;
 
 /// Which way a record went, seen from the droid.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -41,9 +41,10 @@ impl TraceDir {
 #[derive(Debug, Clone, PartialEq)]
 pub struct TraceRecord {
     pub dir: TraceDir,
-    /// What `droidctl packet decode --json` prints for it; `{"kind": "gatt-write", "uuid",
-    /// "hex"}` (or `gatt-read`) for GATT operations that carry no packet.
-    pub packet: Value,
+    /// What `droidctl packet decode --json` prints for it, as JSON text; `{"kind":
+    /// "gatt-write", "uuid", "hex"}` (or `gatt-read`) for GATT operations that carry no
+    /// packet.
+    pub packet: String,
     /// One line for people: `command drive-with-heading seq 3: speed=60 …`.
     pub text: String,
 }
@@ -51,71 +52,73 @@ pub struct TraceRecord {
 impl TraceRecord {
     /// The JSON line `sim --bluez --trace --json` prints: `{"t_ms", "device", "dir",
     /// "packet"}`.
-    pub fn json_line(&self, t_ms: u64, device: &str) -> Value {
-        json!({
-            "t_ms": t_ms,
-            "device": device,
-            "dir": self.dir.name(),
-            "packet": self.packet,
-        })
+    pub fn json_line(&self, t_ms: u64, device: &str) -> String {
+        let device = serde_json::to_string(device).unwrap_or_else(|_| "\"\"".into());
+        format!(
+            "{{\"t_ms\":{t_ms},\"device\":{device},\"dir\":\"{}\",\"packet\":{}}}",
+            self.dir.name(),
+            self.packet
+        )
     }
-}
 
-/// The per-direction stream decoders of one family.
-enum Streams {
-    V2 {
-        inbound: v2::Decoder,
-        outbound: v2::Decoder,
-    },
-    V1 {
-        inbound: v1::Decoder,
-        outbound: v1::Decoder,
-    },
-    Rsrcp,
-}
+    /// The packet's JSON as a value, for tools and tests that look inside.
+    pub fn packet_value(&self) -> serde_json::Value {
+        serde_json::from_str(&self.packet).unwrap_or(serde_json::Value::Null)
+    }
 
-impl Streams {
-    fn new(protocol: Protocol) -> Streams {
-        match protocol {
-            Protocol::SpheroV2 => Streams::V2 {
-                inbound: v2::Decoder::new(),
-                outbound: v2::Decoder::new(),
-            },
-            Protocol::SpheroV1 => Streams::V1 {
-                inbound: v1::Decoder::new(v1::Source::Host),
-                outbound: v1::Decoder::new(v1::Source::Droid),
-            },
-            Protocol::Rsrcp => Streams::Rsrcp,
+    fn of(dir: TraceDir, f: &dyn Found) -> TraceRecord {
+        let mut json = Vec::new();
+        f.write_json(false, &mut json);
+        TraceRecord {
+            dir,
+            packet: String::from_utf8(json).unwrap_or_default(),
+            text: f.line(),
         }
     }
 }
 
 /// Decodes one droid's GATT traffic into [`TraceRecord`]s.
 pub struct PacketTracer {
-    protocol: Protocol,
+    model: Model,
     /// The characteristic API packets are written to (none for Robi: its inputs are bytes).
     api: Option<GattUuid>,
     /// The characteristics the droid's packets are notified on.
     notify: Vec<GattUuid>,
-    streams: Streams,
+    /// The characteristics the host reads as part of the handshake (Robi's version and
+    /// interval): decoded as the droid's packets.
+    reads: Vec<GattUuid>,
+    inbound: Box<dyn Reader>,
+    outbound: Box<dyn Reader>,
 }
 
 impl PacketTracer {
     pub fn new(model: Model) -> PacketTracer {
         let profile = GattProfile::for_model(model);
-        let protocol = model.protocol();
+        let f = family::for_model(model);
         PacketTracer {
-            protocol,
-            api: (protocol != Protocol::Rsrcp).then_some(profile.write.characteristic),
+            model,
+            api: profile
+                .inputs
+                .is_empty()
+                .then_some(profile.write.characteristic),
             notify: profile.notify.iter().map(|c| c.characteristic).collect(),
-            streams: Streams::new(protocol),
+            reads: profile
+                .handshake
+                .iter()
+                .filter_map(|s| match s {
+                    HandshakeStep::Read { ch, .. } => Some(ch.characteristic),
+                    HandshakeStep::Write { .. } => None,
+                })
+                .collect(),
+            inbound: f.side_reader(Side::Host, false),
+            outbound: f.side_reader(Side::Droid, true),
         }
     }
 
     /// A new connection: the byte streams start afresh (a half packet of the last one is
     /// dropped, as the droid drops it).
     pub fn reset(&mut self) {
-        self.streams = Streams::new(self.protocol);
+        *self = PacketTracer::new(self.model);
     }
 
     /// The host wrote `bytes` to `ch`.
@@ -123,21 +126,7 @@ impl PacketTracer {
         if Some(ch) != self.api {
             return vec![gatt_op("gatt-write", TraceDir::In, ch, bytes)];
         }
-        let mut out = Vec::new();
-        match &mut self.streams {
-            Streams::V2 { inbound, .. } => {
-                for r in inbound.feed(bytes) {
-                    out.push(v2_record(TraceDir::In, r));
-                }
-            }
-            Streams::V1 { inbound, .. } => {
-                for r in inbound.feed(bytes) {
-                    out.push(v1_record(TraceDir::In, r));
-                }
-            }
-            Streams::Rsrcp => out.push(gatt_op("gatt-write", TraceDir::In, ch, bytes)),
-        }
-        out
+        records(&mut *self.inbound, TraceDir::In, bytes)
     }
 
     /// The droid notified `bytes` on `ch`.
@@ -145,42 +134,50 @@ impl PacketTracer {
         if !self.notify.contains(&ch) {
             return vec![gatt_op("gatt-notify", TraceDir::Out, ch, bytes)];
         }
-        let mut out = Vec::new();
-        match &mut self.streams {
-            Streams::V2 { outbound, .. } => {
-                for r in outbound.feed(bytes) {
-                    out.push(v2_record(TraceDir::Out, r));
-                }
-            }
-            Streams::V1 { outbound, .. } => {
-                for r in outbound.feed(bytes) {
-                    out.push(v1_record(TraceDir::Out, r));
-                }
-            }
-            // One frame per notification, read as `packet decode --protocol rsrcp` reads one.
-            Streams::Rsrcp => out.push(rsrcp_record(
-                rsrcp::decode_frame(bytes).map(rsrcp::Item::Frame),
-            )),
-        }
-        out
+        records(&mut *self.outbound, TraceDir::Out, bytes)
     }
 
     /// The host read `bytes` from `ch`.
     pub fn read(&mut self, ch: GattUuid, bytes: &[u8]) -> Vec<TraceRecord> {
-        if self.protocol == Protocol::Rsrcp && ch == ROBI_HANDSHAKE && !bytes.is_empty() {
-            return vec![rsrcp_record(
-                rsrcp::decode_handshake(bytes).map(rsrcp::Item::Handshake),
-            )];
+        if self.reads.contains(&ch) && !bytes.is_empty() {
+            return records(&mut *self.outbound, TraceDir::Out, bytes);
         }
         vec![gatt_op("gatt-read", TraceDir::Out, ch, bytes)]
     }
 }
 
+/// What `reader` finds in `bytes`, as records going `dir`.
+fn records(reader: &mut dyn Reader, dir: TraceDir, bytes: &[u8]) -> Vec<TraceRecord> {
+    let mut out = Vec::new();
+    // Records are collected in memory: nothing here can fail.
+    let _ = reader.feed(
+        bytes,
+        Some(&mut |f| {
+            out.push(TraceRecord::of(dir, f));
+            Ok(())
+        }),
+    );
+    out
+}
+
+/// A GATT operation that carries no packet, as JSON.
+#[derive(Serialize)]
+struct GattOp<'a> {
+    kind: &'a str,
+    uuid: String,
+    hex: String,
+}
+
 fn gatt_op(kind: &str, dir: TraceDir, ch: GattUuid, bytes: &[u8]) -> TraceRecord {
     let verb = kind.strip_prefix("gatt-").unwrap_or(kind);
+    let op = GattOp {
+        kind,
+        uuid: ch.to_string(),
+        hex: hex::compact(bytes),
+    };
     TraceRecord {
         dir,
-        packet: json!({"kind": kind, "uuid": ch.to_string(), "hex": hex::compact(bytes)}),
+        packet: serde_json::to_string(&op).unwrap_or_default(),
         text: format!("{verb} {ch}: {}", shown_hex(bytes)),
     }
 }
@@ -193,103 +190,12 @@ fn shown_hex(bytes: &[u8]) -> String {
     }
 }
 
-/// `: fields` or `: problem`, or nothing.
-fn tail(fields: &Option<value::Fields>, problem: &Option<String>) -> String {
-    match (fields, problem) {
-        (Some(f), _) if !f.is_empty() => format!(": {}", value::fields_line(f)),
-        (None, Some(p)) => format!(": {p}"),
-        _ => String::new(),
-    }
-}
-
-fn error_json(kind: &str, offset: u64, detail: &str) -> Value {
-    json!({"error": kind, "offset": offset, "detail": detail})
-}
-
-fn v2_record(dir: TraceDir, r: Result<v2::Packet, v2::DecodeError>) -> TraceRecord {
-    match r {
-        Ok(p) => {
-            let d = v2::describe(&p, None);
-            let label = d
-                .name
-                .clone()
-                .unwrap_or_else(|| format!("{}/0x{:02X}", v2::Device::describe(p.did), p.cid));
-            let err = p
-                .err
-                .filter(|e| !e.is_success())
-                .map(|e| format!(" error {}", e.name()))
-                .unwrap_or_default();
-            TraceRecord {
-                dir,
-                packet: crate::cli::packet::packet_json(&p, true, &d),
-                text: format!(
-                    "{} {label} seq {}{err}{} [{}]",
-                    d.kind.name(),
-                    p.seq,
-                    tail(&d.fields, &d.problem),
-                    hex::spaced(&p.encode())
-                ),
-            }
-        }
-        Err(e) => TraceRecord {
-            dir,
-            packet: error_json(e.kind.name(), e.offset, &e.detail),
-            text: format!("decode error: {} ({})", e.kind.name(), e.detail),
-        },
-    }
-}
-
-fn v1_record(dir: TraceDir, r: Result<v1::Packet, v1::DecodeError>) -> TraceRecord {
-    match r {
-        Ok(p) => {
-            let d = v1::describe(&p, None, None);
-            let head = match &p {
-                v1::Packet::Command(c) => format!("seq {}", c.seq),
-                v1::Packet::Response(r) => format!("seq {} {}", r.seq, r.mrsp),
-                v1::Packet::Async(_) => String::new(),
-            };
-            let wire = p.encode().map(|w| hex::spaced(&w)).unwrap_or_default();
-            TraceRecord {
-                dir,
-                packet: crate::cli::packet::v1_packet_json(&p, &d, true),
-                text: format!(
-                    "{} {}{}{} [{wire}]",
-                    d.kind.name(),
-                    d.label(&p),
-                    if head.is_empty() {
-                        String::new()
-                    } else {
-                        format!(" {head}")
-                    },
-                    tail(&d.fields, &d.problem),
-                ),
-            }
-        }
-        Err(e) => TraceRecord {
-            dir,
-            packet: error_json(e.kind.name(), e.offset, &e.detail),
-            text: format!("decode error: {} ({})", e.kind.name(), e.detail),
-        },
-    }
-}
-
-fn rsrcp_record(r: Result<rsrcp::Item, rsrcp::FrameError>) -> TraceRecord {
-    let text = match &r {
-        Ok(item) => item.summary(),
-        Err(e) => format!("decode error: {}", e.summary()),
-    };
-    TraceRecord {
-        dir: TraceDir::Out,
-        packet: rsrcp::to_json(&r),
-        text,
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::link::gatt::{V1_ANTI_DOS, V1_COMMANDS, V1_RESPONSES, V2_ANTI_DOS, V2_API};
     use crate::protocol::v2::wire::DriveFlags;
+    use crate::protocol::{v1, v2};
     use crate::units::Heading;
 
     #[test]
@@ -297,9 +203,12 @@ mod tests {
         let mut t = PacketTracer::new(Model::R2D2);
         let unlock = t.write(V2_ANTI_DOS, b"usetheforce...band");
         assert_eq!(unlock.len(), 1);
-        assert_eq!(unlock[0].packet["kind"], "gatt-write");
-        assert_eq!(unlock[0].packet["uuid"], V2_ANTI_DOS.to_string());
-        assert_eq!(unlock[0].packet["hex"], hex::compact(b"usetheforce...band"));
+        assert_eq!(unlock[0].packet_value()["kind"], "gatt-write");
+        assert_eq!(unlock[0].packet_value()["uuid"], V2_ANTI_DOS.to_string());
+        assert_eq!(
+            unlock[0].packet_value()["hex"],
+            hex::compact(b"usetheforce...band")
+        );
         let wire = v2::cmd::drive_with_heading(60, Heading::default(), DriveFlags::empty())
             .to_packet(7)
             .encode();
@@ -308,8 +217,8 @@ mod tests {
         let r = t.write(V2_API, b);
         assert_eq!(r.len(), 1);
         assert_eq!(r[0].dir, TraceDir::In);
-        assert_eq!(r[0].packet["command"], "drive-with-heading");
-        assert_eq!(r[0].packet["fields"]["speed"], 60);
+        assert_eq!(r[0].packet_value()["command"], "drive-with-heading");
+        assert_eq!(r[0].packet_value()["fields"]["speed"], 60);
         assert!(
             r[0].text
                 .starts_with("command drive-with-heading seq 7: speed=60"),
@@ -319,7 +228,7 @@ mod tests {
         let note = v2::Packet::notification(0x13, 0x19, vec![]).encode();
         let r = t.notify(V2_API, &note);
         assert_eq!(r[0].dir, TraceDir::Out);
-        assert_eq!(r[0].packet["command"], "will-sleep");
+        assert_eq!(r[0].packet_value()["command"], "will-sleep");
         assert_eq!(
             t.write(V2_API, &[0x8D, 0x01, 0xD8]).len(),
             1,
@@ -331,106 +240,20 @@ mod tests {
     fn v1_commands_in_responses_out() {
         let mut t = PacketTracer::new(Model::BB8);
         assert_eq!(
-            t.write(V1_ANTI_DOS, b"011i3")[0].packet["kind"],
+            t.write(V1_ANTI_DOS, b"011i3")[0].packet_value()["kind"],
             "gatt-write"
         );
         let ping = v1::Packet::Command(v1::cmd::ping().to_packet(3))
             .encode()
             .unwrap();
         let r = t.write(V1_COMMANDS, &ping);
-        assert_eq!(r[0].packet["kind"], "command");
-        assert_eq!(r[0].packet["command"], "ping");
+        assert_eq!(r[0].packet_value()["kind"], "command");
+        assert_eq!(r[0].packet_value()["command"], "ping");
         let pre_sleep = v1::Packet::Async(v1::AsyncPacket::new(0x05, vec![]))
             .encode()
             .unwrap();
         let r = t.notify(V1_RESPONSES, &pre_sleep);
-        assert_eq!(r[0].packet["kind"], "async");
+        assert_eq!(r[0].packet_value()["kind"], "async");
         assert_eq!(r[0].dir, TraceDir::Out);
-    }
-
-    /// What `droidctl packet decode --json --protocol P [--from SIDE] HEX` prints.
-    fn decoded(protocol: &str, from: Option<&str>, wire: &[u8]) -> Value {
-        let cmd = crate::cli::packet::PacketCmd::Decode {
-            hex: vec![hex::spaced(wire)],
-            file: None,
-            btsnoop: None,
-            handle: Vec::new(),
-            summary: false,
-            protocol: Some(protocol.into()),
-            from: from.map(String::from),
-            stream: false,
-            json: true,
-            sensor_mask: None,
-            ext_mask: None,
-            mask2: None,
-            frames: None,
-            request: None,
-        };
-        let mut out = Vec::new();
-        crate::cli::packet::run(cmd, &mut out).unwrap();
-        serde_json::from_slice(&out).unwrap()
-    }
-
-    /// The trace's `packet` is exactly the object `packet decode --json` prints, for every
-    /// family and both directions.
-    #[test]
-    fn packets_are_what_packet_decode_json_prints() {
-        use crate::protocol::rsrcp::{Frame, Handshake};
-        let mut t = PacketTracer::new(Model::R2D2);
-        let cmd =
-            v2::cmd::drive_with_heading(60, Heading::default(), DriveFlags::empty()).to_packet(3);
-        let resp = v2::Packet::response_to(&cmd, v2::ErrorCode::Success, vec![]);
-        let note = v2::Packet::notification(0x13, 0x19, vec![]);
-        for (dir, wire) in [
-            (TraceDir::In, cmd.encode()),
-            (TraceDir::Out, resp.encode()),
-            (TraceDir::Out, note.encode()),
-        ] {
-            let r = match dir {
-                TraceDir::In => t.write(V2_API, &wire),
-                TraceDir::Out => t.notify(V2_API, &wire),
-            };
-            assert_eq!(r[0].packet, decoded("v2", None, &wire));
-        }
-        let mut t = PacketTracer::new(Model::BB8);
-        let c = v1::cmd::ping().to_packet(9);
-        let wire_in = v1::Packet::Command(c.clone()).encode().unwrap();
-        let wire_out = v1::Packet::Response(v1::Response::to(&c, v1::Mrsp::Ok, vec![]))
-            .encode()
-            .unwrap();
-        let wire_async = v1::Packet::Async(v1::AsyncPacket::new(0x05, vec![]))
-            .encode()
-            .unwrap();
-        assert_eq!(
-            t.write(V1_COMMANDS, &wire_in)[0].packet,
-            decoded("v1", Some("host"), &wire_in)
-        );
-        assert_eq!(
-            t.notify(V1_RESPONSES, &wire_out)[0].packet,
-            decoded("v1", Some("droid"), &wire_out)
-        );
-        assert_eq!(
-            t.notify(V1_RESPONSES, &wire_async)[0].packet,
-            decoded("v1", Some("droid"), &wire_async)
-        );
-        let mut t = PacketTracer::new(Model::Robi42);
-        let hs = Handshake {
-            version: 1,
-            msdt_ms: 10,
-        }
-        .encode()
-        .to_vec();
-        assert_eq!(
-            t.read(ROBI_HANDSHAKE, &hs)[0].packet,
-            decoded("rsrcp", None, &hs)
-        );
-        let frame = Frame::default().encode();
-        assert_eq!(
-            t.notify(crate::link::gatt::ROBI_FRAMES, &frame)[0].packet,
-            decoded("rsrcp", None, &frame)
-        );
-        let w = t.write(crate::link::gatt::ROBI_VELOCITY, &[200]);
-        assert_eq!(w[0].packet["kind"], "gatt-write");
-        assert_eq!(w[0].packet["hex"], "c8");
     }
 }

@@ -3,17 +3,48 @@
 //! family (masks learnt from the log's own streaming commands, v1 answers read with their
 //! requests). Read in blocks: a log of any size goes through in bounded memory.
 
-use super::{CliError, DecodeArgs, Protocol, io_err};
+use super::{CliError, DecodeArgs, io_err};
 use crate::app::packet_log::LogLine;
 use crate::capture::btsnoop::{Item, Reader};
 use crate::capture::hci::{self, Decoder};
 use crate::capture::mirror::{Mirror, Output};
-use crate::capture::{Event, Timed, representative};
+use crate::capture::{Event, Timed};
+use crate::model::Protocol;
+use crate::protocol::value::{FieldsJson, HexJson};
 use crate::session::{Direction, LinkState, LogEntry, LogItem};
+use serde::Serialize;
 use serde_json::{Value, json};
 use std::collections::BTreeMap;
 use std::io::{Read, Write};
 use std::time::Duration;
+
+/// A packet of the log as `--btsnoop --json` prints it: the catalogue entry under `command`
+/// as in every JSON output (null when the catalogue does not know it), the log's label beside
+/// it.
+#[derive(Serialize)]
+struct PacketLine<'a> {
+    t_s: f64,
+    dir: &'static str,
+    kind: &'static str,
+    command: Option<&'a str>,
+    label: &'a str,
+    did: Option<u8>,
+    seq: Option<u8>,
+    error: Option<String>,
+    fields: Option<FieldsJson<'a>>,
+    problem: Option<&'a str>,
+    wire: HexJson<'a>,
+}
+
+/// A decode error of the log as `--btsnoop --json` prints it.
+#[derive(Serialize)]
+struct ErrorLine<'a> {
+    t_s: f64,
+    dir: &'static str,
+    error: &'static str,
+    offset: u64,
+    detail: &'a str,
+}
 
 struct Printer<'a> {
     out: &'a mut dyn Write,
@@ -46,7 +77,7 @@ impl Printer<'_> {
     fn entry(&mut self, e: &LogEntry) -> std::io::Result<()> {
         match &e.item {
             LogItem::DecodeError(de) => {
-                *self.decode_errors.entry(de.kind_name()).or_default() += 1;
+                *self.decode_errors.entry(de.kind.name()).or_default() += 1;
             }
             LogItem::Packet { .. } if e.dir == Direction::Out => self.packets.0 += 1,
             LogItem::Packet { .. } => self.packets.1 += 1,
@@ -59,29 +90,38 @@ impl Printer<'_> {
             Direction::In => "in",
         };
         if self.json {
-            let v = match &e.item {
-                LogItem::Packet { packet, explained } => json!({
-                    "t_s": e.at.as_secs_f64(),
-                    "dir": dir,
-                    "kind": format!("{:?}", explained.kind).to_ascii_lowercase(),
-                    "name": explained.label,
-                    "known": explained.known,
-                    "did": explained.did,
-                    "seq": explained.seq,
-                    "error": explained.error.map(|x| x.name()),
-                    "fields": explained.fields.as_ref().map(crate::protocol::value::fields_json),
-                    "problem": explained.problem,
-                    "wire": crate::hex::compact(&packet.encode()),
-                }),
-                LogItem::DecodeError(de) => json!({
-                    "t_s": e.at.as_secs_f64(),
-                    "dir": dir,
-                    "error": de.kind_name(),
-                    "offset": de.offset(),
-                    "detail": de.detail(),
-                }),
-            };
-            return writeln!(self.out, "{v}");
+            let t_s = e.at.as_secs_f64();
+            match &e.item {
+                LogItem::Packet { packet, explained } => {
+                    let wire = packet.encode();
+                    let fields = explained.fields.as_deref().map(FieldsJson);
+                    let line = PacketLine {
+                        t_s,
+                        dir,
+                        kind: explained.kind.name(),
+                        command: explained.known.then_some(explained.label.as_str()),
+                        label: &explained.label,
+                        did: explained.did,
+                        seq: explained.seq,
+                        error: explained.error.map(|x| x.name()),
+                        fields,
+                        problem: explained.problem.as_deref(),
+                        wire: HexJson(&wire),
+                    };
+                    serde_json::to_writer(&mut *self.out, &line).map_err(std::io::Error::other)?;
+                }
+                LogItem::DecodeError(de) => {
+                    let line = ErrorLine {
+                        t_s,
+                        dir,
+                        error: de.kind.name(),
+                        offset: de.offset,
+                        detail: &de.detail,
+                    };
+                    serde_json::to_writer(&mut *self.out, &line).map_err(std::io::Error::other)?;
+                }
+            }
+            return writeln!(self.out);
         }
         let l = LogLine::from_entry(e);
         let seq = l.seq.map(|s| format!(" seq {s}")).unwrap_or_default();
@@ -160,13 +200,9 @@ pub(super) fn decode(
     let forced = args
         .protocol
         .as_deref()
-        .map(Protocol::parse)
+        .map(super::family_named)
         .transpose()?
-        .map(|p| match p {
-            Protocol::V2 => crate::model::Protocol::SpheroV2,
-            Protocol::V1 => crate::model::Protocol::SpheroV1,
-            Protocol::Rsrcp => crate::model::Protocol::Rsrcp,
-        });
+        .map(|f| f.protocol());
     let mut input: Box<dyn Read> = if path == "-" {
         Box::new(std::io::stdin().lock())
     } else {
@@ -211,7 +247,7 @@ pub(super) fn decode(
                     let Some(d) = decoder.as_mut() else { continue };
                     d.record(&r, &mut events);
                     for t in events.drain(..) {
-                        let family = forced.or(d.family()).or_else(|| sniff(&t));
+                        let family = forced.or(d.family()).or_else(|| t.event.family());
                         step(&mut state, t, family, &mut outs, &mut printer).map_err(io_err)?;
                     }
                 }
@@ -239,7 +275,7 @@ pub(super) fn decode(
     };
     let found = mirror_stats.is_some();
     let family = match &state {
-        State::Decoding(m) => crate::capture::family_name(m.model().protocol()),
+        State::Decoding(m) => crate::family::for_model(m.model()).name(),
         State::Waiting(_) => "none",
     };
     let st = &decoder.stats;
@@ -311,26 +347,11 @@ pub(super) fn decode(
     Ok(0)
 }
 
-/// The family of a payload by its first byte, for handles given without a discovery.
-fn sniff(t: &Timed) -> Option<crate::model::Protocol> {
-    use crate::model::Protocol as P;
-    match &t.event {
-        Event::Out(crate::link::Endpoint::Api, b) | Event::In(b) => match b.first() {
-            Some(0x8D) => Some(P::SpheroV2),
-            Some(0xFF) => Some(P::SpheroV1),
-            Some(0x7E) => Some(P::Rsrcp),
-            _ => None,
-        },
-        Event::Out(_, _) => Some(P::Rsrcp),
-        _ => None,
-    }
-}
-
 /// One event through the mirror (made when the family is known).
 fn step(
     state: &mut State,
     t: Timed,
-    family: Option<crate::model::Protocol>,
+    family: Option<Protocol>,
     outs: &mut Vec<Output>,
     printer: &mut Printer,
 ) -> std::io::Result<()> {
@@ -343,7 +364,8 @@ fn step(
             return Ok(());
         };
         let held = std::mem::take(held);
-        *state = State::Decoding(Box::new(Mirror::new(representative(f))));
+        let model = crate::family::for_protocol(f).representative();
+        *state = State::Decoding(Box::new(Mirror::new(model)));
         for h in held {
             step(state, h, family, outs, printer)?;
         }

@@ -3,14 +3,14 @@
 //! flat whatever the input's size. The output ends with a summary: packets per kind and
 //! decode errors per kind.
 //!
-//! v2 goes through [`Decoder::feed_with`](crate::protocol::v2::Decoder::feed_with), so with
-//! `--summary` nothing is allocated per packet.
+//! Every family goes through its [`Reader`](crate::family::Reader) and the same
+//! [`Printer`](super::print::Printer); with `--summary` a reader only counts (v2 then
+//! allocates nothing per packet).
 
-use super::{CliError, DecodeArgs, FamilyOpts, io_err, v1, v2};
-use crate::protocol::rsrcp::{FrameErrorKind, Framer};
-use crate::protocol::v1 as p1;
-use crate::protocol::v2 as p2;
-use serde_json::{Map, Value, json};
+use super::print::Printer;
+use super::{CliError, DecodeArgs, io_err};
+use crate::family::{Family, Reader};
+use serde_json::{Value, json};
 use std::io::{Read, Write};
 
 /// How much is read at a time; also how much the hex-or-binary and family sniffing look at.
@@ -130,11 +130,11 @@ pub fn decode_reader(
     } else {
         bytes.extend_from_slice(&block[..first]);
     }
-    let (family, why) = super::choose_family(&args, &bytes)?;
-    let mut sink = Sink::with_printer(super::family_opts(args, family, &why)?, json, summary_only)?;
+    let (family, mut reader) = super::reader_for(args, &bytes, true)?;
+    let mut printer = Printer::new(out, json, true, summary_only);
     let mut read = first as u64;
     loop {
-        sink.feed(&bytes, out).map_err(io_err)?;
+        feed(&mut *reader, &bytes, &mut printer).map_err(io_err)?;
         bytes.clear();
         if failure.is_some() {
             break;
@@ -162,8 +162,8 @@ pub fn decode_reader(
     {
         failure = Some(e);
     }
-    sink.feed(&bytes, out).map_err(io_err)?;
-    let summary = sink.finish(out, is_hex).map_err(io_err)?;
+    feed(&mut *reader, &bytes, &mut printer).map_err(io_err)?;
+    let summary = finish(family, &mut *reader, &mut printer, is_hex).map_err(io_err)?;
     match failure {
         Some(message) => Err(CliError::failure(message)),
         None => Ok(summary),
@@ -277,353 +277,47 @@ impl HexText {
     }
 }
 
-/// One family's streaming decoder and printer.
-enum Sink {
-    V2 {
-        decoder: p2::Decoder,
-        /// The masks in effect: given, or followed from the stream's own Configure Streaming.
-        streaming: p2::StreamingConfig,
-        follow: bool,
-        kinds: [u64; 3],
-    },
-    V1 {
-        decoder: p1::Decoder,
-        streaming: Option<p1::StreamingConfig>,
-        follow: bool,
-        request: Option<p1::Command>,
-    },
-    Rsrcp {
-        framer: Framer,
-    },
-}
-
-/// The sink and how it prints.
-struct Printer {
-    json: bool,
-    summary_only: bool,
-    items: u64,
-}
-
-impl Printer {
-    /// A blank line between human-readable blocks.
-    fn separate(&mut self, out: &mut dyn Write) -> std::io::Result<()> {
-        if !self.json && self.items > 0 {
-            writeln!(out)?;
-        }
-        self.items += 1;
-        Ok(())
-    }
-}
-
-struct SinkWith {
-    sink: Sink,
-    printer: Printer,
-}
-
-impl Sink {
-    fn with_printer(
-        opts: FamilyOpts,
-        json: bool,
-        summary_only: bool,
-    ) -> Result<SinkWith, CliError> {
-        let sink = match opts {
-            FamilyOpts::V2 { mask, ext_mask } => Sink::V2 {
-                decoder: p2::Decoder::new(),
-                streaming: p2::StreamingConfig {
-                    mask: mask.unwrap_or(0),
-                    ext_mask: ext_mask.unwrap_or(0),
-                    interval_ms: 1,
-                },
-                follow: mask.is_none(),
-                kinds: [0; 3],
-            },
-            FamilyOpts::V1(o) => Sink::V1 {
-                decoder: p1::Decoder::new(o.source),
-                streaming: o.streaming()?,
-                follow: o.mask.is_none() && o.mask2.is_none(),
-                request: o.request.clone(),
-            },
-            FamilyOpts::Rsrcp => Sink::Rsrcp {
-                framer: Framer::new(),
-            },
-        };
-        Ok(SinkWith {
-            sink,
-            printer: Printer {
-                json,
-                summary_only,
-                items: 0,
-            },
-        })
-    }
-}
-
-impl SinkWith {
-    fn feed(&mut self, bytes: &[u8], out: &mut dyn Write) -> std::io::Result<()> {
-        if bytes.is_empty() {
-            return Ok(());
-        }
-        let printer = &mut self.printer;
-        match &mut self.sink {
-            Sink::V2 {
-                decoder,
-                streaming,
-                follow,
-                kinds,
-            } => {
-                let mut result = Ok(());
-                decoder.feed_with(bytes, |d| {
-                    if result.is_ok() {
-                        result = v2_item(d, streaming, *follow, kinds, printer, out);
-                    }
-                });
-                result
-            }
-            Sink::V1 {
-                decoder,
-                streaming,
-                follow,
-                request,
-            } => {
-                for e in decoder.feed(bytes) {
-                    v1_item(e, streaming, *follow, request.as_ref(), printer, out)?;
-                }
-                Ok(())
-            }
-            Sink::Rsrcp { framer } => {
-                for r in framer.feed(bytes) {
-                    rsrcp_item(&r, printer, out)?;
-                }
-                Ok(())
-            }
-        }
-    }
-
-    fn finish(mut self, out: &mut dyn Write, hex: bool) -> std::io::Result<FileSummary> {
-        let printer = &mut self.printer;
-        let summary = match &mut self.sink {
-            Sink::V2 {
-                decoder,
-                streaming,
-                follow,
-                kinds,
-            } => {
-                for e in decoder.finish() {
-                    v2_item(
-                        p2::Decoded::Error(e),
-                        streaming,
-                        *follow,
-                        kinds,
-                        printer,
-                        out,
-                    )?;
-                }
-                let st = decoder.stats();
-                FileSummary {
-                    protocol: "v2",
-                    hex,
-                    bytes: st.bytes,
-                    packets: st.packets,
-                    kinds: vec![
-                        ("command", kinds[0]),
-                        ("response", kinds[1]),
-                        ("notification", kinds[2]),
-                    ],
-                    errors: p2::DecodeErrorKind::ALL
-                        .iter()
-                        .map(|k| (k.name(), st.errors(*k)))
-                        .collect(),
-                }
-            }
-            Sink::V1 {
-                decoder,
-                streaming,
-                follow,
-                request,
-            } => {
-                for e in decoder.finish() {
-                    v1_item(e, streaming, *follow, request.as_ref(), printer, out)?;
-                }
-                let st = decoder.stats();
-                FileSummary {
-                    protocol: "v1",
-                    hex,
-                    bytes: st.bytes,
-                    packets: st.packets,
-                    kinds: vec![
-                        ("command", st.commands),
-                        ("response", st.responses),
-                        ("async", st.asyncs),
-                    ],
-                    errors: p1::DecodeErrorKind::ALL
-                        .iter()
-                        .map(|k| (k.name(), st.errors(*k)))
-                        .collect(),
-                }
-            }
-            Sink::Rsrcp { framer } => {
-                for r in framer.finish() {
-                    rsrcp_item(&r, printer, out)?;
-                }
-                let st = framer.stats();
-                FileSummary {
-                    protocol: "rsrcp",
-                    hex,
-                    bytes: st.bytes,
-                    packets: st.frames + st.handshakes,
-                    kinds: vec![("handshake", st.handshakes), ("frame", st.frames)],
-                    errors: FrameErrorKind::ALL
-                        .iter()
-                        .map(|k| (k.name(), st.errors(*k)))
-                        .collect(),
-                }
-            }
-        };
-        if printer.json {
-            writeln!(out, "{}", summary.json())?;
-        } else {
-            if printer.items > 0 && !printer.summary_only {
-                writeln!(out)?;
-            }
-            writeln!(out, "{}", summary.text())?;
-        }
-        Ok(summary)
-    }
-}
-
-/// A decode error, as `--stream` prints it.
-fn error_out(
-    printer: &mut Printer,
-    out: &mut dyn Write,
-    kind: &str,
-    offset: u64,
-    detail: &str,
-    shown: &dyn std::fmt::Display,
-) -> std::io::Result<()> {
-    if printer.summary_only {
+/// Decode a block: printed, or only counted with `--summary`.
+fn feed(reader: &mut dyn Reader, bytes: &[u8], printer: &mut Printer) -> std::io::Result<()> {
+    if bytes.is_empty() {
         return Ok(());
     }
-    printer.separate(out)?;
-    if printer.json {
-        let v = json!({"error": kind, "offset": offset, "detail": detail});
-        writeln!(out, "{v}")
+    if printer.summary_only() {
+        return reader.feed(bytes, None);
+    }
+    reader.feed(bytes, Some(&mut |f| printer.show(f)))
+}
+
+/// The input ended: what was left half-read, then the summary.
+fn finish(
+    family: &dyn Family,
+    reader: &mut dyn Reader,
+    printer: &mut Printer,
+    hex: bool,
+) -> std::io::Result<FileSummary> {
+    reader.finish(Some(&mut |f| printer.show(f)))?;
+    let st = reader.stats();
+    let summary = FileSummary {
+        protocol: family.name(),
+        hex,
+        bytes: st.bytes,
+        packets: st.packets,
+        kinds: reader.kinds(),
+        errors: family
+            .error_kinds()
+            .iter()
+            .map(|k| (k.name(), st.errors(*k)))
+            .collect(),
+    };
+    if printer.json() {
+        writeln!(printer.out(), "{}", summary.json())?;
     } else {
-        writeln!(out, "decode error: {shown}")
-    }
-}
-
-/// `offset` first, then the packet's keys.
-fn with_offset(offset: u64, v: Value) -> Value {
-    let mut m = Map::new();
-    m.insert("offset".into(), json!(offset));
-    if let Value::Object(rest) = v {
-        m.extend(rest);
-    }
-    Value::Object(m)
-}
-
-fn v2_item(
-    d: p2::Decoded<'_>,
-    streaming: &mut p2::StreamingConfig,
-    follow: bool,
-    kinds: &mut [u64; 3],
-    printer: &mut Printer,
-    out: &mut dyn Write,
-) -> std::io::Result<()> {
-    match d {
-        p2::Decoded::Packet { offset, packet } => {
-            let kind = if packet.is_response() {
-                1
-            } else if packet.is_notification() {
-                2
-            } else {
-                0
-            };
-            kinds[kind] += 1;
-            if follow && kind == 0 {
-                // What the stream itself tells the droid to stream (as the session tracks it).
-                match (packet.did, packet.cid, packet.data) {
-                    (0x18, 0x00, [i0, i1, _count, m @ ..]) if m.len() == 4 => {
-                        streaming.interval_ms = u16::from_be_bytes([*i0, *i1]);
-                        streaming.mask = u32::from_be_bytes([m[0], m[1], m[2], m[3]]);
-                    }
-                    (0x18, 0x0C, m) if m.len() == 4 => {
-                        streaming.ext_mask = u32::from_be_bytes([m[0], m[1], m[2], m[3]]);
-                    }
-                    _ => {}
-                }
-            }
-            if printer.summary_only {
-                return Ok(());
-            }
-            let p = packet.to_packet();
-            let masks = (streaming.mask != 0 || streaming.ext_mask != 0).then_some(&*streaming);
-            let described = p2::describe(&p, masks);
-            printer.separate(out)?;
-            if printer.json {
-                let v = v2::packet_json(&p, true, &described);
-                writeln!(out, "{}", with_offset(offset, v))
-            } else {
-                write!(
-                    out,
-                    "{:<9} {offset}\n{}",
-                    "offset",
-                    v2::packet_text(&p, None, &described)
-                )
-            }
+        if printer.printed() {
+            writeln!(printer.out())?;
         }
-        p2::Decoded::Error(e) => error_out(printer, out, e.kind.name(), e.offset, &e.detail, &e),
+        writeln!(printer.out(), "{}", summary.text())?;
     }
-}
-
-fn v1_item(
-    e: Result<p1::Packet, p1::DecodeError>,
-    streaming: &mut Option<p1::StreamingConfig>,
-    follow: bool,
-    request: Option<&p1::Command>,
-    printer: &mut Printer,
-    out: &mut dyn Write,
-) -> std::io::Result<()> {
-    match e {
-        Ok(p) => {
-            if follow
-                && let p1::Packet::Command(c) = &p
-                && (c.did, c.cid) == (0x02, 0x11)
-                && let Some(s) = p1::StreamingConfig::from_command_data(&c.data)
-            {
-                *streaming = Some(s);
-            }
-            if printer.summary_only {
-                return Ok(());
-            }
-            let d = p1::describe(&p, streaming.as_ref(), request);
-            printer.separate(out)?;
-            if printer.json {
-                writeln!(out, "{}", v1::packet_json(&p, &d, true))
-            } else {
-                write!(out, "{}", v1::packet_text(&p, None, &d))
-            }
-        }
-        Err(e) => error_out(printer, out, e.kind.name(), e.offset, &e.detail, &e),
-    }
-}
-
-fn rsrcp_item(
-    r: &Result<crate::protocol::rsrcp::Item, crate::protocol::rsrcp::FrameError>,
-    printer: &mut Printer,
-    out: &mut dyn Write,
-) -> std::io::Result<()> {
-    if printer.summary_only {
-        return Ok(());
-    }
-    printer.separate(out)?;
-    if printer.json {
-        return writeln!(out, "{}", crate::protocol::rsrcp::to_json(r));
-    }
-    match r {
-        Ok(item) => writeln!(out, "{}", item.summary()),
-        Err(e) => writeln!(out, "decode error: {}", e.summary()),
-    }
+    Ok(summary)
 }
 
 #[cfg(test)]

@@ -1,26 +1,21 @@
-//! `droidctl packet`: decode bytes into explained packets, encode packets, list the catalogues,
-//! for the three protocol families: Sphero API v2 ([`v2`]), Sphero API v1 ([`v1`]) and the
-//! Robi 42's RSRCP ([`rsrcp`]).
+//! `droidctl packet`: decode bytes into explained packets, encode packets, list the
+//! catalogues, for every protocol family.
 //!
 //! This file holds the arguments, the choice of family (given with `--protocol` or detected
-//! from the first start-of-packet byte) and the helpers the families share. Each family's
-//! decoding, encoding and listing lives in its own file.
+//! from the first start-of-packet byte) and how the options become the family's reading
+//! options; [`print`] is the one decode-and-print loop every family's packets go through,
+//! [`file`] reads files of any size and [`btsnoop`] phone logs. The families themselves
+//! (framing, descriptions, encoding, catalogues) live behind [`crate::family`].
 
 mod btsnoop;
 mod file;
-mod rsrcp;
-mod v1;
-mod v2;
+mod print;
 
 pub use file::{FileSummary, decode_reader};
-// `DecodeArgs` is public for `decode_reader`.
-
-pub use v1::packet_json as v1_packet_json;
-pub use v2::{encode, packet_json};
 
 use super::CliError;
+use crate::family::{self, Family, ReadOption, ReadOptions, Side};
 use crate::hex;
-use crate::protocol::schema::FieldDef;
 use crate::protocol::wire::parse_uint;
 use clap::Subcommand;
 use std::io::Write;
@@ -128,63 +123,16 @@ pub enum PacketCmd {
     },
 }
 
-/// A protocol family.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Protocol {
-    V2,
-    V1,
-    Rsrcp,
-}
-
-impl Protocol {
-    pub const ALL: [Protocol; 3] = [Protocol::V2, Protocol::V1, Protocol::Rsrcp];
-
-    pub fn name(self) -> &'static str {
-        match self {
-            Protocol::V2 => "v2",
-            Protocol::V1 => "v1",
-            Protocol::Rsrcp => "rsrcp",
-        }
-    }
-
-    /// The first byte of every packet of this family.
-    pub fn sop(self) -> u8 {
-        match self {
-            Protocol::V2 => 0x8D,
-            Protocol::V1 => 0xFF,
-            Protocol::Rsrcp => 0x7E,
-        }
-    }
-
-    fn parse(text: &str) -> Result<Protocol, CliError> {
-        Protocol::ALL
-            .into_iter()
-            .find(|p| p.name().eq_ignore_ascii_case(text))
-            .ok_or_else(|| {
-                CliError::usage(format!("unknown protocol {text:?}; use v2, v1 or rsrcp"))
-            })
-    }
-
-    /// The family of the first start-of-packet byte in `bytes` (8D v2, FF v1, 7E RSRCP) and
-    /// its offset; `None` when there is none.
-    pub fn detect(bytes: &[u8]) -> Option<(Protocol, usize)> {
-        bytes.iter().enumerate().find_map(|(i, &b)| {
-            Protocol::ALL
-                .into_iter()
-                .find(|p| p.sop() == b)
-                .map(|p| (p, i))
-        })
-    }
-}
-
-/// How `decode` prints.
-#[derive(Debug, Clone, Copy)]
-struct Output {
-    stream: bool,
-    json: bool,
-}
-
 pub fn run(cmd: PacketCmd, out: &mut dyn Write) -> Result<i32, CliError> {
+    // One buffer in front of the terminal or pipe: a packet per line would otherwise be a
+    // write per line.
+    let mut out = std::io::BufWriter::with_capacity(64 * 1024, out);
+    let result = run_buffered(cmd, &mut out);
+    out.flush().map_err(io_err)?;
+    result
+}
+
+fn run_buffered(cmd: PacketCmd, out: &mut dyn Write) -> Result<i32, CliError> {
     match cmd {
         PacketCmd::Decode {
             hex,
@@ -225,7 +173,7 @@ pub fn run(cmd: PacketCmd, out: &mut dyn Write) -> Result<i32, CliError> {
                 return Err(CliError::usage("--summary applies to --file and --btsnoop"));
             }
             let bytes = hex::parse(&hex.join(" ")).map_err(CliError::usage)?;
-            decode(&bytes, opts, Output { stream, json }, out)
+            print::decode(&bytes, opts, stream, json, out)
         }
         PacketCmd::Encode {
             protocol,
@@ -248,70 +196,46 @@ pub struct DecodeArgs {
     pub request: Option<String>,
 }
 
+/// A family by its `--protocol` name.
+fn family_named(text: &str) -> Result<&'static dyn Family, CliError> {
+    family::by_name(text).ok_or_else(|| {
+        CliError::usage(format!(
+            "unknown protocol {text:?}; use {}",
+            family::names()
+        ))
+    })
+}
+
 /// The family to decode `bytes` as: `--protocol`, or the first SOP byte's (v2 without one),
 /// with the reason for messages.
-fn choose_family(args: &DecodeArgs, bytes: &[u8]) -> Result<(Protocol, String), CliError> {
+fn choose_family(
+    args: &DecodeArgs,
+    bytes: &[u8],
+) -> Result<(&'static dyn Family, String), CliError> {
     Ok(match &args.protocol {
-        Some(p) => (Protocol::parse(p)?, String::new()),
-        None => match Protocol::detect(bytes) {
-            Some((p, at)) => (
-                p,
+        Some(p) => (family_named(p)?, String::new()),
+        None => match family::detect(bytes) {
+            Some((f, at)) => (
+                f,
                 format!(
                     " (detected from the SOP byte {:02X} at offset {at}; --protocol overrides)",
-                    p.sop()
+                    f.sop()
                 ),
             ),
-            None => (Protocol::V2, String::new()),
+            None => (family::all()[0], String::new()),
         },
     })
 }
 
-/// The per-family decoding options, checked against the family.
-enum FamilyOpts {
-    V2 {
-        mask: Option<u32>,
-        ext_mask: Option<u32>,
-    },
-    V1(v1::DecodeOpts),
-    Rsrcp,
-}
-
-fn decode(
-    bytes: &[u8],
+/// The options as the family's reading options, checked against the family (`why` says how
+/// it was chosen). `follow`: take the masks from the stream's own commands when none are
+/// given.
+fn read_options(
     args: DecodeArgs,
-    output: Output,
-    out: &mut dyn Write,
-) -> Result<i32, CliError> {
-    let (family, why) = choose_family(&args, bytes)?;
-    match family_opts(args, family, &why)? {
-        FamilyOpts::V2 { mask, ext_mask } => v2::decode(bytes, output, mask, ext_mask, out),
-        FamilyOpts::V1(opts) => v1::decode(bytes, output, &opts, out),
-        FamilyOpts::Rsrcp => rsrcp::decode(bytes, output, out),
-    }
-}
-
-/// Check the options against `family` (`why` says how it was chosen) and parse them.
-fn family_opts(args: DecodeArgs, family: Protocol, why: &str) -> Result<FamilyOpts, CliError> {
-    // An option another family reads is refused rather than ignored: a mask given for the
-    // wrong family would silently change nothing.
-    let only = |flag: &str, given: bool, fams: &[Protocol]| -> Result<(), CliError> {
-        if given && !fams.contains(&family) {
-            let names: Vec<&str> = fams.iter().map(|f| f.name()).collect();
-            return Err(CliError::usage(format!(
-                "{flag} applies to {} packets, but the input is decoded as {}{why}",
-                names.join(" and "),
-                family.name()
-            )));
-        }
-        Ok(())
-    };
-    only("--ext-mask", args.ext_mask.is_some(), &[Protocol::V2])?;
-    only("--mask2", args.mask2.is_some(), &[Protocol::V1])?;
-    only("--frames", args.frames.is_some(), &[Protocol::V1])?;
-    only("--request", args.request.is_some(), &[Protocol::V1])?;
-    let sensor_mask = args.sensor_mask.is_some();
-    only("--sensor-mask", sensor_mask, &[Protocol::V2, Protocol::V1])?;
-    let from = args.from.as_deref().map(v1::parse_source).transpose()?;
+    family: &dyn Family,
+    why: &str,
+    follow: bool,
+) -> Result<ReadOptions, CliError> {
     let mask = |flag: &str, text: Option<String>| -> Result<Option<u32>, CliError> {
         text.map(|t| {
             parse_uint(&t, u32::MAX as u64)
@@ -320,21 +244,65 @@ fn family_opts(args: DecodeArgs, family: Protocol, why: &str) -> Result<FamilyOp
         })
         .transpose()
     };
-    let sensor_mask = mask("--sensor-mask", args.sensor_mask)?;
-    Ok(match family {
-        Protocol::V2 => FamilyOpts::V2 {
-            mask: sensor_mask,
-            ext_mask: mask("--ext-mask", args.ext_mask)?,
+    // v2 and RSRCP packets say what they are: only v1 reads the side.
+    let side = match args.from.as_deref() {
+        None => None,
+        Some(_) if !family.read_options().contains(&ReadOption::Side) => None,
+        Some(t) if t.eq_ignore_ascii_case("host") => Some(Side::Host),
+        Some(t) if t.eq_ignore_ascii_case("droid") => Some(Side::Droid),
+        Some(t) => {
+            return Err(CliError::usage(format!(
+                "--from: unknown side {t:?}; use host or droid"
+            )));
+        }
+    };
+    let frames = match args.frames.as_deref() {
+        None => None,
+        Some(t) => match uint_opt("frames", t, u16::MAX as u64)? {
+            0 => return Err(CliError::usage("--frames: a packet holds at least 1 frame")),
+            m => Some(m as u16),
         },
-        Protocol::V1 => FamilyOpts::V1(v1::DecodeOpts {
-            source: from.unwrap_or(crate::protocol::v1::Source::Host),
-            mask: sensor_mask,
-            mask2: mask("--mask2", args.mask2)?,
-            frames: args.frames.as_deref().map(v1::parse_frames).transpose()?,
-            request: args.request.as_deref().map(v1::parse_request).transpose()?,
-        }),
-        Protocol::Rsrcp => FamilyOpts::Rsrcp,
-    })
+    };
+    let opts = ReadOptions {
+        side,
+        sensor_mask: mask("--sensor-mask", args.sensor_mask)?,
+        ext_mask: mask("--ext-mask", args.ext_mask)?,
+        mask2: mask("--mask2", args.mask2)?,
+        frames,
+        request: args.request,
+        follow,
+        whole_values: false,
+    };
+    // An option another family reads is refused rather than ignored: a mask given for the
+    // wrong family would silently change nothing.
+    for option in ReadOption::given(&opts) {
+        if !family.read_options().contains(&option) {
+            let readers: Vec<&str> = family::all()
+                .into_iter()
+                .filter(|f| f.read_options().contains(&option))
+                .map(|f| f.name())
+                .collect();
+            return Err(CliError::usage(format!(
+                "{} applies to {} packets, but the input is decoded as {}{why}",
+                option.flag(),
+                readers.join(" and "),
+                family.name()
+            )));
+        }
+    }
+    Ok(opts)
+}
+
+/// The reader for `bytes` as the options say.
+fn reader_for(
+    args: DecodeArgs,
+    bytes: &[u8],
+    follow: bool,
+) -> Result<(&'static dyn Family, Box<dyn family::Reader>), CliError> {
+    let (family, why) = choose_family(&args, bytes)?;
+    let opts = read_options(args, family, &why, follow)?;
+    let reader = family.reader(&opts).map_err(CliError::usage)?;
+    Ok((family, reader))
 }
 
 /// `encode`: `--protocol` may come before NAME or among its parameters.
@@ -356,16 +324,11 @@ fn encode_cmd(
             params.push((k, v));
         }
     }
-    let family = given
-        .as_deref()
-        .map(Protocol::parse)
-        .transpose()?
-        .unwrap_or(Protocol::V2);
-    let wire = match family {
-        Protocol::V2 => v2::encode_pairs(name, params)?,
-        Protocol::V1 => v1::encode(name, params)?,
-        Protocol::Rsrcp => rsrcp::encode(name, params)?,
+    let family = match given.as_deref() {
+        Some(p) => family_named(p)?,
+        None => family::all()[0],
     };
+    let wire = family.encode_named(name, params).map_err(CliError::usage)?;
     writeln!(out, "{}", hex::spaced(&wire)).map_err(io_err)?;
     Ok(0)
 }
@@ -377,10 +340,13 @@ fn list(
     out: &mut dyn Write,
 ) -> Result<i32, CliError> {
     let families = match protocol {
-        None => vec![Protocol::V2],
-        Some(p) if p.eq_ignore_ascii_case("all") => Protocol::ALL.to_vec(),
-        Some(p) => vec![Protocol::parse(p).map_err(|_| {
-            CliError::usage(format!("unknown protocol {p:?}; use v2, v1, rsrcp or all"))
+        None => vec![family::all()[0]],
+        Some(p) if p.eq_ignore_ascii_case("all") => family::all().to_vec(),
+        Some(p) => vec![family::by_name(p).ok_or_else(|| {
+            CliError::usage(format!(
+                "unknown protocol {p:?}; use {}, or all",
+                family::names()
+            ))
         })?],
     };
     for (i, family) in families.iter().enumerate() {
@@ -390,12 +356,7 @@ fn list(
             }
             writeln!(out, "== {} ==", family.name()).map_err(io_err)?;
         }
-        match family {
-            Protocol::V2 => v2::list(filter, out),
-            Protocol::V1 => v1::list(filter, out),
-            Protocol::Rsrcp => rsrcp::list(filter, out),
-        }
-        .map_err(io_err)?;
+        family.list(filter, out).map_err(io_err)?;
     }
     Ok(0)
 }
@@ -436,71 +397,32 @@ fn uint_opt(key: &str, v: &str, max: u64) -> Result<u64, CliError> {
     parse_uint(v, max).map_err(|e| CliError::usage(format!("--{key}: {e}")))
 }
 
-fn byte_opt(key: &str, v: &str, max: u64) -> Result<u8, CliError> {
-    uint_opt(key, v, max.min(255)).map(|n| n as u8)
-}
-
-/// Hex data of `--data`.
-fn data_opt(v: &str) -> Result<Vec<u8>, CliError> {
-    hex::parse(v).map_err(|e| CliError::usage(format!("--data: {e}")))
-}
-
-/// "unknown command X; did you mean …?" from a catalogue's suggestions; `list` is what
-/// follows `droidctl packet list` to see that catalogue.
-fn unknown_command(name: &str, hint: Vec<&str>, list: &str) -> String {
-    let hint = if hint.is_empty() {
-        format!("see `droidctl packet list{list}`")
-    } else {
-        format!("did you mean {}?", hint.join(", "))
-    };
-    format!("unknown command {name:?}; {hint}")
-}
-
-/// A command's parameters as `--name <description> ...`, for `packet list`.
-fn params_text(params: &[FieldDef]) -> String {
-    params
-        .iter()
-        .map(|p| format!("--{} <{}>", p.option(), p.description))
-        .collect::<Vec<_>>()
-        .join(" ")
-}
-
-/// Single-packet mode: the decoder's items must be exactly one, else the input needs
-/// `--stream`.
-fn expect_one<T>(mut items: Vec<T>, what: &str) -> Result<T, CliError> {
-    if items.len() > 1 {
-        return Err(CliError::usage(format!(
-            "the input holds {} {what}, not one packet; use --stream to decode a byte stream",
-            items.len()
-        )));
-    }
-    items
-        .pop()
-        .ok_or_else(|| CliError::usage("no bytes to decode"))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
 
     #[test]
-    fn detect_takes_the_first_sop() {
-        assert_eq!(Protocol::detect(&[]), None);
-        assert_eq!(Protocol::detect(&[1, 2, 3]), None);
+    fn options_of_another_family_are_refused_with_who_reads_them() {
+        let args = DecodeArgs {
+            ext_mask: Some("1".into()),
+            sensor_mask: Some("1".into()),
+            ..DecodeArgs::default()
+        };
+        let v1 = family::by_name("v1").unwrap();
+        let e = read_options(args, v1, " (detected)", false).unwrap_err();
         assert_eq!(
-            Protocol::detect(&[1, 0x7E, 0x8D, 0xFF]),
-            Some((Protocol::Rsrcp, 1))
+            e.message,
+            "--ext-mask applies to v2 packets, but the input is decoded as v1 (detected)"
         );
-        assert_eq!(Protocol::detect(&[0xFF, 0x8D]), Some((Protocol::V1, 0)));
-        assert_eq!(Protocol::detect(&[0, 0, 0x8D]), Some((Protocol::V2, 2)));
-    }
-
-    #[test]
-    fn protocol_names() {
-        for p in Protocol::ALL {
-            assert_eq!(Protocol::parse(p.name()).ok(), Some(p));
-        }
-        assert_eq!(Protocol::parse("V1").ok(), Some(Protocol::V1));
-        assert!(Protocol::parse("v3").is_err());
+        let args = DecodeArgs {
+            sensor_mask: Some("1".into()),
+            ..DecodeArgs::default()
+        };
+        let rsrcp = family::by_name("rsrcp").unwrap();
+        let e = read_options(args, rsrcp, "", false).unwrap_err();
+        assert!(
+            e.message
+                .starts_with("--sensor-mask applies to v2 and v1 packets")
+        );
     }
 }

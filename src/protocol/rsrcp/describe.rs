@@ -8,7 +8,7 @@ use super::error::FrameError;
 use super::frame::{Frame, Handshake};
 use crate::protocol::notify::SensorSample;
 use crate::protocol::value::{Fields, Value};
-use serde_json::{Map, Value as Json, json};
+use serde::Serialize;
 
 /// Every key of the JSON form, in order.
 pub const JSON_KEYS: [&str; 16] = [
@@ -32,70 +32,96 @@ pub const JSON_KEYS: [&str; 16] = [
 
 /// A motor speed as JSON: rounded to the wire's hundredths in f64, so 0.8 prints as 0.8 and
 /// not as f32's 0.800000011920929.
-fn rad_s(x: f32) -> Json {
+fn rad_s(x: f32) -> Option<f64> {
     let v = (f64::from(x) * 100.0).round() / 100.0;
-    serde_json::Number::from_f64(v).map_or(Json::Null, Json::Number)
+    v.is_finite().then_some(v)
 }
 
-fn empty() -> Map<String, Json> {
-    JSON_KEYS
-        .iter()
-        .map(|k| ((*k).to_string(), Json::Null))
-        .collect()
+/// The JSON object for a handshake, a frame or an error: always every key of [`JSON_KEYS`],
+/// null where it does not apply. Written straight to the output with
+/// `serde_json::to_writer`.
+#[derive(Serialize, Default)]
+pub struct Json<'a> {
+    kind: Option<&'static str>,
+    version: Option<u8>,
+    msdt_ms: Option<u16>,
+    frame_id: Option<u32>,
+    efs: Option<u16>,
+    features: Option<Vec<&'static str>>,
+    motor_left_rad_s: Option<f64>,
+    motor_right_rad_s: Option<f64>,
+    poti: Option<u8>,
+    buttons: Option<Vec<&'static str>>,
+    leds: Option<Vec<&'static str>>,
+    piezo_on: Option<bool>,
+    piezo_hz: Option<u16>,
+    error: Option<&'static str>,
+    offset: Option<u64>,
+    detail: Option<&'a str>,
 }
 
-fn put_handshake(m: &mut Map<String, Json>, h: &Handshake) {
-    m.insert("kind".into(), json!("handshake"));
-    m.insert("version".into(), json!(h.version));
-    m.insert("msdt_ms".into(), json!(h.msdt_ms));
+impl Json<'_> {
+    /// The same object with the stream offset where the item starts (`packet decode --file`).
+    pub fn at(mut self, offset: u64) -> Self {
+        self.offset = Some(offset);
+        self
+    }
+
+    fn handshake(h: &Handshake) -> Self {
+        Json {
+            kind: Some("handshake"),
+            version: Some(h.version),
+            msdt_ms: Some(h.msdt_ms),
+            ..Json::default()
+        }
+    }
+
+    fn frame(f: &Frame) -> Self {
+        Json {
+            kind: Some("frame"),
+            frame_id: Some(f.frame_id),
+            efs: Some(f.efs.bits()),
+            features: Some(f.efs.names()),
+            motor_left_rad_s: f.motors.as_ref().and_then(|m| rad_s(m.left_rad_s)),
+            motor_right_rad_s: f.motors.as_ref().and_then(|m| rad_s(m.right_rad_s)),
+            poti: f.poti,
+            buttons: f.buttons.map(|b| b.names()),
+            leds: f.leds.map(|l| l.names()),
+            piezo_on: f.piezo.as_ref().map(|p| p.on),
+            piezo_hz: f.piezo.as_ref().map(|p| p.hz),
+            ..Json::default()
+        }
+    }
 }
 
-fn put_frame(m: &mut Map<String, Json>, f: &Frame) {
-    m.insert("kind".into(), json!("frame"));
-    m.insert("frame_id".into(), json!(f.frame_id));
-    m.insert("efs".into(), json!(f.efs.bits()));
-    m.insert("features".into(), json!(f.efs.names()));
-    if let Some(mo) = &f.motors {
-        m.insert("motor_left_rad_s".into(), rad_s(mo.left_rad_s));
-        m.insert("motor_right_rad_s".into(), rad_s(mo.right_rad_s));
-    }
-    if let Some(p) = f.poti {
-        m.insert("poti".into(), json!(p));
-    }
-    if let Some(b) = f.buttons {
-        m.insert("buttons".into(), json!(b.names()));
-    }
-    if let Some(l) = f.leds {
-        m.insert("leds".into(), json!(l.names()));
-    }
-    if let Some(p) = &f.piezo {
-        m.insert("piezo_on".into(), json!(p.on));
-        m.insert("piezo_hz".into(), json!(p.hz));
-    }
-}
-
-fn put_error(m: &mut Map<String, Json>, e: &FrameError) {
-    if let Some(f) = &e.partial {
-        put_frame(m, f);
-    }
-    m.insert("error".into(), json!(e.kind.name()));
-    m.insert("offset".into(), json!(e.offset));
-    m.insert("detail".into(), json!(e.detail));
-}
-
-/// JSON for whatever a decoder or the framer produced.
-pub fn to_json(r: &Result<Item, FrameError>) -> Json {
+/// The JSON form of whatever a decoder or the framer produced.
+pub fn json(r: &Result<Item, FrameError>) -> Json<'_> {
     match r {
-        Ok(item) => item.to_json(),
-        Err(e) => e.to_json(),
+        Ok(item) => item.json(),
+        Err(e) => e.json_object(),
     }
+}
+
+/// JSON for whatever a decoder or the framer produced, as a value (for tests and tools
+/// that want to look inside; output goes through [`json`]).
+pub fn to_json(r: &Result<Item, FrameError>) -> serde_json::Value {
+    value(&json(r))
+}
+
+fn value(j: &Json<'_>) -> serde_json::Value {
+    serde_json::to_value(j).unwrap_or(serde_json::Value::Null)
 }
 
 impl Item {
-    pub fn to_json(&self) -> Json {
+    /// The JSON object as a value (see [`to_json`]).
+    pub fn to_json(&self) -> serde_json::Value {
+        value(&self.json())
+    }
+
+    pub fn json(&self) -> Json<'static> {
         match self {
-            Item::Handshake(h) => h.to_json(),
-            Item::Frame(f) => f.to_json(),
+            Item::Handshake(h) => Json::handshake(h),
+            Item::Frame(f) => Json::frame(f),
         }
     }
 
@@ -115,10 +141,9 @@ impl Item {
 }
 
 impl Handshake {
-    pub fn to_json(&self) -> Json {
-        let mut m = empty();
-        put_handshake(&mut m, self);
-        Json::Object(m)
+    /// The JSON object as a value (see [`to_json`]).
+    pub fn to_json(&self) -> serde_json::Value {
+        value(&Json::handshake(self))
     }
 
     /// `handshake v1 (1.0.0) msdt 10 ms`.
@@ -140,10 +165,9 @@ impl Handshake {
 }
 
 impl Frame {
-    pub fn to_json(&self) -> Json {
-        let mut m = empty();
-        put_frame(&mut m, self);
-        Json::Object(m)
+    /// The JSON object as a value (see [`to_json`]).
+    pub fn to_json(&self) -> serde_json::Value {
+        value(&Json::frame(self))
     }
 
     /// `frame 1234 motors L 1.25 R 0.80 rad/s poti 128 buttons center,left`: the frame id,
@@ -243,16 +267,23 @@ impl Frame {
 }
 
 impl FrameError {
+    /// The JSON object as a value (see [`to_json`]).
+    pub fn to_json(&self) -> serde_json::Value {
+        value(&self.json_object())
+    }
+
     /// JSON with `error`, `offset` and `detail`; a partial frame fills the frame keys too.
-    pub fn to_json(&self) -> Json {
-        let mut m = empty();
-        put_error(&mut m, self);
-        Json::Object(m)
+    pub fn json_object(&self) -> Json<'_> {
+        let mut j = self.partial().map(Json::frame).unwrap_or_default();
+        j.error = Some(self.kind.name());
+        j.offset = Some(self.offset);
+        j.detail = Some(&self.detail);
+        j
     }
 
     /// `bad_eop at offset 12: …`, followed by what was decoded for a partial frame.
     pub fn summary(&self) -> String {
-        match &self.partial {
+        match self.partial() {
             Some(f) => format!("{self}; decoded {}", f.summary()),
             None => self.to_string(),
         }

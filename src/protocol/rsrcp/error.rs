@@ -1,109 +1,79 @@
-//! Why bytes could not be framed or decoded.
+//! Why bytes could not be framed or decoded: the shared [`DecodeError`] with what RSRCP can
+//! say about a damaged frame ([`Damage`]).
 
 use super::efs::Feature;
 use super::frame::Frame;
-use std::fmt;
+pub use crate::protocol::decode::{DecodeStats, ErrorKind};
 
-/// What went wrong, without the details.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum FrameErrorKind {
-    /// Bytes outside any frame or handshake (stream framer only).
-    Garbage,
-    /// A notification that does not start with SOP `7E`.
-    BadSop,
-    /// The byte where the EFS puts the end of the frame (or the handshake's fifth byte) is
-    /// not EOP `7F`.
-    BadEop,
-    /// Fewer bytes than the header or the EFS needs (for the framer: the stream ended).
-    Truncated,
-    /// A notification longer than its EFS implies. BLE delivers exactly one frame per
-    /// notification (`droid-facts.md` §5), so extra bytes mean the EFS and the payload
-    /// disagree.
-    Overlong,
-    /// The EFS enables a feature the spec has not sized yet; the frame is decoded up to it and
-    /// no further (see [`FrameError::partial`]).
-    UnsizedFeature,
-    /// The EFS sets a reserved bit (0x001F); every defined feature is decoded, but where the
-    /// frame ends is unknown.
-    ReservedBits,
-}
+/// The kinds of error RSRCP decoding reports, in the order summaries list them.
+pub const ERROR_KINDS: [ErrorKind; 7] = [
+    ErrorKind::Garbage,
+    ErrorKind::BadSop,
+    ErrorKind::BadEop,
+    ErrorKind::Truncated,
+    ErrorKind::Overlong,
+    ErrorKind::UnsizedFeature,
+    ErrorKind::ReservedBits,
+];
 
-impl FrameErrorKind {
-    pub const ALL: [FrameErrorKind; 7] = [
-        FrameErrorKind::Garbage,
-        FrameErrorKind::BadSop,
-        FrameErrorKind::BadEop,
-        FrameErrorKind::Truncated,
-        FrameErrorKind::Overlong,
-        FrameErrorKind::UnsizedFeature,
-        FrameErrorKind::ReservedBits,
-    ];
-
-    /// Snake-case name for logs and JSON.
-    pub fn name(self) -> &'static str {
-        match self {
-            FrameErrorKind::Garbage => "garbage",
-            FrameErrorKind::BadSop => "bad_sop",
-            FrameErrorKind::BadEop => "bad_eop",
-            FrameErrorKind::Truncated => "truncated",
-            FrameErrorKind::Overlong => "overlong",
-            FrameErrorKind::UnsizedFeature => "unsized_feature",
-            FrameErrorKind::ReservedBits => "reserved_bits",
-        }
-    }
-
-    pub(crate) fn index(self) -> usize {
-        self as usize
-    }
-}
-
-impl fmt::Display for FrameErrorKind {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-/// A framing or decoding error.
-#[derive(Debug, Clone, PartialEq)]
-pub struct FrameError {
-    pub kind: FrameErrorKind,
-    /// Where the rejected frame (its SOP) or the garbage run starts: a stream offset for the
-    /// [`Framer`](super::Framer) (bytes since it was created), 0 for a single notification.
-    pub offset: u64,
+/// What is known of a frame that could not be read whole.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Damage {
     /// Index within the frame where the problem was found: the byte that should have been
     /// EOP, the start of the unsized feature's payload, the number of bytes present when
     /// truncated. 0 for garbage.
     pub at: usize,
-    /// For people: byte counts, the EFS, the feature.
-    pub detail: String,
-    /// The feature that stopped decoding ([`FrameErrorKind::UnsizedFeature`]).
+    /// The feature that stopped decoding ([`ErrorKind::UnsizedFeature`]).
     pub feature: Option<Feature>,
-    /// For [`FrameErrorKind::UnsizedFeature`] and [`FrameErrorKind::ReservedBits`]: the frame
-    /// decoded up to where it became unreadable (its `efs` is the full EFS).
-    pub partial: Option<Box<Frame>>,
+    /// For [`ErrorKind::UnsizedFeature`] and [`ErrorKind::ReservedBits`]: the frame decoded up
+    /// to where it became unreadable (its `efs` is the full EFS).
+    pub partial: Option<Frame>,
+}
+
+/// A framing or decoding error. `offset` is a stream offset for the
+/// [`Framer`](super::Framer) (bytes since it was created), 0 for a single notification.
+pub type FrameError = crate::protocol::decode::DecodeError<Damage>;
+
+/// A frame error found at index `at` of the frame.
+pub(crate) fn frame_error(kind: ErrorKind, at: usize, detail: String) -> FrameError {
+    FrameError {
+        kind,
+        offset: 0,
+        detail,
+        packet: Some(Box::new(Damage {
+            at,
+            ..Damage::default()
+        })),
+    }
 }
 
 impl FrameError {
-    pub(crate) fn new(kind: FrameErrorKind, at: usize, detail: String) -> Self {
-        FrameError {
-            kind,
-            offset: 0,
-            at,
-            detail,
-            feature: None,
-            partial: None,
-        }
+    /// Where in the frame the problem was found (see [`Damage::at`]).
+    pub fn at(&self) -> usize {
+        self.packet.as_ref().map_or(0, |d| d.at)
+    }
+
+    /// The feature whose undefined size stopped decoding.
+    pub fn feature(&self) -> Option<Feature> {
+        self.packet.as_ref().and_then(|d| d.feature)
+    }
+
+    /// The frame as far as it could be read.
+    pub fn partial(&self) -> Option<&Frame> {
+        self.packet.as_ref().and_then(|d| d.partial.as_ref())
+    }
+
+    fn damage(&mut self) -> &mut Damage {
+        self.packet.get_or_insert_with(Box::default)
+    }
+
+    pub(crate) fn with_feature(mut self, f: Feature) -> Self {
+        self.damage().feature = Some(f);
+        self
+    }
+
+    pub(crate) fn with_partial(mut self, frame: Frame) -> Self {
+        self.damage().partial = Some(frame);
+        self
     }
 }
-
-impl fmt::Display for FrameError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{} at offset {}", self.kind.name(), self.offset)?;
-        if !self.detail.is_empty() {
-            write!(f, ": {}", self.detail)?;
-        }
-        Ok(())
-    }
-}
-
-impl std::error::Error for FrameError {}

@@ -11,7 +11,7 @@
 //! while every enabled feature has a defined size.
 
 use super::efs::{Efs, Feature};
-use super::error::{FrameError, FrameErrorKind};
+use super::error::{ErrorKind, FrameError, frame_error};
 use bitflags::bitflags;
 
 /// Start of packet, both for the handshake and frames.
@@ -203,7 +203,7 @@ impl Piezo {
 pub struct Frame {
     /// 24-bit, incremented per frame, wrapping (see [`super::frame_gap`]).
     pub frame_id: u32,
-    /// The EFS as sent. In a partial frame (see [`FrameError::partial`]) it names features
+    /// The EFS as sent. In a partial frame (see [`FrameError::partial`](super::FrameError::partial)) it names features
     /// that were not decoded.
     pub efs: Efs,
     pub motors: Option<Motors>,
@@ -389,17 +389,17 @@ fn be_efs(bytes: &[u8]) -> Efs {
     }
 }
 
-fn err(kind: FrameErrorKind, at: usize, detail: String) -> FrameError {
-    FrameError::new(kind, at, detail)
+fn err(kind: ErrorKind, at: usize, detail: String) -> FrameError {
+    frame_error(kind, at, detail)
 }
 
 /// Decode one frame that arrived alone, as one BLE notification of the frames characteristic
 /// does (`droid-facts.md` §5). The length must match the EFS exactly: a short value is
 /// `truncated`, a long one `overlong`, then the computed last byte must be EOP. A frame that
 /// enables an unsized feature or a reserved bit is an error that carries what precedes it in
-/// [`FrameError::partial`]. `offset` of the error is 0; `at` is the index in `bytes`.
+/// [`FrameError::partial`](super::FrameError::partial). `offset` of the error is 0; `at` is the index in `bytes`.
 pub fn decode_frame(bytes: &[u8]) -> Result<Frame, FrameError> {
-    use FrameErrorKind::*;
+    use ErrorKind::*;
     let len = bytes.len();
     match bytes.first() {
         None => return Err(err(Truncated, 0, "empty value".into())),
@@ -461,9 +461,9 @@ pub fn decode_frame(bytes: &[u8]) -> Result<Frame, FrameError> {
                 ));
             }
             let frame = Frame::read(&bytes[..prefix]);
-            let mut e = match stop {
+            let e = match stop {
                 Stop::Unsized(f) => {
-                    let mut e = err(
+                    let e = err(
                         UnsizedFeature,
                         prefix,
                         format!(
@@ -473,8 +473,7 @@ pub fn decode_frame(bytes: &[u8]) -> Result<Frame, FrameError> {
                             f.name()
                         ),
                     );
-                    e.feature = Some(f);
-                    e
+                    e.with_feature(f)
                 }
                 Stop::Reserved => err(
                     ReservedBits,
@@ -487,8 +486,7 @@ pub fn decode_frame(bytes: &[u8]) -> Result<Frame, FrameError> {
                     ),
                 ),
             };
-            e.partial = Some(Box::new(frame));
-            Err(e)
+            Err(e.with_partial(frame))
         }
     }
 }
@@ -496,7 +494,7 @@ pub fn decode_frame(bytes: &[u8]) -> Result<Frame, FrameError> {
 /// Decode the 5-byte handshake (the value of the handshake characteristic). Any version byte
 /// is accepted and kept; see [`Handshake::version_name`].
 pub fn decode_handshake(bytes: &[u8]) -> Result<Handshake, FrameError> {
-    use FrameErrorKind::*;
+    use ErrorKind::*;
     let len = bytes.len();
     match bytes {
         [] => Err(err(Truncated, 0, "empty value".into())),

@@ -25,34 +25,12 @@
 
 use super::Item;
 use super::efs::Efs;
-use super::error::{FrameError, FrameErrorKind};
+use super::error::{DecodeStats, ErrorKind, FrameError, frame_error};
 use super::frame::{
     EOP, HANDSHAKE_LEN, HEADER_LEN, Layout, MAX_FRAME_LEN, SOP, decode_frame, decode_handshake,
     layout,
 };
 use std::collections::VecDeque;
-
-/// Counters of everything the framer has seen.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
-pub struct FramerStats {
-    pub frames: u64,
-    pub handshakes: u64,
-    /// Bytes fed.
-    pub bytes: u64,
-    /// Bytes in no accepted item: garbage and rejected SOPs and what followed them.
-    pub skipped_bytes: u64,
-    errors: [u64; 7],
-}
-
-impl FramerStats {
-    pub fn errors(&self, kind: FrameErrorKind) -> u64 {
-        self.errors[kind.index()]
-    }
-
-    pub fn total_errors(&self) -> u64 {
-        self.errors.iter().sum()
-    }
-}
 
 /// What to do with the candidate at the head of the buffer.
 enum Verdict {
@@ -75,9 +53,12 @@ pub struct Framer {
     covered_until: u64,
     garbage_start: Option<u64>,
     garbage_len: u64,
-    /// Events completed by the last byte, not yet handed out.
-    pending: VecDeque<Result<Item, FrameError>>,
-    stats: FramerStats,
+    /// Events completed by the last byte, not yet handed out, with the stream offset where
+    /// each starts.
+    pending: VecDeque<(u64, Result<Item, FrameError>)>,
+    /// The stream offset of the last event handed out.
+    event_at: u64,
+    stats: DecodeStats,
 }
 
 impl Framer {
@@ -88,7 +69,7 @@ impl Framer {
         }
     }
 
-    pub fn stats(&self) -> &FramerStats {
+    pub fn stats(&self) -> &DecodeStats {
         &self.stats
     }
 
@@ -118,6 +99,14 @@ impl Framer {
     /// byte after it, so a handshake or frame that is complete inside it is still found); a
     /// pending garbage run is reported. The framer can be fed again afterwards.
     pub fn finish(&mut self) -> Vec<Result<Item, FrameError>> {
+        self.finish_with_offsets()
+            .into_iter()
+            .map(|(_, e)| e)
+            .collect()
+    }
+
+    /// [`Framer::finish`], each event with the stream offset where it starts.
+    pub fn finish_with_offsets(&mut self) -> Vec<(u64, Result<Item, FrameError>)> {
         self.process(true);
         self.flush_garbage();
         self.pending.drain(..).collect()
@@ -145,17 +134,14 @@ impl Framer {
             match self.verdict(eof) {
                 Verdict::NeedMore => return,
                 Verdict::Accept(item, len) => {
-                    match item {
-                        Item::Handshake(_) => self.stats.handshakes += 1,
-                        Item::Frame(_) => self.stats.frames += 1,
-                    }
-                    self.pending.push_back(Ok(item));
+                    self.stats.packets += 1;
+                    self.pending.push_back((self.buf_start, Ok(item)));
                     self.consume(len);
                 }
                 Verdict::Reject(mut e, span) => {
                     e.offset = self.buf_start;
-                    self.stats.errors[e.kind.index()] += 1;
-                    self.pending.push_back(Err(e));
+                    self.stats.count_error(e.kind);
+                    self.pending.push_back((self.buf_start, Err(e)));
                     self.covered_until = self.covered_until.max(self.buf_start + span as u64);
                     self.stats.skipped_bytes += 1;
                     self.consume(1);
@@ -204,14 +190,13 @@ impl Framer {
             return;
         };
         let len = std::mem::take(&mut self.garbage_len);
-        let mut e = FrameError::new(
-            FrameErrorKind::Garbage,
-            0,
+        let e = FrameError::new(
+            ErrorKind::Garbage,
+            start,
             format!("{len} byte(s) outside any frame"),
         );
-        e.offset = start;
-        self.stats.errors[e.kind.index()] += 1;
-        self.pending.push_back(Err(e));
+        self.stats.count_error(e.kind);
+        self.pending.push_back((start, Err(e)));
     }
 
     fn verdict(&self, eof: bool) -> Verdict {
@@ -220,8 +205,8 @@ impl Framer {
         let short = |needed: usize, what: &str| {
             if eof {
                 Verdict::Reject(
-                    FrameError::new(
-                        FrameErrorKind::Truncated,
+                    frame_error(
+                        ErrorKind::Truncated,
                         have,
                         format!("stream ended {have} byte(s) into a {what} of {needed}"),
                     ),
@@ -266,12 +251,20 @@ pub struct Feed<'a> {
     pos: usize,
 }
 
+impl Feed<'_> {
+    /// The stream offset where the last event handed out starts.
+    pub fn event_offset(&self) -> u64 {
+        self.framer.event_at
+    }
+}
+
 impl Iterator for Feed<'_> {
     type Item = Result<Item, FrameError>;
 
     fn next(&mut self) -> Option<Self::Item> {
         loop {
-            if let Some(event) = self.framer.pending.pop_front() {
+            if let Some((at, event)) = self.framer.pending.pop_front() {
+                self.framer.event_at = at;
                 return Some(event);
             }
             let &b = self.bytes.get(self.pos)?;
@@ -328,7 +321,7 @@ mod tests {
         };
         assert_eq!((fr.frame_id, fr.poti), (5, Some(0x2A)));
         assert_eq!(f.stats().skipped_bytes, 3);
-        assert_eq!(f.stats().errors(FrameErrorKind::Garbage), 0);
+        assert_eq!(f.stats().errors(ErrorKind::Garbage), 0);
     }
 
     #[test]

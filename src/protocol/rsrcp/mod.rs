@@ -32,15 +32,15 @@ pub use control::{
     STEERING_STRAIGHT, STEPPER_MAX_HZ, STEPPER_MIN_HZ, steering_byte, stepper_hz, velocity_byte,
     wheel_speeds,
 };
-pub use describe::{JSON_KEYS, to_json};
+pub use describe::{JSON_KEYS, json, to_json};
 pub use efs::{Efs, Feature};
-pub use error::{FrameError, FrameErrorKind};
+pub use error::{Damage, DecodeStats, ERROR_KINDS, ErrorKind, FrameError};
 pub use frame::{
     Buttons, EOP, FRAME_ID_MASK, Frame, HANDSHAKE_LEN, HEADER_LEN, Handshake, Leds, MAX_FRAME_LEN,
     MIN_FRAME_LEN, Motors, Piezo, SOP, VERSION_1_0_0, decode_frame, decode_handshake,
 };
 pub use frame_id::{FRAME_ID_MODULUS, frame_delta, frame_gap};
-pub use framer::{Feed, Framer, FramerStats};
+pub use framer::{Feed, Framer};
 
 /// The Robi 42 GATT UUIDs, from the one place they are defined.
 pub use crate::link::gatt::{

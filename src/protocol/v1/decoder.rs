@@ -27,7 +27,6 @@ use super::packet::{
     ASYNC_HEADER, AsyncPacket, COMMAND_HEADER, CommandPacket, Mrsp, Packet, RESPONSE_HEADER,
     Response, SOP1, SOP2_ASYNC, SOP2_COMMAND_BASE, SOP2_RESPONSE, checksum,
 };
-use std::fmt;
 
 /// Default bound on an async message's DLEN. The longest async message droidctl asks for is
 /// sensor streaming: M frames of up to 2 × 64 bytes; 1024 covers 8 full frames.
@@ -42,95 +41,20 @@ pub enum Source {
     Droid,
 }
 
-/// What went wrong, without the details.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum DecodeErrorKind {
-    /// A candidate packet's checksum does not match.
-    BadChecksum,
-    /// DLEN 0: impossible, DLEN always counts the checksum byte.
-    BadLength,
-    /// An async DLEN above the decoder's bound.
-    Oversize,
-    /// Bytes outside any packet.
-    Garbage,
-    /// The stream ended inside a candidate packet (only reported by [`Decoder::finish`]).
-    Truncated,
-}
+pub use crate::protocol::decode::{DecodeStats, ErrorKind};
 
-impl DecodeErrorKind {
-    pub const ALL: [DecodeErrorKind; 5] = [
-        DecodeErrorKind::BadChecksum,
-        DecodeErrorKind::BadLength,
-        DecodeErrorKind::Oversize,
-        DecodeErrorKind::Garbage,
-        DecodeErrorKind::Truncated,
-    ];
+/// The kinds of error a v1 decoder reports, in the order summaries list them.
+pub const ERROR_KINDS: [ErrorKind; 5] = [
+    ErrorKind::BadChecksum,
+    ErrorKind::BadLength,
+    ErrorKind::Oversize,
+    ErrorKind::Garbage,
+    ErrorKind::Truncated,
+];
 
-    pub fn name(self) -> &'static str {
-        match self {
-            DecodeErrorKind::BadChecksum => "bad_checksum",
-            DecodeErrorKind::BadLength => "bad_length",
-            DecodeErrorKind::Oversize => "oversize",
-            DecodeErrorKind::Garbage => "garbage",
-            DecodeErrorKind::Truncated => "truncated",
-        }
-    }
-
-    fn index(self) -> usize {
-        self as usize
-    }
-}
-
-/// A decode error with where it happened in the stream.
-#[derive(Debug, Clone, PartialEq)]
-pub struct DecodeError {
-    pub kind: DecodeErrorKind,
-    /// Stream offset (bytes since the decoder was created) of the candidate's SOP1, or of the
-    /// first garbage byte.
-    pub offset: u64,
-    /// Extra detail for people, e.g. the checksum values or byte counts.
-    pub detail: String,
-    /// For a bad checksum: the packet as it was read, for diagnostics.
-    pub packet: Option<Box<Packet>>,
-}
-
-impl fmt::Display for DecodeError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{} at offset {}", self.kind.name(), self.offset)?;
-        if !self.detail.is_empty() {
-            write!(f, ": {}", self.detail)?;
-        }
-        Ok(())
-    }
-}
-
-impl std::error::Error for DecodeError {}
-
-/// Counters of everything the decoder has seen.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
-pub struct DecoderStats {
-    /// Packets decoded, of any kind.
-    pub packets: u64,
-    pub commands: u64,
-    pub responses: u64,
-    pub asyncs: u64,
-    /// Bytes fed.
-    pub bytes: u64,
-    /// Bytes dropped: garbage and the bytes of rejected candidates that were not part of a
-    /// packet found afterwards. After [`Decoder::finish`], packet bytes + skipped = bytes.
-    pub skipped_bytes: u64,
-    errors: [u64; 5],
-}
-
-impl DecoderStats {
-    pub fn errors(&self, kind: DecodeErrorKind) -> u64 {
-        self.errors[kind.index()]
-    }
-
-    pub fn total_errors(&self) -> u64 {
-        self.errors.iter().sum()
-    }
-}
+/// A v1 decode error; for a bad checksum it keeps the candidate as it was read, for
+/// diagnostics.
+pub type DecodeError = crate::protocol::decode::DecodeError<Packet>;
 
 type Event = Result<Packet, DecodeError>;
 
@@ -138,8 +62,9 @@ type Event = Result<Packet, DecodeError>;
 enum Head {
     /// Need this many more bytes before anything can be decided.
     NeedMore(usize),
-    /// Decided: an event to report (possibly after a pending garbage run).
-    Event(Event),
+    /// Decided: an event to report (possibly after a pending garbage run), and the stream
+    /// offset of its packet.
+    Event(Event, u64),
     /// Something was dropped silently; look again.
     Again,
 }
@@ -158,11 +83,14 @@ pub struct Decoder {
     quiet_until: u64,
     garbage_start: Option<u64>,
     garbage_len: u64,
-    /// An event decided together with a garbage report, returned right after it.
-    pending: Option<Event>,
+    /// An event decided together with a garbage report, returned right after it, with the
+    /// stream offset of its packet.
+    pending: Option<(Event, u64)>,
+    /// The stream offset of the last packet returned.
+    packet_at: u64,
     /// How many more bytes the head candidate needs (at least 1).
     need: usize,
-    stats: DecoderStats,
+    stats: DecodeStats,
 }
 
 impl Decoder {
@@ -184,8 +112,9 @@ impl Decoder {
             garbage_start: None,
             garbage_len: 0,
             pending: None,
+            packet_at: 0,
             need: 1,
-            stats: DecoderStats::default(),
+            stats: DecodeStats::default(),
         };
         d.buf.reserve(d.max_packet_len());
         d
@@ -203,7 +132,7 @@ impl Decoder {
         }
     }
 
-    pub fn stats(&self) -> &DecoderStats {
+    pub fn stats(&self) -> &DecodeStats {
         &self.stats
     }
 
@@ -244,8 +173,9 @@ impl Decoder {
             }
             let extent = self.buffered();
             let detail = format!("{extent} byte(s) of a packet before the stream ended");
-            if let Some(e) = self.reject(DecodeErrorKind::Truncated, extent, detail, None) {
-                let e = self.emit(Err(e));
+            if let Some(e) = self.reject(ErrorKind::Truncated, extent, detail, None) {
+                let at = e.offset;
+                let e = self.emit(Err(e), at);
                 out.push(e);
             }
         }
@@ -269,8 +199,14 @@ impl Decoder {
         self.fed - self.buffered() as u64
     }
 
+    /// The stream offset of the first byte of the last packet the decoder returned.
+    pub fn packet_offset(&self) -> u64 {
+        self.packet_at
+    }
+
     fn next_event(&mut self) -> Option<Event> {
-        if let Some(e) = self.pending.take() {
+        if let Some((e, at)) = self.pending.take() {
+            self.packet_at = at;
             return Some(e);
         }
         loop {
@@ -279,20 +215,24 @@ impl Decoder {
                     self.need = n.max(1);
                     return None;
                 }
-                Head::Event(e) => return Some(self.emit(e)),
+                Head::Event(e, at) => return Some(self.emit(e, at)),
                 Head::Again => {}
             }
         }
     }
 
-    /// Report `e`, after the garbage run it ends if there is one.
-    fn emit(&mut self, e: Event) -> Event {
+    /// Report `e` (its packet at stream offset `at`), after the garbage run it ends if there
+    /// is one.
+    fn emit(&mut self, e: Event, at: u64) -> Event {
         match self.take_garbage() {
             Some(g) => {
-                self.pending = Some(e);
+                self.pending = Some((e, at));
                 Err(g)
             }
-            None => e,
+            None => {
+                self.packet_at = at;
+                e
+            }
         }
     }
 
@@ -300,11 +240,11 @@ impl Decoder {
         let start = self.garbage_start.take()?;
         let len = std::mem::take(&mut self.garbage_len);
         let detail = format!("{len} byte(s) outside any packet");
-        Some(self.error(DecodeErrorKind::Garbage, start, detail))
+        Some(self.error(ErrorKind::Garbage, start, detail))
     }
 
-    fn error(&mut self, kind: DecodeErrorKind, offset: u64, detail: String) -> DecodeError {
-        self.stats.errors[kind.index()] += 1;
+    fn error(&mut self, kind: ErrorKind, offset: u64, detail: String) -> DecodeError {
+        self.stats.count_error(kind);
         DecodeError {
             kind,
             offset,
@@ -341,7 +281,7 @@ impl Decoder {
     /// candidate starts inside an already reported rejection.
     fn reject(
         &mut self,
-        kind: DecodeErrorKind,
+        kind: ErrorKind,
         extent: usize,
         detail: String,
         packet: Option<Packet>,
@@ -393,14 +333,14 @@ impl Decoder {
         };
         if dlen == 0 {
             let detail = "DLEN 0 (it always counts the checksum byte)".to_string();
-            return self.decided(DecodeErrorKind::BadLength, header, detail, None);
+            return self.decided(ErrorKind::BadLength, header, detail, None);
         }
         if is_async && dlen > self.max_async_dlen {
             let detail = format!(
                 "async DLEN {dlen} is above the bound {}",
                 self.max_async_dlen
             );
-            return self.decided(DecodeErrorKind::Oversize, header, detail, None);
+            return self.decided(ErrorKind::Oversize, header, detail, None);
         }
         let total = header + dlen;
         if live.len() < total {
@@ -429,31 +369,30 @@ impl Decoder {
         let got = live[total - 1];
         if expected != got {
             let detail = format!("checksum 0x{got:02X}, expected 0x{expected:02X}");
-            return self.decided(DecodeErrorKind::BadChecksum, total, detail, Some(packet));
+            return self.decided(ErrorKind::BadChecksum, total, detail, Some(packet));
         }
+        let at = self.live_start();
         self.head += total;
         if self.head == self.buf.len() {
             self.buf.clear();
             self.head = 0;
         }
         self.stats.packets += 1;
-        match packet {
-            Packet::Command(_) => self.stats.commands += 1,
-            Packet::Response(_) => self.stats.responses += 1,
-            Packet::Async(_) => self.stats.asyncs += 1,
-        }
-        Head::Event(Ok(packet))
+        Head::Event(Ok(packet), at)
     }
 
     fn decided(
         &mut self,
-        kind: DecodeErrorKind,
+        kind: ErrorKind,
         extent: usize,
         detail: String,
         packet: Option<Packet>,
     ) -> Head {
         match self.reject(kind, extent, detail, packet) {
-            Some(e) => Head::Event(Err(e)),
+            Some(e) => {
+                let at = e.offset;
+                Head::Event(Err(e), at)
+            }
             None => Head::Again,
         }
     }
@@ -491,6 +430,13 @@ pub struct Feed<'a> {
     pos: usize,
 }
 
+impl Feed<'_> {
+    /// The stream offset of the last packet this iterator returned.
+    pub fn packet_offset(&self) -> u64 {
+        self.decoder.packet_at
+    }
+}
+
 impl Iterator for Feed<'_> {
     type Item = Event;
 
@@ -523,7 +469,7 @@ mod tests {
         hex::parse(s).unwrap()
     }
 
-    fn kinds(events: &[Event]) -> Vec<Result<super::super::packet::Kind, DecodeErrorKind>> {
+    fn kinds(events: &[Event]) -> Vec<Result<super::super::packet::Kind, ErrorKind>> {
         events
             .iter()
             .map(|e| match e {
@@ -547,7 +493,7 @@ mod tests {
         };
         assert_eq!((c.did, c.cid, c.seq), (0x02, 0x30, 0));
         assert_eq!(c.data, vec![0x80, 0x00, 0x5A, 0x01]);
-        assert_eq!(d.stats().commands, 2);
+        assert_eq!(d.stats().packets, 2);
     }
 
     #[test]
@@ -583,7 +529,7 @@ mod tests {
         assert_eq!(
             kinds(&out),
             vec![
-                Err(DecodeErrorKind::BadChecksum),
+                Err(ErrorKind::BadChecksum),
                 Ok(super::super::packet::Kind::Command)
             ]
         );
@@ -600,7 +546,7 @@ mod tests {
         assert_eq!(
             kinds(&out),
             vec![
-                Err(DecodeErrorKind::Garbage),
+                Err(ErrorKind::Garbage),
                 Ok(super::super::packet::Kind::Command)
             ]
         );
@@ -611,7 +557,7 @@ mod tests {
         );
         let tail = d.finish();
         assert_eq!(tail.len(), 1);
-        assert!(matches!(&tail[0], Err(e) if e.kind == DecodeErrorKind::Garbage && e.offset == 11));
+        assert!(matches!(&tail[0], Err(e) if e.kind == ErrorKind::Garbage && e.offset == 11));
     }
 
     #[test]
@@ -620,10 +566,7 @@ mod tests {
         let out = d.decode_all(&h("FF FF 00 00 00 FF FE 03 00 20"));
         assert_eq!(
             kinds(&out),
-            vec![
-                Err(DecodeErrorKind::BadLength),
-                Err(DecodeErrorKind::Oversize)
-            ]
+            vec![Err(ErrorKind::BadLength), Err(ErrorKind::Oversize)]
         );
     }
 
@@ -637,7 +580,7 @@ mod tests {
         assert_eq!(
             kinds(&tail),
             vec![
-                Err(DecodeErrorKind::Truncated),
+                Err(ErrorKind::Truncated),
                 Ok(super::super::packet::Kind::Response)
             ]
         );

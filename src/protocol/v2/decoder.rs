@@ -12,102 +12,26 @@ use super::packet::{
     BodyError, EOP, ESC, ESC_EOP, ESC_ESC, ESC_SOP, Packet, PacketRef, SOP, body_ref_unchecked,
     parse_body, parse_body_ref,
 };
-use std::fmt;
 
 /// Default bound on an unescaped body. Real packets are far shorter (the longest documented
 /// response is 46 bytes of data); anything larger is line noise.
 pub const DEFAULT_MAX_BODY: usize = 512;
 
-/// What went wrong, without the details.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum DecodeErrorKind {
-    /// The checksum byte does not match the body.
-    BadChecksum,
-    /// ESC followed by something other than 0x23 / 0x05 / 0x50.
-    BadEscape,
-    /// A new SOP arrived before the current packet's EOP; the partial packet is dropped and
-    /// decoding restarts at the new SOP.
-    SopInsidePacket,
-    /// A body too short for the header its flags announce.
-    TooShort,
-    /// A body longer than the decoder's bound.
-    Oversize,
-    /// Bytes outside any packet.
-    Garbage,
-    /// The stream ended inside a packet (only reported by [`Decoder::finish`]).
-    Truncated,
-}
+pub use crate::protocol::decode::{DecodeStats, ErrorKind};
 
-impl DecodeErrorKind {
-    pub const ALL: [DecodeErrorKind; 7] = [
-        DecodeErrorKind::BadChecksum,
-        DecodeErrorKind::BadEscape,
-        DecodeErrorKind::SopInsidePacket,
-        DecodeErrorKind::TooShort,
-        DecodeErrorKind::Oversize,
-        DecodeErrorKind::Garbage,
-        DecodeErrorKind::Truncated,
-    ];
+/// The kinds of error a v2 decoder reports, in the order summaries list them.
+pub const ERROR_KINDS: [ErrorKind; 7] = [
+    ErrorKind::BadChecksum,
+    ErrorKind::BadEscape,
+    ErrorKind::SopInsidePacket,
+    ErrorKind::TooShort,
+    ErrorKind::Oversize,
+    ErrorKind::Garbage,
+    ErrorKind::Truncated,
+];
 
-    pub fn name(self) -> &'static str {
-        match self {
-            DecodeErrorKind::BadChecksum => "bad_checksum",
-            DecodeErrorKind::BadEscape => "bad_escape",
-            DecodeErrorKind::SopInsidePacket => "sop_inside_packet",
-            DecodeErrorKind::TooShort => "too_short",
-            DecodeErrorKind::Oversize => "oversize",
-            DecodeErrorKind::Garbage => "garbage",
-            DecodeErrorKind::Truncated => "truncated",
-        }
-    }
-
-    fn index(self) -> usize {
-        self as usize
-    }
-}
-
-/// A decode error with where it happened in the stream.
-#[derive(Debug, Clone, PartialEq)]
-pub struct DecodeError {
-    pub kind: DecodeErrorKind,
-    /// Stream offset (bytes since the decoder was created) of the packet's SOP, or of the
-    /// first garbage byte.
-    pub offset: u64,
-    /// Extra detail for people, e.g. the checksum values or byte counts.
-    pub detail: String,
-    /// For a bad checksum: the packet as it was read, for diagnostics.
-    pub packet: Option<Box<Packet>>,
-}
-
-impl fmt::Display for DecodeError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{} at offset {}", self.kind.name(), self.offset)?;
-        if !self.detail.is_empty() {
-            write!(f, ": {}", self.detail)?;
-        }
-        Ok(())
-    }
-}
-
-/// Counters of everything the decoder has seen.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
-pub struct DecoderStats {
-    pub packets: u64,
-    pub bytes: u64,
-    /// Bytes dropped: garbage, and the rest of packets abandoned after an error.
-    pub skipped_bytes: u64,
-    errors: [u64; 7],
-}
-
-impl DecoderStats {
-    pub fn errors(&self, kind: DecodeErrorKind) -> u64 {
-        self.errors[kind.index()]
-    }
-
-    pub fn total_errors(&self) -> u64 {
-        self.errors.iter().sum()
-    }
-}
+/// A v2 decode error; for a bad checksum it keeps the packet as it was read, for diagnostics.
+pub type DecodeError = crate::protocol::decode::DecodeError<Packet>;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum State {
@@ -133,7 +57,7 @@ pub struct Decoder {
     packet_wire_len: u64,
     garbage_start: Option<u64>,
     garbage_len: u64,
-    stats: DecoderStats,
+    stats: DecodeStats,
 }
 
 impl Default for Decoder {
@@ -159,11 +83,11 @@ impl Decoder {
             packet_wire_len: 0,
             garbage_start: None,
             garbage_len: 0,
-            stats: DecoderStats::default(),
+            stats: DecodeStats::default(),
         }
     }
 
-    pub fn stats(&self) -> &DecoderStats {
+    pub fn stats(&self) -> &DecodeStats {
         &self.stats
     }
 
@@ -266,7 +190,7 @@ impl Decoder {
                         self.packet_wire_len += room as u64 + 1;
                         self.advance(pos, room + 1);
                         let detail = format!("body longer than {} bytes", self.max_body);
-                        return Some(Err(self.abandon(DecodeErrorKind::Oversize, detail)));
+                        return Some(Err(self.abandon(ErrorKind::Oversize, detail)));
                     }
                     self.buf.extend_from_slice(&rest[..run]);
                     self.packet_wire_len += run as u64;
@@ -329,7 +253,7 @@ impl Decoder {
         }
         if let State::Body { .. } = self.state {
             let detail = format!("{} body bytes before the stream ended", self.buf.len());
-            out.push(self.error(DecodeErrorKind::Truncated, self.packet_start, detail));
+            out.push(self.error(ErrorKind::Truncated, self.packet_start, detail));
             self.stats.skipped_bytes += self.packet_wire_len;
         }
         self.buf.clear();
@@ -337,8 +261,8 @@ impl Decoder {
         out
     }
 
-    fn error(&mut self, kind: DecodeErrorKind, offset: u64, detail: String) -> DecodeError {
-        self.stats.errors[kind.index()] += 1;
+    fn error(&mut self, kind: ErrorKind, offset: u64, detail: String) -> DecodeError {
+        self.stats.count_error(kind);
         DecodeError {
             kind,
             offset,
@@ -351,7 +275,7 @@ impl Decoder {
         let start = self.garbage_start.take()?;
         let len = std::mem::take(&mut self.garbage_len);
         let detail = format!("{len} byte(s) outside any packet");
-        Some(self.error(DecodeErrorKind::Garbage, start, detail))
+        Some(self.error(ErrorKind::Garbage, start, detail))
     }
 
     fn start_packet(&mut self, at: u64) {
@@ -362,7 +286,7 @@ impl Decoder {
     }
 
     /// Abandon the current packet after an error inside it.
-    fn abandon(&mut self, kind: DecodeErrorKind, detail: String) -> DecodeError {
+    fn abandon(&mut self, kind: ErrorKind, detail: String) -> DecodeError {
         self.stats.skipped_bytes += self.packet_wire_len;
         self.buf.clear();
         self.state = State::Discarding;
@@ -372,7 +296,7 @@ impl Decoder {
     fn push_body(&mut self, b: u8) -> Option<DecodeError> {
         if self.buf.len() >= self.max_body {
             let detail = format!("body longer than {} bytes", self.max_body);
-            return Some(self.abandon(DecodeErrorKind::Oversize, detail));
+            return Some(self.abandon(ErrorKind::Oversize, detail));
         }
         self.buf.push(b);
         None
@@ -397,11 +321,11 @@ impl Decoder {
         match e {
             BodyError::TooShort { needed, got } => {
                 let detail = format!("{got} body byte(s), its flags need at least {needed}");
-                self.error(DecodeErrorKind::TooShort, self.packet_start, detail)
+                self.error(ErrorKind::TooShort, self.packet_start, detail)
             }
             BodyError::BadChecksum { expected, got } => {
                 let detail = format!("checksum 0x{got:02X}, expected 0x{expected:02X}");
-                let mut e = self.error(DecodeErrorKind::BadChecksum, self.packet_start, detail);
+                let mut e = self.error(ErrorKind::BadChecksum, self.packet_start, detail);
                 e.packet = packet.map(Box::new);
                 e
             }
@@ -442,7 +366,7 @@ impl Decoder {
                     // Drop the partial packet, restart here.
                     self.stats.skipped_bytes += self.packet_wire_len;
                     let detail = format!("new SOP after {} body byte(s)", self.buf.len());
-                    let e = self.error(DecodeErrorKind::SopInsidePacket, self.packet_start, detail);
+                    let e = self.error(ErrorKind::SopInsidePacket, self.packet_start, detail);
                     self.start_packet(at);
                     return Some(Err(e));
                 }
@@ -454,7 +378,7 @@ impl Decoder {
                         ESC_EOP => EOP,
                         other => {
                             let detail = format!("ESC followed by 0x{other:02X}");
-                            let e = self.abandon(DecodeErrorKind::BadEscape, detail);
+                            let e = self.abandon(ErrorKind::BadEscape, detail);
                             if other == EOP {
                                 self.state = State::Hunting;
                             }
@@ -519,7 +443,7 @@ mod tests {
     use super::*;
     use crate::hex;
 
-    fn kinds(events: &[Result<Packet, DecodeError>]) -> Vec<Result<(u8, u8), DecodeErrorKind>> {
+    fn kinds(events: &[Result<Packet, DecodeError>]) -> Vec<Result<(u8, u8), ErrorKind>> {
         events
             .iter()
             .map(|e| match e {
@@ -558,12 +482,12 @@ mod tests {
         let out = d.decode_all(&bytes);
         assert_eq!(
             kinds(&out),
-            vec![Err(DecodeErrorKind::BadChecksum), Ok((0x13, 0x0D))]
+            vec![Err(ErrorKind::BadChecksum), Ok((0x13, 0x0D))]
         );
         let Err(e) = &out[0] else { panic!() };
         assert_eq!(e.offset, 0);
         assert!(e.packet.is_some());
-        assert_eq!(d.stats().errors(DecodeErrorKind::BadChecksum), 1);
+        assert_eq!(d.stats().errors(ErrorKind::BadChecksum), 1);
     }
 
     #[test]
@@ -573,7 +497,7 @@ mod tests {
         let out = d.decode_all(&bytes);
         assert_eq!(
             kinds(&out),
-            vec![Err(DecodeErrorKind::SopInsidePacket), Ok((0x13, 0x0D))]
+            vec![Err(ErrorKind::SopInsidePacket), Ok((0x13, 0x0D))]
         );
     }
 
@@ -584,7 +508,7 @@ mod tests {
         let out = d.decode_all(&bytes);
         assert_eq!(
             kinds(&out),
-            vec![Err(DecodeErrorKind::BadEscape), Ok((0x13, 0x0D))]
+            vec![Err(ErrorKind::BadEscape), Ok((0x13, 0x0D))]
         );
     }
 
@@ -593,15 +517,12 @@ mod tests {
         let mut d = Decoder::new();
         let bytes = hex::parse("01 02 03 8D 0A 13 0D 00 D5 D8 FF").unwrap();
         let out = d.decode_all(&bytes);
-        assert_eq!(
-            kinds(&out),
-            vec![Err(DecodeErrorKind::Garbage), Ok((0x13, 0x0D))]
-        );
+        assert_eq!(kinds(&out), vec![Err(ErrorKind::Garbage), Ok((0x13, 0x0D))]);
         let Err(e) = &out[0] else { panic!() };
         assert_eq!(e.offset, 0);
         let tail = d.finish();
         assert_eq!(tail.len(), 1);
-        assert_eq!(tail[0].kind, DecodeErrorKind::Garbage);
+        assert_eq!(tail[0].kind, ErrorKind::Garbage);
         assert_eq!(tail[0].offset, 10);
     }
 
@@ -609,9 +530,9 @@ mod tests {
     fn too_short_and_truncated() {
         let mut d = Decoder::new();
         let out = d.decode_all(&hex::parse("8D 0A 13 D8 8D 0A").unwrap());
-        assert_eq!(kinds(&out), vec![Err(DecodeErrorKind::TooShort)]);
+        assert_eq!(kinds(&out), vec![Err(ErrorKind::TooShort)]);
         let tail = d.finish();
-        assert_eq!(tail[0].kind, DecodeErrorKind::Truncated);
+        assert_eq!(tail[0].kind, ErrorKind::Truncated);
         assert_eq!(tail[0].offset, 4);
     }
 
@@ -631,7 +552,7 @@ mod tests {
         assert!(max_buffered <= 16);
         assert_eq!(
             kinds(&out),
-            vec![Err(DecodeErrorKind::Oversize), Ok((0x13, 0x0D))]
+            vec![Err(ErrorKind::Oversize), Ok((0x13, 0x0D))]
         );
     }
 
@@ -686,7 +607,7 @@ mod feed_with_tests {
         bytes: &[u8],
         chunk: usize,
         max: usize,
-    ) -> (Vec<Result<Packet, DecodeError>>, DecoderStats) {
+    ) -> (Vec<Result<Packet, DecodeError>>, DecodeStats) {
         let mut d = Decoder::with_max_body(max);
         let mut out = Vec::new();
         for c in bytes.chunks(chunk.max(1)) {
@@ -706,7 +627,7 @@ mod feed_with_tests {
         bytes: &[u8],
         chunk: usize,
         max: usize,
-    ) -> (Vec<Result<Packet, DecodeError>>, DecoderStats) {
+    ) -> (Vec<Result<Packet, DecodeError>>, DecodeStats) {
         let mut d = Decoder::with_max_body(max);
         let mut out = Vec::new();
         for c in bytes.chunks(chunk.max(1)) {
@@ -720,7 +641,7 @@ mod feed_with_tests {
         bytes: &[u8],
         chunk: usize,
         max: usize,
-    ) -> (Vec<Result<Packet, DecodeError>>, DecoderStats) {
+    ) -> (Vec<Result<Packet, DecodeError>>, DecodeStats) {
         let mut d = Decoder::with_max_body(max);
         let mut out = Vec::new();
         for c in bytes.chunks(chunk.max(1)) {

@@ -146,21 +146,32 @@ impl std::fmt::Display for SampleError {
 
 /// Decode a 0x18/0x02 payload with the masks in effect.
 pub fn decode_sample(config: &StreamingConfig, data: &[u8]) -> Result<SensorSample, SampleError> {
-    let layout = config.layout();
-    if data.len() != layout.len() * 4 {
+    let count = config.value_count();
+    if data.len() != count * 4 {
         return Err(SampleError {
-            expected_values: layout.len(),
+            expected_values: count,
             got_bytes: data.len(),
         });
     }
-    let values = layout
-        .iter()
-        .zip(data.chunks_exact(4))
-        .filter_map(|(f, c)| {
-            let raw = f32::from_be_bytes([c[0], c[1], c[2], c[3]]);
-            f.map(|f| (f.name, raw * f.scale))
-        })
-        .collect();
+    // The layout walked in place (no list of fields built per sample: this runs for every
+    // sensor packet of a capture).
+    let mut values = Vec::with_capacity(count);
+    let mut chunks = data.chunks_exact(4);
+    for (m, table) in [
+        (config.mask, &STANDARD_FIELDS[..]),
+        (config.ext_mask, &EXTENDED_FIELDS[..]),
+    ] {
+        for bit in (0..32).rev() {
+            if m & (1 << bit) == 0 {
+                continue;
+            }
+            let Some(c) = chunks.next() else { break };
+            if let Some(f) = table.iter().find(|f| f.bit == bit) {
+                let raw = f32::from_be_bytes([c[0], c[1], c[2], c[3]]);
+                values.push((f.name, raw * f.scale));
+            }
+        }
+    }
     Ok(SensorSample { values })
 }
 

@@ -1,7 +1,14 @@
 //! Sphero API v2 behind the family seam (R2-D2, R2-Q5, BB-9E).
 
-use super::{Codec, Command, DroidError, Explained, Family, Incoming, Key, Packet, PacketKind};
+pub mod named;
+pub mod read;
+
+use super::{
+    Codec, Command, DroidError, Explained, Family, Incoming, Key, Packet, PacketKind, ReadOption,
+    ReadOptions, Reader,
+};
 use crate::model::{Model, Protocol};
+use crate::protocol::decode::ErrorKind;
 use crate::protocol::v2::sensor::StreamingConfig;
 use crate::protocol::v2::wire::{
     AudioMode, Bytes, CollisionMethod, DriveFlags, LegAction, Mask, StabilizationIndex,
@@ -110,7 +117,7 @@ impl Codec for V2Codec {
     fn feed(&mut self, bytes: &[u8], out: &mut Vec<Incoming>) {
         for r in self.decoder.feed(bytes) {
             out.push(match r {
-                Err(e) => Incoming::Error(super::DecodeError::V2(e)),
+                Err(e) => Incoming::Error(read::seam_error(e)),
                 Ok(p) if p.is_response() => Incoming::Response {
                     key: (p.did, p.cid, p.seq),
                     error: p.err.filter(|e| !e.is_success()).map(DroidError::V2),
@@ -127,7 +134,12 @@ impl Codec for V2Codec {
 
     fn explain(&self, p: &Packet, _request: Option<&Command>) -> Explained {
         match p {
-            Packet::V2(p) => explain(p, Some(&self.streaming)),
+            // Without masks, sensor data is shown as its raw values (as v1 does).
+            Packet::V2(p) => explain(
+                p,
+                (self.streaming.mask != 0 || self.streaming.ext_mask != 0)
+                    .then_some(&self.streaming),
+            ),
             other => super::explain_foreign(other),
         }
     }
@@ -136,6 +148,51 @@ impl Codec for V2Codec {
 impl Family for V2 {
     fn protocol(&self) -> Protocol {
         Protocol::SpheroV2
+    }
+
+    fn name(&self) -> &'static str {
+        "v2"
+    }
+
+    fn display_name(&self) -> &'static str {
+        "Sphero API v2"
+    }
+
+    fn sop(&self) -> u8 {
+        v2::packet::SOP
+    }
+
+    fn representative(&self) -> Model {
+        Model::R2D2
+    }
+
+    fn error_kinds(&self) -> &'static [ErrorKind] {
+        &v2::ERROR_KINDS
+    }
+
+    fn read_options(&self) -> &'static [ReadOption] {
+        &[ReadOption::SensorMask, ReadOption::ExtMask]
+    }
+
+    fn reader(&self, opts: &ReadOptions) -> Result<Box<dyn Reader>, String> {
+        Ok(Box::new(read::V2Reader::new(opts)))
+    }
+
+    fn side_reader(&self, side: super::Side, whole_values: bool) -> Box<dyn Reader> {
+        let opts = ReadOptions {
+            side: Some(side),
+            whole_values,
+            ..ReadOptions::default()
+        };
+        Box::new(read::V2Reader::new(&opts))
+    }
+
+    fn encode_named(&self, name: &str, params: Vec<(String, String)>) -> Result<Vec<u8>, String> {
+        named::encode(name, params)
+    }
+
+    fn list(&self, filter: Option<&str>, out: &mut dyn std::io::Write) -> std::io::Result<()> {
+        named::list(filter, out)
     }
 
     fn codec(&self) -> Box<dyn Codec> {

@@ -1,91 +1,36 @@
-//! `droidctl packet --protocol rsrcp`: the Robi 42's state reports (RSRCP 1.0.0): decode the
-//! handshake and frames, build them as test input, list the features.
-//!
-//! RSRCP only flows robot → central; droidctl drives the robot through the remote-control
-//! service's two one-byte characteristics, which carry no packets (see [`list`]).
+//! `packet encode --protocol rsrcp` and `packet list --protocol rsrcp`: what the Robi 42
+//! sends (a handshake, state frames), built from options as test input, and the protocol's
+//! characteristics and features listed. RSRCP only flows robot → central; droidctl drives the
+//! robot through the remote-control service's two one-byte characteristics, which carry no
+//! packets.
 
-use super::{CliError, Output, io_err, uint_opt};
+use crate::family::named::{keep, uint_opt};
 use crate::link::gatt::GattUuid;
 use crate::protocol::rsrcp::frame::{MOTOR_LIMIT_RAD_S, PIEZO_MAX_HZ};
 use crate::protocol::rsrcp::{
-    Buttons, EOP, FRAME_ID_MASK, Feature, Frame, FrameError, Framer, HANDSHAKE_LEN, Handshake,
-    Item, Leds, ROBI_FRAMES, ROBI_HANDSHAKE, ROBI_RC_SERVICE, ROBI_RSRC_SERVICE, ROBI_START,
-    ROBI_STEERING, ROBI_VELOCITY, STEERING_STRAIGHT, decode_frame, decode_handshake, to_json,
+    Buttons, FRAME_ID_MASK, Feature, Frame, Handshake, Leds, ROBI_FRAMES, ROBI_HANDSHAKE,
+    ROBI_RC_SERVICE, ROBI_RSRC_SERVICE, ROBI_START, ROBI_STEERING, ROBI_VELOCITY,
+    STEERING_STRAIGHT,
 };
 use std::io::Write;
 
-pub(super) fn decode(bytes: &[u8], output: Output, out: &mut dyn Write) -> Result<i32, CliError> {
-    let Output { stream, json } = output;
-    let results = if stream {
-        frame_stream(bytes)
-    } else {
-        vec![single(bytes)?]
-    };
-    let mut status = 0;
-    for r in &results {
-        if r.is_err() {
-            status = 1;
-        }
-        if json {
-            writeln!(out, "{}", to_json(r)).map_err(io_err)?;
-        } else {
-            match r {
-                Ok(item) => writeln!(out, "{}", item.summary()),
-                Err(e) => writeln!(out, "decode error: {}", e.summary()),
-            }
-            .map_err(io_err)?;
-        }
-    }
-    // A stream with garbage is still a successful decode of what was there.
-    Ok(if stream { 0 } else { status })
-}
-
-fn frame_stream(bytes: &[u8]) -> Vec<Result<Item, FrameError>> {
-    let mut framer = Framer::new();
-    let mut all: Vec<_> = framer.feed(bytes).collect();
-    all.extend(framer.finish());
-    all
-}
-
-/// One BLE value: the handshake characteristic's 5 bytes or one frames notification, which
-/// must be exactly one handshake or frame (too short, too long, a bad EOP, an unsized feature
-/// are errors). Input holding several is refused in favour of `--stream`.
-fn single(bytes: &[u8]) -> Result<Result<Item, FrameError>, CliError> {
-    if bytes.is_empty() {
-        return Err(CliError::usage("no bytes to decode"));
-    }
-    let found = frame_stream(bytes).iter().filter(|r| r.is_ok()).count();
-    if found > 1 {
-        return Err(CliError::usage(format!(
-            "the input holds {found} handshakes or frames, not one; use --stream to decode a byte stream"
-        )));
-    }
-    // Byte 4 is 7F in a handshake; in a frame it is the EFS high byte, where 7F enables the
-    // unsized gyro, so such a frame could not be read anyway (the framer's rule too).
-    Ok(if bytes.get(HANDSHAKE_LEN - 1) == Some(&EOP) {
-        decode_handshake(bytes).map(Item::Handshake)
-    } else {
-        decode_frame(bytes).map(Item::Frame)
-    })
-}
-
 /// What the robot sends, built from options: `frame` or `handshake`. Anything else is a usage
 /// error that says how the robot is actually driven.
-pub(super) fn encode(name: &str, given: Vec<(String, String)>) -> Result<Vec<u8>, CliError> {
+pub fn encode(name: &str, given: Vec<(String, String)>) -> Result<Vec<u8>, String> {
     match name {
         "frame" => encode_frame(given),
         "handshake" => encode_handshake(given),
-        _ => Err(CliError::usage(format!(
+        _ => Err(format!(
             "RSRCP has no command {name:?}: the Robi 42 sends the handshake and state frames, \
              and is driven by writing one velocity byte (0..=255 = 0..1 forward, \
              characteristic 0x6B2F) and one steering byte (0 left, 128 straight, 255 right, \
              0x3F4A) to the remote-control service 0xBA73; `encode --protocol rsrcp frame` or \
              `handshake` builds test input"
-        ))),
+        )),
     }
 }
 
-fn encode_handshake(given: Vec<(String, String)>) -> Result<Vec<u8>, CliError> {
+fn encode_handshake(given: Vec<(String, String)>) -> Result<Vec<u8>, String> {
     let mut h = Handshake {
         version: 1,
         msdt_ms: 10,
@@ -95,16 +40,16 @@ fn encode_handshake(given: Vec<(String, String)>) -> Result<Vec<u8>, CliError> {
             "version" => h.version = uint_opt(&k, &v, u8::MAX as u64)? as u8,
             "msdt" => h.msdt_ms = uint_opt(&k, &v, u16::MAX as u64)? as u16,
             _ => {
-                return Err(CliError::usage(format!(
+                return Err(format!(
                     "handshake has no parameter --{k} (expected --version --msdt)"
-                )));
+                ));
             }
         }
     }
     Ok(h.encode().to_vec())
 }
 
-fn encode_frame(given: Vec<(String, String)>) -> Result<Vec<u8>, CliError> {
+fn encode_frame(given: Vec<(String, String)>) -> Result<Vec<u8>, String> {
     let mut f = Frame::default();
     for (k, v) in given {
         f = match k.as_str() {
@@ -132,10 +77,10 @@ fn encode_frame(given: Vec<(String, String)>) -> Result<Vec<u8>, CliError> {
                 f.with_piezo(on, hz)
             }
             _ => {
-                return Err(CliError::usage(format!(
+                return Err(format!(
                     "frame has no parameter --{k} (expected --frame-id --motors --poti \
                      --buttons --leds --piezo)"
-                )));
+                ));
             }
         };
     }
@@ -143,12 +88,12 @@ fn encode_frame(given: Vec<(String, String)>) -> Result<Vec<u8>, CliError> {
 }
 
 /// `--motors L,R` in rad/s, each within ±300.
-fn motors(text: &str) -> Result<(f32, f32), CliError> {
-    let bad = |why: &str| CliError::usage(format!("--motors: {why} (expected L,R in rad/s)"));
+fn motors(text: &str) -> Result<(f32, f32), String> {
+    let bad = |why: &str| format!("--motors: {why} (expected L,R in rad/s)");
     let (l, r) = text
         .split_once(',')
         .ok_or_else(|| bad(&format!("{text:?} is not two numbers")))?;
-    let speed = |s: &str| -> Result<f32, CliError> {
+    let speed = |s: &str| -> Result<f32, String> {
         let v: f32 = s
             .trim()
             .parse()
@@ -165,15 +110,15 @@ fn motors(text: &str) -> Result<(f32, f32), CliError> {
 }
 
 /// `--piezo HZ` (sounding), `--piezo HZ,off` (silent at HZ) or `--piezo off` (silent, 0 Hz).
-fn piezo(text: &str) -> Result<(bool, u16), CliError> {
+fn piezo(text: &str) -> Result<(bool, u16), String> {
     let (hz, on) = match text.split_once(',') {
         _ if text.eq_ignore_ascii_case("off") => return Ok((false, 0)),
         Some((hz, state)) if state.trim().eq_ignore_ascii_case("off") => (hz, false),
         Some((hz, state)) if state.trim().eq_ignore_ascii_case("on") => (hz, true),
         Some((_, state)) => {
-            return Err(CliError::usage(format!(
+            return Err(format!(
                 "--piezo: {state:?} is neither on nor off (expected HZ, HZ,off or off)"
-            )));
+            ));
         }
         None => (text, true),
     };
@@ -193,7 +138,7 @@ fn named_bits(names_of: impl Fn(u8) -> Vec<&'static str>) -> Vec<(u8, &'static s
 }
 
 /// A byte of named bits: names joined by `,` or `|`, `none`, or a number.
-fn bits(key: &str, text: &str, table: &[(u8, &str)]) -> Result<u8, CliError> {
+fn bits(key: &str, text: &str, table: &[(u8, &str)]) -> Result<u8, String> {
     if text.eq_ignore_ascii_case("none") {
         return Ok(0);
     }
@@ -210,10 +155,10 @@ fn bits(key: &str, text: &str, table: &[(u8, &str)]) -> Result<u8, CliError> {
                 .map(|(b, _)| acc | b)
                 .ok_or_else(|| {
                     let names: Vec<&str> = table.iter().map(|(_, n)| *n).collect();
-                    CliError::usage(format!(
+                    format!(
                         "--{key}: unknown name {name:?} (expected {}, none or a number)",
                         names.join(", ")
-                    ))
+                    )
                 })
         })
 }
@@ -242,8 +187,10 @@ fn payload(f: Feature) -> String {
     }
 }
 
-pub(super) fn list(filter: Option<&str>, out: &mut dyn Write) -> std::io::Result<()> {
-    let keep = |n: &str| filter.is_none_or(|f| n.contains(f));
+/// `packet list --protocol rsrcp`: the characteristics, the EFS features with their bits and
+/// payload sizes, and the remote-control bytes.
+pub fn list(filter: Option<&str>, out: &mut dyn Write) -> std::io::Result<()> {
+    let keep = |n: &str| keep(filter, n);
     writeln!(
         out,
         "Robot -> central (RSRC service {}; characteristic  name  bytes):",

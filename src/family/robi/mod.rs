@@ -7,10 +7,17 @@
 //! capabilities are few: drive forward and steer; no reverse, heading, dome, legs, lights,
 //! sounds or battery reading.
 
+pub mod named;
+pub mod read;
+
 use super::types::{RobiControl, RobiPacket};
-use super::{Codec, Command, Explained, Family, Incoming, Key, Packet, PacketKind};
+use super::{
+    Codec, Command, Explained, Family, Incoming, Key, Packet, PacketKind, ReadOption, ReadOptions,
+    Reader,
+};
 use crate::link::Endpoint;
 use crate::model::{Model, Protocol};
+use crate::protocol::decode::ErrorKind;
 use crate::protocol::notify::Notification;
 use crate::protocol::rsrcp::{self, Item};
 use crate::protocol::value::{Fields, Value};
@@ -124,15 +131,7 @@ impl Codec for RobiCodec {
     }
 
     fn feed(&mut self, bytes: &[u8], out: &mut Vec<Incoming>) {
-        // The handshake is 5 bytes ending in EOP where a frame has its EFS high byte; a frame
-        // with 0x7F there would enable the unsized gyro, so the two cannot be confused.
-        let is_handshake = bytes.len() == rsrcp::HANDSHAKE_LEN && bytes[4] == rsrcp::EOP;
-        let item = if is_handshake {
-            rsrcp::decode_handshake(bytes).map(Item::Handshake)
-        } else {
-            rsrcp::decode_frame(bytes).map(Item::Frame)
-        };
-        out.push(match item {
+        out.push(match read::decode_value(bytes) {
             Ok(item) => {
                 let n = match &item {
                     Item::Handshake(h) => Notification::RobiHandshake(*h),
@@ -143,7 +142,7 @@ impl Codec for RobiCodec {
                     packet: Packet::Robi(RobiPacket::Item(item)),
                 }
             }
-            Err(e) => Incoming::Error(super::DecodeError::Rsrcp(e)),
+            Err(e) => Incoming::Error(read::seam_error(e)),
         });
     }
 
@@ -158,6 +157,52 @@ impl Codec for RobiCodec {
 impl Family for Robi {
     fn protocol(&self) -> Protocol {
         Protocol::Rsrcp
+    }
+
+    fn name(&self) -> &'static str {
+        "rsrcp"
+    }
+
+    fn display_name(&self) -> &'static str {
+        "RSRCP"
+    }
+
+    fn sop(&self) -> u8 {
+        rsrcp::SOP
+    }
+
+    fn representative(&self) -> Model {
+        Model::Robi42
+    }
+
+    fn error_kinds(&self) -> &'static [ErrorKind] {
+        &rsrcp::ERROR_KINDS
+    }
+
+    /// RSRCP frames say what they carry: nothing to be told.
+    fn read_options(&self) -> &'static [ReadOption] {
+        &[]
+    }
+
+    fn reader(&self, opts: &ReadOptions) -> Result<Box<dyn Reader>, String> {
+        Ok(Box::new(read::RobiReader::new(opts)))
+    }
+
+    fn side_reader(&self, side: super::Side, whole_values: bool) -> Box<dyn Reader> {
+        let opts = ReadOptions {
+            side: Some(side),
+            whole_values,
+            ..ReadOptions::default()
+        };
+        Box::new(read::RobiReader::new(&opts))
+    }
+
+    fn encode_named(&self, name: &str, params: Vec<(String, String)>) -> Result<Vec<u8>, String> {
+        named::encode(name, params)
+    }
+
+    fn list(&self, filter: Option<&str>, out: &mut dyn std::io::Write) -> std::io::Result<()> {
+        named::list(filter, out)
     }
 
     fn codec(&self) -> Box<dyn Codec> {

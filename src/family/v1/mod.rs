@@ -5,8 +5,15 @@
 //! (it wakes at the GATT level, `droid-facts.md` §4) and no dome, legs, sounds or
 //! animations; Roll has no reverse flag, so reversing rolls toward the opposite heading.
 
-use super::{Codec, Command, DroidError, Explained, Family, Incoming, Key, Packet, PacketKind};
+pub mod named;
+pub mod read;
+
+use super::{
+    Codec, Command, DroidError, Explained, Family, Incoming, Key, Packet, PacketKind, ReadOption,
+    ReadOptions, Reader,
+};
 use crate::model::{Model, Protocol};
+use crate::protocol::decode::ErrorKind;
 use crate::protocol::v1::{self, Decoder, Source, StreamingConfig, cmd};
 use crate::script::{Action, LedGroup};
 use crate::setup::SetupOptions;
@@ -74,7 +81,7 @@ pub fn explain(
         ),
         v1::Packet::Async(_) => (PacketKind::Notification, None, None, None),
     };
-    let label = d.name.clone().unwrap_or_else(|| match p {
+    let label = d.name.map(String::from).unwrap_or_else(|| match p {
         v1::Packet::Command(c) => format!("0x{:02X}/0x{:02X}", c.did, c.cid),
         v1::Packet::Response(_) => match request {
             Some(r) => format!("{} (answer)", r.name()),
@@ -131,7 +138,7 @@ impl Codec for V1Codec {
     fn feed(&mut self, bytes: &[u8], out: &mut Vec<Incoming>) {
         for r in self.decoder.feed(bytes) {
             out.push(match r {
-                Err(e) => Incoming::Error(super::DecodeError::V1(e)),
+                Err(e) => Incoming::Error(read::seam_error(e)),
                 Ok(v1::Packet::Response(r)) => Incoming::Response {
                     key: (0, 0, r.seq),
                     error: (!r.mrsp.is_success()).then_some(DroidError::V1(r.mrsp)),
@@ -177,6 +184,52 @@ impl Codec for V1Codec {
 impl Family for V1 {
     fn protocol(&self) -> Protocol {
         Protocol::SpheroV1
+    }
+
+    fn name(&self) -> &'static str {
+        "v1"
+    }
+
+    fn display_name(&self) -> &'static str {
+        "Sphero API v1"
+    }
+
+    fn sop(&self) -> u8 {
+        v1::packet::SOP1
+    }
+
+    fn representative(&self) -> Model {
+        Model::BB8
+    }
+
+    fn error_kinds(&self) -> &'static [ErrorKind] {
+        &v1::ERROR_KINDS
+    }
+
+    fn read_options(&self) -> &'static [ReadOption] {
+        &[
+            ReadOption::Side,
+            ReadOption::SensorMask,
+            ReadOption::Mask2,
+            ReadOption::Frames,
+            ReadOption::Request,
+        ]
+    }
+
+    fn reader(&self, opts: &ReadOptions) -> Result<Box<dyn Reader>, String> {
+        Ok(Box::new(read::V1Reader::new(opts)?))
+    }
+
+    fn side_reader(&self, side: super::Side, _whole_values: bool) -> Box<dyn Reader> {
+        Box::new(read::V1Reader::for_side(side))
+    }
+
+    fn encode_named(&self, name: &str, params: Vec<(String, String)>) -> Result<Vec<u8>, String> {
+        named::encode(name, params)
+    }
+
+    fn list(&self, filter: Option<&str>, out: &mut dyn std::io::Write) -> std::io::Result<()> {
+        named::list(filter, out)
     }
 
     fn codec(&self) -> Box<dyn Codec> {

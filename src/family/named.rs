@@ -1,0 +1,35 @@
+//! What `packet encode` and `packet list` share across families: packets built from a name
+//! and `--key value` parameters, and catalogues listed with their parameters. Each family's
+//! own rules (headers, `raw`, test input) live in its `named.rs`.
+
+use crate::protocol::schema::FieldDef;
+use crate::protocol::wire::parse_uint;
+
+/// A number in `0..=max` for option `--key` (decimal or `0x` hex).
+pub fn uint_opt(key: &str, v: &str, max: u64) -> Result<u64, String> {
+    parse_uint(v, max).map_err(|e| format!("--{key}: {e}"))
+}
+
+/// A byte in `0..=max` for option `--key`.
+pub fn byte_opt(key: &str, v: &str, max: u64) -> Result<u8, String> {
+    uint_opt(key, v, max.min(255)).map(|n| n as u8)
+}
+
+/// Hex data of `--data`.
+pub fn data_opt(v: &str) -> Result<Vec<u8>, String> {
+    crate::hex::parse(v).map_err(|e| format!("--data: {e}"))
+}
+
+/// A command's parameters as `--name <description> ...`, for `packet list`.
+pub fn params_text(params: &[FieldDef]) -> String {
+    params
+        .iter()
+        .map(|p| format!("--{} <{}>", p.option(), p.description))
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+/// Whether `name` passes `packet list`'s filter.
+pub fn keep(filter: Option<&str>, name: &str) -> bool {
+    filter.is_none_or(|f| name.contains(f))
+}
