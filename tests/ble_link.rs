@@ -1,12 +1,13 @@
 //! BleLink against the fake peripheral, all on tokio's paused clock: handshakes per model,
 //! chunking, pacing, notifications as a byte stream, timeouts, and the session's reconnect path.
 
+use droidctl::family::{v1::gatt as v1g, v2::gatt as v2g};
+use droidctl::gatt::GattUuid;
 use droidctl::link::backoff::Backoff;
 use droidctl::link::ble::fake::{FakeCentral, FakeOp, FakePeripheral};
 use droidctl::link::ble::{
     Advertisement, BleAddress, BleError, BleErrorKind, BleLink, DiscoveredChar,
 };
-use droidctl::link::gatt::{self, GattProfile, GattUuid};
 use droidctl::link::{Connection, Link, LinkEvent};
 use droidctl::model::Model;
 use droidctl::protocol::v2::{Decoder, ErrorCode, Packet, cmd};
@@ -27,7 +28,7 @@ fn name_for(model: Model) -> String {
 
 /// An adapter holding one fake `model` droid; returns the adapter, the droid and its link.
 fn setup(model: Model) -> (FakeCentral, FakePeripheral, BleLink) {
-    let profile = GattProfile::for_model(model);
+    let profile = droidctl::family::gatt_profile(model);
     let droid = FakePeripheral::for_profile(&profile);
     let central = FakeCentral::new();
     central.add_device(
@@ -38,7 +39,13 @@ fn setup(model: Model) -> (FakeCentral, FakePeripheral, BleLink) {
         },
         droid.clone(),
     );
-    let link = BleLink::new(Arc::new(central.clone()), ADDR, name_for(model), model);
+    let link = BleLink::new(
+        Arc::new(central.clone()),
+        ADDR,
+        name_for(model),
+        model,
+        droidctl::family::gatt_profile(model),
+    );
     (central, droid, link)
 }
 
@@ -65,16 +72,16 @@ async fn v2_handshake_is_unlock_then_subscribe() {
         [
             FakeOp::Connect,
             FakeOp::Discover,
-            write(gatt::V2_ANTI_DOS, b"usetheforce...band"),
-            FakeOp::Subscribe(gatt::V2_API),
+            write(v2g::V2_ANTI_DOS, b"usetheforce...band"),
+            FakeOp::Subscribe(v2g::V2_API),
         ]
     );
     assert_eq!(
-        gatt::V2_API.to_string(),
+        v2g::V2_API.to_string(),
         "00010002-574f-4f20-5370-6865726f2121"
     );
     assert_eq!(
-        gatt::V2_ANTI_DOS.to_string(),
+        v2g::V2_ANTI_DOS.to_string(),
         "00020005-574f-4f20-5370-6865726f2121"
     );
     assert_eq!(link.describe(), "R2-D2 D2-1A2B (F1:22:33:44:55:66)");
@@ -90,18 +97,18 @@ async fn v1_handshake_is_antidos_txpower_wake_then_subscribe() {
             [
                 FakeOp::Connect,
                 FakeOp::Discover,
-                write(gatt::V1_ANTI_DOS, b"011i3"),
-                write(gatt::V1_TX_POWER, &[0x07]),
-                write(gatt::V1_WAKE, &[0x01]),
-                FakeOp::Subscribe(gatt::V1_RESPONSES),
+                write(v1g::V1_ANTI_DOS, b"011i3"),
+                write(v1g::V1_TX_POWER, &[0x07]),
+                write(v1g::V1_WAKE, &[0x01]),
+                FakeOp::Subscribe(v1g::V1_RESPONSES),
             ],
             "{model:?}"
         );
         // Commands go to 2ba1.
         conn.writer.write(&[0xFF, 0xFF, 0x00, 0x01]).await.unwrap();
-        assert_eq!(droid.writes_to(gatt::V1_COMMANDS).len(), 1);
+        assert_eq!(droid.writes_to(v1g::V1_COMMANDS).len(), 1);
         assert_eq!(
-            gatt::V1_COMMANDS.to_string(),
+            v1g::V1_COMMANDS.to_string(),
             "22bb746f-2ba1-7554-2d6f-726568705327"
         );
     }
@@ -112,28 +119,37 @@ async fn robi_handshake_reads_then_confirms_then_subscribes() {
     let (_c, droid, mut link) = setup(Model::Robi42);
     // Version 1, MSDT 10 ms (`droid-facts.md` §5).
     let handshake = vec![0x7E, 0x01, 0x00, 0x0A, 0x7F];
-    droid.set_read(gatt::ROBI_HANDSHAKE, handshake.clone());
+    droid.set_read(
+        droidctl::family::robi::gatt::ROBI_HANDSHAKE,
+        handshake.clone(),
+    );
     let mut conn = open(&mut link).await;
     assert_eq!(
         droid.ops(),
         [
             FakeOp::Connect,
             FakeOp::Discover,
-            FakeOp::Read(gatt::ROBI_HANDSHAKE),
-            write(gatt::ROBI_START, &[0x01]),
-            FakeOp::Subscribe(gatt::ROBI_FRAMES),
+            FakeOp::Read(droidctl::family::robi::gatt::ROBI_HANDSHAKE),
+            write(droidctl::family::robi::gatt::ROBI_START, &[0x01]),
+            FakeOp::Subscribe(droidctl::family::robi::gatt::ROBI_FRAMES),
         ]
     );
-    assert_eq!(gatt::ROBI_FRAMES.as_u16(), Some(0x8765));
+    assert_eq!(
+        droidctl::family::robi::gatt::ROBI_FRAMES.as_u16(),
+        Some(0x8765)
+    );
     // What the handshake read comes first, so the session learns the announced interval.
     assert_eq!(conn.events.recv().await, Some(LinkEvent::Data(handshake)));
-    droid.notify(gatt::ROBI_FRAMES, &[0x7E, 0x01, 0x7F]);
+    droid.notify(
+        droidctl::family::robi::gatt::ROBI_FRAMES,
+        &[0x7E, 0x01, 0x7F],
+    );
     assert_eq!(
         conn.events.recv().await,
         Some(LinkEvent::Data(vec![0x7E, 0x01, 0x7F]))
     );
     // A write names its destination: the remote control's two characteristics.
-    use droidctl::link::Endpoint;
+    use droidctl::gatt::Endpoint;
     conn.writer
         .write_to(Endpoint::Velocity, &[200])
         .await
@@ -144,7 +160,7 @@ async fn robi_handshake_reads_then_confirms_then_subscribes() {
         .unwrap();
     assert_eq!(
         droid
-            .writes_to(gatt::ROBI_VELOCITY)
+            .writes_to(droidctl::family::robi::gatt::ROBI_VELOCITY)
             .into_iter()
             .map(|(_, d)| d)
             .collect::<Vec<_>>(),
@@ -152,7 +168,7 @@ async fn robi_handshake_reads_then_confirms_then_subscribes() {
     );
     assert_eq!(
         droid
-            .writes_to(gatt::ROBI_STEERING)
+            .writes_to(droidctl::family::robi::gatt::ROBI_STEERING)
             .into_iter()
             .map(|(_, d)| d)
             .collect::<Vec<_>>(),
@@ -166,7 +182,7 @@ async fn a_45_byte_write_is_three_chunks() {
     let mut conn = open(&mut link).await;
     let data: Vec<u8> = (0..45).collect();
     conn.writer.write(&data).await.unwrap();
-    let writes = droid.writes_to(gatt::V2_API);
+    let writes = droid.writes_to(v2g::V2_API);
     let sizes: Vec<usize> = writes.iter().map(|(_, d)| d.len()).collect();
     assert_eq!(sizes, [20, 20, 5]);
     let joined: Vec<u8> = writes.into_iter().flat_map(|(_, d)| d).collect();
@@ -202,10 +218,10 @@ async fn notifications_are_one_byte_stream() {
     // A response split across three notifications, plus noise on another characteristic.
     let packet = Packet::response_to(&cmd::wake().to_packet(7), ErrorCode::Success, vec![]);
     let wire = packet.encode();
-    droid.notify(gatt::V2_API, &wire[..3]);
-    droid.notify(gatt::V2_ANTI_DOS, &[0xAA]);
-    droid.notify(gatt::V2_API, &wire[3..5]);
-    droid.notify(gatt::V2_API, &wire[5..]);
+    droid.notify(v2g::V2_API, &wire[..3]);
+    droid.notify(v2g::V2_ANTI_DOS, &[0xAA]);
+    droid.notify(v2g::V2_API, &wire[3..5]);
+    droid.notify(v2g::V2_API, &wire[5..]);
     let mut bytes = Vec::new();
     for _ in 0..3 {
         match conn.events.recv().await {
@@ -263,8 +279,8 @@ async fn a_sleeping_droid_times_out_and_is_retryable() {
 async fn the_wrong_device_is_fatal() {
     // Something called D2-… without the anti-DoS characteristic.
     let droid = FakePeripheral::new(vec![DiscoveredChar {
-        service: gatt::V2_SERVICE,
-        characteristic: gatt::V2_API,
+        service: v2g::V2_SERVICE,
+        characteristic: v2g::V2_API,
     }]);
     let central = FakeCentral::new();
     central.add_device(
@@ -275,7 +291,13 @@ async fn the_wrong_device_is_fatal() {
         },
         droid.clone(),
     );
-    let mut link = BleLink::new(Arc::new(central), ADDR, "D2-FAKE", Model::R2D2);
+    let mut link = BleLink::new(
+        Arc::new(central),
+        ADDR,
+        "D2-FAKE",
+        Model::R2D2,
+        droidctl::family::gatt_profile(Model::R2D2),
+    );
     let e = link.open().await.err().unwrap();
     assert!(e.fatal, "{e}");
     assert!(e.message.contains("does not look like a R2-D2"), "{e}");
@@ -287,10 +309,16 @@ async fn the_wrong_device_is_fatal() {
 
 #[tokio::test(start_paused = true)]
 async fn a_forgotten_device_is_scanned_for_again() {
-    let profile = GattProfile::for_model(Model::R2D2);
+    let profile = droidctl::family::gatt_profile(Model::R2D2);
     let droid = FakePeripheral::for_profile(&profile);
     let central = FakeCentral::new();
-    let mut link = BleLink::new(Arc::new(central.clone()), ADDR, "D2-1A2B", Model::R2D2);
+    let mut link = BleLink::new(
+        Arc::new(central.clone()),
+        ADDR,
+        "D2-1A2B",
+        Model::R2D2,
+        droidctl::family::gatt_profile(Model::R2D2),
+    );
     // Not known at all: a bounded rescan, then a retryable error.
     let e = link.open().await.err().unwrap();
     assert!(!e.fatal);
@@ -343,7 +371,7 @@ async fn wait_for(rx: &mut watch::Receiver<LinkState>, want: impl Fn(&LinkState)
 /// The wake commands the session wrote, decoded from the fake's write log.
 fn wakes_written(droid: &FakePeripheral) -> usize {
     let bytes: Vec<u8> = droid
-        .writes_to(gatt::V2_API)
+        .writes_to(v2g::V2_API)
         .into_iter()
         .flat_map(|(_, d)| d)
         .collect();
@@ -395,10 +423,10 @@ async fn session_reconnects_and_reruns_handshake_and_setup() {
             LinkState::Connected,
         ]
     );
-    let unlock = write(gatt::V2_ANTI_DOS, b"usetheforce...band");
+    let unlock = write(v2g::V2_ANTI_DOS, b"usetheforce...band");
     assert_eq!(count(&droid, &FakeOp::Connect), 2);
     assert_eq!(count(&droid, &unlock), 2, "handshake re-run");
-    assert_eq!(count(&droid, &FakeOp::Subscribe(gatt::V2_API)), 2);
+    assert_eq!(count(&droid, &FakeOp::Subscribe(v2g::V2_API)), 2);
     assert_eq!(wakes_written(&droid), 2, "setup commands written again");
     assert_eq!(s.stats().reconnects, 1);
     s.shutdown(vec![]).await;
@@ -436,7 +464,13 @@ async fn a_fatal_open_error_closes_the_session() {
     let central = FakeCentral::new();
     central.fail_scan(BleError::no_adapter());
     // Unknown device → rescan → the adapter error, which retrying cannot fix.
-    let link = BleLink::new(Arc::new(central), ADDR, "D2-1A2B", Model::R2D2);
+    let link = BleLink::new(
+        Arc::new(central),
+        ADDR,
+        "D2-1A2B",
+        Model::R2D2,
+        droidctl::family::gatt_profile(Model::R2D2),
+    );
     let s = session::start(Box::new(link), SessionConfig::default());
     let mut rx = s.watch_state();
     wait_for(&mut rx, |st| matches!(st, LinkState::Closed { .. })).await;
@@ -452,7 +486,7 @@ async fn a_fatal_open_error_closes_the_session() {
 /// The drive commands (speed, heading) written to the API characteristic since `from`.
 fn drives_written(droid: &FakePeripheral, from: Instant) -> Vec<(u8, u16)> {
     let bytes: Vec<u8> = droid
-        .writes_to(gatt::V2_API)
+        .writes_to(v2g::V2_API)
         .into_iter()
         .filter(|(t, _)| *t >= from)
         .flat_map(|(_, d)| d)
@@ -539,8 +573,8 @@ async fn a_characteristic_missing_on_a_reconnect_is_retried() {
     let mut rx = s.watch_state();
     wait_for(&mut rx, |st| *st == LinkState::Connected).await;
     droid.set_chars(vec![DiscoveredChar {
-        service: gatt::V2_SERVICE,
-        characteristic: gatt::V2_API,
+        service: v2g::V2_SERVICE,
+        characteristic: v2g::V2_API,
     }]);
     droid.drop_connection("link loss");
     wait_for(&mut rx, |st| {
@@ -548,11 +582,11 @@ async fn a_characteristic_missing_on_a_reconnect_is_retried() {
     })
     .await;
     droid.set_chars(
-        GattProfile::for_model(Model::R2D2)
+        droidctl::family::gatt_profile(Model::R2D2)
             .characteristics()
             .into_iter()
             .map(|c| DiscoveredChar {
-                service: c.service.unwrap_or(gatt::V2_SERVICE),
+                service: c.service.unwrap_or(v2g::V2_SERVICE),
                 characteristic: c.characteristic,
             })
             .collect(),
@@ -578,17 +612,17 @@ mod v1_session {
         vec![
             FakeOp::Connect,
             FakeOp::Discover,
-            write(gatt::V1_ANTI_DOS, b"011i3"),
-            write(gatt::V1_TX_POWER, &[0x07]),
-            write(gatt::V1_WAKE, &[0x01]),
-            FakeOp::Subscribe(gatt::V1_RESPONSES),
+            write(v1g::V1_ANTI_DOS, b"011i3"),
+            write(v1g::V1_TX_POWER, &[0x07]),
+            write(v1g::V1_WAKE, &[0x01]),
+            FakeOp::Subscribe(v1g::V1_RESPONSES),
         ]
     }
 
     /// Every command written to 2ba1 so far, decoded as the droid reads them.
     fn commands_written(droid: &FakePeripheral) -> Vec<CommandPacket> {
         let bytes: Vec<u8> = droid
-            .writes_to(gatt::V1_COMMANDS)
+            .writes_to(v1g::V1_COMMANDS)
             .into_iter()
             .flat_map(|(_, d)| d)
             .collect();
@@ -618,7 +652,7 @@ mod v1_session {
             .encode()
             .unwrap();
         for chunk in wire.chunks(piece) {
-            droid.notify(gatt::V1_RESPONSES, chunk);
+            droid.notify(v1g::V1_RESPONSES, chunk);
         }
     }
 
@@ -630,7 +664,7 @@ mod v1_session {
             let mut seen = 0;
             loop {
                 sleep(Duration::from_millis(5)).await;
-                let writes = droid.writes_to(gatt::V1_COMMANDS);
+                let writes = droid.writes_to(v1g::V1_COMMANDS);
                 for (_, w) in &writes[seen..] {
                     let cmds: Vec<_> = decoder.feed(w).collect();
                     for c in cmds {
@@ -709,7 +743,7 @@ mod v1_session {
         }
         sleep(Duration::from_secs(1)).await;
         let times: Vec<Instant> = droid
-            .writes_to(gatt::V1_COMMANDS)
+            .writes_to(v1g::V1_COMMANDS)
             .into_iter()
             .map(|(t, _)| t)
             .collect();

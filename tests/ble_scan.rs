@@ -6,7 +6,6 @@ use droidctl::link::ble::scan::{self, summarize};
 use droidctl::link::ble::{
     Advertisement, BleAddress, BleErrorKind, DeviceId, DeviceSelector, connect_link_with,
 };
-use droidctl::link::gatt::GattProfile;
 use droidctl::link::{Link, LinkEvent};
 use droidctl::model::Model;
 use std::sync::Arc;
@@ -60,7 +59,7 @@ fn central_with_droids() -> FakeCentral {
     ] {
         c.add_device(
             ad(name, last, rssi),
-            FakePeripheral::for_profile(&GattProfile::for_model(model)),
+            FakePeripheral::for_profile(&droidctl::family::gatt_profile(model)),
         );
     }
     c.advertise(ad("Headphones", 9, -30), Duration::ZERO);
@@ -71,9 +70,13 @@ fn central_with_droids() -> FakeCentral {
 async fn strongest_supported_droid_by_default() {
     let c = central_with_droids();
     let t0 = Instant::now();
-    let found = connect_link_with(Arc::new(c), &DeviceSelector::default())
-        .await
-        .unwrap();
+    let found = connect_link_with(
+        Arc::new(c),
+        &DeviceSelector::default(),
+        droidctl::family::gatt_profile,
+    )
+    .await
+    .unwrap();
     assert_eq!(t0.elapsed(), Duration::from_secs(5), "the full scan");
     assert_eq!(found.name, "BB-NEAR");
     assert_eq!(found.model, Model::BB8);
@@ -88,7 +91,7 @@ async fn by_name_stops_the_scan_early_and_connects() {
     let c = central_with_droids();
     c.add_device(
         ad("D2-LATE", 7, -90),
-        FakePeripheral::for_profile(&GattProfile::for_model(Model::R2D2)),
+        FakePeripheral::for_profile(&droidctl::family::gatt_profile(Model::R2D2)),
     );
     let sel = DeviceSelector {
         name: Some("d2-far0".into()),
@@ -96,7 +99,9 @@ async fn by_name_stops_the_scan_early_and_connects() {
         ..DeviceSelector::default()
     };
     let t0 = Instant::now();
-    let found = connect_link_with(Arc::new(c.clone()), &sel).await.unwrap();
+    let found = connect_link_with(Arc::new(c.clone()), &sel, droidctl::family::gatt_profile)
+        .await
+        .unwrap();
     assert!(t0.elapsed() < Duration::from_secs(1), "{:?}", t0.elapsed());
     assert_eq!(found.name, "D2-FAR0");
     let mut link = found.link;
@@ -117,14 +122,16 @@ async fn by_address_and_errors() {
         address: Some("E0:00:00:00:00:03".parse().unwrap()),
         ..DeviceSelector::default()
     };
-    let found = connect_link_with(Arc::new(c.clone()), &sel).await.unwrap();
+    let found = connect_link_with(Arc::new(c.clone()), &sel, droidctl::family::gatt_profile)
+        .await
+        .unwrap();
     assert_eq!(found.model, Model::R2Q5);
 
     let sel = DeviceSelector {
         name: Some("Headphones".into()),
         ..DeviceSelector::default()
     };
-    let e = connect_link_with(Arc::new(c.clone()), &sel)
+    let e = connect_link_with(Arc::new(c.clone()), &sel, droidctl::family::gatt_profile)
         .await
         .err()
         .unwrap();
@@ -132,10 +139,14 @@ async fn by_address_and_errors() {
     assert!(e.fatal());
 
     let empty = FakeCentral::new();
-    let e = connect_link_with(Arc::new(empty), &DeviceSelector::default())
-        .await
-        .err()
-        .unwrap();
+    let e = connect_link_with(
+        Arc::new(empty),
+        &DeviceSelector::default(),
+        droidctl::family::gatt_profile,
+    )
+    .await
+    .err()
+    .unwrap();
     assert_eq!(e.kind, BleErrorKind::NotFound);
     assert!(e.message.starts_with("no droid found in 5 s"), "{e}");
 }
@@ -158,8 +169,8 @@ async fn late_advertisers_are_heard_within_the_timeout() {
 async fn two_droids_with_one_address_are_two_droids() {
     let c = FakeCentral::new();
     let zero = Some(BleAddress::default());
-    let near = FakePeripheral::for_profile(&GattProfile::for_model(Model::R2D2));
-    let far = FakePeripheral::for_profile(&GattProfile::for_model(Model::R2D2));
+    let near = FakePeripheral::for_profile(&droidctl::family::gatt_profile(Model::R2D2));
+    let far = FakePeripheral::for_profile(&droidctl::family::gatt_profile(Model::R2D2));
     let near_id = DeviceId::new("8e5b5b4e-1234-4a6b-9c8d-0123456789ab", zero);
     let far_id = DeviceId::new("0f000000-5678-4a6b-9c8d-0123456789ab", zero);
     c.add_device_as(near_id.clone(), Some("D2-NEAR"), Some(-40), near.clone());
@@ -179,7 +190,9 @@ async fn two_droids_with_one_address_are_two_droids() {
         address: Some("0F000000-5678-4A6B-9C8D-0123456789AB".into()),
         ..DeviceSelector::default()
     };
-    let found = connect_link_with(Arc::new(c.clone()), &sel).await.unwrap();
+    let found = connect_link_with(Arc::new(c.clone()), &sel, droidctl::family::gatt_profile)
+        .await
+        .unwrap();
     assert_eq!(found.name, "D2-FAR0");
     assert_eq!(found.id, far_id);
     let mut link = found.link;
@@ -193,20 +206,24 @@ async fn two_droids_with_one_address_are_two_droids() {
 #[tokio::test(start_paused = true)]
 async fn remembered_droids_are_neither_listed_nor_picked() {
     let c = FakeCentral::new();
-    let asleep = FakePeripheral::for_profile(&GattProfile::for_model(Model::R2D2));
+    let asleep = FakePeripheral::for_profile(&droidctl::family::gatt_profile(Model::R2D2));
     asleep.hang_connect(true);
     c.remember(ad("D2-GONE", 1, -30), Some(asleep.clone()));
     c.add_device(
         ad("BB-HERE", 2, -70),
-        FakePeripheral::for_profile(&GattProfile::for_model(Model::BB8)),
+        FakePeripheral::for_profile(&droidctl::family::gatt_profile(Model::BB8)),
     );
     let heard = scan::scan(&c, Duration::from_secs(1), |_| false)
         .await
         .unwrap();
     assert_eq!(heard.len(), 1, "{heard:?}");
-    let found = connect_link_with(Arc::new(c.clone()), &DeviceSelector::default())
-        .await
-        .unwrap();
+    let found = connect_link_with(
+        Arc::new(c.clone()),
+        &DeviceSelector::default(),
+        droidctl::family::gatt_profile,
+    )
+    .await
+    .unwrap();
     assert_eq!(found.name, "BB-HERE");
     assert!(found.candidates.iter().all(|e| e.heard));
     for sel in [
@@ -220,7 +237,7 @@ async fn remembered_droids_are_neither_listed_nor_picked() {
         },
     ] {
         let t0 = Instant::now();
-        let e = connect_link_with(Arc::new(c.clone()), &sel)
+        let e = connect_link_with(Arc::new(c.clone()), &sel, droidctl::family::gatt_profile)
             .await
             .err()
             .unwrap();

@@ -170,8 +170,10 @@ mod btsnoop {
     use droidctl::capture::btsnoop::Datalink;
     use droidctl::capture::hci::build::Log;
     use droidctl::capture::{Capture, Event};
-    use droidctl::link::Endpoint;
-    use droidctl::link::gatt;
+    use droidctl::family::robi::gatt as robi;
+    use droidctl::family::v1::gatt as v1;
+    use droidctl::family::v2::gatt as v2;
+    use droidctl::gatt::Endpoint;
 
     const CONN: u16 = 0x0041;
 
@@ -184,15 +186,15 @@ mod btsnoop {
         let robi = c.header.family == Some(droidctl::model::Protocol::Rsrcp);
         let chars = if robi {
             vec![
-                (0x20, gatt::ROBI_HANDSHAKE),
-                (0x22, gatt::ROBI_FRAMES),
-                (0x30, gatt::ROBI_VELOCITY),
-                (0x32, gatt::ROBI_STEERING),
+                (0x20, robi::ROBI_HANDSHAKE),
+                (0x22, robi::ROBI_FRAMES),
+                (0x30, robi::ROBI_VELOCITY),
+                (0x32, robi::ROBI_STEERING),
             ]
         } else if c.header.family == Some(droidctl::model::Protocol::SpheroV1) {
-            vec![(0x0E, gatt::V1_COMMANDS), (0x10, gatt::V1_RESPONSES)]
+            vec![(0x0E, v1::V1_COMMANDS), (0x10, v1::V1_RESPONSES)]
         } else {
-            vec![(0x0E, gatt::V2_API)]
+            vec![(0x0E, v2::V2_API)]
         };
         let (write_h, notify_h) = (chars[0].0, chars[chars.len().min(2) - 1].0);
         let mut read_handshake = robi;

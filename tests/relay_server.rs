@@ -6,8 +6,8 @@
 //!
 //! Real time (TCP and paused clocks do not mix); every wait is bounded.
 
+use droidctl::family::v2::gatt::{V2_ANTI_DOS, V2_API, V2_UNLOCK};
 use droidctl::family::{self, Codec};
-use droidctl::link::gatt::{V2_ANTI_DOS, V2_API, V2_UNLOCK};
 use droidctl::link::remote::{RelayAddr, RemoteLink, RemoteSelector, select};
 use droidctl::model::Model;
 use droidctl::relay::backend::GattBackend;
@@ -140,7 +140,7 @@ async fn serve_forever(
 /// Wait until the fake droid's connection is gone, and return everything written to `ch`.
 async fn written_after_release(
     droid: &droidctl::link::ble::fake::FakePeripheral,
-    ch: droidctl::link::gatt::GattUuid,
+    ch: droidctl::gatt::GattUuid,
 ) -> Vec<u8> {
     let deadline = Instant::now() + WAIT;
     while droid.is_connected() {
@@ -316,7 +316,9 @@ async fn remote_link_drives_a_simulated_droid() {
         address: None,
         scan_timeout: Duration::from_secs(1),
     };
-    let link = select(&relay.relay_addr(), &sel).await.unwrap();
+    let link = select(&relay.relay_addr(), &sel, droidctl::family::gatt_profile)
+        .await
+        .unwrap();
     assert_eq!(link.model(), Model::R2D2);
     assert!(link.address().eq_ignore_ascii_case(&relay.address(0)));
     let session = session::start(Box::new(link), session_config(Model::R2D2));
@@ -372,7 +374,13 @@ async fn remote_link_reconnects_when_the_relay_drops_the_droid() {
         host: "127.0.0.1".into(),
         port,
     };
-    let link = RemoteLink::new(relay, sim.devices()[0].1.clone(), "D2-0001", Model::R2D2);
+    let link = RemoteLink::new(
+        relay,
+        sim.devices()[0].1.clone(),
+        "D2-0001",
+        Model::R2D2,
+        droidctl::family::gatt_profile(Model::R2D2),
+    );
     let session = session::start(Box::new(link), session_config(Model::R2D2));
     let mut states = session.watch_state();
     let saw_reconnecting = timeout(Duration::from_secs(5), async {
@@ -777,7 +785,13 @@ async fn soak_several_clients_one_killed() {
     // Three droidctl sessions through the relay link…
     let mut sessions = Vec::new();
     for (i, m) in models.iter().enumerate().skip(1) {
-        let link = RemoteLink::new(ra.clone(), relay.address(i), format!("droid {i}"), *m);
+        let link = RemoteLink::new(
+            ra.clone(),
+            relay.address(i),
+            format!("droid {i}"),
+            *m,
+            droidctl::family::gatt_profile(*m),
+        );
         sessions.push((i, *m, session::start(Box::new(link), session_config(*m))));
     }
     // …and one raw client that will be killed.
@@ -866,11 +880,10 @@ async fn soak_several_clients_one_killed() {
 async fn the_ble_backend_relays_gatt_operations() {
     use droidctl::link::ble::fake::{FakeCentral, FakeOp, FakePeripheral};
     use droidctl::link::ble::{Advertisement, BleAddress};
-    use droidctl::link::gatt::GattProfile;
     use droidctl::relay::ble_backend::BleBackend;
 
     let central = FakeCentral::new();
-    let droid = FakePeripheral::for_profile(&GattProfile::for_model(Model::R2D2));
+    let droid = FakePeripheral::for_profile(&droidctl::family::gatt_profile(Model::R2D2));
     let address = BleAddress([0xD2, 0, 0, 0, 0x1A, 0x2B]);
     central.add_device(
         Advertisement {
@@ -957,13 +970,13 @@ async fn the_ble_backend_relays_gatt_operations() {
 /// client goes: the family is read from its GATT table.
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_droid_without_a_known_name_is_stopped_by_its_family() {
+    use droidctl::family::v1::gatt::V1_COMMANDS;
     use droidctl::link::ble::fake::{FakeCentral, FakePeripheral};
     use droidctl::link::ble::{Advertisement, BleAddress};
-    use droidctl::link::gatt::{GattProfile, V1_COMMANDS};
     use droidctl::relay::ble_backend::BleBackend;
 
     let central = FakeCentral::new();
-    let droid = FakePeripheral::for_profile(&GattProfile::for_model(Model::BB8));
+    let droid = FakePeripheral::for_profile(&droidctl::family::gatt_profile(Model::BB8));
     central.add_device(
         Advertisement {
             address: BleAddress([0xBB, 8, 0, 0, 0, 1]),

@@ -4,8 +4,8 @@
 
 use droidctl::hex;
 use droidctl::protocol::rsrcp::{
-    self, Buttons, Efs, ErrorKind, Feature, Frame, FrameError, Framer, Handshake, Item, JSON_KEYS,
-    Leds, MAX_FRAME_LEN, Motors, Piezo, decode_frame, decode_handshake, frame_delta, frame_gap,
+    Buttons, Efs, ErrorKind, Feature, Frame, FrameError, Framer, Handshake, Item, JSON_KEYS, Leds,
+    MAX_FRAME_LEN, Motors, Piezo, decode_frame, decode_handshake, frame_delta, frame_gap,
     steering_byte, to_json, velocity_byte, wheel_speeds,
 };
 use serde_json::json;
@@ -576,12 +576,15 @@ fn remote_control_bytes_and_mix() {
 
 #[test]
 fn gatt_uuids_are_the_facts_sheets() {
-    let short = |u: droidctl::link::gatt::GattUuid| u.as_u16().unwrap();
-    assert_eq!(short(rsrcp::ROBI_RSRC_SERVICE), 0x2579);
-    assert_eq!(short(rsrcp::ROBI_FRAMES), 0x8765);
-    assert_eq!(short(rsrcp::ROBI_HANDSHAKE), 0x4744);
-    assert_eq!(short(rsrcp::ROBI_START), 0x4234);
-    assert_eq!(short(rsrcp::ROBI_RC_SERVICE), 0xBA73);
-    assert_eq!(short(rsrcp::ROBI_VELOCITY), 0x6B2F);
-    assert_eq!(short(rsrcp::ROBI_STEERING), 0x3F4A);
+    let short = |u: droidctl::gatt::GattUuid| u.as_u16().unwrap();
+    assert_eq!(
+        short(droidctl::family::robi::gatt::ROBI_RSRC_SERVICE),
+        0x2579
+    );
+    assert_eq!(short(droidctl::family::robi::gatt::ROBI_FRAMES), 0x8765);
+    assert_eq!(short(droidctl::family::robi::gatt::ROBI_HANDSHAKE), 0x4744);
+    assert_eq!(short(droidctl::family::robi::gatt::ROBI_START), 0x4234);
+    assert_eq!(short(droidctl::family::robi::gatt::ROBI_RC_SERVICE), 0xBA73);
+    assert_eq!(short(droidctl::family::robi::gatt::ROBI_VELOCITY), 0x6B2F);
+    assert_eq!(short(droidctl::family::robi::gatt::ROBI_STEERING), 0x3F4A);
 }

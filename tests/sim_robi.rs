@@ -6,7 +6,7 @@
 //! latest-wins, a dropped link that stops the robot and resumes at speed 0).
 
 use droidctl::family::{Command as AnyCommand, Packet, RobiControl, RobiPacket};
-use droidctl::link::Endpoint;
+use droidctl::gatt::Endpoint;
 use droidctl::model::{Model, Protocol};
 use droidctl::protocol::notify::Notification;
 use droidctl::protocol::rsrcp::{self, Buttons, Efs, Frame, Handshake};

@@ -1,10 +1,10 @@
 //! A virtual droid's trace (`sim --bluez --trace --json`) carries, for every packet, exactly
 //! the object `droidctl packet decode --json` prints: both come from the family's reader.
 
+use droidctl::family::robi::gatt::{ROBI_FRAMES, ROBI_HANDSHAKE, ROBI_VELOCITY};
+use droidctl::family::v1::gatt::{V1_COMMANDS, V1_RESPONSES};
+use droidctl::family::v2::gatt::V2_API;
 use droidctl::hex;
-use droidctl::link::gatt::{
-    ROBI_FRAMES, ROBI_HANDSHAKE, ROBI_VELOCITY, V1_COMMANDS, V1_RESPONSES, V2_API,
-};
 use droidctl::model::Model;
 use droidctl::protocol::v2::wire::DriveFlags;
 use droidctl::protocol::{v1, v2};

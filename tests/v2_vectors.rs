@@ -276,10 +276,7 @@ fn golden_vectors_describe() {
     assert_eq!(d.problem, None);
 
     let d = describe(&v[2].packet, None);
-    assert_eq!(
-        (d.kind, d.name),
-        (Kind::Command, Some("set-head-position"))
-    );
+    assert_eq!((d.kind, d.name), (Kind::Command, Some("set-head-position")));
     assert_eq!(d.fields, Some(vec![("degrees", float(0.5))]));
 
     let d = describe(&v[3].packet, None);

@@ -1,7 +1,7 @@
 //! From HCI snoop records to the droid's traffic: HCI packets (H1, H4 or the Linux monitor
 //! format), ACL fragments reassembled into L2CAP PDUs, the ATT channel's writes, write
 //! commands, notifications, indications and reads, and the GATT discovery that says which
-//! ATT handle is which of the droid's characteristics ([`crate::link::gatt`]). Out come the
+//! ATT handle is which of the droid's characteristics (the families' GATT profiles, [`crate::family::Family::gatt_profile`]). Out come the
 //! same timed [`Event`]s as a droidctl capture: connects, chunks out and in, disconnects.
 //!
 //! Handles are per connection; a phone that reconnects often skips the discovery, so a
@@ -10,8 +10,7 @@
 
 use super::btsnoop::{self, Datalink, Record};
 use super::{Capture, Event, Header, Timed};
-use crate::link::Endpoint;
-use crate::link::gatt::{self, GattUuid};
+use crate::gatt::{CharRole, Endpoint, GattUuid};
 use crate::model::Protocol;
 use std::collections::{BTreeMap, HashMap};
 use std::time::Duration;
@@ -21,17 +20,12 @@ pub const ATT_CID: u16 = 0x0004;
 /// The GATT characteristic declaration type.
 pub const CHARACTERISTIC: u16 = 0x2803;
 
-/// What an ATT handle is to droidctl.
+/// What an ATT handle is to droidctl: a characteristic's role in its family's GATT profile,
+/// or a handle given with `--handle`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Role {
-    /// A command channel: writes are the host's bytes, notifications the droid's.
-    Channel(Protocol),
-    /// Read while connecting (Robi's handshake): the value read is the droid's.
-    ReadValue(Protocol),
-    /// A one-byte input (Robi's velocity and steering).
-    Input(Endpoint),
-    /// A connection-setup characteristic (anti-DoS unlock, wake, start): shown as a note.
-    Setup(&'static str, Protocol),
+    /// A characteristic of a family's droids.
+    Of(Protocol, CharRole),
     /// Given with `--handle`: writes out, notifications in, family from the bytes.
     Given,
 }
@@ -39,8 +33,7 @@ pub enum Role {
 impl Role {
     pub fn family(self) -> Option<Protocol> {
         match self {
-            Role::Channel(p) | Role::ReadValue(p) | Role::Setup(_, p) => Some(p),
-            Role::Input(_) => Some(Protocol::Rsrcp),
+            Role::Of(p, _) => Some(p),
             Role::Given => None,
         }
     }
@@ -48,21 +41,7 @@ impl Role {
 
 /// The role of a characteristic UUID, if it is one of the droids'.
 pub fn role_of(uuid: GattUuid) -> Option<Role> {
-    use Protocol::*;
-    Some(match uuid {
-        u if u == gatt::V2_API => Role::Channel(SpheroV2),
-        u if u == gatt::V2_ANTI_DOS => Role::Setup("v2 anti-DoS unlock", SpheroV2),
-        u if u == gatt::V1_COMMANDS || u == gatt::V1_RESPONSES => Role::Channel(SpheroV1),
-        u if u == gatt::V1_ANTI_DOS => Role::Setup("v1 anti-DoS unlock", SpheroV1),
-        u if u == gatt::V1_TX_POWER => Role::Setup("v1 TX power", SpheroV1),
-        u if u == gatt::V1_WAKE => Role::Setup("v1 wake", SpheroV1),
-        u if u == gatt::ROBI_FRAMES => Role::Channel(Rsrcp),
-        u if u == gatt::ROBI_HANDSHAKE => Role::ReadValue(Rsrcp),
-        u if u == gatt::ROBI_START => Role::Setup("Robi start", Rsrcp),
-        u if u == gatt::ROBI_VELOCITY => Role::Input(Endpoint::Velocity),
-        u if u == gatt::ROBI_STEERING => Role::Input(Endpoint::Steering),
-        _ => return None,
-    })
+    crate::family::role_of(uuid).map(|(f, r)| Role::Of(f.protocol(), r))
 }
 
 /// A UUID as ATT carries it: 2 or 16 bytes, little-endian.
@@ -368,11 +347,16 @@ impl Decoder {
             }
             return;
         };
+        let role = match role {
+            Role::Of(_, r) => r,
+            // A handle given by hand is read as a command channel.
+            Role::Given => CharRole::Channel,
+        };
         let event = match (role, write) {
-            (Role::Channel(_) | Role::Given, true) => Event::Out(Endpoint::Api, v.to_vec()),
-            (Role::Channel(_) | Role::Given | Role::ReadValue(_), false) => Event::In(v.to_vec()),
-            (Role::Input(e), true) => Event::Out(e, v.to_vec()),
-            (Role::Setup(name, _), _) => {
+            (CharRole::Channel, true) => Event::Out(Endpoint::Api, v.to_vec()),
+            (CharRole::Channel | CharRole::ReadValue, false) => Event::In(v.to_vec()),
+            (CharRole::Input(e), true) => Event::Out(e, v.to_vec()),
+            (CharRole::Setup(name), _) => {
                 let shown = if v.iter().all(|b| b.is_ascii_graphic()) && !v.is_empty() {
                     format!("{:?}", String::from_utf8_lossy(v))
                 } else {
@@ -383,7 +367,7 @@ impl Decoder {
                     if write { "wrote" } else { "read" }
                 ))
             }
-            (Role::ReadValue(_) | Role::Input(_), _) => return,
+            (CharRole::ReadValue | CharRole::Input(_), _) => return,
         };
         self.stats.droid_values += 1;
         let c = self.conns.entry(conn).or_default();
@@ -727,6 +711,9 @@ pub mod build {
 mod tests {
     use super::build::{Log, Way};
     use super::*;
+    use crate::family::robi::gatt as robig;
+    use crate::family::v1::gatt as v1g;
+    use crate::family::v2::gatt as v2g;
     use crate::protocol::v2::{ErrorCode, Packet, cmd};
 
     const CONN: u16 = 0x0040;
@@ -737,8 +724,8 @@ mod tests {
         let mut log = Log::new(datalink);
         log.le_connected(CONN);
         log.advance(50);
-        log.declare(CONN, &[(API, gatt::V2_API), (DOS, gatt::V2_ANTI_DOS)]);
-        log.write_req(CONN, DOS, gatt::V2_UNLOCK);
+        log.declare(CONN, &[(API, v2g::V2_API), (DOS, v2g::V2_ANTI_DOS)]);
+        log.write_req(CONN, DOS, v2g::V2_UNLOCK);
         log.advance(10);
         // A 20-byte-plus command cut into ACL fragments.
         let wake = cmd::wake().to_packet(0).encode();
@@ -777,7 +764,7 @@ mod tests {
         for mtu in [5, 9, 27, 251] {
             let mut log = Log::new(Datalink::H4);
             log.acl_mtu = mtu;
-            log.declare(CONN, &[(API, gatt::V2_API)]);
+            log.declare(CONN, &[(API, v2g::V2_API)]);
             let long = cmd::set_all_leds_with_16_bit_mask(
                 crate::protocol::v2::wire::Mask(0xFFFF),
                 crate::protocol::v2::wire::Bytes(vec![0x8D; 16]),
@@ -799,7 +786,7 @@ mod tests {
         let mut log = Log::new(Datalink::H4);
         // Find Information response, 128-bit format: the v1 characteristics.
         let mut rsp = vec![0x05, 0x02];
-        for (h, u) in [(0x0E, gatt::V1_COMMANDS), (0x10, gatt::V1_RESPONSES)] {
+        for (h, u) in [(0x0E, v1g::V1_COMMANDS), (0x10, v1g::V1_RESPONSES)] {
             rsp.extend((h as u16).to_le_bytes());
             rsp.extend(u.as_u128().to_le_bytes());
         }
@@ -828,10 +815,10 @@ mod tests {
         log.declare(
             CONN,
             &[
-                (0x20, gatt::ROBI_HANDSHAKE),
-                (0x22, gatt::ROBI_FRAMES),
-                (0x30, gatt::ROBI_VELOCITY),
-                (0x32, gatt::ROBI_STEERING),
+                (0x20, robig::ROBI_HANDSHAKE),
+                (0x22, robig::ROBI_FRAMES),
+                (0x30, robig::ROBI_VELOCITY),
+                (0x32, robig::ROBI_STEERING),
             ],
         );
         log.read(CONN, 0x20, &[0x7E, 0x01, 0x00, 0x0A, 0x7F]);
@@ -866,7 +853,7 @@ mod tests {
         // A malformed ACL length is skipped with a warning.
         let mut log = Log::new(Datalink::H4);
         log.hci(2, Way::Received, &[0x40, 0x20, 0xFF, 0x00, 1, 2]);
-        log.declare(CONN, &[(API, gatt::V2_API)]);
+        log.declare(CONN, &[(API, v2g::V2_API)]);
         log.notify(CONN, API, &[0x8D]);
         let c = capture_from_btsnoop(&log.bytes, &[]).unwrap();
         assert!(

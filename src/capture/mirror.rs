@@ -10,7 +10,7 @@
 
 use super::{Event, Timed};
 use crate::family::{Codec, Command, Family, Incoming, Key, Packet, Reader, Side};
-use crate::link::Endpoint;
+use crate::gatt::Endpoint;
 use crate::model::Model;
 use crate::protocol::notify::Notification;
 use crate::protocol::wire::{LegAction, LegState};

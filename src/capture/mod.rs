@@ -49,7 +49,7 @@ pub mod hci;
 pub mod mirror;
 pub mod replay;
 
-use crate::link::Endpoint;
+use crate::gatt::Endpoint;
 use crate::model::{Model, Protocol};
 use std::fmt::Write as _;
 use std::time::Duration;

@@ -97,7 +97,7 @@ pub async fn connect(
             scan_timeout.as_secs()
         );
     }
-    let mut found = connect_link(&sel)
+    let mut found = connect_link(&sel, crate::family::gatt_profile)
         .await
         .map_err(|e| CliError::failure(e.message))?;
     let drivable: Vec<&ScanEntry> = found
@@ -124,7 +124,7 @@ pub async fn connect(
             address: Some(choice.key().to_string()),
             scan_timeout,
         };
-        found = connect_link(&sel)
+        found = connect_link(&sel, crate::family::gatt_profile)
             .await
             .map_err(|e| CliError::failure(e.message))?;
     }
@@ -174,7 +174,7 @@ pub async fn connect_remote(
         address,
         scan_timeout,
     };
-    let link = select(relay, &sel)
+    let link = select(relay, &sel, crate::family::gatt_profile)
         .await
         .map_err(|e| CliError::failure(e.message))?;
     let profile = link.profile().clone();

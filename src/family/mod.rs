@@ -52,9 +52,9 @@ pub trait Codec: Send {
         cmd: &Command,
         seq: u8,
         want_response: bool,
-    ) -> (Vec<(crate::link::Endpoint, Vec<u8>)>, Packet) {
+    ) -> (Vec<(crate::gatt::Endpoint, Vec<u8>)>, Packet) {
         let (wire, packet) = self.encode(cmd, seq, want_response);
-        (vec![(crate::link::Endpoint::Api, wire)], packet)
+        (vec![(crate::gatt::Endpoint::Api, wire)], packet)
     }
     /// Whether the droid answers commands at all (Robi 42 only reports its state).
     fn answers(&self) -> bool {
@@ -91,6 +91,9 @@ pub trait Family: Sync {
     /// A reader told nothing but the side (and whether values come whole), as captures and
     /// traces read: it cannot fail.
     fn side_reader(&self, side: Side, whole_values: bool) -> Box<dyn Reader>;
+    /// The GATT profile of `model` (one of the family's): what a link writes, reads and
+    /// subscribes to, and the handshake that unlocks the droid.
+    fn gatt_profile(&self, model: Model) -> crate::gatt::GattProfile;
     /// `packet encode`: the wire bytes of the packet `name` with `--key value` parameters.
     fn encode_named(&self, name: &str, params: Vec<(String, String)>) -> Result<Vec<u8>, String>;
     /// `packet list`: the catalogue, names containing `filter` only.
@@ -201,10 +204,10 @@ pub fn detect(bytes: &[u8]) -> Option<(&'static dyn Family, usize)> {
 /// The family of bytes seen on a link: a write to one of a family's own inputs (Robi's remote
 /// control) names it; otherwise the first byte, a start of packet, does. `to` is where the
 /// host wrote them, `None` for what the droid sent.
-pub fn of_traffic(to: Option<crate::link::Endpoint>, bytes: &[u8]) -> Option<&'static dyn Family> {
+pub fn of_traffic(to: Option<crate::gatt::Endpoint>, bytes: &[u8]) -> Option<&'static dyn Family> {
     match to {
-        Some(e) if e != crate::link::Endpoint::Api => all().into_iter().find(|f| {
-            crate::link::gatt::GattProfile::for_model(f.representative())
+        Some(e) if e != crate::gatt::Endpoint::Api => all().into_iter().find(|f| {
+            f.gatt_profile(f.representative())
                 .inputs
                 .iter()
                 .any(|(input, _)| *input == e)
@@ -214,6 +217,22 @@ pub fn of_traffic(to: Option<crate::link::Endpoint>, bytes: &[u8]) -> Option<&'s
             all().into_iter().find(|f| f.sop() == first)
         }
     }
+}
+
+/// The GATT profile of `model`, from its family.
+pub fn gatt_profile(model: Model) -> crate::gatt::GattProfile {
+    for_model(model).gatt_profile(model)
+}
+
+/// The family whose droids have the characteristic `uuid`, and what it is to them.
+pub fn role_of(
+    uuid: crate::gatt::GattUuid,
+) -> Option<(&'static dyn Family, crate::gatt::CharRole)> {
+    all().into_iter().find_map(|f| {
+        f.gatt_profile(f.representative())
+            .role_of(uuid)
+            .map(|r| (f, r))
+    })
 }
 
 /// The family a model speaks.

@@ -9,7 +9,7 @@
 //! serialized straight into the caller's buffer.
 
 use super::{DecodeError, Packet};
-use crate::link::Endpoint;
+use crate::gatt::Endpoint;
 use crate::protocol::decode::{DecodeStats, ErrorKind};
 use std::io;
 

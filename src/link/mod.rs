@@ -6,10 +6,10 @@
 
 pub mod backoff;
 pub mod ble;
-pub mod gatt;
 pub mod record;
 pub mod remote;
 
+use crate::gatt::Endpoint;
 use futures_util::future::BoxFuture;
 use std::fmt;
 use tokio::sync::mpsc;
@@ -58,29 +58,6 @@ pub enum LinkEvent {
     Data(Vec<u8>),
     /// The connection is gone; the reason is for people.
     Disconnected(String),
-}
-
-/// Where a write goes. Sphero droids take everything on one command channel; Robi 42 is
-/// driven through two one-byte remote-control inputs beside its (read-only) state frames.
-/// The droid's GATT profile maps each endpoint to a characteristic.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum Endpoint {
-    /// The command channel (Sphero API v1/v2).
-    Api,
-    /// Robi 42 remote control: velocity, 0..=255 = 0..1, forward only.
-    Velocity,
-    /// Robi 42 remote control: steering, 0..=255, 128 ≈ straight.
-    Steering,
-}
-
-impl Endpoint {
-    pub fn name(self) -> &'static str {
-        match self {
-            Endpoint::Api => "api",
-            Endpoint::Velocity => "velocity",
-            Endpoint::Steering => "steering",
-        }
-    }
 }
 
 /// The writing half of an open connection.

@@ -11,8 +11,9 @@
 //! frame interval) is skipped with a warning. The start confirmation is still written, so
 //! the frames flow; only the announced interval is unknown.
 
-use crate::link::gatt::{GattProfile, GattUuid, HandshakeStep};
-use crate::link::{Connection, Endpoint, Link, LinkError, LinkEvent, LinkWriter};
+use crate::gatt::Endpoint;
+use crate::gatt::{GattProfile, GattUuid, HandshakeStep};
+use crate::link::{Connection, Link, LinkError, LinkEvent, LinkWriter};
 use crate::model::Model;
 use crate::relay::backend::parse_uuid;
 use crate::relay::protocol::{DEFAULT_PORT, Device, Limits, Reply, ReplyDecoder, Request};
@@ -546,8 +547,13 @@ pub struct RemoteSelector {
     pub scan_timeout: Duration,
 }
 
-/// Find the droid `sel` asks for behind `relay` and build the link to it (not connected yet).
-pub async fn select(relay: &RelayAddr, sel: &RemoteSelector) -> Result<RemoteLink, LinkError> {
+/// Find the droid `sel` asks for behind `relay` and build the link to it (not connected yet),
+/// with the GATT profile `profile_of` gives for its model.
+pub async fn select(
+    relay: &RelayAddr,
+    sel: &RemoteSelector,
+    profile_of: fn(Model) -> GattProfile,
+) -> Result<RemoteLink, LinkError> {
     let secs = sel.scan_timeout.as_secs_f64();
     let mut chosen = None;
     if let (Some(name), None) = (&sel.name, &sel.address) {
@@ -575,6 +581,7 @@ pub async fn select(relay: &RelayAddr, sel: &RemoteSelector) -> Result<RemoteLin
         chosen.address,
         chosen.name,
         model,
+        profile_of(model),
     ))
 }
 
@@ -645,20 +652,21 @@ pub struct RemoteLink {
 }
 
 impl RemoteLink {
-    /// The droid at `address` (as the relay names it) behind `relay`, speaking `model`'s
-    /// profile.
+    /// The droid at `address` (as the relay names it) behind `relay`, a `model` speaking
+    /// `profile`.
     pub fn new(
         relay: RelayAddr,
         address: impl Into<String>,
         name: impl Into<String>,
         model: Model,
+        profile: GattProfile,
     ) -> Self {
         RemoteLink {
             relay,
             address: address.into(),
             name: name.into(),
             model,
-            profile: GattProfile::for_model(model),
+            profile,
             timeouts: RemoteTimeouts::default(),
             warned_read: false,
         }
@@ -699,7 +707,7 @@ impl RemoteLink {
                 .map_err(|e| fail("the relay could not connect to", e))?;
             for step in &self.profile.handshake {
                 match step {
-                    HandshakeStep::Write { ch, bytes } => {
+                    HandshakeStep::Write { ch, bytes, .. } => {
                         let uuid = ch.characteristic.to_string();
                         let data = bytes.clone();
                         client

@@ -6,7 +6,7 @@
 //! ([`crate::link::ble::BleCentral`]), and [`super::sim_backend::SimBackend`] over simulated
 //! droids at the GATT level ([`crate::sim::gatt::GattDroid`]). Tests add their own fakes.
 
-use crate::link::gatt::GattUuid;
+use crate::gatt::GattUuid;
 use crate::model::Model;
 use futures_util::future::BoxFuture;
 use std::fmt;
@@ -131,7 +131,8 @@ pub fn parse_uuid(s: &str) -> Option<GattUuid> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::link::gatt::{ROBI_FRAMES, V2_API};
+    use crate::family::robi::gatt::ROBI_FRAMES;
+    use crate::family::v2::gatt::V2_API;
 
     #[test]
     fn uuids_parse_in_every_form() {

@@ -4,11 +4,11 @@
 use super::backend::{
     BackendDevice, BackendError, Connected, DroidEvent, GattBackend, GattConnection,
 };
+use crate::gatt::{CharRef, GattUuid};
 use crate::link::ble::{
     BleAddress, BleCentral, BleErrorKind, BlePeripheral, DiscoveredChar, PeripheralEvent,
     ScanEntry, scan,
 };
-use crate::link::gatt::{CharRef, GattUuid, ROBI_VELOCITY, V1_COMMANDS, V2_API};
 use crate::model::Model;
 use futures_util::StreamExt;
 use futures_util::future::BoxFuture;
@@ -212,16 +212,15 @@ impl GattBackend for BleBackend {
 /// A model of the family whose command characteristic the device has (each family's stop
 /// command is the same for all its models).
 fn family_of(chars: &[DiscoveredChar]) -> Option<Model> {
-    let has = |c: GattUuid| chars.iter().any(|d| d.characteristic == c);
-    if has(V2_API) {
-        Some(Model::R2D2)
-    } else if has(V1_COMMANDS) {
-        Some(Model::BB8)
-    } else if has(ROBI_VELOCITY) {
-        Some(Model::Robi42)
-    } else {
-        None
-    }
+    crate::family::all()
+        .into_iter()
+        .find(|f| {
+            let write = f.gatt_profile(f.representative()).write;
+            chars
+                .iter()
+                .any(|d| write.matches(d.service, d.characteristic))
+        })
+        .map(|f| f.representative())
 }
 
 struct BleConnection {

@@ -11,8 +11,8 @@ use super::backend::{
     BackendDevice, BackendError, Connected, DroidEvent, GattBackend, GattConnection,
 };
 use crate::capture::Event;
-use crate::link::Endpoint;
-use crate::link::gatt::{GattProfile, GattUuid};
+use crate::gatt::Endpoint;
+use crate::gatt::{GattProfile, GattUuid};
 use crate::link::record::Recorder;
 use futures_util::future::BoxFuture;
 use std::path::{Path, PathBuf};
@@ -96,7 +96,7 @@ impl GattBackend for RecordingBackend {
             };
             rec.start(&Recorder::header_for(model, &c.name));
             rec.record(Event::Connect);
-            let profile = GattProfile::for_model(model);
+            let profile = crate::family::gatt_profile(model);
             let (tx, rx) = mpsc::channel(1024);
             tokio::spawn(forward(c.events, tx, rec.clone(), profile.clone()));
             Ok(Connected {

@@ -16,7 +16,7 @@
 
 use super::backend::{Connected, DroidEvent, GattBackend, GattConnection, parse_uuid};
 use super::protocol::{Device, Limits, Reply, Request, RequestDecoder};
-use crate::link::gatt::{GattProfile, GattUuid};
+use crate::gatt::GattUuid;
 use crate::model::Model;
 use serde::Serialize;
 use std::collections::HashMap;
@@ -795,7 +795,7 @@ pub async fn stop(conn: &mut dyn GattConnection, model: Model, op: Duration) -> 
     let family = crate::family::for_model(model);
     let cmd = family.stop_after(None);
     let (writes, _) = family.codec().encode_writes(&cmd, 0, false);
-    let profile = GattProfile::for_model(model);
+    let profile = crate::family::gatt_profile(model);
     let mut ok = true;
     for (endpoint, bytes) in writes {
         let Some(ch) = profile.endpoint(endpoint) else {

@@ -6,7 +6,7 @@
 use super::backend::{
     BackendDevice, BackendError, Connected, DroidEvent, GattBackend, GattConnection,
 };
-use crate::link::gatt::GattUuid;
+use crate::gatt::GattUuid;
 use crate::model::Model;
 use crate::sim::gatt::{GattDroid, GattEvent, GattFaults};
 use crate::sim::{SimConfig, SimState};

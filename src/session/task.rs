@@ -6,7 +6,8 @@ use super::{
     lock,
 };
 use crate::family::{Codec, Command, Family, Incoming, Key, Packet};
-use crate::link::{Connection, Endpoint, Link, LinkEvent};
+use crate::gatt::Endpoint;
+use crate::link::{Connection, Link, LinkEvent};
 use crate::protocol::notify::Notification;
 use std::collections::{HashMap, VecDeque};
 use std::sync::Arc;

@@ -21,19 +21,13 @@
 //! starts locked again. One connection at a time, as the droids have.
 
 use super::{SimConfig, SimRobi, SimState, WireDroid, wire_droid};
-use crate::link::Endpoint;
-use crate::link::gatt::{
-    ATT_PAYLOAD, CharRef, GattProfile, GattUuid, HandshakeStep, V2_ANTI_DOS, V2_SERVICE,
-};
+use crate::family::v2::gatt::V2_SERVICE;
+use crate::gatt::Endpoint;
+use crate::gatt::{ATT_PAYLOAD, CharRef, GattProfile, GattUuid, HandshakeStep};
 use crate::model::{Model, Protocol};
 use std::collections::VecDeque;
 use std::fmt;
 use std::time::Duration;
-
-/// The service the v2 anti-DoS characteristic sits in on the droids (the profile matches on
-/// the characteristic alone; a GATT table needs a service for it).
-pub const V2_ANTI_DOS_SERVICE: GattUuid =
-    GattUuid::from_u128(0x0002_0001_574f_4f20_5370_6865_726f_2121);
 
 /// The longest value one write may carry (the ATT limit for an attribute value).
 pub const MAX_WRITE: usize = 512;
@@ -89,7 +83,7 @@ pub struct ServiceDef {
 /// The GATT table of `model`, as its profile describes it: every characteristic the profile
 /// writes, reads or subscribes to, in the service it lives in.
 pub fn gatt_table(model: Model) -> Vec<ServiceDef> {
-    let profile = GattProfile::for_model(model);
+    let profile = crate::family::gatt_profile(model);
     let writable = CharFlags::WRITE | CharFlags::WRITE_WITHOUT_RESPONSE;
     let mut chars: Vec<(CharRef, CharFlags)> = Vec::new();
     let mut add = |c: CharRef, f: CharFlags| match chars
@@ -114,10 +108,7 @@ pub fn gatt_table(model: Model) -> Vec<ServiceDef> {
     }
     let mut table: Vec<ServiceDef> = Vec::new();
     for (c, flags) in chars {
-        let service = c.service.unwrap_or(match model.protocol() {
-            Protocol::SpheroV2 if c.characteristic == V2_ANTI_DOS => V2_ANTI_DOS_SERVICE,
-            _ => profile.service,
-        });
+        let service = c.home(profile.service);
         let def = CharDef {
             uuid: c.characteristic,
             flags,
@@ -342,7 +333,7 @@ pub struct GattDroid {
 
 impl GattDroid {
     pub fn new(model: Model, cfg: SimConfig, faults: GattFaults) -> Self {
-        let profile = GattProfile::for_model(model);
+        let profile = crate::family::gatt_profile(model);
         let readable = profile
             .handshake
             .iter()
@@ -364,7 +355,7 @@ impl GattDroid {
             .handshake
             .iter()
             .filter_map(|s| match s {
-                HandshakeStep::Write { ch, bytes } => Some((ch.characteristic, bytes.clone())),
+                HandshakeStep::Write { ch, bytes, .. } => Some((ch.characteristic, bytes.clone())),
                 HandshakeStep::Read { .. } => None,
             })
             .collect();
@@ -705,10 +696,9 @@ impl GattDroid {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::link::gatt::{
-        ROBI_FRAMES, ROBI_HANDSHAKE, ROBI_START, ROBI_VELOCITY, V1_ANTI_DOS, V1_COMMANDS,
-        V1_TX_POWER, V1_WAKE, V2_API, V2_UNLOCK,
-    };
+    use crate::family::robi::gatt::{ROBI_FRAMES, ROBI_HANDSHAKE, ROBI_START, ROBI_VELOCITY};
+    use crate::family::v1::gatt::{V1_ANTI_DOS, V1_COMMANDS, V1_TX_POWER, V1_WAKE};
+    use crate::family::v2::gatt::{V2_ANTI_DOS, V2_ANTI_DOS_SERVICE, V2_API, V2_UNLOCK};
     use crate::protocol::v2::{Decoder, Packet, cmd};
 
     const MS: Duration = Duration::from_millis(1);
@@ -758,7 +748,7 @@ mod tests {
     fn tables_hold_every_profile_characteristic() {
         for model in Model::ALL {
             let table = gatt_table(model);
-            let profile = GattProfile::for_model(model);
+            let profile = crate::family::gatt_profile(model);
             for c in profile.characteristics() {
                 assert!(
                     table

@@ -2,7 +2,8 @@
 //! droid's bytes in pieces of at most 20 bytes, with the configured faults, on tokio time.
 
 use super::{Faults, SimConfig, SimState, WireDroid, wire_droid};
-use crate::link::{Connection, Endpoint, Link, LinkError, LinkEvent, LinkWriter};
+use crate::gatt::Endpoint;
+use crate::link::{Connection, Link, LinkError, LinkEvent, LinkWriter};
 use crate::model::Model;
 use crate::rng::Rng;
 use futures_util::future::BoxFuture;

@@ -114,7 +114,7 @@ pub fn wire_droid(model: Model, cfg: SimConfig) -> Box<dyn WireDroid> {
 pub use faults::Faults;
 pub use link::SimLink;
 
-use crate::link::Endpoint;
+use crate::gatt::Endpoint;
 use crate::model::{Model, Protocol};
 use std::time::Duration;
 

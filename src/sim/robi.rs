@@ -12,7 +12,7 @@
 
 use super::SimConfig;
 use super::body::{Body, SimState};
-use crate::link::Endpoint;
+use crate::gatt::Endpoint;
 use crate::model::Model;
 use crate::protocol::rsrcp::{self, Buttons, Frame, Handshake};
 use std::time::Duration;

@@ -14,8 +14,8 @@
 //! (the family's reader writes both, so the two cannot drift apart) and a one-line text.
 
 use crate::family::{self, Found, Reader, Side};
+use crate::gatt::{GattUuid, HandshakeStep};
 use crate::hex;
-use crate::link::gatt::{GattProfile, GattUuid, HandshakeStep};
 use crate::model::Model;
 use serde::Serialize;
 
@@ -93,7 +93,7 @@ pub struct PacketTracer {
 
 impl PacketTracer {
     pub fn new(model: Model) -> PacketTracer {
-        let profile = GattProfile::for_model(model);
+        let profile = crate::family::gatt_profile(model);
         let f = family::for_model(model);
         PacketTracer {
             model,
@@ -193,7 +193,8 @@ fn shown_hex(bytes: &[u8]) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::link::gatt::{V1_ANTI_DOS, V1_COMMANDS, V1_RESPONSES, V2_ANTI_DOS, V2_API};
+    use crate::family::v1::gatt::{V1_ANTI_DOS, V1_COMMANDS, V1_RESPONSES};
+    use crate::family::v2::gatt::{V2_ANTI_DOS, V2_API};
     use crate::protocol::v2::wire::DriveFlags;
     use crate::protocol::{v1, v2};
     use crate::units::Heading;

@@ -7,6 +7,7 @@
 //! capabilities are few: drive forward and steer; no reverse, heading, dome, legs, lights,
 //! sounds or battery reading.
 
+pub mod gatt;
 pub mod named;
 pub mod read;
 
@@ -15,7 +16,7 @@ use super::{
     Codec, Command, Explained, Family, Incoming, Key, Packet, PacketKind, ReadOption, ReadOptions,
     Reader,
 };
-use crate::link::Endpoint;
+use crate::gatt::Endpoint;
 use crate::model::{Model, Protocol};
 use crate::protocol::decode::ErrorKind;
 use crate::protocol::notify::Notification;
@@ -195,6 +196,10 @@ impl Family for Robi {
             ..ReadOptions::default()
         };
         Box::new(read::RobiReader::new(&opts))
+    }
+
+    fn gatt_profile(&self, model: Model) -> crate::gatt::GattProfile {
+        gatt::profile(model)
     }
 
     fn encode_named(&self, name: &str, params: Vec<(String, String)>) -> Result<Vec<u8>, String> {

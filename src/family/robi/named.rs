@@ -4,13 +4,15 @@
 //! robot through the remote-control service's two one-byte characteristics, which carry no
 //! packets.
 
+use super::gatt::{
+    ROBI_FRAMES, ROBI_HANDSHAKE, ROBI_RC_SERVICE, ROBI_RSRC_SERVICE, ROBI_START, ROBI_STEERING,
+    ROBI_VELOCITY,
+};
 use crate::family::named::{keep, uint_opt};
-use crate::link::gatt::GattUuid;
+use crate::gatt::GattUuid;
 use crate::protocol::rsrcp::frame::{MOTOR_LIMIT_RAD_S, PIEZO_MAX_HZ};
 use crate::protocol::rsrcp::{
-    Buttons, FRAME_ID_MASK, Feature, Frame, Handshake, Leds, ROBI_FRAMES, ROBI_HANDSHAKE,
-    ROBI_RC_SERVICE, ROBI_RSRC_SERVICE, ROBI_START, ROBI_STEERING, ROBI_VELOCITY,
-    STEERING_STRAIGHT,
+    Buttons, FRAME_ID_MASK, Feature, Frame, Handshake, Leds, STEERING_STRAIGHT,
 };
 use std::io::Write;
 

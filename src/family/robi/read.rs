@@ -6,7 +6,7 @@
 use super::super::types::{RobiControl, RobiPacket};
 use crate::family::read::{Emit, Found, ReadOptions, Reader, Side, write_json};
 use crate::family::{DecodeError, Packet};
-use crate::link::Endpoint;
+use crate::gatt::Endpoint;
 use crate::protocol::decode::{DecodeStats, ErrorKind};
 use crate::protocol::rsrcp::{self, EOP, FrameError, Framer, HANDSHAKE_LEN, Item};
 use serde::Serialize;

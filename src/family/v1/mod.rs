@@ -5,6 +5,7 @@
 //! (it wakes at the GATT level, `droid-facts.md` §4) and no dome, legs, sounds or
 //! animations; Roll has no reverse flag, so reversing rolls toward the opposite heading.
 
+pub mod gatt;
 pub mod named;
 pub mod read;
 
@@ -222,6 +223,10 @@ impl Family for V1 {
 
     fn side_reader(&self, side: super::Side, _whole_values: bool) -> Box<dyn Reader> {
         Box::new(read::V1Reader::for_side(side))
+    }
+
+    fn gatt_profile(&self, model: Model) -> crate::gatt::GattProfile {
+        gatt::profile(model)
     }
 
     fn encode_named(&self, name: &str, params: Vec<(String, String)>) -> Result<Vec<u8>, String> {

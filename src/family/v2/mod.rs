@@ -1,5 +1,6 @@
 //! Sphero API v2 behind the family seam (R2-D2, R2-Q5, BB-9E).
 
+pub mod gatt;
 pub mod named;
 pub mod read;
 
@@ -185,6 +186,10 @@ impl Family for V2 {
             ..ReadOptions::default()
         };
         Box::new(read::V2Reader::new(&opts))
+    }
+
+    fn gatt_profile(&self, model: Model) -> crate::gatt::GattProfile {
+        gatt::profile(model)
     }
 
     fn encode_named(&self, name: &str, params: Vec<(String, String)>) -> Result<Vec<u8>, String> {

@@ -10,7 +10,7 @@
 //! `tokio::time::timeout`, so they behave the same (and are tested) for every backend.
 
 use super::BleError;
-use crate::link::gatt::{CharRef, GattUuid};
+use crate::gatt::{CharRef, GattUuid};
 use futures_util::future::BoxFuture;
 use futures_util::stream::BoxStream;
 use std::fmt;

@@ -8,7 +8,7 @@ use super::backend::{
     BleAddress, BleCentral, BlePeripheral, DeviceId, DiscoveredChar, KnownDevice, PeripheralEvent,
 };
 use super::error::{BleError, BleErrorKind, DBUS_MARK, Os, dbus_error_in};
-use crate::link::gatt::{CharRef, GattUuid};
+use crate::gatt::{CharRef, GattUuid};
 use btleplug::api::{
     Central as _, CentralEvent, CentralState, Characteristic, Manager as _, Peripheral as _,
     ScanFilter, WriteType,

@@ -8,7 +8,7 @@ use super::backend::{
     PeripheralEvent,
 };
 use super::error::{BleError, BleErrorKind};
-use crate::link::gatt::{CharRef, GattProfile, GattUuid};
+use crate::gatt::{CharRef, GattProfile, GattUuid};
 use futures_util::future::BoxFuture;
 use futures_util::stream::{self, BoxStream, StreamExt};
 use std::collections::{HashMap, HashSet};

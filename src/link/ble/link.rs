@@ -8,7 +8,7 @@
 
 use super::backend::{BleAddress, BleCentral, BlePeripheral, DeviceId, PeripheralEvent};
 use super::error::{BleError, BleErrorKind};
-use crate::link::gatt::{CharRef, GattProfile, GattUuid, HandshakeStep};
+use crate::gatt::{CharRef, GattProfile, GattUuid, HandshakeStep};
 use crate::link::{Connection, Link, LinkError, LinkEvent, LinkWriter};
 use crate::model::Model;
 use futures_util::StreamExt;
@@ -78,19 +78,20 @@ pub struct BleLink {
 }
 
 impl BleLink {
-    /// A link to the device `id` (or a [`BleAddress`]), speaking `model`'s profile.
+    /// A link to the device `id` (or a [`BleAddress`]), a `model` speaking `profile`.
     pub fn new(
         central: Arc<dyn BleCentral>,
         id: impl Into<DeviceId>,
         name: impl Into<String>,
         model: Model,
+        profile: GattProfile,
     ) -> Self {
         BleLink {
             central,
             id: id.into(),
             name: name.into(),
             model,
-            profile: GattProfile::for_model(model),
+            profile,
             timeouts: BleTimeouts::default(),
             connecting: None,
             opened_once: false,
@@ -236,7 +237,7 @@ impl BleLink {
         let mut read_values = Vec::new();
         for step in &self.profile.handshake {
             match step {
-                HandshakeStep::Write { ch, bytes } => {
+                HandshakeStep::Write { ch, bytes, .. } => {
                     self.bounded("handshake with", t.op, p.write(*ch, bytes, true))
                         .await?;
                 }
@@ -388,7 +389,7 @@ impl Link for BleLink {
 struct BleWriter {
     peripheral: Option<Arc<dyn BlePeripheral>>,
     ch: CharRef,
-    inputs: Vec<(crate::link::Endpoint, CharRef)>,
+    inputs: Vec<(crate::gatt::Endpoint, CharRef)>,
     chunk_size: usize,
     pacing: Duration,
     with_response: bool,
@@ -406,11 +407,11 @@ impl LinkWriter for BleWriter {
 
     fn write_to<'a>(
         &'a mut self,
-        to: crate::link::Endpoint,
+        to: crate::gatt::Endpoint,
         chunk: &'a [u8],
     ) -> BoxFuture<'a, Result<(), LinkError>> {
         let ch = match to {
-            crate::link::Endpoint::Api => Some(self.ch),
+            crate::gatt::Endpoint::Api => Some(self.ch),
             other => self
                 .inputs
                 .iter()

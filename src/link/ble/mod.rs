@@ -1,7 +1,7 @@
 //! Bluetooth LE: scanning for droids and [`BleLink`], the [`crate::link::Link`] to a real one.
 //!
 //! Layers, each testable without the one below:
-//! - [`crate::link::gatt`]: each model's GATT profile as data;
+//! - [`crate::gatt`]: GATT profiles as data (each family describes its droids');
 //! - [`backend`]: the radio-free interface ([`BleCentral`], [`BlePeripheral`]);
 //! - [`BleLink`] and [`scan`]: the generic logic, written against that interface;
 //! - `btleplug_backend` (the real radio: BlueZ, CoreBluetooth or WinRT) and [`fake`] (tests):
@@ -26,6 +26,7 @@ pub use error::{BleError, BleErrorKind, Os};
 pub use link::{BleLink, BleTimeouts};
 pub use scan::{DeviceSelector, ScanEntry};
 
+use crate::gatt::GattProfile;
 use crate::model::Model;
 use std::sync::Arc;
 
@@ -45,7 +46,9 @@ pub struct FoundDroid {
     pub candidates: Vec<ScanEntry>,
 }
 
-/// Find the droid `sel` asks for and build a [`BleLink`] to it.
+/// Find the droid `sel` asks for and build a [`BleLink`] to it, with the GATT profile
+/// `profile_of` gives for its model (`crate::family::gatt_profile`: the link layer runs a
+/// profile, the families know them).
 ///
 /// Opens the system's Bluetooth adapter, scans for up to `sel.scan_timeout` (stopping early
 /// once a droid asked for by `--name` or `--address` is heard), then picks among the devices
@@ -65,21 +68,25 @@ pub struct FoundDroid {
 /// # async fn f() -> Result<(), droidctl::link::ble::BleError> {
 /// use droidctl::link::ble::{DeviceSelector, connect_link};
 /// use droidctl::session::{self, SessionConfig};
-/// let found = connect_link(&DeviceSelector::default()).await?;
+/// let found = connect_link(&DeviceSelector::default(), droidctl::family::gatt_profile).await?;
 /// let profile = found.link.profile().clone();
 /// let cfg = SessionConfig { pacing: profile.pacing, chunk_size: profile.chunk_size, ..Default::default() };
 /// let session = session::start(Box::new(found.link), cfg);
 /// # Ok(()) }
 /// ```
-pub async fn connect_link(sel: &DeviceSelector) -> Result<FoundDroid, BleError> {
+pub async fn connect_link(
+    sel: &DeviceSelector,
+    profile_of: fn(Model) -> GattProfile,
+) -> Result<FoundDroid, BleError> {
     let central = open_central().await?;
-    connect_link_with(central, sel).await
+    connect_link_with(central, sel, profile_of).await
 }
 
 /// [`connect_link`] on a given adapter (the fake one in tests).
 pub async fn connect_link_with(
     central: Arc<dyn BleCentral>,
     sel: &DeviceSelector,
+    profile_of: fn(Model) -> GattProfile,
 ) -> Result<FoundDroid, BleError> {
     let mut known =
         scan::scan_known(central.as_ref(), sel.scan_timeout, |e| sel.satisfied_by(e)).await?;
@@ -91,7 +98,13 @@ pub async fn connect_link_with(
     tracing::info!(%name, device = %chosen.id, model = model.display_name(), "chose droid");
     known.retain(|e| e.heard);
     Ok(FoundDroid {
-        link: BleLink::new(central, chosen.id.clone(), name.clone(), model),
+        link: BleLink::new(
+            central,
+            chosen.id.clone(),
+            name.clone(),
+            model,
+            profile_of(model),
+        ),
         model,
         name,
         id: chosen.id,

@@ -1,8 +1,8 @@
 //! The remote-control service: the two bytes droidctl writes, and what the robot makes of them.
 //!
 //! Velocity and steering are each one byte, written to their own characteristic of the
-//! remote-control service ([`crate::link::gatt::ROBI_VELOCITY`],
-//! [`crate::link::gatt::ROBI_STEERING`]). The spec (`robi-rsrcp.md`) is read-only and says
+//! remote-control service ([`crate::family::robi::gatt::ROBI_VELOCITY`],
+//! [`crate::family::robi::gatt::ROBI_STEERING`]). The spec (`robi-rsrcp.md`) is read-only and says
 //! nothing about them; everything here is `droid-facts.md` §5, which describes the Robi42Lib
 //! firmware (`RobiLive`).
 

@@ -16,9 +16,8 @@
 //!
 //! The GATT UUIDs (RSRC service 0x2579 with frames 0x8765, handshake 0x4744 and start
 //! confirmation 0x4234; remote-control service 0xBA73 with velocity 0x6B2F and steering
-//! 0x3F4A) and the connection sequence (read the handshake, write `01` to start) are data in
-//! [`crate::link::gatt`] (`ROBI_*`, and `GattProfile::for_model(Model::Robi42)`); they are
-//! re-exported here, not defined twice.
+//! 0x3F4A) and the connection sequence (read the handshake, write `01` to start) are the Robi
+//! family's GATT profile (`crate::family::robi::gatt`): this module is the wire format only.
 
 pub mod control;
 pub mod describe;
@@ -41,12 +40,6 @@ pub use frame::{
 };
 pub use frame_id::{FRAME_ID_MODULUS, frame_delta, frame_gap};
 pub use framer::{Feed, Framer};
-
-/// The Robi 42 GATT UUIDs, from the one place they are defined.
-pub use crate::link::gatt::{
-    ROBI_FRAMES, ROBI_HANDSHAKE, ROBI_RC_SERVICE, ROBI_RSRC_SERVICE, ROBI_START, ROBI_STEERING,
-    ROBI_VELOCITY,
-};
 
 /// What the robot sends: the handshake once at connection, then frames.
 #[derive(Debug, Clone, PartialEq)]

@@ -10,7 +10,7 @@ use super::xml::{
     PROPERTIES, SERVICE,
 };
 use super::{BluezOptions, DroidSpec, Report};
-use crate::link::gatt::GattUuid;
+use crate::gatt::GattUuid;
 use crate::rng::Rng;
 use crate::sim::SimConfig;
 use crate::sim::gatt::{CharFlags, GattDroid, GattError, GattEvent, SLEEP_GRACE};
