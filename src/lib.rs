@@ -19,7 +19,6 @@ pub mod relay;
 pub mod rng;
 pub mod script;
 pub mod session;
-pub mod setup;
 pub mod sim;
 pub mod telemetry;
 pub mod teleop;

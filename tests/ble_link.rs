@@ -602,10 +602,10 @@ async fn a_characteristic_missing_on_a_reconnect_is_retried() {
 
 mod v1_session {
     use super::*;
+    use droidctl::family::setup::{SetupOptions, connect_setup};
     use droidctl::protocol::v1::{
         self, CommandPacket, Decoder as V1Decoder, Mrsp, Packet as V1Packet, Response, Source,
     };
-    use droidctl::setup::{SetupOptions, connect_setup};
 
     /// The wake sequence of `droid-facts.md` §4, then the subscription to 2ba6.
     fn wake_sequence() -> Vec<FakeOp> {

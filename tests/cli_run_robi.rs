@@ -4,10 +4,10 @@
 //! Robi cannot do, refused before anything is sent; and `mission::run` in-process against the
 //! simulator, comparing the mission's odometry with where the robot really is.
 
+use droidctl::family::setup::{SetupOptions, connect_setup};
 use droidctl::mission::{self, MissionEvent, MissionOptions, Sample};
 use droidctl::model::Model;
 use droidctl::session::{self, SessionConfig};
-use droidctl::setup::{SetupOptions, connect_setup};
 use droidctl::sim::{Faults, SimConfig, SimLink};
 use serde_json::Value;
 use std::sync::{Arc, Mutex};

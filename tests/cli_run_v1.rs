@@ -3,10 +3,10 @@
 //! droid ends up, the collisions it reports and the telemetry streamed on the way; and the
 //! lines a v1 droid cannot do, refused before anything is sent.
 
+use droidctl::family::setup::{SetupOptions, connect_setup};
 use droidctl::mission::{self, MissionEvent, MissionOptions, Sample};
 use droidctl::model::Model;
 use droidctl::session::{self, SessionConfig};
-use droidctl::setup::{SetupOptions, connect_setup};
 use droidctl::sim::{Faults, SimConfig, SimLink};
 use serde_json::Value;
 use std::sync::{Arc, Mutex};

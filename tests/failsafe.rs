@@ -2,6 +2,7 @@
 //! sleeping droid woken for a drive command. All on tokio's paused clock against the
 //! simulated droids (the same checks through btleplug run against `sim --bluez`).
 
+use droidctl::family::setup::{SetupOptions, connect_setup};
 use droidctl::family::{self, Command};
 use droidctl::link::{Connection, Link, LinkError, LinkWriter};
 use droidctl::model::Model;
@@ -9,7 +10,6 @@ use droidctl::protocol::v1;
 use droidctl::protocol::v2::cmd;
 use droidctl::protocol::v2::wire::DriveFlags;
 use droidctl::session::{self, Direction, LinkState, LogEntry, LogItem, SessionConfig, Slot};
-use droidctl::setup::{SetupOptions, connect_setup};
 use droidctl::sim::{Faults, SimConfig, SimLink};
 use droidctl::units::Heading;
 use futures_util::future::BoxFuture;

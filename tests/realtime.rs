@@ -1,9 +1,9 @@
 //! A mission in simulated (paused) time ends where the same mission ends in real time.
 
+use droidctl::family::setup::{SetupOptions, connect_setup};
 use droidctl::mission::{self, MissionOptions, Summary};
 use droidctl::model::Model;
 use droidctl::session::{self, SessionConfig};
-use droidctl::setup::{SetupOptions, connect_setup};
 use droidctl::sim::{Faults, SimConfig, SimLink};
 use std::sync::Arc;
 use std::time::Duration;

@@ -6,6 +6,7 @@
 //!
 //! Real time (TCP and paused clocks do not mix); every wait is bounded.
 
+use droidctl::family::setup::{SetupOptions, connect_setup};
 use droidctl::family::v2::gatt::{V2_ANTI_DOS, V2_API, V2_UNLOCK};
 use droidctl::family::{self, Codec};
 use droidctl::link::remote::{RelayAddr, RemoteLink, RemoteSelector, select};
@@ -15,7 +16,6 @@ use droidctl::relay::protocol::{Expect, Limits, Reply, ReplyDecoder, Request};
 use droidctl::relay::server::{self, EventSink, ServerConfig, ServerEvent};
 use droidctl::relay::sim_backend::SimBackend;
 use droidctl::session::{self, LinkState, SessionConfig, Slot};
-use droidctl::setup::{SetupOptions, connect_setup};
 use droidctl::sim::gatt::GattFaults;
 use droidctl::units::Heading;
 use std::net::SocketAddr;

@@ -2,12 +2,12 @@
 //! streaming: setup commands are re-sent on timeout, and after a Wake when the droid answers
 //! target_unavailable.
 
+use droidctl::family::setup::{SetupOptions, connect_setup};
 use droidctl::link::{Connection, Link, LinkError, LinkWriter};
 use droidctl::model::Model;
 use droidctl::protocol::v2::Notification;
 use droidctl::protocol::v2::wire::LegState;
 use droidctl::session::{self, SessionConfig, SessionEvent};
-use droidctl::setup::{SetupOptions, connect_setup};
 use droidctl::sim::{Faults, SimConfig, SimLink};
 use futures_util::future::BoxFuture;
 use std::time::Duration;

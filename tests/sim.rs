@@ -2,6 +2,7 @@
 //! injection. Most tests drive [`SimDroid`] directly with explicit times; the end-to-end ones
 //! go through [`SimLink`] and a session under paused tokio time.
 
+use droidctl::family::setup::{SetupOptions, connect_setup};
 use droidctl::link::{Link, LinkEvent};
 use droidctl::model::Model;
 use droidctl::protocol::v2::catalog::{self, Schema};
@@ -11,7 +12,6 @@ use droidctl::protocol::v2::{
     Collision, Command, Decoder, Device, ErrorCode, Flags, Notification, Packet, cmd,
 };
 use droidctl::session::{self, LinkState, SessionConfig, SessionEvent, SessionHandle, Slot};
-use droidctl::setup::{SetupOptions, connect_setup};
 use droidctl::sim::{Faults, SimConfig, SimDroid, SimLink, SimState};
 use droidctl::units::{HeadAngle, Heading};
 use std::time::Duration;

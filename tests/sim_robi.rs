@@ -5,6 +5,7 @@
 //! (handshake first, measured link quality, drive controls as velocity and steering writes,
 //! latest-wins, a dropped link that stops the robot and resumes at speed 0).
 
+use droidctl::family::setup::{SetupOptions, connect_setup};
 use droidctl::family::{Command as AnyCommand, Packet, RobiControl, RobiPacket};
 use droidctl::gatt::Endpoint;
 use droidctl::model::{Model, Protocol};
@@ -13,7 +14,6 @@ use droidctl::protocol::rsrcp::{self, Buttons, Efs, Frame, Handshake};
 use droidctl::session::{
     self, Direction, LinkState, LogEntry, LogItem, SessionConfig, SessionEvent, SessionHandle, Slot,
 };
-use droidctl::setup::{SetupOptions, connect_setup};
 use droidctl::sim::link::SimProbe;
 use droidctl::sim::robi::FIRST_FRAME_ID;
 use droidctl::sim::{Faults, SimConfig, SimLink, SimRobi, SimState, WireDroid};

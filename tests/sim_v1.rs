@@ -3,6 +3,7 @@
 //! under paused tokio time (`droid-facts.md` §4, `sphero-v1-packets.md`).
 
 use droidctl::family::Command as AnyCommand;
+use droidctl::family::setup::{SetupOptions, connect_setup};
 use droidctl::model::{Model, Protocol};
 use droidctl::protocol::v1::catalog;
 use droidctl::protocol::v1::sensor::mask;
@@ -13,7 +14,6 @@ use droidctl::protocol::v1::{
 use droidctl::session::{
     self, Direction, LinkState, LogEntry, LogItem, SessionConfig, SessionEvent, SessionHandle, Slot,
 };
-use droidctl::setup::{SetupOptions, connect_setup};
 use droidctl::sim::link::SimProbe;
 use droidctl::sim::{Faults, SimConfig, SimDroidV1, SimLink, SimState};
 use droidctl::units::Heading;

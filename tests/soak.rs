@@ -2,12 +2,12 @@
 //! corruption both ways, random splits, a disconnect every minute), with discrete requests
 //! mixed in. Nothing may panic or hang; the session must keep reconnecting and answering.
 
+use droidctl::family::setup::{SetupOptions, connect_setup};
 use droidctl::model::Model;
 use droidctl::protocol::v2::wire::{AudioMode, DriveFlags};
 use droidctl::protocol::v2::{Command, cmd};
 use droidctl::rng::Rng;
 use droidctl::session::{self, LinkState, RequestError, SessionConfig, Slot};
-use droidctl::setup::{SetupOptions, connect_setup};
 use droidctl::sim::{Faults, SimConfig, SimLink};
 use droidctl::units::{HeadAngle, Heading};
 use std::collections::BTreeMap;

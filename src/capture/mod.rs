@@ -1,5 +1,5 @@
 //! Captures: what went over a link, kept for later. droidctl writes its own line-based format
-//! (`--record`, [`crate::link::record`]); it also reads the HCI snoop logs phones and BlueZ
+//! (`--record`, [`crate::capture::record`]); it also reads the HCI snoop logs phones and BlueZ
 //! write ([`btsnoop`], [`hci`]). Either way a capture becomes a list of timed [`Event`]s that
 //! replay ([`replay`]) and `packet decode` ([`mirror`]) decode with the droid's family.
 //!
@@ -47,6 +47,7 @@
 pub mod btsnoop;
 pub mod hci;
 pub mod mirror;
+pub mod record;
 pub mod replay;
 
 use crate::gatt::Endpoint;

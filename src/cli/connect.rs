@@ -4,7 +4,7 @@
 use super::CliError;
 use crate::link::Link;
 use crate::link::ble::{DeviceId, DeviceSelector, ScanEntry, connect_link};
-use crate::model::{Model, Protocol};
+use crate::model::Model;
 use std::io::{BufRead, IsTerminal, Write};
 use std::time::Duration;
 
@@ -127,18 +127,6 @@ pub async fn connect(
         found = connect_link(&sel, crate::family::gatt_profile)
             .await
             .map_err(|e| CliError::failure(e.message))?;
-    }
-    if !found.model.drivable() {
-        return Err(CliError::failure(format!(
-            "{} ({}) speaks {}, which droidctl can find but not yet drive — pick a Sphero droid with --name, or try `--sim`",
-            found.name,
-            found.model.display_name(),
-            match found.model.protocol() {
-                Protocol::SpheroV1 => "Sphero API v1",
-                Protocol::SpheroV2 => "Sphero API v2",
-                Protocol::Rsrcp => "RSRCP",
-            }
-        )));
     }
     if chatty {
         eprintln!(

@@ -4,10 +4,10 @@ use super::CliError;
 use super::term::{self, TerminalGuard};
 use crate::app::run::{self, AppInputs, AppOptions, ExitReason};
 use crate::config::Config;
+use crate::family::setup::{SetupOptions, connect_setup};
 use crate::link::Link;
 use crate::model::Model;
 use crate::session::{self, SessionConfig, SessionHandle};
-use crate::setup::{SetupOptions, connect_setup};
 use crate::sim::{Faults, SimConfig, SimLink};
 use clap::Args;
 use ratatui::Terminal;
@@ -54,7 +54,7 @@ fn install_panic_hook() {
             // At the last heading written: a stop at heading 0 would turn the droid.
             s.stop_now(crate::family::for_model(*model));
         }
-        crate::link::record::flush_all();
+        crate::capture::record::flush_all();
         let in_app = std::thread::current().name() != Some("main");
         if in_app && term::active() {
             if let Ok(mut m) = PANIC_MESSAGE.lock() {
@@ -89,7 +89,7 @@ pub fn run(args: DriveArgs) -> Result<i32, CliError> {
         };
         let link = match &recorder {
             Some(r) => {
-                r.start(&crate::link::record::Recorder::header_for(model, &name));
+                r.start(&crate::capture::record::Recorder::header_for(model, &name));
                 r.wrap(link)
             }
             None => link,

@@ -1,7 +1,7 @@
 //! `--record FILE` (on `drive` and `run`) and `droidctl replay FILE`.
 
 use super::CliError;
-use crate::link::record::Recorder;
+use crate::capture::record::Recorder;
 use clap::Args;
 use std::path::PathBuf;
 

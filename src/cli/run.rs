@@ -1,11 +1,11 @@
 //! `droidctl run SCRIPT [--sim [MODEL]] [--json] [--interval MS]`: run a mission script.
 
 use super::CliError;
+use crate::family::setup::{SetupOptions, connect_setup};
 use crate::link::Link;
 use crate::mission::{self, MissionEvent, MissionOptions, Summary};
 use crate::model::Model;
 use crate::session::{self, LinkState, SessionConfig};
-use crate::setup::{SetupOptions, connect_setup};
 use crate::sim::{Faults, SimConfig, SimLink};
 use clap::Args;
 use std::io::Write;
@@ -134,14 +134,14 @@ pub fn run(args: RunArgs) -> Result<i32, CliError> {
 
 /// `link` recorded by `recorder` (which starts its clock and writes its header now).
 fn recorded(
-    recorder: Option<&crate::link::record::Recorder>,
+    recorder: Option<&crate::capture::record::Recorder>,
     link: Box<dyn Link>,
     model: Model,
     name: &str,
 ) -> Box<dyn Link> {
     match recorder {
         Some(r) => {
-            r.start(&crate::link::record::Recorder::header_for(model, name));
+            r.start(&crate::capture::record::Recorder::header_for(model, name));
             r.wrap(link)
         }
         None => link,
@@ -167,7 +167,7 @@ pub async fn run_recorded(
     steps: &[crate::script::Step],
     opts: MissionOptions,
     json: bool,
-    recorder: Option<&crate::link::record::Recorder>,
+    recorder: Option<&crate::capture::record::Recorder>,
 ) -> Result<Summary, String> {
     let interval_ms = opts.interval.as_millis().clamp(20, 1000) as u16;
     let setup = SetupOptions {

@@ -9,8 +9,10 @@
 
 use super::CliError;
 use crate::link::ble::{self, BleCentral, BleError, scan};
+use crate::link::remote::{self, RelayAddr, RemoteDevice};
+use crate::model::Model;
 use clap::Args;
-use std::io::Write;
+use std::io::{self, Write};
 use std::time::Duration;
 
 #[derive(Debug, Clone, Args)]
@@ -55,8 +57,7 @@ fn parse_secs(s: &str) -> Result<Duration, String> {
 /// Run `droidctl scan` on the system's adapter.
 pub fn run(args: ScanArgs, out: &mut dyn Write) -> Result<i32, CliError> {
     if let Some(relay) = &args.remote {
-        return crate::link::remote::scan_command(relay, args.timeout, args.json, args.all, out)
-            .map_err(CliError::failure);
+        return run_remote(relay, &args, out).map_err(CliError::failure);
     }
     let rt = tokio::runtime::Builder::new_current_thread()
         .enable_all()
@@ -137,13 +138,167 @@ fn report(
         .map_err(write_err)?;
         return Ok(0);
     }
-    scan::render(&shown, args.json, out).map_err(write_err)?;
+    render(&shown, args.json, out).map_err(write_err)?;
     Ok(0)
+}
+
+/// Print a scan result as a table (or one JSON object per line, like `packet decode --json`).
+pub fn render(entries: &[ble::ScanEntry], json: bool, out: &mut dyn Write) -> io::Result<()> {
+    if json {
+        for e in entries {
+            writeln!(out, "{}", e.to_json())?;
+        }
+        return Ok(());
+    }
+    let rows = entries
+        .iter()
+        .map(|e| {
+            vec![
+                e.name.clone().unwrap_or_else(|| "(no name)".into()),
+                e.model.map_or("-", Model::display_name).to_string(),
+                e.id.to_string(),
+                match (e.rssi, e.heard) {
+                    (Some(r), _) => format!("{r} dBm"),
+                    (None, true) => "connected".into(),
+                    (None, false) => "not in range (remembered)".into(),
+                },
+            ]
+        })
+        .collect();
+    table(&["NAME", "MODEL", "ADDRESS", "RSSI"], rows, out)
+}
+
+/// `droidctl scan --remote`: list what the relay hears (droids only unless `--all`), as a
+/// table or one JSON object per line; the whole command is bounded.
+fn run_remote(relay: &RelayAddr, args: &ScanArgs, out: &mut dyn Write) -> Result<i32, String> {
+    let rt = tokio::runtime::Builder::new_current_thread()
+        .enable_all()
+        .build()
+        .map_err(|e| format!("cannot start the async runtime: {e}"))?;
+    let found = rt
+        .block_on(remote::scan(relay, args.timeout))
+        .map_err(|e| e.message)?;
+    rt.shutdown_background();
+    let shown: Vec<&RemoteDevice> = found
+        .iter()
+        .filter(|d| args.all || d.model.is_some())
+        .collect();
+    let w = |e: io::Error| format!("cannot write output: {e}");
+    if shown.is_empty() {
+        let others = found.len();
+        let tail = if others > 0 && !args.all {
+            format!(" ({others} other device(s) heard: --all lists them)")
+        } else {
+            String::new()
+        };
+        eprintln!(
+            "no droids found behind the relay at {relay}{tail} — wake it (tap it or put it on \
+             its charger) and keep it near the relay"
+        );
+        return Ok(0);
+    }
+    if args.json {
+        for d in shown {
+            writeln!(out, "{}", d.to_json()).map_err(w)?;
+        }
+        return Ok(0);
+    }
+    let rows = shown
+        .iter()
+        .map(|d| {
+            vec![
+                if d.name.is_empty() {
+                    "(no name)".into()
+                } else {
+                    d.name.clone()
+                },
+                d.model.map_or("-", Model::display_name).to_string(),
+                d.address.clone(),
+            ]
+        })
+        .collect();
+    table(&["NAME", "MODEL", "ADDRESS"], rows, out).map_err(w)?;
+    Ok(0)
+}
+
+/// Columns padded to their widest cell, two spaces apart; the last is not padded.
+fn table(header: &[&str], rows: Vec<Vec<String>>, out: &mut dyn Write) -> io::Result<()> {
+    let header: Vec<String> = header.iter().map(|h| h.to_string()).collect();
+    let mut widths: Vec<usize> = header.iter().map(|h| h.chars().count()).collect();
+    for r in &rows {
+        for (w, c) in widths.iter_mut().zip(r) {
+            *w = (*w).max(c.chars().count());
+        }
+    }
+    for r in std::iter::once(&header).chain(&rows) {
+        let mut line = String::new();
+        for (i, c) in r.iter().enumerate() {
+            if i + 1 == r.len() {
+                line.push_str(c);
+            } else {
+                line.push_str(&format!("{c:<w$}  ", w = widths[i]));
+            }
+        }
+        writeln!(out, "{line}")?;
+    }
+    Ok(())
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn scan_ad(name: Option<&str>, last: u8, rssi: Option<i16>) -> ble::Advertisement {
+        ble::Advertisement {
+            address: ble::BleAddress([0xF1, 0, 0, 0, 0, last]),
+            name: name.map(String::from),
+            rssi,
+        }
+    }
+
+    #[test]
+    fn json_lines() {
+        let s = scan::summarize(
+            &[
+                scan_ad(Some("D2-AAAA"), 1, Some(-70)),
+                scan_ad(None, 2, None),
+            ],
+            true,
+        );
+        let mut out = Vec::new();
+        render(&s, true, &mut out).unwrap();
+        let text = String::from_utf8(out).unwrap();
+        let lines: Vec<&str> = text.lines().collect();
+        assert_eq!(
+            lines,
+            [
+                r#"{"name":"D2-AAAA","model":"r2d2","model_name":"R2-D2","address":"F1:00:00:00:00:01","rssi":-70,"heard":true}"#,
+                r#"{"name":null,"model":null,"model_name":null,"address":"F1:00:00:00:00:02","rssi":null,"heard":false}"#,
+            ]
+        );
+    }
+
+    #[test]
+    fn table() {
+        let s = scan::summarize(
+            &[
+                scan_ad(Some("D2-AAAA"), 1, Some(-70)),
+                scan_ad(Some("BB-1"), 2, Some(-48)),
+                scan_ad(Some("D2-OLD0"), 3, None),
+            ],
+            false,
+        );
+        let mut out = Vec::new();
+        render(&s, false, &mut out).unwrap();
+        assert_eq!(
+            String::from_utf8(out).unwrap(),
+            "NAME     MODEL  ADDRESS            RSSI\n\
+             BB-1     BB-8   F1:00:00:00:00:02  -48 dBm\n\
+             D2-AAAA  R2-D2  F1:00:00:00:00:01  -70 dBm\n\
+             D2-OLD0  R2-D2  F1:00:00:00:00:03  not in range (remembered)\n"
+        );
+    }
+
     use crate::link::ble::fake::FakeCentral;
     use crate::link::ble::{Advertisement, BleAddress, BleErrorKind};
 

@@ -19,6 +19,7 @@
 pub mod named;
 pub mod read;
 pub mod robi;
+pub mod setup;
 pub mod types;
 pub mod v1;
 pub mod v2;
@@ -29,11 +30,11 @@ pub use types::{
     RobiPacket,
 };
 
+use crate::family::setup::SetupOptions;
 use crate::model::{Model, Protocol};
 use crate::protocol::decode::ErrorKind;
 use crate::protocol::wire::LegAction;
 use crate::script::Action;
-use crate::setup::SetupOptions;
 use crate::units::{HeadAngle, Heading};
 
 /// Framing, decoding and matching for one connection. One per connection: it holds the

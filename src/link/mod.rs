@@ -6,7 +6,6 @@
 
 pub mod backoff;
 pub mod ble;
-pub mod record;
 pub mod remote;
 
 use crate::gatt::Endpoint;

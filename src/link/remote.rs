@@ -407,6 +407,8 @@ impl RemoteDevice {
             "model_name": self.model.map(Model::display_name),
             "address": self.address,
             "rssi": null,
+            // The relay lists what its scan heard.
+            "heard": true,
         })
     }
 }
@@ -463,78 +465,6 @@ pub async fn find(
             "the relay at {relay} answered FIND with {other:?}"
         ))),
     }
-}
-
-/// `droidctl scan --remote`: list what the relay hears (droids only unless `all`), as a
-/// table or one JSON object per line; the whole command is bounded.
-pub fn scan_command(
-    relay: &RelayAddr,
-    t: Duration,
-    json: bool,
-    all: bool,
-    out: &mut dyn std::io::Write,
-) -> Result<i32, String> {
-    let rt = tokio::runtime::Builder::new_current_thread()
-        .enable_all()
-        .build()
-        .map_err(|e| format!("cannot start the async runtime: {e}"))?;
-    let found = rt.block_on(scan(relay, t)).map_err(|e| e.message)?;
-    rt.shutdown_background();
-    let shown: Vec<&RemoteDevice> = found.iter().filter(|d| all || d.model.is_some()).collect();
-    let w = |e: std::io::Error| format!("cannot write output: {e}");
-    if shown.is_empty() {
-        let others = found.len();
-        let tail = if others > 0 && !all {
-            format!(" ({others} other device(s) heard: --all lists them)")
-        } else {
-            String::new()
-        };
-        eprintln!(
-            "no droids found behind the relay at {relay}{tail} — wake it (tap it or put it on \
-             its charger) and keep it near the relay"
-        );
-        return Ok(0);
-    }
-    if json {
-        for d in shown {
-            writeln!(out, "{}", d.to_json()).map_err(w)?;
-        }
-        return Ok(0);
-    }
-    let rows: Vec<[String; 3]> = shown
-        .iter()
-        .map(|d| {
-            [
-                if d.name.is_empty() {
-                    "(no name)".into()
-                } else {
-                    d.name.clone()
-                },
-                d.model.map_or("-", Model::display_name).to_string(),
-                d.address.clone(),
-            ]
-        })
-        .collect();
-    let header = ["NAME", "MODEL", "ADDRESS"].map(String::from);
-    let mut widths = header.clone().map(|h| h.chars().count());
-    for r in &rows {
-        for (wd, c) in widths.iter_mut().zip(r) {
-            *wd = (*wd).max(c.chars().count());
-        }
-    }
-    for r in std::iter::once(&header).chain(&rows) {
-        writeln!(
-            out,
-            "{:<w0$}  {:<w1$}  {}",
-            r[0],
-            r[1],
-            r[2],
-            w0 = widths[0],
-            w1 = widths[1]
-        )
-        .map_err(w)?;
-    }
-    Ok(0)
 }
 
 /// How to choose the droid behind a relay.

@@ -95,6 +95,12 @@ pub struct NotificationError {
 }
 
 impl Notification {
+    /// What a droid says about itself once per connection (Robi's handshake: version and
+    /// interval): the session keeps it for whoever asks after the fact.
+    pub fn is_greeting(&self) -> bool {
+        matches!(self, Notification::RobiHandshake(_))
+    }
+
     /// A family-independent name, for notifications every family can send.
     pub fn common_name(&self) -> &'static str {
         match self {

@@ -11,9 +11,9 @@ use super::backend::{
     BackendDevice, BackendError, Connected, DroidEvent, GattBackend, GattConnection,
 };
 use crate::capture::Event;
+use crate::capture::record::Recorder;
 use crate::gatt::Endpoint;
 use crate::gatt::{GattProfile, GattUuid};
-use crate::link::record::Recorder;
 use futures_util::future::BoxFuture;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;

@@ -405,7 +405,7 @@ impl Task {
                 for n in notifications {
                     match n {
                         Ok(n) => {
-                            if matches!(n, Notification::RobiHandshake(_)) {
+                            if n.is_greeting() {
                                 lock(&self.shared.greeting).push(n.clone());
                             }
                             if n == Notification::WillSleep && self.cfg.keep_awake {

@@ -878,7 +878,10 @@ mod tests {
         let mut d = ready(Model::R2D2);
         d.write(V2_ANTI_DOS, V2_UNLOCK, ms(1)).unwrap();
         // The connect setup turns on sensor streaming, whose packets are longer than 20 bytes.
-        let c = crate::setup::connect_setup(Model::R2D2, &crate::setup::SetupOptions::default());
+        let c = crate::family::setup::connect_setup(
+            Model::R2D2,
+            &crate::family::setup::SetupOptions::default(),
+        );
         for (i, cmd) in c.iter().enumerate() {
             let family = crate::family::for_model(Model::R2D2);
             let mut codec = family.codec();

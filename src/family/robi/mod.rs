@@ -16,13 +16,13 @@ use super::{
     Codec, Command, Explained, Family, Incoming, Key, Packet, PacketKind, ReadOption, ReadOptions,
     Reader,
 };
+use crate::family::setup::SetupOptions;
 use crate::gatt::Endpoint;
 use crate::model::{Model, Protocol};
 use crate::protocol::decode::ErrorKind;
 use crate::protocol::notify::Notification;
 use crate::protocol::rsrcp::{self, Item};
 use crate::protocol::value::{Fields, Value};
-use crate::setup::SetupOptions;
 use crate::units::Heading;
 
 /// The Robi 42 family.

@@ -13,11 +13,11 @@ use super::{
     Codec, Command, DroidError, Explained, Family, Incoming, Key, Packet, PacketKind, ReadOption,
     ReadOptions, Reader,
 };
+use crate::family::setup::SetupOptions;
 use crate::model::{Model, Protocol};
 use crate::protocol::decode::ErrorKind;
 use crate::protocol::v1::{self, Decoder, Source, StreamingConfig, cmd};
 use crate::script::{Action, LedGroup};
-use crate::setup::SetupOptions;
 use crate::units::Heading;
 
 /// The v1 family.

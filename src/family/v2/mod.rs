@@ -8,6 +8,7 @@ use super::{
     Codec, Command, DroidError, Explained, Family, Incoming, Key, Packet, PacketKind, ReadOption,
     ReadOptions, Reader,
 };
+use crate::family::setup::SetupOptions;
 use crate::model::{Model, Protocol};
 use crate::protocol::decode::ErrorKind;
 use crate::protocol::v2::sensor::StreamingConfig;
@@ -16,7 +17,6 @@ use crate::protocol::v2::wire::{
 };
 use crate::protocol::v2::{self, Decoder, Flags, Kind, Notification, cmd, describe};
 use crate::script::{Action, LedGroup};
-use crate::setup::SetupOptions;
 use crate::units::{HeadAngle, Heading};
 
 /// The v2 family.

@@ -6,7 +6,6 @@ use super::error::{BleError, BleErrorKind, Os};
 use crate::model::Model;
 use serde_json::json;
 use std::collections::BTreeMap;
-use std::io::{self, Write};
 use std::time::Duration;
 use tokio::time::{Instant, sleep, timeout};
 
@@ -347,52 +346,6 @@ fn find_named<'a>(
     }
 }
 
-/// Print a scan result as a table (or one JSON object per line, like `packet decode --json`).
-pub fn render(entries: &[ScanEntry], json: bool, out: &mut dyn Write) -> io::Result<()> {
-    if json {
-        for e in entries {
-            writeln!(out, "{}", e.to_json())?;
-        }
-        return Ok(());
-    }
-    let rows: Vec<[String; 4]> = entries
-        .iter()
-        .map(|e| {
-            [
-                e.name.clone().unwrap_or_else(|| "(no name)".into()),
-                e.model.map_or("-", Model::display_name).to_string(),
-                e.id.to_string(),
-                match (e.rssi, e.heard) {
-                    (Some(r), _) => format!("{r} dBm"),
-                    (None, true) => "connected".into(),
-                    (None, false) => "not in range (remembered)".into(),
-                },
-            ]
-        })
-        .collect();
-    let header = ["NAME", "MODEL", "ADDRESS", "RSSI"].map(String::from);
-    let mut widths = header.clone().map(|h| h.chars().count());
-    for r in &rows {
-        for (w, c) in widths.iter_mut().zip(r) {
-            *w = (*w).max(c.chars().count());
-        }
-    }
-    for r in std::iter::once(&header).chain(&rows) {
-        writeln!(
-            out,
-            "{:<w0$}  {:<w1$}  {:<w2$}  {}",
-            r[0],
-            r[1],
-            r[2],
-            r[3],
-            w0 = widths[0],
-            w1 = widths[1],
-            w2 = widths[2]
-        )?;
-    }
-    Ok(())
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -488,46 +441,6 @@ mod tests {
             address: Some(a.into()),
             ..DeviceSelector::default()
         }
-    }
-
-    #[test]
-    fn json_lines() {
-        let s = summarize(
-            &[ad(Some("D2-AAAA"), 1, Some(-70)), ad(None, 2, None)],
-            true,
-        );
-        let mut out = Vec::new();
-        render(&s, true, &mut out).unwrap();
-        let text = String::from_utf8(out).unwrap();
-        let lines: Vec<&str> = text.lines().collect();
-        assert_eq!(
-            lines,
-            [
-                r#"{"name":"D2-AAAA","model":"r2d2","model_name":"R2-D2","address":"F1:00:00:00:00:01","rssi":-70,"heard":true}"#,
-                r#"{"name":null,"model":null,"model_name":null,"address":"F1:00:00:00:00:02","rssi":null,"heard":false}"#,
-            ]
-        );
-    }
-
-    #[test]
-    fn table() {
-        let s = summarize(
-            &[
-                ad(Some("D2-AAAA"), 1, Some(-70)),
-                ad(Some("BB-1"), 2, Some(-48)),
-                ad(Some("D2-OLD0"), 3, None),
-            ],
-            false,
-        );
-        let mut out = Vec::new();
-        render(&s, false, &mut out).unwrap();
-        assert_eq!(
-            String::from_utf8(out).unwrap(),
-            "NAME     MODEL  ADDRESS            RSSI\n\
-             BB-1     BB-8   F1:00:00:00:00:02  -48 dBm\n\
-             D2-AAAA  R2-D2  F1:00:00:00:00:01  -70 dBm\n\
-             D2-OLD0  R2-D2  F1:00:00:00:00:03  not in range (remembered)\n"
-        );
     }
 
     fn sel(name: Option<&str>, address: Option<&str>) -> DeviceSelector {

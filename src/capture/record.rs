@@ -8,8 +8,9 @@
 //! the panic hook ([`flush_all`]). A crash leaves a readable file up to the last flush. An
 //! existing file is never truncated unless asked (`--force`).
 
-use super::{Connection, Endpoint, Link, LinkError, LinkEvent, LinkWriter};
 use crate::capture::{self, Event, Header, Timed};
+use crate::gatt::Endpoint;
+use crate::link::{Connection, Link, LinkError, LinkEvent, LinkWriter};
 use futures_util::future::BoxFuture;
 use std::fs::File;
 use std::io::{BufWriter, Write};
@@ -401,9 +402,9 @@ mod tests {
         let session = crate::session::start(
             link,
             crate::session::SessionConfig {
-                setup: crate::setup::connect_setup(
+                setup: crate::family::setup::connect_setup(
                     Model::R2D2,
-                    &crate::setup::SetupOptions {
+                    &crate::family::setup::SetupOptions {
                         tripod: false,
                         streaming_interval_ms: 100,
                     },

@@ -2,7 +2,7 @@
 //! dome to 0, collision detection on, sensor streaming, battery notifications. The commands
 //! themselves come from the model's protocol family (`crate::family`).
 
-use crate::family::Command;
+use super::Command;
 use crate::model::Model;
 
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -24,7 +24,7 @@ impl Default for SetupOptions {
 
 /// The connect setup, in order.
 pub fn connect_setup(model: Model, opts: &SetupOptions) -> Vec<Command> {
-    crate::family::for_model(model).setup(model, opts)
+    super::for_model(model).setup(model, opts)
 }
 
 #[cfg(test)]

@@ -1,0 +1,162 @@
+//! Imports point one way: protocol ← link ← family ← session, sim ← capture, teleop ← relay ←
+//! app ← ui ← cli, with the pure-data leaves (model, units, gatt, …) under everything. A lower
+//! layer never names a higher one, in code or in its tests: this reads every `crate::` path
+//! in `src/` (comments aside) and fails with the offending file and line.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// Each top-level module's rank: a module may use only modules of strictly lower rank.
+const RANKS: &[(&str, u32)] = &[
+    // Leaves: pure data and small helpers.
+    ("units", 0),
+    ("hex", 0),
+    ("rng", 0),
+    ("model", 0),
+    ("gatt", 0),
+    ("logging", 0),
+    // The sans-IO protocol core.
+    ("protocol", 10),
+    // Links, and the plain data built on the protocol (scripts, telemetry, configuration).
+    ("link", 20),
+    ("script", 20),
+    ("telemetry", 20),
+    ("config", 20),
+    // The seam between protocol families.
+    ("family", 30),
+    ("session", 40),
+    ("sim", 40),
+    // Missions run on a session.
+    ("mission", 45),
+    ("capture", 50),
+    ("teleop", 50),
+    // `serve --record` writes captures.
+    ("relay", 55),
+    ("app", 60),
+    ("ui", 70),
+    ("cli", 80),
+];
+
+fn rank(module: &str) -> Option<u32> {
+    RANKS.iter().find(|(m, _)| *m == module).map(|(_, r)| *r)
+}
+
+fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
+    for entry in std::fs::read_dir(dir).expect("src is readable") {
+        let path = entry.expect("a directory entry").path();
+        if path.is_dir() {
+            rust_files(&path, out);
+        } else if path.extension().is_some_and(|e| e == "rs") {
+            out.push(path);
+        }
+    }
+}
+
+/// The top-level module a file belongs to (`src/family/v2/read.rs` → `family`).
+fn module_of(src: &Path, file: &Path) -> String {
+    let rel = file.strip_prefix(src).expect("under src");
+    let first = rel.components().next().expect("a path");
+    let name = first.as_os_str().to_string_lossy();
+    name.trim_end_matches(".rs").to_string()
+}
+
+/// The modules a line of code names with `crate::…`, including those inside
+/// `crate::{a, b::c}` groups.
+fn named_modules(code: &str) -> Vec<String> {
+    let mut out = Vec::new();
+    let mut rest = code;
+    while let Some(at) = rest.find("crate::") {
+        // `droidctl::crate::` cannot happen; skip identifiers that merely end in "crate".
+        let before = &rest[..at];
+        let boundary = before
+            .chars()
+            .last()
+            .is_none_or(|c| !c.is_alphanumeric() && c != '_');
+        rest = &rest[at + "crate::".len()..];
+        if !boundary {
+            continue;
+        }
+        if let Some(group) = rest.strip_prefix('{') {
+            let end = group.find('}').unwrap_or(group.len());
+            for item in group[..end].split(',') {
+                let name: String = item
+                    .trim()
+                    .chars()
+                    .take_while(|c| c.is_alphanumeric() || *c == '_')
+                    .collect();
+                if !name.is_empty() {
+                    out.push(name);
+                }
+            }
+        } else {
+            let name: String = rest
+                .chars()
+                .take_while(|c| c.is_alphanumeric() || *c == '_')
+                .collect();
+            out.push(name);
+        }
+    }
+    out
+}
+
+#[test]
+fn lower_layers_never_import_higher_ones() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut files = Vec::new();
+    rust_files(&src, &mut files);
+    files.sort();
+    let mut violations = Vec::new();
+    let mut unranked = BTreeMap::new();
+    for file in &files {
+        let module = module_of(&src, file);
+        if module == "lib" || module == "main" {
+            continue;
+        }
+        let Some(own) = rank(&module) else {
+            unranked.insert(module, file.display().to_string());
+            continue;
+        };
+        let text = std::fs::read_to_string(file).expect("a source file");
+        for (i, line) in text.lines().enumerate() {
+            let code = line.split("//").next().unwrap_or("");
+            for used in named_modules(code) {
+                if used == module || used == "self" || used == "super" {
+                    continue;
+                }
+                match rank(&used) {
+                    Some(r) if r < own => {}
+                    Some(r) => violations.push(format!(
+                        "{}:{}: {module} (rank {own}) uses {used} (rank {r})",
+                        file.display(),
+                        i + 1
+                    )),
+                    None => {
+                        unranked.insert(used, format!("{}:{}", file.display(), i + 1));
+                    }
+                }
+            }
+        }
+    }
+    assert!(
+        unranked.is_empty(),
+        "modules without a layer (add them to RANKS): {unranked:?}"
+    );
+    assert!(
+        violations.is_empty(),
+        "a lower layer imports a higher one:\n{}",
+        violations.join("\n")
+    );
+}
+
+#[test]
+fn the_checker_sees_grouped_and_nested_paths() {
+    assert_eq!(
+        named_modules("use crate::{family::Command, link::Link};"),
+        ["family", "link"]
+    );
+    assert_eq!(
+        named_modules("let x = crate::sim::SimConfig::for_model(m); // crate::ui"),
+        ["sim", "ui"]
+    );
+    assert!(named_modules("let my_crate::x = 1;").is_empty());
+}
