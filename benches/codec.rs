@@ -6,7 +6,9 @@
 //!
 //! `v2/decode_borrowed*` is the borrowing decoder `packet decode --file` uses (nothing
 //! allocated per packet); `capture/file_summary` is all of `packet decode --file --summary`
-//! (64 KiB blocks from a reader, the decoder, the counts) over a 16 MiB capture. With
+//! (64 KiB blocks from a reader, the decoder, the counts) over a 16 MiB capture;
+//! `capture/file_json` the same printed as JSON lines (packets/s); `capture/btsnoop_load`
+//! loads a generated multi-megabyte phone log for replay (HCI and ATT decoded, events out). With
 //! `DROIDCTL_CODEC_STREAM=PATH` the stream is also written to PATH, for
 //! `benches/spherov2_compare.sh` to time another parser on the same bytes.
 
@@ -133,6 +135,27 @@ fn mixed_packets() -> Vec<Packet> {
         }
     }
     out
+}
+
+/// A btsnoop log (HCI H4) of a connection whose droid notifies `packets` over and over, until
+/// the log holds about `size` bytes.
+fn btsnoop_log(packets: &[Packet], size: usize) -> Vec<u8> {
+    use droidctl::capture::btsnoop::Datalink;
+    use droidctl::capture::hci::build::Log;
+    let (conn, api) = (0x0040, 0x000E);
+    let mut log = Log::new(Datalink::H4);
+    log.le_connected(conn);
+    log.declare(conn, &[(api, droidctl::family::v2::gatt::V2_API)]);
+    'fill: loop {
+        for p in packets {
+            log.advance(1);
+            log.notify(conn, api, &p.encode());
+            if log.bytes.len() >= size {
+                break 'fill;
+            }
+        }
+    }
+    log.bytes
 }
 
 #[cfg(target_os = "linux")]
@@ -278,6 +301,22 @@ fn codec(c: &mut Criterion) {
             .expect("decodes");
             assert_eq!(summary.packets, packets_per_iter);
             summary.packets
+        })
+    });
+    group.finish();
+
+    // A phone's log of a long session: every packet of the stream notified as the droid
+    // sends it, repeated to about 8 MB of btsnoop records, loaded as replay loads it.
+    let log = btsnoop_log(&packets, 8 << 20);
+    eprintln!("btsnoop log: {} bytes", log.len());
+    let mut group = c.benchmark_group("capture");
+    group.throughput(Throughput::Bytes(log.len() as u64));
+    group.sample_size(10);
+    group.bench_function("btsnoop_load", |b| {
+        b.iter(|| {
+            let c = droidctl::capture::hci::capture_from_btsnoop(black_box(&log), &[])
+                .expect("a droid's traffic");
+            c.events.len()
         })
     });
     group.finish();

@@ -106,11 +106,15 @@ pub fn parse_duration(text: &str) -> Result<Duration, String> {
     if !v.is_finite() || v < 0.0 {
         return Err(format!("duration {t:?} must be zero or more"));
     }
-    let d = Duration::from_secs_f64(v * scale);
-    if d > MAX_DURATION {
-        return Err(format!("duration {t:?} is longer than a day"));
+    // Checked before converting: `Duration::from_secs_f64` panics on what it cannot hold
+    // (a script line `wait 1e20s`).
+    let secs = v * scale;
+    if secs > MAX_DURATION.as_secs_f64() {
+        return Err(format!(
+            "duration {t:?} is longer than a day (the limit is 86400s)"
+        ));
     }
-    Ok(d)
+    Ok(Duration::from_secs_f64(secs))
 }
 
 fn int<T: TryFrom<i64>>(text: &str, what: &str, min: i64, max: i64) -> Result<T, String> {
@@ -358,5 +362,19 @@ sleep
         assert_eq!(parse_duration("2s"), Ok(Duration::from_secs(2)));
         assert_eq!(parse_duration("1.5s"), Ok(Duration::from_millis(1500)));
         assert_eq!(parse_duration("0s"), Ok(Duration::ZERO));
+        assert_eq!(parse_duration("86400s"), Ok(MAX_DURATION));
+    }
+
+    #[test]
+    fn huge_durations_are_refused_not_a_panic() {
+        for t in ["1e20s", "1e23ms", "86401s", "1e300s"] {
+            let e = parse_duration(t).unwrap_err();
+            assert!(
+                e.contains("longer than a day") && e.contains("86400s"),
+                "{t}: {e}"
+            );
+        }
+        let e = parse(&["drive 1 1 for 1e20s".to_string()].join("\n")).unwrap_err();
+        assert!(e[0].to_string().starts_with("line 1:"), "{}", e[0]);
     }
 }

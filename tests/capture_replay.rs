@@ -313,3 +313,80 @@ fn a_killed_recording_is_readable_up_to_the_last_flush() {
         c.duration()
     );
 }
+
+/// Hardening (issue 21, points 1 and 2): what a damaged or hostile capture does to
+/// `replay --json`.
+mod hostile {
+    use super::*;
+    use droidctl::capture::btsnoop::Datalink;
+    use droidctl::capture::hci::build::Log;
+
+    fn stderr(o: &Output) -> String {
+        String::from_utf8_lossy(&o.stderr).into_owned()
+    }
+
+    #[test]
+    fn a_long_silence_is_jumped_not_sampled_every_interval() {
+        // 63 bytes: a connect and an end 100,000 s later. Sampling every 100 ms made a
+        // million samples (162 MB); the silence is now jumped and said.
+        let dir = tmp("silence");
+        let path = dir.join("silence.capture");
+        std::fs::write(
+            &path,
+            "droidctl-capture 1\n# model: r2d2\n0.000 connect\n100000000.000 end\n",
+        )
+        .unwrap();
+        let o = droidctl(&["replay", path.to_str().unwrap(), "--json"]);
+        let samples = lines(&o);
+        assert!(samples.len() <= 4, "{} lines", samples.len());
+        assert_eq!(samples.last().unwrap()["done"], true);
+        assert!(stderr(&o).contains("no traffic from"), "{}", stderr(&o));
+    }
+
+    #[test]
+    fn a_span_no_recording_holds_is_refused_with_one_line() {
+        let dir = tmp("span");
+        let path = dir.join("span.capture");
+        std::fs::write(
+            &path,
+            "droidctl-capture 1\n# model: r2d2\n0.000 connect\n9000000000000000.000 end\n",
+        )
+        .unwrap();
+        let o = droidctl(&["replay", path.to_str().unwrap(), "--json"]);
+        assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+        assert_eq!(stderr(&o).trim().lines().count(), 1, "{}", stderr(&o));
+        assert!(stderr(&o).contains("at most 7 days"), "{}", stderr(&o));
+
+        // The same from a phone's log: a droid's two notifications 9e15 µs apart.
+        let mut log = Log::new(Datalink::H4);
+        log.le_connected(0x40);
+        log.declare(0x40, &[(0x0E, droidctl::family::v2::gatt::V2_API)]);
+        let wake = droidctl::protocol::v2::cmd::wake().to_packet(0).encode();
+        log.notify(0x40, 0x0E, &wake);
+        log.advance(9_000_000_000_000);
+        log.notify(0x40, 0x0E, &wake);
+        let snoop = dir.join("far.btsnoop");
+        std::fs::write(&snoop, &log.bytes).unwrap();
+        let o = droidctl(&["replay", snoop.to_str().unwrap(), "--json"]);
+        assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+        assert_eq!(stderr(&o).trim().lines().count(), 1, "{}", stderr(&o));
+        assert!(stderr(&o).contains("at most 7 days"), "{}", stderr(&o));
+    }
+
+    #[test]
+    fn a_mission_step_too_long_to_wait_is_named_not_a_panic() {
+        let dir = tmp("step");
+        let path = dir.join("step.capture");
+        std::fs::write(
+            &path,
+            "droidctl-capture 1\n# model: r2d2\n0.000 connect\n0.000 mark mission-start\n\
+             1.000 mark step 1 wait 1e20s\n2.000 mark mission-end\n3.000 end\n",
+        )
+        .unwrap();
+        let o = droidctl(&["replay", path.to_str().unwrap(), "--json"]);
+        assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+        let e = stderr(&o);
+        assert_eq!(e.trim().lines().count(), 1, "{e}");
+        assert!(e.contains("1.000 ms") && e.contains("86400s"), "{e}");
+    }
+}

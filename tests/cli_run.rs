@@ -156,6 +156,25 @@ fn malformed_script_exits_2_naming_the_line_and_sends_nothing() {
 }
 
 #[test]
+fn a_duration_beyond_the_limit_exits_2_naming_the_line_not_a_panic() {
+    // `Duration::from_secs_f64` panicked on these before the limit was checked (exit 101).
+    let dir = Scratch::new("cli-run", "huge");
+    for (i, line) in ["wait 1e20s", "drive 1 1 for 1e20s", "wait 1e23ms"]
+        .iter()
+        .enumerate()
+    {
+        let script = dir.file(&format!("huge{i}.txt"), &format!("wake\n{line}\n"));
+        let (o, _) = dir.run_timed(&["run", path(&script), "--sim"]);
+        assert_eq!(o.status.code(), Some(2), "{line}: {}", stderr(&o));
+        let err = stderr(&o);
+        assert!(
+            err.contains(&format!("huge{i}.txt:2:")) && err.contains("the limit is 86400s"),
+            "{line}: {err}"
+        );
+    }
+}
+
+#[test]
 fn missing_script_exits_2() {
     let dir = Scratch::new("cli-run", "missing");
     let (o, _) = dir.run_timed(&["run", "no-such-mission.txt", "--sim"]);

@@ -117,9 +117,10 @@ fn mark(c: &Capture, name: &str) -> Option<Duration> {
 
 /// The action of a mission's `step LINE TEXT` mark.
 fn step_action(mark: &str) -> Option<crate::script::Action> {
-    let rest = mark.strip_prefix("step ")?;
-    let (_, text) = rest.split_once(' ')?;
-    crate::script::parse(text).ok()?.pop().map(|s| s.action)
+    crate::script::parse(step_text(mark)?)
+        .ok()?
+        .pop()
+        .map(|s| s.action)
 }
 
 /// Telemetry as a mission folds it, from the mirror's outputs. A mission asks for a stance
@@ -157,17 +158,68 @@ pub struct ReplaySummary {
     pub y_cm: Option<f32>,
 }
 
+/// The longest capture replay reads, from its first event to its last: a week of recording.
+/// Anything longer is a damaged time stamp, not a session.
+pub const MAX_SPAN: Duration = Duration::from_secs(7 * 24 * 3600);
+
+/// A stretch of a capture without a single event this long (the link down, the recorder
+/// idle) is not sampled every interval: `replay --json` jumps over it and says so.
+pub const MAX_GAP: Duration = Duration::from_secs(600);
+
+/// What replay refuses to read: a capture spanning more than [`MAX_SPAN`], or a mission step
+/// mark whose script line cannot be read (a `wait 1e20s`). One line saying where and why.
+pub fn validate(c: &Capture) -> Result<(), String> {
+    if let (Some(first), Some(last)) = (c.events.first(), c.events.last()) {
+        let span = last.at.saturating_sub(first.at);
+        if span > MAX_SPAN {
+            return Err(format!(
+                "the {} spans {:.0} days from its first event to its last; a recording holds at \
+                 most {} days (is a time stamp damaged?)",
+                c.kind,
+                span.as_secs_f64() / 86_400.0,
+                MAX_SPAN.as_secs() / 86_400
+            ));
+        }
+    }
+    for t in &c.events {
+        if let Event::Mark(m) = &t.event
+            && let Some(text) = step_text(m)
+            && let Err(errors) = crate::script::parse(text)
+        {
+            let why: Vec<String> = errors.iter().map(|e| e.message.clone()).collect();
+            return Err(format!(
+                "the mark at {} ms (`{m}`): {}",
+                super::format_time(t.at),
+                why.join("; ")
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The script line of a mission's `step LINE TEXT` mark.
+fn step_text(mark: &str) -> Option<&str> {
+    let rest = mark.strip_prefix("step ")?;
+    rest.split_once(' ').map(|(_, text)| text)
+}
+
 /// The telemetry samples of a whole capture, every `interval` from the mission's start (its
 /// `mission-start` mark, else the first connect, else the first event) to its end
 /// (`mission-end`, else the last event), then one at the end: what `droidctl run --json`
 /// printed when the capture was recorded from it. A sample at `T` holds what arrived before
 /// `T` (the live sampler reads the telemetry as the tick fires, before that instant's
 /// notifications are through the session).
+///
+/// Each sample goes to `emit` as it is made (memory stays flat whatever the capture's span);
+/// a stretch of more than [`MAX_GAP`] without events is jumped over and reported to `gap`
+/// (from, to).
 pub fn samples(
     capture: &Capture,
     model: Model,
     interval: Duration,
-) -> (Vec<Sample>, ReplaySummary) {
+    emit: &mut dyn FnMut(&Sample) -> std::io::Result<()>,
+    gap: &mut dyn FnMut(Duration, Duration),
+) -> std::io::Result<ReplaySummary> {
     let interval = interval.max(Duration::from_millis(1));
     let start = mark(capture, "mission-start")
         .or_else(|| {
@@ -198,7 +250,6 @@ pub fn samples(
     let mut mirror = Mirror::new(model);
     let mut telemetry = Telemetry::default();
     let mut out = Vec::new();
-    let mut samples = Vec::new();
     let mut next_sample = start;
     let mut events = capture.events[..end_idx].iter().peekable();
     let sample = |t: &Telemetry, at: Duration| {
@@ -228,14 +279,25 @@ pub fn samples(
             apply(e, &mut telemetry);
             idx += 1;
         }
-        samples.push(sample(&telemetry, next_sample));
+        emit(&sample(&telemetry, next_sample))?;
         next_sample += interval;
+        // Nothing happens until the next event (or the end): jump a long silence.
+        let quiet_until = events.peek().map_or(end, |e| e.at.min(end));
+        if quiet_until.saturating_sub(next_sample) > MAX_GAP {
+            let steps = (quiet_until - next_sample).as_nanos() / interval.as_nanos().max(1);
+            let resume = next_sample + interval * steps.min(u32::MAX as u128) as u32;
+            gap(
+                next_sample.saturating_sub(start),
+                resume.saturating_sub(start),
+            );
+            next_sample = resume;
+        }
     }
     // The rest up to the end, then the final sample.
     for e in events {
         apply(e, &mut telemetry);
     }
-    samples.push(sample(&telemetry, end));
+    emit(&sample(&telemetry, end))?;
     // Counters up to the end, as the mission counted them.
     let st = mirror.stats();
     let summary = ReplaySummary {
@@ -249,5 +311,5 @@ pub fn samples(
         x_cm: telemetry.x_cm,
         y_cm: telemetry.y_cm,
     };
-    (samples, summary)
+    Ok(summary)
 }

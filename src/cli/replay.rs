@@ -77,6 +77,8 @@ pub fn load(args: &ReplayArgs) -> Result<(crate::capture::Capture, crate::model:
         .collect::<Result<Vec<_>, _>>()?;
     let capture =
         crate::capture::Capture::load_with(&args.file, &handles).map_err(CliError::failure)?;
+    crate::capture::replay::validate(&capture)
+        .map_err(|e| CliError::usage(format!("{}: {e}", args.file.display())))?;
     let model = match &args.model {
         Some(m) => crate::model::Model::from_id(m)
             .ok_or_else(|| CliError::usage(format!("unknown model {m:?}")))?,
@@ -111,23 +113,30 @@ pub fn run(args: ReplayArgs) -> Result<i32, CliError> {
         eprintln!("droidctl: {}: {w}", args.file.display());
     }
     if args.json {
-        let (samples, summary) = crate::capture::replay::samples(
+        use std::io::Write;
+        let mut out = std::io::BufWriter::new(std::io::stdout().lock());
+        let file = args.file.display().to_string();
+        // Each sample is written as it is made: memory stays flat whatever the span.
+        let summary = crate::capture::replay::samples(
             &capture,
             model,
             std::time::Duration::from_millis(args.interval),
-        );
-        let mut out = std::io::stdout().lock();
-        use std::io::Write;
-        for s in &samples {
-            writeln!(out, "{}", serde_json::to_string(s).unwrap_or_default())
-                .map_err(CliError::output)?;
-        }
-        writeln!(
-            out,
-            "{}",
-            serde_json::to_string(&summary).unwrap_or_default()
+            &mut |s| {
+                serde_json::to_writer(&mut out, s).map_err(std::io::Error::other)?;
+                writeln!(out)
+            },
+            &mut |from, to| {
+                eprintln!(
+                    "droidctl: {file}: no traffic from {:.3} s to {:.3} s: not sampled",
+                    from.as_secs_f64(),
+                    to.as_secs_f64()
+                )
+            },
         )
         .map_err(CliError::output)?;
+        serde_json::to_writer(&mut out, &summary).map_err(|e| CliError::output(e.into()))?;
+        writeln!(out).map_err(CliError::output)?;
+        out.flush().map_err(CliError::output)?;
         return Ok(0);
     }
     play(capture, model, args.file.display().to_string())

@@ -47,11 +47,11 @@ fn parse_secs(s: &str) -> Result<Duration, String> {
     if !v.is_finite() || v <= 0.0 {
         return Err(format!("`{s}`: the timeout must be more than 0 seconds"));
     }
-    let d = Duration::from_secs_f64(v);
-    if d > MAX_SCAN {
+    // Checked before converting, which panics on what a Duration cannot hold.
+    if v > MAX_SCAN.as_secs_f64() {
         return Err(format!("`{s}`: at most {} seconds", MAX_SCAN.as_secs()));
     }
-    Ok(d)
+    Ok(Duration::from_secs_f64(v))
 }
 
 /// Run `droidctl scan` on the system's adapter.
