@@ -38,6 +38,15 @@ struct Relay {
 
 impl Relay {
     async fn start(models: &[Model], cfg: ServerConfig) -> Relay {
+        Relay::start_with(models, cfg, |sim| sim).await
+    }
+
+    /// A relay whose backend is `wrap` around the simulated droids.
+    async fn start_with(
+        models: &[Model],
+        cfg: ServerConfig,
+        wrap: impl FnOnce(Arc<SimBackend>) -> Arc<dyn GattBackend>,
+    ) -> Relay {
         let sim = Arc::new(SimBackend::new(models, GattFaults::none()));
         let events: Arc<Mutex<Vec<ServerEvent>>> = Arc::default();
         let sink: EventSink = {
@@ -54,7 +63,7 @@ impl Relay {
             .unwrap();
         let addr = listener.local_addr().unwrap();
         let (stop, stopped) = oneshot::channel::<()>();
-        let backend: Arc<dyn GattBackend> = sim.clone();
+        let backend = wrap(sim.clone());
         let done = tokio::spawn(server::serve(listener, backend, cfg, sink, async {
             let _ = stopped.await;
         }));
@@ -684,15 +693,18 @@ async fn a_reader_that_cannot_keep_up_is_dropped() {
     }
     .encode(&mut one)
     .unwrap();
-    let batch: Vec<u8> = one.repeat(1000);
+    // Batches within the server's bound on queued requests: what fills up is the send
+    // queue, answers the flooder never reads.
+    let batch: Vec<u8> = one.repeat(droidctl::relay::server::MAX_QUEUED / 8);
     let mut sent = 0usize;
     let flooding = async {
-        // At most ~40 MB: the server drops us long before.
-        for _ in 0..800 {
+        // At most ~5 MB: the server drops us long before.
+        for _ in 0..5000 {
             if flood.write_all(&batch).await.is_err() {
                 return true;
             }
             sent += batch.len();
+            tokio::task::yield_now().await;
         }
         false
     };
@@ -1076,4 +1088,141 @@ async fn waiting_for_a_scan_is_not_silence() {
         t0.elapsed()
     );
     server.abort();
+}
+
+/// The simulated droids, with scans that take as long as the client asks (a real adapter's).
+struct SlowScanSim(Arc<SimBackend>);
+
+impl GattBackend for SlowScanSim {
+    fn scan(
+        &self,
+        t: Duration,
+    ) -> futures_util::future::BoxFuture<
+        '_,
+        Result<
+            Vec<droidctl::relay::backend::BackendDevice>,
+            droidctl::relay::backend::BackendError,
+        >,
+    > {
+        Box::pin(async move {
+            sleep(t).await;
+            self.0.scan(t).await
+        })
+    }
+    fn find<'a>(
+        &'a self,
+        name: &'a str,
+        t: Duration,
+    ) -> futures_util::future::BoxFuture<
+        'a,
+        Result<
+            Option<droidctl::relay::backend::BackendDevice>,
+            droidctl::relay::backend::BackendError,
+        >,
+    > {
+        self.0.find(name, t)
+    }
+    fn connect<'a>(
+        &'a self,
+        address: &'a str,
+    ) -> futures_util::future::BoxFuture<
+        'a,
+        Result<droidctl::relay::backend::Connected, droidctl::relay::backend::BackendError>,
+    > {
+        self.0.connect(address)
+    }
+    fn describe(&self) -> String {
+        "simulated droids, slow scans".into()
+    }
+}
+
+async fn slow_relay() -> Relay {
+    Relay::start_with(&[Model::BB9E], cfg(), |sim| Arc::new(SlowScanSim(sim))).await
+}
+
+/// A server stopping while a client waits for a 25 s scan does not wait for the scan: the
+/// client's droid is stopped and released within a second (it used to wait 10 s, then abort
+/// the client before the stop was written).
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn stopping_the_server_mid_scan_stops_the_droid_within_a_second() {
+    let relay = slow_relay().await;
+    let addr = relay.address(0);
+    let mut a = Raw::connect(relay.addr).await;
+    a.v2_ready(&addr).await;
+    a.drive(150).await;
+    wait_until("rolling", || relay.speed(0) > 50.0).await;
+    a.send(&Request::Scan { timeout: 25.0 }).await;
+    sleep(Duration::from_millis(200)).await;
+    let sim = relay.sim.clone();
+    let events = relay.events.clone();
+    let t0 = Instant::now();
+    relay.stop().await;
+    assert!(
+        t0.elapsed() < Duration::from_secs(1),
+        "the server took {:?} to stop",
+        t0.elapsed()
+    );
+    assert!(
+        events
+            .lock()
+            .unwrap()
+            .iter()
+            .any(|e| matches!(e, ServerEvent::DroidReleased { stopped: true, .. })),
+        "the droid was not stopped on release"
+    );
+    wait_until("stopped", || {
+        sim.state(&addr).unwrap().velocity_cm_s.abs() < 0.5
+    })
+    .await;
+    assert!(a.closed().await);
+}
+
+/// A client that goes while its 25 s scan runs is noticed at once: its droid is stopped.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_client_leaving_mid_scan_is_noticed_and_its_droid_stopped() {
+    let relay = slow_relay().await;
+    let addr = relay.address(0);
+    let mut a = Raw::connect(relay.addr).await;
+    a.v2_ready(&addr).await;
+    a.drive(150).await;
+    wait_until("rolling", || relay.speed(0) > 50.0).await;
+    a.send(&Request::Scan { timeout: 25.0 }).await;
+    sleep(Duration::from_millis(200)).await;
+    let t0 = Instant::now();
+    drop(a);
+    relay
+        .wait_event("release with stop", |e| {
+            matches!(e, ServerEvent::DroidReleased { stopped: true, .. })
+        })
+        .await;
+    assert!(t0.elapsed() < Duration::from_secs(1), "{:?}", t0.elapsed());
+    wait_until("stopped", || relay.speed(0).abs() < 0.5).await;
+    relay.stop().await;
+}
+
+/// Hundreds of SCANs pipelined in one write would keep a client's task (and the adapter's
+/// scan) busy for hours: past the queue bound the client is told so and closed, and others
+/// are served.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn pipelined_requests_beyond_the_bound_close_the_client() {
+    let relay = slow_relay().await;
+    let mut greedy = Raw::connect(relay.addr).await;
+    let mut burst = Vec::new();
+    for _ in 0..500 {
+        burst.extend(Request::Scan { timeout: 30.0 }.to_bytes().unwrap());
+    }
+    greedy.send_raw(&burst).await;
+    let t0 = Instant::now();
+    relay
+        .wait_event("queue bound", |e| {
+            matches!(e, ServerEvent::ProtocolError { error, .. } if error.contains("scans queued"))
+        })
+        .await;
+    assert!(greedy.closed().await, "the greedy client was not closed");
+    assert!(t0.elapsed() < Duration::from_secs(2), "{:?}", t0.elapsed());
+    // Someone else is answered.
+    let mut other = Raw::connect(relay.addr).await;
+    other.send(&Request::Scan { timeout: 0.1 }).await;
+    assert!(matches!(other.reply().await, Some(Reply::Devices(_))));
+    relay.stop().await;
 }

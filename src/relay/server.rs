@@ -15,18 +15,18 @@
 //! once (the next one gets an ERROR and is closed).
 
 use super::backend::{Connected, DroidEvent, GattBackend, GattConnection, parse_uuid};
-use super::protocol::{Device, Limits, Reply, Request, RequestDecoder};
+use super::protocol::{DecodeError, Device, Limits, Reply, Request, RequestDecoder};
 use crate::gatt::GattUuid;
 use crate::model::Model;
 use serde::Serialize;
-use std::collections::HashMap;
+use std::collections::{HashMap, VecDeque};
 use std::future::Future;
 use std::net::SocketAddr;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 use tokio::io::{AsyncReadExt, AsyncWriteExt};
-use tokio::net::tcp::OwnedWriteHalf;
+use tokio::net::tcp::{OwnedReadHalf, OwnedWriteHalf};
 use tokio::net::{TcpListener, TcpSocket, TcpStream};
 use tokio::sync::{Semaphore, mpsc, watch};
 use tokio::time::{Instant, sleep_until, timeout};
@@ -365,6 +365,68 @@ struct ClientTask {
 /// Read buffer size: a few requests at a time.
 const READ_CHUNK: usize = 4096;
 
+/// Requests a client may have waiting behind the one being served: the protocol's SEQ is one
+/// byte, so more outstanding requests could not be told apart. A client that sends more
+/// without waiting for the answers is told so and closed.
+pub const MAX_QUEUED: usize = 256;
+
+/// Scans and finds (up to [`ServerConfig::max_scan`] each) a client may have waiting: one
+/// pipelining hundreds of SCANs in one write would hold its task, and the adapter's scan,
+/// for hours.
+pub const MAX_QUEUED_SCANS: usize = 2;
+
+/// Move the requests `decoder` has whole into `queue`; `Err` when more wait than the bounds
+/// allow.
+fn take_requests(
+    decoder: &mut RequestDecoder,
+    queue: &mut VecDeque<Result<Request, DecodeError>>,
+) -> Result<(), String> {
+    let is_scan = |r: &Result<Request, DecodeError>| {
+        matches!(r, Ok(Request::Scan { .. } | Request::Find { .. }))
+    };
+    let mut scans = queue.iter().filter(|r| is_scan(r)).count();
+    while let Some(r) = decoder.next() {
+        scans += is_scan(&r) as usize;
+        queue.push_back(r);
+        if scans > MAX_QUEUED_SCANS {
+            return Err(format!(
+                "more than {MAX_QUEUED_SCANS} scans queued behind the one being served; wait \
+                 for the answers"
+            ));
+        }
+        if queue.len() > MAX_QUEUED {
+            return Err(format!(
+                "more than {MAX_QUEUED} requests queued behind the one being served; wait for \
+                 the answers"
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// While a request is served: keep reading the client, so its departure is noticed (and
+/// what it sends meanwhile queued). Resolves only with the reason to close: the client went,
+/// reading failed, or it queued too much.
+async fn read_while_busy(
+    rd: &mut OwnedReadHalf,
+    buf: &mut [u8],
+    decoder: &mut RequestDecoder,
+    queue: &mut VecDeque<Result<Request, DecodeError>>,
+) -> String {
+    loop {
+        match rd.read(buf).await {
+            Ok(0) => return "the client disconnected".to_string(),
+            Ok(n) => {
+                decoder.push(&buf[..n]);
+                if let Err(why) = take_requests(decoder, queue) {
+                    return why;
+                }
+            }
+            Err(e) => return format!("reading failed: {e}"),
+        }
+    }
+}
+
 impl ClientTask {
     fn new(shared: Arc<Shared>, id: u64, peer: SocketAddr) -> Self {
         ClientTask {
@@ -393,16 +455,39 @@ impl ClientTask {
         let mut last_heard = Instant::now();
         let mut partial_since: Option<Instant> = None;
         let mut writer_done = false;
+        // Requests decoded and waiting their turn, at most `MAX_QUEUED`.
+        let mut queue: VecDeque<Result<Request, DecodeError>> = VecDeque::new();
         let reason = 'client: loop {
             // Whole requests first, in order. Time spent serving them (a scan, a connect) is
-            // not the client's silence.
+            // not the client's silence; while one runs, the server's stop and the client's
+            // departure are still heard, so a droid is never left to a long scan.
             let mut served = false;
-            while let Some(r) = decoder.next() {
+            loop {
+                if let Err(why) = take_requests(&mut decoder, &mut queue) {
+                    self.protocol_error(why.clone());
+                    let _ = self.send(&Reply::error(&why, None));
+                    break 'client why;
+                }
+                let Some(r) = queue.pop_front() else { break };
                 served = true;
                 let flow = match r {
                     Ok(req) => {
                         self.requests += 1;
-                        self.handle(req).await
+                        let busy = read_while_busy(&mut rd, &mut buf, &mut decoder, &mut queue);
+                        // The request first: one answered at once never lets the client's
+                        // backlog be read into the queue; a slow one does.
+                        tokio::select! {
+                            biased;
+                            flow = self.handle(req) => flow,
+                            _ = stop.changed() => Err(Close("the server is stopping".into())),
+                            why = busy => {
+                                if why.starts_with("more than") {
+                                    self.protocol_error(why.clone());
+                                    let _ = self.send(&Reply::error(&why, None));
+                                }
+                                Err(Close(why))
+                            }
+                        }
                     }
                     Err(e) => self.decode_error(e),
                 };
