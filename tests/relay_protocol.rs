@@ -322,14 +322,24 @@ fn every_length_is_checked_before_its_bytes() {
         d.push(&[0xff]);
         assert_eq!(d.next(), None);
     }
-    // Replies: a message, a UUID, a device list.
-    let cases: Vec<(Expect, Vec<u8>, Field)> = vec![
-        (Expect::Seq, vec![0xff, 0x10, 0x01], Field::Message),
-        (Expect::Seq, vec![0x01, 0x00, 65], Field::Characteristic),
-        (Expect::Scan, vec![0x00, 0x01, 0x01], Field::Devices),
-        (Expect::Find, vec![0x00, 0x01, 0x00], Field::Name),
+    // Replies: a message, a UUID, a device list (against a smaller device limit: the
+    // default is all a u16 count can say).
+    let few = Limits {
+        devices: 256,
+        ..lim
+    };
+    let cases: Vec<(Expect, Vec<u8>, Field, Limits)> = vec![
+        (Expect::Seq, vec![0xff, 0x10, 0x01], Field::Message, lim),
+        (
+            Expect::Seq,
+            vec![0x01, 0x00, 65],
+            Field::Characteristic,
+            lim,
+        ),
+        (Expect::Scan, vec![0x00, 0x01, 0x01], Field::Devices, few),
+        (Expect::Find, vec![0x00, 0x01, 0x00], Field::Name, lim),
     ];
-    for (e, bytes, field) in cases {
+    for (e, bytes, field, lim) in cases {
         let mut d = ReplyDecoder::new(lim);
         d.expect(e);
         d.push(&bytes);
@@ -338,6 +348,34 @@ fn every_length_is_checked_before_its_bytes() {
             other => panic!("{bytes:?}: {other:?}"),
         }
     }
+}
+
+/// A crowded room: a server may list up to 65,535 devices, and a client with the default
+/// limits reads them all (it used to refuse more than 256, saying "bytes" for a count).
+#[test]
+fn a_scan_of_a_crowded_room_is_read_whole() {
+    let devices: Vec<Device> = (0..1000)
+        .map(|i| Device {
+            name: format!("D2-{i:04X}"),
+            address: format!("5E:D0:00:00:{:02X}:{:02X}", i / 256, i % 256),
+        })
+        .collect();
+    let mut d = ReplyDecoder::new(Limits::default());
+    d.expect(Expect::Scan);
+    d.push(&Reply::Devices(devices.clone()).to_bytes().unwrap());
+    assert_eq!(d.next(), Some(Ok(Reply::Devices(devices))));
+    let few = Limits {
+        devices: 10,
+        ..Limits::default()
+    };
+    let mut d = ReplyDecoder::new(few);
+    d.expect(Expect::Scan);
+    d.push(&[0x00, 0x00, 0x0B]);
+    let e = d.next().unwrap().unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        "the device list is 11 devices long, more than the 10 accepted"
+    );
 }
 
 #[test]

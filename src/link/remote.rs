@@ -23,7 +23,6 @@ use std::sync::{Arc, Mutex};
 use std::time::Duration;
 use tokio::io::{AsyncReadExt, AsyncWriteExt};
 use tokio::net::TcpStream;
-use tokio::net::tcp::OwnedWriteHalf;
 use tokio::sync::{mpsc, oneshot};
 use tokio::time::{Instant, sleep_until, timeout};
 
@@ -140,9 +139,12 @@ fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
     m.lock().unwrap_or_else(|e| e.into_inner())
 }
 
+/// The writing half of a connection to a relay.
+type RelayWriter = Box<dyn tokio::io::AsyncWrite + Send + Unpin>;
+
 /// One TCP connection to a relay: requests out, replies matched to their waiters.
 struct RelayClient {
-    writer: tokio::sync::Mutex<Option<OwnedWriteHalf>>,
+    writer: tokio::sync::Mutex<Option<RelayWriter>>,
     decoder: Arc<Mutex<ReplyDecoder>>,
     waiters: Arc<Mutex<Waiters>>,
     reader: tokio::task::JoinHandle<()>,
@@ -176,7 +178,15 @@ impl RelayClient {
             }
         };
         let _ = stream.set_nodelay(true);
-        let (mut rd, wr) = stream.into_split();
+        Ok(RelayClient::over(stream, relay))
+    }
+
+    /// A client over any byte stream to a relay (a TCP connection; a pipe in tests).
+    fn over(
+        stream: impl tokio::io::AsyncRead + tokio::io::AsyncWrite + Send + 'static,
+        relay: &RelayAddr,
+    ) -> (RelayClient, mpsc::Receiver<Incoming>) {
+        let (mut rd, wr) = tokio::io::split(stream);
         let decoder = Arc::new(Mutex::new(ReplyDecoder::new(Limits::default())));
         let waiters = Arc::new(Mutex::new(Waiters::default()));
         let (tx, rx) = mpsc::channel(EVENTS);
@@ -243,16 +253,16 @@ impl RelayClient {
                 let _ = tx.try_send(Incoming::Closed(why));
             })
         };
-        Ok((
+        (
             RelayClient {
-                writer: tokio::sync::Mutex::new(Some(wr)),
+                writer: tokio::sync::Mutex::new(Some(Box::new(wr))),
                 decoder,
                 waiters,
                 reader,
                 relay: relay.clone(),
             },
             rx,
-        ))
+        )
     }
 
     /// Send `req`, its expectation registered first so the reply is read right.
@@ -293,17 +303,27 @@ impl RelayClient {
         };
         let req = make(seq);
         let name = req.name();
-        if let Err(e) = self.send(&req).await {
-            lock(&self.waiters).seq.remove(&seq);
-            return Err(e);
-        }
-        match timeout(limit, rx).await {
-            Ok(Ok(r)) => r,
-            Ok(Err(_)) => Err("the relay connection ended".into()),
+        // The write is bounded too: a relay that stops reading fills the socket's buffers,
+        // and an unbounded write would hang the session's writer for good.
+        let answered = timeout(limit, async {
+            self.send(&req).await?;
+            rx.await
+                .unwrap_or_else(|_| Err("the relay connection ended".into()))
+        })
+        .await;
+        match answered {
+            Ok(r) => {
+                if r.is_err() {
+                    lock(&self.waiters).seq.remove(&seq);
+                }
+                r
+            }
             Err(_) => {
                 lock(&self.waiters).seq.remove(&seq);
+                // A request may be half written: the stream cannot be followed any more.
+                self.writer.lock().await.take();
                 Err(format!(
-                    "the relay did not answer {name} within {:.0} s",
+                    "the relay did not take or answer {name} within {:.0} s",
                     limit.as_secs_f64()
                 ))
             }
@@ -320,16 +340,19 @@ impl RelayClient {
             }
             w.discovery.push_back(tx);
         }
-        self.send(&req).await?;
-        match timeout(limit, rx).await {
-            Ok(Ok(r)) => r,
-            Ok(Err(_)) => Err("the relay connection ended".into()),
-            Err(_) => Err(format!(
-                "the relay did not answer {} within {:.0} s",
+        let answered = timeout(limit, async {
+            self.send(&req).await?;
+            rx.await
+                .unwrap_or_else(|_| Err("the relay connection ended".into()))
+        })
+        .await;
+        answered.unwrap_or_else(|_| {
+            Err(format!(
+                "the relay did not take or answer {} within {:.0} s",
                 req.name(),
                 limit.as_secs_f64()
-            )),
-        }
+            ))
+        })
     }
 
     /// END, then close (best effort).
@@ -816,6 +839,37 @@ impl LinkWriter for RemoteWriter {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A relay that stops reading: a pipe whose buffer is full. A request must give up within
+    /// its limit; the write used to wait for room forever, hanging the session's writer.
+    #[tokio::test]
+    async fn a_write_to_a_relay_that_stops_reading_gives_up() {
+        let (ours, _theirs) = tokio::io::duplex(16);
+        let relay = RelayAddr {
+            host: "pipe".into(),
+            port: 0,
+        };
+        let (client, _events) = RelayClient::over(ours, &relay);
+        let write = |seq| Request::Write {
+            seq,
+            characteristic: "00010002-574f-4f20-5370-6865726f2121".into(),
+            data: vec![0x55; 20],
+        };
+        let r = timeout(
+            Duration::from_secs(5),
+            client.call(write, Duration::from_millis(200)),
+        )
+        .await
+        .expect("the call gave up by itself");
+        let e = r.unwrap_err();
+        assert!(e.contains("did not take or answer WRITE"), "{e}");
+        // The stream may hold half a request now: later requests fail at once.
+        let e = client
+            .call(write, Duration::from_millis(200))
+            .await
+            .unwrap_err();
+        assert!(e.contains("closed"), "{e}");
+    }
 
     #[test]
     fn relay_addresses_parse() {

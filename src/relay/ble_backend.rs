@@ -25,6 +25,9 @@ const RESCAN: Duration = Duration::from_secs(5);
 /// Notifications waiting for the client task.
 const EVENTS: usize = 1024;
 
+/// Device names remembered between scans, at most (see [`BleBackend::remember`]).
+const MAX_NAMES: usize = 1024;
+
 /// The local Bluetooth adapter as a relay backend.
 pub struct BleBackend {
     central: Arc<dyn BleCentral>,
@@ -35,6 +38,11 @@ pub struct BleBackend {
 }
 
 impl BleBackend {
+    /// How many device names are remembered.
+    pub fn names_remembered(&self) -> usize {
+        self.names.lock().unwrap_or_else(|e| e.into_inner()).len()
+    }
+
     pub fn new(central: Arc<dyn BleCentral>) -> Self {
         BleBackend {
             central,
@@ -43,8 +51,14 @@ impl BleBackend {
         }
     }
 
-    fn remember(&self, entries: &[ScanEntry]) {
+    /// Keep the names heard, for INIT (bounded: see [`MAX_NAMES`]).
+    pub(crate) fn remember(&self, entries: &[ScanEntry]) {
         let mut names = self.names.lock().unwrap_or_else(|e| e.into_inner());
+        // Phones and headphones rotate random addresses: the names heard would pile up for
+        // as long as the relay runs. Past the bound only this scan's devices are kept.
+        if names.len() + entries.len() > MAX_NAMES {
+            names.retain(|a, _| entries.iter().any(|e| e.address == *a));
+        }
         for e in entries {
             if let Some(n) = &e.name {
                 names.insert(e.address, n.clone());
@@ -267,5 +281,41 @@ impl GattConnection for BleConnection {
         Box::pin(async move {
             let _ = self.p.disconnect().await;
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::link::ble::DeviceId;
+    use crate::link::ble::fake::FakeCentral;
+
+    fn entry(i: u32) -> ScanEntry {
+        let address = BleAddress([0x4A, 0, (i >> 16) as u8, (i >> 8) as u8, i as u8, 1]);
+        ScanEntry {
+            name: Some(format!("phone {i}")),
+            model: None,
+            id: DeviceId::from(address),
+            address,
+            rssi: Some(-80),
+            heard: true,
+        }
+    }
+
+    /// Rotating random addresses are heard scan after scan: the names kept stay bounded.
+    #[test]
+    fn names_of_rotating_addresses_do_not_pile_up() {
+        let b = BleBackend::new(Arc::new(FakeCentral::new()));
+        for scan in 0..50u32 {
+            let heard: Vec<ScanEntry> = (0..100).map(|i| entry(scan * 100 + i)).collect();
+            b.remember(&heard);
+            assert!(
+                b.names_remembered() <= MAX_NAMES,
+                "{}",
+                b.names_remembered()
+            );
+        }
+        // The latest scan's names are kept.
+        assert!(b.names_remembered() >= 100);
     }
 }

@@ -67,7 +67,8 @@ pub struct Limits {
     pub data: usize,
     /// An ERROR's message.
     pub message: usize,
-    /// Devices in one SCAN answer.
+    /// Devices in one SCAN answer: as many as the format's u16 count can say, as many as a
+    /// server may send (a crowded room must not break a client's scan).
     pub devices: usize,
 }
 
@@ -78,7 +79,7 @@ impl Default for Limits {
             name: 248,
             data: 512,
             message: 4096,
-            devices: 256,
+            devices: u16::MAX as usize,
         }
     }
 }
@@ -311,6 +312,16 @@ pub enum Field {
     Devices,
 }
 
+impl Field {
+    /// What a length of this field counts.
+    fn unit(self) -> &'static str {
+        match self {
+            Field::Devices => "devices",
+            _ => "bytes",
+        }
+    }
+}
+
 impl fmt::Display for Field {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(match self {
@@ -340,7 +351,7 @@ pub enum DecodeError {
     #[error("unknown {side} opcode 0x{op:02x}")]
     UnknownOpcode { side: Side, op: u8 },
     /// A length prefix above the limit: rejected before its bytes are read.
-    #[error("{field} is {len} bytes long, more than the {max} accepted")]
+    #[error("{field} is {len} {} long, more than the {max} accepted", field.unit())]
     TooLong {
         field: Field,
         len: usize,
