@@ -1226,3 +1226,62 @@ async fn pipelined_requests_beyond_the_bound_close_the_client() {
     assert!(matches!(other.reply().await, Some(Reply::Devices(_))));
     relay.stop().await;
 }
+
+/// A client that goes mid-drive leaves its droid stopped at the heading it last drove: the
+/// relay reads the client's writes with the droid's family (a stop at heading 0 turned the
+/// droid on the spot as it stopped).
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_departed_clients_droid_stops_at_its_last_heading() {
+    use droidctl::link::ble::fake::{FakeCentral, FakePeripheral};
+    use droidctl::link::ble::{Advertisement, BleAddress};
+    use droidctl::protocol::v2::cmd;
+    use droidctl::protocol::v2::wire::DriveFlags;
+    use droidctl::relay::ble_backend::BleBackend;
+
+    let central = FakeCentral::new();
+    let droid = FakePeripheral::for_profile(&droidctl::family::gatt_profile(Model::R2D2));
+    let address = BleAddress([0xD2, 0, 0, 0, 0x1A, 0x2C]);
+    central.add_device(
+        Advertisement {
+            address,
+            name: Some("D2-1A2C".into()),
+            rssi: Some(-60),
+        },
+        droid.clone(),
+    );
+    let backend: Arc<dyn GattBackend> = Arc::new(BleBackend::new(Arc::new(central)));
+    let (addr, server) = serve_forever(backend, cfg(), Arc::new(|_| {})).await;
+    let mut c = Raw::connect(addr).await;
+    c.init("D2:00:00:00:1A:2C").await.unwrap();
+    c.write(&V2_ANTI_DOS.to_string(), V2_UNLOCK).await.unwrap();
+    let api = V2_API.to_string();
+    // Two drives, the last toward 135°, each cut into 20-byte writes as BLE carries them.
+    let heading = Heading::new(135).unwrap();
+    let last = cmd::drive_with_heading(90, heading, DriveFlags::empty());
+    for (seq, c2) in [
+        cmd::drive_with_heading(60, Heading::new(20).unwrap(), DriveFlags::empty()),
+        last.clone(),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        for chunk in c2.to_packet(seq as u8).encode().chunks(20) {
+            c.write(&api, chunk).await.unwrap();
+        }
+    }
+    let before = droid.writes_to(V2_API).len();
+    drop(c);
+    written_after_release(&droid, V2_API).await;
+    let written: Vec<u8> = droid
+        .writes_to(V2_API)
+        .into_iter()
+        .skip(before)
+        .flat_map(|(_, d)| d)
+        .collect();
+    let f = family::for_model(Model::R2D2);
+    let stop = f.stop_after(Some(&last.into()));
+    let (expected, _) = f.codec().encode(&stop, 0, false);
+    assert_eq!(written, expected, "the stop keeps heading 135");
+    assert_eq!(&stop.data()[..3], &[0, 0, 135]);
+    server.abort();
+}

@@ -55,6 +55,8 @@ struct FakeState {
     closes: Vec<(Instant, u32)>,
     /// Answer every request that asks for a response, with success and no data.
     auto_respond: bool,
+    /// What the link says of its quiet time ([`Link::keepalive`]).
+    keepalive: Option<Duration>,
 }
 
 #[derive(Clone)]
@@ -155,6 +157,10 @@ impl Link for FakeLink {
                 events: rx,
             })
         })
+    }
+
+    fn keepalive(&self) -> Option<Duration> {
+        self.0.lock().keepalive
     }
 
     fn describe(&self) -> String {
@@ -1136,4 +1142,45 @@ async fn stop_now_keeps_the_last_heading() {
     let sent = fake.wait_packets(2).await;
     assert!(is_drive(&sent[1]));
     assert_eq!(sent[1].data, [0, 0, 123, 0], "speed 0 at heading 123");
+}
+
+/// A link that closes when quiet (a relay's idle timeout) is written to in time: an idle
+/// session sends a harmless ping at least every keepalive period, and none on a link without
+/// one.
+#[tokio::test(start_paused = true)]
+async fn a_quiet_link_that_needs_traffic_gets_a_ping_in_time() {
+    let fake = Fake::new();
+    fake.auto_respond(true);
+    fake.lock().keepalive = Some(Duration::from_secs(20));
+    let s = connected(&fake, quick()).await;
+    s.send(drive(0, 90)).unwrap();
+    sleep(Duration::from_secs(65)).await;
+    let sent = fake.sent();
+    let pings: Vec<&Sent> = sent
+        .iter()
+        .filter(|w| (w.packet.did, w.packet.cid) == (cmd::ping().did, cmd::ping().cid))
+        .collect();
+    assert!(pings.len() >= 3, "{} pings in 65 s", pings.len());
+    let mut last = sent[0].at;
+    for w in &sent {
+        assert!(
+            w.at - last <= Duration::from_secs(20) + ms(50),
+            "a quiet stretch of {:?}",
+            w.at - last
+        );
+        last = w.at;
+    }
+
+    let quiet = Fake::new();
+    quiet.auto_respond(true);
+    let s2 = connected(&quiet, quick()).await;
+    sleep(Duration::from_secs(65)).await;
+    assert!(
+        quiet
+            .packets()
+            .iter()
+            .all(|p| (p.did, p.cid) != (cmd::ping().did, cmd::ping().cid)),
+        "no pings on a link that stays open however quiet"
+    );
+    drop((s, s2));
 }

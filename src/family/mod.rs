@@ -104,6 +104,12 @@ pub trait Family: Sync {
     fn wake(&self) -> Option<Command>;
     /// Cheap activity that keeps the droid awake.
     fn ping(&self) -> Command;
+    /// Something harmless to write when a link needs traffic to stay open
+    /// ([`crate::link::Link::keepalive`]); `last_drive` is the drive command last written.
+    fn keepalive(&self, last_drive: Option<&Command>) -> Command {
+        let _ = last_drive;
+        self.ping()
+    }
     /// Put the droid to sleep (sent on quit when configured).
     fn sleep(&self) -> Option<Command> {
         None

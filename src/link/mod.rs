@@ -105,6 +105,12 @@ pub trait Link: Send {
     fn retry_hint(&mut self) -> BoxFuture<'_, ()> {
         Box::pin(std::future::pending())
     }
+    /// How long the link may go without a write before it is closed under the session (a
+    /// relay closes silent clients): the session writes something harmless in time. `None`
+    /// (the default): the link stays open however quiet.
+    fn keepalive(&self) -> Option<std::time::Duration> {
+        None
+    }
     /// A name for the status bar: "R2-D2 D2-1A2B (simulated)".
     fn describe(&self) -> String;
 }

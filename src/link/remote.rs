@@ -153,6 +153,8 @@ struct RelayClient {
 
 /// Bytes read at once.
 const READ_CHUNK: usize = 4096;
+/// The longest a session over a relay stays without writing (see [`Link::keepalive`]).
+pub const KEEPALIVE: Duration = Duration::from_secs(20);
 /// ON_DATA waiting for the link's reader.
 const EVENTS: usize = 1024;
 
@@ -764,6 +766,12 @@ impl Link for RemoteLink {
                 tracing::warn!(error = %e, "relay open failed");
             })
         })
+    }
+
+    /// A relay closes a client silent for its idle timeout (`droidctl serve`: 60 s by
+    /// default): a third of that is written in time.
+    fn keepalive(&self) -> Option<Duration> {
+        Some(KEEPALIVE)
     }
 
     fn describe(&self) -> String {

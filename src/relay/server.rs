@@ -16,7 +16,7 @@
 
 use super::backend::{Connected, DroidEvent, GattBackend, GattConnection, parse_uuid};
 use super::protocol::{DecodeError, Device, Limits, Reply, Request, RequestDecoder};
-use crate::gatt::GattUuid;
+use crate::gatt::{CharRole, Endpoint, GattUuid};
 use crate::model::Model;
 use serde::Serialize;
 use std::collections::{HashMap, VecDeque};
@@ -343,6 +343,10 @@ struct Held {
     key: String,
     /// The model whose stop command is written when the client goes.
     stop_as: Option<Model>,
+    /// The client's writes read as its family's commands, to know the last drive: the stop
+    /// keeps its heading (a stop at heading 0 would turn the droid on the spot).
+    writes: Option<Box<dyn crate::family::Reader>>,
+    last_drive: Option<crate::family::Command>,
     /// Characteristics subscribed to, with the UUID as the client wrote it (ON_DATA echoes
     /// it, so a client that subscribed to `2a00` hears about `2a00`).
     subscribed: HashMap<GattUuid, String>,
@@ -719,6 +723,7 @@ impl ClientTask {
                 match timeout(op, held.conn.write(uuid, &data)).await {
                     Ok(Ok(())) => {
                         self.writes += 1;
+                        held.note_write(uuid, &data);
                         self.send(&Reply::Ok { seq })
                     }
                     Ok(Err(e)) => self.failed("WRITE", e.0, Some(seq)),
@@ -796,6 +801,10 @@ impl ClientTask {
             address,
             key,
             stop_as: c.stop_as,
+            writes: c
+                .stop_as
+                .map(|m| crate::family::for_model(m).side_reader(crate::family::Side::Host, false)),
+            last_drive: None,
             subscribed: HashMap::new(),
         });
         self.send(&Reply::Ok { seq })
@@ -848,7 +857,10 @@ impl ClientTask {
         };
         let gone = reason.starts_with("the droid disconnected");
         let stopped = match held.stop_as {
-            Some(model) if !gone => stop(&mut *held.conn, model, self.cfg().op_timeout).await,
+            Some(model) if !gone => {
+                let last = held.last_drive.take();
+                stop(&mut *held.conn, model, last.as_ref(), self.cfg().op_timeout).await
+            }
             _ => false,
         };
         let _ = timeout(self.cfg().op_timeout, held.conn.disconnect()).await;
@@ -875,10 +887,49 @@ async fn next_event(droid: &mut Option<Held>) -> Option<DroidEvent> {
     }
 }
 
-/// Write the family's stop (speed 0) to the droid, to the characteristics its profile names.
-pub async fn stop(conn: &mut dyn GattConnection, model: Model, op: Duration) -> bool {
+impl Held {
+    /// Read what the client wrote as its family's commands and keep the last drive.
+    fn note_write(&mut self, uuid: GattUuid, data: &[u8]) {
+        let (Some(model), Some(reader)) = (self.stop_as, self.writes.as_mut()) else {
+            return;
+        };
+        let family = crate::family::for_model(model);
+        let to = match crate::family::gatt_profile(model).role_of(uuid) {
+            Some(CharRole::Channel) => Endpoint::Api,
+            Some(CharRole::Input(e)) => e,
+            // Handshake writes are not commands.
+            _ => return,
+        };
+        let mut last = None;
+        // Reading into memory cannot fail.
+        let _ = reader.write(
+            to,
+            data,
+            Some(&mut |f| {
+                if let Some((cmd, _, _)) = f.packet().and_then(|p| p.as_command())
+                    && family.is_drive(&cmd)
+                {
+                    last = Some(cmd);
+                }
+                Ok(())
+            }),
+        );
+        if last.is_some() {
+            self.last_drive = last;
+        }
+    }
+}
+
+/// Write the family's stop (speed 0, at the heading of `last`, the client's last drive) to
+/// the droid, to the characteristics its profile names.
+pub async fn stop(
+    conn: &mut dyn GattConnection,
+    model: Model,
+    last: Option<&crate::family::Command>,
+    op: Duration,
+) -> bool {
     let family = crate::family::for_model(model);
-    let cmd = family.stop_after(None);
+    let cmd = family.stop_after(last);
     let (writes, _) = family.codec().encode_writes(&cmd, 0, false);
     let profile = crate::family::gatt_profile(model);
     let mut ok = true;

@@ -470,6 +470,8 @@ impl Task {
     async fn connected_with(&mut self, codec: &mut dyn Codec, conn: &mut Connection) -> Ended {
         let mut chunks: VecDeque<(Endpoint, Vec<u8>)> = VecDeque::new();
         let mut next_write = Instant::now();
+        let keepalive = self.link.keepalive();
+        let mut last_write = Instant::now();
         loop {
             let last = lock(&self.shared.shutdown).take();
             if let Some(last) = last {
@@ -511,7 +513,19 @@ impl Task {
                             return Ended::LinkLost(format!("write failed: {e}"));
                         }
                         next_write = Instant::now() + self.cfg.pacing;
+                        last_write = Instant::now();
                     }
+                }
+                // A link that closes when quiet (a relay's idle timeout) gets a harmless
+                // write in time.
+                _ = sleep_until(last_write + keepalive.unwrap_or_default()), if keepalive.is_some() && !has_work => {
+                    let cmd = self.family.keepalive(lock(&self.shared.last_drive).as_ref());
+                    tracing::debug!(command = %cmd.name(), "keepalive");
+                    let _ = lock(&self.shared.queue).push(Queued {
+                        quiet: true,
+                        ..Queued::new(cmd)
+                    });
+                    last_write = Instant::now();
                 }
                 _ = self.shared.wake.notified(), if !has_work => {}
                 _ = sleep_until(deadline.unwrap_or_else(Instant::now)), if deadline.is_some() => self.expire(),

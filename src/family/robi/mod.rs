@@ -224,6 +224,13 @@ impl Family for Robi {
         Command::Robi(RobiControl::STOP)
     }
 
+    /// The remote control as it was last written: the robot goes on doing what it does.
+    fn keepalive(&self, last_drive: Option<&Command>) -> Command {
+        last_drive
+            .cloned()
+            .unwrap_or(Command::Robi(RobiControl::STOP))
+    }
+
     /// Forward at `speed`, straight: Robi has no heading to steer to. The controller uses
     /// [`Family::steer`] instead; this serves stops and scripts.
     fn drive(&self, speed: u8, _heading: Heading, reverse: bool) -> Command {
@@ -301,6 +308,13 @@ mod tests {
                 steering: 128
             })
         );
+    }
+
+    #[test]
+    fn keepalive_repeats_the_remote_control_as_it_was() {
+        let moving = Robi.steer(120, 0.3).unwrap();
+        assert_eq!(Robi.keepalive(Some(&moving)), moving);
+        assert!(Robi.keepalive(None).is_stop());
     }
 
     #[test]
