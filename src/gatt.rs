@@ -42,6 +42,32 @@ pub struct GattUuid(u128);
 const BLUETOOTH_BASE: u128 = 0x0000_0000_0000_1000_8000_0080_5f9b_34fb;
 
 impl GattUuid {
+    /// A UUID as people and clients write it: `00010002-574f-4f20-5370-6865726f2121` (any
+    /// case), the same without hyphens, or a 16-bit `2a00` / `0x2A00` on the Bluetooth base.
+    pub fn parse(s: &str) -> Option<GattUuid> {
+        let t = s.trim();
+        let t = t
+            .strip_prefix("0x")
+            .or_else(|| t.strip_prefix("0X"))
+            .unwrap_or(t);
+        if t.len() == 4 && t.chars().all(|c| c.is_ascii_hexdigit()) {
+            return u16::from_str_radix(t, 16).ok().map(GattUuid::from_u16);
+        }
+        let hex: String = if t.len() == 36 {
+            let b = t.as_bytes();
+            if [8, 13, 18, 23].iter().any(|&i| b[i] != b'-') {
+                return None;
+            }
+            t.chars().filter(|c| *c != '-').collect()
+        } else {
+            t.to_string()
+        };
+        if hex.len() != 32 || !hex.chars().all(|c| c.is_ascii_hexdigit()) {
+            return None;
+        }
+        u128::from_str_radix(&hex, 16).ok().map(GattUuid::from_u128)
+    }
+
     pub const fn from_u128(v: u128) -> Self {
         GattUuid(v)
     }
@@ -260,6 +286,22 @@ mod tests {
         let short = GattUuid::from_u16(0x8765);
         assert_eq!(short.to_string(), "00008765-0000-1000-8000-00805f9b34fb");
         assert_eq!(short.as_u16(), Some(0x8765));
+    }
+
+    #[test]
+    fn uuids_parse_in_every_form() {
+        let api = GattUuid::from_u128(0x0001_0002_574f_4f20_5370_6865_726f_2121);
+        let frames = GattUuid::from_u16(0x8765);
+        let p = GattUuid::parse;
+        assert_eq!(p("00010002-574f-4f20-5370-6865726f2121"), Some(api));
+        assert_eq!(p("00010002-574F-4F20-5370-6865726F2121"), Some(api));
+        assert_eq!(p("00010002574f4f2053706865726f2121"), Some(api));
+        assert_eq!(p("8765"), Some(frames));
+        assert_eq!(p("0x8765"), Some(frames));
+        assert_eq!(p("00010002-574f-4f20-5370-6865726f212"), None);
+        assert_eq!(p("00010002+574f-4f20-5370-6865726f2121"), None);
+        assert_eq!(p("zz"), None);
+        assert_eq!(p("é"), None);
     }
 
     #[test]

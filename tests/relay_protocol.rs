@@ -2,7 +2,7 @@
 //! spherov2's `tcp_adapter.py` and `tcp_server.py` write, round trips, decoding independent
 //! of chunking, length limits enforced before the bytes arrive, and garbage never panicking.
 
-use droidctl::relay::protocol::{
+use droidctl::protocol::relay::{
     DecodeError, Device, Expect, Field, Limits, Reply, ReplyDecoder, Request, RequestDecoder,
 };
 use proptest::collection::vec;

@@ -8,7 +8,7 @@
 
 #![no_main]
 
-use droidctl::relay::protocol::{Expect, Limits, Reply, ReplyDecoder, Request, RequestDecoder};
+use droidctl::protocol::relay::{Expect, Limits, Reply, ReplyDecoder, Request, RequestDecoder};
 use libfuzzer_sys::fuzz_target;
 
 fn same(a: &Request, b: &Request) -> bool {

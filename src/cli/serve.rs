@@ -4,9 +4,9 @@
 
 use super::CliError;
 use crate::model::Model;
+use crate::protocol::relay::DEFAULT_PORT;
 use crate::relay::backend::GattBackend;
 use crate::relay::ble_backend::BleBackend;
-use crate::relay::protocol::DEFAULT_PORT;
 use crate::relay::server::{self, EventSink, ServerConfig, ServerEvent};
 use crate::relay::sim_backend::SimBackend;
 use crate::sim::gatt::GattFaults;

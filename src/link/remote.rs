@@ -1,5 +1,5 @@
 //! `--remote HOST[:PORT]`: a droid behind a TCP relay (`droidctl serve`, or spherov2.py's
-//! own `tcp_server`), speaking spherov2's relay protocol ([`crate::relay::protocol`]).
+//! own `tcp_server`), speaking spherov2's relay protocol ([`crate::protocol::relay`]).
 //!
 //! [`RemoteLink`] is a [`Link`] like the BLE one: each `open()` makes a TCP connection,
 //! INITs the droid (the relay connects to it), runs the model's handshake writes and
@@ -15,8 +15,7 @@ use crate::gatt::Endpoint;
 use crate::gatt::{GattProfile, GattUuid, HandshakeStep};
 use crate::link::{Connection, Link, LinkError, LinkEvent, LinkWriter};
 use crate::model::Model;
-use crate::relay::backend::parse_uuid;
-use crate::relay::protocol::{DEFAULT_PORT, Device, Limits, Reply, ReplyDecoder, Request};
+use crate::protocol::relay::{DEFAULT_PORT, Device, Limits, Reply, ReplyDecoder, Request};
 use futures_util::future::BoxFuture;
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
@@ -725,7 +724,8 @@ impl RemoteLink {
                         characteristic,
                         data,
                     }) => {
-                        let ours = parse_uuid(&characteristic).is_some_and(|u| notify.contains(&u));
+                        let ours =
+                            GattUuid::parse(&characteristic).is_some_and(|u| notify.contains(&u));
                         if !ours || data.is_empty() {
                             continue;
                         }

@@ -3,6 +3,7 @@
 
 pub mod decode;
 pub mod notify;
+pub mod relay;
 pub mod rsrcp;
 pub mod schema;
 pub mod table;

@@ -6,7 +6,6 @@
 
 pub mod backend;
 pub mod ble_backend;
-pub mod protocol;
 pub mod record;
 pub mod server;
 pub mod sim_backend;

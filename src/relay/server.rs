@@ -14,10 +14,10 @@
 //! [`ServerConfig::write_timeout`], and at most [`ServerConfig::max_clients`] are served at
 //! once (the next one gets an ERROR and is closed).
 
-use super::backend::{Connected, DroidEvent, GattBackend, GattConnection, parse_uuid};
-use super::protocol::{DecodeError, Device, Limits, Reply, Request, RequestDecoder};
+use super::backend::{Connected, DroidEvent, GattBackend, GattConnection};
 use crate::gatt::{CharRole, Endpoint, GattUuid};
 use crate::model::Model;
+use crate::protocol::relay::{DecodeError, Device, Limits, Reply, Request, RequestDecoder};
 use serde::Serialize;
 use std::collections::{HashMap, VecDeque};
 use std::future::Future;
@@ -619,7 +619,7 @@ impl ClientTask {
         self.send(&Reply::error(&error, seq))
     }
 
-    fn decode_error(&mut self, e: super::protocol::DecodeError) -> Result<(), Close> {
+    fn decode_error(&mut self, e: crate::protocol::relay::DecodeError) -> Result<(), Close> {
         let msg = e.to_string();
         self.protocol_error(msg.clone());
         self.send(&Reply::error(&msg, e.seq()))?;
@@ -679,7 +679,7 @@ impl ClientTask {
                 seq,
                 characteristic,
             } => {
-                let Some(uuid) = parse_uuid(&characteristic) else {
+                let Some(uuid) = GattUuid::parse(&characteristic) else {
                     return self.failed(
                         "SET_CALLBACK",
                         format!("{characteristic:?} is not a characteristic UUID"),
@@ -710,7 +710,7 @@ impl ClientTask {
                 characteristic,
                 data,
             } => {
-                let Some(uuid) = parse_uuid(&characteristic) else {
+                let Some(uuid) = GattUuid::parse(&characteristic) else {
                     return self.failed(
                         "WRITE",
                         format!("{characteristic:?} is not a characteristic UUID"),
