@@ -1285,3 +1285,29 @@ async fn a_departed_clients_droid_stops_at_its_last_heading() {
     assert_eq!(&stop.data()[..3], &[0, 0, 135]);
     server.abort();
 }
+
+/// An idle timeout too long for the clock means "never", not a panic in every client task.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn an_idle_timeout_beyond_the_clock_is_never() {
+    let relay = Relay::start(
+        &[Model::R2D2],
+        ServerConfig {
+            idle_timeout: Some(Duration::MAX),
+            request_timeout: Duration::MAX,
+            ..cfg()
+        },
+    )
+    .await;
+    let mut c = Raw::connect(relay.addr).await;
+    c.send(&Request::Scan { timeout: 0.0 }).await;
+    assert!(matches!(c.reply().await, Some(Reply::Devices(_))));
+    // A partial request arms the request timer too: a SCAN in two pieces.
+    let scan = Request::Scan { timeout: 0.0 };
+    let bytes = scan.to_bytes().unwrap();
+    c.dec.expect(scan.expect().unwrap());
+    c.send_raw(&bytes[..1]).await;
+    sleep(Duration::from_millis(100)).await;
+    c.send_raw(&bytes[1..]).await;
+    assert!(matches!(c.reply().await, Some(Reply::Devices(_))));
+    relay.stop().await;
+}

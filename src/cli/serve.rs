@@ -34,8 +34,9 @@ pub struct ServeArgs {
     /// One JSON object per event on stdout (clients, droids, errors), for scripts.
     #[arg(long)]
     pub json: bool,
-    /// Close a client that sends nothing for this long, stopping its droid (0: never).
-    #[arg(long, value_name = "SECS", default_value_t = 60)]
+    /// Close a client that sends nothing for this long, stopping its droid (0: never; at
+    /// most a week).
+    #[arg(long, value_name = "SECS", default_value_t = 60, value_parser = clap::value_parser!(u64).range(0..=604_800))]
     pub idle_timeout: u64,
     /// Most clients served at once.
     #[arg(long, value_name = "N", default_value_t = 16, value_parser = clap::value_parser!(u16).range(1..=1024))]
@@ -93,12 +94,7 @@ pub fn exposure_warning(addr: &SocketAddr) -> Option<String> {
 
 pub fn run(args: ServeArgs) -> Result<i32, CliError> {
     let models = args.sim.as_deref().map(sim_models).transpose()?;
-    let mut faults = GattFaults::none();
-    for f in &args.faults {
-        faults
-            .add(f)
-            .map_err(|e| CliError::usage(format!("--fault {f}: {e}")))?;
-    }
+    let faults = GattFaults::parse_all(&args.faults).map_err(CliError::usage)?;
     let _ = crate::logging::init();
     let cfg = ServerConfig {
         max_clients: args.max_clients as usize,
@@ -178,6 +174,21 @@ mod tests {
         assert!(exposure_warning(&"0.0.0.0:50004".parse().unwrap()).is_some());
         assert!(exposure_warning(&"127.0.0.1:50004".parse().unwrap()).is_none());
         assert!(exposure_warning(&"[::1]:50004".parse().unwrap()).is_none());
+    }
+
+    #[test]
+    fn an_idle_timeout_the_clock_cannot_hold_is_refused() {
+        use clap::Parser;
+        #[derive(Parser)]
+        struct T {
+            #[command(flatten)]
+            serve: ServeArgs,
+        }
+        assert!(T::try_parse_from(["t", "--idle-timeout", "604800"]).is_ok());
+        for v in ["604801", "18446744073709551615"] {
+            let e = T::try_parse_from(["t", "--idle-timeout", v]).err().unwrap();
+            assert_eq!(e.exit_code(), 2, "{v}: {e}");
+        }
     }
 
     #[test]

@@ -9,7 +9,7 @@
 
 use super::CliError;
 use crate::model::Model;
-use crate::sim::gatt::{FAULT_SYNTAX, GattFaults};
+use crate::sim::gatt::GattFaults;
 use clap::Args;
 
 #[derive(Debug, Clone, Args)]
@@ -100,12 +100,7 @@ fn check(args: &SimArgs) -> Result<Plan, CliError> {
     if models.len() + remembered.len() > MAX {
         return Err(CliError::usage(format!("at most {MAX} droids at once")));
     }
-    let mut faults = GattFaults::none();
-    for f in &args.faults {
-        faults
-            .add(f)
-            .map_err(|e| CliError::usage(format!("--fault: {e} ({FAULT_SYNTAX})")))?;
-    }
+    let mut faults = GattFaults::parse_all(&args.faults).map_err(CliError::usage)?;
     if let Some(bus) = &args.bus
         && bus.trim().is_empty()
     {

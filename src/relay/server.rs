@@ -507,8 +507,12 @@ impl ClientTask {
                 (_, Some(t)) => Some(t),
                 (_, None) => Some(Instant::now()),
             };
-            let idle_at = self.cfg().idle_timeout.map(|d| last_heard + d);
-            let partial_at = partial_since.map(|t| t + self.cfg().request_timeout);
+            // Checked: a configured timeout too long for the clock means "never".
+            let idle_at = self
+                .cfg()
+                .idle_timeout
+                .and_then(|d| last_heard.checked_add(d));
+            let partial_at = partial_since.and_then(|t| t.checked_add(self.cfg().request_timeout));
             let deadline = match (idle_at, partial_at) {
                 (Some(a), Some(b)) => Some(a.min(b)),
                 (a, b) => a.or(b),

@@ -5,11 +5,15 @@
 
 use super::SimConfig;
 use super::physics::{angle_diff, approach, clamp_to_room, heading_vector, wrap360};
+use super::sleep::{SleepStep, SleepTimer};
 use crate::model::Model;
 use crate::protocol::notify::Collision;
 use crate::protocol::wire::{AccelRaw, CollisionAxis, LegAction, LegState};
 use crate::units::{HEAD_MAX_DEG, HEAD_MIN_DEG};
 use std::time::Duration;
+
+/// A droid warns this long before it falls asleep for inactivity.
+const WARN_BEFORE_SLEEP: Duration = Duration::from_secs(10);
 
 /// The slowest contact with a wall that counts as a collision, cm/s.
 const MIN_IMPACT_CM_S: f32 = 10.0;
@@ -85,9 +89,8 @@ pub struct Body {
     control_timeout: Option<Duration>,
     head_target: f32,
     transition: Option<Transition>,
-    last_activity: Duration,
-    inactivity_timeout: Duration,
-    will_sleep_sent: bool,
+    /// Soft sleep on inactivity, warning 10 s before (changed by Set Inactivity Timeout).
+    sleep: SleepTimer,
     /// Sensor streaming period (`None`: off).
     stream_every: Option<Duration>,
     next_sample: Duration,
@@ -106,7 +109,7 @@ pub struct Body {
 
 impl Body {
     pub fn new(model: Model, cfg: SimConfig) -> Self {
-        let inactivity_timeout = cfg.inactivity_timeout;
+        let sleep = SleepTimer::new(cfg.inactivity_timeout, WARN_BEFORE_SLEEP);
         let control_timeout = cfg.motion_timeout;
         let battery = cfg.battery_start_v;
         Body {
@@ -140,9 +143,7 @@ impl Body {
             control_timeout,
             head_target: 0.0,
             transition: None,
-            last_activity: Duration::ZERO,
-            inactivity_timeout,
-            will_sleep_sent: false,
+            sleep,
             stream_every: None,
             next_sample: Duration::ZERO,
             collision_notify: false,
@@ -206,11 +207,7 @@ impl Body {
             if self.stream_every.is_some() {
                 at(self.next_sample);
             }
-            let sleep = self.last_activity + self.inactivity_timeout;
-            if !self.will_sleep_sent {
-                at(sleep.saturating_sub(Duration::from_secs(10)));
-            }
-            at(sleep);
+            at(self.sleep.next_due());
             // The battery drains at the idle rate: the next level it crosses (3.6 V, 3.45 V).
             let v = self.state.battery_v;
             if self.voltage_state_now() != self.voltage_state {
@@ -234,19 +231,18 @@ impl Body {
 
     /// A command arrived that counts as activity (resets the inactivity timer).
     pub fn activity(&mut self) {
-        self.last_activity = self.now;
-        self.will_sleep_sent = false;
+        self.sleep.activity(self.now);
     }
 
     pub fn wake(&mut self) {
         if !self.state.awake {
             self.state.awake = true;
-            self.last_activity = self.now;
+            self.sleep.activity(self.now);
         }
     }
 
     pub fn set_inactivity_timeout(&mut self, t: Duration) {
-        self.inactivity_timeout = t.max(Duration::from_secs(1));
+        self.sleep.timeout = t.max(Duration::from_secs(1));
     }
 
     /// Roll at `speed` (0..=255 of top speed) facing `facing` degrees; `backward` backs up.
@@ -469,15 +465,10 @@ impl Body {
         }
         // Sleep on inactivity, warning 10 s before.
         if self.state.awake {
-            let idle = now.saturating_sub(self.last_activity);
-            let warn_at = self
-                .inactivity_timeout
-                .saturating_sub(Duration::from_secs(10));
-            if idle >= self.inactivity_timeout {
-                self.fall_asleep();
-            } else if idle >= warn_at && !self.will_sleep_sent {
-                self.will_sleep_sent = true;
-                self.events.push(SimEvent::WillSleep);
+            match self.sleep.poll(now, true) {
+                Some(SleepStep::Sleep { .. }) => self.fall_asleep(),
+                Some(SleepStep::Warn) => self.events.push(SimEvent::WillSleep),
+                None => {}
             }
         }
         self.motion(dt);

@@ -1,4 +1,6 @@
-//! Fault injection for the simulated link, all drawn from one seed: same seed, same run.
+//! Fault injection: for the simulated link ([`Faults`], all drawn from one seed: same seed,
+//! same run) and for the GATT-level droid ([`GattFaults`], the `--fault` of `sim --bluez`
+//! and `serve --sim`, parsed here).
 
 use crate::rng::Rng;
 use std::time::Duration;
@@ -67,6 +69,118 @@ impl Faults {
     pub fn delay(&self, rng: &mut Rng) -> Duration {
         let jitter_us = self.jitter.as_micros() as u64;
         self.latency + Duration::from_micros(rng.below(jitter_us + 1))
+    }
+}
+
+/// Faults the droid can inject at the GATT level. The command-line syntax (`--fault`) is
+/// parsed by [`GattFaults::add`].
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct GattFaults {
+    /// Refuse this many connection attempts, counting from the first (`u32::MAX`: all).
+    pub refuse_connects: u32,
+    /// Drop a connection this long after it was made: the first one only, or every one with
+    /// `disconnect_every`.
+    pub disconnect_after: Option<Duration>,
+    pub disconnect_every: bool,
+    /// Service discovery takes this long after a connect.
+    pub slow_resolve: Duration,
+    /// Not a fault but a droid's habit (`sim --bluez --idle-sleep SECS`): after this long
+    /// without a command (a write; counted from its first connection on) the droid sends its
+    /// will-sleep warning, and [`SLEEP_GRACE`](super::sleep::SLEEP_GRACE) later, with still
+    /// nothing received, it falls asleep for good: it drops the connection and stops
+    /// advertising. Robi 42 has no sleep timer and ignores it.
+    pub idle_sleep: Option<Duration>,
+}
+
+/// The `--fault` forms, for messages.
+pub const FAULT_SYNTAX: &str = "disconnect-after=SECS, disconnect-every=SECS, refuse-connect[=N] \
+                                or slow-resolve=SECS";
+
+impl GattFaults {
+    pub fn none() -> Self {
+        GattFaults::default()
+    }
+
+    /// Every `--fault` of a command line (`sim --bluez`, `serve --sim`), one message for any
+    /// that cannot be read.
+    pub fn parse_all(specs: &[String]) -> Result<GattFaults, String> {
+        let mut faults = GattFaults::none();
+        for f in specs {
+            faults
+                .add(f)
+                .map_err(|e| format!("--fault: {e} ({FAULT_SYNTAX})"))?;
+        }
+        Ok(faults)
+    }
+
+    /// Add one fault in its command-line form: `disconnect-after=SECS` (drop the first
+    /// connection SECS after it was made), `disconnect-every=SECS` (drop every connection
+    /// SECS after it was made), `refuse-connect` (refuse every connection attempt),
+    /// `refuse-connect=N` (refuse the first N), `slow-resolve=SECS` (services resolve SECS
+    /// after each connect).
+    pub fn add(&mut self, spec: &str) -> Result<(), String> {
+        let spec = spec.trim();
+        let (name, value) = match spec.split_once('=') {
+            Some((n, v)) => (n.trim(), Some(v.trim())),
+            None => (spec, None),
+        };
+        let secs = |v: Option<&str>| -> Result<Duration, String> {
+            let v = v.ok_or_else(|| format!("`{name}` needs a number of seconds: {name}=SECS"))?;
+            let s: f64 = v
+                .parse()
+                .map_err(|_| format!("`{spec}`: `{v}` is not a number of seconds"))?;
+            if !s.is_finite() || !(0.0..=3600.0).contains(&s) {
+                return Err(format!("`{spec}`: seconds must be within 0..=3600"));
+            }
+            Ok(Duration::from_secs_f64(s))
+        };
+        match name {
+            "disconnect-after" => {
+                self.disconnect_after = Some(secs(value)?);
+                self.disconnect_every = false;
+            }
+            "disconnect-every" => {
+                let d = secs(value)?;
+                if d.is_zero() {
+                    return Err(format!("`{spec}`: a connection must last some time"));
+                }
+                self.disconnect_after = Some(d);
+                self.disconnect_every = true;
+            }
+            "refuse-connect" => {
+                self.refuse_connects = match value {
+                    None => u32::MAX,
+                    Some(v) => v.parse().map_err(|_| {
+                        format!("`{spec}`: `{v}` is not a count of connection attempts")
+                    })?,
+                }
+            }
+            "slow-resolve" => self.slow_resolve = secs(value)?,
+            _ => return Err(format!("unknown fault `{spec}`: use {FAULT_SYNTAX}")),
+        }
+        Ok(())
+    }
+
+    /// The faults in effect, in their command-line form.
+    pub fn describe(&self) -> Vec<String> {
+        let mut out = Vec::new();
+        if let Some(d) = self.disconnect_after {
+            let name = if self.disconnect_every {
+                "disconnect-every"
+            } else {
+                "disconnect-after"
+            };
+            out.push(format!("{name}={}", d.as_secs_f64()));
+        }
+        match self.refuse_connects {
+            0 => {}
+            u32::MAX => out.push("refuse-connect".into()),
+            n => out.push(format!("refuse-connect={n}")),
+        }
+        if !self.slow_resolve.is_zero() {
+            out.push(format!("slow-resolve={}", self.slow_resolve.as_secs_f64()));
+        }
+        out
     }
 }
 

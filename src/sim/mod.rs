@@ -15,6 +15,7 @@ pub mod gatt;
 pub mod link;
 mod physics;
 pub mod robi;
+pub mod sleep;
 pub mod trace;
 pub mod v1;
 
@@ -47,6 +48,14 @@ pub trait WireDroid: Send {
     }
     fn advance(&mut self, now: Duration) -> Vec<Vec<u8>>;
     fn state(&self) -> &SimState;
+    /// The packet that warns of sleep, as the family sends it; `None` for a droid that never
+    /// sleeps (Robi 42).
+    fn will_sleep(&self) -> Option<Vec<u8>>;
+    /// What a read of the handshake characteristic returns (Robi: version and interval);
+    /// empty for droids with nothing to read.
+    fn handshake_value(&self) -> Vec<u8> {
+        Vec::new()
+    }
     /// When [`WireDroid::advance`] next has something to return: `None` to be advanced every
     /// physics step (the default), else the earliest time (`Duration::MAX`: nothing pending).
     /// The link steps the droid no more often than that.
@@ -70,6 +79,10 @@ impl WireDroid for SimDroid {
     }
     fn state(&self) -> &SimState {
         SimDroid::state(self)
+    }
+    /// Power / Will Sleep (13h/19h).
+    fn will_sleep(&self) -> Option<Vec<u8>> {
+        Some(crate::protocol::v2::Packet::notification(0x13, 0x19, Vec::new()).encode())
     }
     fn next_due(&self) -> Option<Duration> {
         SimDroid::next_due(self)
@@ -98,18 +111,45 @@ impl WireDroid for SimDroidV1 {
     fn state(&self) -> &SimState {
         SimDroidV1::state(self)
     }
+    /// The pre-sleep warning (async ID 05h).
+    fn will_sleep(&self) -> Option<Vec<u8>> {
+        use crate::protocol::v1::{AsyncPacket, Packet};
+        Packet::Async(AsyncPacket::new(0x05, Vec::new()))
+            .encode()
+            .ok()
+    }
     fn next_due(&self) -> Option<Duration> {
         SimDroidV1::next_due(self)
     }
 }
 
+/// A simulator front: the droid of a family, and its own physical figures.
+struct Front {
+    config: fn() -> SimConfig,
+    build: fn(Model, SimConfig) -> Box<dyn WireDroid>,
+}
+
+/// The one place a model's protocol picks its simulator front.
+fn front(model: Model) -> Front {
+    match model.protocol() {
+        Protocol::SpheroV2 => Front {
+            config: SimConfig::default,
+            build: |m, cfg| Box::new(SimDroid::new(m, cfg)),
+        },
+        Protocol::SpheroV1 => Front {
+            config: SimConfig::default,
+            build: |m, cfg| Box::new(SimDroidV1::new(m, cfg)),
+        },
+        Protocol::Rsrcp => Front {
+            config: SimRobi::config,
+            build: |_, cfg| Box::new(SimRobi::new(cfg)),
+        },
+    }
+}
+
 /// The simulated droid of a model, speaking its family's protocol.
 pub fn wire_droid(model: Model, cfg: SimConfig) -> Box<dyn WireDroid> {
-    match model.protocol() {
-        Protocol::SpheroV1 => Box::new(SimDroidV1::new(model, cfg)),
-        Protocol::Rsrcp => Box::new(SimRobi::new(cfg)),
-        Protocol::SpheroV2 => Box::new(SimDroid::new(model, cfg)),
-    }
+    (front(model).build)(model, cfg)
 }
 pub use faults::Faults;
 pub use link::SimLink;
@@ -180,19 +220,10 @@ pub struct SimConfig {
 }
 
 impl SimConfig {
-    /// The defaults with the model's own figures (Robi 42 is a slow differential-drive robot).
+    /// The defaults with the model's own figures, as its simulator front has them (Robi 42
+    /// is a slow differential-drive robot).
     pub fn for_model(model: Model) -> SimConfig {
-        let base = SimConfig::default();
-        match model.protocol() {
-            Protocol::Rsrcp => SimConfig {
-                top_speed_cm_s: 30.0,
-                accel_cm_s2: 60.0,
-                brake_cm_s2: 120.0,
-                radius_cm: 8.0,
-                ..base
-            },
-            _ => base,
-        }
+        (front(model).config)()
     }
 }
 

@@ -35,6 +35,17 @@ pub struct SimRobi {
 }
 
 impl SimRobi {
+    /// The Robi 42's figures: a slow, small differential-drive robot.
+    pub fn config() -> SimConfig {
+        SimConfig {
+            top_speed_cm_s: 30.0,
+            accel_cm_s2: 60.0,
+            brake_cm_s2: 120.0,
+            radius_cm: 8.0,
+            ..SimConfig::default()
+        }
+    }
+
     pub fn new(cfg: SimConfig) -> Self {
         let mut body = Body::new(Model::Robi42, cfg);
         body.wake();
@@ -207,5 +218,14 @@ impl super::WireDroid for SimRobi {
 
     fn whole_notifications(&self) -> bool {
         true
+    }
+
+    /// Robi has no sleep timer.
+    fn will_sleep(&self) -> Option<Vec<u8>> {
+        None
+    }
+
+    fn handshake_value(&self) -> Vec<u8> {
+        self.handshake().encode().to_vec()
     }
 }
