@@ -1466,3 +1466,106 @@ fn the_fail_safe_stops_a_droid_whose_host_vanished() {
         "droidctl set the fail-safe"
     );
 }
+
+/// Only the bus says who left: a client forging NameOwnerChanged for another client (a
+/// unicast signal reaches the virtual BlueZ whatever its match rules) does not tear down the
+/// other's connection.
+#[test]
+fn a_forged_name_owner_changed_does_not_disconnect_another_client() {
+    let sim = Sim::start(&["r2d2"]);
+    let a = Connection::new_address(&sim.address).unwrap();
+    let b = Connection::new_address(&sim.address).unwrap();
+    let adapter = "/org/bluez/hci0";
+    call(&a, adapter, "org.bluez.Adapter1", "StartDiscovery").unwrap();
+    let tree = managed(&a);
+    let dev = tree
+        .keys()
+        .find(|p| p.contains("dev_"))
+        .expect("the droid is heard")
+        .to_string();
+    call(&a, &dev, "org.bluez.Device1", "Connect").unwrap();
+    let victim = a.unique_name().to_string();
+    let mut forged = dbus::Message::new_signal(
+        "/org/freedesktop/DBus",
+        "org.freedesktop.DBus",
+        "NameOwnerChanged",
+    )
+    .unwrap()
+    .append3(victim.as_str(), victim.as_str(), "");
+    forged.set_destination(Some("org.bluez".into()));
+    use dbus::channel::Sender;
+    b.send(forged).unwrap();
+    std::thread::sleep(Duration::from_millis(500));
+    assert_eq!(
+        prop(&managed(&a), &dev, "org.bluez.Device1", "Connected"),
+        Some("true".into()),
+        "the forged signal disconnected the droid: {:?}",
+        sim.lines()
+    );
+    // The real thing still works: a leaves the bus and its connection ends.
+    drop(a);
+    sim.wait_line("left the bus", Duration::from_secs(3));
+}
+
+/// The processes whose parent is `pid`, with their state letter (`Z` for a zombie).
+fn children_of(pid: u32) -> Vec<(u32, char, String)> {
+    let mut out = Vec::new();
+    for entry in std::fs::read_dir("/proc").into_iter().flatten().flatten() {
+        let Some(p) = entry
+            .file_name()
+            .to_str()
+            .and_then(|n| n.parse::<u32>().ok())
+        else {
+            continue;
+        };
+        let Ok(stat) = std::fs::read_to_string(format!("/proc/{p}/stat")) else {
+            continue;
+        };
+        // pid (comm) state ppid …: comm may hold spaces, so split after its ')'.
+        let Some((head, rest)) = stat.rsplit_once(')') else {
+            continue;
+        };
+        let comm = head
+            .split_once('(')
+            .map(|(_, c)| c)
+            .unwrap_or("")
+            .to_string();
+        let mut f = rest.split_whitespace();
+        let state = f.next().and_then(|s| s.chars().next()).unwrap_or('?');
+        if f.next().and_then(|pp| pp.parse::<u32>().ok()) == Some(pid) {
+            out.push((p, state, comm));
+        }
+    }
+    out
+}
+
+/// `sim --bluez` killed with SIGKILL (no chance to clean up) takes its private dbus-daemon
+/// with it.
+#[test]
+fn a_killed_simulator_takes_its_dbus_daemon_with_it() {
+    let mut sim = Sim::start(&["r2d2"]);
+    let daemons: Vec<u32> = children_of(sim.child.id())
+        .into_iter()
+        .filter(|(_, _, comm)| comm.contains("dbus-daemon"))
+        .map(|(p, _, _)| p)
+        .collect();
+    assert_eq!(daemons.len(), 1, "one private dbus-daemon");
+    sim.child.kill().unwrap();
+    let _ = sim.child.wait();
+    let gone = |p: u32| match std::fs::read_to_string(format!("/proc/{p}/stat")) {
+        Err(_) => true,
+        Ok(stat) => stat
+            .rsplit_once(')')
+            .and_then(|(_, rest)| rest.split_whitespace().next())
+            .is_some_and(|s| s == "Z" || s == "X"),
+    };
+    let deadline = Instant::now() + Duration::from_secs(3);
+    while !gone(daemons[0]) {
+        assert!(
+            Instant::now() < deadline,
+            "dbus-daemon {} still runs after its parent was killed",
+            daemons[0]
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}

@@ -24,6 +24,8 @@ pub struct PrivateBus {
 
 impl PrivateBus {
     /// Start the daemon and wait until it listens.
+    /// Start the daemon. It dies with this process (`PR_SET_PDEATHSIG`, which follows the
+    /// starting *thread*: call this from the one that lives as long as the simulator).
     pub fn start() -> Result<PrivateBus, String> {
         let dir = make_dir()?;
         match Self::start_in(&dir) {
@@ -65,6 +67,24 @@ impl PrivateBus {
         {
             use std::os::unix::process::CommandExt;
             cmd.process_group(0);
+            // And it dies with droidctl, however droidctl ends: a SIGKILL gives droidctl no
+            // chance to stop it, and a daemon left behind keeps the bus (and its socket)
+            // alive for nothing.
+            let parent = std::process::id();
+            // SAFETY: between fork and exec only async-signal-safe calls are made (prctl,
+            // getppid, _exit), touching no memory of the parent's.
+            unsafe {
+                cmd.pre_exec(move || {
+                    if libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGKILL) != 0 {
+                        return Err(std::io::Error::last_os_error());
+                    }
+                    // The parent may have died before the call: then nobody would signal.
+                    if libc::getppid() as u32 != parent {
+                        libc::_exit(1);
+                    }
+                    Ok(())
+                });
+            }
         }
         let mut child = cmd.spawn().map_err(|e| {
             if e.kind() == std::io::ErrorKind::NotFound {
