@@ -6,6 +6,7 @@
 
 pub mod backend;
 pub mod ble_backend;
+pub mod events;
 pub mod record;
 pub mod server;
 pub mod sim_backend;
