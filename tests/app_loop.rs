@@ -3,8 +3,9 @@
 
 use droidctl::app::input::{KeyKind, TermEvent};
 use droidctl::app::run::{self, AppInputs, AppOptions, Exit, ExitReason};
-use droidctl::app::state::AppState;
+use droidctl::app::state::{AppState, Focus, Overlay};
 use droidctl::config::Config;
+use droidctl::config::{Key, KeyCode};
 use droidctl::family::setup::{SetupOptions, connect_setup};
 use droidctl::model::Model;
 use droidctl::protocol::v2::Packet;
@@ -12,7 +13,6 @@ use droidctl::session::{self, Direction, LogEntry, LogItem, SessionConfig, Sessi
 use droidctl::sim::{Faults, SimConfig, SimLink, link::SimProbe};
 use droidctl::teleop::gamepad::{Axis, PadEvent};
 use droidctl::teleop::held::ReleaseMode;
-use droidctl::teleop::keymap::{Key, KeyCode};
 use ratatui::{Frame, Terminal, backend::TestBackend};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
@@ -35,9 +35,24 @@ struct Harness {
 }
 
 async fn start(release: ReleaseMode, faults: Faults, pacing_ms: u64) -> Harness {
+    start_with(release, faults, pacing_ms, Config::defaults(), true).await
+}
+
+/// `tripod_on_connect` is both the session's setup and the app's option, as `droidctl` sets
+/// them.
+async fn start_with(
+    release: ReleaseMode,
+    faults: Faults,
+    pacing_ms: u64,
+    config: Config,
+    tripod_on_connect: bool,
+) -> Harness {
     let link = SimLink::new(Model::R2D2, SimConfig::default(), faults);
     let probe = link.probe();
-    let setup = SetupOptions::default();
+    let setup = SetupOptions {
+        tripod: tripod_on_connect,
+        ..SetupOptions::default()
+    };
     let session = session::start(
         Box::new(link),
         SessionConfig {
@@ -76,12 +91,12 @@ async fn start(release: ReleaseMode, faults: Faults, pacing_ms: u64) -> Harness 
     let (pad, pad_rx) = mpsc::channel(64);
     let (quit, quit_rx) = mpsc::channel(4);
     let opts = AppOptions {
-        config: Config::defaults(),
+        config,
         model: Model::R2D2,
         droid_name: "R2-D2 (simulated)".into(),
         log_path: None,
         release,
-        tripod_on_connect: true,
+        tripod_on_connect,
     };
     let s = session.clone();
     let app = tokio::spawn(async move {
@@ -395,4 +410,61 @@ async fn start_up_has_no_errors() {
     assert_eq!(st.droid_errors, 0);
     h.quit.send("test".into()).await.unwrap();
     h.app.await.unwrap();
+}
+
+#[tokio::test(start_paused = true)]
+async fn rebound_keys_work_in_every_context_and_show_in_help() {
+    let config = Config::parse_merged(
+        None,
+        "[keys]\nlog = [\"L\"]\n\
+         [keys.packet_log]\npause = [\"P\"]\nback = [\"x\"]\n\
+         [keys.help_overlay]\nnext_page = [\"n\"]\n",
+    )
+    .unwrap();
+    let h = start_with(REPORTED, Faults::none(), 5, config, true).await;
+    // `l` no longer opens the log; `L` does; there the default `p` does nothing, `P` pauses,
+    // and `x` goes back to driving.
+    for k in ['l', 'L', 'p', 'P', 'x', '?', 'n'] {
+        h.press(key(k)).await;
+        h.release(key(k)).await;
+        sleep(Duration::from_millis(20)).await;
+    }
+    h.quit.send("test".into()).await.unwrap();
+    let exit = h.app.await.unwrap();
+    let s = &exit.state;
+    assert!(s.log.paused, "P paused the log");
+    assert_eq!(s.focus, Focus::Drive, "x went back to driving");
+    assert_eq!(s.overlay, Overlay::Help);
+    assert_eq!(s.help_page, 1, "n turned the help page");
+    let line = |title: &str, action: &str| {
+        s.help
+            .iter()
+            .find(|sec| sec.title == title)
+            .and_then(|sec| sec.lines.iter().find(|l| l.action.starts_with(action)))
+            .map(|l| l.keys.clone())
+    };
+    assert_eq!(line("Packet log", "pause").as_deref(), Some("P"));
+    assert_eq!(line("Keyboard", "the packet log").as_deref(), Some("L"));
+    assert_eq!(line("Help", "next page").as_deref(), Some("n"));
+    assert_eq!(s.help_nav, "n/PgUp");
+}
+
+#[tokio::test(start_paused = true)]
+async fn tripod_on_connect_is_shown_only_when_the_setup_asks_for_it() {
+    use droidctl::protocol::wire::LegState;
+    use droidctl::telemetry::Stance;
+    for (tripod, expect) in [(true, true), (false, false)] {
+        let h = start_with(REPORTED, Faults::none(), 5, Config::defaults(), tripod).await;
+        h.quit.send("test".into()).await.unwrap();
+        let exit = h.app.await.unwrap();
+        let stance = exit.state.telemetry.stance;
+        let tripod_shown = matches!(
+            stance,
+            Stance::Transitioning(LegState::Tripod) | Stance::Tripod
+        );
+        assert_eq!(
+            tripod_shown, expect,
+            "tripod_on_connect {tripod}: {stance:?}"
+        );
+    }
 }

@@ -8,9 +8,9 @@ use droidctl::app::run::{AppInputs, AppOptions, Source, run_source};
 use droidctl::capture::replay::Replay;
 use droidctl::capture::{Capture, Event};
 use droidctl::config::Config;
+use droidctl::config::{Key, KeyCode};
 use droidctl::model::Model;
 use droidctl::teleop::held::ReleaseMode;
-use droidctl::teleop::keymap::{Key, KeyCode};
 use ratatui::{Terminal, backend::TestBackend, buffer::Buffer};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
@@ -124,11 +124,22 @@ fn key(code: KeyCode) -> TermEvent {
 /// Replay `capture` in the app under paused time, pressing `keys` at their times; the screen
 /// at the end.
 async fn replay_screen(capture: &Capture, keys: &[(u64, TermEvent)]) -> (Buffer, Vec<u8>) {
+    let (buffer, exit) = replay_with(capture, keys, Config::defaults()).await;
+    let telemetry = format!("{:?}", exit.state.telemetry).into_bytes();
+    (buffer, telemetry)
+}
+
+/// The same with `config`'s bindings; the screen and how the app ended.
+async fn replay_with(
+    capture: &Capture,
+    keys: &[(u64, TermEvent)],
+    config: Config,
+) -> (Buffer, droidctl::app::run::Exit) {
     let (term_tx, term_rx) = mpsc::channel(64);
     let (_pad_tx, pad_rx) = mpsc::channel(1);
     let (_quit_tx, quit_rx) = mpsc::channel(1);
     let opts = AppOptions {
-        config: Config::defaults(),
+        config,
         model: Model::R2D2,
         droid_name: "R2-D2 (replay)".into(),
         log_path: None,
@@ -157,9 +168,41 @@ async fn replay_screen(capture: &Capture, keys: &[(u64, TermEvent)]) -> (Buffer,
         run_source(&mut terminal, source, opts, inputs, droidctl::ui::draw),
         driver
     );
-    let exit = exit.unwrap();
-    let telemetry = format!("{:?}", exit.state.telemetry).into_bytes();
-    (terminal.backend().buffer().clone(), telemetry)
+    (terminal.backend().buffer().clone(), exit.unwrap())
+}
+
+#[tokio::test(start_paused = true)]
+async fn replay_keys_come_from_the_key_map() {
+    let dir = tmp("rebound");
+    let (_, path) = record(&dir, "r2d2", V2_MISSION);
+    let capture = Capture::load(&path).unwrap();
+    let config =
+        Config::parse_merged(None, "[keys.replay]\npause = [\"k\"]\nfaster = [\"F\"]\n").unwrap();
+    // Space no longer pauses; `F` doubles the speed and `k` pauses.
+    let keys = [
+        (500, key(KeyCode::Space)),
+        (600, key(KeyCode::Char('F'))),
+        (700, key(KeyCode::Char('k'))),
+    ];
+    let (screen, exit) = replay_with(&capture, &keys, config).await;
+    let view = exit.state.replay.expect("a replay view");
+    assert!(view.paused, "k paused");
+    assert_eq!(view.speed, 2.0, "F went faster");
+    // Played 0.6 s at 1x (Space did not pause), then 0.1 s at 2x, then paused.
+    assert_eq!(view.position, Duration::from_millis(800), "{view:?}");
+    let help = exit
+        .state
+        .help
+        .iter()
+        .find(|s| s.title == "Replay")
+        .unwrap();
+    assert!(
+        help.lines
+            .iter()
+            .any(|l| l.keys == "k" && l.action.starts_with("pause")),
+        "{help:?}"
+    );
+    assert!(text(&screen).contains("REPLAY"));
 }
 
 fn text(b: &Buffer) -> String {

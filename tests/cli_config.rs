@@ -90,3 +90,37 @@ fn an_invalid_file_is_reported_and_the_app_refuses_to_start() {
         "{err}"
     );
 }
+
+/// `config check` on `text` fails with status 2 and says each of `expect`.
+fn check_refuses(tag: &str, text: &str, expect: &[&str]) {
+    let d = tmp(tag);
+    std::fs::create_dir_all(d.join("droidctl")).unwrap();
+    std::fs::write(d.join("droidctl/config.toml"), text).unwrap();
+    let out = droidctl(&d, &["config", "check"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    for e in expect {
+        assert!(err.contains(e), "{e:?} not in {err}");
+    }
+}
+
+#[test]
+fn every_gamepad_button_is_checked_aim_included() {
+    check_refuses(
+        "aim",
+        "[gamepad]\ndeadzone = 0.2\naim = \"RightBumpr\"\n",
+        &[
+            "config.toml:3: key `gamepad.aim`",
+            "unknown button \"RightBumpr\"",
+        ],
+    );
+}
+
+#[test]
+fn context_bindings_are_checked_with_their_line() {
+    check_refuses(
+        "ctx",
+        "[keys]\nforward = [\"Up\"]\n\n[keys.replay]\nstep = [\"Right\"]\n",
+        &["config.toml:5: key `keys.replay.step`", "replay.forward"],
+    );
+}

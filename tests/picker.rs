@@ -1,9 +1,9 @@
 //! The droid picker shown when several droids answer the scan.
 
 use droidctl::app::picker::{Picked, Picker};
+use droidctl::config::{Key, KeyCode};
 use droidctl::link::ble::{BleAddress, ScanEntry};
 use droidctl::model::Model;
-use droidctl::teleop::keymap::{Key, KeyCode};
 use ratatui::{Terminal, backend::TestBackend};
 
 fn entry(name: &str, addr: u8, rssi: i16) -> ScanEntry {
@@ -19,11 +19,14 @@ fn entry(name: &str, addr: u8, rssi: i16) -> ScanEntry {
 }
 
 fn picker() -> Picker {
-    Picker::new(vec![
-        entry("D2-1A2B", 0x66, -48),
-        entry("Q5-77C0", 0x67, -63),
-        entry("GB-0042", 0x68, -80),
-    ])
+    Picker::new(
+        vec![
+            entry("D2-1A2B", 0x66, -48),
+            entry("Q5-77C0", 0x67, -63),
+            entry("GB-0042", 0x68, -80),
+        ],
+        droidctl::config::Config::defaults().keymap,
+    )
 }
 
 #[test]
@@ -41,8 +44,13 @@ fn picker_never_panics_when_tiny_or_empty() {
         let mut term = Terminal::new(TestBackend::new(w, h)).unwrap();
         term.draw(|f| droidctl::ui::picker::draw(f, &picker()))
             .unwrap();
-        term.draw(|f| droidctl::ui::picker::draw(f, &Picker::new(vec![])))
-            .unwrap();
+        term.draw(|f| {
+            droidctl::ui::picker::draw(
+                f,
+                &Picker::new(vec![], droidctl::config::Config::defaults().keymap),
+            )
+        })
+        .unwrap();
     }
 }
 

@@ -2,13 +2,13 @@
 //! with the steering straight, the turn keys and the stick's sideways part steer, reverse is
 //! refused (speed held at 0, one "cannot reverse" hint per press), release and e-stop stop.
 
+use droidctl::config::Action;
 use droidctl::config::{Config, DriveMode};
 use droidctl::family::{Command, RobiControl};
 use droidctl::model::Model;
 use droidctl::telemetry::Stance;
 use droidctl::teleop::control::{Controller, DroidView, Inputs, Out};
 use droidctl::teleop::gamepad::PadDrive;
-use droidctl::teleop::keymap::Action;
 use std::time::Duration;
 
 const TICK: Duration = Duration::from_millis(50);

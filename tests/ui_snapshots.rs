@@ -8,7 +8,7 @@
 //! read every changed `.snap`.
 
 use droidctl::app::packet_log::{LogFilter, LogLine};
-use droidctl::app::state::{AppState, Focus, GamepadStatus, HelpLine, KeyboardMode, Overlay};
+use droidctl::app::state::{AppState, Focus, GamepadStatus, KeyboardMode, Overlay};
 use droidctl::model::Model;
 use droidctl::protocol::v2::notify::Collision;
 use droidctl::protocol::v2::wire::{
@@ -29,12 +29,11 @@ fn ms(v: u64) -> Duration {
     Duration::from_millis(v)
 }
 
-/// The help lines as the app builds them from the shipped config (mirrors `app::run`).
-/// The help lines exactly as the app builds them from the shipped config.
-fn help_lines() -> (Vec<HelpLine>, Vec<HelpLine>) {
+/// Help exactly as the app builds it from the shipped config.
+fn with_help(s: &mut AppState) {
     let config = droidctl::config::Config::defaults();
-    let keymap = droidctl::teleop::keymap::KeyMap::from_config(&config.keys).unwrap();
-    droidctl::app::run::help_lines(&config, &keymap)
+    s.help = droidctl::app::help::live(&config);
+    s.help_nav = droidctl::app::help::nav(&config.keymap);
 }
 
 fn entry(at_ms: u64, dir: Direction, p: Packet) -> LogLine {
@@ -129,9 +128,7 @@ fn collision() -> Collision {
 /// Connected, driving at 100 towards 90°, telemetry and log populated.
 fn driving() -> AppState {
     let mut s = AppState::new(Model::R2D2, "D2-1A2B".into());
-    let (keys, pad) = help_lines();
-    s.help_keys = keys;
-    s.help_gamepad = pad;
+    with_help(&mut s);
     s.now = Duration::from_secs(42);
     s.link = LinkState::Connected;
     s.stats.sent = 812;
@@ -327,38 +324,41 @@ fn words_in_order(hay: &[String], needle: &str) -> bool {
 }
 
 #[test]
-fn help_overlay_lists_every_key_binding_at_80x24() {
+fn help_overlay_lists_every_binding_at_80x24() {
     let s = help();
-    let page1 = rows(render(&s, 80, 24).backend().buffer());
-    for h in &s.help_keys {
-        assert!(
-            words_in_order(&page1, &h.action),
-            "missing {:?} in\n{}",
-            h.action,
-            page1.join("\n")
-        );
-        assert!(
-            page1.iter().any(|r| r.contains(&h.keys)),
-            "missing keys {:?}",
-            h.keys
-        );
+    // Page by page until the pages repeat (the UI clamps to the last one).
+    let mut pages: Vec<Vec<String>> = Vec::new();
+    for page in 0..10 {
+        let mut p = s.clone();
+        p.help_page = page;
+        let text = rows(render(&p, 80, 24).backend().buffer());
+        if pages.last() == Some(&text) {
+            break;
+        }
+        pages.push(text);
+    }
+    assert!(pages.len() >= 2, "80x24 needs more than one page");
+    assert!(
+        pages[0].iter().any(|r| r.contains("page 1/")),
+        "the footer says so"
+    );
+    for section in &s.help {
+        for h in &section.lines {
+            assert!(
+                pages
+                    .iter()
+                    .any(|p| words_in_order(p, &h.action) && p.iter().any(|r| r.contains(&h.keys))),
+                "missing {:?} ({:?}) on every page",
+                h.action,
+                h.keys
+            );
+        }
     }
     // Descriptions that fit their column stay on one line.
-    assert!(page1.iter().any(|r| r.contains("drive forward (hold)")));
-    let mut s2 = s.clone();
-    s2.help_page = 1;
-    let page2 = rows(render(&s2, 80, 24).backend().buffer());
-    for h in &s.help_gamepad {
-        assert!(
-            words_in_order(&page2, &h.action),
-            "missing {:?} in\n{}",
-            h.action,
-            page2.join("\n")
-        );
-    }
+    assert!(pages[0].iter().any(|r| r.contains("drive forward (hold)")));
     // At 160×48 everything is on one page.
     let big = rows(render(&s, 160, 48).backend().buffer());
-    for h in s.help_keys.iter().chain(&s.help_gamepad) {
+    for h in s.help.iter().flat_map(|sec| &sec.lines) {
         assert!(
             big.iter().any(|r| r.contains(&h.action)),
             "missing {:?}",
@@ -584,9 +584,7 @@ fn bb8_log() -> Vec<LogLine> {
 /// BB-8 stopped and aiming: turned to 35°, back light on, main LED orange.
 fn bb8_aiming() -> AppState {
     let mut s = AppState::new(Model::BB8, "BB-1A2B".into());
-    let (keys, pad) = help_lines();
-    s.help_keys = keys;
-    s.help_gamepad = pad;
+    with_help(&mut s);
     s.now = Duration::from_secs(12);
     s.link = LinkState::Connected;
     s.stats.sent = 96;
@@ -716,9 +714,7 @@ fn robi_driving() -> AppState {
     use droidctl::protocol::notify::Notification;
     use droidctl::protocol::rsrcp::{Buttons, Frame, Handshake, Leds};
     let mut s = AppState::new(Model::Robi42, "Robi 42".into());
-    let (keys, pad) = help_lines();
-    s.help_keys = keys;
-    s.help_gamepad = pad;
+    with_help(&mut s);
     s.now = Duration::from_secs(31);
     s.link = LinkState::Connected;
     s.stats.sent = 140;

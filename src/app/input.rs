@@ -1,7 +1,7 @@
 //! Terminal input as the app sees it, converted from crossterm at the edge so the event loop
 //! can be driven by synthetic events in tests.
 
-use crate::teleop::keymap::{Key, KeyCode};
+use crate::config::{Key, KeyCode};
 use crossterm::event::{Event, KeyCode as CtCode, KeyEvent, KeyEventKind, KeyModifiers};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -1,11 +1,29 @@
 //! The application: state, the packet log, palettes, and the event loop that owns them.
+//!
+//! - [`run`]: the event loop and its wiring (inputs in, frames out);
+//! - [`core`]: what the loop owns, and the events every source shares;
+//! - [`keys`], [`pad`]: key dispatch by context and gamepad events;
+//! - [`actions`]: what reaches the droid (control outputs, lights, animations, sounds);
+//! - [`replay`], [`player`]: the app on a capture;
+//! - [`help`]: the help overlay's text, generated from the bindings;
+//! - [`pacing`], [`rates`]: frame pacing and per-second rates, small state machines without IO;
+//! - [`battery`]: the battery poller.
 
+mod actions;
+pub mod battery;
 pub mod catalog;
+mod core;
+pub mod help;
+pub mod input;
+mod keys;
+pub mod pacing;
 pub mod packet_log;
+mod pad;
+pub mod picker;
+pub mod player;
+pub mod rates;
+mod replay;
+pub mod run;
 pub mod state;
 
 pub use state::AppState;
-pub mod input;
-pub mod picker;
-pub mod replay;
-pub mod run;

@@ -1,14 +1,16 @@
 //! Choosing a droid when several answer the scan: a small full-screen list before the app.
-//! State and keys only; [`crate::ui::picker`] draws it.
+//! State and keys only (the `[keys.picker]` bindings, and digits 1-9 to choose directly);
+//! [`crate::ui::picker`] draws it.
 
+use crate::config::{Action, Context, Key, KeyCode, KeyMap};
 use crate::link::ble::ScanEntry;
-use crate::teleop::keymap::{Key, KeyCode};
 
 #[derive(Debug, Clone, PartialEq)]
 pub struct Picker {
     /// Droids that can be driven, strongest first.
     pub entries: Vec<ScanEntry>,
     pub selected: usize,
+    keys: KeyMap,
 }
 
 /// What a key did.
@@ -21,37 +23,58 @@ pub enum Picked {
 }
 
 impl Picker {
-    pub fn new(entries: Vec<ScanEntry>) -> Self {
+    pub fn new(entries: Vec<ScanEntry>, keys: KeyMap) -> Self {
         Picker {
             entries,
             selected: 0,
+            keys,
         }
     }
 
     pub fn on_key(&mut self, key: Key) -> Picked {
         let last = self.entries.len().saturating_sub(1);
-        match key.code {
-            KeyCode::Up | KeyCode::Char('k') => self.selected = self.selected.saturating_sub(1),
-            KeyCode::Down | KeyCode::Char('j') => self.selected = (self.selected + 1).min(last),
-            KeyCode::Home => self.selected = 0,
-            KeyCode::End => self.selected = last,
-            KeyCode::Enter | KeyCode::Space => {
+        if key == Key::CTRL_C {
+            return Picked::Cancelled;
+        }
+        match self.keys.action_in(Context::Picker, &key) {
+            Some(Action::PickerUp) => self.selected = self.selected.saturating_sub(1),
+            Some(Action::PickerDown) => self.selected = (self.selected + 1).min(last),
+            Some(Action::PickerFirst) => self.selected = 0,
+            Some(Action::PickerLast) => self.selected = last,
+            Some(Action::PickerChoose) => {
                 return match self.entries.get(self.selected) {
                     Some(e) => Picked::Chosen(e.clone()),
                     None => Picked::Cancelled,
                 };
             }
-            KeyCode::Char(c @ '1'..='9') => {
-                let i = c as usize - '1' as usize;
-                if let Some(e) = self.entries.get(i) {
-                    return Picked::Chosen(e.clone());
+            Some(Action::PickerCancel) => return Picked::Cancelled,
+            _ => {
+                if let KeyCode::Char(c @ '1'..='9') = key.code {
+                    let i = c as usize - '1' as usize;
+                    if let Some(e) = self.entries.get(i) {
+                        return Picked::Chosen(e.clone());
+                    }
                 }
             }
-            KeyCode::Esc | KeyCode::Char('q') => return Picked::Cancelled,
-            KeyCode::Char('c') if key.ctrl => return Picked::Cancelled,
-            _ => {}
         }
         Picked::Pending
+    }
+
+    /// The keys line under the list, as bound (each action's first key).
+    pub fn footer(&self) -> String {
+        let shown = |a| {
+            self.keys
+                .keys(a)
+                .first()
+                .map_or_else(|| "-".into(), ToString::to_string)
+        };
+        format!(
+            "{} {} choose · {} or 1-9 connect · {} cancel",
+            shown(Action::PickerUp),
+            shown(Action::PickerDown),
+            shown(Action::PickerChoose),
+            shown(Action::PickerCancel)
+        )
     }
 }
 
@@ -60,6 +83,10 @@ mod tests {
     use super::*;
     use crate::link::ble::BleAddress;
     use crate::model::Model;
+
+    fn keys() -> KeyMap {
+        crate::config::Config::defaults().keymap
+    }
 
     fn entry(name: &str, rssi: i16) -> ScanEntry {
         let address = BleAddress([0, 0, 0, 0, 0, rssi.unsigned_abs() as u8]);
@@ -75,11 +102,14 @@ mod tests {
 
     #[test]
     fn arrows_enter_digits_escape() {
-        let mut p = Picker::new(vec![
-            entry("D2-AAAA", -40),
-            entry("Q5-BBBB", -60),
-            entry("GB-CCCC", -70),
-        ]);
+        let mut p = Picker::new(
+            vec![
+                entry("D2-AAAA", -40),
+                entry("Q5-BBBB", -60),
+                entry("GB-CCCC", -70),
+            ],
+            keys(),
+        );
         assert_eq!(p.on_key(Key::plain(KeyCode::Up)), Picked::Pending);
         assert_eq!(p.selected, 0);
         p.on_key(Key::plain(KeyCode::Down));
@@ -104,8 +134,25 @@ mod tests {
             Picked::Cancelled
         );
         assert_eq!(
-            Picker::new(vec![]).on_key(Key::plain(KeyCode::Enter)),
+            Picker::new(vec![], keys()).on_key(Key::plain(KeyCode::Enter)),
             Picked::Cancelled
         );
+    }
+
+    #[test]
+    fn keys_are_the_configured_ones() {
+        let c = crate::config::Config::parse_merged(
+            None,
+            "[keys.picker]\ndown = [\"n\"]\nchoose = [\"Tab\"]\n",
+        )
+        .unwrap();
+        let mut p = Picker::new(vec![entry("D2-AAAA", -40), entry("Q5-BBBB", -60)], c.keymap);
+        p.on_key(Key::ch('n'));
+        assert_eq!(p.selected, 1);
+        assert_eq!(
+            p.on_key(Key::plain(KeyCode::Tab)),
+            Picked::Chosen(entry("Q5-BBBB", -60))
+        );
+        assert_eq!(p.footer(), "↑ n choose · Tab or 1-9 connect · Esc cancel");
     }
 }

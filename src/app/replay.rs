@@ -1,188 +1,128 @@
-//! The app in replay mode: a [`Replay`] on the app's clock. Playing, the capture position
-//! runs at the chosen speed from where it was; paused, it holds. The event loop advances the
-//! replay on its frame ticks and feeds what comes out to the same telemetry, packet log and
-//! link-state paths as a live session; nothing is ever sent.
+//! The app on a capture: the player advanced on frame ticks, what it produces fed to the same
+//! telemetry, packet log and link-state paths as a live session's events, and the replay
+//! actions (pause, speed, seek, step). Nothing is ever sent.
 
-use super::state::{HelpLine, ReplayView};
+use super::core::App;
+use super::packet_log::PacketLog;
+use super::player::{SEEK_LONG, SEEK_SHORT};
+use super::state::ReplayView;
 use crate::capture::mirror::Output;
-use crate::capture::replay::{Replay, SPEEDS};
-use crate::teleop::keymap::{Key, KeyCode};
+use crate::config::Action;
+use crate::session::{LinkState, SessionStats};
+use crate::telemetry::Stance;
 use std::time::Duration;
 use tokio::time::Instant;
 
-/// How far ← → and PgUp PgDn seek.
-pub const SEEK_SHORT: Duration = Duration::from_secs(5);
-pub const SEEK_LONG: Duration = Duration::from_secs(60);
-
-/// What a replay key asks for.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum ReplayKey {
-    TogglePause,
-    Faster,
-    Slower,
-    /// Seek by this much, forward or back.
-    Forward(Duration),
-    Back(Duration),
-    Start,
-    End,
-    Step,
-}
-
-/// The replay keys (fixed; the configured quit, help and log keys still work).
-pub fn replay_key(key: &Key) -> Option<ReplayKey> {
-    if key.ctrl {
-        return None;
-    }
-    Some(match key.code {
-        KeyCode::Space | KeyCode::Char('p') => ReplayKey::TogglePause,
-        KeyCode::Char('+' | '=' | ']') => ReplayKey::Faster,
-        KeyCode::Char('-' | '_' | '[') => ReplayKey::Slower,
-        KeyCode::Right => ReplayKey::Forward(SEEK_SHORT),
-        KeyCode::Left => ReplayKey::Back(SEEK_SHORT),
-        KeyCode::PageDown | KeyCode::Up => ReplayKey::Forward(SEEK_LONG),
-        KeyCode::PageUp | KeyCode::Down => ReplayKey::Back(SEEK_LONG),
-        KeyCode::Home => ReplayKey::Start,
-        KeyCode::End => ReplayKey::End,
-        KeyCode::Char('.' | 's') => ReplayKey::Step,
-        _ => return None,
-    })
-}
-
-/// The help overlay's keyboard lines in replay mode.
-pub fn help_lines(quit: &str, help: &str, log: &str) -> Vec<HelpLine> {
-    [
-        ("Space p", "pause / play"),
-        ("+ -", "speed: 0.25× 0.5× 1× 2× 4× 8× 16×"),
-        ("← →", "seek back / forward 5 s"),
-        ("PgUp PgDn ↓ ↑", "seek back / forward 60 s"),
-        ("Home End", "to the start / the end"),
-        (". s", "single step: pause, then the next event"),
-        (log, "the packet log (↑ ↓ PgUp PgDn scroll, Esc back)"),
-        (help, "this help"),
-        (quit, "quit"),
-    ]
-    .into_iter()
-    .map(|(k, a)| HelpLine {
-        keys: k.to_string(),
-        action: a.to_string(),
-    })
-    .collect()
-}
-
-/// A replay on the app's clock.
-pub struct Player {
-    pub replay: Replay,
-    /// Index into [`SPEEDS`].
-    speed: usize,
-    paused: bool,
-    /// Playing: the position is `base + (now - anchor) × speed`.
-    base: Duration,
-    anchor: Instant,
-    file: String,
-}
-
-impl Player {
-    pub fn new(replay: Replay, file: String, now: Instant) -> Player {
-        Player {
-            replay,
-            speed: SPEEDS.iter().position(|s| *s == 1.0).unwrap_or(0),
-            paused: false,
-            base: Duration::ZERO,
-            anchor: now,
-            file,
+impl App {
+    /// What the replay produced, through the same paths as a live session's events.
+    fn on_replayed(&mut self, outs: &mut Vec<(Duration, Output)>) {
+        for (at, o) in outs.drain(..) {
+            match o {
+                Output::Log(entry) => self.on_log(&entry),
+                Output::Notification(n) => self.on_notification(&n, at),
+                Output::BadNotification { name, reason } => {
+                    tracing::debug!(name, %reason, "malformed notification in the capture")
+                }
+                Output::Link(s) => self.on_link(s),
+                Output::Battery(v) => self.on_battery(v),
+                Output::StanceRequested(a) => self.state.telemetry.stance_requested(a),
+                Output::StanceRead(s) => {
+                    if self.state.telemetry.stance == Stance::Unknown {
+                        self.state.telemetry.stance = Stance::from_state(s);
+                    }
+                }
+                Output::Mark(_) => {}
+            }
+        }
+        if let Some(p) = &self.player {
+            let st = p.replay.mirror().stats();
+            if st != self.state.stats {
+                self.state.stats = st;
+                self.dirty = true;
+            }
         }
     }
 
-    pub fn speed(&self) -> f64 {
-        SPEEDS[self.speed]
-    }
-
-    pub fn paused(&self) -> bool {
-        self.paused
-    }
-
-    /// Playing and not yet at the end.
-    pub fn running(&self) -> bool {
-        !self.paused && !self.replay.at_end()
-    }
-
-    /// Where the capture is now by the clock (not past its end).
-    pub fn clock(&self, now: Instant) -> Duration {
-        let t = if self.paused {
-            self.base
-        } else {
-            self.base + now.duration_since(self.anchor).mul_f64(self.speed())
+    /// Replay: bring the capture up to the clock, and the status bar's position.
+    pub fn replay_frame(&mut self) {
+        let Some(p) = self.player.as_mut() else {
+            return;
         };
-        t.min(self.replay.duration())
+        let mut outs = std::mem::take(&mut self.replayed);
+        p.advance(Instant::now(), &mut outs);
+        let view = p.view(Instant::now());
+        self.on_replayed(&mut outs);
+        self.replayed = outs;
+        self.show_replay(view);
     }
 
-    /// Bring the replay up to the clock.
-    pub fn advance(&mut self, now: Instant, out: &mut Vec<(Duration, Output)>) {
-        let t = self.clock(now);
-        self.replay.advance_to(t, out);
-    }
-
-    /// Hold the clock where it is now.
-    fn rebase(&mut self, now: Instant) {
-        self.base = self.clock(now);
-        self.anchor = now;
-    }
-
-    pub fn toggle_pause(&mut self, now: Instant) {
-        self.rebase(now);
-        // At the end, play restarts from the start.
-        if self.paused && self.replay.at_end() && self.base >= self.replay.duration() {
-            self.base = Duration::ZERO;
+    fn show_replay(&mut self, view: ReplayView) {
+        // The position is shown to a tenth of a second: redraw when that changes.
+        let shown = |v: &ReplayView| {
+            (
+                v.position.as_millis() / 100,
+                v.paused,
+                (v.speed * 100.0) as u64,
+                v.events_done,
+            )
+        };
+        if self.state.replay.as_ref().map(shown) != Some(shown(&view)) {
+            self.dirty = true;
         }
-        self.paused = !self.paused;
+        self.state.now = view.position;
+        self.state.replay = Some(view);
     }
 
-    pub fn faster(&mut self, now: Instant) {
-        self.rebase(now);
-        self.speed = (self.speed + 1).min(SPEEDS.len() - 1);
-    }
-
-    pub fn slower(&mut self, now: Instant) {
-        self.rebase(now);
-        self.speed = self.speed.saturating_sub(1);
-    }
-
-    /// Move the clock to `t`. Returns true when that is behind what was already applied:
-    /// the caller resets what it shows and replays from the start
-    /// ([`Player::replay_from_start`]).
-    pub fn seek(&mut self, t: Duration, now: Instant) -> bool {
-        let t = t.min(self.replay.duration());
-        self.base = t;
-        self.anchor = now;
-        t < self.replay.position()
-    }
-
-    pub fn replay_from_start(&mut self) {
-        self.replay.rewind();
-    }
-
-    /// Pause, and apply the next event (those at the same time too).
-    pub fn step(&mut self, now: Instant, out: &mut Vec<(Duration, Output)>) {
-        self.rebase(now);
-        self.paused = true;
-        // Catch up first, so the step is the event after what the screen shows.
-        self.replay.advance_to(self.base, out);
-        if self.replay.step(out) {
-            self.base = self.replay.position();
+    /// A replay action from the key map's replay table.
+    pub fn on_replay_action(&mut self, a: Action) {
+        let now = Instant::now();
+        let Some(p) = self.player.as_mut() else {
+            return;
+        };
+        let mut outs = std::mem::take(&mut self.replayed);
+        let at = p.clock(now);
+        let restart = match a {
+            Action::ReplayPause => {
+                p.toggle_pause(now);
+                false
+            }
+            Action::ReplayFaster => {
+                p.faster(now);
+                false
+            }
+            Action::ReplaySlower => {
+                p.slower(now);
+                false
+            }
+            Action::ReplayStep => {
+                p.step(now, &mut outs);
+                false
+            }
+            Action::ReplayForward => p.seek(at + SEEK_SHORT, now),
+            Action::ReplayBack => p.seek(at.saturating_sub(SEEK_SHORT), now),
+            Action::ReplayForwardLong => p.seek(at + SEEK_LONG, now),
+            Action::ReplayBackLong => p.seek(at.saturating_sub(SEEK_LONG), now),
+            Action::ReplayStart => p.seek(Duration::ZERO, now),
+            Action::ReplayEnd => p.seek(p.replay.duration(), now),
+            _ => false,
+        };
+        if restart {
+            // Back in time: forget what the capture showed, then play it again up to there.
+            p.replay_from_start();
+            outs.clear();
+            let log = &self.state.log;
+            let mut fresh = PacketLog::with_capacity(log.capacity());
+            fresh.decoded = log.decoded;
+            fresh.filter = log.filter.clone();
+            self.state.log = fresh;
+            self.state.telemetry = Default::default();
+            self.state.stats = SessionStats::default();
+            self.state.link = LinkState::Connecting;
+            self.state.rate_in = 0.0;
+            self.state.rate_out = 0.0;
         }
-    }
-
-    /// What the status bar shows.
-    pub fn view(&self, now: Instant) -> ReplayView {
-        let (done, total) = self.replay.progress();
-        ReplayView {
-            file: self.file.clone(),
-            position: self.clock(now),
-            duration: self.replay.duration(),
-            speed: self.speed(),
-            paused: self.paused,
-            events_done: done,
-            events: total,
-        }
+        self.replayed = outs;
+        self.replay_frame();
+        self.dirty = true;
     }
 }

@@ -6,56 +6,9 @@ use super::packet_log::PacketLog;
 use crate::model::Model;
 use crate::session::{LinkState, SessionStats};
 use crate::telemetry::Telemetry;
-use crate::units::Heading;
+pub use crate::teleop::control::ControlView;
 use std::path::PathBuf;
 use std::time::Duration;
-
-/// What the control loop is commanding (written by the teleop layer every tick).
-#[derive(Debug, Clone, PartialEq)]
-pub struct ControlView {
-    /// Commanded speed 0..=255 (magnitude).
-    pub speed: u8,
-    /// Commanded heading (direction of travel).
-    pub heading: Heading,
-    pub reverse: bool,
-    pub turbo: bool,
-    /// Cruise speed used while a drive key is held.
-    pub cruise: u8,
-    /// Emergency stop latched.
-    pub estop: bool,
-    /// No drive input: the deadman holds speed at 0.
-    pub deadman: bool,
-    /// Commanded dome angle, degrees.
-    pub head_target: f32,
-    /// "hold" or "latched".
-    pub mode: &'static str,
-    /// Where the drive input comes from now: "keyboard", "gamepad", "aim" or "-".
-    pub source: &'static str,
-    /// Aim mode is on.
-    pub aiming: bool,
-    /// On a steering robot (Robi 42): the steering commanded, −1 full left ..= 1 full right
-    /// (`None` on droids driven toward a heading).
-    pub steer: Option<f32>,
-}
-
-impl Default for ControlView {
-    fn default() -> Self {
-        ControlView {
-            speed: 0,
-            heading: Heading::default(),
-            reverse: false,
-            turbo: false,
-            cruise: 100,
-            estop: false,
-            deadman: true,
-            head_target: 0.0,
-            mode: "hold",
-            source: "-",
-            aiming: false,
-            steer: None,
-        }
-    }
-}
 
 /// Gamepad status for the status bar.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -106,6 +59,13 @@ pub enum Focus {
     Log,
 }
 
+/// A titled group of the help overlay (one per place keys are read, and the gamepad).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct HelpSection {
+    pub title: String,
+    pub lines: Vec<HelpLine>,
+}
+
 /// One line of the help overlay: keys and what they do.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct HelpLine {
@@ -141,11 +101,13 @@ pub struct AppState {
     pub keyboard: KeyboardMode,
     pub log_path: Option<PathBuf>,
     pub hint: Option<Hint>,
-    /// Help overlay lines, from the bindings as configured.
-    pub help_keys: Vec<HelpLine>,
-    pub help_gamepad: Vec<HelpLine>,
-    /// Page of the help overlay shown when the bindings do not fit the terminal at once
-    /// (80×24: keyboard on page 0, gamepad on page 1). The UI clamps it to the last page.
+    /// The help overlay's sections (driving keys, the packet log, palettes, …, the gamepad),
+    /// generated from the bindings as configured ([`crate::app::help`]).
+    pub help: Vec<HelpSection>,
+    /// The help overlay's page keys as configured, for its footer (`PgDn/PgUp`).
+    pub help_nav: String,
+    /// Page of the help overlay shown when the bindings do not fit the terminal at once.
+    /// The UI clamps it to the last page.
     pub help_page: usize,
     pub animations: Vec<Entry>,
     pub sounds: Vec<Entry>,
@@ -208,8 +170,8 @@ impl AppState {
             keyboard: KeyboardMode::Emulated,
             log_path: None,
             hint: None,
-            help_keys: Vec::new(),
-            help_gamepad: Vec::new(),
+            help: Vec::new(),
+            help_nav: String::new(),
             help_page: 0,
             animations: catalog::animations(),
             sounds: catalog::sounds(),

@@ -28,12 +28,12 @@ pub struct BleArgs {
 }
 
 /// How to ask which droid, when several answer and none was named.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq)]
 pub enum Chooser {
     /// A numbered list on stderr and an answer on stdin (`run`).
     Prompt,
-    /// A full-screen list (the app).
-    Screen,
+    /// A full-screen list (the app), read with these bindings.
+    Screen(crate::config::KeyMap),
 }
 
 impl BleArgs {
@@ -108,9 +108,9 @@ pub async fn connect(
     let choice = if !explicit && drivable.len() > 1 && std::io::stdin().is_terminal() {
         match chooser {
             Chooser::Prompt => pick(&drivable)?,
-            Chooser::Screen => {
+            Chooser::Screen(keys) => {
                 let entries: Vec<ScanEntry> = drivable.iter().map(|e| (*e).clone()).collect();
-                tokio::task::spawn_blocking(move || pick_on_screen(entries))
+                tokio::task::spawn_blocking(move || pick_on_screen(entries, keys))
                     .await
                     .map_err(|e| CliError::failure(format!("picker failed: {e}")))??
             }
@@ -211,8 +211,11 @@ fn pick(entries: &[&ScanEntry]) -> Result<Option<DeviceId>, CliError> {
     }
 }
 
-/// The full-screen picker: arrows and Enter (or a digit); Esc cancels.
-fn pick_on_screen(entries: Vec<ScanEntry>) -> Result<Option<DeviceId>, CliError> {
+/// The full-screen picker: the `[keys.picker]` bindings (or a digit).
+fn pick_on_screen(
+    entries: Vec<ScanEntry>,
+    keys: crate::config::KeyMap,
+) -> Result<Option<DeviceId>, CliError> {
     use crate::app::input::key_from_crossterm;
     use crate::app::picker::{Picked, Picker};
     use crossterm::event::{Event, KeyEventKind, read};
@@ -222,7 +225,7 @@ fn pick_on_screen(entries: Vec<ScanEntry>) -> Result<Option<DeviceId>, CliError>
     let mut terminal =
         ratatui::Terminal::new(ratatui::backend::CrosstermBackend::new(std::io::stdout()))
             .map_err(|e| fail("cannot use this terminal", &e))?;
-    let mut picker = Picker::new(entries);
+    let mut picker = Picker::new(entries, keys);
     let result = loop {
         if let Err(e) = terminal.draw(|f| crate::ui::picker::draw(f, &picker)) {
             break Err(fail("cannot draw", &e));

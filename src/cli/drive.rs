@@ -85,7 +85,7 @@ pub fn run(args: DriveArgs) -> Result<i32, CliError> {
                     Box::new(SimLink::new(m, SimConfig::for_model(m), Faults::none()));
                 (link, m, format!("{} (simulated)", m.display_name()))
             }
-            None => connect_real(&args).await?,
+            None => connect_real(&args, &config).await?,
         };
         let link = match &recorder {
             Some(r) => {
@@ -101,8 +101,14 @@ pub fn run(args: DriveArgs) -> Result<i32, CliError> {
 }
 
 /// Find and connect to a real droid over Bluetooth.
-async fn connect_real(args: &DriveArgs) -> Result<(Box<dyn Link>, Model, String), CliError> {
-    let c = args.ble.connect(super::connect::Chooser::Screen).await?;
+async fn connect_real(
+    args: &DriveArgs,
+    config: &Config,
+) -> Result<(Box<dyn Link>, Model, String), CliError> {
+    let c = args
+        .ble
+        .connect(super::connect::Chooser::Screen(config.keymap.clone()))
+        .await?;
     Ok((c.link, c.model, c.name))
 }
 

@@ -7,13 +7,59 @@
 //! an e-stop forces 0 immediately and stays latched while held.
 
 use super::gamepad::PadDrive;
-use crate::app::state::ControlView;
 use crate::config::{Control as ControlConfig, DriveMode};
 use crate::family::{Command, Family};
 use crate::protocol::wire::{LegAction, LegState};
 use crate::telemetry::Stance;
 use crate::units::{HEAD_MAX_DEG, HEAD_MIN_DEG, HeadAngle, Heading};
 use std::time::Duration;
+
+/// What the control loop is commanding (the control loop writes it every tick; the app shows it).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ControlView {
+    /// Commanded speed 0..=255 (magnitude).
+    pub speed: u8,
+    /// Commanded heading (direction of travel).
+    pub heading: Heading,
+    pub reverse: bool,
+    pub turbo: bool,
+    /// Cruise speed used while a drive key is held.
+    pub cruise: u8,
+    /// Emergency stop latched.
+    pub estop: bool,
+    /// No drive input: the deadman holds speed at 0.
+    pub deadman: bool,
+    /// Commanded dome angle, degrees.
+    pub head_target: f32,
+    /// "hold" or "latched".
+    pub mode: &'static str,
+    /// Where the drive input comes from now: "keyboard", "gamepad", "aim" or "-".
+    pub source: &'static str,
+    /// Aim mode is on.
+    pub aiming: bool,
+    /// On a steering robot (Robi 42): the steering commanded, −1 full left ..= 1 full right
+    /// (`None` on droids driven toward a heading).
+    pub steer: Option<f32>,
+}
+
+impl Default for ControlView {
+    fn default() -> Self {
+        ControlView {
+            speed: 0,
+            heading: Heading::default(),
+            reverse: false,
+            turbo: false,
+            cruise: 100,
+            estop: false,
+            deadman: true,
+            head_target: 0.0,
+            mode: "hold",
+            source: "-",
+            aiming: false,
+            steer: None,
+        }
+    }
+}
 
 /// Input state at one instant.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -161,8 +207,8 @@ impl Controller {
     }
 
     /// A one-shot action (key or button press).
-    pub fn on_press(&mut self, a: super::keymap::Action, droid: &DroidView) -> Vec<Out> {
-        use super::keymap::Action as A;
+    pub fn on_press(&mut self, a: crate::config::Action, droid: &DroidView) -> Vec<Out> {
+        use crate::config::Action as A;
         let step = self.cfg.speed_step as i16;
         match a {
             A::Faster => self.cruise = self.cruise.saturating_add(self.cfg.speed_step),
@@ -397,8 +443,8 @@ impl Controller {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::config::Action;
     use crate::config::Config;
-    use crate::teleop::keymap::Action;
 
     const R2: DroidView = DroidView {
         connected: true,

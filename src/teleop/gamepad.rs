@@ -3,60 +3,29 @@
 //! normal: the thread reports `Unavailable` once and ends.
 
 use crate::config::Gamepad as PadConfig;
+pub use crate::config::{Button, PadAction};
 use std::collections::HashSet;
 use std::time::Duration;
 use tokio::sync::mpsc;
 
-/// The buttons droidctl maps (a subset of gilrs's, named as in the config).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum Button {
-    South,
-    East,
-    North,
-    West,
-    Start,
-    Select,
-    LeftBumper,
-    RightBumper,
-    DPadUp,
-    DPadDown,
-    DPadLeft,
-    DPadRight,
-}
-
-impl Button {
-    pub fn parse(name: &str) -> Option<Button> {
-        Some(match name {
-            "South" => Button::South,
-            "East" => Button::East,
-            "North" => Button::North,
-            "West" => Button::West,
-            "Start" => Button::Start,
-            "Select" => Button::Select,
-            "LeftBumper" => Button::LeftBumper,
-            "RightBumper" => Button::RightBumper,
-            _ => return None,
-        })
-    }
-
-    fn from_gilrs(b: gilrs::Button) -> Option<Button> {
-        use gilrs::Button as G;
-        Some(match b {
-            G::South => Button::South,
-            G::East => Button::East,
-            G::North => Button::North,
-            G::West => Button::West,
-            G::Start => Button::Start,
-            G::Select => Button::Select,
-            G::LeftTrigger => Button::LeftBumper,
-            G::RightTrigger => Button::RightBumper,
-            G::DPadUp => Button::DPadUp,
-            G::DPadDown => Button::DPadDown,
-            G::DPadLeft => Button::DPadLeft,
-            G::DPadRight => Button::DPadRight,
-            _ => return None,
-        })
-    }
+/// gilrs's button as one droidctl maps (`None` for the rest).
+fn button_from_gilrs(b: gilrs::Button) -> Option<Button> {
+    use gilrs::Button as G;
+    Some(match b {
+        G::South => Button::South,
+        G::East => Button::East,
+        G::North => Button::North,
+        G::West => Button::West,
+        G::Start => Button::Start,
+        G::Select => Button::Select,
+        G::LeftTrigger => Button::LeftBumper,
+        G::RightTrigger => Button::RightBumper,
+        G::DPadUp => Button::DPadUp,
+        G::DPadDown => Button::DPadDown,
+        G::DPadLeft => Button::DPadLeft,
+        G::DPadRight => Button::DPadRight,
+        _ => return None,
+    })
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -84,12 +53,9 @@ pub enum PadEvent {
 /// What a button press asks for.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum PadCommand {
-    Tripod,
-    Bipod,
-    Aim,
-    EStop,
-    Animation,
-    Help,
+    /// A bound action.
+    Action(PadAction),
+    /// A D-pad button: play this sound.
     Sound(u16),
 }
 
@@ -163,20 +129,13 @@ impl PadState {
             PadEvent::Pressed(b) => {
                 self.pressed.insert(*b);
                 let c = &self.cfg;
-                let is = |name: &str| Button::parse(name) == Some(*b);
-                return Some(match b {
-                    Button::DPadUp => PadCommand::Sound(c.sound_up),
-                    Button::DPadDown => PadCommand::Sound(c.sound_down),
-                    Button::DPadLeft => PadCommand::Sound(c.sound_left),
-                    Button::DPadRight => PadCommand::Sound(c.sound_right),
-                    _ if is(&c.tripod) => PadCommand::Tripod,
-                    _ if is(&c.bipod) => PadCommand::Bipod,
-                    _ if is(&c.aim) => PadCommand::Aim,
-                    _ if is(&c.estop) => PadCommand::EStop,
-                    _ if is(&c.animation) => PadCommand::Animation,
-                    _ if is(&c.help) => PadCommand::Help,
-                    _ => return None,
-                });
+                return match b {
+                    Button::DPadUp => Some(PadCommand::Sound(c.sound_up)),
+                    Button::DPadDown => Some(PadCommand::Sound(c.sound_down)),
+                    Button::DPadLeft => Some(PadCommand::Sound(c.sound_left)),
+                    Button::DPadRight => Some(PadCommand::Sound(c.sound_right)),
+                    _ => c.buttons.action(*b).map(PadCommand::Action),
+                };
             }
         }
         None
@@ -184,7 +143,8 @@ impl PadState {
 
     /// The e-stop button is held.
     pub fn estop_held(&self) -> bool {
-        Button::parse(&self.cfg.estop).is_some_and(|b| self.pressed.contains(&b))
+        self.pressed
+            .contains(&self.cfg.buttons.button(PadAction::EStop))
     }
 
     /// Left stick as polar driving input; `None` inside the deadzone (deadman).
@@ -268,8 +228,8 @@ pub fn spawn(tx: mpsc::Sender<PadEvent>) -> std::io::Result<std::thread::JoinHan
                     E::ButtonChanged(gilrs::Button::RightTrigger2, v, _) => {
                         Some(PadEvent::Axis(Axis::RightTrigger, v))
                     }
-                    E::ButtonPressed(b, _) => Button::from_gilrs(b).map(PadEvent::Pressed),
-                    E::ButtonReleased(b, _) => Button::from_gilrs(b).map(PadEvent::Released),
+                    E::ButtonPressed(b, _) => button_from_gilrs(b).map(PadEvent::Pressed),
+                    E::ButtonReleased(b, _) => button_from_gilrs(b).map(PadEvent::Released),
                     _ => None,
                 };
                 if let Some(out) = out
@@ -343,23 +303,27 @@ mod tests {
         let mut p = pad();
         assert_eq!(
             p.apply(&PadEvent::Pressed(Button::South)),
-            Some(PadCommand::Tripod)
+            Some(PadCommand::Action(PadAction::Tripod))
         );
         assert_eq!(
             p.apply(&PadEvent::Pressed(Button::North)),
-            Some(PadCommand::Bipod)
+            Some(PadCommand::Action(PadAction::Bipod))
         );
         assert_eq!(
             p.apply(&PadEvent::Pressed(Button::East)),
-            Some(PadCommand::EStop)
+            Some(PadCommand::Action(PadAction::EStop))
         );
         assert_eq!(
             p.apply(&PadEvent::Pressed(Button::West)),
-            Some(PadCommand::Animation)
+            Some(PadCommand::Action(PadAction::Animation))
         );
         assert_eq!(
             p.apply(&PadEvent::Pressed(Button::DPadUp)),
             Some(PadCommand::Sound(1915))
+        );
+        assert_eq!(
+            p.apply(&PadEvent::Pressed(Button::RightBumper)),
+            Some(PadCommand::Action(PadAction::Aim))
         );
         assert_eq!(p.apply(&PadEvent::Pressed(Button::Start)), None);
         p.apply(&PadEvent::Axis(Axis::RightX, -1.0));

@@ -3,7 +3,7 @@
 //! that is longer after the first press (the terminal's auto-repeat delay, ~500 ms) and shorter
 //! once repeats flow (~30 per second). Losing focus releases every key.
 
-use super::keymap::Key;
+use crate::config::Key;
 use std::collections::HashMap;
 use std::time::Duration;
 

@@ -5,4 +5,3 @@
 pub mod control;
 pub mod gamepad;
 pub mod held;
-pub mod keymap;

@@ -47,7 +47,7 @@ pub fn draw(frame: &mut Frame, picker: &Picker) {
     }
     lines.push(Line::from(""));
     lines.push(Line::from(Span::styled(
-        truncate("↑ ↓ choose · Enter or 1-9 connect · Esc cancel", width),
+        truncate(&picker.footer(), width),
         theme::dim(),
     )));
     frame.render_widget(Paragraph::new(lines), inner);

@@ -1,16 +1,16 @@
-//! The `?` help overlay: every key binding and every gamepad binding, in two sections.
+//! The `?` help overlay: every key binding, by where it is read (driving, the packet log,
+//! palettes, …), and every gamepad binding, as the app generated them from the configuration.
 //!
 //! Bindings flow down columns, a section starting a fresh column when it would not fit the
 //! rest of the current one, and long descriptions wrap under themselves. When the columns do
-//! not all fit side by side they are split into pages ([`AppState::help_page`]); on 80×24 the
-//! whole keyboard section is on the first page and the gamepad on the second.
+//! not all fit side by side they are split into pages ([`AppState::help_page`]).
 //!
 //! [`AppState::help_page`]: crate::app::state::AppState::help_page
 
 use super::super::layout::centered;
 use super::super::text::{clean, truncate, width, wrap};
 use super::super::theme;
-use crate::app::state::HelpLine;
+use crate::app::state::{HelpLine, HelpSection};
 use ratatui::Frame;
 use ratatui::layout::Rect;
 use ratatui::style::Modifier;
@@ -27,9 +27,9 @@ const GAP: usize = 2;
 type Unit = Vec<Line<'static>>;
 
 /// A section's lines at column width `w`: the heading, then one unit per binding.
-fn section(title: &'static str, binds: &[HelpLine], w: usize) -> Vec<Unit> {
+fn section(title: &str, binds: &[HelpLine], w: usize) -> Vec<Unit> {
     let heading = Line::from(Span::styled(
-        title,
+        title.to_string(),
         theme::bold().add_modifier(Modifier::UNDERLINED),
     ));
     let mut units = vec![vec![heading]];
@@ -110,20 +110,23 @@ fn flow(sections: Vec<Vec<Unit>>, rows: usize) -> Vec<Vec<Line<'static>>> {
     cols
 }
 
-pub fn render(frame: &mut Frame, area: Rect, keys: &[HelpLine], pad: &[HelpLine], page: usize) {
+/// `nav` names the page keys as configured (`PgDn/PgUp`).
+pub fn render(frame: &mut Frame, area: Rect, sections: &[HelpSection], nav: &str, page: usize) {
     let rows = area.height.saturating_sub(2) as usize;
     let avail = area.width.saturating_sub(4) as usize;
     let max_cols = ((avail + GAP) / (MIN_COL_W + GAP)).max(1);
-    let natural = natural(keys).max(natural(pad));
+    let natural = sections
+        .iter()
+        .map(|s| natural(&s.lines))
+        .max()
+        .unwrap_or(12);
     let build = |n: usize| {
         let w = natural.min(avail.saturating_sub(GAP * (n - 1)) / n).max(1);
-        // No gamepad section when there is nothing to say (a replay drives nothing).
-        let mut sections = vec![section("Keyboard", keys, w)];
-        if !pad.is_empty() {
-            sections.push(section("Gamepad", pad, w));
-        }
-        let cols = flow(sections, rows);
-        (w, cols)
+        let units = sections
+            .iter()
+            .map(|s| section(&s.title, &s.lines, w))
+            .collect();
+        (w, flow(units, rows))
     };
     // The fewest columns that show everything at once, else as many as fit, paged.
     let (col_w, cols, per_page) = (1..=max_cols)
@@ -143,9 +146,9 @@ pub fn render(frame: &mut Frame, area: Rect, keys: &[HelpLine], pad: &[HelpLine]
     let inner_w = col_w * per_page + GAP * (per_page - 1);
     let rect = centered(area, (inner_w + 4) as u16, (inner_h + 2) as u16);
     let foot = if pages > 1 {
-        format!(" page {}/{pages} · PgDn/PgUp · Esc close ", page + 1)
+        format!(" page {}/{pages} · {nav} · other keys close ", page + 1)
     } else {
-        " ? or Esc to close ".to_string()
+        " any key closes ".to_string()
     };
     let block = theme::panel(Span::styled(" Help ", theme::bold()))
         .border_style(theme::label())

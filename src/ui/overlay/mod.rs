@@ -13,7 +13,7 @@ pub fn render(frame: &mut Frame, s: &AppState) {
     let area = frame.area();
     match &s.overlay {
         Overlay::None => {}
-        Overlay::Help => help::render(frame, area, &s.help_keys, &s.help_gamepad, s.help_page),
+        Overlay::Help => help::render(frame, area, &s.help, &s.help_nav, s.help_page),
         Overlay::Animations { selected } => {
             palette::render(frame, area, "Animations", &s.animations, *selected)
         }

@@ -1,13 +1,23 @@
 //! Configuration: a TOML file in the platform config directory, merged over the defaults
 //! shipped in `assets/default-config.toml`. An invalid file is reported with its path, line
 //! and key, and the app refuses to start rather than guess.
+//!
+//! Loading parses everything into types: key bindings into a [`KeyMap`] per context
+//! ([`keys`]), gamepad buttons into [`PadBindings`] ([`pad`]). The layers above take those
+//! types and never see a binding's name.
+
+pub mod keys;
+pub mod pad;
+
+pub use keys::{Action, Context, Key, KeyCode, KeyEntry, KeyMap};
+pub use pad::{Button, PadAction, PadBindings};
 
 use serde::Deserialize;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 /// The shipped defaults (also what `droidctl config init` writes).
-pub const DEFAULT_TOML: &str = include_str!("../assets/default-config.toml");
+pub const DEFAULT_TOML: &str = include_str!("../../assets/default-config.toml");
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
 #[serde(rename_all = "lowercase")]
@@ -47,35 +57,62 @@ pub struct Session {
     pub pacing_ms: u64,
 }
 
+/// The `[gamepad]` table as written.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
+struct RawGamepad {
+    enabled: bool,
+    deadzone: f32,
+    expo: f32,
+    max_speed: u8,
+    dome_rate_deg_s: f32,
+    tripod: String,
+    bipod: String,
+    aim: String,
+    estop: String,
+    animation: String,
+    help: String,
+    sound_up: u16,
+    sound_down: u16,
+    sound_left: u16,
+    sound_right: u16,
+}
+
+#[derive(Debug, Clone, PartialEq)]
 pub struct Gamepad {
     pub enabled: bool,
     pub deadzone: f32,
     pub expo: f32,
     pub max_speed: u8,
     pub dome_rate_deg_s: f32,
-    pub tripod: String,
-    pub bipod: String,
-    /// Aim mode on rolling droids (BB-8, SPRK+, Ollie, BB-9E).
-    pub aim: String,
-    pub estop: String,
-    pub animation: String,
-    pub help: String,
+    /// Which button does what (tripod, bipod, aim, e-stop, animation, help).
+    pub buttons: PadBindings,
     pub sound_up: u16,
     pub sound_down: u16,
     pub sound_left: u16,
     pub sound_right: u16,
 }
 
+/// The file as written, before bindings are parsed.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
+struct RawConfig {
+    control: Control,
+    keyboard: Keyboard,
+    session: Session,
+    keys: BTreeMap<String, KeyEntry>,
+    gamepad: RawGamepad,
+}
+
+#[derive(Debug, Clone, PartialEq)]
 pub struct Config {
     pub control: Control,
     pub keyboard: Keyboard,
     pub session: Session,
-    /// Action name → key names.
-    pub keys: BTreeMap<String, Vec<String>>,
+    /// The `[keys]` table as written: action name → key names, a sub-table per context.
+    pub keys: BTreeMap<String, KeyEntry>,
+    /// The key bindings parsed from [`Config::keys`].
+    pub keymap: KeyMap,
     pub gamepad: Gamepad,
 }
 
@@ -190,7 +227,7 @@ impl Config {
         // the whole table; other sections merge key by key.
         merge(&mut base, user);
         let merged = toml::to_string(&base).map_err(|e| err(None, None, e.to_string()))?;
-        let cfg: Config = toml::from_str(&merged).map_err(|e: toml::de::Error| {
+        let raw: RawConfig = toml::from_str(&merged).map_err(|e: toml::de::Error| {
             // The merged text's lines are not the user's: point at the key in the user's file.
             let msg = e.message().to_string();
             let key = msg
@@ -205,13 +242,48 @@ impl Config {
             });
             err(line, key, msg)
         })?;
-        cfg.validate().map_err(|(section, key, message)| {
+        Config::from_raw(raw).map_err(|(section, key, message)| {
+            // A context's binding (`log.pause`) sits in its own table (`[keys.packet_log]`).
+            let (table, name) = match key.rsplit_once('.') {
+                Some((sub, name)) => (format!("{section}.{sub}"), name.to_string()),
+                None => (section.clone(), key.clone()),
+            };
             err(
-                find_key_line(text, &section, &key),
+                find_key_line(text, &table, &name),
                 Some(format!("{section}.{key}")),
                 message,
             )
-        })?;
+        })
+    }
+
+    /// Parse the bindings and check ranges: (section, key, message) on error.
+    fn from_raw(raw: RawConfig) -> Result<Config, (String, String, String)> {
+        let keymap =
+            KeyMap::from_config(&raw.keys).map_err(|(key, msg)| ("keys".to_string(), key, msg))?;
+        let g = raw.gamepad;
+        let buttons =
+            PadBindings::parse([&g.tripod, &g.bipod, &g.aim, &g.estop, &g.animation, &g.help])
+                .map_err(|(key, msg)| ("gamepad".to_string(), key, msg))?;
+        let cfg = Config {
+            control: raw.control,
+            keyboard: raw.keyboard,
+            session: raw.session,
+            keys: raw.keys,
+            keymap,
+            gamepad: Gamepad {
+                enabled: g.enabled,
+                deadzone: g.deadzone,
+                expo: g.expo,
+                max_speed: g.max_speed,
+                dome_rate_deg_s: g.dome_rate_deg_s,
+                buttons,
+                sound_up: g.sound_up,
+                sound_down: g.sound_down,
+                sound_left: g.sound_left,
+                sound_right: g.sound_right,
+            },
+        };
+        cfg.validate()?;
         Ok(cfg)
     }
 
@@ -252,26 +324,6 @@ impl Config {
                 return bad("keyboard", k, format!("{v} is out of range 20..=5000"));
             }
         }
-        if let Err((key, msg)) = crate::teleop::keymap::KeyMap::from_config(&self.keys) {
-            return bad("keys", &key, msg);
-        }
-        for (k, name) in [
-            ("tripod", &self.gamepad.tripod),
-            ("bipod", &self.gamepad.bipod),
-            ("estop", &self.gamepad.estop),
-            ("animation", &self.gamepad.animation),
-            ("help", &self.gamepad.help),
-        ] {
-            if crate::teleop::gamepad::Button::parse(name).is_none() {
-                return bad(
-                    "gamepad",
-                    k,
-                    format!(
-                        "unknown button {name:?} (use South, East, North, West, Start, Select, LeftBumper, RightBumper)"
-                    ),
-                );
-            }
-        }
         Ok(())
     }
 }
@@ -285,7 +337,10 @@ mod tests {
         let c = Config::defaults();
         assert_eq!(c.control.rate_hz, 10);
         assert_eq!(c.control.mode, DriveMode::Hold);
-        assert_eq!(c.keys["quit"], vec!["q", "Esc"]);
+        assert_eq!(
+            c.keys["quit"],
+            KeyEntry::Keys(vec!["q".into(), "Esc".into()])
+        );
     }
 
     #[test]
@@ -298,8 +353,20 @@ mod tests {
         assert_eq!(c.control.rate_hz, 20);
         assert_eq!(c.control.mode, DriveMode::Latched);
         assert_eq!(c.control.cruise_speed, 100);
-        assert_eq!(c.keys["quit"], vec!["Ctrl+q"]);
-        assert_eq!(c.keys["forward"], vec!["Up", "w"]);
+        assert_eq!(c.keymap.action(&Key::ch('q')), None);
+        let ctrl_q = Key::parse("Ctrl+q").unwrap();
+        assert_eq!(c.keymap.action(&ctrl_q), Some(Action::Quit));
+        assert_eq!(c.keymap.action(&Key::ch('w')), Some(Action::Forward));
+        // A context's table merges binding by binding too.
+        let c = Config::parse_merged(None, "[keys.packet_log]\npause = [\"P\"]\n").unwrap();
+        assert_eq!(
+            c.keymap.action_in(Context::Log, &Key::ch('P')),
+            Some(Action::LogPause)
+        );
+        assert_eq!(
+            c.keymap.action_in(Context::Log, &Key::ch('d')),
+            Some(Action::LogDecoded)
+        );
     }
 
     #[test]
@@ -339,6 +406,16 @@ mod tests {
 
         let e = Config::parse_merged(Some(p), "[gamepad]\ntripod = \"Z\"\n").unwrap_err();
         assert_eq!(e.key.as_deref(), Some("gamepad.tripod"));
+        // Every button is checked, `aim` included, with its line.
+        let e =
+            Config::parse_merged(Some(p), "[gamepad]\nenabled = true\naim = \"RB\"\n").unwrap_err();
+        assert_eq!(e.key.as_deref(), Some("gamepad.aim"));
+        assert_eq!(e.line, Some(3));
+        // A context's binding is found in its own table.
+        let e = Config::parse_merged(Some(p), "[keys]\n[keys.packet_log]\npause = [\"d\"]\n")
+            .unwrap_err();
+        assert_eq!(e.key.as_deref(), Some("keys.packet_log.pause"));
+        assert_eq!(e.line, Some(3));
     }
 
     #[test]

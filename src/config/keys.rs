@@ -1,0 +1,523 @@
+//! Keys, the actions they do in each part of the app, and the configured bindings between
+//! them, parsed and checked when the configuration loads. Keys are our own type so the
+//! control logic is testable without a terminal (`app::input` converts crossterm's events).
+//!
+//! Bindings live in contexts: driving (the `[keys]` table itself), the packet log
+//! (`[keys.packet_log]`), the animation and sound palettes (`[keys.palette]`), the help
+//! overlay (`[keys.help_overlay]`), the log filter being typed (`[keys.filter]`), replay
+//! (`[keys.replay]`) and the droid picker (`[keys.picker]`).
+//! A key means one thing per context; the same key may mean different things in different
+//! contexts (`c` is the colour while driving and "clear the filter" in the log).
+
+use std::collections::{BTreeMap, HashMap};
+use std::fmt;
+
+/// A key, without the press/release distinction.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum KeyCode {
+    /// A printable character, case kept (upper case = with Shift).
+    Char(char),
+    Up,
+    Down,
+    Left,
+    Right,
+    Space,
+    Esc,
+    Enter,
+    Tab,
+    Backspace,
+    PageUp,
+    PageDown,
+    Home,
+    End,
+    F(u8),
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct Key {
+    pub code: KeyCode,
+    pub ctrl: bool,
+}
+
+impl Key {
+    pub const fn plain(code: KeyCode) -> Key {
+        Key { code, ctrl: false }
+    }
+
+    pub const fn ch(c: char) -> Key {
+        Key::plain(KeyCode::Char(c))
+    }
+
+    /// Ctrl+C: always quits (the droid is stopped first), whatever the bindings say.
+    pub const CTRL_C: Key = Key {
+        code: KeyCode::Char('c'),
+        ctrl: true,
+    };
+
+    /// Parse a config name: "Up", "Space", "F1", "w", "+", "Ctrl+c".
+    pub fn parse(name: &str) -> Option<Key> {
+        let (ctrl, rest) = match name
+            .strip_prefix("Ctrl+")
+            .or_else(|| name.strip_prefix("ctrl+"))
+        {
+            Some(r) => (true, r),
+            None => (false, name),
+        };
+        let code = match rest {
+            "Up" => KeyCode::Up,
+            "Down" => KeyCode::Down,
+            "Left" => KeyCode::Left,
+            "Right" => KeyCode::Right,
+            "Space" => KeyCode::Space,
+            "Esc" => KeyCode::Esc,
+            "Enter" => KeyCode::Enter,
+            "Tab" => KeyCode::Tab,
+            "Backspace" => KeyCode::Backspace,
+            "PageUp" => KeyCode::PageUp,
+            "PageDown" => KeyCode::PageDown,
+            "Home" => KeyCode::Home,
+            "End" => KeyCode::End,
+            f if f.len() >= 2 && f.starts_with('F') => {
+                KeyCode::F(f[1..].parse().ok().filter(|n| (1..=12).contains(n))?)
+            }
+            s => {
+                let mut chars = s.chars();
+                let c = chars.next()?;
+                if chars.next().is_some() || c.is_control() || c == ' ' {
+                    return None;
+                }
+                KeyCode::Char(c)
+            }
+        };
+        Some(Key { code, ctrl })
+    }
+}
+
+impl fmt::Display for Key {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.ctrl {
+            write!(f, "Ctrl+")?;
+        }
+        match self.code {
+            KeyCode::Char(c) => write!(f, "{c}"),
+            KeyCode::Up => write!(f, "↑"),
+            KeyCode::Down => write!(f, "↓"),
+            KeyCode::Left => write!(f, "←"),
+            KeyCode::Right => write!(f, "→"),
+            KeyCode::PageUp => write!(f, "PgUp"),
+            KeyCode::PageDown => write!(f, "PgDn"),
+            KeyCode::F(n) => write!(f, "F{n}"),
+            other => write!(f, "{other:?}"),
+        }
+    }
+}
+
+/// Where a key is read: which part of the app has the keyboard.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Context {
+    /// Driving: the `[keys]` table itself.
+    Drive,
+    /// The packet log has the focus.
+    Log,
+    /// The animation or sound palette is open.
+    Palette,
+    /// The help overlay is open.
+    Help,
+    /// The log filter is being typed.
+    Filter,
+    /// A capture is played back.
+    Replay,
+    /// Choosing a droid among those a scan found.
+    Picker,
+}
+
+impl Context {
+    pub const ALL: [Context; 7] = [
+        Context::Drive,
+        Context::Log,
+        Context::Palette,
+        Context::Help,
+        Context::Filter,
+        Context::Replay,
+        Context::Picker,
+    ];
+
+    /// The sub-table of `[keys]` (`None`: the `[keys]` table itself).
+    pub fn table(self) -> Option<&'static str> {
+        match self {
+            Context::Drive => None,
+            Context::Log => Some("packet_log"),
+            Context::Palette => Some("palette"),
+            Context::Help => Some("help_overlay"),
+            Context::Filter => Some("filter"),
+            Context::Replay => Some("replay"),
+            Context::Picker => Some("picker"),
+        }
+    }
+
+    /// The help overlay's heading.
+    pub fn title(self) -> &'static str {
+        match self {
+            Context::Drive => "Keyboard",
+            Context::Log => "Packet log",
+            Context::Palette => "Palettes",
+            Context::Help => "Help",
+            Context::Filter => "Log filter",
+            Context::Replay => "Replay",
+            Context::Picker => "Choosing a droid",
+        }
+    }
+}
+
+macro_rules! actions {
+    ($( $ctx:ident { $( $v:ident $name:literal $held:literal $desc:literal; )* } )*) => {
+        /// What a key does, in its context.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+        pub enum Action { $( $( $v, )* )* }
+
+        impl Action {
+            pub const ALL: &'static [Action] = &[ $( $( Action::$v, )* )* ];
+
+            pub fn context(self) -> Context {
+                match self { $( $( Action::$v => Context::$ctx, )* )* }
+            }
+
+            /// The name in its table of the config.
+            pub fn config_name(self) -> &'static str {
+                match self { $( $( Action::$v => $name, )* )* }
+            }
+
+            /// For the help overlay.
+            pub fn description(self) -> &'static str {
+                match self { $( $( Action::$v => $desc, )* )* }
+            }
+
+            /// Actions that last while the key is held (the rest fire once per press).
+            pub fn is_held(self) -> bool {
+                match self { $( $( Action::$v => $held, )* )* }
+            }
+        }
+    };
+}
+
+actions! {
+    Drive {
+        Forward "forward" true "drive forward (hold)";
+        Backward "backward" true "reverse (hold)";
+        Left "left" true "turn left (hold; also aims while stopped)";
+        Right "right" true "turn right (hold; also aims while stopped)";
+        Faster "faster" false "cruise speed up";
+        Slower "slower" false "cruise speed down";
+        DomeLeft "dome_left" true "dome left (hold)";
+        DomeRight "dome_right" true "dome right (hold)";
+        Tripod "tripod" false "stance: tripod (3 legs, can roll)";
+        Bipod "bipod" false "stance: bipod (2 legs)";
+        Waddle "waddle" false "stance: waddle";
+        StanceStop "stance_stop" false "stance: stop";
+        EStop "estop" true "EMERGENCY STOP (latched while held)";
+        Turbo "turbo" false "turbo on/off";
+        Aim "aim" false "aim mode (rolling droids)";
+        Colour "colour" false "main LED colour";
+        BackLight "back_light" false "back light";
+        Animations "animations" false "animation palette";
+        Sounds "sounds" false "sound palette";
+        Log "log" false "the packet log has the keys (and back)";
+        Help "help" false "this help";
+        Quit "quit" false "quit (stops the droid first)";
+    }
+    Log {
+        LogUp "up" false "scroll up";
+        LogDown "down" false "scroll down";
+        LogPageUp "page_up" false "scroll up a page";
+        LogPageDown "page_down" false "scroll down a page";
+        LogTop "top" false "to the oldest line";
+        LogBottom "bottom" false "to the newest line (follow)";
+        LogPause "pause" false "pause / resume";
+        LogDecoded "decoded" false "decoded / hex";
+        LogFilter "filter" false "filter (in|out dev:NAME text)";
+        LogClearFilter "clear_filter" false "clear the filter";
+        LogBack "back" false "back to driving";
+    }
+    Palette {
+        PaletteUp "up" false "previous entry";
+        PaletteDown "down" false "next entry";
+        PalettePageUp "page_up" false "ten entries back";
+        PalettePageDown "page_down" false "ten entries on";
+        PalettePlay "play" false "play it and close";
+        PaletteClose "close" false "close";
+    }
+    Help {
+        HelpNext "next_page" false "next page";
+        HelpPrevious "previous_page" false "previous page (any other key closes)";
+    }
+    Filter {
+        FilterApply "apply" false "apply the filter";
+        FilterCancel "cancel" false "leave it as it was";
+    }
+    Replay {
+        ReplayPause "pause" false "pause / play";
+        ReplayFaster "faster" false "faster (up to 16×)";
+        ReplaySlower "slower" false "slower (down to 0.25×)";
+        ReplayForward "forward" false "seek forward 5 s";
+        ReplayBack "back" false "seek back 5 s";
+        ReplayForwardLong "forward_long" false "seek forward 60 s";
+        ReplayBackLong "back_long" false "seek back 60 s";
+        ReplayStart "start" false "to the start";
+        ReplayEnd "end" false "to the end";
+        ReplayStep "step" false "single step: pause, then the next event";
+    }
+    Picker {
+        PickerUp "up" false "previous droid";
+        PickerDown "down" false "next droid";
+        PickerFirst "first" false "the first droid";
+        PickerLast "last" false "the last droid";
+        PickerChoose "choose" false "connect to it";
+        PickerCancel "cancel" false "cancel";
+    }
+}
+
+impl Action {
+    /// The action named `name` in `ctx`'s table.
+    pub fn from_config_name(ctx: Context, name: &str) -> Option<Action> {
+        Action::ALL
+            .iter()
+            .copied()
+            .find(|a| a.context() == ctx && a.config_name() == name)
+    }
+
+    /// The config key, `table.name` for a sub-table: for messages.
+    pub fn config_key(self) -> String {
+        match self.context().table() {
+            None => self.config_name().to_string(),
+            Some(t) => format!("{t}.{}", self.config_name()),
+        }
+    }
+}
+
+/// The `[keys]` table as written: drive actions at the top, contexts as sub-tables.
+#[derive(Debug, Clone, PartialEq, serde::Deserialize, serde::Serialize)]
+#[serde(untagged)]
+pub enum KeyEntry {
+    Keys(Vec<String>),
+    Table(BTreeMap<String, Vec<String>>),
+}
+
+/// Bindings from keys to actions, per context.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct KeyMap {
+    map: HashMap<(Context, Key), Action>,
+    by_action: BTreeMap<Action, Vec<Key>>,
+}
+
+impl KeyMap {
+    /// Build from the config's `[keys]` table. Errors name the offending config key
+    /// (`forward`, `log.pause`).
+    pub fn from_config(keys: &BTreeMap<String, KeyEntry>) -> Result<KeyMap, (String, String)> {
+        let mut km = KeyMap::default();
+        for (name, entry) in keys {
+            match entry {
+                KeyEntry::Keys(names) => km.bind(Context::Drive, name, name, names)?,
+                KeyEntry::Table(table) => {
+                    let ctx = Context::ALL
+                        .into_iter()
+                        .find(|c| c.table() == Some(name.as_str()))
+                        .ok_or_else(|| unknown_action(name, Context::Drive))?;
+                    for (action, names) in table {
+                        km.bind(ctx, &format!("{name}.{action}"), action, names)?;
+                    }
+                }
+            }
+        }
+        for a in [Action::Quit, Action::EStop] {
+            if km.keys(a).is_empty() {
+                return Err((a.config_key(), "must have at least one key".into()));
+            }
+        }
+        Ok(km)
+    }
+
+    /// Bind `names` to the action `action` of `ctx`; `key` is the config key for messages.
+    fn bind(
+        &mut self,
+        ctx: Context,
+        key: &str,
+        action: &str,
+        names: &[String],
+    ) -> Result<(), (String, String)> {
+        let a = Action::from_config_name(ctx, action).ok_or_else(|| unknown_action(key, ctx))?;
+        for kn in names {
+            let k = Key::parse(kn).ok_or_else(|| {
+                (
+                    key.to_string(),
+                    format!("unknown key {kn:?} (e.g. \"Up\", \"Space\", \"w\", \"Ctrl+c\")"),
+                )
+            })?;
+            if k == Key::CTRL_C {
+                return Err((
+                    key.to_string(),
+                    "Ctrl+c always quits; bind another key".into(),
+                ));
+            }
+            if let Some(other) = self.map.insert((ctx, k), a)
+                && other != a
+            {
+                return Err((
+                    key.to_string(),
+                    format!(
+                        "key {kn:?} is bound to both {} and {}",
+                        other.config_key(),
+                        a.config_key()
+                    ),
+                ));
+            }
+            let keys = self.by_action.entry(a).or_default();
+            if !keys.contains(&k) {
+                keys.push(k);
+            }
+        }
+        Ok(())
+    }
+
+    /// What `key` does in `ctx`.
+    pub fn action_in(&self, ctx: Context, key: &Key) -> Option<Action> {
+        self.map.get(&(ctx, *key)).copied()
+    }
+
+    /// What `key` does while driving.
+    pub fn action(&self, key: &Key) -> Option<Action> {
+        self.action_in(Context::Drive, key)
+    }
+
+    pub fn keys(&self, a: Action) -> &[Key] {
+        self.by_action.get(&a).map(Vec::as_slice).unwrap_or(&[])
+    }
+
+    /// The keys of `a` as shown in help (`↑ / w`); `None` when it has none.
+    pub fn shown(&self, a: Action) -> Option<String> {
+        let keys: Vec<String> = self.keys(a).iter().map(Key::to_string).collect();
+        (!keys.is_empty()).then(|| keys.join(" / "))
+    }
+
+    /// Help lines of a context, in the table's order: (keys, description).
+    pub fn help(&self, ctx: Context) -> Vec<(String, &'static str)> {
+        Action::ALL
+            .iter()
+            .filter(|a| a.context() == ctx)
+            .filter_map(|a| self.shown(*a).map(|k| (k, a.description())))
+            .collect()
+    }
+}
+
+fn unknown_action(key: &str, ctx: Context) -> (String, String) {
+    let mut all: Vec<String> = Action::ALL
+        .iter()
+        .filter(|a| a.context() == ctx)
+        .map(|a| a.config_name().to_string())
+        .collect();
+    if ctx == Context::Drive {
+        all.extend(
+            Context::ALL
+                .iter()
+                .filter_map(|c| c.table())
+                .map(|t| format!("[keys.{t}]")),
+        );
+    }
+    (
+        key.to_string(),
+        format!("unknown action; expected one of {}", all.join(", ")),
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config::Config;
+
+    #[test]
+    fn parses_key_names() {
+        assert_eq!(Key::parse("Up"), Some(Key::plain(KeyCode::Up)));
+        assert_eq!(Key::parse("w"), Some(Key::ch('w')));
+        assert_eq!(Key::parse("Q"), Some(Key::ch('Q')));
+        assert_eq!(Key::parse("Ctrl+c"), Some(Key::CTRL_C));
+        assert_eq!(Key::parse("F12"), Some(Key::plain(KeyCode::F(12))));
+        assert_eq!(Key::parse("F13"), None);
+        assert_eq!(Key::parse("ww"), None);
+        assert_eq!(Key::parse(""), None);
+    }
+
+    #[test]
+    fn default_bindings() {
+        let km = Config::defaults().keymap;
+        assert_eq!(km.action(&Key::plain(KeyCode::Up)), Some(Action::Forward));
+        assert_eq!(km.action(&Key::ch('w')), Some(Action::Forward));
+        assert_eq!(km.action(&Key::ch('q')), Some(Action::Quit));
+        assert_eq!(km.action(&Key::ch('Q')), Some(Action::DomeLeft));
+        assert_eq!(km.action(&Key::plain(KeyCode::Space)), Some(Action::EStop));
+        assert_eq!(km.action(&Key::ch('?')), Some(Action::Help));
+        // The same key means other things elsewhere.
+        assert_eq!(km.action(&Key::ch('c')), Some(Action::Colour));
+        assert_eq!(
+            km.action_in(Context::Log, &Key::ch('c')),
+            Some(Action::LogClearFilter)
+        );
+        assert_eq!(
+            km.action_in(Context::Replay, &Key::plain(KeyCode::Space)),
+            Some(Action::ReplayPause)
+        );
+        // Every action has a default key, and its help line.
+        for a in Action::ALL {
+            assert!(
+                !km.keys(*a).is_empty(),
+                "{} has no default key",
+                a.config_key()
+            );
+        }
+        let help = km.help(Context::Drive);
+        assert_eq!(help[0].0, "↑ / w");
+        let n: usize = Context::ALL.iter().map(|c| km.help(*c).len()).sum();
+        assert_eq!(n, Action::ALL.len());
+    }
+
+    fn with(extra: &[(&str, KeyEntry)]) -> BTreeMap<String, KeyEntry> {
+        let mut keys = Config::defaults().keys;
+        for (k, v) in extra {
+            keys.insert((*k).to_string(), v.clone());
+        }
+        keys
+    }
+
+    fn list(v: &[&str]) -> Vec<String> {
+        v.iter().map(|s| s.to_string()).collect()
+    }
+
+    #[test]
+    fn conflicts_and_unknowns_are_errors() {
+        let keys = with(&[("forward", KeyEntry::Keys(list(&["t"])))]);
+        let (_, msg) = KeyMap::from_config(&keys).unwrap_err();
+        assert!(msg.contains("forward") && msg.contains("turbo"), "{msg}");
+        let keys = with(&[("fly", KeyEntry::Keys(list(&["f"])))]);
+        assert_eq!(KeyMap::from_config(&keys).unwrap_err().0, "fly");
+        let keys = with(&[("quit", KeyEntry::Keys(vec![]))]);
+        assert_eq!(KeyMap::from_config(&keys).unwrap_err().0, "quit");
+        let keys = with(&[("quit", KeyEntry::Keys(list(&["Ctrl+c"])))]);
+        assert!(
+            KeyMap::from_config(&keys)
+                .unwrap_err()
+                .1
+                .contains("always quits")
+        );
+        // Within a context, too.
+        let Some(KeyEntry::Table(mut log)) = Config::defaults().keys.remove("packet_log") else {
+            panic!("the defaults have a packet_log table")
+        };
+        log.insert("pause".to_string(), list(&["d"]));
+        let keys = with(&[("packet_log", KeyEntry::Table(log))]);
+        let (k, msg) = KeyMap::from_config(&keys).unwrap_err();
+        assert_eq!(k, "packet_log.pause");
+        assert!(msg.contains("packet_log.decoded"), "{msg}");
+        let mut log = BTreeMap::new();
+        log.insert("zoom".to_string(), list(&["z"]));
+        let keys = with(&[("packet_log", KeyEntry::Table(log))]);
+        assert_eq!(KeyMap::from_config(&keys).unwrap_err().0, "packet_log.zoom");
+    }
+}
