@@ -160,3 +160,19 @@ fn the_checker_sees_grouped_and_nested_paths() {
     );
     assert!(named_modules("let my_crate::x = 1;").is_empty());
 }
+
+/// Short files with one job: no file in `src/` over 900 lines (tests included).
+#[test]
+fn no_source_file_is_over_900_lines() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut files = Vec::new();
+    rust_files(&src, &mut files);
+    let long: Vec<String> = files
+        .iter()
+        .filter_map(|f| {
+            let n = std::fs::read_to_string(f).expect("a source file").lines().count();
+            (n > 900).then(|| format!("{}: {n} lines", f.display()))
+        })
+        .collect();
+    assert!(long.is_empty(), "split these by job:\n{}", long.join("\n"));
+}
