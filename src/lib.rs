@@ -8,6 +8,7 @@ pub mod capture;
 pub mod cli;
 pub mod config;
 pub mod family;
+pub mod fleet;
 pub mod gatt;
 pub mod hex;
 pub mod link;

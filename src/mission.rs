@@ -157,7 +157,22 @@ pub fn led_command(model: Model, action: &Action) -> Option<Command> {
     crate::family::for_model(model).led(model, action)
 }
 
-type Emit = Arc<dyn Fn(MissionEvent) + Send + Sync>;
+/// Where a mission's steps, samples and warnings go.
+pub type Emit = Arc<dyn Fn(MissionEvent) + Send + Sync>;
+
+/// The command that drives `family`'s droid at `speed` toward `heading`. A steering robot
+/// (Robi 42) reads the heading as a turn relative to straight ahead: 0 straight, 1..=180 to
+/// the right (90 or more is full lock), 359..=180 to the left.
+pub fn drive_command(family: &dyn Family, speed: u8, heading: Heading) -> Command {
+    if family.steers() {
+        let d = heading.degrees() as f32;
+        let signed = if d > 180.0 { d - 360.0 } else { d };
+        if let Some(c) = family.steer(speed, (signed / 90.0).clamp(-1.0, 1.0)) {
+            return c;
+        }
+    }
+    family.drive(speed, heading, false)
+}
 
 struct Runner {
     session: SessionHandle,
@@ -194,18 +209,9 @@ impl Runner {
         });
     }
 
-    /// The drive for a script's `drive SPEED HEADING`. On a steering robot (Robi 42) the
-    /// heading is read as a turn relative to straight ahead: 0 straight, 1..=180 to the right
-    /// (90 or more is full lock), 359..=180 to the left.
+    /// The drive for a script's `drive SPEED HEADING` ([`drive_command`]).
     fn drive_cmd(&self, speed: u8, heading: Heading) -> Command {
-        if self.family.steers() {
-            let d = heading.degrees() as f32;
-            let signed = if d > 180.0 { d - 360.0 } else { d };
-            if let Some(c) = self.family.steer(speed, (signed / 90.0).clamp(-1.0, 1.0)) {
-                return c;
-            }
-        }
-        self.family.drive(speed, heading, false)
+        drive_command(self.family, speed, heading)
     }
 
     /// Let `d` pass, re-sending the held drive command on the heartbeat.
@@ -344,7 +350,7 @@ impl Runner {
 }
 
 /// Wait until the session is connected, or fail.
-async fn await_connected(session: &SessionHandle, limit: Duration) -> Result<(), MissionError> {
+pub async fn await_connected(session: &SessionHandle, limit: Duration) -> Result<(), MissionError> {
     let mut state = session.watch_state();
     let wait = async {
         loop {
@@ -403,123 +409,189 @@ pub async fn run(
 ) -> Result<Summary, MissionError> {
     let events = session.subscribe();
     await_connected(session, opts.connect_timeout).await?;
-    let start = Instant::now();
-    let telemetry = Arc::new(Mutex::new(Telemetry::default()));
-
-    // Notifications → telemetry; then what the droid announced at connect, before we
-    // subscribed (Robi's handshake; folding it twice is harmless).
-    let collector = {
-        let mut rx = session.subscribe();
-        let telemetry = telemetry.clone();
-        tokio::spawn(async move {
-            loop {
-                match rx.recv().await {
-                    Ok(SessionEvent::Notification(n)) => {
-                        lock(&telemetry).apply(&n, start.elapsed())
-                    }
-                    Ok(_) | Err(broadcast::error::RecvError::Lagged(_)) => {}
-                    Err(broadcast::error::RecvError::Closed) => break,
-                }
-            }
-        })
-    };
-    for n in session.greeting() {
-        lock(&telemetry).apply(&n, Duration::ZERO);
-    }
-    let family = crate::family::for_model(model);
-    // Battery and stance read-back.
-    let poller = {
-        let session = session.clone();
-        let telemetry = telemetry.clone();
-        let every = opts.battery_poll;
-        tokio::spawn(async move {
-            if model.has_legs()
-                && let Some(c) = family.get_stance()
-                && let Ok(p) = session.request(c).await
-                && let Some(s) = p.data().first().and_then(|b| LegState::from_byte(*b))
-            {
-                let mut t = lock(&telemetry);
-                if t.stance == crate::telemetry::Stance::Unknown {
-                    t.stance = crate::telemetry::Stance::from_state(s);
-                }
-            }
-            let Some(battery) = family.battery_request() else {
-                return;
-            };
-            loop {
-                if let Ok(p) = session.request(battery.clone()).await
-                    && let Some(v) = family.battery_volts(p.data())
-                {
-                    lock(&telemetry).battery_v = Some(v);
-                }
-                sleep(every).await;
-            }
-        })
-    };
-    // Samples on a fixed interval.
-    let sampler = {
-        let telemetry = telemetry.clone();
-        let emit = emit.clone();
-        let every = opts.interval.max(Duration::from_millis(1));
-        tokio::spawn(async move {
-            let mut tick = tokio::time::interval_at(start, every);
-            tick.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
-            loop {
-                tick.tick().await;
-                let s = sample_of(&lock(&telemetry), start.elapsed().as_millis() as u64);
-                emit(MissionEvent::Sample(s));
-            }
-        })
-    };
-
-    let mut runner = Runner {
-        session: session.clone(),
-        model,
-        family,
-        opts: opts.clone(),
-        telemetry: telemetry.clone(),
-        start,
-        emit: emit.clone(),
-        driving: None,
-        last_heading: Heading::default(),
-        events,
-        failed: 0,
-        slept: false,
-    };
+    let mut m = DroidMission::begin(session, model, opts, emit, Instant::now(), events);
     for s in steps {
         if session.is_closed() {
             break;
         }
-        runner.step(s).await;
+        m.step(s).await;
     }
-    // Stop, and give the stop time to go out before the summary.
-    if runner.driving.take().is_some() {
-        session.set(Slot::Drive, runner.drive_cmd(0, runner.last_heading));
-    }
-    runner.hold(Duration::from_millis(300)).await;
-    sampler.abort();
-    poller.abort();
-    collector.abort();
+    m.finish().await
+}
 
-    let t_ms = start.elapsed().as_millis() as u64;
-    let t = lock(&telemetry).clone();
-    emit(MissionEvent::Sample(sample_of(&t, t_ms)));
-    let st = session.stats();
-    let closed = session.is_closed();
-    let summary = Summary {
-        done: true,
-        t_ms,
-        sent: st.sent,
-        received: st.received,
-        errors: st.errors,
-        timeouts: st.timeouts,
-        collisions: t.collisions,
-        failed_steps: runner.failed,
-        x_cm: t.x_cm,
-        y_cm: t.y_cm,
-    };
-    if closed && let LinkState::Closed { reason: Some(r) } = session.state() {
-        return Err(MissionError(r));
+/// A mission on one droid taken step by step: what [`run`] does, and what a fleet mission
+/// does on each of its droids (`crate::fleet::mission`), all sampled from one start.
+pub struct DroidMission {
+    runner: Runner,
+    sampler: tokio::task::JoinHandle<()>,
+    poller: tokio::task::JoinHandle<()>,
+    collector: tokio::task::JoinHandle<()>,
+}
+
+impl DroidMission {
+    /// Wait for `session` to connect (bounded by `opts.connect_timeout`), then start its
+    /// telemetry, battery poll and samples from `start` (when it is already past, the first
+    /// sample comes at once).
+    pub async fn start(
+        session: &SessionHandle,
+        model: Model,
+        opts: MissionOptions,
+        emit: Emit,
+        start: Instant,
+    ) -> Result<DroidMission, MissionError> {
+        let events = session.subscribe();
+        await_connected(session, opts.connect_timeout).await?;
+        Ok(DroidMission::begin(
+            session, model, opts, emit, start, events,
+        ))
     }
-    Ok(summary)
+
+    fn begin(
+        session: &SessionHandle,
+        model: Model,
+        opts: MissionOptions,
+        emit: Emit,
+        start: Instant,
+        events: broadcast::Receiver<SessionEvent>,
+    ) -> DroidMission {
+        let telemetry = Arc::new(Mutex::new(Telemetry::default()));
+
+        // Notifications → telemetry; then what the droid announced at connect, before we
+        // subscribed (Robi's handshake; folding it twice is harmless).
+        let collector = {
+            let mut rx = session.subscribe();
+            let telemetry = telemetry.clone();
+            tokio::spawn(async move {
+                loop {
+                    match rx.recv().await {
+                        Ok(SessionEvent::Notification(n)) => {
+                            lock(&telemetry).apply(&n, start.elapsed())
+                        }
+                        Ok(_) | Err(broadcast::error::RecvError::Lagged(_)) => {}
+                        Err(broadcast::error::RecvError::Closed) => break,
+                    }
+                }
+            })
+        };
+        for n in session.greeting() {
+            lock(&telemetry).apply(&n, Duration::ZERO);
+        }
+        let family = crate::family::for_model(model);
+        // Battery and stance read-back.
+        let poller = {
+            let session = session.clone();
+            let telemetry = telemetry.clone();
+            let every = opts.battery_poll;
+            tokio::spawn(async move {
+                if model.has_legs()
+                    && let Some(c) = family.get_stance()
+                    && let Ok(p) = session.request(c).await
+                    && let Some(s) = p.data().first().and_then(|b| LegState::from_byte(*b))
+                {
+                    let mut t = lock(&telemetry);
+                    if t.stance == crate::telemetry::Stance::Unknown {
+                        t.stance = crate::telemetry::Stance::from_state(s);
+                    }
+                }
+                let Some(battery) = family.battery_request() else {
+                    return;
+                };
+                loop {
+                    if let Ok(p) = session.request(battery.clone()).await
+                        && let Some(v) = family.battery_volts(p.data())
+                    {
+                        lock(&telemetry).battery_v = Some(v);
+                    }
+                    sleep(every).await;
+                }
+            })
+        };
+        // Samples on a fixed interval.
+        let sampler = {
+            let telemetry = telemetry.clone();
+            let emit = emit.clone();
+            let every = opts.interval.max(Duration::from_millis(1));
+            tokio::spawn(async move {
+                let mut tick = tokio::time::interval_at(start, every);
+                tick.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
+                loop {
+                    tick.tick().await;
+                    let s = sample_of(&lock(&telemetry), start.elapsed().as_millis() as u64);
+                    emit(MissionEvent::Sample(s));
+                }
+            })
+        };
+
+        let runner = Runner {
+            session: session.clone(),
+            model,
+            family,
+            opts: opts.clone(),
+            telemetry: telemetry.clone(),
+            start,
+            emit: emit.clone(),
+            driving: None,
+            last_heading: Heading::default(),
+            events,
+            failed: 0,
+            slept: false,
+        };
+        DroidMission {
+            runner,
+            sampler,
+            poller,
+            collector,
+        }
+    }
+
+    /// Run one step.
+    pub async fn step(&mut self, s: &Step) {
+        self.runner.step(s).await;
+    }
+
+    /// Whether the session has ended (a fatal link error): the rest is skipped.
+    pub fn closed(&self) -> bool {
+        self.runner.session.is_closed()
+    }
+
+    /// Stop the droid, give the stop time to go out, and sum up.
+    pub async fn finish(mut self) -> Result<Summary, MissionError> {
+        let start = self.runner.start;
+        let emit = self.runner.emit.clone();
+        let telemetry = self.runner.telemetry.clone();
+        let (sampler, poller, collector) = (&self.sampler, &self.poller, &self.collector);
+        // Stop, and give the stop time to go out before the summary.
+        if self.runner.driving.take().is_some() {
+            self.runner.session.set(
+                Slot::Drive,
+                self.runner.drive_cmd(0, self.runner.last_heading),
+            );
+        }
+        self.runner.hold(Duration::from_millis(300)).await;
+        sampler.abort();
+        poller.abort();
+        collector.abort();
+
+        let t_ms = start.elapsed().as_millis() as u64;
+        let t = lock(&telemetry).clone();
+        emit(MissionEvent::Sample(sample_of(&t, t_ms)));
+        let st = self.runner.session.stats();
+        let closed = self.runner.session.is_closed();
+        let summary = Summary {
+            done: true,
+            t_ms,
+            sent: st.sent,
+            received: st.received,
+            errors: st.errors,
+            timeouts: st.timeouts,
+            collisions: t.collisions,
+            failed_steps: self.runner.failed,
+            x_cm: t.x_cm,
+            y_cm: t.y_cm,
+        };
+        if closed && let LinkState::Closed { reason: Some(r) } = self.runner.session.state() {
+            return Err(MissionError(r));
+        }
+        Ok(summary)
+    }
 }

@@ -6,7 +6,12 @@
 //! head DEGREES · animation ID · sound ID · led front|back R G B · led logic|holo BRIGHTNESS
 //! wait DURATION          (durations: 500ms, 2s, 1.5s)
 //! ```
-//! Blank lines and `#` comments are ignored.
+//! Blank lines and `#` comments are ignored. Missions for several droids address lines
+//! (`@R2 drive 100 90 for 2s`) and group them (`together { … }`): see [`fleet`].
+
+pub mod fleet;
+
+pub use fleet::{Addressed, Item, is_fleet, parse_fleet, plain_steps};
 
 use crate::protocol::v2::wire::LegAction;
 use crate::units::{HeadAngle, Heading};

@@ -28,6 +28,8 @@ const RANKS: &[(&str, u32)] = &[
     ("sim", 40),
     // Missions run on a session.
     ("mission", 45),
+    // Several sessions at once, and missions on them.
+    ("fleet", 47),
     ("capture", 50),
     ("teleop", 50),
     // `serve --record` writes captures.
@@ -170,7 +172,10 @@ fn no_source_file_is_over_900_lines() {
     let long: Vec<String> = files
         .iter()
         .filter_map(|f| {
-            let n = std::fs::read_to_string(f).expect("a source file").lines().count();
+            let n = std::fs::read_to_string(f)
+                .expect("a source file")
+                .lines()
+                .count();
             (n > 900).then(|| format!("{}: {n} lines", f.display()))
         })
         .collect();

@@ -133,10 +133,14 @@ impl App {
         }
     }
 
-    /// Latch the emergency stop now (not at the next tick).
+    /// Latch the emergency stop now (not at the next tick), on every droid of a fleet.
     pub fn estop(&mut self) {
         let o = self.controller.estop_now();
         self.apply(vec![o]);
+        self.each_other(|a| {
+            let o = a.controller.estop_now();
+            a.apply(vec![o]);
+        });
     }
 
     /// The driving input right now, from held keys and the pad. Nothing drives while the log
@@ -149,6 +153,15 @@ impl App {
         let pad_estop = self.pad.estop_held();
         if self.state.focus != Focus::Drive || self.state.overlay != Overlay::None {
             inp.estop = pad_estop;
+            return inp;
+        }
+        if !self.driven {
+            // A parked droid outside mirror mode: only the e-stop reaches it.
+            inp.estop = pad_estop
+                || self
+                    .held
+                    .keys()
+                    .any(|k| self.keymap.action(k) == Some(Action::EStop));
             return inp;
         }
         for k in self.held.keys() {
@@ -172,8 +185,23 @@ impl App {
         inp
     }
 
-    /// The fixed-rate control tick (`heartbeat`), or an immediate update after input stopped.
+    /// The fixed-rate control tick (`heartbeat`), or an immediate update after input stopped:
+    /// the driven droid's, then every other droid's of a fleet (each its own deadman).
     pub fn control(&mut self, heartbeat: bool) {
+        // Every droid's tick measures from the same last tick.
+        let last = self.last_tick;
+        self.control_one(heartbeat);
+        if self.fleet.is_some() {
+            let now = self.last_tick;
+            self.each_other(|a| {
+                a.last_tick = last;
+                a.control_one(heartbeat);
+                a.last_tick = now;
+            });
+        }
+    }
+
+    fn control_one(&mut self, heartbeat: bool) {
         let now = Instant::now();
         let dt = if heartbeat {
             now.duration_since(self.last_tick)

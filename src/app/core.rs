@@ -44,6 +44,11 @@ pub(super) struct App {
     /// Replay: what the last advance produced (kept to reuse its allocation).
     pub replayed: Vec<(Duration, Output)>,
     pub pacer: FramePacer,
+    /// The other droids of a fleet (`None` with one droid).
+    pub fleet: Option<super::fleet::FleetSide>,
+    /// The keys and the pad drive the droid swapped in (false for a parked droid outside
+    /// mirror mode: it gets no input, its deadman holds it; the e-stop still reaches it).
+    pub driven: bool,
 }
 
 impl App {

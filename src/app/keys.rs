@@ -242,6 +242,9 @@ impl App {
                 self.held.release_all();
                 self.control(false);
             }
+            Action::NextDroid => self.choose_next(true),
+            Action::PreviousDroid => self.choose_next(false),
+            Action::Mirror => self.toggle_mirror(),
             Action::Colour => self.cycle_colour(),
             Action::BackLight => self.toggle_back_light(),
             Action::Animations if self.family.animation(0).is_none() => {
@@ -256,6 +259,14 @@ impl App {
                 let view = self.droid_view();
                 let outs = self.controller.on_press(a, &view);
                 self.apply(outs);
+                // Mirror: speed, turbo, stance and aim keys act on every droid too.
+                if self.mirroring() && !a.is_held() {
+                    self.each_other(|o| {
+                        let view = o.droid_view();
+                        let outs = o.controller.on_press(a, &view);
+                        o.apply(outs);
+                    });
+                }
                 if a.is_held() {
                     self.control(false);
                 }

@@ -7,12 +7,15 @@
 //! - [`replay`], [`player`]: the app on a capture;
 //! - [`help`]: the help overlay's text, generated from the bindings;
 //! - [`pacing`], [`rates`]: frame pacing and per-second rates, small state machines without IO;
-//! - [`battery`]: the battery poller.
+//! - [`battery`]: the battery poller;
+//! - `fleet`, [`roster`]: several droids (the parked ones, choosing, mirror) and the roster
+//!   strip's view of them.
 
 mod actions;
 pub mod battery;
 pub mod catalog;
 mod core;
+mod fleet;
 pub mod help;
 pub mod input;
 mod keys;
@@ -23,6 +26,7 @@ pub mod picker;
 pub mod player;
 pub mod rates;
 mod replay;
+pub mod roster;
 pub mod run;
 pub mod state;
 

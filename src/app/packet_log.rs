@@ -31,6 +31,8 @@ pub struct LogLine {
     /// Name, fields and hex in lower case, made once so filtering 10,000 lines per frame does
     /// not lower-case them again every time.
     search: String,
+    /// The droid the line is about, in a fleet (`None` with one droid).
+    pub droid: Option<std::sync::Arc<str>>,
 }
 
 impl LogLine {
@@ -39,6 +41,13 @@ impl LogLine {
         let err = line.err.map(|e| e.name()).unwrap_or_default();
         line.search =
             format!("{}\n{}\n{}\n{err}", line.name, line.decoded, line.hex).to_ascii_lowercase();
+        line
+    }
+
+    /// The line of `e`, about the fleet's droid `droid`.
+    pub fn from_droid_entry(e: &LogEntry, droid: std::sync::Arc<str>) -> LogLine {
+        let mut line = Self::from_entry(e);
+        line.droid = Some(droid);
         line
     }
 
@@ -68,6 +77,7 @@ impl LogLine {
                     hex: hex::spaced(&packet.encode()),
                     decoded,
                     search: String::new(),
+                    droid: None,
                 }
             }
             LogItem::DecodeError(de) => LogLine {
@@ -81,6 +91,7 @@ impl LogLine {
                 hex: String::new(),
                 decoded: de.detail.clone(),
                 search: String::new(),
+                droid: None,
             },
         }
     }
@@ -95,6 +106,8 @@ pub struct LogFilter {
     pub text: String,
     /// `text` in lower case.
     lower: String,
+    /// `droid:NAME`: only lines about a droid whose name contains this (lower case).
+    pub droid: Option<String>,
 }
 
 impl LogFilter {
@@ -105,6 +118,14 @@ impl LogFilter {
         if self.did.is_some() && self.did != l.did {
             return false;
         }
+        if let Some(d) = &self.droid
+            && !l
+                .droid
+                .as_deref()
+                .is_some_and(|n| n.to_ascii_lowercase().contains(d.as_str()))
+        {
+            return false;
+        }
         if self.text.is_empty() {
             return true;
         }
@@ -112,7 +133,7 @@ impl LogFilter {
     }
 
     pub fn is_active(&self) -> bool {
-        self.dir.is_some() || self.did.is_some() || !self.text.is_empty()
+        self.dir.is_some() || self.did.is_some() || self.droid.is_some() || !self.text.is_empty()
     }
 
     /// Parse the filter prompt: words `in`/`out`, `dev:NAME` (or a device name), free text.
@@ -123,6 +144,9 @@ impl LogFilter {
             match w.to_ascii_lowercase().as_str() {
                 "in" | "<-" => f.dir = Some(Direction::In),
                 "out" | "->" => f.dir = Some(Direction::Out),
+                lw if lw.len() > 6 && lw.starts_with("droid:") => {
+                    f.droid = Some(lw["droid:".len()..].to_string())
+                }
                 lw => match lw.strip_prefix("dev:").and_then(Device::parse) {
                     Some(did) => f.did = Some(did),
                     None => text.push(w),
@@ -145,6 +169,9 @@ impl LogFilter {
         }
         if let Some(did) = self.did {
             parts.push(format!("dev:{}", Device::describe(did)));
+        }
+        if let Some(d) = &self.droid {
+            parts.push(format!("droid:{d}"));
         }
         if !self.text.is_empty() {
             parts.push(format!("{:?}", self.text));
@@ -265,6 +292,9 @@ impl PacketLog {
         }
         if let Some(did) = self.filter.did {
             parts.push(format!("dev:{}", Device::describe(did)));
+        }
+        if let Some(d) = &self.filter.droid {
+            parts.push(format!("droid:{d}"));
         }
         if !self.filter.text.is_empty() {
             parts.push(self.filter.text.clone());

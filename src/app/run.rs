@@ -14,7 +14,7 @@ use crate::capture::replay::Replay;
 use crate::config::Config;
 use crate::family::Command;
 use crate::model::Model;
-use crate::session::{LinkState, SessionEvent, SessionHandle, Slot};
+use crate::session::{LinkState, SessionEvent, SessionHandle};
 use crate::teleop::control::Controller;
 use crate::teleop::gamepad::{PadEvent, PadState};
 use crate::teleop::held::{HeldKeys, ReleaseMode};
@@ -60,6 +60,8 @@ pub struct Exit {
     pub state: AppState,
     /// Speed 0 at the last commanded heading.
     pub stop: Command,
+    /// Every droid's stop, in fleet order (the first is `stop`).
+    pub stops: Vec<Command>,
 }
 
 pub type DrawFn = fn(&mut Frame, &AppState);
@@ -127,6 +129,8 @@ fn build(source: Source, opts: AppOptions) -> App {
         start,
         last_tick: start,
         dirty: true,
+        fleet: None,
+        driven: true,
     };
     app.state.control = app.controller.view().clone();
     app
@@ -137,11 +141,50 @@ pub async fn run_source<B: Backend>(
     terminal: &mut Terminal<B>,
     source: Source,
     opts: AppOptions,
+    inputs: AppInputs,
+    draw: DrawFn,
+) -> std::io::Result<Exit> {
+    run_inner(terminal, source, None, opts, inputs, draw).await
+}
+
+/// Run the app on a fleet: the roster strip shows every droid, the keys drive the chosen one
+/// (or all, mirrored), the e-stop and quitting reach all. `opts.model` and
+/// `opts.droid_name` are ignored: each droid's come from the fleet. A fleet of one is the
+/// one-droid app.
+pub async fn run_fleet<B: Backend>(
+    terminal: &mut Terminal<B>,
+    fleet: crate::fleet::Fleet,
+    mut opts: AppOptions,
+    inputs: AppInputs,
+    draw: DrawFn,
+) -> std::io::Result<Exit> {
+    let Some(first) = fleet.member(0) else {
+        return Err(std::io::Error::other("a fleet without droids"));
+    };
+    opts.model = first.model;
+    opts.droid_name = first.name.clone();
+    let source = Source::Live(first.session.clone());
+    let fleet = (fleet.len() > 1).then_some(fleet);
+    run_inner(terminal, source, fleet, opts, inputs, draw).await
+}
+
+async fn run_inner<B: Backend>(
+    terminal: &mut Terminal<B>,
+    source: Source,
+    fleet: Option<crate::fleet::Fleet>,
+    opts: AppOptions,
     mut inputs: AppInputs,
     draw: DrawFn,
 ) -> std::io::Result<Exit> {
     let rate_hz = opts.config.control.rate_hz;
+    let parked_config = (opts.config.clone(), opts.log_path.clone());
     let mut app = build(source, opts);
+    // The other droids of a fleet, and one channel carrying their events.
+    let (mut fleet_rx, forwarders) = match &fleet {
+        Some(f) => super::fleet::attach(&mut app, f, &parked_config.0, parked_config.1),
+        None => (mpsc::channel(1).1, Vec::new()),
+    };
+    let mut fleet_open = fleet.is_some();
     let start = app.start;
     let family = app.family;
     let session = app.session.clone();
@@ -228,7 +271,7 @@ pub async fn run_source<B: Backend>(
             e = events_rx.recv(), if events_open => match e {
                 Ok(SessionEvent::Notification(n)) => {
                     let at = app.now();
-                    app.on_notification(&n, at);
+                    app.with_droid(0, |a| a.on_notification(&n, at));
                 }
                 Ok(SessionEvent::BadNotification { name, reason }) => {
                     tracing::warn!(name, %reason, "malformed notification");
@@ -237,22 +280,26 @@ pub async fn run_source<B: Backend>(
                 Err(broadcast::error::RecvError::Closed) => events_open = false,
             },
             e = log_rx.recv(), if log_open => match e {
-                Ok(entry) => app.on_log(&entry),
+                Ok(entry) => app.on_droid_log(0, &entry),
                 Err(broadcast::error::RecvError::Lagged(n)) => app.state.log.dropped += n,
                 Err(broadcast::error::RecvError::Closed) => log_open = false,
             },
             r = link_rx.changed(), if link_open => {
                 if r.is_ok() {
                     let s = link_rx.borrow_and_update().clone();
-                    app.on_link(s);
+                    app.on_droid_link(0, s);
                 } else {
                     link_open = false;
-                    app.on_link(LinkState::Closed { reason: Some("the session ended".into()) });
+                    app.on_droid_link(0, LinkState::Closed { reason: Some("the session ended".into()) });
                 }
             }
             v = battery_rx.recv(), if battery_open => match v {
-                Some(v) => app.on_battery(v),
+                Some(v) => app.with_droid(0, |a| a.on_battery(v)),
                 None => battery_open = false,
+            },
+            e = fleet_rx.recv(), if fleet_open => match e {
+                Some((i, e)) => app.on_droid_event(i, e),
+                None => fleet_open = false,
             },
             _ = second.tick() => {
                 // Rates per second of the session's time: capture time in replay.
@@ -268,6 +315,9 @@ pub async fn run_source<B: Backend>(
                     app.state.stats = st;
                     app.dirty = true;
                 }
+                if app.sample_fleet_rates(app.clock()) {
+                    app.dirty = true;
+                }
             }
             _ = sleep_until(change.unwrap_or_else(Instant::now)), if change.is_some() && !app.dirty => {
                 app.dirty = true;
@@ -279,6 +329,9 @@ pub async fn run_source<B: Backend>(
                 if app.dirty {
                     app.state.now = app.clock();
                     app.state.stats = stats(&app);
+                    if app.fleet.is_some() {
+                        app.state.roster = app.roster();
+                    }
                     terminal
                         .draw(|f| draw(f, &app.state))
                         .map_err(|e| std::io::Error::other(e.to_string()))?;
@@ -288,13 +341,24 @@ pub async fn run_source<B: Backend>(
         }
     };
     poller.abort();
-    let stop = family.drive(0, app.controller.view().heading, false);
-    // The operator sees the droid stopped even before the session writes it.
-    app.set(Slot::Drive, stop.clone());
+    for f in forwarders {
+        f.abort();
+    }
+    // Every droid gets its stop now (the operator sees them stopped before the sessions
+    // write them); the chosen one's state goes back to its place first.
+    if app.fleet.is_some() {
+        app.choose(0);
+    }
+    let stops = app.stop_all_for_exit();
+    let stop = stops
+        .first()
+        .cloned()
+        .unwrap_or_else(|| family.drive(0, app.controller.view().heading, false));
     Ok(Exit {
         reason,
         state: app.state,
         stop,
+        stops,
     })
 }
 

@@ -117,6 +117,8 @@ pub struct AppState {
     pub leds: LedView,
     /// Replaying a capture (nothing is sent): where, how fast.
     pub replay: Option<ReplayView>,
+    /// The fleet, when several droids are driven (`None` with one).
+    pub roster: Option<super::roster::Roster>,
 }
 
 /// A replay, for the status bar.
@@ -178,6 +180,7 @@ impl AppState {
             collision_flash: Duration::from_millis(1500),
             leds: LedView::default(),
             replay: None,
+            roster: None,
         }
     }
 

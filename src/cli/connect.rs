@@ -12,8 +12,9 @@ use std::time::Duration;
 #[derive(Debug, Clone, Default, clap::Args)]
 pub struct BleArgs {
     /// Connect to the droid with this advertised name (e.g. D2-1A2B; a unique part is enough).
-    #[arg(long, value_name = "NAME", conflicts_with = "sim")]
-    pub name: Option<String>,
+    /// Repeat it to drive several droids at once (a fleet).
+    #[arg(long, value_name = "NAME")]
+    pub name: Vec<String>,
     /// Connect to the droid with this Bluetooth address (on macOS, the device identifier
     /// `droidctl scan` shows in its place).
     #[arg(long, value_name = "ADDR", conflicts_with_all = ["sim", "name"])]
@@ -22,9 +23,10 @@ pub struct BleArgs {
     #[arg(long, default_value_t = 5, value_name = "SECS", value_parser = clap::value_parser!(u64).range(1..=120))]
     pub scan_timeout: u64,
     /// Drive a droid behind a relay on another machine: `droidctl serve` or spherov2.py's
-    /// tcp_server at HOST[:PORT] (port 50004 by default).
-    #[arg(long, value_name = "HOST[:PORT]", conflicts_with = "sim")]
-    pub remote: Option<crate::link::remote::RelayAddr>,
+    /// tcp_server at HOST[:PORT] (port 50004 by default); NAME@HOST picks one of its droids.
+    /// Repeat it for several relays (a fleet).
+    #[arg(long, value_name = "[NAME@]HOST[:PORT]")]
+    pub remote: Vec<super::fleet::RemoteSpec>,
 }
 
 /// How to ask which droid, when several answer and none was named.
@@ -39,17 +41,17 @@ pub enum Chooser {
 impl BleArgs {
     /// Scan, pick and build the link to the droid these arguments select.
     pub async fn connect(&self, chooser: Chooser) -> Result<Connected, CliError> {
-        if let Some(relay) = &self.remote {
+        if let Some(r) = self.remote.first() {
             return connect_remote(
-                relay,
-                self.name.clone(),
+                &r.relay,
+                r.name.clone().or_else(|| self.name.first().cloned()),
                 self.address.clone(),
                 Duration::from_secs(self.scan_timeout),
             )
             .await;
         }
         connect(
-            self.name.clone(),
+            self.name.first().cloned(),
             self.address.clone(),
             Duration::from_secs(self.scan_timeout),
             chooser,

@@ -4,22 +4,21 @@ use super::CliError;
 use super::term::{self, TerminalGuard};
 use crate::app::run::{self, AppInputs, AppOptions, ExitReason};
 use crate::config::Config;
-use crate::family::setup::{SetupOptions, connect_setup};
+use crate::fleet::Fleet;
 use crate::link::Link;
 use crate::model::Model;
-use crate::session::{self, SessionConfig, SessionHandle};
 use crate::sim::{Faults, SimConfig, SimLink};
 use clap::Args;
 use ratatui::Terminal;
 use ratatui::backend::CrosstermBackend;
 use std::sync::{Mutex, OnceLock};
-use std::time::Duration;
 use tokio::sync::mpsc;
 
 #[derive(Debug, Clone, Default, Args)]
 pub struct DriveArgs {
-    /// Drive a simulated droid in-process: r2d2 (default), r2q5, bb9e, bb8, sprk, ollie or robi.
-    #[arg(long, num_args = 0..=1, default_missing_value = "r2d2", value_name = "MODEL")]
+    /// Drive a simulated droid in-process: r2d2 (default), r2q5, bb9e, bb8, sprk, ollie or robi;
+    /// several at once, sharing one room: --sim r2d2,bb8,robi.
+    #[arg(long, num_args = 0..=1, default_missing_value = "r2d2", value_name = "MODEL[,MODEL…]")]
     pub sim: Option<String>,
     #[command(flatten)]
     pub ble: super::connect::BleArgs,
@@ -27,22 +26,16 @@ pub struct DriveArgs {
     pub record: super::replay::RecordArgs,
 }
 
-/// The simulated model asked for, if any.
-pub fn sim_model(sim: &Option<String>) -> Result<Option<Model>, CliError> {
+/// The simulated models asked for (`--sim r2d2,bb8`), none without `--sim`.
+pub fn sim_models(sim: &Option<String>) -> Result<Vec<Model>, CliError> {
     match sim {
-        None => Ok(None),
-        Some(m) => match Model::from_id(m) {
-            Some(model) if crate::sim::simulates(model) => Ok(Some(model)),
-            _ => Err(CliError::usage(format!(
-                "unknown simulated model {m:?}: use one of {}",
-                crate::sim::simulated_ids().join(", ")
-            ))),
-        },
+        None => Ok(Vec::new()),
+        Some(list) => super::fleet::sim_models(list),
     }
 }
 
 static PANIC_MESSAGE: Mutex<Option<String>> = Mutex::new(None);
-static PANIC_SESSION: OnceLock<(SessionHandle, Model)> = OnceLock::new();
+static PANIC_FLEET: OnceLock<Fleet> = OnceLock::new();
 
 /// On a panic: ask the session to stop the droid at once (a synchronous slot write), keep
 /// the message for after the terminal is restored; a panic outside the app task restores the
@@ -50,9 +43,9 @@ static PANIC_SESSION: OnceLock<(SessionHandle, Model)> = OnceLock::new();
 fn install_panic_hook() {
     let default = std::panic::take_hook();
     std::panic::set_hook(Box::new(move |info| {
-        if let Some((s, model)) = PANIC_SESSION.get() {
-            // At the last heading written: a stop at heading 0 would turn the droid.
-            s.stop_now(crate::family::for_model(*model));
+        if let Some(fleet) = PANIC_FLEET.get() {
+            // Every droid, at the last heading written: a stop at heading 0 would turn it.
+            fleet.estop_all();
         }
         crate::capture::record::flush_all();
         let in_app = std::thread::current().name() != Some("main");
@@ -74,7 +67,11 @@ pub fn run(args: DriveArgs) -> Result<i32, CliError> {
             "{e}\nFix the file (or move it away to use the defaults) and try again."
         ))
     })?;
-    let model = sim_model(&args.sim)?;
+    let sims = sim_models(&args.sim)?;
+    if super::fleet::is_fleet(sims.len(), &args.ble) {
+        return run_fleet(args, sims, config);
+    }
+    let model = sims.first().copied();
     let recorder = args.record.open()?;
     let log_path = crate::logging::init().ok();
     let rt = super::realtime_runtime()?;
@@ -94,9 +91,43 @@ pub fn run(args: DriveArgs) -> Result<i32, CliError> {
             }
             None => link,
         };
-        let result = drive(link, model, name, config, log_path).await;
+        let origin = if args.sim.is_some() {
+            "simulated"
+        } else {
+            "connected"
+        };
+        let fleet = Fleet::start(vec![crate::fleet::DroidSpec {
+            session: super::fleet::session_config(model, &config, true),
+            name,
+            model,
+            link,
+            origin: origin.into(),
+        }]);
+        let result = drive(fleet, config, log_path).await;
         super::replay::finish(recorder.as_ref());
         result
+    })
+}
+
+/// Several droids: find them all, start a session each, and run the app on the fleet.
+fn run_fleet(args: DriveArgs, sims: Vec<Model>, config: Config) -> Result<i32, CliError> {
+    if args.record.record.is_some() {
+        return Err(CliError::usage(
+            "--record records one droid; with several, record each from its own droidctl",
+        ));
+    }
+    let log_path = crate::logging::init().ok();
+    let rt = super::realtime_runtime()?;
+    rt.block_on(async move {
+        let found = super::fleet::find_all(&sims, &args.ble, &config).await?;
+        let specs = found
+            .into_iter()
+            .map(|f| {
+                let cfg = super::fleet::session_config(f.model, &config, true);
+                f.into_spec(cfg)
+            })
+            .collect();
+        drive(Fleet::start(specs), config, log_path).await
     })
 }
 
@@ -113,32 +144,17 @@ async fn connect_real(
 }
 
 async fn drive(
-    link: Box<dyn Link>,
-    model: Model,
-    name: String,
+    fleet: Fleet,
     config: Config,
     log_path: Option<std::path::PathBuf>,
 ) -> Result<i32, CliError> {
-    let setup = SetupOptions {
-        tripod: true,
-        streaming_interval_ms: config.control.streaming_interval_ms,
+    let Some(first) = fleet.member(0) else {
+        return Err(CliError::usage("no droid to drive"));
     };
-    let pacing = match config.session.pacing_ms {
-        0 => model.write_pacing(),
-        ms => Duration::from_millis(ms),
-    };
-    let session = session::start(
-        link,
-        SessionConfig {
-            family: model.protocol(),
-            request_timeout: Duration::from_millis(config.session.request_timeout_ms),
-            pacing,
-            setup: connect_setup(model, &setup),
-            ..SessionConfig::default()
-        },
-    );
-    let _ = PANIC_SESSION.set((session.clone(), model));
+    let (model, name) = (first.model, first.name.clone());
+    let _ = PANIC_FLEET.set(fleet.clone());
     install_panic_hook();
+    let setup_tripod = true;
 
     let mut guard = TerminalGuard::enter()
         .map_err(|e| CliError::failure(format!("cannot use this terminal: {e}")))?;
@@ -169,7 +185,7 @@ async fn drive(
         droid_name: name,
         log_path: log_path.clone(),
         release,
-        tripod_on_connect: setup.tripod,
+        tripod_on_connect: setup_tripod,
     };
     let inputs = AppInputs {
         term: term_rx,
@@ -178,29 +194,42 @@ async fn drive(
     };
     // The app runs as its own task so a panic in it is caught here: the droid is stopped first,
     // then the terminal restored, then the message shown.
-    let app_session = session.clone();
+    let app_fleet = fleet.clone();
     let app = tokio::spawn(async move {
         let backend = CrosstermBackend::new(std::io::stdout());
         // The alternate screen was cleared on entry; `Terminal::clear` would also ask the
         // terminal for the cursor position, which some terminals never answer.
         let mut terminal = Terminal::new(backend)?;
-        run::run(&mut terminal, app_session, opts, inputs, crate::ui::draw).await
+        run::run_fleet(&mut terminal, app_fleet, opts, inputs, crate::ui::draw).await
     });
     let result = app.await;
-    let stop_cmds = match &result {
-        Ok(Ok(exit)) => run::exit_commands(model, Some(exit.stop.clone()), sleep_on_exit),
-        // A crash: no controller to ask; the session stops at the last heading it wrote.
-        _ => run::exit_commands(model, Vec::new(), sleep_on_exit),
+    // Every droid: its app stop, then sleep when configured; after a crash there is no
+    // controller to ask, and each session stops at the last heading it wrote. The sessions'
+    // own budget (1 s of final writes, 1.5 s to close) fits inside the fleet's 3 s.
+    let stops: Vec<_> = match &result {
+        Ok(Ok(exit)) => exit.stops.clone(),
+        _ => Vec::new(),
     };
-    // The session's own budget (1 s of final writes, 1.5 s to close) fits inside this one.
-    let _ = tokio::time::timeout(Duration::from_secs(3), session.shutdown_stopped(stop_cmds)).await;
+    fleet
+        .shutdown_all(|i| {
+            let m = fleet.members()[i].model;
+            run::exit_commands(m, stops.get(i).cloned(), sleep_on_exit)
+        })
+        .await;
     reader.abort();
     signals.abort();
     guard.restore();
     match result {
         Ok(Ok(exit)) => {
             if let ExitReason::Signal(s) = &exit.reason {
-                eprintln!("droidctl: {s}: stopped the droid and exited");
+                if fleet.len() > 1 {
+                    eprintln!(
+                        "droidctl: {s}: stopped the {} droids and exited",
+                        fleet.len()
+                    );
+                } else {
+                    eprintln!("droidctl: {s}: stopped the droid and exited");
+                }
             }
             Ok(0)
         }

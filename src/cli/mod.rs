@@ -6,6 +6,8 @@ pub mod completions;
 pub mod config_cmd;
 pub mod connect;
 pub mod drive;
+pub mod fleet;
+mod fleet_run;
 pub mod packet;
 pub mod replay;
 pub mod run;

@@ -15,12 +15,13 @@ use std::time::Duration;
 
 #[derive(Debug, Args)]
 pub struct RunArgs {
-    /// The mission script (see README, "Mission scripts").
+    /// The mission script (see README, "Mission scripts"; `@NAME` lines and `together { }`
+    /// blocks for several droids).
     #[arg(value_name = "SCRIPT")]
     pub script: Option<PathBuf>,
     /// Run against a simulated droid: r2d2 (default), r2q5, bb9e, bb8, sprk, ollie or robi. The mission runs in
-    /// simulated time.
-    #[arg(long, num_args = 0..=1, default_missing_value = "r2d2", value_name = "MODEL")]
+    /// simulated time. Several share one room: --sim r2d2,bb8,robi.
+    #[arg(long, num_args = 0..=1, default_missing_value = "r2d2", value_name = "MODEL[,MODEL…]")]
     pub sim: Option<String>,
     /// One JSON object per telemetry sample, then a summary object.
     #[arg(long)]
@@ -34,14 +35,15 @@ pub struct RunArgs {
     pub record: super::replay::RecordArgs,
 }
 
-/// Resolve `--sim MODEL` vs the script path: `droidctl run --sim mission.txt` puts the script
-/// where the model would go.
-fn resolve(args: &RunArgs) -> Result<(PathBuf, Option<Model>), CliError> {
+/// Resolve `--sim MODEL[,MODEL…]` vs the script path: `droidctl run --sim mission.txt` puts
+/// the script where the model would go.
+fn resolve(args: &RunArgs) -> Result<(PathBuf, Vec<Model>), CliError> {
     let mut script = args.script.clone();
-    let model = match &args.sim {
-        None => None,
+    let models = match &args.sim {
+        None => Vec::new(),
+        Some(m) if m.contains(',') => super::fleet::sim_models(m)?,
         Some(m) => match Model::from_id(m) {
-            Some(model) if crate::sim::simulates(model) => Some(model),
+            Some(model) if crate::sim::simulates(model) => vec![model],
             Some(other) => {
                 return Err(CliError::usage(format!(
                     "{} is not simulated yet: use one of {}",
@@ -51,7 +53,7 @@ fn resolve(args: &RunArgs) -> Result<(PathBuf, Option<Model>), CliError> {
             }
             None if script.is_none() => {
                 script = Some(PathBuf::from(m));
-                Some(Model::R2D2)
+                vec![Model::R2D2]
             }
             None => {
                 return Err(CliError::usage(format!(
@@ -62,11 +64,11 @@ fn resolve(args: &RunArgs) -> Result<(PathBuf, Option<Model>), CliError> {
         },
     };
     let script = script.ok_or_else(|| CliError::usage("run needs a SCRIPT file"))?;
-    Ok((script, model))
+    Ok((script, models))
 }
 
 pub fn run(args: RunArgs) -> Result<i32, CliError> {
-    let (path, sim) = resolve(&args)?;
+    let (path, sims) = resolve(&args)?;
     let text = std::fs::read_to_string(&path)
         .map_err(|e| CliError::usage(format!("cannot read script {}: {e}", path.display())))?;
     let shown = path.display().to_string();
@@ -80,7 +82,12 @@ pub fn run(args: RunArgs) -> Result<i32, CliError> {
             lines.join("\n")
         ))
     };
-    let steps = crate::script::parse(&text).map_err(script_errors)?;
+    let items = crate::script::parse_fleet(&text).map_err(script_errors)?;
+    if super::fleet::is_fleet(sims.len(), &args.ble) || crate::script::is_fleet(&items) {
+        return super::fleet_run::run(&args, sims, &items, script_errors);
+    }
+    let sim = sims.first().copied();
+    let steps = crate::script::plain_steps(&items);
     let recorder = args.record.open()?;
     let recorder = recorder.as_ref();
     let opts = MissionOptions {
@@ -169,18 +176,7 @@ pub async fn run_recorded(
     json: bool,
     recorder: Option<&crate::capture::record::Recorder>,
 ) -> Result<Summary, String> {
-    let interval_ms = opts.interval.as_millis().clamp(20, 1000) as u16;
-    let setup = SetupOptions {
-        tripod: false,
-        streaming_interval_ms: interval_ms.min(100),
-    };
-    let config = SessionConfig {
-        family: model.protocol(),
-        pacing: model.write_pacing(),
-        setup: connect_setup(model, &setup),
-        ..SessionConfig::default()
-    };
-    let session = session::start(link, config);
+    let session = session::start(link, mission_session_config(model, &opts));
     let samples_per_line = (1000 / opts.interval.as_millis().max(1)).max(1) as u64;
     let count = std::sync::atomic::AtomicU64::new(0);
     let marker = recorder.cloned();
@@ -249,11 +245,27 @@ pub async fn run_recorded(
     result
 }
 
+/// A mission's session settings for `model`: no tripod on connect (the script says), sensors
+/// streamed as often as the samples need (at most every 100 ms).
+pub fn mission_session_config(model: Model, opts: &MissionOptions) -> SessionConfig {
+    let interval_ms = opts.interval.as_millis().clamp(20, 1000) as u16;
+    let setup = SetupOptions {
+        tripod: false,
+        streaming_interval_ms: interval_ms.min(100),
+    };
+    SessionConfig {
+        family: model.protocol(),
+        pacing: model.write_pacing(),
+        setup: connect_setup(model, &setup),
+        ..SessionConfig::default()
+    }
+}
+
 /// A lost link and the reconnect, on stderr as they happen (`[    4.52s] link lost: the droid
 /// disconnected — reconnecting (attempt 1)`, `[    5.06s] reconnected`), the time counted from
 /// the first connection. Nothing before it: a droid that cannot be reached gets one error line
 /// at the end.
-async fn report_link(mut state: tokio::sync::watch::Receiver<LinkState>) {
+pub async fn report_link(mut state: tokio::sync::watch::Receiver<LinkState>) {
     let mut since: Option<tokio::time::Instant> = None;
     let mut lost = false;
     let mut waiting = false;
@@ -310,7 +322,7 @@ fn opt(v: Option<f32>, prec: usize) -> String {
         .unwrap_or_else(|| "-".into())
 }
 
-fn sample_line(s: &mission::Sample) -> String {
+pub fn sample_line(s: &mission::Sample) -> String {
     // Robi 42 reports wheels and frames, not a dome, stance or battery.
     if let (Some(l), Some(r)) = (s.motor_left_rad_s, s.motor_right_rad_s) {
         return format!(
@@ -342,7 +354,7 @@ fn sample_line(s: &mission::Sample) -> String {
     )
 }
 
-fn print_summary(s: &Summary, json: bool) {
+pub fn print_summary(s: &Summary, json: bool) {
     if json {
         println!("{}", serde_json::to_string(s).unwrap_or_default());
     } else {

@@ -221,6 +221,9 @@ actions! {
         BackLight "back_light" false "back light";
         Animations "animations" false "animation palette";
         Sounds "sounds" false "sound palette";
+        NextDroid "next_droid" false "fleet: drive the next droid";
+        PreviousDroid "previous_droid" false "fleet: drive the previous droid";
+        Mirror "mirror" false "fleet: mirror mode (the same control to every droid)";
         Log "log" false "the packet log has the keys (and back)";
         Help "help" false "this help";
         Quit "quit" false "quit (stops the droid first)";
@@ -234,7 +237,7 @@ actions! {
         LogBottom "bottom" false "to the newest line (follow)";
         LogPause "pause" false "pause / resume";
         LogDecoded "decoded" false "decoded / hex";
-        LogFilter "filter" false "filter (in|out dev:NAME text)";
+        LogFilter "filter" false "filter (in|out dev:NAME droid:NAME text)";
         LogClearFilter "clear_filter" false "clear the filter";
         LogBack "back" false "back to driving";
     }

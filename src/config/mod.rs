@@ -57,6 +57,15 @@ pub struct Session {
     pub pacing_ms: u64,
 }
 
+/// Several droids at once (`[fleet]`).
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FleetSettings {
+    /// Droids connected through one Bluetooth adapter at most (1..=7): an adapter holds
+    /// about six LE links of which about four stay stable.
+    pub max_per_adapter: usize,
+}
+
 /// The `[gamepad]` table as written.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -102,6 +111,7 @@ struct RawConfig {
     session: Session,
     keys: BTreeMap<String, KeyEntry>,
     gamepad: RawGamepad,
+    fleet: FleetSettings,
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -114,6 +124,7 @@ pub struct Config {
     /// The key bindings parsed from [`Config::keys`].
     pub keymap: KeyMap,
     pub gamepad: Gamepad,
+    pub fleet: FleetSettings,
 }
 
 /// Why a config could not be used: where and what.
@@ -282,6 +293,7 @@ impl Config {
                 sound_left: g.sound_left,
                 sound_right: g.sound_right,
             },
+            fleet: raw.fleet,
         };
         cfg.validate()?;
         Ok(cfg)
@@ -290,6 +302,13 @@ impl Config {
     /// Range and consistency checks: (section, key, message).
     fn validate(&self) -> Result<(), (String, String, String)> {
         let bad = |s: &str, k: &str, m: String| Err((s.to_string(), k.to_string(), m));
+        if !(1..=7).contains(&self.fleet.max_per_adapter) {
+            return bad(
+                "fleet",
+                "max_per_adapter",
+                format!("{} is out of range 1..=7", self.fleet.max_per_adapter),
+            );
+        }
         if !(1..=50).contains(&self.control.rate_hz) {
             return bad(
                 "control",

@@ -531,11 +531,32 @@ impl Body {
         let y = self.state.y_cm + hy * new_v * dt;
         let half_w = self.cfg.room_cm.0 / 2.0 - self.cfg.radius_cm;
         let half_h = self.cfg.room_cm.1 / 2.0 - self.cfg.radius_cm;
-        let ((cx, cy), hit_x, hit_y) = clamp_to_room(x, y, half_w, half_h);
-        self.state.x_cm = cx;
-        self.state.y_cm = cy;
+        // In a shared room the walls are where they are for everyone: the locator counts
+        // from the droid's own starting place.
+        let (ox, oy) = self.cfg.place.as_ref().map_or((0.0, 0.0), |p| p.origin);
+        let ((cx, cy), hit_x, hit_y) = clamp_to_room(x + ox, y + oy, half_w, half_h);
+        self.state.x_cm = cx - ox;
+        self.state.y_cm = cy - oy;
         if hit_x || hit_y {
             self.collide(new_v, hx, hy, hit_x, hit_y);
+        }
+        self.other_droids(cx, cy, hx * new_v, hy * new_v);
+    }
+
+    /// Collisions with the other droids of a shared room: running into one stops this droid
+    /// as a wall does; being hit is reported without stopping it.
+    fn other_droids(&mut self, x: f32, y: f32, vx: f32, vy: f32) {
+        let Some(place) = self.cfg.place.clone() else {
+            return;
+        };
+        let v = self.state.velocity_cm_s;
+        if let Some(c) = place.moved(x, y, vx, vy) {
+            self.state.x_cm = c.x - place.origin.0;
+            self.state.y_cm = c.y - place.origin.1;
+            self.collide(v.abs(), c.nx, c.ny, c.nx.abs() >= 0.5, c.ny.abs() >= 0.5);
+        }
+        if let Some(h) = place.take_hit() {
+            self.report_collision(h.speed, h.dx, h.dy, h.dx.abs() >= 0.5, h.dy.abs() >= 0.5);
         }
     }
 
@@ -545,6 +566,11 @@ impl Body {
         if let Some(d) = &mut self.drive {
             d.speed = 0.0;
         }
+        self.report_collision(v, hx, hy, hit_x, hit_y);
+    }
+
+    /// Count a collision at speed `v` along (`hx`, `hy`) and notify it when detection is on.
+    fn report_collision(&mut self, v: f32, hx: f32, hy: f32, hit_x: bool, hit_y: bool) {
         // Fix: the bar was 1 cm/s, below one physics step of acceleration (1.5 cm/s at
         // 150 cm/s² and 10 ms), so a droid held against a wall by a drive heartbeat counted
         // (and reported) a fresh collision on every re-sent drive command. Pushing against

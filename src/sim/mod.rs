@@ -15,6 +15,7 @@ pub mod gatt;
 pub mod link;
 mod physics;
 pub mod robi;
+pub mod room;
 pub mod sleep;
 pub mod trace;
 pub mod v1;
@@ -217,6 +218,8 @@ pub struct SimConfig {
     pub robi_msdt_ms: u16,
     pub robi_frame_interval: Duration,
     pub robi_drop_every: u32,
+    /// A room shared with other simulated droids (`None`: alone in its own room).
+    pub place: Option<room::Place>,
 }
 
 impl SimConfig {
@@ -251,6 +254,7 @@ impl Default for SimConfig {
             robi_msdt_ms: 10,
             robi_frame_interval: Duration::from_millis(100),
             robi_drop_every: 40,
+            place: None,
         }
     }
 }

@@ -133,6 +133,9 @@ fn header(c: &Cols, decoded: bool) -> Line<'static> {
     ))
 }
 
+/// Width of the droid column of a fleet's log.
+const DROID_COL: usize = 8;
+
 fn row(l: &LogLine, c: &Cols, decoded: bool) -> Line<'static> {
     let base = if l.is_error {
         Style::new().fg(theme::ALERT)
@@ -152,6 +155,13 @@ fn row(l: &LogLine, c: &Cols, decoded: bool) -> Line<'static> {
             if l.is_error { base } else { theme::dim() },
         ),
         Span::raw(" "),
+    ];
+    // In a fleet, which droid the line is about.
+    if let Some(d) = &l.droid {
+        spans.push(Span::styled(fit(&clean(d), DROID_COL), theme::label()));
+        spans.push(Span::raw(" "));
+    }
+    spans.extend([
         Span::styled(l.dir.arrow(), dir_style),
         Span::raw(" "),
         Span::styled(fit(&clean(&l.name), c.name), base),
@@ -160,7 +170,7 @@ fn row(l: &LogLine, c: &Cols, decoded: bool) -> Line<'static> {
             fit_right(&seq, Cols::SEQ),
             if l.is_error { base } else { theme::label() },
         ),
-    ];
+    ]);
     if c.err > 0 {
         let err = l.err.map(|e| e.name()).unwrap_or_default();
         spans.push(Span::raw(" "));

@@ -18,6 +18,7 @@ mod map;
 mod overlay;
 pub mod picker;
 mod robi;
+mod roster;
 mod sensors;
 mod status;
 mod text;
@@ -31,7 +32,17 @@ use ratatui::widgets::Paragraph;
 
 /// Draw the whole screen for `state`.
 pub fn draw(frame: &mut Frame, state: &AppState) {
-    let p = layout::plan(frame.area());
+    // A fleet's roster strip takes the top row; the rest is the one-droid screen.
+    let mut area = frame.area();
+    if let Some(roster) = &state.roster
+        && area.height > 1
+    {
+        let strip = ratatui::layout::Rect { height: 1, ..area };
+        roster::render(frame, strip, roster);
+        area.y += 1;
+        area.height -= 1;
+    }
+    let p = layout::plan(area);
     status::render(frame, p.status, state);
     if let Some(r) = p.drive {
         drive::render(frame, r, state);

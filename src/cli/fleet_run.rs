@@ -1,0 +1,167 @@
+//! `droidctl run` on several droids: the droids named (`--sim r2d2,bb8`, repeated `--name`
+//! and `--remote`) form a fleet, the script's `@NAME` lines go to their droid, `together`
+//! blocks run at once. Output as for one droid with each line naming its droid: `--json`
+//! samples and summaries gain a `droid` field. Simulated fleets run in simulated time and
+//! give the same output every run.
+
+use super::CliError;
+use super::run::{RunArgs, mission_session_config, print_summary, report_link, sample_line};
+use crate::fleet::Fleet;
+use crate::fleet::mission::{self as fleet_mission, FleetEmit};
+use crate::mission::{MissionEvent, MissionOptions};
+use crate::model::Model;
+use crate::script::{Item, ScriptError};
+use serde::Serialize;
+use std::io::Write;
+use std::sync::Arc;
+use std::time::Duration;
+
+/// A JSON line naming its droid first.
+#[derive(Serialize)]
+struct Tagged<'a, T: Serialize> {
+    droid: &'a str,
+    #[serde(flatten)]
+    inner: &'a T,
+}
+
+pub fn run(
+    args: &RunArgs,
+    sims: Vec<Model>,
+    items: &[Item],
+    script_errors: impl Fn(Vec<ScriptError>) -> CliError,
+) -> Result<i32, CliError> {
+    if args.record.record.is_some() {
+        return Err(CliError::usage(
+            "--record records one droid; with several, record each from its own droidctl",
+        ));
+    }
+    let config = crate::config::Config::load(&crate::config::config_path())
+        .map_err(|e| CliError::usage(e.to_string()))?;
+    let opts = MissionOptions {
+        interval: Duration::from_millis(args.interval),
+        ..MissionOptions::default()
+    };
+    let json = args.json;
+    let _ = crate::logging::init();
+    let only_sims = args.ble.name.is_empty() && args.ble.remote.is_empty();
+    let rt = if only_sims {
+        // Simulated time, as for one simulated droid.
+        tokio::runtime::Builder::new_current_thread()
+            .enable_time()
+            .enable_io()
+            .start_paused(true)
+            .build()
+            .map_err(|e| CliError::failure(format!("cannot start the runtime: {e}")))?
+    } else {
+        super::realtime_runtime()?
+    };
+    let summaries = rt.block_on(async {
+        let found = super::fleet::find_all(&sims, &args.ble, &config).await?;
+        if found.is_empty() {
+            return Err(CliError::usage(
+                "this mission addresses droids by name: say which droids with --sim \
+                 MODEL[,MODEL…], --name (repeatable) or --remote (repeatable)",
+            ));
+        }
+        let specs = found
+            .into_iter()
+            .map(|f| {
+                let cfg = mission_session_config(f.model, &opts);
+                f.into_spec(cfg)
+            })
+            .collect();
+        let fleet = Fleet::start(specs);
+        let plan = match fleet_mission::plan(&fleet, items) {
+            Ok(p) => p,
+            Err(e) => {
+                fleet.shutdown_all(|_| Vec::new()).await;
+                return Err(script_errors(e));
+            }
+        };
+        let reporters: Vec<_> = fleet
+            .members()
+            .iter()
+            .map(|m| tokio::spawn(report_link(m.session.watch_state())))
+            .collect();
+        let r = tokio::select! {
+            r = fleet_mission::run(&fleet, &plan, opts.clone(), printer(&fleet, json, &opts)) => r,
+            sig = super::signals::terminated() => Err(crate::mission::MissionError(format!(
+                "{sig}: mission interrupted, every droid was stopped"
+            ))),
+        };
+        for t in reporters {
+            t.abort();
+        }
+        fleet.shutdown_all(|_| Vec::new()).await;
+        let summaries = r.map_err(|e| CliError::failure(e.to_string()))?;
+        Ok(fleet.names().into_iter().zip(summaries).collect::<Vec<_>>())
+    })?;
+    let mut failed = 0;
+    for (name, s) in &summaries {
+        failed += s.failed_steps;
+        if json {
+            let t = Tagged {
+                droid: name,
+                inner: s,
+            };
+            println!("{}", serde_json::to_string(&t).unwrap_or_default());
+        } else {
+            print!("{name}: ");
+            print_summary(s, false);
+        }
+    }
+    Ok(if failed > 0 { 1 } else { 0 })
+}
+
+/// Print each droid's steps, samples and warnings as they come, naming the droid.
+fn printer(fleet: &Fleet, json: bool, opts: &MissionOptions) -> FleetEmit {
+    let names = fleet.names();
+    let per_line = (1000 / opts.interval.as_millis().max(1)).max(1) as u64;
+    let counts: Vec<std::sync::atomic::AtomicU64> =
+        names.iter().map(|_| Default::default()).collect();
+    Arc::new(move |i, e| {
+        let name = names.get(i).map(String::as_str).unwrap_or("?");
+        let mut out = std::io::stdout().lock();
+        let _ = match e {
+            MissionEvent::Sample(s) if json => {
+                let t = Tagged {
+                    droid: name,
+                    inner: &s,
+                };
+                writeln!(out, "{}", serde_json::to_string(&t).unwrap_or_default())
+            }
+            MissionEvent::Sample(s) => {
+                let n = counts
+                    .get(i)
+                    .map_or(0, |c| c.fetch_add(1, std::sync::atomic::Ordering::Relaxed));
+                if !n.is_multiple_of(per_line) {
+                    return;
+                }
+                let line = sample_line(&s);
+                // `[   1.00s] pos …` becomes `[   1.00s] D2-0001 pos …`.
+                match line.split_once("] ") {
+                    Some((t, rest)) => writeln!(out, "{t}] {name} {rest}"),
+                    None => writeln!(out, "{name} {line}"),
+                }
+            }
+            MissionEvent::Step { t_ms, line, text } if !json => writeln!(
+                out,
+                "[{:>8.2}s] {name} line {line}: {text}",
+                t_ms as f64 / 1000.0
+            ),
+            MissionEvent::Step { .. } => Ok(()),
+            MissionEvent::Warning {
+                t_ms,
+                line,
+                message,
+            } => {
+                let at = line.map(|l| format!("line {l}: ")).unwrap_or_default();
+                eprintln!(
+                    "[{:>8.2}s] {name}: warning: {at}{message}",
+                    t_ms as f64 / 1000.0
+                );
+                Ok(())
+            }
+        };
+    })
+}

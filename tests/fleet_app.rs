@@ -1,0 +1,316 @@
+//! The app on a fleet, under paused time: four simulated droids in one room, mirrored and
+//! rolling. Safety first: one emergency stop reaches all four; a droid whose link is lost for
+//! good is stopped by its own fail-safe while the others go on; quitting stops and
+//! disconnects every droid. Then the roster, choosing a droid, and the fleet's packet log.
+
+use droidctl::app::input::{KeyKind, TermEvent};
+use droidctl::app::run::{self, AppInputs, AppOptions, Exit, ExitReason};
+use droidctl::app::state::AppState;
+use droidctl::cli::fleet::session_config;
+use droidctl::config::{Config, Key, KeyCode};
+use droidctl::fleet::{DroidSpec, Fleet};
+use droidctl::link::{Connection, Link, LinkError};
+use droidctl::model::Model;
+use droidctl::session::LinkState;
+use droidctl::sim::room::SharedRoom;
+use droidctl::sim::{Faults, SimConfig, SimLink, link::SimProbe};
+use droidctl::teleop::held::ReleaseMode;
+use futures_util::future::BoxFuture;
+use ratatui::{Frame, Terminal, backend::TestBackend};
+use std::cell::RefCell;
+use std::time::Duration;
+use tokio::sync::mpsc;
+use tokio::task::JoinHandle;
+use tokio::time::{Instant, sleep};
+
+const MODELS: [Model; 4] = [Model::R2D2, Model::BB8, Model::SprkPlus, Model::Robi42];
+
+thread_local! {
+    /// The last frame's state, kept by the draw function (the roster is made for drawing).
+    /// Per thread: each test's runtime runs on its own.
+    static SEEN: RefCell<Option<AppState>> = const { RefCell::new(None) };
+}
+
+fn keep(_: &mut Frame, s: &AppState) {
+    SEEN.with(|seen| *seen.borrow_mut() = Some(s.clone()));
+}
+
+fn seen() -> AppState {
+    SEEN.with(|s| s.borrow().clone())
+        .expect("a frame was drawn")
+}
+
+/// A link that, from `cut_at` on, cannot be opened (the droid went out of range): with a
+/// scheduled disconnect at the same time, the droid is on its own from then on.
+struct OutOfRange {
+    inner: SimLink,
+    cut_at: Option<Instant>,
+}
+
+impl Link for OutOfRange {
+    fn open(&mut self) -> BoxFuture<'_, Result<Connection, LinkError>> {
+        Box::pin(async move {
+            if self.cut_at.is_some_and(|t| Instant::now() >= t) {
+                return Err(LinkError::transient("out of range"));
+            }
+            self.inner.open().await
+        })
+    }
+    fn describe(&self) -> String {
+        self.inner.describe()
+    }
+}
+
+struct Harness {
+    term: mpsc::Sender<TermEvent>,
+    fleet: Fleet,
+    probes: Vec<SimProbe>,
+    app: JoinHandle<Exit>,
+}
+
+/// Four droids in one room; droid `lost` (if any) loses its link for good at `lost_at`.
+async fn start(lost: Option<(usize, Duration)>) -> Harness {
+    let config = Config::defaults();
+    let room = SharedRoom::new();
+    let origins = SharedRoom::origins(MODELS.len());
+    let mut probes = Vec::new();
+    let mut specs = Vec::new();
+    let t0 = Instant::now();
+    for (i, (&m, origin)) in MODELS.iter().zip(origins).enumerate() {
+        let mut cfg = SimConfig::for_model(m);
+        cfg.place = Some(room.place(origin, cfg.radius_cm));
+        let cut = lost.filter(|(j, _)| *j == i).map(|(_, at)| at);
+        let faults = Faults {
+            disconnect_at: cut.into_iter().collect(),
+            ..Faults::none()
+        };
+        let link = SimLink::new(m, cfg, faults);
+        probes.push(link.probe());
+        specs.push(DroidSpec {
+            name: format!("droid-{i}"),
+            model: m,
+            link: Box::new(OutOfRange {
+                inner: link,
+                cut_at: cut.map(|d| t0 + d),
+            }),
+            session: session_config(m, &config, true),
+            origin: "simulated".into(),
+        });
+    }
+    let fleet = Fleet::start(specs);
+    let (term, term_rx) = mpsc::channel(64);
+    let (_pad, pad_rx) = mpsc::channel(4);
+    let (_quit, quit_rx) = mpsc::channel(4);
+    let opts = AppOptions {
+        config,
+        model: Model::R2D2,
+        droid_name: String::new(),
+        log_path: None,
+        release: ReleaseMode::Reported,
+        tripod_on_connect: true,
+    };
+    let f = fleet.clone();
+    let app = tokio::spawn(async move {
+        let _keep = (_pad, _quit);
+        let mut terminal = Terminal::new(TestBackend::new(120, 40)).unwrap();
+        let inputs = AppInputs {
+            term: term_rx,
+            pad: pad_rx,
+            quit: quit_rx,
+        };
+        run::run_fleet(&mut terminal, f, opts, inputs, keep)
+            .await
+            .unwrap()
+    });
+    // Connected, and R2 up on three legs.
+    sleep(Duration::from_secs(3)).await;
+    Harness {
+        term,
+        fleet,
+        probes,
+        app,
+    }
+}
+
+impl Harness {
+    async fn key(&self, key: Key, kind: KeyKind) {
+        self.term.send(TermEvent::Key { key, kind }).await.unwrap();
+    }
+    async fn tap(&self, key: Key) {
+        self.key(key, KeyKind::Press).await;
+        self.key(key, KeyKind::Release).await;
+    }
+    fn speeds(&self) -> Vec<f32> {
+        self.probes
+            .iter()
+            .map(|p| p.state().velocity_cm_s.abs())
+            .collect()
+    }
+    /// Mirror on, cruise speed down to 40 on all four (slow enough to stay off the walls
+    /// for several seconds), forward held.
+    async fn mirrored_and_rolling(&self) {
+        self.tap(Key::ch('g')).await;
+        for _ in 0..4 {
+            self.tap(Key::ch('-')).await;
+        }
+        self.key(Key::ch('w'), KeyKind::Press).await;
+        sleep(Duration::from_secs(2)).await;
+        let v = self.speeds();
+        assert!(v.iter().all(|v| *v > 1.0), "all four roll: {v:?}");
+    }
+}
+
+#[tokio::test(start_paused = true)]
+async fn one_emergency_stop_reaches_all_four_mirrored_droids() {
+    let h = start(None).await;
+    h.mirrored_and_rolling().await;
+    // Space: e-stop, latched while held; forward is still held.
+    h.key(Key::plain(KeyCode::Space), KeyKind::Press).await;
+    sleep(Duration::from_millis(800)).await;
+    let v = h.speeds();
+    assert!(v.iter().all(|v| *v == 0.0), "all four stopped: {v:?}");
+    // It holds: nothing rolls again while forward stays held under the e-stop.
+    sleep(Duration::from_secs(2)).await;
+    assert!(h.speeds().iter().all(|v| *v == 0.0));
+    h.key(Key::plain(KeyCode::Space), KeyKind::Release).await;
+    h.key(Key::ch('w'), KeyKind::Release).await;
+    h.tap(Key::ch('q')).await;
+    let exit = h.app.await.unwrap();
+    assert_eq!(exit.reason, ExitReason::Quit);
+}
+
+#[tokio::test(start_paused = true)]
+async fn without_mirror_only_the_chosen_droid_drives_and_the_e_stop_still_reaches_all() {
+    let h = start(None).await;
+    h.key(Key::ch('w'), KeyKind::Press).await;
+    sleep(Duration::from_secs(2)).await;
+    let v = h.speeds();
+    assert!(v[0] > 5.0 && v[1..].iter().all(|v| *v == 0.0), "{v:?}");
+    // Tab: the next droid; the first one's deadman stops it, the second drives.
+    h.tap(Key::plain(KeyCode::Tab)).await;
+    sleep(Duration::from_secs(2)).await;
+    let v = h.speeds();
+    assert!(v[0] == 0.0 && v[1] > 5.0 && v[2] == 0.0, "{v:?}");
+    let seen = seen();
+    let roster = seen.roster.expect("a roster with four droids");
+    assert_eq!(roster.droids.len(), 4);
+    assert_eq!(roster.chosen, 1);
+    assert_eq!(
+        seen.droid_name, "droid-1",
+        "the screen follows the chosen droid"
+    );
+    assert!(roster.droids.iter().all(|d| d.link == LinkState::Connected));
+    assert!(roster.droids[1].moving && !roster.droids[0].moving);
+    // The fleet's log names every droid's lines.
+    let droids: std::collections::BTreeSet<String> = seen
+        .log
+        .visible(10_000)
+        .into_iter()
+        .filter_map(|l| l.droid.as_deref().map(str::to_string))
+        .collect();
+    assert_eq!(droids.len(), 4, "{droids:?}");
+    h.key(Key::plain(KeyCode::Space), KeyKind::Press).await;
+    sleep(Duration::from_millis(800)).await;
+    assert!(h.speeds().iter().all(|v| *v == 0.0));
+    h.tap(Key::ch('q')).await;
+    h.app.await.unwrap();
+}
+
+#[tokio::test(start_paused = true)]
+async fn a_droid_that_loses_its_link_is_stopped_by_its_own_fail_safe() {
+    // R2-D2 (v2: the 2 s control-system timeout) goes out of range at 6 s, mid-drive.
+    let h = start(Some((0, Duration::from_secs(6)))).await;
+    h.mirrored_and_rolling().await;
+    sleep(Duration::from_millis(1500)).await;
+    assert!(!h.probes[0].connected(), "R2's link is gone");
+    // Nothing reaches it any more; its own timeout stops it within 2 s (+ braking).
+    sleep(Duration::from_millis(2500)).await;
+    let v = h.speeds();
+    assert_eq!(v[0], 0.0, "R2 stopped by its fail-safe: {v:?}");
+    assert!(v[1..].iter().all(|v| *v > 1.0), "the others roll on: {v:?}");
+    let seen = seen();
+    let r = seen.roster.unwrap();
+    assert!(
+        matches!(r.droids[0].link, LinkState::Reconnecting { .. }),
+        "{:?}",
+        r.droids[0].link
+    );
+    assert!(r.droids[1..].iter().all(|d| d.link == LinkState::Connected));
+    h.key(Key::ch('w'), KeyKind::Release).await;
+    h.tap(Key::ch('q')).await;
+    h.app.await.unwrap();
+}
+
+#[tokio::test(start_paused = true)]
+async fn quitting_stops_and_disconnects_every_droid() {
+    let h = start(None).await;
+    h.mirrored_and_rolling().await;
+    // Quit while still holding forward: every droid gets its stop, then its link closes.
+    h.tap(Key::ch('q')).await;
+    let exit = h.app.await.unwrap();
+    assert_eq!(exit.stops.len(), 4);
+    let before = Instant::now();
+    h.fleet.shutdown_all(|i| vec![exit.stops[i].clone()]).await;
+    assert!(before.elapsed() <= Duration::from_secs(3));
+    sleep(Duration::from_millis(800)).await;
+    for (i, p) in h.probes.iter().enumerate() {
+        assert!(!p.connected(), "droid {i} disconnected");
+        assert_eq!(p.state().velocity_cm_s, 0.0, "droid {i} stopped");
+    }
+    for m in h.fleet.members() {
+        assert!(matches!(m.session.state(), LinkState::Closed { .. }));
+    }
+}
+
+#[tokio::test(start_paused = true)]
+async fn the_fleet_api_addresses_droids_by_name_without_the_app() {
+    use droidctl::fleet::FleetCommand;
+    use droidctl::units::Heading;
+    let config = Config::defaults();
+    let found = droidctl::cli::fleet::simulated(&[Model::R2D2, Model::Robi42]);
+    let specs = found
+        .into_iter()
+        .map(|f| {
+            let c = session_config(f.model, &config, true);
+            f.into_spec(c)
+        })
+        .collect();
+    let fleet = Fleet::start(specs);
+    // Connected, R2 up on three legs.
+    sleep(Duration::from_secs(3)).await;
+    let r2 = fleet.find("r2").unwrap();
+    let robi = fleet.find("robi").unwrap();
+    assert!(fleet.find("bb8").is_err());
+    let mut t = fleet.telemetry(robi).unwrap();
+    for i in [r2, robi] {
+        fleet
+            .command(
+                i,
+                FleetCommand::Drive {
+                    speed: 120,
+                    heading: Heading::new(0).unwrap(),
+                },
+            )
+            .unwrap();
+    }
+    // A bridge keeps re-sending within the fail-safe's 2 s.
+    for _ in 0..4 {
+        sleep(Duration::from_millis(500)).await;
+        fleet
+            .command(
+                r2,
+                FleetCommand::Drive {
+                    speed: 120,
+                    heading: Heading::new(0).unwrap(),
+                },
+            )
+            .unwrap();
+    }
+    t.changed().await.unwrap();
+    assert!(t.borrow().robi.is_some(), "Robi's telemetry streams");
+    let r2_t = fleet.telemetry(r2).unwrap().borrow().clone();
+    assert!(r2_t.y_cm.unwrap_or(0.0) > 20.0, "{:?}", r2_t.y_cm);
+    fleet.estop_all();
+    fleet.shutdown_all(|_| Vec::new()).await;
+    assert!(fleet.members().iter().all(|m| m.session.is_closed()));
+}

@@ -1,0 +1,91 @@
+//! Fleet missions end to end, as a user runs them: `droidctl run SCRIPT --sim r2d2,bb8,robi`
+//! with `@NAME` lines and `together { }` blocks, in one simulated room (the droids collide
+//! with each other, and both report it), deterministic, with a `droid` field in `--json`.
+
+use serde_json::Value;
+
+#[path = "common/scratch.rs"]
+mod scratch;
+use scratch::{Scratch, json_lines, path, stderr, stdout};
+
+/// R2-D2 starts 60 cm west of BB-8 (the fleet stands in a row) and drives east into it;
+/// meanwhile Robi 42 drives north on its own, in a block that runs it alongside BB-8.
+const CRASH: &str = "\
+@R2 stance tripod
+@R2 drive 120 90 for 3s
+together {
+  @BB8 drive 60 180 for 1s
+  @robi drive 80 0 for 2s
+  @robi stop
+}
+";
+
+#[test]
+fn a_fleet_mission_addresses_droids_shares_a_room_and_is_deterministic() {
+    let dir = Scratch::new("fleet-mission", "crash");
+    let script = dir.file("crash.txt", CRASH);
+    let args = ["run", path(&script), "--sim", "r2d2,bb8,robi", "--json"];
+    let (a, _) = dir.run_timed(&args);
+    assert_eq!(a.status.code(), Some(0), "stderr: {}", stderr(&a));
+    let (b, _) = dir.run_timed(&args);
+    assert_eq!(
+        stdout(&a),
+        stdout(&b),
+        "the same fleet mission gives the same output"
+    );
+
+    let lines = json_lines(&stdout(&a));
+    let summary = |droid: &str| {
+        lines
+            .iter()
+            .find(|l| l["droid"] == droid && l.get("done") == Some(&Value::Bool(true)))
+            .unwrap_or_else(|| panic!("a summary for {droid}"))
+            .clone()
+    };
+    let (r2, bb8, robi) = (summary("D2-0001"), summary("BB-0002"), summary("Robi 42"));
+    // R2 ran into BB-8: both report the collision; Robi, away from both, none.
+    assert!(r2["collisions"].as_u64().unwrap() >= 1, "{r2:?}");
+    assert!(bb8["collisions"].as_u64().unwrap() >= 1, "{bb8:?}");
+    assert_eq!(robi["collisions"], Value::from(0));
+    // R2 stopped touching BB-8 (their centres 20 cm apart, 60 cm at the start): it went
+    // about 40 cm, not the 3 s × 75 cm/s it was told.
+    let x = r2["x_cm"].as_f64().unwrap();
+    assert!((30.0..50.0).contains(&x), "R2 stopped at BB-8: x = {x}");
+    assert!(robi["y_cm"].as_f64().unwrap() > 5.0, "{robi:?}");
+    // Every sample names its droid, all three sampled on one clock.
+    let samples: Vec<&serde_json::Map<String, Value>> =
+        lines.iter().filter(|l| l.get("done").is_none()).collect();
+    for d in ["D2-0001", "BB-0002", "Robi 42"] {
+        assert!(samples.iter().any(|s| s["droid"] == d), "samples of {d}");
+    }
+    assert!(samples.iter().all(|s| s.contains_key("droid")));
+}
+
+#[test]
+fn lines_for_droids_the_fleet_lacks_or_cannot_do_are_refused_before_anything_is_sent() {
+    let dir = Scratch::new("fleet-mission", "errors");
+    let script = dir.file(
+        "bad.txt",
+        "@sprk drive 50 0\nstance tripod\ntogether {\n@R2 wait 1s\n",
+    );
+    let out = dir.run(&["run", path(&script), "--sim", "r2d2,bb8"]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = stderr(&out);
+    assert!(
+        err.contains("bad.txt:3:") && err.contains("never closed"),
+        "{err}"
+    );
+    let script = dir.file("bad2.txt", "@sprk drive 50 0\nstance tripod\n");
+    let out = dir.run(&["run", path(&script), "--sim", "r2d2,bb8"]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = stderr(&out);
+    assert!(
+        err.contains("bad2.txt:1: no droid called \"sprk\""),
+        "{err}"
+    );
+    assert!(
+        err.contains("bad2.txt:2: BB-0002: BB-8 has no legs"),
+        "{err}"
+    );
+    assert!(stdout(&out).is_empty(), "nothing ran");
+}
