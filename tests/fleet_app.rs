@@ -61,6 +61,35 @@ impl Link for OutOfRange {
     }
 }
 
+/// The app's inputs for a test: the key channel to type into, and what the app reads (the
+/// pad and signal senders kept alive with it).
+fn inputs() -> (mpsc::Sender<TermEvent>, AppInputs, impl Send + 'static) {
+    let (term, term_rx) = mpsc::channel(64);
+    let (pad, pad_rx) = mpsc::channel(4);
+    let (quit, quit_rx) = mpsc::channel(4);
+    let inputs = AppInputs {
+        term: term_rx,
+        pad: pad_rx,
+        quit: quit_rx,
+    };
+    (term, inputs, (pad, quit))
+}
+
+fn opts(config: Config, tripod_on_connect: bool) -> AppOptions {
+    AppOptions {
+        config,
+        model: Model::R2D2,
+        droid_name: String::new(),
+        log_path: None,
+        release: ReleaseMode::Reported,
+        tripod_on_connect,
+    }
+}
+
+fn terminal() -> Terminal<TestBackend> {
+    Terminal::new(TestBackend::new(120, 40)).unwrap()
+}
+
 struct Harness {
     term: mpsc::Sender<TermEvent>,
     fleet: Fleet,
@@ -98,27 +127,12 @@ async fn start(lost: Option<(usize, Duration)>) -> Harness {
         });
     }
     let fleet = Fleet::start(specs);
-    let (term, term_rx) = mpsc::channel(64);
-    let (_pad, pad_rx) = mpsc::channel(4);
-    let (_quit, quit_rx) = mpsc::channel(4);
-    let opts = AppOptions {
-        config,
-        model: Model::R2D2,
-        droid_name: String::new(),
-        log_path: None,
-        release: ReleaseMode::Reported,
-        tripod_on_connect: true,
-    };
+    let (term, inputs, keep_alive) = inputs();
+    let opts = opts(config, true);
     let f = fleet.clone();
     let app = tokio::spawn(async move {
-        let _keep = (_pad, _quit);
-        let mut terminal = Terminal::new(TestBackend::new(120, 40)).unwrap();
-        let inputs = AppInputs {
-            term: term_rx,
-            pad: pad_rx,
-            quit: quit_rx,
-        };
-        run::run_fleet(&mut terminal, f, opts, inputs, keep)
+        let _keep = keep_alive;
+        run::run_fleet(&mut terminal(), f, opts, inputs, keep)
             .await
             .unwrap()
     });
@@ -313,4 +327,98 @@ async fn the_fleet_api_addresses_droids_by_name_without_the_app() {
     fleet.estop_all();
     fleet.shutdown_all(|_| Vec::new()).await;
     assert!(fleet.members().iter().all(|m| m.session.is_closed()));
+}
+
+/// `replay` of a fleet's capture in the app: every droid plays back on one clock, the roster
+/// lists them, Tab shows another droid's gauges, the log names each line's droid.
+#[tokio::test(start_paused = true)]
+async fn a_fleet_capture_replays_every_droid_together() {
+    use droidctl::capture::replay::Replay;
+    // Record a short fleet mission with the real binary.
+    let dir = std::env::temp_dir().join(format!("droidctl-fleet-replay-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let script = dir.join("m.txt");
+    std::fs::write(
+        &script,
+        "@R2 stance tripod\ntogether {\n@R2 drive 80 0 for 2s\n@BB-8 drive 80 180 for 2s\n}\n",
+    )
+    .unwrap();
+    let capture = dir.join("fleet.capture");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_droidctl"))
+        .args([
+            "run",
+            script.to_str().unwrap(),
+            "--sim",
+            "r2d2,bb8",
+            "--record",
+        ])
+        .arg(&capture)
+        .env("DROIDCTL_LOG_FILE", dir.join("log"))
+        .env("DROIDCTL_CONFIG", dir.join("config.toml"))
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = std::fs::read_to_string(&capture).unwrap();
+    let replays: Vec<(Replay, String)> = droidctl::capture::fleet::split(&text)
+        .unwrap()
+        .into_iter()
+        .map(|c| {
+            let model = c.header.model.unwrap();
+            let name = c.header.droid.clone().unwrap();
+            (Replay::new(c, model), name)
+        })
+        .collect();
+    let (term, inputs, keep_alive) = inputs();
+    let opts = opts(Config::defaults(), false);
+    let app = tokio::spawn(async move {
+        let _keep = keep_alive;
+        let file = "fleet.capture".to_string();
+        run::run_fleet_replay(&mut terminal(), replays, file, opts, inputs, keep)
+            .await
+            .unwrap()
+    });
+    // Past the end of the mission (7 s), at 1×.
+    sleep(Duration::from_secs(9)).await;
+    let s = seen();
+    let r = s.roster.clone().expect("a roster");
+    let names: Vec<&str> = r.droids.iter().map(|d| d.name.as_str()).collect();
+    assert_eq!(names, ["D2-0001", "BB-0002"]);
+    assert_eq!(s.droid_name, "D2-0001");
+    let r2_y = s.telemetry.y_cm.unwrap();
+    assert!(r2_y > 20.0, "R2 went north in the replay: {r2_y}");
+    // BB-8's position is in the roster too, south.
+    let (_, bb_y) = r.droids[1].position.expect("BB-8's position");
+    assert!(bb_y < -20.0, "BB-8 went south: {bb_y}");
+    let named: std::collections::BTreeSet<String> = s
+        .log
+        .visible(10_000)
+        .into_iter()
+        .filter_map(|l| l.droid.as_deref().map(str::to_string))
+        .collect();
+    assert_eq!(named.len(), 2, "{named:?}");
+    // Tab: BB-8's gauges.
+    term.send(TermEvent::Key {
+        key: Key::plain(KeyCode::Tab),
+        kind: KeyKind::Press,
+    })
+    .await
+    .unwrap();
+    sleep(Duration::from_millis(300)).await;
+    let s = seen();
+    assert_eq!(s.droid_name, "BB-0002");
+    assert!(s.telemetry.y_cm.unwrap() < -20.0);
+    assert!(s.replay.is_some(), "still a replay");
+    term.send(TermEvent::Key {
+        key: Key::ch('q'),
+        kind: KeyKind::Press,
+    })
+    .await
+    .unwrap();
+    app.await.unwrap();
+    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -89,3 +89,42 @@ fn lines_for_droids_the_fleet_lacks_or_cannot_do_are_refused_before_anything_is_
     );
     assert!(stdout(&out).is_empty(), "nothing ran");
 }
+
+/// `--record` on a fleet mission: one file, each droid's lines apart (`@K`); `replay --json`
+/// plays every droid back to the very samples the live run printed.
+#[test]
+fn a_recorded_fleet_mission_replays_to_the_same_samples_per_droid() {
+    let dir = Scratch::new("fleet-mission", "record");
+    let script = dir.file("crash.txt", CRASH);
+    let capture = dir.0.join("fleet.capture");
+    let live = dir.run(&[
+        "run",
+        path(&script),
+        "--sim",
+        "r2d2,bb8,robi",
+        "--json",
+        "--record",
+        path(&capture),
+    ]);
+    assert_eq!(live.status.code(), Some(0), "{}", stderr(&live));
+    let text = std::fs::read_to_string(&capture).unwrap();
+    assert!(text.starts_with("droidctl-capture 2\n"), "{text}");
+    assert!(text.contains("# droid-2: bb8 v1 BB-0002\n"), "{text}");
+    for k in 1..=3 {
+        assert!(text.contains(&format!("\n@{k} ")), "droid {k}'s lines");
+    }
+    let replayed = dir.run(&["replay", path(&capture), "--json"]);
+    assert_eq!(replayed.status.code(), Some(0), "{}", stderr(&replayed));
+    assert_eq!(stderr(&replayed), "", "a clean capture");
+    let samples = |out: &str, droid: &str| -> Vec<String> {
+        out.lines()
+            .filter(|l| l.contains(&format!("\"droid\":\"{droid}\"")) && !l.contains("\"done\""))
+            .map(str::to_string)
+            .collect()
+    };
+    for d in ["D2-0001", "BB-0002", "Robi 42"] {
+        let (a, b) = (samples(&stdout(&live), d), samples(&stdout(&replayed), d));
+        assert!(a.len() > 50, "{d}: {} samples", a.len());
+        assert_eq!(a, b, "{d}: the replay's samples are the live run's");
+    }
+}

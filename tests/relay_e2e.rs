@@ -716,3 +716,47 @@ fn serve_records_each_droid_session_for_replay() {
         text(&again.stderr)
     );
 }
+
+/// A fleet across machines (issue 23 point 5): droids behind two relays and one local droid,
+/// one mission driving all three at once. `NAME@HOST` picks a droid of a relay holding
+/// several.
+#[test]
+fn a_fleet_mixes_droids_behind_two_relays_and_a_local_one() {
+    let dir = TempDir::new("fleet");
+    let a = Serve::start(&["r2d2"], &[], &dir);
+    let b = Serve::start(&["bb8", "sprk"], &[], &dir);
+    let script = dir.file(
+        "fleet.txt",
+        "@R2 stance tripod\ntogether {\n  @R2 drive 80 0 for 2s\n  @BB-8 drive 80 0 for 2s\n  \
+         @robi drive 120 0 for 2s\n}\n",
+    );
+    let bb = format!("BB-0001@{}", b.address);
+    let out = droidctl(
+        &[
+            "run", &script, "--json", "--sim", "robi", "--remote", &a.address, "--remote", &bb,
+        ],
+        &dir,
+    );
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let summaries: Vec<Value> = text(&out.stdout)
+        .lines()
+        .filter_map(|l| serde_json::from_str::<Value>(l).ok())
+        .filter(|v| v["done"] == true)
+        .collect();
+    let names: Vec<&str> = summaries
+        .iter()
+        .filter_map(|s| s["droid"].as_str())
+        .collect();
+    assert_eq!(names, ["Robi 42", "D2-0001", "BB-0001"]);
+    for s in &summaries {
+        assert!(f(&s["y_cm"]) > 10.0, "every droid drove north: {s}");
+    }
+    for serve in [&a, &b] {
+        serve.wait_event("its droid connected", |e| e["event"] == "droid_connected");
+        serve.wait_event("its droid released", |e| e["event"] == "droid_released");
+    }
+    let released = b.wait_event("BB-8 released", |e| e["event"] == "droid_released");
+    assert_eq!(released["name"], "BB-0001", "the named droid of the two");
+    a.stop();
+    b.stop();
+}

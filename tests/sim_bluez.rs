@@ -1569,3 +1569,116 @@ fn a_killed_simulator_takes_its_dbus_daemon_with_it() {
         std::thread::sleep(Duration::from_millis(20));
     }
 }
+
+// -------------------------------------------------------------------------------------------
+// Several droids at once (issue 23)
+// -------------------------------------------------------------------------------------------
+
+/// Three droids through one adapter, each refusing its first connection (as a droid that
+/// needs a retry does): droidctl's attempts take turns, so the adapter never answers
+/// `InProgress`; each retry after `le-connection-abort-by-local` succeeds; then one mission
+/// drives all three at once through btleplug, in the room they share.
+#[test]
+fn a_fleet_takes_turns_on_the_adapter_and_drives_all_three_at_once() {
+    let sim = Sim::start(&["r2d2", "bb8", "robi", "--fault", "refuse-connect=1"]);
+    let dir = TempDir::new("fleet");
+    let script = dir.file(
+        "fleet.txt",
+        "@R2 stance tripod\ntogether {\n  @R2 drive 80 0 for 2s\n  @BB-8 drive 80 0 for 2s\n  \
+         @robi drive 120 0 for 2s\n}\n",
+    );
+    let mut args = vec!["run", &script, "--json"];
+    for n in &sim.names {
+        args.extend(["--name", n.as_str()]);
+    }
+    let out = droidctl(&args, Some(&sim.address), &dir);
+    let lines = sim.lines();
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "stderr: {}\nsim:\n{}",
+        text(&out.stderr),
+        lines.join("\n")
+    );
+    // Each droid: its refusal, then a connection.
+    for n in &sim.names {
+        assert!(
+            lines
+                .iter()
+                .any(|l| l.contains(&format!("{n}: fault refuse-connect"))),
+            "{n} refused once:\n{}",
+            lines.join("\n")
+        );
+        assert!(
+            lines
+                .iter()
+                .any(|l| l.starts_with(&format!("droidctl sim: {n}: connected"))),
+            "{n} connected:\n{}",
+            lines.join("\n")
+        );
+    }
+    assert!(
+        !lines.iter().any(|l| l.contains("InProgress")),
+        "attempts overlapped on the adapter:\n{}",
+        lines.join("\n")
+    );
+    let summaries: Vec<serde_json::Value> = text(&out.stdout)
+        .lines()
+        .filter_map(|l| serde_json::from_str::<serde_json::Value>(l).ok())
+        .filter(|v| v["done"] == true)
+        .collect();
+    assert_eq!(summaries.len(), 3, "{}", text(&out.stdout));
+    for s in &summaries {
+        assert!(f(&s["y_cm"]) > 10.0, "every droid drove north: {s}");
+        assert_eq!(s["failed_steps"], 0, "{s}");
+    }
+    sim.stop();
+}
+
+/// The virtual adapter's one-attempt-at-a-time rule, as a BlueZ client sees it: while one
+/// droid's connection attempt is under way (it refuses, answering after 0.3 s), another's
+/// `Connect` is answered `org.bluez.Error.InProgress` at once.
+#[test]
+fn the_virtual_adapter_allows_one_connection_attempt_at_a_time() {
+    let sim = Sim::start(&["r2d2", "bb8", "--fault", "refuse-connect=1"]);
+    let c = Connection::new_address(&sim.address).unwrap();
+    call(
+        &c,
+        "/org/bluez/hci0",
+        "org.bluez.Adapter1",
+        "StartDiscovery",
+    )
+    .unwrap();
+    std::thread::sleep(Duration::from_millis(300));
+    let tree = managed(&c);
+    let device = |name: &str| {
+        tree.iter()
+            .find(|(_, ifaces)| {
+                ifaces
+                    .get("org.bluez.Device1")
+                    .and_then(|p| p.get("Name"))
+                    .and_then(|v| v.0.as_str())
+                    == Some(name)
+            })
+            .map(|(p, _)| p.to_string())
+            .unwrap()
+    };
+    let (a, b) = (device(&sim.names[0]), device(&sim.names[1]));
+    let first = {
+        let (bus, a) = (sim.address.clone(), a.clone());
+        std::thread::spawn(move || {
+            let c = Connection::new_address(&bus).unwrap();
+            call(&c, &a, "org.bluez.Device1", "Connect")
+        })
+    };
+    sim.wait_line("fault refuse-connect", Duration::from_secs(5));
+    let second = call(&c, &b, "org.bluez.Device1", "Connect");
+    assert_eq!(err_name(second), "org.bluez.Error.InProgress");
+    let first = first.join().unwrap();
+    assert!(err_name(first).contains("Failed"));
+    // Once the first attempt is over, the other droid's own attempts go ahead (its first
+    // refused too, by the fault, then connected).
+    assert!(err_name(call(&c, &b, "org.bluez.Device1", "Connect")).contains("Failed"));
+    call(&c, &b, "org.bluez.Device1", "Connect").unwrap();
+    sim.stop();
+}

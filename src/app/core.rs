@@ -49,6 +49,8 @@ pub(super) struct App {
     /// The keys and the pad drive the droid swapped in (false for a parked droid outside
     /// mirror mode: it gets no input, its deadman holds it; the e-stop still reaches it).
     pub driven: bool,
+    /// In a fleet, the droid whose events are being handled: its log lines are named.
+    pub log_droid: Option<std::sync::Arc<str>>,
 }
 
 impl App {
@@ -96,7 +98,10 @@ impl App {
 
     /// A packet-log entry, from the session or the replay.
     pub fn on_log(&mut self, entry: &LogEntry) {
-        let line = LogLine::from_entry(entry);
+        let line = match &self.log_droid {
+            Some(droid) => LogLine::from_droid_entry(entry, droid.clone()),
+            None => LogLine::from_entry(entry),
+        };
         self.state.log.push(line);
         self.dirty = true;
     }

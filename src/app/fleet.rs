@@ -10,7 +10,6 @@
 //! steers, a BB-8 rolls). The emergency stop and quitting reach every droid, mirror or not.
 
 use super::core::App;
-use super::packet_log::LogLine;
 use super::rates::Rates;
 use super::roster::{Roster, RosterEntry};
 use super::state::AppState;
@@ -24,6 +23,8 @@ use std::time::Duration;
 pub(super) struct Parked {
     pub state: AppState,
     pub session: Option<SessionHandle>,
+    /// In replay, its capture's player.
+    pub player: Option<super::player::Player>,
     pub controller: Controller,
     pub family: &'static dyn Family,
 }
@@ -50,19 +51,22 @@ impl App {
         let Some(mut side) = self.fleet.take() else {
             return f(self);
         };
-        if i == side.chosen || i >= side.parked.len() {
-            let r = f(self);
-            self.fleet = Some(side);
-            return r;
-        }
-        let Some(mut p) = side.parked[i].take() else {
-            self.fleet = Some(side);
-            return f(self);
+        // Its log lines go to the fleet's log (on screen), named.
+        let tag = std::mem::replace(&mut self.log_droid, side.names.get(i).cloned());
+        let r = match side.parked.get_mut(i).and_then(Option::take) {
+            Some(mut p) if i != side.chosen => {
+                self.swap_in(&mut p);
+                // The fleet's log stays on screen.
+                std::mem::swap(&mut self.state.log, &mut p.state.log);
+                let r = f(self);
+                std::mem::swap(&mut self.state.log, &mut p.state.log);
+                self.swap_in(&mut p);
+                side.parked[i] = Some(p);
+                r
+            }
+            _ => f(self),
         };
-        self.swap_in(&mut p);
-        let r = f(self);
-        self.swap_in(&mut p);
-        side.parked[i] = Some(p);
+        self.log_droid = tag;
         self.fleet = Some(side);
         r
     }
@@ -70,6 +74,7 @@ impl App {
     fn swap_in(&mut self, p: &mut Parked) {
         std::mem::swap(&mut self.state, &mut p.state);
         std::mem::swap(&mut self.session, &mut p.session);
+        std::mem::swap(&mut self.player, &mut p.player);
         std::mem::swap(&mut self.controller, &mut p.controller);
         std::mem::swap(&mut self.family, &mut p.family);
     }
@@ -88,6 +93,11 @@ impl App {
                 a.driven = true;
             });
         }
+    }
+
+    /// The droid the keys drive (0 without a fleet).
+    pub fn chosen(&self) -> usize {
+        self.fleet.as_ref().map_or(0, |s| s.chosen)
     }
 
     /// Whether mirror mode is on.
@@ -161,14 +171,7 @@ impl App {
 
     /// A packet-log entry of droid `i`: into the fleet's log, named.
     pub fn on_droid_log(&mut self, i: usize, entry: &LogEntry) {
-        match self.fleet.as_ref().and_then(|s| s.names.get(i)) {
-            Some(name) => {
-                let line = LogLine::from_droid_entry(entry, name.clone());
-                self.state.log.push(line);
-                self.dirty = true;
-            }
-            None => self.on_log(entry),
-        }
+        self.with_droid(i, |a| a.on_log(entry));
     }
 
     /// Per-second rates of every droid; returns whether any changed.
@@ -299,6 +302,7 @@ pub(super) fn attach(
         parked.push(Some(Parked {
             state,
             session: Some(m.session.clone()),
+            player: None,
             controller,
             family: m.family,
         }));
@@ -385,4 +389,48 @@ impl App {
             DroidEvent::Battery(v) => self.with_droid(i, |a| a.on_battery(v)),
         }
     }
+}
+
+/// Set the app up for replaying a fleet's capture (its first droid's replay is already in
+/// the app): park the others, each with its own player started now.
+pub(super) fn attach_replays(
+    app: &mut App,
+    others: Vec<(crate::capture::replay::Replay, String)>,
+    config: &crate::config::Config,
+    file: &str,
+) {
+    let mut parked = vec![None];
+    let mut names = vec![Arc::from(app.state.droid_name.as_str())];
+    for (replay, name) in others {
+        let model = replay.model();
+        let family = crate::family::for_model(model);
+        let mut state = AppState::new(model, name.clone());
+        state.help = app.state.help.clone();
+        state.help_nav = app.state.help_nav.clone();
+        state.keyboard = app.state.keyboard;
+        state.gamepad = app.state.gamepad.clone();
+        names.push(Arc::from(name.as_str()));
+        parked.push(Some(Parked {
+            state,
+            session: None,
+            player: Some(super::player::Player::new(
+                replay,
+                file.to_string(),
+                app.start,
+            )),
+            controller: Controller::with_family(config.control.clone(), family),
+            family,
+        }));
+    }
+    let rates = parked
+        .iter()
+        .map(|_| Rates::new(Default::default(), Duration::ZERO))
+        .collect();
+    app.fleet = Some(FleetSide {
+        parked,
+        chosen: 0,
+        mirror: false,
+        names,
+        rates,
+    });
 }

@@ -215,8 +215,21 @@ impl App {
             return None;
         }
         if let Some(a) = self.keymap.action_in(Context::Replay, &key) {
+            // Every droid of a fleet's capture plays on the same clock.
             self.on_replay_action(a);
+            self.each_other(|o| o.on_replay_action(a));
             return None;
+        }
+        match self.keymap.action(&key) {
+            Some(Action::NextDroid) => {
+                self.choose_next(true);
+                return None;
+            }
+            Some(Action::PreviousDroid) => {
+                self.choose_next(false);
+                return None;
+            }
+            _ => {}
         }
         match self.keymap.action(&key) {
             Some(Action::Quit) => return Some(ExitReason::Quit),

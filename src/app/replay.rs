@@ -43,8 +43,15 @@ impl App {
         }
     }
 
-    /// Replay: bring the capture up to the clock, and the status bar's position.
+    /// Replay: bring the capture up to the clock (every droid's of a fleet), and the status
+    /// bar's position.
     pub fn replay_frame(&mut self) {
+        let chosen = self.chosen();
+        self.with_droid(chosen, App::replay_frame_one);
+        self.each_other(App::replay_frame_one);
+    }
+
+    fn replay_frame_one(&mut self) {
         let Some(p) = self.player.as_mut() else {
             return;
         };

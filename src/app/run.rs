@@ -131,6 +131,7 @@ fn build(source: Source, opts: AppOptions) -> App {
         dirty: true,
         fleet: None,
         driven: true,
+        log_droid: None,
     };
     app.state.control = app.controller.view().clone();
     app
@@ -144,7 +145,7 @@ pub async fn run_source<B: Backend>(
     inputs: AppInputs,
     draw: DrawFn,
 ) -> std::io::Result<Exit> {
-    run_inner(terminal, source, None, opts, inputs, draw).await
+    run_with(terminal, source, None, None, opts, inputs, draw).await
 }
 
 /// Run the app on a fleet: the roster strip shows every droid, the keys drive the chosen one
@@ -165,13 +166,38 @@ pub async fn run_fleet<B: Backend>(
     opts.droid_name = first.name.clone();
     let source = Source::Live(first.session.clone());
     let fleet = (fleet.len() > 1).then_some(fleet);
-    run_inner(terminal, source, fleet, opts, inputs, draw).await
+    run_with(terminal, source, fleet, None, opts, inputs, draw).await
 }
 
-async fn run_inner<B: Backend>(
+/// Replay a fleet's capture: every droid's replay on one clock, the roster and the choice
+/// of droid as live (nothing is sent). `replays` in fleet order, each with its name.
+pub async fn run_fleet_replay<B: Backend>(
+    terminal: &mut Terminal<B>,
+    mut replays: Vec<(Replay, String)>,
+    file: String,
+    mut opts: AppOptions,
+    inputs: AppInputs,
+    draw: DrawFn,
+) -> std::io::Result<Exit> {
+    if replays.is_empty() {
+        return Err(std::io::Error::other("a capture without droids"));
+    }
+    let (first, name) = replays.remove(0);
+    opts.model = first.model();
+    opts.droid_name = name;
+    let rest = (!replays.is_empty()).then_some((replays, file.clone()));
+    let source = Source::Replay(Box::new(first), file);
+    run_with(terminal, source, None, rest, opts, inputs, draw).await
+}
+
+/// A fleet's other droids: live, or replayed (their replays and the file's name).
+type OtherReplays = Option<(Vec<(Replay, String)>, String)>;
+
+async fn run_with<B: Backend>(
     terminal: &mut Terminal<B>,
     source: Source,
     fleet: Option<crate::fleet::Fleet>,
+    replays: OtherReplays,
     opts: AppOptions,
     mut inputs: AppInputs,
     draw: DrawFn,
@@ -185,6 +211,9 @@ async fn run_inner<B: Backend>(
         None => (mpsc::channel(1).1, Vec::new()),
     };
     let mut fleet_open = fleet.is_some();
+    if let Some((others, file)) = replays {
+        super::fleet::attach_replays(&mut app, others, &parked_config.0, &file);
+    }
     let start = app.start;
     let family = app.family;
     let session = app.session.clone();

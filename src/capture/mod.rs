@@ -45,6 +45,7 @@
 //! versions can add some.
 
 pub mod btsnoop;
+pub mod fleet;
 pub mod hci;
 pub mod mirror;
 pub mod record;
@@ -243,6 +244,11 @@ impl TextReader {
             }
             return match words.next().and_then(|v| v.parse::<u32>().ok()) {
                 Some(VERSION) => Ok(Line::Nothing),
+                Some(fleet::FLEET_VERSION) => Err(err(
+                    "a capture of several droids (version 2): `droidctl replay` plays them \
+                     together"
+                        .into(),
+                )),
                 Some(v) => Err(err(format!(
                     "capture format version {v}; this droidctl reads version {VERSION}"
                 ))),

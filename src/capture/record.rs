@@ -102,6 +102,8 @@ fn lock(s: &Shared) -> std::sync::MutexGuard<'_, State> {
 pub struct Recorder {
     shared: Shared,
     path: PathBuf,
+    /// In a capture of several droids, the droid (1-based) this handle's events are about.
+    droid: Option<usize>,
 }
 
 impl Recorder {
@@ -139,6 +141,7 @@ impl Recorder {
         Ok(Recorder {
             shared,
             path: path.to_path_buf(),
+            droid: None,
         })
     }
 
@@ -166,21 +169,43 @@ impl Recorder {
         }
     }
 
+    /// Write the header of a capture of several droids (`headers`, in fleet order) and start
+    /// the clock; each droid's events then go through [`Recorder::for_droid`].
+    pub fn start_fleet(&self, headers: &[Header]) {
+        let mut s = lock(&self.shared);
+        s.start = Some(tokio::time::Instant::now());
+        let text = capture::fleet::header_text(headers);
+        s.write(&text);
+        s.flush();
+    }
+
+    /// A handle recording droid `k` (0-based) of a capture started with
+    /// [`Recorder::start_fleet`]: its lines carry `@k+1`.
+    pub fn for_droid(&self, k: usize) -> Recorder {
+        Recorder {
+            droid: Some(k + 1),
+            ..self.clone()
+        }
+    }
+
     /// Record `event` now.
     pub fn record(&self, event: Event) {
-        let mut s = lock(&self.shared);
-        let at = s.now();
-        s.write(&capture::event_line(&Timed { at, event }));
+        self.record_before(Duration::ZERO, event);
     }
 
     /// Record a mark `back` before now (a mission's first sample is taken at its start).
     pub fn mark_before(&self, back: Duration, text: &str) {
+        self.record_before(back, Event::Mark(text.to_string()));
+    }
+
+    fn record_before(&self, back: Duration, event: Event) {
         let mut s = lock(&self.shared);
         let at = s.now().saturating_sub(back);
-        s.write(&capture::event_line(&Timed {
-            at,
-            event: Event::Mark(text.to_string()),
-        }));
+        let line = capture::event_line(&Timed { at, event });
+        match self.droid {
+            Some(k) => s.write(&format!("@{k} {line}")),
+            None => s.write(&line),
+        }
     }
 
     pub fn flush(&self) {

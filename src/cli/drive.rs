@@ -111,15 +111,12 @@ pub fn run(args: DriveArgs) -> Result<i32, CliError> {
 
 /// Several droids: find them all, start a session each, and run the app on the fleet.
 fn run_fleet(args: DriveArgs, sims: Vec<Model>, config: Config) -> Result<i32, CliError> {
-    if args.record.record.is_some() {
-        return Err(CliError::usage(
-            "--record records one droid; with several, record each from its own droidctl",
-        ));
-    }
+    let recorder = args.record.open()?;
     let log_path = crate::logging::init().ok();
     let rt = super::realtime_runtime()?;
     rt.block_on(async move {
-        let found = super::fleet::find_all(&sims, &args.ble, &config).await?;
+        let mut found = super::fleet::find_all(&sims, &args.ble, &config).await?;
+        super::fleet::record_all(recorder.as_ref(), &mut found);
         let specs = found
             .into_iter()
             .map(|f| {
@@ -127,7 +124,9 @@ fn run_fleet(args: DriveArgs, sims: Vec<Model>, config: Config) -> Result<i32, C
                 f.into_spec(cfg)
             })
             .collect();
-        drive(Fleet::start(specs), config, log_path).await
+        let result = drive(Fleet::start(specs), config, log_path).await;
+        super::replay::finish(recorder.as_ref());
+        result
     })
 }
 

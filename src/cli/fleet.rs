@@ -116,6 +116,38 @@ pub struct Found {
     pub origin: String,
 }
 
+/// Record every droid of `found` into `rec` (one file, each droid's lines apart), starting
+/// its clock now; nothing without a recorder.
+pub fn record_all(rec: Option<&crate::capture::record::Recorder>, found: &mut [Found]) {
+    let Some(rec) = rec else {
+        return;
+    };
+    let headers: Vec<_> = found
+        .iter()
+        .map(|f| crate::capture::record::Recorder::header_for(f.model, &f.name))
+        .collect();
+    rec.start_fleet(&headers);
+    for (i, f) in found.iter_mut().enumerate() {
+        let link = std::mem::replace(&mut f.link, Box::new(Unplugged));
+        f.link = rec.for_droid(i).wrap(link);
+    }
+}
+
+/// A placeholder link while another is moved into its recorder.
+struct Unplugged;
+
+impl Link for Unplugged {
+    fn open(
+        &mut self,
+    ) -> futures_util::future::BoxFuture<'_, Result<crate::link::Connection, crate::link::LinkError>>
+    {
+        Box::pin(async { Err(crate::link::LinkError::fatal("no link")) })
+    }
+    fn describe(&self) -> String {
+        "no link".into()
+    }
+}
+
 impl Found {
     pub fn into_spec(self, session: SessionConfig) -> DroidSpec {
         DroidSpec {

@@ -16,12 +16,12 @@ use std::io::Write;
 use std::sync::Arc;
 use std::time::Duration;
 
-/// A JSON line naming its droid first.
+/// A JSON line naming its droid first (`run --json` and `replay --json` of a fleet).
 #[derive(Serialize)]
-struct Tagged<'a, T: Serialize> {
-    droid: &'a str,
+pub(super) struct Tagged<'a, T: Serialize> {
+    pub droid: &'a str,
     #[serde(flatten)]
-    inner: &'a T,
+    pub inner: &'a T,
 }
 
 pub fn run(
@@ -30,11 +30,7 @@ pub fn run(
     items: &[Item],
     script_errors: impl Fn(Vec<ScriptError>) -> CliError,
 ) -> Result<i32, CliError> {
-    if args.record.record.is_some() {
-        return Err(CliError::usage(
-            "--record records one droid; with several, record each from its own droidctl",
-        ));
-    }
+    let recorder = args.record.open()?;
     let config = crate::config::Config::load(&crate::config::config_path())
         .map_err(|e| CliError::usage(e.to_string()))?;
     let opts = MissionOptions {
@@ -56,13 +52,14 @@ pub fn run(
         super::realtime_runtime()?
     };
     let summaries = rt.block_on(async {
-        let found = super::fleet::find_all(&sims, &args.ble, &config).await?;
+        let mut found = super::fleet::find_all(&sims, &args.ble, &config).await?;
         if found.is_empty() {
             return Err(CliError::usage(
                 "this mission addresses droids by name: say which droids with --sim \
                  MODEL[,MODEL…], --name (repeatable) or --remote (repeatable)",
             ));
         }
+        super::fleet::record_all(recorder.as_ref(), &mut found);
         let specs = found
             .into_iter()
             .map(|f| {
@@ -84,7 +81,12 @@ pub fn run(
             .map(|m| tokio::spawn(report_link(m.session.watch_state())))
             .collect();
         let r = tokio::select! {
-            r = fleet_mission::run(&fleet, &plan, opts.clone(), printer(&fleet, json, &opts)) => r,
+            r = fleet_mission::run(
+                &fleet,
+                &plan,
+                opts.clone(),
+                printer(&fleet, json, &opts, recorder.clone()),
+            ) => r,
             sig = super::signals::terminated() => Err(crate::mission::MissionError(format!(
                 "{sig}: mission interrupted, every droid was stopped"
             ))),
@@ -92,10 +94,19 @@ pub fn run(
         for t in reporters {
             t.abort();
         }
+        if let Some(rec) = &recorder {
+            for i in 0..fleet.len() {
+                rec.for_droid(i)
+                    .record(crate::capture::Event::Mark("mission-end".into()));
+            }
+        }
         fleet.shutdown_all(|_| Vec::new()).await;
+        // In the runtime: under simulated time the `end` line has the mission's time.
+        super::replay::finish(recorder.as_ref());
         let summaries = r.map_err(|e| CliError::failure(e.to_string()))?;
         Ok(fleet.names().into_iter().zip(summaries).collect::<Vec<_>>())
-    })?;
+    });
+    let summaries = summaries?;
     let mut failed = 0;
     for (name, s) in &summaries {
         failed += s.failed_steps;
@@ -113,14 +124,43 @@ pub fn run(
     Ok(if failed > 0 { 1 } else { 0 })
 }
 
-/// Print each droid's steps, samples and warnings as they come, naming the droid.
-fn printer(fleet: &Fleet, json: bool, opts: &MissionOptions) -> FleetEmit {
+/// Print each droid's steps, samples and warnings as they come, naming the droid; with a
+/// recorder, mark each droid's mission start and steps in its lines of the capture (replay
+/// samples from there, as for one droid).
+fn printer(
+    fleet: &Fleet,
+    json: bool,
+    opts: &MissionOptions,
+    recorder: Option<crate::capture::record::Recorder>,
+) -> FleetEmit {
+    use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
     let names = fleet.names();
     let per_line = (1000 / opts.interval.as_millis().max(1)).max(1) as u64;
-    let counts: Vec<std::sync::atomic::AtomicU64> =
-        names.iter().map(|_| Default::default()).collect();
+    let counts: Vec<AtomicU64> = names.iter().map(|_| Default::default()).collect();
+    let marked: Vec<AtomicBool> = names.iter().map(|_| Default::default()).collect();
     Arc::new(move |i, e| {
         let name = names.get(i).map(String::as_str).unwrap_or("?");
+        if let Some(rec) = &recorder {
+            let rec = rec.for_droid(i);
+            match &e {
+                MissionEvent::Sample(s)
+                    if !marked
+                        .get(i)
+                        .is_some_and(|m| m.swap(true, Ordering::Relaxed)) =>
+                {
+                    rec.mark_before(Duration::from_millis(s.t_ms), "mission-start");
+                }
+                MissionEvent::Step { line, text, .. } => {
+                    // The droid's own line, as a one-droid capture has it (replay reads it).
+                    let own = text
+                        .strip_prefix('@')
+                        .and_then(|r| r.split_once(char::is_whitespace))
+                        .map_or(text.as_str(), |(_, rest)| rest.trim());
+                    rec.record(crate::capture::Event::Mark(format!("step {line} {own}")));
+                }
+                _ => {}
+            }
+        }
         let mut out = std::io::stdout().lock();
         let _ = match e {
             MissionEvent::Sample(s) if json => {
@@ -133,7 +173,7 @@ fn printer(fleet: &Fleet, json: bool, opts: &MissionOptions) -> FleetEmit {
             MissionEvent::Sample(s) => {
                 let n = counts
                     .get(i)
-                    .map_or(0, |c| c.fetch_add(1, std::sync::atomic::Ordering::Relaxed));
+                    .map_or(0, |c| c.fetch_add(1, Ordering::Relaxed));
                 if !n.is_multiple_of(per_line) {
                     return;
                 }

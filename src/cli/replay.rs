@@ -107,7 +107,96 @@ pub fn load(args: &ReplayArgs) -> Result<(crate::capture::Capture, crate::model:
     Ok((capture, model))
 }
 
+/// A capture of several droids: each droid's capture, checked, with its model and name.
+type FleetCaptures = Vec<(crate::capture::Capture, crate::model::Model, String)>;
+
+/// Load a capture of several droids, if `args.file` is one.
+fn load_fleet(args: &ReplayArgs) -> Result<Option<FleetCaptures>, CliError> {
+    let bytes = std::fs::read(&args.file)
+        .map_err(|e| CliError::failure(format!("cannot read {}: {e}", args.file.display())))?;
+    if !crate::capture::fleet::sniff(&bytes) {
+        return Ok(None);
+    }
+    let shown = args.file.display();
+    let droids = crate::capture::fleet::split(&String::from_utf8_lossy(&bytes))
+        .map_err(|e| CliError::usage(format!("{shown}: {e}")))?;
+    let mut out = Vec::with_capacity(droids.len());
+    for (i, c) in droids.into_iter().enumerate() {
+        crate::capture::replay::validate(&c)
+            .map_err(|e| CliError::usage(format!("{shown}: droid {}: {e}", i + 1)))?;
+        let model = c
+            .header
+            .model
+            .or_else(|| {
+                c.family()
+                    .map(|f| crate::family::for_protocol(f).representative())
+            })
+            .ok_or_else(|| CliError::failure(format!("{shown}: droid {}: no model", i + 1)))?;
+        let name = c
+            .header
+            .droid
+            .clone()
+            .unwrap_or_else(|| format!("{} {}", model.display_name(), i + 1));
+        out.push((c, model, name));
+    }
+    Ok(Some(out))
+}
+
+/// `replay --json` of a fleet's capture: each droid's samples and summary, naming it.
+fn fleet_json(args: &ReplayArgs, droids: &FleetCaptures) -> Result<i32, CliError> {
+    use super::fleet_run::Tagged;
+    use std::io::Write;
+    let mut out = std::io::BufWriter::new(std::io::stdout().lock());
+    let file = args.file.display().to_string();
+    for (c, model, name) in droids {
+        let summary = crate::capture::replay::samples(
+            c,
+            *model,
+            std::time::Duration::from_millis(args.interval),
+            &mut |s| {
+                let t = Tagged {
+                    droid: name,
+                    inner: s,
+                };
+                serde_json::to_writer(&mut out, &t).map_err(std::io::Error::other)?;
+                writeln!(out)
+            },
+            &mut |from, to| {
+                eprintln!(
+                    "droidctl: {file}: {name}: no traffic from {:.3} s to {:.3} s: not sampled",
+                    from.as_secs_f64(),
+                    to.as_secs_f64()
+                )
+            },
+        )
+        .map_err(CliError::output)?;
+        let t = Tagged {
+            droid: name,
+            inner: &summary,
+        };
+        serde_json::to_writer(&mut out, &t).map_err(|e| CliError::output(e.into()))?;
+        writeln!(out).map_err(CliError::output)?;
+    }
+    out.flush().map_err(CliError::output)?;
+    Ok(0)
+}
+
 pub fn run(args: ReplayArgs) -> Result<i32, CliError> {
+    if let Some(droids) = load_fleet(&args)? {
+        for (c, _, name) in &droids {
+            for w in &c.warnings {
+                eprintln!("droidctl: {}: {name}: {w}", args.file.display());
+            }
+        }
+        if args.json {
+            return fleet_json(&args, &droids);
+        }
+        let replays = droids
+            .into_iter()
+            .map(|(c, m, name)| (crate::capture::replay::Replay::new(c, m), name))
+            .collect();
+        return play(Played::Fleet(replays), args.file.display().to_string());
+    }
     let (capture, model) = load(&args)?;
     for w in &capture.warnings {
         eprintln!("droidctl: {}: {w}", args.file.display());
@@ -139,16 +228,27 @@ pub fn run(args: ReplayArgs) -> Result<i32, CliError> {
         out.flush().map_err(CliError::output)?;
         return Ok(0);
     }
-    play(capture, model, args.file.display().to_string())
+    let name = capture
+        .header
+        .droid
+        .clone()
+        .unwrap_or_else(|| format!("{} ({})", model.display_name(), capture.kind));
+    let replay = crate::capture::replay::Replay::new(capture, model);
+    play(
+        Played::One(Box::new(replay), name),
+        args.file.display().to_string(),
+    )
+}
+
+/// What the app replays: one droid, or a fleet's droids with their names.
+enum Played {
+    One(Box<crate::capture::replay::Replay>, String),
+    Fleet(Vec<(crate::capture::replay::Replay, String)>),
 }
 
 /// The app on the capture: the terminal and its keys as `drive` has them, no droid, no
 /// gamepad, nothing sent.
-fn play(
-    capture: crate::capture::Capture,
-    model: crate::model::Model,
-    file: String,
-) -> Result<i32, CliError> {
+fn play(played: Played, file: String) -> Result<i32, CliError> {
     use crate::app::run::{self, AppInputs, AppOptions, ExitReason, Source};
     use ratatui::Terminal;
     use ratatui::backend::CrosstermBackend;
@@ -160,11 +260,13 @@ fn play(
         ))
     })?;
     let log_path = crate::logging::init().ok();
-    let name = capture
-        .header
-        .droid
-        .clone()
-        .unwrap_or_else(|| format!("{} ({})", model.display_name(), capture.kind));
+    let (model, name) = match &played {
+        Played::One(r, name) => (r.model(), name.clone()),
+        Played::Fleet(v) => v
+            .first()
+            .map(|(r, n)| (r.model(), n.clone()))
+            .ok_or_else(|| CliError::usage("the capture holds no droid"))?,
+    };
     let rt = super::realtime_runtime()?;
     rt.block_on(async move {
         let mut guard = super::term::TerminalGuard::enter()
@@ -192,12 +294,26 @@ fn play(
             pad: pad_rx,
             quit: quit_rx,
         };
-        let replay = crate::capture::replay::Replay::new(capture, model);
         let app = tokio::spawn(async move {
             let backend = CrosstermBackend::new(std::io::stdout());
             let mut terminal = Terminal::new(backend)?;
-            let source = Source::Replay(Box::new(replay), file);
-            run::run_source(&mut terminal, source, opts, inputs, crate::ui::draw).await
+            match played {
+                Played::One(replay, _) => {
+                    let source = Source::Replay(replay, file);
+                    run::run_source(&mut terminal, source, opts, inputs, crate::ui::draw).await
+                }
+                Played::Fleet(replays) => {
+                    run::run_fleet_replay(
+                        &mut terminal,
+                        replays,
+                        file,
+                        opts,
+                        inputs,
+                        crate::ui::draw,
+                    )
+                    .await
+                }
+            }
         });
         let result = app.await;
         reader.abort();

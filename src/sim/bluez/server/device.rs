@@ -1,5 +1,6 @@
-//! Device calls: Connect (the one at a time BlueZ allows, refusals and aborts as BlueZ gives
-//! them) and Disconnect.
+//! Device calls: Connect (one attempt at a time per adapter, as BlueZ allows: another
+//! device's Connect meanwhile gets `org.bluez.Error.InProgress`; refusals and aborts as BlueZ
+//! gives them) and Disconnect.
 
 use super::*;
 
@@ -60,6 +61,21 @@ impl BluezSim {
         if d.blocked {
             return Some(error(&msg, ERR_FAILED, "Device is blocked"));
         }
+        // One LE connection attempt at a time per adapter, as BlueZ has it.
+        if let Some(other) = self.devices.iter().find(|o| o.refusing) {
+            let line = format!(
+                "{}: connection attempt from {client} while {}'s is under way: {ERR_IN_PROGRESS}",
+                self.devices[i].name(),
+                other.name()
+            );
+            self.say(line);
+            return Some(error(
+                &msg,
+                ERR_IN_PROGRESS,
+                "Operation already in progress",
+            ));
+        }
+        let d = &self.devices[i];
         if d.remembered || d.droid.status().asleep {
             // Nobody answers: BlueZ gives up after a while.
             let why = if d.remembered {

@@ -226,8 +226,16 @@ struct Device {
 }
 
 impl Device {
-    fn new(spec: DroidSpec, faults: &crate::sim::gatt::GattFaults, remembered: bool) -> Device {
-        let droid = GattDroid::new(spec.model, SimConfig::for_model(spec.model), faults.clone());
+    /// `place`: where it stands in the room it shares with the other droids served.
+    fn new(
+        spec: DroidSpec,
+        faults: &crate::sim::gatt::GattFaults,
+        remembered: bool,
+        place: Option<crate::sim::room::Place>,
+    ) -> Device {
+        let mut cfg = SimConfig::for_model(spec.model);
+        cfg.place = place;
+        let droid = GattDroid::new(spec.model, cfg, faults.clone());
         let path = format!(
             "{ADAPTER_PATH}/dev_{}",
             spec.address_string().replace(':', "_")
@@ -363,14 +371,23 @@ impl BluezSim {
              member='NameOwnerChanged'",
         )
         .map_err(|e| format!("cannot watch the bus: {}", why(e)))?;
+        // The droids in range share one room (they see the same walls and collide);
+        // remembered ones are elsewhere.
+        let room = crate::sim::room::SharedRoom::new();
+        let origins = crate::sim::room::SharedRoom::origins(opts.droids.len());
         let devices = opts
             .droids
             .into_iter()
-            .map(|spec| Device::new(spec, &opts.faults, false))
+            .zip(origins)
+            .map(|(spec, origin)| {
+                let radius = SimConfig::for_model(spec.model).radius_cm;
+                let place = room.place(origin, radius);
+                Device::new(spec, &opts.faults, false, Some(place))
+            })
             .chain(
                 opts.remembered
                     .into_iter()
-                    .map(|spec| Device::new(spec, &opts.faults, true)),
+                    .map(|spec| Device::new(spec, &opts.faults, true, None)),
             )
             .collect();
         let now = Instant::now();
