@@ -128,3 +128,64 @@ fn a_recorded_fleet_mission_replays_to_the_same_samples_per_droid() {
         assert_eq!(a, b, "{d}: the replay's samples are the live run's");
     }
 }
+
+/// A phone's btsnoop log of two droids at once: `packet decode --btsnoop` decodes each
+/// droid's bytes with its own decoder (they used to be merged into one stream, cutting
+/// packets apart) and names each line's droid; `replay --json` gives each droid's samples.
+#[test]
+fn a_btsnoop_log_of_two_droids_keeps_them_apart_by_connection() {
+    use droidctl::capture::btsnoop::Datalink;
+    use droidctl::capture::hci::build::Log;
+    use droidctl::family::v2::gatt as v2g;
+    use droidctl::protocol::v2::cmd;
+    use droidctl::protocol::wire::DriveFlags;
+    use droidctl::units::Heading;
+    const A: [u8; 6] = [0xD5, 0x03, 0x52, 0x94, 0xF2, 0x06];
+    const B: [u8; 6] = [0xDD, 0xA4, 0xD5, 0xAE, 0xBF, 0xBE];
+    let (api, dos) = (0x000E, 0x0013);
+    let mut log = Log::new(Datalink::H4);
+    log.le_connected_to(0x0040, A);
+    log.le_connected_to(0x0041, B);
+    for h in [0x0040, 0x0041] {
+        log.declare(h, &[(api, v2g::V2_API), (dos, v2g::V2_ANTI_DOS)]);
+    }
+    // Each droid's drive command cut in two writes, the writes of both interleaved.
+    let drive = |speed, heading| {
+        cmd::drive_with_heading(speed, Heading::new(heading).unwrap(), DriveFlags::empty())
+    };
+    let a = drive(100, 90).to_packet(1).encode();
+    let b = drive(50, 270).to_packet(7).encode();
+    log.write_cmd(0x0040, api, &a[..6]);
+    log.advance(5);
+    log.write_cmd(0x0041, api, &b[..6]);
+    log.advance(5);
+    log.write_cmd(0x0040, api, &a[6..]);
+    log.advance(5);
+    log.write_cmd(0x0041, api, &b[6..]);
+    let dir = Scratch::new("fleet-mission", "btsnoop");
+    let file = dir.0.join("two.btsnoop");
+    std::fs::write(&file, &log.bytes).unwrap();
+    let out = dir.run(&["packet", "decode", "--btsnoop", path(&file)]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let text = stdout(&out);
+    let drives: Vec<&str> = text.lines().filter(|l| l.contains("drive-with-heading")).collect();
+    assert_eq!(drives.len(), 2, "both drives decoded whole:\n{text}");
+    assert!(
+        drives.iter().any(|l| l.contains("DD:A4:D5:AE:BF:BE") && l.contains("speed=50")),
+        "{text}"
+    );
+    assert!(
+        drives.iter().any(|l| l.contains("D5:03:52:94:F2:06") && l.contains("speed=100")),
+        "{text}"
+    );
+    assert!(text.contains("no decode errors"), "{text}");
+    let replayed = dir.run(&["replay", path(&file), "--json"]);
+    assert_eq!(replayed.status.code(), Some(0), "{}", stderr(&replayed));
+    let lines = json_lines(&stdout(&replayed));
+    let droids: std::collections::BTreeSet<&str> =
+        lines.iter().filter_map(|l| l["droid"].as_str()).collect();
+    assert_eq!(
+        droids.into_iter().collect::<Vec<_>>(),
+        ["D5:03:52:94:F2:06", "DD:A4:D5:AE:BF:BE"]
+    );
+}

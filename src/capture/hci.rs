@@ -103,6 +103,9 @@ type ConnKey = (u16, u16);
 
 #[derive(Debug, Default)]
 struct Conn {
+    /// Which connection of the log it is (from 1; 0 until it carries droid traffic or its
+    /// Connection Complete is seen).
+    serial: usize,
     connected_at: Option<Duration>,
     /// A connect was emitted for it (it carried droid traffic).
     announced: bool,
@@ -143,6 +146,11 @@ pub struct Decoder {
     /// What went wrong and was skipped (bounded).
     pub warnings: Vec<String>,
     family: Option<Protocol>,
+    /// The connection of each event pushed to `out`, in order (see [`Decoder::record_tagged`]).
+    tags: Vec<usize>,
+    /// Each connection's peer address, when its Connection Complete was in the log (by serial).
+    peers: BTreeMap<usize, [u8; 6]>,
+    next_serial: usize,
 }
 
 const MAX_WARNINGS: usize = 20;
@@ -161,7 +169,33 @@ impl Decoder {
             stats: Stats::default(),
             warnings: Vec::new(),
             family: None,
+            tags: Vec::new(),
+            peers: BTreeMap::new(),
+            next_serial: 1,
         }
+    }
+
+    /// Most connections told apart (a bound on what a log can make us keep).
+    pub const MAX_CONNECTIONS: usize = 4096;
+
+    fn new_serial(&mut self) -> usize {
+        let s = self.next_serial.min(Self::MAX_CONNECTIONS);
+        self.next_serial = (self.next_serial + 1).min(Self::MAX_CONNECTIONS + 1);
+        s
+    }
+
+    /// [`Decoder::record`], each event with the connection it came on (a serial from 1; see
+    /// [`Decoder::peer`]).
+    pub fn record_tagged(&mut self, r: &Record, out: &mut Vec<(usize, Timed)>) {
+        let mut events = Vec::new();
+        self.tags.clear();
+        self.record(r, &mut events);
+        out.extend(self.tags.drain(..).zip(events));
+    }
+
+    /// The peer address of connection `serial`, when the log holds its Connection Complete.
+    pub fn peer(&self, serial: usize) -> Option<[u8; 6]> {
+        self.peers.get(&serial).copied()
     }
 
     /// The family of the droid characteristics found, if any.
@@ -217,6 +251,7 @@ impl Decoder {
                 if let Some(c) = self.conns.remove(&key)
                     && c.announced
                 {
+                    self.tags.push(c.serial);
                     out.push(Timed {
                         at,
                         event: Event::Disconnect(disconnect_reason(p[3])),
@@ -227,9 +262,21 @@ impl Decoder {
             // LE Meta: (Enhanced) Connection Complete: status, handle.
             0x3E if p.len() >= 4 && matches!(p[0], 0x01 | 0x0A | 0x29) && p[1] == 0 => {
                 let key = (0, le16(&p[2..4]) & 0x0FFF);
+                let serial = self.new_serial();
+                // Role, peer address type, then the peer's address (little-endian).
+                if let Some(a) = p.get(6..12) {
+                    let mut addr = [0u8; 6];
+                    addr.copy_from_slice(a);
+                    addr.reverse();
+                    // All zeros: a platform that hides addresses.
+                    if addr != [0; 6] && self.peers.len() < Self::MAX_CONNECTIONS {
+                        self.peers.insert(serial, addr);
+                    }
+                }
                 self.conns.insert(
                     key,
                     Conn {
+                        serial,
                         connected_at: Some(at),
                         ..Conn::default()
                     },
@@ -370,15 +417,22 @@ impl Decoder {
             (CharRole::ReadValue | CharRole::Input(_), _) => return,
         };
         self.stats.droid_values += 1;
+        if self.conns.get(&conn).is_none_or(|c| c.serial == 0) {
+            let serial = self.new_serial();
+            self.conns.entry(conn).or_default().serial = serial;
+        }
         let c = self.conns.entry(conn).or_default();
+        let serial = c.serial;
         if !c.announced {
             c.announced = true;
             out.push(Timed {
                 at: c.connected_at.unwrap_or(at),
                 event: Event::Connect,
             });
+            self.tags.push(serial);
         }
         out.push(Timed { at, event });
+        self.tags.push(serial);
     }
 
     fn att(&mut self, at: Duration, conn: ConnKey, pdu: &[u8], out: &mut Vec<Timed>) {
@@ -501,6 +555,50 @@ pub fn no_traffic_hint(stats: &Stats) -> String {
 /// A whole btsnoop log as a capture: the droid's traffic in it, with the damage (if any)
 /// among the warnings. An unreadable header or no droid traffic at all is an error.
 pub fn capture_from_btsnoop(bytes: &[u8], handles: &[u16]) -> Result<Capture, String> {
+    let (decoder, events, warnings) = read_btsnoop(bytes, handles)?;
+    Ok(capture_of(
+        &decoder,
+        events.into_iter().map(|(_, t)| t).collect(),
+        warnings,
+    ))
+}
+
+/// The droids of a btsnoop log kept apart: one capture per droid, told apart by connection
+/// (a droid's reconnections, known by its address, stay one capture), each with a name for
+/// people (its address, or `connection N`). In the order they first carried droid traffic.
+pub fn captures_by_connection(
+    bytes: &[u8],
+    handles: &[u16],
+) -> Result<Vec<(String, Capture)>, String> {
+    let (decoder, events, warnings) = read_btsnoop(bytes, handles)?;
+    // Group by peer address when known, else by connection.
+    let mut groups: Vec<(String, Vec<Timed>)> = Vec::new();
+    let mut index: HashMap<String, usize> = HashMap::new();
+    for (serial, t) in events {
+        let key = match decoder.peer(serial) {
+            Some(a) => crate::hex::spaced(&a).replace(' ', ":"),
+            None => format!("connection {serial}"),
+        };
+        let i = *index.entry(key.clone()).or_insert_with(|| {
+            groups.push((key, Vec::new()));
+            groups.len() - 1
+        });
+        groups[i].1.push(t);
+    }
+    Ok(groups
+        .into_iter()
+        .map(|(name, events)| {
+            let mut c = capture_of(&decoder, events, warnings.clone());
+            c.header.droid = Some(name.clone());
+            (name, c)
+        })
+        .collect())
+}
+
+/// Read a whole btsnoop log: the decoder, its tagged events in time order, the warnings.
+type Read = (Decoder, Vec<(usize, Timed)>, Vec<String>);
+
+fn read_btsnoop(bytes: &[u8], handles: &[u16]) -> Result<Read, String> {
     let mut reader = btsnoop::Reader::new();
     reader.feed(bytes);
     let mut decoder: Option<Decoder> = None;
@@ -512,7 +610,7 @@ pub fn capture_from_btsnoop(bytes: &[u8], handles: &[u16]) -> Result<Capture, St
             Ok(btsnoop::Item::Header(h)) => decoder = Some(Decoder::new(h.datalink, handles)),
             Ok(btsnoop::Item::Record(r)) => {
                 if let Some(d) = decoder.as_mut() {
-                    d.record(&r, &mut events);
+                    d.record_tagged(&r, &mut events);
                 }
             }
             Err(e) => {
@@ -536,12 +634,16 @@ pub fn capture_from_btsnoop(bytes: &[u8], handles: &[u16]) -> Result<Capture, St
         return Err(no_traffic_hint(&decoder.stats));
     }
     // Connects are emitted late (at the first droid value) with their own earlier time.
-    events.sort_by_key(|t| t.at);
+    events.sort_by_key(|(_, t)| t.at);
+    Ok((decoder, events, warnings))
+}
+
+fn capture_of(decoder: &Decoder, events: Vec<Timed>, warnings: Vec<String>) -> Capture {
     let started = decoder
         .first_unix_us()
         .filter(|us| *us > 0)
         .map(|us| super::rfc3339(Duration::from_micros(us as u64)));
-    Ok(Capture {
+    Capture {
         header: Header {
             droidctl: None,
             model: None,
@@ -552,160 +654,10 @@ pub fn capture_from_btsnoop(bytes: &[u8], handles: &[u16]) -> Result<Capture, St
         events,
         warnings,
         kind: "btsnoop log",
-    })
-}
-
-/// Building HCI traffic as a phone logs it, for tests and fixtures: a droid connected, its
-/// GATT discovered, values written and notified, each as a btsnoop record.
-pub mod build {
-    use super::*;
-    use crate::capture::btsnoop::write;
-
-    /// Records of a log in one datalink, on a clock that starts at 2020-01-01.
-    pub struct Log {
-        pub datalink: Datalink,
-        pub bytes: Vec<u8>,
-        pub t_us: i64,
-        /// The ACL payload size per fragment (27: the LE default).
-        pub acl_mtu: usize,
-    }
-
-    /// Which way a packet goes.
-    #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-    pub enum Way {
-        /// Host → controller.
-        Sent,
-        Received,
-    }
-
-    impl Log {
-        pub fn new(datalink: Datalink) -> Log {
-            Log {
-                datalink,
-                bytes: write::header(datalink),
-                t_us: btsnoop::UNIX_EPOCH_US + 1_577_836_800_000_000,
-                acl_mtu: 27,
-            }
-        }
-
-        pub fn advance(&mut self, ms: u64) {
-            self.t_us += ms as i64 * 1000;
-        }
-
-        /// One HCI packet: `kind` 1 command, 2 ACL, 4 event.
-        pub fn hci(&mut self, kind: u8, way: Way, packet: &[u8]) {
-            let received = (way == Way::Received) as u32;
-            let (flags, data) = match self.datalink {
-                Datalink::H4 => {
-                    let mut d = vec![kind];
-                    d.extend_from_slice(packet);
-                    (received | if kind == 2 { 0 } else { 2 }, d)
-                }
-                Datalink::H1 => (received | if kind == 2 { 0 } else { 2 }, packet.to_vec()),
-                Datalink::Monitor => {
-                    let op = match (kind, way) {
-                        (1, _) => 2,
-                        (4, _) => 3,
-                        (_, Way::Sent) => 4,
-                        (_, Way::Received) => 5,
-                    };
-                    (op, packet.to_vec())
-                }
-            };
-            self.bytes.extend(write::record(flags, self.t_us, &data));
-        }
-
-        pub fn le_connected(&mut self, handle: u16) {
-            let mut p = vec![0x3E, 19, 0x01, 0x00];
-            p.extend(handle.to_le_bytes());
-            p.extend([0u8; 15]);
-            self.hci(4, Way::Received, &p);
-        }
-
-        pub fn disconnected(&mut self, handle: u16, reason: u8) {
-            let mut p = vec![0x05, 4, 0x00];
-            p.extend(handle.to_le_bytes());
-            p.push(reason);
-            self.hci(4, Way::Received, &p);
-        }
-
-        /// An ATT PDU over L2CAP, cut into ACL fragments of `acl_mtu`.
-        pub fn att(&mut self, handle: u16, way: Way, pdu: &[u8]) {
-            let mut l2 = (pdu.len() as u16).to_le_bytes().to_vec();
-            l2.extend(ATT_CID.to_le_bytes());
-            l2.extend_from_slice(pdu);
-            for (i, part) in l2.chunks(self.acl_mtu.max(1)).enumerate() {
-                let pb: u16 = if i == 0 { 0b10 } else { 0b01 };
-                let mut acl = (handle | (pb << 12)).to_le_bytes().to_vec();
-                acl.extend((part.len() as u16).to_le_bytes());
-                acl.extend_from_slice(part);
-                self.hci(2, way, &acl);
-            }
-        }
-
-        /// Characteristic discovery: a Read By Type request and its response declaring
-        /// `chars` (value handle, UUID).
-        pub fn declare(&mut self, handle: u16, chars: &[(u16, GattUuid)]) {
-            self.att(
-                handle,
-                Way::Sent,
-                &[0x08, 0x01, 0x00, 0xFF, 0xFF, 0x03, 0x28],
-            );
-            // One response per UUID size, as a server answers.
-            for size in [2usize, 16] {
-                let of_size: Vec<_> = chars
-                    .iter()
-                    .filter(|(_, u)| (u.as_u16().is_some()) == (size == 2))
-                    .collect();
-                if of_size.is_empty() {
-                    continue;
-                }
-                let mut rsp = vec![0x09, (5 + size) as u8];
-                for (h, u) in of_size {
-                    rsp.extend((h - 1).to_le_bytes());
-                    rsp.push(0x1A); // read, write without response, notify
-                    rsp.extend(h.to_le_bytes());
-                    match u.as_u16() {
-                        Some(short) if size == 2 => rsp.extend(short.to_le_bytes()),
-                        _ => rsp.extend(u.as_u128().to_le_bytes()),
-                    }
-                }
-                self.att(handle, Way::Received, &rsp);
-            }
-        }
-
-        pub fn write_cmd(&mut self, handle: u16, att_handle: u16, value: &[u8]) {
-            let mut p = vec![0x52];
-            p.extend(att_handle.to_le_bytes());
-            p.extend_from_slice(value);
-            self.att(handle, Way::Sent, &p);
-        }
-
-        pub fn write_req(&mut self, handle: u16, att_handle: u16, value: &[u8]) {
-            let mut p = vec![0x12];
-            p.extend(att_handle.to_le_bytes());
-            p.extend_from_slice(value);
-            self.att(handle, Way::Sent, &p);
-            self.att(handle, Way::Received, &[0x13]);
-        }
-
-        pub fn notify(&mut self, handle: u16, att_handle: u16, value: &[u8]) {
-            let mut p = vec![0x1B];
-            p.extend(att_handle.to_le_bytes());
-            p.extend_from_slice(value);
-            self.att(handle, Way::Received, &p);
-        }
-
-        pub fn read(&mut self, handle: u16, att_handle: u16, value: &[u8]) {
-            let mut p = vec![0x0A];
-            p.extend(att_handle.to_le_bytes());
-            self.att(handle, Way::Sent, &p);
-            let mut r = vec![0x0B];
-            r.extend_from_slice(value);
-            self.att(handle, Way::Received, &r);
-        }
     }
 }
+
+pub mod build;
 
 #[cfg(test)]
 mod tests {
@@ -861,5 +813,73 @@ mod tests {
             "{:?}",
             c.warnings
         );
+    }
+
+    #[test]
+    fn several_droids_connections_are_kept_apart() {
+        const A: [u8; 6] = [0xD5, 0x03, 0x52, 0x94, 0xF2, 0x06];
+        const B: [u8; 6] = [0xDD, 0xA4, 0xD5, 0xAE, 0xBF, 0xBE];
+        let mut log = Log::new(Datalink::H4);
+        let wake = cmd::wake().to_packet(0).encode();
+        let sleep = cmd::sleep().to_packet(1).encode();
+        // Two R2s at once, their traffic interleaved; the first reconnects on a new handle.
+        log.le_connected_to(0x0040, A);
+        log.le_connected_to(0x0041, B);
+        log.advance(10);
+        for h in [0x0040, 0x0041] {
+            log.declare(h, &[(API, v2g::V2_API), (DOS, v2g::V2_ANTI_DOS)]);
+        }
+        log.write_cmd(0x0040, API, &wake[..5]);
+        log.write_cmd(0x0041, API, &sleep);
+        log.write_cmd(0x0040, API, &wake[5..]);
+        log.advance(10);
+        log.disconnected(0x0040, 0x08);
+        log.advance(10);
+        log.le_connected_to(0x0042, A);
+        log.declare(0x0042, &[(API, v2g::V2_API), (DOS, v2g::V2_ANTI_DOS)]);
+        log.write_cmd(0x0042, API, &wake);
+        let split = captures_by_connection(&log.bytes, &[]).unwrap();
+        let names: Vec<&str> = split.iter().map(|(n, _)| n.as_str()).collect();
+        assert_eq!(
+            names,
+            [
+                "D5 03 52 94 F2 06".replace(' ', ":"),
+                "DD:A4:D5:AE:BF:BE".into()
+            ]
+        );
+        let outs = |c: &Capture| -> Vec<u8> {
+            c.events
+                .iter()
+                .filter_map(|t| match &t.event {
+                    Event::Out(_, b) => Some(b.clone()),
+                    _ => None,
+                })
+                .flatten()
+                .collect()
+        };
+        // Each droid's bytes whole and alone; A's two connections are one droid.
+        assert_eq!(outs(&split[0].1), [wake.clone(), wake.clone()].concat());
+        assert_eq!(outs(&split[1].1), sleep);
+        let connects = |c: &Capture| {
+            c.events
+                .iter()
+                .filter(|t| t.event == Event::Connect)
+                .count()
+        };
+        assert_eq!((connects(&split[0].1), connects(&split[1].1)), (2, 1));
+        // The merged capture interleaves them (what one stream used to be).
+        let merged = capture_from_btsnoop(&log.bytes, &[]).unwrap();
+        assert_ne!(outs(&merged)[..wake.len()], wake[..]);
+        // Without addresses (hidden by the platform), connections are told apart by handle.
+        let mut log = Log::new(Datalink::H4);
+        log.le_connected(0x0040);
+        log.le_connected(0x0041);
+        for h in [0x0040, 0x0041] {
+            log.declare(h, &[(API, v2g::V2_API), (DOS, v2g::V2_ANTI_DOS)]);
+            log.write_cmd(h, API, &wake);
+        }
+        let split = captures_by_connection(&log.bytes, &[]).unwrap();
+        let names: Vec<&str> = split.iter().map(|(n, _)| n.as_str()).collect();
+        assert_eq!(names, ["connection 1", "connection 2"]);
     }
 }

@@ -65,16 +65,20 @@ pub struct ReplayArgs {
 }
 
 /// Load the capture and pick the model: `--model`, the capture's, or one of its family's.
-pub fn load(args: &ReplayArgs) -> Result<(crate::capture::Capture, crate::model::Model), CliError> {
-    let handles = args
-        .handle
+/// The `--handle` values.
+fn handles(args: &ReplayArgs) -> Result<Vec<u16>, CliError> {
+    args.handle
         .iter()
         .map(|h| {
             crate::protocol::wire::parse_uint(h, u16::MAX as u64)
                 .map(|v| v as u16)
                 .map_err(|e| CliError::usage(format!("--handle: {e}")))
         })
-        .collect::<Result<Vec<_>, _>>()?;
+        .collect()
+}
+
+pub fn load(args: &ReplayArgs) -> Result<(crate::capture::Capture, crate::model::Model), CliError> {
+    let handles = handles(args)?;
     let capture =
         crate::capture::Capture::load_with(&args.file, &handles).map_err(CliError::failure)?;
     crate::capture::replay::validate(&capture)
@@ -114,19 +118,29 @@ type FleetCaptures = Vec<(crate::capture::Capture, crate::model::Model, String)>
 fn load_fleet(args: &ReplayArgs) -> Result<Option<FleetCaptures>, CliError> {
     let bytes = std::fs::read(&args.file)
         .map_err(|e| CliError::failure(format!("cannot read {}: {e}", args.file.display())))?;
-    if !crate::capture::fleet::sniff(&bytes) {
-        return Ok(None);
-    }
     let shown = args.file.display();
-    let droids = crate::capture::fleet::split(&String::from_utf8_lossy(&bytes))
-        .map_err(|e| CliError::usage(format!("{shown}: {e}")))?;
+    let droids = if crate::capture::fleet::sniff(&bytes) {
+        crate::capture::fleet::split(&String::from_utf8_lossy(&bytes))
+            .map_err(|e| CliError::usage(format!("{shown}: {e}")))?
+    } else if crate::capture::btsnoop::sniff(&bytes) {
+        // A phone's log of several droids: one droid per connection.
+        let handles = handles(args)?;
+        match crate::capture::hci::captures_by_connection(&bytes, &handles) {
+            Ok(v) if v.len() > 1 => v.into_iter().map(|(_, c)| c).collect(),
+            _ => return Ok(None),
+        }
+    } else {
+        return Ok(None);
+    };
     let mut out = Vec::with_capacity(droids.len());
     for (i, c) in droids.into_iter().enumerate() {
         crate::capture::replay::validate(&c)
             .map_err(|e| CliError::usage(format!("{shown}: droid {}: {e}", i + 1)))?;
+        let given = args.model.as_deref().and_then(crate::model::Model::from_id);
         let model = c
             .header
             .model
+            .or(given.filter(|m| Some(m.protocol()) == c.family()))
             .or_else(|| {
                 c.family()
                     .map(|f| crate::family::for_protocol(f).representative())

@@ -23,6 +23,9 @@ use std::time::Duration;
 /// it.
 #[derive(Serialize)]
 struct PacketLine<'a> {
+    /// In a log of several droids, which one (its address, or `connection N`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    droid: Option<&'a str>,
     t_s: f64,
     dir: &'static str,
     kind: &'static str,
@@ -39,6 +42,8 @@ struct PacketLine<'a> {
 /// A decode error of the log as `--btsnoop --json` prints it.
 #[derive(Serialize)]
 struct ErrorLine<'a> {
+    #[serde(skip_serializing_if = "Option::is_none")]
+    droid: Option<&'a str>,
     t_s: f64,
     dir: &'static str,
     error: &'static str,
@@ -52,6 +57,8 @@ struct Printer<'a> {
     summary_only: bool,
     decode_errors: BTreeMap<&'static str, u64>,
     packets: (u64, u64),
+    /// The droid the lines are about, once the log has shown more than one.
+    droid: Option<String>,
 }
 
 fn secs(at: Duration) -> String {
@@ -96,6 +103,7 @@ impl Printer<'_> {
                     let wire = packet.encode();
                     let fields = explained.fields.as_deref().map(FieldsJson);
                     let line = PacketLine {
+                        droid: self.droid.as_deref(),
                         t_s,
                         dir,
                         kind: explained.kind.name(),
@@ -112,6 +120,7 @@ impl Printer<'_> {
                 }
                 LogItem::DecodeError(de) => {
                     let line = ErrorLine {
+                        droid: self.droid.as_deref(),
                         t_s,
                         dir,
                         error: de.kind.name(),
@@ -139,9 +148,14 @@ impl Printer<'_> {
         } else {
             format!("  [{}]", l.hex)
         };
+        let droid = self
+            .droid
+            .as_deref()
+            .map(|d| format!("{d} "))
+            .unwrap_or_default();
         writeln!(
             self.out,
-            "{:>12} {} {}{seq}{err}{fields}{hex}",
+            "{:>12} {droid}{} {}{seq}{err}{fields}{hex}",
             secs(e.at),
             e.dir.arrow(),
             l.name
@@ -217,10 +231,12 @@ pub(super) fn decode(
         summary_only,
         decode_errors: BTreeMap::new(),
         packets: (0, 0),
+        droid: None,
     };
     let mut reader = Reader::new();
     let mut decoder: Option<Decoder> = None;
-    let mut state = State::Waiting(Vec::new());
+    // Each droid's own mirror: two droids' bytes never meet in one decoder.
+    let mut droids = Droids::default();
     let mut events = Vec::new();
     let mut outs = Vec::new();
     let mut block = vec![0u8; 64 * 1024];
@@ -245,10 +261,11 @@ pub(super) fn decode(
                 Ok(Item::Header(h)) => decoder = Some(Decoder::new(h.datalink, handles)),
                 Ok(Item::Record(r)) => {
                     let Some(d) = decoder.as_mut() else { continue };
-                    d.record(&r, &mut events);
-                    for t in events.drain(..) {
+                    d.record_tagged(&r, &mut events);
+                    for (conn, t) in events.drain(..) {
                         let family = forced.or(d.family()).or_else(|| t.event.family());
-                        step(&mut state, t, family, &mut outs, &mut printer).map_err(io_err)?;
+                        let state = droids.of(d, conn, t.at, &mut printer).map_err(io_err)?;
+                        step(state, t, family, &mut outs, &mut printer).map_err(io_err)?;
                     }
                 }
                 Err(e) => {
@@ -269,15 +286,13 @@ pub(super) fn decode(
         return Err(CliError::failure(format!("{path}: {why}")));
     };
     // Summary.
-    let mirror_stats = match &state {
-        State::Decoding(m) => Some(m.stats()),
+    let decoding = droids.list.iter().find_map(|(_, s)| match s {
+        State::Decoding(m) => Some(m),
         State::Waiting(_) => None,
-    };
-    let found = mirror_stats.is_some();
-    let family = match &state {
-        State::Decoding(m) => crate::family::for_model(m.model()).name(),
-        State::Waiting(_) => "none",
-    };
+    });
+    let found = decoding.is_some();
+    let family = decoding.map_or("none", |m| crate::family::for_model(m.model()).name());
+    let droid_count = droids.list.len();
     let st = &decoder.stats;
     let damage_text = damage.as_ref().map(|e| e.to_string());
     if printer.json {
@@ -292,6 +307,7 @@ pub(super) fn decode(
             "att_pdus": st.att_pdus,
             "droid_values": st.droid_values,
             "family": family,
+            "droids": droid_count,
             "packets_out": printer.packets.0,
             "packets_in": printer.packets.1,
             "decode_errors": errors,
@@ -345,6 +361,52 @@ pub(super) fn decode(
         )));
     }
     Ok(0)
+}
+
+/// The droids of the log, each with its own mirror: by peer address when the log has its
+/// connection, else by connection. Bounded like the decoder's connections.
+#[derive(Default)]
+struct Droids {
+    list: Vec<(String, State)>,
+    index: std::collections::HashMap<String, usize>,
+}
+
+impl Droids {
+    /// The state of the droid on connection `conn`; when a second droid appears, the lines
+    /// from then on name their droid.
+    fn of(
+        &mut self,
+        d: &Decoder,
+        conn: usize,
+        at: Duration,
+        printer: &mut Printer,
+    ) -> std::io::Result<&mut State> {
+        let key = match d.peer(conn) {
+            Some(a) => crate::hex::spaced(&a).replace(' ', ":"),
+            None => format!("connection {conn}"),
+        };
+        let i = match self.index.get(&key) {
+            Some(i) => *i,
+            None if self.list.len() < Decoder::MAX_CONNECTIONS => {
+                self.list.push((key.clone(), State::Waiting(Vec::new())));
+                self.index.insert(key.clone(), self.list.len() - 1);
+                if self.list.len() == 2 {
+                    printer.droid = None;
+                    printer.note(
+                        at,
+                        &format!("a second droid ({key}): each line names its droid from here on"),
+                    )?;
+                }
+                self.list.len() - 1
+            }
+            // Past the bound: the last droid's mirror takes the rest.
+            None => self.list.len() - 1,
+        };
+        if self.list.len() > 1 {
+            printer.droid = Some(self.list[i].0.clone());
+        }
+        Ok(&mut self.list[i].1)
+    }
 }
 
 /// One event through the mirror (made when the family is known).
