@@ -168,14 +168,21 @@ fn a_btsnoop_log_of_two_droids_keeps_them_apart_by_connection() {
     let out = dir.run(&["packet", "decode", "--btsnoop", path(&file)]);
     assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
     let text = stdout(&out);
-    let drives: Vec<&str> = text.lines().filter(|l| l.contains("drive-with-heading")).collect();
+    let drives: Vec<&str> = text
+        .lines()
+        .filter(|l| l.contains("drive-with-heading"))
+        .collect();
     assert_eq!(drives.len(), 2, "both drives decoded whole:\n{text}");
     assert!(
-        drives.iter().any(|l| l.contains("DD:A4:D5:AE:BF:BE") && l.contains("speed=50")),
+        drives
+            .iter()
+            .any(|l| l.contains("DD:A4:D5:AE:BF:BE") && l.contains("speed=50")),
         "{text}"
     );
     assert!(
-        drives.iter().any(|l| l.contains("D5:03:52:94:F2:06") && l.contains("speed=100")),
+        drives
+            .iter()
+            .any(|l| l.contains("D5:03:52:94:F2:06") && l.contains("speed=100")),
         "{text}"
     );
     assert!(text.contains("no decode errors"), "{text}");

@@ -851,3 +851,98 @@ fn robi_panels_light_pressed_buttons_and_lit_lamps_and_never_cut_the_lost_count(
         }
     }
 }
+
+/// A fleet of four on screen: the roster strip above the one-droid screen (the chosen one's
+/// gauges), the other droids on its map by number, the log naming each line's droid.
+fn fleet() -> AppState {
+    use droidctl::app::roster::{Roster, RosterEntry};
+    use std::sync::Arc;
+    let mut s = driving();
+    s.droid_name = "D2-0001".into();
+    let entry = |name: &str, model, link, battery_v, moving, position| RosterEntry {
+        name: name.into(),
+        model,
+        link,
+        battery_v,
+        rate_in: 12.0,
+        rate_out: 10.0,
+        moving,
+        position,
+    };
+    s.roster = Some(Roster {
+        droids: vec![
+            entry(
+                "D2-0001",
+                Model::R2D2,
+                LinkState::Connected,
+                Some(3.9),
+                true,
+                Some((-60.0, 80.0)),
+            ),
+            entry(
+                "BB-0002",
+                Model::BB8,
+                LinkState::Connected,
+                Some(4.1),
+                true,
+                Some((0.0, 0.0)),
+            ),
+            entry(
+                "GB-0003",
+                Model::BB9E,
+                LinkState::Reconnecting {
+                    attempt: 2,
+                    reason: "the droid disconnected".into(),
+                },
+                None,
+                false,
+                Some((120.0, -40.0)),
+            ),
+            entry(
+                "Robi 42",
+                Model::Robi42,
+                LinkState::Connecting,
+                None,
+                false,
+                None,
+            ),
+        ],
+        chosen: 0,
+        mirror: true,
+    });
+    let names: [Arc<str>; 2] = [Arc::from("D2-0001"), Arc::from("BB-0002")];
+    let lines = session_log();
+    s.log = Default::default();
+    for (i, mut l) in lines.into_iter().enumerate() {
+        l.droid = Some(names[i % 2].clone());
+        s.log.push(l);
+    }
+    s
+}
+
+snap!(fleet_80x24, fleet(), 80, 24);
+snap!(fleet_160x48, fleet(), 160, 48);
+snap!(
+    fleet_log_filtered_by_droid_160x48,
+    {
+        let mut s = fleet();
+        s.log.set_filter(LogFilter::parse("droid:d2"));
+        s
+    },
+    160,
+    48
+);
+
+#[test]
+fn the_log_filters_by_droid() {
+    let s = fleet();
+    let mut log = s.log.clone();
+    let all = log.visible(1000).len();
+    log.set_filter(LogFilter::parse("droid:bb-0002"));
+    let bb: Vec<_> = log.visible(1000).into_iter().cloned().collect();
+    assert!(!bb.is_empty() && bb.len() < all);
+    assert!(bb.iter().all(|l| l.droid.as_deref() == Some("BB-0002")));
+    assert_eq!(log.filter_input(), "droid:bb-0002");
+    log.set_filter(LogFilter::parse("droid:nobody"));
+    assert!(log.visible(1000).is_empty());
+}

@@ -5,7 +5,7 @@
 //! give the same output every run.
 
 use super::CliError;
-use super::run::{RunArgs, mission_session_config, print_summary, report_link, sample_line};
+use super::run::{RunArgs, mission_session_config, print_summary, report_link_of, sample_line};
 use crate::fleet::Fleet;
 use crate::fleet::mission::{self as fleet_mission, FleetEmit};
 use crate::mission::{MissionEvent, MissionOptions};
@@ -78,7 +78,10 @@ pub fn run(
         let reporters: Vec<_> = fleet
             .members()
             .iter()
-            .map(|m| tokio::spawn(report_link(m.session.watch_state())))
+            .map(|m| {
+                let who = format!("{}: ", m.name);
+                tokio::spawn(report_link_of(m.session.watch_state(), who))
+            })
             .collect();
         let r = tokio::select! {
             r = fleet_mission::run(

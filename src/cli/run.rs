@@ -265,20 +265,38 @@ pub fn mission_session_config(model: Model, opts: &MissionOptions) -> SessionCon
 /// disconnected — reconnecting (attempt 1)`, `[    5.06s] reconnected`), the time counted from
 /// the first connection. Nothing before it: a droid that cannot be reached gets one error line
 /// at the end.
-pub async fn report_link(mut state: tokio::sync::watch::Receiver<LinkState>) {
+pub async fn report_link(state: tokio::sync::watch::Receiver<LinkState>) {
+    report_link_of(state, String::new()).await
+}
+
+/// [`report_link`] for one droid of a fleet: `who` (`"D2-0001: "`) after the time, and its
+/// first connection too (each droid's progress is visible).
+pub async fn report_link_of(mut state: tokio::sync::watch::Receiver<LinkState>, who: String) {
     let mut since: Option<tokio::time::Instant> = None;
     let mut lost = false;
     let mut waiting = false;
     loop {
         let now = state.borrow_and_update().clone();
         match (now, since) {
-            (LinkState::Connected, None) => since = Some(tokio::time::Instant::now()),
+            (LinkState::Connected, None) => {
+                since = Some(tokio::time::Instant::now());
+                if !who.is_empty() {
+                    let _ = writeln!(std::io::stderr(), "droidctl: {who}connected");
+                }
+            }
+            // A droid of a fleet still connecting: say why each attempt failed.
+            (LinkState::Reconnecting { attempt, reason }, None) if !who.is_empty() => {
+                let _ = writeln!(
+                    std::io::stderr(),
+                    "droidctl: {who}connection attempt {attempt} failed: {reason} — retrying"
+                );
+            }
             (LinkState::Connected, Some(t0)) if lost => {
                 lost = false;
                 waiting = false;
                 let _ = writeln!(
                     std::io::stderr(),
-                    "[{:>8.2}s] reconnected",
+                    "[{:>8.2}s] {who}reconnected",
                     t0.elapsed().as_secs_f64()
                 );
             }
@@ -292,7 +310,7 @@ pub async fn report_link(mut state: tokio::sync::watch::Receiver<LinkState>) {
                 lost = true;
                 let _ = writeln!(
                     std::io::stderr(),
-                    "[{:>8.2}s] {reason}",
+                    "[{:>8.2}s] {who}{reason}",
                     t0.elapsed().as_secs_f64()
                 );
             }
@@ -305,7 +323,7 @@ pub async fn report_link(mut state: tokio::sync::watch::Receiver<LinkState>) {
                 lost = true;
                 let _ = writeln!(
                     std::io::stderr(),
-                    "[{:>8.2}s] {what}: {reason} — reconnecting (attempt {attempt})",
+                    "[{:>8.2}s] {who}{what}: {reason} — reconnecting (attempt {attempt})",
                     t0.elapsed().as_secs_f64()
                 );
             }

@@ -29,11 +29,12 @@ fn position(t: &Telemetry) -> Option<(f64, f64)> {
     (x.is_finite() && y.is_finite()).then_some((x, y))
 }
 
-/// Bounds covering the room and the track, widened on one axis to keep cm square on screen
-/// (a cell is about twice as tall as wide).
-pub fn bounds(t: &Telemetry, cols: u16, rows: u16) -> ([f64; 2], [f64; 2]) {
+/// Bounds covering the room, the track and `others` (a fleet's other droids), widened on one
+/// axis to keep cm square on screen (a cell is about twice as tall as wide).
+fn bounds_with(t: &Telemetry, others: &[Other], cols: u16, rows: u16) -> ([f64; 2], [f64; 2]) {
     let (mut x0, mut x1, mut y0, mut y1) = (-ROOM_CM, ROOM_CM, -ROOM_CM, ROOM_CM);
-    for (x, y) in finite(t).chain(position(t)) {
+    let more = others.iter().map(|o| o.at);
+    for (x, y) in finite(t).chain(position(t)).chain(more) {
         x0 = x0.min(x * 1.1);
         x1 = x1.max(x * 1.1);
         y0 = y0.min(y * 1.1);
@@ -52,7 +53,16 @@ pub fn bounds(t: &Telemetry, cols: u16, rows: u16) -> ([f64; 2], [f64; 2]) {
     ([x0, x1], [y0, y1])
 }
 
-pub fn render(frame: &mut Frame, area: Rect, t: &Telemetry) {
+/// Another droid of a fleet on the map: its number in the roster and where its locator puts
+/// it (each droid's locator counts from where that droid started).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Other {
+    pub number: usize,
+    pub at: (f64, f64),
+}
+
+/// The map; a fleet's other droids are marked by their roster numbers.
+pub fn render_with(frame: &mut Frame, area: Rect, t: &Telemetry, others: &[Other]) {
     let pos = position(t);
     let title = match pos {
         Some((x, y)) => Line::from(vec![
@@ -69,7 +79,7 @@ pub fn render(frame: &mut Frame, area: Rect, t: &Telemetry) {
     };
     let block = theme::panel(title);
     let inner = block.inner(area);
-    let (xb, yb) = bounds(t, inner.width, inner.height);
+    let (xb, yb) = bounds_with(t, others, inner.width, inner.height);
     let extent = format!(
         " {}×{} cm ",
         num((xb[1] - xb[0]) as f32, 0),
@@ -77,6 +87,7 @@ pub fn render(frame: &mut Frame, area: Rect, t: &Telemetry) {
     );
     let block = block.title_bottom(Line::from(Span::styled(extent, theme::dim())).right_aligned());
     let points: Vec<(f64, f64)> = finite(t).collect();
+    let others = others.to_vec();
     let canvas = Canvas::default()
         .block(block)
         .marker(Marker::Braille)
@@ -88,6 +99,14 @@ pub fn render(frame: &mut Frame, area: Rect, t: &Telemetry) {
             ctx.layer();
             for w in points.windows(2) {
                 ctx.draw(&Segment::new(w[0].0, w[0].1, w[1].0, w[1].1, TRACK));
+            }
+            for o in &others {
+                let mark = char::from_digit((o.number % 10) as u32, 10).unwrap_or('?');
+                ctx.print(
+                    o.at.0,
+                    o.at.1,
+                    Span::styled(mark.to_string(), theme::label()),
+                );
             }
             if let Some((x, y)) = pos {
                 ctx.print(

@@ -48,7 +48,20 @@ pub fn draw(frame: &mut Frame, state: &AppState) {
         drive::render(frame, r, state);
     }
     if let Some(r) = p.map {
-        map::render(frame, r, &state.telemetry);
+        // A fleet's other droids are on the chosen droid's map, by roster number.
+        let others: Vec<map::Other> = state
+            .roster
+            .iter()
+            .flat_map(|roster| {
+                roster.droids.iter().enumerate().filter_map(|(i, d)| {
+                    let (x, y) = d.position?;
+                    let at = (f64::from(x), f64::from(y));
+                    (i != roster.chosen && at.0.is_finite() && at.1.is_finite())
+                        .then_some(map::Other { number: i + 1, at })
+                })
+            })
+            .collect();
+        map::render_with(frame, r, &state.telemetry, &others);
     }
     // Panels by capability: the dome's place shows the dome, Robi's motors, or the lights;
     // the sensors' place shows Sphero sensors or Robi's I/O and link quality.
