@@ -38,6 +38,7 @@ pub fn run(
         ..MissionOptions::default()
     };
     let json = args.json;
+    let csv = args.csv;
     let _ = crate::logging::init();
     let only_sims = args.ble.name.is_empty() && args.ble.remote.is_empty();
     let rt = if only_sims {
@@ -75,6 +76,9 @@ pub fn run(
                 return Err(script_errors(e));
             }
         };
+        if csv {
+            println!("{}", super::run::CSV_HEADER);
+        }
         let reporters: Vec<_> = fleet
             .members()
             .iter()
@@ -88,7 +92,7 @@ pub fn run(
                 &fleet,
                 &plan,
                 opts.clone(),
-                printer(&fleet, json, &opts, recorder.clone()),
+                printer(&fleet, (json, csv), &opts, recorder.clone()),
             ) => r,
             sig = super::signals::terminated() => Err(crate::mission::MissionError(format!(
                 "{sig}: mission interrupted, every droid was stopped"
@@ -119,6 +123,8 @@ pub fn run(
                 inner: s,
             };
             println!("{}", serde_json::to_string(&t).unwrap_or_default());
+        } else if csv {
+            eprintln!("droidctl: {name}: {}", super::run::summary_text(s));
         } else {
             print!("{name}: ");
             print_summary(s, false);
@@ -132,7 +138,7 @@ pub fn run(
 /// samples from there, as for one droid).
 fn printer(
     fleet: &Fleet,
-    json: bool,
+    (json, csv): (bool, bool),
     opts: &MissionOptions,
     recorder: Option<crate::capture::record::Recorder>,
 ) -> FleetEmit {
@@ -173,6 +179,10 @@ fn printer(
                 };
                 writeln!(out, "{}", serde_json::to_string(&t).unwrap_or_default())
             }
+            MissionEvent::Sample(s) if csv => {
+                writeln!(out, "{}", super::run::csv_row(name, &s))
+            }
+            MissionEvent::Step { .. } if csv => Ok(()),
             MissionEvent::Sample(s) => {
                 let n = counts
                     .get(i)

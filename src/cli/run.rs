@@ -26,6 +26,10 @@ pub struct RunArgs {
     /// One JSON object per telemetry sample, then a summary object.
     #[arg(long)]
     pub json: bool,
+    /// One CSV row per telemetry sample after a header row, the droid first (the summary goes
+    /// to stderr).
+    #[arg(long, conflicts_with = "json")]
+    pub csv: bool,
     #[command(flatten)]
     pub ble: super::connect::BleArgs,
     /// Telemetry sample interval in milliseconds.
@@ -95,6 +99,8 @@ pub fn run(args: RunArgs) -> Result<i32, CliError> {
         ..MissionOptions::default()
     };
     let json = args.json;
+    let csv = args.csv;
+    let format = |name: &str| Format::of(json, csv, name);
     let result = match sim {
         Some(model) => {
             mission::validate(model, &steps).map_err(script_errors)?;
@@ -112,7 +118,7 @@ pub fn run(args: RunArgs) -> Result<i32, CliError> {
                 let link = SimLink::new(model, SimConfig::for_model(model), Faults::none());
                 let name = format!("{} (simulated)", model.display_name());
                 let link = recorded(recorder, Box::new(link), model, &name);
-                let r = run_recorded(link, model, &steps, opts, json, recorder).await;
+                let r = run_recorded(link, model, &steps, opts, format(&name), recorder).await;
                 super::replay::finish(recorder);
                 r.map_err(CliError::failure)
             })
@@ -124,7 +130,7 @@ pub fn run(args: RunArgs) -> Result<i32, CliError> {
                 let c = args.ble.connect(super::connect::Chooser::Prompt).await?;
                 mission::validate(c.model, &steps).map_err(script_errors)?;
                 let link = recorded(recorder, c.link, c.model, &c.name);
-                let r = run_recorded(link, c.model, &steps, opts, json, recorder).await;
+                let r = run_recorded(link, c.model, &steps, opts, format(&c.name), recorder).await;
                 super::replay::finish(recorder);
                 r.map_err(CliError::failure)
             })
@@ -132,7 +138,11 @@ pub fn run(args: RunArgs) -> Result<i32, CliError> {
     };
     match result {
         Ok(summary) => {
-            print_summary(&summary, json);
+            if csv {
+                eprintln!("droidctl: {}", summary_text(&summary));
+            } else {
+                print_summary(&summary, json);
+            }
             Ok(if summary.failed_steps > 0 { 1 } else { 0 })
         }
         Err(e) => Err(e),
@@ -163,7 +173,67 @@ pub async fn run_on(
     opts: MissionOptions,
     json: bool,
 ) -> Result<Summary, String> {
-    run_recorded(link, model, steps, opts, json, None).await
+    let format = Format::of(json, false, "");
+    run_recorded(link, model, steps, opts, format, None).await
+}
+
+/// How `run` prints samples.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Format {
+    /// A line a second, steps and the summary as text.
+    Text,
+    /// Every sample, then the summary, as JSON lines.
+    Json,
+    /// Every sample as a CSV row naming `droid`, after a header row.
+    Csv { droid: String },
+}
+
+impl Format {
+    pub fn of(json: bool, csv: bool, droid: &str) -> Format {
+        match (json, csv) {
+            (true, _) => Format::Json,
+            (false, true) => Format::Csv {
+                droid: droid.to_string(),
+            },
+            _ => Format::Text,
+        }
+    }
+}
+
+/// The CSV header row (`run --csv`).
+pub const CSV_HEADER: &str = "droid,t_ms,x_cm,y_cm,speed,heading,head_deg,stance,battery_v,\
+collisions,motor_left_rad_s,motor_right_rad_s,frames,lost_frames";
+
+/// One sample as a CSV row (empty cells for what the droid does not report).
+pub fn csv_row(droid: &str, s: &mission::Sample) -> String {
+    fn cell<T: std::fmt::Display>(v: Option<T>) -> String {
+        v.map(|v| v.to_string()).unwrap_or_default()
+    }
+    // A name with a comma or quote is quoted, as CSV readers expect.
+    let quote = |t: &str| {
+        if t.contains([',', '"', '\n']) {
+            format!("\"{}\"", t.replace('"', "\"\""))
+        } else {
+            t.to_string()
+        }
+    };
+    [
+        quote(droid),
+        s.t_ms.to_string(),
+        cell(s.x_cm),
+        cell(s.y_cm),
+        cell(s.speed),
+        cell(s.heading),
+        cell(s.head_deg),
+        quote(&s.stance),
+        cell(s.battery_v),
+        s.collisions.to_string(),
+        cell(s.motor_left_rad_s),
+        cell(s.motor_right_rad_s),
+        cell(s.frames),
+        cell(s.lost_frames),
+    ]
+    .join(",")
 }
 
 /// [`run_on`], marking the mission's start and end in the capture being recorded (replay
@@ -173,10 +243,14 @@ pub async fn run_recorded(
     model: Model,
     steps: &[crate::script::Step],
     opts: MissionOptions,
-    json: bool,
+    format: Format,
     recorder: Option<&crate::capture::record::Recorder>,
 ) -> Result<Summary, String> {
     let session = session::start(link, mission_session_config(model, &opts));
+    if matches!(format, Format::Csv { .. }) {
+        println!("{CSV_HEADER}");
+    }
+    let json = format == Format::Json;
     let samples_per_line = (1000 / opts.interval.as_millis().max(1)).max(1) as u64;
     let count = std::sync::atomic::AtomicU64::new(0);
     let marker = recorder.cloned();
@@ -199,6 +273,10 @@ pub async fn run_recorded(
             MissionEvent::Sample(s) if json => {
                 writeln!(out, "{}", serde_json::to_string(&s).unwrap_or_default())
             }
+            MissionEvent::Sample(s) if let Format::Csv { droid } = &format => {
+                writeln!(out, "{}", csv_row(droid, &s))
+            }
+            MissionEvent::Step { .. } if format != Format::Text => Ok(()),
             MissionEvent::Sample(s) => {
                 let n = count.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
                 if !n.is_multiple_of(samples_per_line) {
@@ -376,17 +454,22 @@ pub fn print_summary(s: &Summary, json: bool) {
     if json {
         println!("{}", serde_json::to_string(s).unwrap_or_default());
     } else {
-        println!(
-            "done in {:.2} s: sent {}, received {}, errors {}, timeouts {}, collisions {}, failed steps {}, final position ({}, {}) cm",
-            s.t_ms as f64 / 1000.0,
-            s.sent,
-            s.received,
-            s.errors,
-            s.timeouts,
-            s.collisions,
-            s.failed_steps,
-            opt(s.x_cm, 1),
-            opt(s.y_cm, 1)
-        );
+        println!("{}", summary_text(s));
     }
+}
+
+/// The summary as text.
+pub fn summary_text(s: &Summary) -> String {
+    format!(
+        "done in {:.2} s: sent {}, received {}, errors {}, timeouts {}, collisions {}, failed steps {}, final position ({}, {}) cm",
+        s.t_ms as f64 / 1000.0,
+        s.sent,
+        s.received,
+        s.errors,
+        s.timeouts,
+        s.collisions,
+        s.failed_steps,
+        opt(s.x_cm, 1),
+        opt(s.y_cm, 1)
+    )
 }
