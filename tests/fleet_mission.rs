@@ -208,19 +208,34 @@ fn csv_rows_name_their_droid() {
     let text = stdout(&out);
     let mut rows = text.lines();
     let header = rows.next().unwrap();
-    assert!(header.starts_with("droid,t_ms,x_cm,y_cm,speed,heading"), "{header}");
+    assert!(
+        header.starts_with("droid,t_ms,x_cm,y_cm,speed,heading"),
+        "{header}"
+    );
     let width = header.split(',').count();
     let rows: Vec<Vec<&str>> = rows.map(|r| r.split(',').collect()).collect();
-    assert!(rows.iter().all(|r| r.len() == width), "every row has every column");
+    assert!(
+        rows.iter().all(|r| r.len() == width),
+        "every row has every column"
+    );
     for d in ["D2-0001", "BB-0002", "Robi 42"] {
         assert!(rows.iter().filter(|r| r[0] == d).count() > 50, "{d}'s rows");
     }
-    assert!(stderr(&out).contains("D2-0001: done in"), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("D2-0001: done in"),
+        "{}",
+        stderr(&out)
+    );
     let one = dir.file("one.txt", "drive 50 0 for 1s\n");
     let out = dir.run(&["run", path(&one), "--sim", "bb8", "--csv"]);
     assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
     let text = stdout(&out);
     let second = text.lines().nth(1).unwrap();
     assert!(second.starts_with("BB-8 (simulated),0,"), "{second}");
-    assert!(dir.run(&["run", path(&one), "--sim", "--csv", "--json"]).status.code() == Some(2));
+    assert!(
+        dir.run(&["run", path(&one), "--sim", "--csv", "--json"])
+            .status
+            .code()
+            == Some(2)
+    );
 }

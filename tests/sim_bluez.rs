@@ -1682,3 +1682,43 @@ fn the_virtual_adapter_allows_one_connection_attempt_at_a_time() {
     call(&c, &b, "org.bluez.Device1", "Connect").unwrap();
     sim.stop();
 }
+
+/// The cap of droids per adapter (`fleet.max_per_adapter`) and `--adapter`: over the cap, one
+/// line saying which droid was not connected and what to do; an adapter that is not there
+/// is named with those that are; the one that is works.
+#[test]
+fn the_adapter_cap_and_adapter_names_are_checked() {
+    let sim = Sim::start(&["r2d2", "bb8", "robi"]);
+    let dir = TempDir::new("fleet-cap");
+    dir.file("config.toml", "[fleet]\nmax_per_adapter = 2\n");
+    let script = dir.file("wait.txt", "wait 0.5s\n");
+    let mut three = vec!["run", &script];
+    for n in &sim.names {
+        three.extend(["--name", n.as_str()]);
+    }
+    let out = droidctl(&three, Some(&sim.address), &dir);
+    assert_eq!(out.status.code(), Some(1), "{}", text(&out.stderr));
+    let err = text(&out.stderr);
+    assert!(
+        err.contains(&format!(
+            "{} not connected: the adapter hci0 already holds 2 droids",
+            sim.names[2]
+        )) && err.contains("max_per_adapter"),
+        "{err}"
+    );
+    let mut two = vec!["run", &script, "--adapter", "hci9"];
+    for n in &sim.names[..2] {
+        two.extend(["--name", n.as_str()]);
+    }
+    let out = droidctl(&two, Some(&sim.address), &dir);
+    assert_eq!(out.status.code(), Some(1));
+    let err = text(&out.stderr);
+    assert!(
+        err.contains("no Bluetooth adapter called hci9: this computer has hci0"),
+        "{err}"
+    );
+    two[3] = "hci0";
+    let out = droidctl(&two, Some(&sim.address), &dir);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    sim.stop();
+}

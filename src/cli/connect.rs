@@ -3,7 +3,7 @@
 
 use super::CliError;
 use crate::link::Link;
-use crate::link::ble::{DeviceId, DeviceSelector, ScanEntry, connect_link};
+use crate::link::ble::{DeviceId, DeviceSelector, ScanEntry, connect_link_with};
 use crate::model::Model;
 use std::io::{BufRead, IsTerminal, Write};
 use std::time::Duration;
@@ -27,6 +27,11 @@ pub struct BleArgs {
     /// Repeat it for several relays (a fleet).
     #[arg(long, value_name = "[NAME@]HOST[:PORT]")]
     pub remote: Vec<super::fleet::RemoteSpec>,
+    /// Use this Bluetooth adapter (hci0, hci1 …); repeat it to share a fleet's droids between
+    /// several. Without it: the first adapter for one droid, every adapter that is on for
+    /// several.
+    #[arg(long, value_name = "NAME")]
+    pub adapter: Vec<String>,
 }
 
 /// How to ask which droid, when several answer and none was named.
@@ -55,6 +60,7 @@ impl BleArgs {
             self.address.clone(),
             Duration::from_secs(self.scan_timeout),
             chooser,
+            self.adapter.first().cloned(),
         )
         .await
     }
@@ -76,6 +82,7 @@ pub async fn connect(
     address: Option<String>,
     scan_timeout: Duration,
     chooser: Chooser,
+    adapter: Option<String>,
 ) -> Result<Connected, CliError> {
     if let Some(a) = &address
         && !DeviceId::is_query(a)
@@ -99,7 +106,17 @@ pub async fn connect(
             scan_timeout.as_secs()
         );
     }
-    let mut found = connect_link(&sel, crate::family::gatt_profile)
+    // The adapter asked for, else the system's first.
+    let central = match &adapter {
+        Some(a) => crate::link::ble::open_adapters(std::slice::from_ref(a)).await,
+        None => crate::link::ble::open_central()
+            .await
+            .map(|c| vec![(String::new(), c)]),
+    }
+    .map_err(|e| CliError::failure(e.message))?
+    .remove(0)
+    .1;
+    let mut found = connect_link_with(central.clone(), &sel, crate::family::gatt_profile)
         .await
         .map_err(|e| CliError::failure(e.message))?;
     let drivable: Vec<&ScanEntry> = found
@@ -126,7 +143,7 @@ pub async fn connect(
             address: Some(choice.key().to_string()),
             scan_timeout,
         };
-        found = connect_link(&sel, crate::family::gatt_profile)
+        found = connect_link_with(central, &sel, crate::family::gatt_profile)
             .await
             .map_err(|e| CliError::failure(e.message))?;
     }

@@ -215,7 +215,8 @@ pub async fn find_all(
         });
     }
     if !ble.name.is_empty() {
-        found.extend(bluetooth(&ble.name, scan_timeout, config.fleet.max_per_adapter).await?);
+        let cap = config.fleet.max_per_adapter;
+        found.extend(bluetooth(&ble.name, &ble.adapter, scan_timeout, cap).await?);
     }
     // Two droids may not go by one name: a mission's `@NAME` must say which.
     for (i, f) in found.iter().enumerate() {
@@ -229,16 +230,18 @@ pub async fn find_all(
     Ok(found)
 }
 
-/// The droids `names` name, from one scan on the system's adapter; each link's connection
-/// attempts take turns there, and at most `cap` droids use it.
+/// The droids `names` name, from one scan on the first adapter; each droid goes to the
+/// adapter (of `adapters`, or every one that is on) holding the fewest so far, at most `cap`
+/// each, and its link's connection attempts take turns there.
 async fn bluetooth(
     names: &[String],
+    adapters: &[String],
     scan_timeout: Duration,
     cap: usize,
 ) -> Result<Vec<Found>, CliError> {
-    use crate::link::ble::{BleLink, DeviceSelector, open_central, scan};
+    use crate::link::ble::{BleLink, DeviceSelector, open_adapters, scan};
     let fail = |e: crate::link::ble::BleError| CliError::failure(e.message);
-    let central = open_central().await.map_err(fail)?;
+    let centrals = open_adapters(adapters).await.map_err(fail)?;
     let selectors: Vec<DeviceSelector> = names
         .iter()
         .map(|n| DeviceSelector {
@@ -252,12 +255,16 @@ async fn bluetooth(
         names.join(", "),
         scan_timeout.as_secs()
     );
-    let known = scan::scan_known(central.as_ref(), scan_timeout, |heard| {
+    let Some((_, first)) = centrals.first() else {
+        return Err(CliError::failure("no Bluetooth adapter"));
+    };
+    let known = scan::scan_known(first.as_ref(), scan_timeout, |heard| {
         selectors.iter().all(|s| s.satisfied_by(heard))
     })
     .await
     .map_err(fail)?;
-    let adapters = Adapters::new(cap);
+    let gates = Adapters::new(cap);
+    let adapter_names: Vec<String> = centrals.iter().map(|(n, _)| n.clone()).collect();
     let mut out = Vec::new();
     for sel in &selectors {
         let e = scan::pick(&known, sel).map_err(fail)?;
@@ -265,10 +272,17 @@ async fn bluetooth(
             CliError::failure(format!("{} is not a droid droidctl drives", e.label()))
         })?;
         let name = e.label();
-        let gate = adapters
-            .admit("the Bluetooth adapter", &name)
+        let i = gates.least_loaded(&adapter_names);
+        let (adapter, central) = &centrals[i];
+        let gate = gates
+            .admit(adapter, &name)
             .map_err(|over| CliError::failure(over.to_string()))?;
-        eprintln!("droidctl: {name} ({}, {})", model.display_name(), e.id);
+        let via = if centrals.len() > 1 {
+            format!(" via {adapter}")
+        } else {
+            String::new()
+        };
+        eprintln!("droidctl: {name} ({}, {}){via}", model.display_name(), e.id);
         let link = BleLink::new(
             central.clone(),
             e.id.clone(),
@@ -280,7 +294,7 @@ async fn bluetooth(
             link: Box::new(GatedLink::new(Box::new(link), gate)),
             model,
             name,
-            origin: "Bluetooth".into(),
+            origin: format!("Bluetooth {adapter}"),
         });
     }
     Ok(out)

@@ -114,6 +114,19 @@ impl Adapters {
     }
 }
 
+impl Adapters {
+    /// Which of `adapters` (by index) takes the next droid: the one holding the fewest, the
+    /// first on a tie (an adapter over the cap is then full everywhere, and `admit` says so).
+    pub fn least_loaded(&self, adapters: &[String]) -> usize {
+        let all = self.admitted.lock().unwrap_or_else(|e| e.into_inner());
+        adapters
+            .iter()
+            .enumerate()
+            .min_by_key(|(i, n)| (all.get(*n).map_or(0, |(_, h)| h.len()), *i))
+            .map_or(0, |(i, _)| i)
+    }
+}
+
 /// A link whose connection attempts take turns on their adapter's [`Gate`].
 pub struct GatedLink {
     inner: Box<dyn Link>,
@@ -233,8 +246,13 @@ mod tests {
             m.contains("fleet.max_per_adapter") && m.contains("--remote"),
             "{m}"
         );
-        // Another adapter has room.
+        // Another adapter has room, and takes the next droid.
+        let names = ["hci0".to_string(), "hci1".to_string()];
+        assert_eq!(adapters.least_loaded(&names), 1);
         assert!(adapters.admit("hci1", "C").is_ok());
+        assert!(adapters.admit("hci1", "D").is_ok());
+        // Both full: the first, where admit refuses with the message.
+        assert_eq!(adapters.least_loaded(&names), 0);
         assert_eq!(Adapters::new(0).cap, 1);
     }
 }

@@ -38,6 +38,77 @@ const SETTLE_TIMEOUT: Duration = Duration::from_secs(2);
 /// powered on. Never takes much longer than [`SETUP_TIMEOUT`] twice, whatever state the system
 /// is in (on macOS, [`PROMPT_TIMEOUT`] while the permission prompt is up).
 pub async fn open_central() -> Result<Arc<dyn BleCentral>, BleError> {
+    let adapter = list_adapters()
+        .await?
+        .into_iter()
+        .next()
+        .ok_or_else(|| BleError::no_adapter_on(Os::CURRENT))?;
+    usable(&adapter).await?;
+    Ok(Arc::new(BtleCentral { adapter }))
+}
+
+/// Every Bluetooth adapter to drive droids through, by name (`hci0`, `hci1` on Linux; the
+/// platform's description elsewhere): those `names` lists (each must be there and on), or
+/// without names every adapter that is on (at least one). Several adapters share a fleet's
+/// droids (`--adapter`).
+pub async fn open_adapters(
+    names: &[String],
+) -> Result<Vec<(String, Arc<dyn BleCentral>)>, BleError> {
+    let os = Os::CURRENT;
+    let mut all = Vec::new();
+    for adapter in list_adapters().await? {
+        let info = timeout(SETUP_TIMEOUT, adapter.adapter_info())
+            .await
+            .map_err(|_| stack_silent("reading the adapter", SETUP_TIMEOUT))?
+            .map_err(map_err)?;
+        // BlueZ says `hci0 (usb:v1D6Bp0246d0537)`: the name is the first word.
+        let name = info.split_whitespace().next().unwrap_or(&info).to_string();
+        all.push((name, adapter));
+    }
+    if all.is_empty() {
+        return Err(BleError::no_adapter_on(os));
+    }
+    let known: Vec<String> = all.iter().map(|(n, _)| n.clone()).collect();
+    let mut out: Vec<(String, Arc<dyn BleCentral>)> = Vec::new();
+    let mut first_error = None;
+    for (name, adapter) in all {
+        let wanted = names.is_empty() || names.iter().any(|n| n.eq_ignore_ascii_case(&name));
+        if !wanted {
+            continue;
+        }
+        match usable(&adapter).await {
+            Ok(()) => out.push((name, Arc::new(BtleCentral { adapter }))),
+            // Asked for by name: it must work.
+            Err(e) if !names.is_empty() => {
+                return Err(BleError::new(e.kind, format!("{name}: {}", e.message)));
+            }
+            Err(e) => {
+                tracing::warn!(adapter = %name, error = %e, "adapter not usable; skipped");
+                first_error.get_or_insert(e);
+            }
+        }
+    }
+    if let Some(missing) = names
+        .iter()
+        .find(|n| !known.iter().any(|k| k.eq_ignore_ascii_case(n)))
+    {
+        return Err(BleError::new(
+            BleErrorKind::NoAdapter,
+            format!(
+                "no Bluetooth adapter called {missing}: this computer has {}",
+                known.join(", ")
+            ),
+        ));
+    }
+    match (out.is_empty(), first_error) {
+        (true, Some(e)) => Err(e),
+        (true, None) => Err(BleError::no_adapter_on(os)),
+        (false, _) => Ok(out),
+    }
+}
+
+/// The system's adapters, after checking (Linux) the D-Bus system bus and BlueZ on it.
+async fn list_adapters() -> Result<Vec<Adapter>, BleError> {
     let os = Os::CURRENT;
     preflight().await?;
     let manager = timeout(SETUP_TIMEOUT, Manager::new())
@@ -49,7 +120,7 @@ pub async fn open_central() -> Result<Arc<dyn BleCentral>, BleError> {
     } else {
         SETUP_TIMEOUT
     };
-    let adapters = timeout(list_timeout, manager.adapters())
+    timeout(list_timeout, manager.adapters())
         .await
         .map_err(|_| match os {
             Os::MacOs => BleError::new(
@@ -63,11 +134,12 @@ pub async fn open_central() -> Result<Arc<dyn BleCentral>, BleError> {
             ),
             _ => stack_silent("listing adapters", list_timeout),
         })?
-        .map_err(map_err)?;
-    let adapter = adapters
-        .into_iter()
-        .next()
-        .ok_or_else(|| BleError::no_adapter_on(os))?;
+        .map_err(map_err)
+}
+
+/// Check `adapter` can be used: readable (permission errors surface here) and powered on.
+async fn usable(adapter: &Adapter) -> Result<(), BleError> {
+    let os = Os::CURRENT;
     // Surfaces permission errors before `adapter_state`, which reports any failure as "off".
     timeout(SETUP_TIMEOUT, adapter.adapter_info())
         .await
@@ -96,7 +168,7 @@ pub async fn open_central() -> Result<Arc<dyn BleCentral>, BleError> {
     if state == CentralState::PoweredOff {
         return Err(BleError::adapter_off_on(os));
     }
-    Ok(Arc::new(BtleCentral { adapter }))
+    Ok(())
 }
 
 /// The platform's Bluetooth stack did not answer `what` in time.

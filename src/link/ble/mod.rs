@@ -21,7 +21,7 @@ pub use backend::{
     Advertisement, BleAddress, BleCentral, BlePeripheral, DeviceId, DiscoveredChar, KnownDevice,
     PeripheralEvent,
 };
-pub use btleplug_backend::open_central;
+pub use btleplug_backend::{open_adapters, open_central};
 pub use error::{BleError, BleErrorKind, Os};
 pub use link::{BleLink, BleTimeouts};
 pub use scan::{DeviceSelector, ScanEntry};
