@@ -1722,3 +1722,53 @@ fn the_adapter_cap_and_adapter_names_are_checked() {
     assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
     sim.stop();
 }
+
+/// The app as a person starts a fleet: `droidctl` without a name, two droids in range, the
+/// picker; `x` marks each, Enter drives both (the roster lists them); `g` mirrors, `w` rolls
+/// both; `q` stops and disconnects both.
+#[test]
+fn the_picker_marks_several_droids_and_the_app_drives_them_mirrored() {
+    let sim = Sim::start(&["r2d2", "bb8"]);
+    let dir = TempDir::new("picker-fleet");
+    let log = dir.0.join("droidctl.log").to_string_lossy().into_owned();
+    let config = dir.0.join("config.toml").to_string_lossy().into_owned();
+    let mut tui = pty::Tui::start(
+        &["--scan-timeout", "2"],
+        &[
+            ("DBUS_SYSTEM_BUS_ADDRESS", sim.address.as_str()),
+            ("DROIDCTL_LOG_FILE", log.as_str()),
+            ("DROIDCTL_CONFIG", config.as_str()),
+        ],
+    );
+    tui.wait_for("Several droids are in range", Duration::from_secs(20));
+    tui.send(b"x");
+    tui.send(b"\x1b[B");
+    tui.send(b"x");
+    std::thread::sleep(Duration::from_millis(200));
+    tui.send(b"\r");
+    for n in &sim.names {
+        tui.wait_for(&format!("{n} ok"), Duration::from_secs(20));
+    }
+    tui.wait_for("stance tripod", Duration::from_secs(10));
+    tui.send(b"g");
+    tui.wait_for("MIRROR", Duration::from_secs(5));
+    tui.hold(b"w", Duration::from_millis(2500));
+    let screen = tui.text();
+    assert!(screen.matches("moving").count() >= 1, "{screen}");
+    tui.send(b"q");
+    let status = tui.wait_exit(Duration::from_secs(10));
+    assert!(status.success(), "{status:?}");
+    for n in &sim.names {
+        sim.wait_line(
+            &format!("{n}: disconnected by the client"),
+            Duration::from_secs(5),
+        );
+        let said = sim.wait_line(
+            &format!("{n}: 3.0 s after the disconnect"),
+            Duration::from_secs(8),
+        );
+        assert!(said.ends_with("stopped"), "{n} was left stopped: {said}");
+    }
+    let lines = sim.stop();
+    assert!(!lines.iter().any(|l| l.contains("InProgress")), "{lines:?}");
+}

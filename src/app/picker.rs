@@ -1,6 +1,7 @@
 //! Choosing a droid when several answer the scan: a small full-screen list before the app.
 //! State and keys only (the `[keys.picker]` bindings, and digits 1-9 to choose directly);
-//! [`crate::ui::picker`] draws it.
+//! [`crate::ui::picker`] draws it. Marking several and choosing drives them all at once (a
+//! fleet).
 
 use crate::config::{Action, Context, Key, KeyCode, KeyMap};
 use crate::link::ble::ScanEntry;
@@ -10,6 +11,8 @@ pub struct Picker {
     /// Droids that can be driven, strongest first.
     pub entries: Vec<ScanEntry>,
     pub selected: usize,
+    /// Marked entries (by index), to drive together.
+    pub marked: Vec<bool>,
     keys: KeyMap,
 }
 
@@ -19,12 +22,15 @@ pub enum Picked {
     /// Still choosing.
     Pending,
     Chosen(ScanEntry),
+    /// Several marked: drive them all, in the list's order.
+    Several(Vec<ScanEntry>),
     Cancelled,
 }
 
 impl Picker {
     pub fn new(entries: Vec<ScanEntry>, keys: KeyMap) -> Self {
         Picker {
+            marked: vec![false; entries.len()],
             entries,
             selected: 0,
             keys,
@@ -41,10 +47,24 @@ impl Picker {
             Some(Action::PickerDown) => self.selected = (self.selected + 1).min(last),
             Some(Action::PickerFirst) => self.selected = 0,
             Some(Action::PickerLast) => self.selected = last,
+            Some(Action::PickerMark) => {
+                if let Some(m) = self.marked.get_mut(self.selected) {
+                    *m = !*m;
+                }
+            }
             Some(Action::PickerChoose) => {
-                return match self.entries.get(self.selected) {
-                    Some(e) => Picked::Chosen(e.clone()),
-                    None => Picked::Cancelled,
+                let marked: Vec<ScanEntry> = self
+                    .entries
+                    .iter()
+                    .zip(&self.marked)
+                    .filter(|(_, m)| **m)
+                    .map(|(e, _)| e.clone())
+                    .collect();
+                return match (marked.len(), self.entries.get(self.selected)) {
+                    (0, Some(e)) => Picked::Chosen(e.clone()),
+                    (1, _) => Picked::Chosen(marked[0].clone()),
+                    (n, _) if n > 1 => Picked::Several(marked),
+                    _ => Picked::Cancelled,
                 };
             }
             Some(Action::PickerCancel) => return Picked::Cancelled,
@@ -69,9 +89,10 @@ impl Picker {
                 .map_or_else(|| "-".into(), ToString::to_string)
         };
         format!(
-            "{} {} choose · {} or 1-9 connect · {} cancel",
+            "{} {} choose · {} mark several · {} or 1-9 connect · {} cancel",
             shown(Action::PickerUp),
             shown(Action::PickerDown),
+            shown(Action::PickerMark),
             shown(Action::PickerChoose),
             shown(Action::PickerCancel)
         )
@@ -153,6 +174,34 @@ mod tests {
             p.on_key(Key::plain(KeyCode::Tab)),
             Picked::Chosen(entry("Q5-BBBB", -60))
         );
-        assert_eq!(p.footer(), "↑ n choose · Tab or 1-9 connect · Esc cancel");
+        assert_eq!(
+            p.footer(),
+            "↑ n choose · x mark several · Tab or 1-9 connect · Esc cancel"
+        );
+    }
+
+    #[test]
+    fn marking_several_chooses_them_all() {
+        let all = [
+            entry("D2-AAAA", -40),
+            entry("Q5-BBBB", -60),
+            entry("GB-CCCC", -70),
+        ];
+        let mut p = Picker::new(all.to_vec(), keys());
+        p.on_key(Key::ch('x'));
+        p.on_key(Key::plain(KeyCode::Down));
+        p.on_key(Key::plain(KeyCode::Down));
+        p.on_key(Key::ch('x'));
+        assert_eq!(p.marked, [true, false, true]);
+        assert_eq!(
+            p.clone().on_key(Key::plain(KeyCode::Enter)),
+            Picked::Several(vec![all[0].clone(), all[2].clone()])
+        );
+        // Unmarking down to one chooses that one.
+        p.on_key(Key::ch('x'));
+        assert_eq!(
+            p.on_key(Key::plain(KeyCode::Enter)),
+            Picked::Chosen(all[0].clone())
+        );
     }
 }

@@ -73,6 +73,8 @@ pub struct Connected {
     pub name: String,
     pub pacing: Duration,
     pub chunk_size: usize,
+    /// The other droids marked in the picker, to drive with it (a fleet).
+    pub others: Vec<Connected>,
 }
 
 /// Find and connect to a droid. With several supported droids in range and neither `name` nor
@@ -124,9 +126,10 @@ pub async fn connect(
         .iter()
         .filter(|c| c.model.is_some_and(Model::drivable))
         .collect();
-    let choice = if !explicit && drivable.len() > 1 && std::io::stdin().is_terminal() {
+    let chosen: Vec<DeviceId> = if !explicit && drivable.len() > 1 && std::io::stdin().is_terminal()
+    {
         match chooser {
-            Chooser::Prompt => pick(&drivable)?,
+            Chooser::Prompt => pick(&drivable)?.into_iter().collect(),
             Chooser::Screen(keys) => {
                 let entries: Vec<ScanEntry> = drivable.iter().map(|e| (*e).clone()).collect();
                 tokio::task::spawn_blocking(move || pick_on_screen(entries, keys))
@@ -135,15 +138,23 @@ pub async fn connect(
             }
         }
     } else {
-        None
+        Vec::new()
     };
+    // Several marked in the picker: the first is connected as one droid is, the others
+    // alongside on the same adapter, every connection attempt taking its turn.
+    let others: Vec<ScanEntry> = chosen
+        .iter()
+        .skip(1)
+        .filter_map(|id| drivable.iter().find(|e| e.id == *id).map(|e| (*e).clone()))
+        .collect();
+    let choice = chosen.first().cloned();
     if let Some(choice) = choice.filter(|c| *c != found.id) {
         let sel = DeviceSelector {
             name: None,
             address: Some(choice.key().to_string()),
             scan_timeout,
         };
-        found = connect_link_with(central, &sel, crate::family::gatt_profile)
+        found = connect_link_with(central.clone(), &sel, crate::family::gatt_profile)
             .await
             .map_err(|e| CliError::failure(e.message))?;
     }
@@ -156,12 +167,62 @@ pub async fn connect(
         );
     }
     let profile = found.link.profile().clone();
+    if others.is_empty() {
+        return Ok(Connected {
+            model: found.model,
+            name: found.name.clone(),
+            pacing: profile.pacing,
+            chunk_size: profile.chunk_size,
+            link: Box::new(found.link),
+            others: Vec::new(),
+        });
+    }
+    let cap = crate::config::Config::load(&crate::config::config_path())
+        .map(|c| c.fleet.max_per_adapter)
+        .unwrap_or(crate::fleet::gate::DEFAULT_MAX_PER_ADAPTER);
+    let adapters = crate::fleet::gate::Adapters::new(cap);
+    let adapter = adapter.unwrap_or_else(|| "the Bluetooth adapter".into());
+    let gated = |link: Box<dyn Link>, name: &str| -> Result<Box<dyn Link>, CliError> {
+        let gate = adapters
+            .admit(&adapter, name)
+            .map_err(|over| CliError::failure(over.to_string()))?;
+        Ok(Box::new(crate::fleet::gate::GatedLink::new(link, gate)))
+    };
+    let mut rest = Vec::new();
+    for e in others {
+        let Some(model) = e.model else { continue };
+        let name = e.label();
+        let link = crate::link::ble::BleLink::new(
+            central.clone(),
+            e.id.clone(),
+            name.clone(),
+            model,
+            crate::family::gatt_profile(model),
+        );
+        let profile = link.profile().clone();
+        if chatty {
+            eprintln!(
+                "droidctl: connecting to {name} ({}, {})",
+                model.display_name(),
+                e.id
+            );
+        }
+        rest.push(Connected {
+            link: gated(Box::new(link), &name)?,
+            model,
+            name,
+            pacing: profile.pacing,
+            chunk_size: profile.chunk_size,
+            others: Vec::new(),
+        });
+    }
     Ok(Connected {
         model: found.model,
         name: found.name.clone(),
         pacing: profile.pacing,
         chunk_size: profile.chunk_size,
-        link: Box::new(found.link),
+        link: gated(Box::new(found.link), &found.name)?,
+        others: rest,
     })
 }
 
@@ -191,6 +252,7 @@ pub async fn connect_remote(
         pacing: profile.pacing,
         chunk_size: profile.chunk_size,
         link: Box::new(link),
+        others: Vec::new(),
     })
 }
 
@@ -234,7 +296,7 @@ fn pick(entries: &[&ScanEntry]) -> Result<Option<DeviceId>, CliError> {
 fn pick_on_screen(
     entries: Vec<ScanEntry>,
     keys: crate::config::KeyMap,
-) -> Result<Option<DeviceId>, CliError> {
+) -> Result<Vec<DeviceId>, CliError> {
     use crate::app::input::key_from_crossterm;
     use crate::app::picker::{Picked, Picker};
     use crossterm::event::{Event, KeyEventKind, read};
@@ -260,7 +322,8 @@ fn pick_on_screen(
         if let Some((key, _)) = key_from_crossterm(&k) {
             match picker.on_key(key) {
                 Picked::Pending => {}
-                Picked::Chosen(e) => break Ok(Some(e.id)),
+                Picked::Chosen(e) => break Ok(vec![e.id]),
+                Picked::Several(v) => break Ok(v.into_iter().map(|e| e.id).collect()),
                 Picked::Cancelled => break Err(CliError::failure("no droid chosen")),
             }
         }

@@ -82,7 +82,17 @@ pub fn run(args: DriveArgs) -> Result<i32, CliError> {
                     Box::new(SimLink::new(m, SimConfig::for_model(m), Faults::none()));
                 (link, m, format!("{} (simulated)", m.display_name()))
             }
-            None => connect_real(&args, &config).await?,
+            None => {
+                let c = args
+                    .ble
+                    .connect(super::connect::Chooser::Screen(config.keymap.clone()))
+                    .await?;
+                if !c.others.is_empty() {
+                    // Several marked in the picker: drive them all.
+                    return drive_several(c, config, log_path, recorder).await;
+                }
+                (c.link, c.model, c.name)
+            }
         };
         let link = match &recorder {
             Some(r) => {
@@ -130,16 +140,41 @@ fn run_fleet(args: DriveArgs, sims: Vec<Model>, config: Config) -> Result<i32, C
     })
 }
 
-/// Find and connect to a real droid over Bluetooth.
-async fn connect_real(
-    args: &DriveArgs,
-    config: &Config,
-) -> Result<(Box<dyn Link>, Model, String), CliError> {
-    let c = args
-        .ble
-        .connect(super::connect::Chooser::Screen(config.keymap.clone()))
-        .await?;
-    Ok((c.link, c.model, c.name))
+/// The droids marked in the picker, as a fleet.
+async fn drive_several(
+    first: super::connect::Connected,
+    config: Config,
+    log_path: Option<std::path::PathBuf>,
+    recorder: Option<crate::capture::record::Recorder>,
+) -> Result<i32, CliError> {
+    let super::connect::Connected {
+        link,
+        model,
+        name,
+        others,
+        ..
+    } = first;
+    let mut found: Vec<super::fleet::Found> = std::iter::once((link, model, name))
+        .chain(others.into_iter().map(|c| (c.link, c.model, c.name)))
+        .map(|(link, model, name)| super::fleet::Found {
+            link,
+            model,
+            name,
+            origin: "Bluetooth".into(),
+        })
+        .collect();
+    // The single recording started for one droid cannot hold several: start it for all.
+    super::fleet::record_all(recorder.as_ref(), &mut found);
+    let specs = found
+        .into_iter()
+        .map(|f| {
+            let cfg = super::fleet::session_config(f.model, &config, true);
+            f.into_spec(cfg)
+        })
+        .collect();
+    let result = drive(Fleet::start(specs), config, log_path).await;
+    super::replay::finish(recorder.as_ref());
+    result
 }
 
 async fn drive(

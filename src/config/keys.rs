@@ -274,7 +274,8 @@ actions! {
         PickerDown "down" false "next droid";
         PickerFirst "first" false "the first droid";
         PickerLast "last" false "the last droid";
-        PickerChoose "choose" false "connect to it";
+        PickerChoose "choose" false "connect to it (to the marked ones, if any)";
+        PickerMark "mark" false "mark / unmark it (several marked: drive them all at once)";
         PickerCancel "cancel" false "cancel";
     }
 }

@@ -11,7 +11,7 @@ use ratatui::widgets::Paragraph;
 pub fn draw(frame: &mut Frame, picker: &Picker) {
     let area = frame.area();
     let rows = picker.entries.len() as u16 + 6;
-    let box_area = centered(area, 64, rows.max(7));
+    let box_area = centered(area, 72, rows.max(7));
     let block = theme::panel(" Several droids are in range ");
     let inner = block.inner(box_area);
     frame.render_widget(block, box_area);
@@ -27,9 +27,11 @@ pub fn draw(frame: &mut Frame, picker: &Picker) {
         theme::label(),
     ))];
     for (i, e) in picker.entries.iter().enumerate() {
+        let marked = picker.marked.get(i).copied().unwrap_or(false);
         let text = format!(
-            "{} {}. {:<13} {:<9} {}  {}",
+            "{}{}{}. {:<13} {:<9} {}  {}",
             if i == picker.selected { "▶" } else { " " },
+            if marked { "✓" } else { " " },
             i + 1,
             clean(e.name.as_deref().unwrap_or("?")),
             e.model.map(|m| m.display_name()).unwrap_or("?"),
@@ -38,7 +40,7 @@ pub fn draw(frame: &mut Frame, picker: &Picker) {
                 .map(|r| format!("{r} dBm"))
                 .unwrap_or_else(|| "-".into())
         );
-        let style = if i == picker.selected {
+        let style = if i == picker.selected || marked {
             theme::selected()
         } else {
             theme::reported()
