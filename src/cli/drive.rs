@@ -125,18 +125,8 @@ fn run_fleet(args: DriveArgs, sims: Vec<Model>, config: Config) -> Result<i32, C
     let log_path = crate::logging::init().ok();
     let rt = super::realtime_runtime()?;
     rt.block_on(async move {
-        let mut found = super::fleet::find_all(&sims, &args.ble, &config).await?;
-        super::fleet::record_all(recorder.as_ref(), &mut found);
-        let specs = found
-            .into_iter()
-            .map(|f| {
-                let cfg = super::fleet::session_config(f.model, &config, true);
-                f.into_spec(cfg)
-            })
-            .collect();
-        let result = drive(Fleet::start(specs), config, log_path).await;
-        super::replay::finish(recorder.as_ref());
-        result
+        let found = super::fleet::find_all(&sims, &args.ble, &config).await?;
+        drive_found(found, config, log_path, recorder).await
     })
 }
 
@@ -154,7 +144,7 @@ async fn drive_several(
         others,
         ..
     } = first;
-    let mut found: Vec<super::fleet::Found> = std::iter::once((link, model, name))
+    let found: Vec<super::fleet::Found> = std::iter::once((link, model, name))
         .chain(others.into_iter().map(|c| (c.link, c.model, c.name)))
         .map(|(link, model, name)| super::fleet::Found {
             link,
@@ -163,7 +153,16 @@ async fn drive_several(
             origin: "Bluetooth".into(),
         })
         .collect();
-    // The single recording started for one droid cannot hold several: start it for all.
+    drive_found(found, config, log_path, recorder).await
+}
+
+/// Drive the droids found, recording them all into one capture when asked.
+async fn drive_found(
+    mut found: Vec<super::fleet::Found>,
+    config: Config,
+    log_path: Option<std::path::PathBuf>,
+    recorder: Option<crate::capture::record::Recorder>,
+) -> Result<i32, CliError> {
     super::fleet::record_all(recorder.as_ref(), &mut found);
     let specs = found
         .into_iter()
