@@ -170,7 +170,10 @@ fn no_source_file_is_over_900_lines() {
     let long: Vec<String> = files
         .iter()
         .filter_map(|f| {
-            let n = std::fs::read_to_string(f).expect("a source file").lines().count();
+            let n = std::fs::read_to_string(f)
+                .expect("a source file")
+                .lines()
+                .count();
             (n > 900).then(|| format!("{}: {n} lines", f.display()))
         })
         .collect();

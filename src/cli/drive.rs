@@ -131,6 +131,7 @@ async fn drive(
         link,
         SessionConfig {
             family: model.protocol(),
+            model: Some(model),
             request_timeout: Duration::from_millis(config.session.request_timeout_ms),
             pacing,
             setup: connect_setup(model, &setup),

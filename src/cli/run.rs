@@ -176,6 +176,7 @@ pub async fn run_recorded(
     };
     let config = SessionConfig {
         family: model.protocol(),
+        model: Some(model),
         pacing: model.write_pacing(),
         setup: connect_setup(model, &setup),
         ..SessionConfig::default()

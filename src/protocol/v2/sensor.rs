@@ -59,11 +59,13 @@ pub const STANDARD_FIELDS: [SensorField; 17] = [
 
 /// The extended mask (R2-D2 specific), descending bit order. Gyro scaling is disputed
 /// between clients (`droid-facts.md` §2, *unverified*): values are shown as sent.
-pub const EXTENDED_FIELDS: [SensorField; 4] = [
+pub const EXTENDED_FIELDS: [SensorField; 5] = [
     ext_field(26, "head_angle", "deg"),
     ext_field(25, "gyro_x", "deg/s"),
     ext_field(24, "gyro_y", "deg/s"),
     ext_field(23, "gyro_z", "deg/s"),
+    // BOLT's ambient light sensor: spherov2.py `toy/bolt.py` extended bit 0x40000.
+    ext_field(18, "ambient_light", "lux"),
 ];
 
 pub mod mask {
