@@ -7,7 +7,8 @@
 //! - [`replay`], [`player`]: the app on a capture;
 //! - [`help`]: the help overlay's text, generated from the bindings;
 //! - [`pacing`], [`rates`]: frame pacing and per-second rates, small state machines without IO;
-//! - [`battery`]: the battery poller.
+//! - [`battery`]: the battery poller;
+//! - [`matrix`]: BOLT's LED matrix as droidctl drew it, its prompt, colour and compass keys.
 
 mod actions;
 pub mod battery;
@@ -16,6 +17,7 @@ mod core;
 pub mod help;
 pub mod input;
 mod keys;
+pub mod matrix;
 pub mod pacing;
 pub mod packet_log;
 mod pad;

@@ -128,6 +128,7 @@ fn build(source: Source, opts: AppOptions) -> App {
         last_tick: start,
         dirty: true,
     };
+    app.controller.set_tracks(app.state.model.has_tracks());
     app.state.control = app.controller.view().clone();
     app
 }

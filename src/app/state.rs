@@ -48,6 +48,10 @@ pub enum Overlay {
     Filter {
         input: String,
     },
+    /// Typing what BOLT's matrix shows: one character is drawn, more scroll.
+    Matrix {
+        input: String,
+    },
 }
 
 /// Which pane has the keyboard.
@@ -117,6 +121,8 @@ pub struct AppState {
     pub leds: LedView,
     /// Replaying a capture (nothing is sent): where, how fast.
     pub replay: Option<ReplayView>,
+    /// What BOLT's matrix shows, as droidctl drew it.
+    pub matrix: super::matrix::MatrixView,
 }
 
 /// A replay, for the status bar.
@@ -178,6 +184,7 @@ impl AppState {
             collision_flash: Duration::from_millis(1500),
             leds: LedView::default(),
             replay: None,
+            matrix: Default::default(),
         }
     }
 

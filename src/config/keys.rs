@@ -221,6 +221,10 @@ actions! {
         BackLight "back_light" false "back light";
         Animations "animations" false "animation palette";
         Sounds "sounds" false "sound palette";
+        Tank "tank" false "tank mode: a track per stick (RVR)";
+        Matrix "matrix" false "type on the matrix (BOLT)";
+        MatrixColour "matrix_colour" false "next matrix colour (BOLT)";
+        Calibrate "calibrate" false "calibrate the compass (BOLT)";
         Log "log" false "the packet log has the keys (and back)";
         Help "help" false "this help";
         Quit "quit" false "quit (stops the droid first)";

@@ -446,12 +446,12 @@ impl SimDroid {
             }
             (Device::Sensor, 0x35) => {
                 if d[0] != 0 {
-                    self.notify(0x18, 0x36, vec![128, 128, 128, 0, 90]);
+                    self.notify(0x18, 0x36, vec![128, 128, 128, 0, 230]);
                 }
                 ok
             }
             (Device::Sensor, 0x37) => {
-                self.notify(0x18, 0x36, vec![128, 128, 128, 0, 90]);
+                self.notify(0x18, 0x36, vec![128, 128, 128, 0, 230]);
                 ok
             }
             (Device::ApiAndShell, 0x00) => (ErrorCode::Success, d.to_vec()),

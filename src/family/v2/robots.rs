@@ -22,6 +22,10 @@ pub fn led(model: Model, action: &Action) -> Option<Option<Command>> {
         (Model::Bolt, Action::LedRgb(LedGroup::Back, rgb)) => {
             cmd::set_all_leds_with_8_bit_mask(Mask(0x38), Bytes(rgb.to_vec()))
         }
+        // The back light as a brightness: BOLT's back LED in blue (its aiming colour here).
+        (Model::Bolt, Action::LedBrightness(LedGroup::Back, v)) => {
+            cmd::set_all_leds_with_8_bit_mask(Mask(0x38), Bytes(vec![0, 0, *v]))
+        }
         // Mini: bit 0 aiming (back) light, 1..3 body RGB (16-bit mask).
         (Model::Mini, Action::LedRgb(LedGroup::Front, rgb)) => {
             cmd::set_all_leds_with_16_bit_mask(Mask(0x0E), Bytes(rgb.to_vec()))
@@ -38,6 +42,9 @@ pub fn led(model: Model, action: &Action) -> Option<Option<Command>> {
         }
         (Model::Rvr, Action::LedRgb(LedGroup::Back, rgb)) => {
             cmd::set_all_leds_with_32_bit_mask(Mask(0x3F00_0000), Bytes([*rgb, *rgb].concat()))
+        }
+        (Model::Rvr, Action::LedBrightness(LedGroup::Back, v)) => {
+            cmd::set_all_leds_with_32_bit_mask(Mask(0x3F00_0000), Bytes(vec![*v, 0, 0, *v, 0, 0]))
         }
         (Model::Bolt | Model::Mini | Model::Rvr, _) => return Some(None),
         _ => return None,
