@@ -1588,3 +1588,139 @@ async fn shutdown_stop_reaches_the_simulated_droid() {
     assert_eq!(st.velocity_cm_s, 0.0, "{st:?}");
     assert_eq!(st.collisions, 0, "stopped by the stop, not by a wall");
 }
+
+/// Issue 19 point 3: BOLT's and RVR's processors are honoured: a command sent to the
+/// processor that has it is answered, to the other one it gets the robot's bad-command
+/// error, to a target that is no processor bad-target; RVR takes nothing without a target;
+/// Mini, with one processor, takes no target at all.
+#[test]
+fn processor_targets_are_honoured() {
+    let err = |model: Model, did: u8, cid: u8, tid: Option<u8>, data: Vec<u8>| {
+        let mut b = Bench::new(model);
+        b.send_packet(&addressed_packet(model, 0x13, 0x0D, 1, vec![]));
+        let mut c = Command::new(did, cid, data);
+        c.target = tid;
+        b.send_packet(&c.to_packet(5)).remove(0).err
+    };
+    let drive = || vec![50, 0, 90, 0];
+    assert_eq!(
+        err(Model::Bolt, 0x16, 0x07, Some(0x12), drive()),
+        Some(ErrorCode::Success)
+    );
+    assert_eq!(
+        err(Model::Bolt, 0x16, 0x07, Some(0x11), drive()),
+        Some(ErrorCode::BadCommandId)
+    );
+    assert_eq!(
+        err(Model::Bolt, 0x16, 0x07, Some(0x15), drive()),
+        Some(ErrorCode::BadTargetId)
+    );
+    assert_eq!(
+        err(Model::Bolt, 0x16, 0x07, None, drive()),
+        Some(ErrorCode::Success)
+    );
+    // The matrix is the secondary's, the front/back LEDs the primary's.
+    assert_eq!(
+        err(Model::Bolt, 0x1A, 0x2F, Some(0x11), vec![1, 2, 3]),
+        Some(ErrorCode::BadCommandId)
+    );
+    assert_eq!(
+        err(Model::Bolt, 0x1A, 0x1C, Some(0x11), vec![1, 9]),
+        Some(ErrorCode::Success)
+    );
+    assert_eq!(
+        err(Model::Rvr, 0x16, 0x07, None, drive()),
+        Some(ErrorCode::BadTargetId)
+    );
+    assert_eq!(
+        err(Model::Rvr, 0x16, 0x07, Some(0x12), drive()),
+        Some(ErrorCode::Success)
+    );
+    // RVR's colour sensor is the primary's; the streaming service runs on both.
+    assert_eq!(
+        err(Model::Rvr, 0x18, 0x38, Some(0x12), vec![1]),
+        Some(ErrorCode::BadCommandId)
+    );
+    assert_eq!(
+        err(Model::Rvr, 0x18, 0x38, Some(0x11), vec![1]),
+        Some(ErrorCode::Success)
+    );
+    assert_eq!(
+        err(Model::Rvr, 0x18, 0x3B, Some(0x12), vec![]),
+        Some(ErrorCode::Success)
+    );
+    assert_eq!(
+        err(Model::Rvr, 0x18, 0x3B, Some(0x11), vec![]),
+        Some(ErrorCode::Success)
+    );
+    assert_eq!(
+        err(Model::Mini, 0x16, 0x07, Some(0x12), drive()),
+        Some(ErrorCode::BadTargetId)
+    );
+    assert_eq!(
+        err(Model::Mini, 0x16, 0x07, None, drive()),
+        Some(ErrorCode::Success)
+    );
+}
+
+/// Issue 19 point 3: RVR's streaming service as the robot runs it: a configuration per token
+/// and processor (at most four sensors), started with a period, data from the processor that
+/// measures them, no reconfiguration while streaming, stopped and cleared.
+#[test]
+fn rvr_streaming_service_streams_named_values() {
+    use droidctl::protocol::v2::catalog::targets::Processor;
+    use droidctl::protocol::v2::stream::{ServiceConfig, decode};
+    let mut b = Bench::new(Model::Rvr);
+    let to = |c: Command, p: Processor| c.to(p);
+    b.ok(to(cmd::wake(), Processor::Primary));
+    let config = to(
+        Command::new(0x18, 0x39, vec![1, 0, 1, 2, 0, 6, 2]),
+        Processor::Secondary,
+    );
+    b.ok(config.clone());
+    b.ok(to(cmd::start_streaming_service(100), Processor::Secondary));
+    // No reconfiguration while streaming.
+    let busy = to(
+        Command::new(0x18, 0x39, vec![2, 0, 7, 2]),
+        Processor::Secondary,
+    );
+    assert_eq!(b.err(busy), ErrorCode::Busy);
+    b.ok(to(
+        cmd::drive_with_heading(100, Heading::new(90).unwrap(), DriveFlags::empty()),
+        Processor::Secondary,
+    ));
+    b.notes.clear();
+    b.run_for(ms(1000));
+    let out: Vec<Packet> = b.notes.iter().map(|(_, p)| p.clone()).collect();
+    let mut host = ServiceConfig::default();
+    host.snoop(&config);
+    let data: Vec<_> = out
+        .iter()
+        .filter(|p| (p.did, p.cid) == (0x18, 0x3D))
+        .collect();
+    assert!(
+        (8..=11).contains(&data.len()),
+        "every 100 ms: {}",
+        data.len()
+    );
+    assert!(
+        data.iter().all(|p| p.sid == Some(0x12)),
+        "from the secondary"
+    );
+    let last = decode(
+        &host,
+        Some(Processor::Secondary),
+        &data[data.len() - 1].data,
+    )
+    .unwrap();
+    assert!((last.get("yaw").unwrap() - 90.0).abs() < 1.0, "{last:?}");
+    assert!(last.get("locator_x").unwrap() > 5.0, "{last:?}");
+    b.ok(to(cmd::stop_streaming_service(), Processor::Secondary));
+    b.notes.clear();
+    b.run_for(ms(500));
+    assert!(b.notes.iter().all(|(_, p)| (p.did, p.cid) != (0x18, 0x3D)));
+    b.ok(to(
+        Command::new(0x18, 0x39, vec![2, 0, 7, 2]),
+        Processor::Secondary,
+    ));
+}
