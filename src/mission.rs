@@ -491,12 +491,12 @@ pub async fn run(
                     t.stance = crate::telemetry::Stance::from_state(s);
                 }
             }
-            let Some(battery) = family.battery_request() else {
+            let Some(battery) = family.battery_request_for(model) else {
                 return;
             };
             loop {
                 if let Ok(p) = session.request(battery.clone()).await
-                    && let Some(v) = family.battery_volts(p.data())
+                    && let Some(v) = family.battery_volts_for(model, p.data())
                 {
                     lock(&telemetry).battery_v = Some(v);
                 }

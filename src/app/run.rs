@@ -165,7 +165,7 @@ pub async fn run_source<B: Backend>(
     tick.set_missed_tick_behavior(MissedTickBehavior::Delay);
     let mut second = interval(Duration::from_secs(1));
     second.set_missed_tick_behavior(MissedTickBehavior::Skip);
-    let (poller, mut battery_rx) = super::battery::spawn(session.clone(), family);
+    let (poller, mut battery_rx) = super::battery::spawn(session.clone(), family, app.state.model);
     let stats = |app: &App| match &app.session {
         Some(s) => s.stats(),
         None => app.state.stats,

@@ -166,6 +166,16 @@ pub trait Family: Sync {
     fn battery_volts(&self, _response: &[u8]) -> Option<f32> {
         None
     }
+    /// The battery request for `model`, addressed to the processor that measures it (RVR's
+    /// primary), and its answer read.
+    fn battery_request_for(&self, model: Model) -> Option<Command> {
+        let _ = model;
+        self.battery_request()
+    }
+    fn battery_volts_for(&self, model: Model, response: &[u8]) -> Option<f32> {
+        let _ = model;
+        self.battery_volts(response)
+    }
     /// The droid's own fail-safe, set on every connect: it stops by itself when the link
     /// drops or drive commands stop. Firmware that does not know it may refuse it; that is
     /// fine.

@@ -168,7 +168,7 @@ pub fn rvr(frame: &mut Frame, area: Rect, s: &AppState) {
         Some((l, rt)) => format!("tracks L {l:+} R {rt:+}"),
         None => "v: tank mode".to_string(),
     };
-    let lines = vec![
+    let mut lines = vec![
         Line::from(colour),
         Line::from(vec![
             motors,
@@ -176,6 +176,18 @@ pub fn rvr(frame: &mut Frame, area: Rect, s: &AppState) {
             Span::styled(tracks, theme::dim()),
         ]),
     ];
+    if inner.height >= 3 {
+        // RVR's battery is read from its primary processor.
+        let volts = match s.telemetry.battery_v {
+            Some(v) if v.is_finite() => format!("{v:.2} V"),
+            _ => "-".to_string(),
+        };
+        lines.push(Line::from(vec![
+            Span::styled("battery ", theme::label()),
+            Span::raw(volts),
+            Span::styled(" (primary processor)", theme::dim()),
+        ]));
+    }
     frame.render_widget(Paragraph::new(lines), inner);
 }
 

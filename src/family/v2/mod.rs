@@ -343,6 +343,17 @@ impl Family for V2 {
         crate::telemetry::battery_volts(response)
     }
 
+    fn battery_request_for(&self, model: Model) -> Option<Command> {
+        robots::battery_request(model).or_else(|| self.battery_request())
+    }
+
+    fn battery_volts_for(&self, model: Model, response: &[u8]) -> Option<f32> {
+        match robots::battery_request(model) {
+            Some(_) => robots::battery_volts(response),
+            None => self.battery_volts(response),
+        }
+    }
+
     /// Set Custom Control System Timeout (DID 16h, CID 22h): the droid stops by itself when
     /// drive commands stop for this long. Comfortably above the slowest drive re-send (the
     /// missions' 0.5 s heartbeat; the app re-sends at its control rate).

@@ -7,7 +7,7 @@ use crate::model::Model;
 use crate::protocol::v2::catalog::targets::Processor;
 use crate::protocol::v2::stream::sensor_by_name;
 use crate::protocol::v2::types::{Char, FrameRotation, ScrollText, StreamSlots, StreamWidth};
-use crate::protocol::v2::wire::{Bytes, Mask, RawMotorMode};
+use crate::protocol::v2::wire::{Bytes, Mask, RawMotorMode, VoltageReadingType};
 use crate::protocol::v2::{self, cmd};
 use crate::script::{Action, LedGroup, MatrixAction};
 
@@ -131,6 +131,22 @@ const RVR_STREAMS: [(Processor, u8, &[&str]); 4] = [
     (Processor::Primary, 2, &["ambient_light"]),
 ];
 
+/// RVR's battery: volts (calibrated, filtered) from the primary, the processor that measures
+/// it (spherov2's `toy/rvr.py` binds Get Battery Voltage In Volts there and not Power 0x03).
+pub fn battery_request(model: Model) -> Option<Command> {
+    (model == Model::Rvr).then(|| {
+        cmd::get_battery_voltage_in_volts(VoltageReadingType::CalibratedFiltered)
+            .to(Processor::Primary)
+            .into()
+    })
+}
+
+/// The volts of Get Battery Voltage In Volts: a big-endian f32, believed when plausible.
+pub fn battery_volts(response: &[u8]) -> Option<f32> {
+    let v = f32::from_be_bytes(response.try_into().ok()?);
+    (v.is_finite() && (0.0..=30.0).contains(&v)).then_some(v)
+}
+
 /// RVR's streaming: stop and clear each processor, configure its tokens, start it at
 /// `period_ms` (spherov2's StreamingControl order).
 pub fn rvr_streaming(period_ms: u16) -> Vec<Command> {
@@ -177,5 +193,50 @@ pub fn setup_extra(model: Model, streaming_interval_ms: u16) -> Vec<Command> {
             out
         }
         _ => Vec::new(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rvr_battery_is_read_from_the_primary() {
+        let Some(Command::V2(c)) = battery_request(Model::Rvr) else {
+            panic!("RVR has a battery request");
+        };
+        assert_eq!(
+            (c.did, c.cid, c.target, &c.data[..]),
+            (0x13, 0x25, Some(0x11), &[0][..])
+        );
+        assert!(battery_request(Model::Bolt).is_none());
+        assert_eq!(battery_volts(&3.9f32.to_be_bytes()), Some(3.9));
+        assert_eq!(battery_volts(&f32::NAN.to_be_bytes()), None);
+        assert_eq!(battery_volts(&[1, 2]), None);
+    }
+
+    #[test]
+    fn rvr_streams_motion_on_the_secondary_and_colour_on_the_primary() {
+        let cmds = rvr_streaming(100);
+        let v2: Vec<_> = cmds.iter().filter_map(|c| c.as_v2()).collect();
+        let configure: Vec<_> = v2.iter().filter(|c| c.cid == 0x39).collect();
+        assert_eq!(configure.len(), 4);
+        // Colour detection (id 3) at 8 bits on the primary.
+        assert!(
+            configure
+                .iter()
+                .any(|c| c.target == Some(0x11) && c.data == [1, 0, 3, 0])
+        );
+        // Each processor is stopped and cleared before it is configured, then started.
+        for t in [0x11, 0x12] {
+            let seq: Vec<u8> = v2
+                .iter()
+                .filter(|c| c.target == Some(t))
+                .map(|c| c.cid)
+                .collect();
+            assert_eq!(seq.first(), Some(&0x3B));
+            assert_eq!(seq.get(1), Some(&0x3C));
+            assert_eq!(seq.last(), Some(&0x3A));
+        }
     }
 }
