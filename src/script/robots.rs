@@ -140,3 +140,81 @@ pub fn parse_tank(words: &[&str]) -> Result<Action, String> {
         duration,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::super::{Action, parse};
+    use super::MatrixAction;
+    use std::time::Duration;
+
+    fn one(line: &str) -> Result<Action, String> {
+        parse(line)
+            .map(|mut s| s.remove(0).action)
+            .map_err(|e| e[0].message.clone())
+    }
+
+    #[test]
+    fn matrix_tank_and_calibrate_lines() {
+        assert_eq!(
+            one(r#"matrix text "HI THERE" 255 0 0"#),
+            Ok(Action::Matrix(MatrixAction::Text {
+                text: "HI THERE".into(),
+                rgb: [255, 0, 0]
+            }))
+        );
+        assert_eq!(
+            one("matrix text HI"),
+            Ok(Action::Matrix(MatrixAction::Text {
+                text: "HI".into(),
+                rgb: [255, 255, 255]
+            }))
+        );
+        assert_eq!(
+            one("matrix char A"),
+            Ok(Action::Matrix(MatrixAction::Char {
+                ch: 'A',
+                rgb: [255, 255, 255]
+            }))
+        );
+        assert_eq!(
+            one("matrix fill 1 2 3"),
+            Ok(Action::Matrix(MatrixAction::Fill([1, 2, 3])))
+        );
+        assert_eq!(
+            one("matrix pixel 7 0 9 9 9"),
+            Ok(Action::Matrix(MatrixAction::Pixel {
+                x: 7,
+                y: 0,
+                rgb: [9, 9, 9]
+            }))
+        );
+        assert_eq!(one("matrix clear"), Ok(Action::Matrix(MatrixAction::Clear)));
+        assert_eq!(
+            one("matrix rotate 180"),
+            Ok(Action::Matrix(MatrixAction::Rotate(180)))
+        );
+        assert_eq!(
+            one("tank 200 -100 for 1.5s"),
+            Ok(Action::Tank {
+                left: 200,
+                right: -100,
+                duration: Some(Duration::from_millis(1500))
+            })
+        );
+        assert_eq!(one("calibrate compass"), Ok(Action::CalibrateCompass));
+        for (bad, says) in [
+            ("matrix pixel 8 0", "x"),
+            ("matrix char AB", "one printable"),
+            ("matrix text \"unclosed", "unclosed"),
+            (&format!("matrix text {}", "x".repeat(26)), "1 to 25"),
+            ("matrix rotate 45", "0, 90"),
+            ("matrix", "expected"),
+            ("tank 300 0", "left track"),
+            ("tank 1 2 in 3s", "for"),
+            ("calibrate gyro", "unknown calibration"),
+        ] {
+            let e = one(bad).unwrap_err();
+            assert!(e.contains(says), "{bad}: {e}");
+        }
+    }
+}

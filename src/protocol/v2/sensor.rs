@@ -247,6 +247,28 @@ mod tests {
     }
 
     #[test]
+    fn bolts_ambient_light_is_named_after_the_gyro() {
+        // BOLT: extended bit 18 is the ambient light (spherov2 `toy/bolt.py`).
+        let cfg = StreamingConfig {
+            interval_ms: 100,
+            mask: mask::ATTITUDE,
+            ext_mask: mask::EXT_GYRO | 0x0004_0000,
+        };
+        let values = [
+            ("pitch", 1.0),
+            ("roll", 2.0),
+            ("yaw", 3.0),
+            ("gyro_x", 4.0),
+            ("gyro_y", 5.0),
+            ("gyro_z", 6.0),
+            ("ambient_light", 320.0),
+        ];
+        let s = decode_sample(&cfg, &encode_sample(&cfg, &values)).unwrap();
+        assert_eq!(s.get("ambient_light"), Some(320.0));
+        assert_eq!(s.get("gyro_z"), Some(6.0));
+    }
+
+    #[test]
     fn wrong_length_is_an_error() {
         let cfg = StreamingConfig::full(100);
         let e = decode_sample(&cfg, &[0; 7]).unwrap_err();
