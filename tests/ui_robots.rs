@@ -71,7 +71,8 @@ fn bolt_matrix_panel_shows_the_character_in_its_colour_and_the_compass() {
         let all = text.join("\n");
         assert!(all.contains("Matrix"), "{w}×{h}: {all}");
         assert!(all.contains("'A' #ff0000"), "{w}×{h}: {all}");
-        assert!(all.contains("270°"), "the compass: {all}");
+        // Facing yaw 90 with north at yaw 270: heading 180.
+        assert!(all.contains("180°"), "the compass: {all}");
         assert!(all.contains("320 lx"), "the light: {all}");
         assert!(!all.contains(" Dome "), "{all}");
         // The character (or its swatch) is painted in the matrix's colour.

@@ -79,9 +79,22 @@ pub fn bolt(frame: &mut Frame, area: Rect, s: &AppState) {
     let inner = block.inner(area);
     frame.render_widget(block, area);
     let r = &s.telemetry.robot;
-    let compass = match r.compass_north {
-        Some(n) => format!("north at yaw {n}°"),
-        None => "compass not calibrated".to_string(),
+    // The compass heading: how far clockwise from north the robot faces (yaw grows
+    // clockwise; north's yaw is what the calibration reported).
+    let heading = r
+        .compass_north
+        .zip(s.telemetry.yaw.filter(|y| y.is_finite()));
+    let heading = heading.map(|(n, yaw)| (n, (yaw - n as f32).rem_euclid(360.0)));
+    let (compass, short) = match (heading, r.compass_north) {
+        (Some((n, h)), _) => (
+            format!("heading {h:.0}° (north at yaw {n}°)"),
+            format!("compass {h:.0}°"),
+        ),
+        (None, Some(n)) => (format!("north at yaw {n}°"), format!("north at yaw {n}°")),
+        (None, None) => (
+            "compass not calibrated".into(),
+            "compass not calibrated".into(),
+        ),
     };
     let light = match r.ambient_lux {
         Some(l) if l.is_finite() => format!("light {l:.0} lx"),
@@ -95,7 +108,7 @@ pub fn bolt(frame: &mut Frame, area: Rect, s: &AppState) {
                 swatch,
                 Span::raw(what_it_shows(s)),
             ]),
-            Line::from(Span::styled(format!("{compass} · {light}"), theme::dim())),
+            Line::from(Span::styled(format!("{short} · {light}"), theme::dim())),
         ];
         frame.render_widget(Paragraph::new(lines), inner);
         return;
