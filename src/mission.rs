@@ -125,6 +125,13 @@ pub fn validate(model: Model, steps: &[Step]) -> Result<(), Vec<crate::script::S
                     Some(format!("{name} only takes drive, stop and wait lines"))
                 }
                 Action::Stance(_) if !model.has_legs() => Some(format!("{name} has no legs")),
+                Action::Matrix(_) if !model.has_matrix() => {
+                    Some(format!("{name} has no LED matrix"))
+                }
+                Action::Tank { .. } if !model.has_tracks() => Some(format!("{name} has no tracks")),
+                Action::CalibrateCompass if !model.has_compass() => {
+                    Some(format!("{name} has no compass"))
+                }
                 Action::Head(_) if !model.has_dome() => Some(format!("{name} has no dome to turn")),
                 Action::Animation(_) if family.animation(0).is_none() => {
                     Some(format!("{name} has no animations"))
@@ -184,6 +191,8 @@ struct Runner {
     emit: Emit,
     /// The drive being held: speed, heading.
     driving: Option<(u8, Heading)>,
+    /// The tracks being held (RVR): left, right.
+    tracking: Option<(i16, i16)>,
     last_heading: Heading,
     events: broadcast::Receiver<SessionEvent>,
     failed: u32,
@@ -229,6 +238,12 @@ impl Runner {
             {
                 self.session
                     .set(Slot::Drive, self.drive_cmd(speed, heading));
+            }
+            if let Some((left, right)) = self.tracking
+                && Instant::now() < end
+                && let Some(c) = self.family.tank(left, right)
+            {
+                self.session.set(Slot::Drive, c);
             }
         }
     }
@@ -315,6 +330,11 @@ impl Runner {
             }
             Action::Stop => {
                 self.driving = None;
+                if self.tracking.take().is_some()
+                    && let Some(c) = self.family.tank(0, 0)
+                {
+                    self.session.set(Slot::Drive, c);
+                }
                 self.session
                     .set(Slot::Drive, self.drive_cmd(0, self.last_heading));
             }
@@ -345,6 +365,34 @@ impl Runner {
                 }
             }
             Action::Wait(d) => self.hold(*d).await,
+            Action::Matrix(m) => {
+                if let Some(c) = self.family.matrix(m) {
+                    self.request(s.line, c).await;
+                }
+            }
+            Action::CalibrateCompass => {
+                if let Some(c) = self.family.calibrate_compass() {
+                    self.request(s.line, c).await;
+                }
+            }
+            Action::Tank {
+                left,
+                right,
+                duration,
+            } => {
+                self.driving = None;
+                if let Some(c) = self.family.tank(*left, *right) {
+                    self.session.set(Slot::Drive, c);
+                }
+                self.tracking = (*left != 0 || *right != 0).then_some((*left, *right));
+                if let Some(d) = duration {
+                    self.hold(*d).await;
+                    self.tracking = None;
+                    if let Some(c) = self.family.tank(0, 0) {
+                        self.session.set(Slot::Drive, c);
+                    }
+                }
+            }
         }
     }
 }
@@ -493,12 +541,12 @@ impl DroidMission {
                         t.stance = crate::telemetry::Stance::from_state(s);
                     }
                 }
-                let Some(battery) = family.battery_request() else {
+                let Some(battery) = family.battery_request_for(model) else {
                     return;
                 };
                 loop {
                     if let Ok(p) = session.request(battery.clone()).await
-                        && let Some(v) = family.battery_volts(p.data())
+                        && let Some(v) = family.battery_volts_for(model, p.data())
                     {
                         lock(&telemetry).battery_v = Some(v);
                     }
@@ -531,6 +579,7 @@ impl DroidMission {
             start,
             emit: emit.clone(),
             driving: None,
+            tracking: None,
             last_heading: Heading::default(),
             events,
             failed: 0,

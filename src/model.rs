@@ -12,6 +12,13 @@ pub enum Model {
     SprkPlus,
     Ollie,
     Robi42,
+    /// Sphero BOLT (and BOLT+, which advertises the same way): two processors, an 8×8 LED
+    /// matrix, compass, ambient light, robot-to-robot IR (`droid-facts.md` §6).
+    Bolt,
+    /// Sphero Mini: one processor, BB-8-like on API v2.
+    Mini,
+    /// Sphero RVR: a tracked rover, every command addressed to one of two processors.
+    Rvr,
 }
 
 /// The wire protocol a model speaks.
@@ -23,7 +30,7 @@ pub enum Protocol {
 }
 
 impl Model {
-    pub const ALL: [Model; 7] = [
+    pub const ALL: [Model; 10] = [
         Model::R2D2,
         Model::R2Q5,
         Model::BB9E,
@@ -31,6 +38,9 @@ impl Model {
         Model::SprkPlus,
         Model::Ollie,
         Model::Robi42,
+        Model::Bolt,
+        Model::Mini,
+        Model::Rvr,
     ];
 
     /// Recognise a model from its advertised BLE name (`D2-1234` → R2-D2).
@@ -54,6 +64,9 @@ impl Model {
             Model::SprkPlus => Some("SK-"),
             Model::Ollie => Some("2B-"),
             Model::Robi42 => None,
+            Model::Bolt => Some("SB-"),
+            Model::Mini => Some("SM-"),
+            Model::Rvr => Some("RV-"),
         }
     }
 
@@ -66,6 +79,9 @@ impl Model {
             Model::SprkPlus => "SPRK+",
             Model::Ollie => "Ollie",
             Model::Robi42 => "Robi 42",
+            Model::Bolt => "Sphero BOLT",
+            Model::Mini => "Sphero Mini",
+            Model::Rvr => "Sphero RVR",
         }
     }
 
@@ -79,6 +95,9 @@ impl Model {
             Model::SprkPlus => "sprk",
             Model::Ollie => "ollie",
             Model::Robi42 => "robi42",
+            Model::Bolt => "bolt",
+            Model::Mini => "mini",
+            Model::Rvr => "rvr",
         }
     }
 
@@ -88,6 +107,9 @@ impl Model {
         let id = match id.as_str() {
             "robi" => "robi42".to_string(),
             "sprkplus" | "sprk+" => "sprk".to_string(),
+            "boltplus" | "bolt+" | "spherobolt" => "bolt".to_string(),
+            "spherorvr" | "rvr+" => "rvr".to_string(),
+            "spheromini" => "mini".to_string(),
             _ => id,
         };
         Model::ALL.into_iter().find(|m| {
@@ -101,7 +123,9 @@ impl Model {
 
     pub fn protocol(self) -> Protocol {
         match self {
-            Model::R2D2 | Model::R2Q5 | Model::BB9E => Protocol::SpheroV2,
+            Model::R2D2 | Model::R2Q5 | Model::BB9E | Model::Bolt | Model::Mini | Model::Rvr => {
+                Protocol::SpheroV2
+            }
             Model::BB8 | Model::SprkPlus | Model::Ollie => Protocol::SpheroV1,
             Model::Robi42 => Protocol::Rsrcp,
         }
@@ -110,6 +134,13 @@ impl Model {
     /// Minimum interval between writes used by reference clients (`droid-facts.md` §1).
     /// One client uses 12 ms for R2-D2: this is only a default, configurable.
     pub fn write_pacing(self) -> Duration {
+        match self {
+            // spherov2.py's `cmd_safe_interval` (`droid-facts.md` §6): BOLT and RVR 75 ms,
+            // Mini 120 ms.
+            Model::Bolt | Model::Rvr => return Duration::from_millis(75),
+            Model::Mini => return Duration::from_millis(120),
+            _ => {}
+        }
         match self.protocol() {
             Protocol::SpheroV2 => Duration::from_millis(120),
             Protocol::SpheroV1 => Duration::from_millis(60),
@@ -138,8 +169,54 @@ impl Model {
     pub fn can_aim(self) -> bool {
         matches!(
             self,
-            Model::BB8 | Model::SprkPlus | Model::Ollie | Model::BB9E
+            Model::BB8
+                | Model::SprkPlus
+                | Model::Ollie
+                | Model::BB9E
+                | Model::Bolt
+                | Model::Mini
+                | Model::Rvr
         )
+    }
+
+    /// How many processors take commands: BOLT and RVR have a primary (0x11: power, lights,
+    /// RVR's colour sensor) and a secondary (0x12: drive, sensors, BOLT's matrix); the others
+    /// one, addressed without a target (`droid-facts.md` §6).
+    pub fn processors(self) -> u8 {
+        match self {
+            Model::Bolt | Model::Rvr => 2,
+            _ => 1,
+        }
+    }
+
+    /// Whether every command must name its processor (RVR; spherov2's `_require_target`).
+    pub fn requires_target(self) -> bool {
+        self == Model::Rvr
+    }
+
+    /// BOLT's 8×8 LED matrix.
+    pub fn has_matrix(self) -> bool {
+        self == Model::Bolt
+    }
+
+    /// A magnetometer to calibrate to north, and an ambient light sensor (BOLT).
+    pub fn has_compass(self) -> bool {
+        self == Model::Bolt
+    }
+
+    /// Driven by its two tracks as well as by heading (RVR's raw motors).
+    pub fn has_tracks(self) -> bool {
+        self == Model::Rvr
+    }
+
+    /// Sensors through the streaming service (tokens, periods) rather than masks (RVR).
+    pub fn streams_by_service(self) -> bool {
+        self == Model::Rvr
+    }
+
+    /// A colour sensor underneath (RVR).
+    pub fn has_color_sensor(self) -> bool {
+        self == Model::Rvr
     }
 
     /// Whether the droid has R2's rotating dome.
@@ -161,6 +238,9 @@ mod tests {
         assert_eq!(Model::from_advertised_name("SK-1"), Some(Model::SprkPlus));
         assert_eq!(Model::from_advertised_name("2B-9"), Some(Model::Ollie));
         assert_eq!(Model::from_advertised_name("Robi 42"), Some(Model::Robi42));
+        assert_eq!(Model::from_advertised_name("SB-5A1C"), Some(Model::Bolt));
+        assert_eq!(Model::from_advertised_name("SM-0B12"), Some(Model::Mini));
+        assert_eq!(Model::from_advertised_name("RV-F00D"), Some(Model::Rvr));
         assert_eq!(Model::from_advertised_name("JBL Flip"), None);
         assert_eq!(Model::from_advertised_name("d2-lower"), None);
     }
@@ -175,5 +255,11 @@ mod tests {
         assert_eq!(Model::from_id("Robi 42"), Some(Model::Robi42));
         assert_eq!(Model::from_id("sprk+"), Some(Model::SprkPlus));
         assert_eq!(Model::R2D2.write_pacing(), Duration::from_millis(120));
+        assert_eq!(Model::from_id("bolt+"), Some(Model::Bolt));
+        assert_eq!(Model::from_id("Sphero RVR"), Some(Model::Rvr));
+        assert_eq!(Model::from_id("mini"), Some(Model::Mini));
+        assert_eq!(Model::Bolt.write_pacing(), Duration::from_millis(75));
+        assert_eq!(Model::Rvr.write_pacing(), Duration::from_millis(75));
+        assert_eq!(Model::Mini.write_pacing(), Duration::from_millis(120));
     }
 }

@@ -13,8 +13,10 @@ pub mod fleet;
 
 pub use fleet::{Addressed, Item, is_fleet, parse_fleet, plain_steps};
 
+mod robots;
 use crate::protocol::v2::wire::LegAction;
 use crate::units::{HeadAngle, Heading};
+pub use robots::MatrixAction;
 use std::fmt;
 use std::time::Duration;
 
@@ -46,6 +48,16 @@ pub enum Action {
     LedRgb(LedGroup, [u8; 3]),
     LedBrightness(LedGroup, u8),
     Wait(Duration),
+    /// BOLT's LED matrix.
+    Matrix(MatrixAction),
+    /// RVR's tracks, each −255..=255, held for `duration` (then stopped) or until changed.
+    Tank {
+        left: i16,
+        right: i16,
+        duration: Option<Duration>,
+    },
+    /// Calibrate the compass to north (BOLT).
+    CalibrateCompass,
 }
 
 /// One step with the line it came from.
@@ -132,6 +144,17 @@ fn int<T: TryFrom<i64>>(text: &str, what: &str, min: i64, max: i64) -> Result<T,
     T::try_from(v).map_err(|_| format!("{what} {v} is out of range"))
 }
 
+/// The optional `for DURATION` ending a 5-word line (`drive`, `tank`).
+fn for_duration(words: &[&str], usage: &str) -> Result<Option<Duration>, String> {
+    if words.len() != 5 {
+        return Ok(None);
+    }
+    if !words[3].eq_ignore_ascii_case("for") {
+        return Err(format!("expected `for` before the duration in `{usage}`"));
+    }
+    parse_duration(words[4]).map(Some)
+}
+
 fn arity(words: &[&str], n: usize, usage: &str) -> Result<(), String> {
     if words.len() != n {
         return Err(format!("expected `{usage}`"));
@@ -170,14 +193,7 @@ fn parse_line(content: &str) -> Result<Action, String> {
             let h: u16 = int(words[2], "heading", 0, 359)?;
             let heading =
                 Heading::new(h).ok_or_else(|| format!("heading {h} is out of range 0..=359"))?;
-            let duration = if words.len() == 5 {
-                if !words[3].eq_ignore_ascii_case("for") {
-                    return Err(format!("expected `for` before the duration in `{usage}`"));
-                }
-                Some(parse_duration(words[4])?)
-            } else {
-                None
-            };
+            let duration = for_duration(&words, usage)?;
             Ok(Action::Drive {
                 speed,
                 heading,
@@ -241,6 +257,15 @@ fn parse_line(content: &str) -> Result<Action, String> {
         "wait" => {
             arity(&words, 2, "wait DURATION")?;
             Ok(Action::Wait(parse_duration(words[1])?))
+        }
+        "matrix" => robots::parse_matrix(content, &words),
+        "tank" => robots::parse_tank(&words),
+        "calibrate" => {
+            arity(&words, 2, "calibrate compass")?;
+            match words[1].to_ascii_lowercase().as_str() {
+                "compass" => Ok(Action::CalibrateCompass),
+                other => Err(format!("unknown calibration {other:?}: use compass")),
+            }
         }
         other => Err(format!(
             "unknown command {other:?}; expected one of wake, sleep, stance, drive, stop, head, animation, sound, led, wait"

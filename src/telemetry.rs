@@ -1,7 +1,7 @@
 //! What the droid reports, aggregated from notifications: the live gauges of the TUI and the
 //! samples of `droidctl run --json` both read this.
 
-use crate::protocol::notify::{Collision, Notification};
+use crate::protocol::notify::{Collision, Notification, RobotEvent};
 use crate::protocol::rsrcp;
 use crate::protocol::wire::{LegAction, LegState};
 use crate::units::Heading;
@@ -140,6 +140,30 @@ impl RobiTelemetry {
     }
 }
 
+impl RobotReadings {
+    fn apply(&mut self, e: &RobotEvent) {
+        match *e {
+            RobotEvent::CompassHeading(yaw) => self.compass_north = Some(yaw % 360),
+            RobotEvent::Color {
+                rgb,
+                index,
+                confidence,
+            } => self.color = Some((rgb, index, confidence as f32 / 255.0)),
+            RobotEvent::MotorStall { motor, stalled } => {
+                self.motor_events += 1;
+                if let Some(m) = self.stalled.get_mut(motor as usize) {
+                    *m = stalled;
+                }
+            }
+            RobotEvent::MotorFault(f) => {
+                self.motor_events += 1;
+                self.motor_fault = f;
+            }
+            RobotEvent::MatrixTextDone => {}
+        }
+    }
+}
+
 /// The last collision and when it happened.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CollisionSeen {
@@ -172,6 +196,25 @@ pub struct Telemetry {
     pub animations_completed: u32,
     /// Robi 42's state (`None` for other droids).
     pub robi: Option<RobiTelemetry>,
+    /// What BOLT and RVR report beyond the droids.
+    pub robot: RobotReadings,
+}
+
+/// BOLT's compass and light, RVR's colour sensor and motors.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct RobotReadings {
+    /// North as a yaw, degrees, after a compass calibration (BOLT).
+    pub compass_north: Option<u16>,
+    /// Ambient light, lux (BOLT, RVR).
+    pub ambient_lux: Option<f32>,
+    /// The colour under the robot, its palette index and confidence 0..=1 (RVR).
+    pub color: Option<([u8; 3], u8, f32)>,
+    /// A motor stalled: left, right (RVR's motor stall notifications).
+    pub stalled: [bool; 2],
+    /// The motors report a fault (RVR).
+    pub motor_fault: bool,
+    /// Notifications of motor stalls and faults seen.
+    pub motor_events: u32,
 }
 
 impl Default for Telemetry {
@@ -197,6 +240,7 @@ impl Default for Telemetry {
             asleep: false,
             animations_completed: 0,
             robi: None,
+            robot: RobotReadings::default(),
         }
     }
 }
@@ -221,7 +265,21 @@ impl Telemetry {
                 if let (Some(x), Some(y)) = (s.get("locator_x"), s.get("locator_y")) {
                     self.moved_to(x, y);
                 }
+                self.robot.ambient_lux = s.get("ambient_light").or(self.robot.ambient_lux);
+                if let (Some(r), Some(g), Some(b)) = (
+                    s.get("color_red"),
+                    s.get("color_green"),
+                    s.get("color_blue"),
+                ) {
+                    let byte = |v: f32| v.round().clamp(0.0, 255.0) as u8;
+                    self.robot.color = Some((
+                        [byte(r), byte(g), byte(b)],
+                        byte(s.get("color_index").unwrap_or(0.0)),
+                        s.get("color_confidence").unwrap_or(0.0).clamp(0.0, 1.0),
+                    ));
+                }
             }
+            Notification::Robot(e) => self.robot.apply(e),
             Notification::Collision(c) => {
                 self.collisions += 1;
                 self.last_collision = Some(CollisionSeen { at, collision: *c });

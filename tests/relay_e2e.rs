@@ -501,6 +501,20 @@ fn python_with(modules: &str) -> Result<String, String> {
     }
 }
 
+/// Whether a private bus can be run for the virtual BlueZ, or why not.
+fn dbus_daemon() -> Result<(), String> {
+    let ok = Command::new("dbus-daemon")
+        .arg("--version")
+        .stdout(Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success());
+    if ok {
+        Ok(())
+    } else {
+        Err("no dbus-daemon".into())
+    }
+}
+
 /// Wait for a child with a limit; its output.
 fn finish(mut child: Child, limit: Duration, what: &str) -> Output {
     let start = Instant::now();
@@ -553,58 +567,94 @@ fn spherov2_tcp_adapter_drives_through_serve() {
     serve.stop();
 }
 
+/// A running `droidctl sim --bluez MODEL… [--trace --json]`: its bus, its droids' names (in
+/// the order given), and with `--trace --json` its trace lines.
+struct Bluez {
+    child: Child,
+    bus: String,
+    names: Vec<String>,
+    trace: Arc<Mutex<Vec<Value>>>,
+}
+
+impl Bluez {
+    fn start(models: &[&str], dir: &TempDir) -> Bluez {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_droidctl"))
+            .args(["sim", "--bluez"])
+            .args(models)
+            .args(["--trace", "--json"])
+            .env("DROIDCTL_LOG_FILE", dir.path("bluez.log"))
+            .stdin(Stdio::null())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        let mut out = BufReader::new(child.stdout.take().unwrap());
+        let mut first = String::new();
+        out.read_line(&mut first).unwrap();
+        let bus = first
+            .trim()
+            .strip_prefix("DBUS_SYSTEM_BUS_ADDRESS=")
+            .unwrap_or_else(|| panic!("export line, got {first:?}"))
+            .to_string();
+        std::thread::spawn(move || for _ in out.lines() {});
+        let mut names = Vec::new();
+        let mut err = BufReader::new(child.stderr.take().unwrap());
+        while names.len() < models.len() {
+            let mut line = String::new();
+            if err.read_line(&mut line).unwrap() == 0 {
+                panic!("sim --bluez ended");
+            }
+            if let Some(rest) = line.strip_prefix("droidctl sim: ")
+                && let Some((n, _)) = rest.split_once(" (")
+                && !rest.starts_with("serving")
+            {
+                names.push(n.to_string());
+            }
+        }
+        // The trace (JSON lines on stderr), read on so the simulator never blocks on it.
+        let trace = Arc::new(Mutex::new(Vec::new()));
+        let lines = trace.clone();
+        std::thread::spawn(move || {
+            for line in err.lines() {
+                let Ok(line) = line else { break };
+                if let Ok(v) = serde_json::from_str::<Value>(&line) {
+                    lines.lock().unwrap().push(v);
+                }
+            }
+        });
+        Bluez {
+            child,
+            bus,
+            names,
+            trace,
+        }
+    }
+
+    fn stop(self) {
+        let _ = Command::new("kill")
+            .args(["-TERM", &self.child.id().to_string()])
+            .status();
+        let _ = finish(self.child, Duration::from_secs(10), "sim --bluez");
+    }
+}
+
 /// `droidctl run --remote` through spherov2's own `tcp_server` (bleak), which reaches the
 /// droid on the virtual BlueZ of `droidctl sim --bluez`: the same telemetry as `--sim`.
 #[test]
 fn droidctl_drives_through_spherov2_tcp_server() {
-    let py = match python_with("spherov2.adapter.tcp_server, bleak") {
+    let py = match python_with("spherov2.adapter.tcp_server, bleak")
+        .and_then(|py| dbus_daemon().map(|_| py))
+    {
         Ok(py) => py,
         Err(why) => {
             println!("SKIPPED droidctl_drives_through_spherov2_tcp_server: {why}");
             return;
         }
     };
-    let dbus = Command::new("dbus-daemon")
-        .arg("--version")
-        .stdout(Stdio::null())
-        .status()
-        .is_ok_and(|s| s.success());
-    if !dbus {
-        println!("SKIPPED droidctl_drives_through_spherov2_tcp_server: no dbus-daemon");
-        return;
-    }
     let dir = TempDir::new("spherov2-server");
     // The virtual BlueZ with one R2-D2.
-    let mut bluez = Command::new(env!("CARGO_BIN_EXE_droidctl"))
-        .args(["sim", "--bluez", "r2d2"])
-        .env("DROIDCTL_LOG_FILE", dir.path("bluez.log"))
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let mut first = String::new();
-    BufReader::new(bluez.stdout.take().unwrap())
-        .read_line(&mut first)
-        .unwrap();
-    let bus = first
-        .trim()
-        .strip_prefix("DBUS_SYSTEM_BUS_ADDRESS=")
-        .unwrap_or_else(|| panic!("export line, got {first:?}"))
-        .to_string();
-    let mut name = String::new();
-    let mut err = BufReader::new(bluez.stderr.take().unwrap());
-    while name.is_empty() {
-        let mut line = String::new();
-        if err.read_line(&mut line).unwrap() == 0 {
-            panic!("sim --bluez ended");
-        }
-        if let Some(rest) = line.strip_prefix("droidctl sim: ")
-            && let Some((n, _)) = rest.split_once(" (R2-D2)")
-        {
-            name = n.to_string();
-        }
-    }
+    let bluez = Bluez::start(&["r2d2"], &dir);
+    let (bus, name) = (bluez.bus.clone(), bluez.names[0].clone());
     // spherov2's server on a free loopback port (it listens on 0.0.0.0 unless told).
     let port = std::net::TcpListener::bind("127.0.0.1:0")
         .unwrap()
@@ -647,10 +697,7 @@ fn droidctl_drives_through_spherov2_tcp_server() {
     let reference = droidctl(&["run", &script, "--sim", "--json"], &dir);
     let _ = server.kill();
     let _ = server.wait();
-    let _ = Command::new("kill")
-        .args(["-TERM", &bluez.id().to_string()])
-        .status();
-    let _ = finish(bluez, Duration::from_secs(10), "sim --bluez");
+    bluez.stop();
     assert_eq!(remote.status.code(), Some(0), "{}", text(&remote.stderr));
     let (a, b) = (parse_run(&remote).summary, parse_run(&reference).summary);
     let off = (f(&a["x_cm"]) - f(&b["x_cm"])).hypot(f(&a["y_cm"]) - f(&b["y_cm"]));
@@ -759,4 +806,106 @@ fn a_fleet_mixes_droids_behind_two_relays_and_a_local_one() {
     assert_eq!(released["name"], "BB-0001", "the named droid of the two");
     a.stop();
     b.stop();
+}
+
+/// spherov2's Sphero Edu API on a simulated BOLT or Mini (tests/sphero_edu.py): `how` is
+/// `["tcp", PORT]` or `["bleak"]`. The JSON it prints.
+fn sphero_edu(py: &str, how: &[&str], name: &str, bus: Option<&str>, dir: &TempDir) -> Value {
+    let script = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/sphero_edu.py");
+    let mut cmd = Command::new(py);
+    cmd.arg(script)
+        .args(how)
+        .arg(name)
+        .current_dir(&dir.0)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped());
+    if let Some(bus) = bus {
+        cmd.env("DBUS_SYSTEM_BUS_ADDRESS", bus);
+    }
+    let out = finish(
+        cmd.spawn().unwrap(),
+        Duration::from_secs(90),
+        "the Sphero Edu client",
+    );
+    assert!(out.status.success(), "{name}: {}", text(&out.stderr));
+    serde_json::from_str(text(&out.stdout).trim()).unwrap()
+}
+
+/// It rolled at heading 90: east (+x), far more than sideways.
+fn rolled_east(seen: &Value) {
+    let (x, y) = (f(&seen["location"]["x"]), f(&seen["location"]["y"]));
+    assert!(x > 40.0 && y.abs() < x / 3.0, "rolled east: {seen}");
+}
+
+/// Issue 19 point 4: spherov2's Sphero Edu API drives a simulated BOLT and a simulated Mini
+/// through `droidctl serve` (its TCP adapter): roll, the location in the rolled direction; the
+/// BOLT's matrix character is in the served session's capture, answered with success.
+#[test]
+fn sphero_edu_drives_bolt_and_mini_through_serve() {
+    let py = match python_with("spherov2.adapter.tcp_adapter, spherov2.sphero_edu") {
+        Ok(py) => py,
+        Err(why) => {
+            println!("SKIPPED sphero_edu_drives_bolt_and_mini_through_serve: {why}");
+            return;
+        }
+    };
+    let dir = TempDir::new("sphero-edu-serve");
+    let cap = dir.path("serve.txt");
+    let serve = Serve::start(&["bolt", "mini"], &["--record", &cap], &dir);
+    let port = serve.address.rsplit(':').next().unwrap().to_string();
+    let bolt = sphero_edu(&py, &["tcp", &port], "SB-0001", None, &dir);
+    assert_eq!(bolt["class"], "BOLT", "{bolt}");
+    rolled_east(&bolt);
+    let mini = sphero_edu(&py, &["tcp", &port], "SM-0002", None, &dir);
+    assert_eq!(mini["class"], "Mini", "{mini}");
+    rolled_east(&mini);
+    serve.wait_event("both released", |e| {
+        e["event"] == "droid_released" && e["name"] == "SM-0002"
+    });
+    serve.stop();
+    let capture = std::fs::read_to_string(&cap).expect("the capture was written");
+    // Set Single Character 'A' in red to the secondary (8D 3A 12 01 1A 42 …), and its answer
+    // from the secondary with error 0 (8D 39 01 12 1A 42 SEQ 00 …).
+    let compact = capture.to_ascii_lowercase().replace(' ', "");
+    assert!(compact.contains("8d3a12011a42"), "{capture}");
+    assert!(
+        compact.contains("ff000041"),
+        "the character and colour: {capture}"
+    );
+    assert!(compact.contains("8d3901121a42"), "answered: {capture}");
+}
+
+/// Issue 19 point 4: the same through bleak on the virtual BlueZ of `droidctl sim --bluez`,
+/// whose trace shows the BOLT's matrix drawing the character.
+#[test]
+fn sphero_edu_drives_bolt_and_mini_through_bleak() {
+    let py = match python_with("spherov2.adapter.bleak_adapter, spherov2.sphero_edu, bleak")
+        .and_then(|py| dbus_daemon().map(|_| py))
+    {
+        Ok(py) => py,
+        Err(why) => {
+            println!("SKIPPED sphero_edu_drives_bolt_and_mini_through_bleak: {why}");
+            return;
+        }
+    };
+    let dir = TempDir::new("sphero-edu-bleak");
+    let bluez = Bluez::start(&["bolt", "mini"], &dir);
+    let bolt = sphero_edu(&py, &["bleak"], &bluez.names[0], Some(&bluez.bus), &dir);
+    assert_eq!(bolt["class"], "BOLT", "{bolt}");
+    rolled_east(&bolt);
+    let mini = sphero_edu(&py, &["bleak"], &bluez.names[1], Some(&bluez.bus), &dir);
+    assert_eq!(mini["class"], "Mini", "{mini}");
+    rolled_east(&mini);
+    let trace = bluez.trace.lock().unwrap().clone();
+    bluez.stop();
+    let shown = trace
+        .iter()
+        .filter(|t| t["packet"]["kind"] == "state")
+        .map(|t| t["packet"]["shows"].as_str().unwrap_or("").to_string())
+        .collect::<Vec<_>>();
+    assert!(
+        shown.contains(&"matrix: character 'A' in #ff0000".to_string()),
+        "{shown:?}"
+    );
 }

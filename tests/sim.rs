@@ -193,6 +193,19 @@ fn payload_for(schema: Schema) -> Vec<u8> {
     droidctl::protocol::v2::catalog::minimal_payload(schema)
 }
 
+/// A well-formed payload for `def`: the shortest, except where zeros are not a valid value
+/// (a streaming token, a period, a matrix character).
+fn valid_payload(model: Model, def: &droidctl::protocol::v2::CommandDef) -> Vec<u8> {
+    match (def.did, def.cid) {
+        // RVR takes it on the primary (the one both answer): its ambient light.
+        (0x18, 0x39) if model == Model::Rvr => vec![1, 0, 10, 2],
+        (0x18, 0x39) => vec![1, 0, 1, 2],
+        (0x18, 0x3A) => vec![0, 100],
+        (0x1A, 0x42) => vec![255, 0, 0, b'A'],
+        _ => payload_for(def.params),
+    }
+}
+
 fn wrong_length(schema: Schema) -> Option<Vec<u8>> {
     let n = payload_for(schema).len();
     let variable = schema.iter().any(|f| matches!(f.size, Size::Rest { .. }));
@@ -204,11 +217,32 @@ fn wrong_length(schema: Schema) -> Option<Vec<u8>> {
     }
 }
 
-/// Which commands a model rejects as unknown: BB-9E has no legs or dome.
+/// Which commands a model rejects as unknown: BB-9E has no legs or dome; BOLT, Mini and
+/// RVR no animatronic device at all.
 fn model_knows(model: Model, did: u8, cid: u8) -> bool {
+    if matches!(model, Model::Bolt | Model::Mini | Model::Rvr) {
+        return Device::from_id(did) != Some(Device::Animatronic);
+    }
     model.has_legs()
         || Device::from_id(did) != Some(Device::Animatronic)
         || matches!(cid, 0x05 | 0x2B | 0x2C)
+}
+
+/// What a model answers a command it lacks.
+fn unknown_error(model: Model) -> ErrorCode {
+    if matches!(model, Model::Bolt | Model::Mini | Model::Rvr) {
+        ErrorCode::BadDeviceId
+    } else {
+        ErrorCode::BadCommandId
+    }
+}
+
+/// A command packet as a client addresses it on `model` (RVR and BOLT name the processor).
+fn addressed_packet(model: Model, did: u8, cid: u8, seq: u8, data: Vec<u8>) -> Packet {
+    let mut c = Command::new(did, cid, data);
+    c.target =
+        droidctl::protocol::v2::catalog::targets::addressed(model, did, cid).map(|p| p.target_id());
+    c.to_packet(seq)
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -219,11 +253,18 @@ fn model_knows(model: Model, did: u8, cid: u8) -> bool {
 fn answers_every_catalogue_command() {
     let commands = catalog::commands();
     assert!(commands.len() > 100);
-    for model in [Model::R2D2, Model::R2Q5, Model::BB9E] {
+    for model in [
+        Model::R2D2,
+        Model::R2Q5,
+        Model::BB9E,
+        Model::Bolt,
+        Model::Mini,
+        Model::Rvr,
+    ] {
         for def in commands {
             let mut b = Bench::new(model);
-            b.ok(cmd::wake());
-            let req = Packet::command(def.did, def.cid, 77, payload_for(def.params));
+            b.send_packet(&addressed_packet(model, 0x13, 0x0D, 1, vec![]));
+            let req = addressed_packet(model, def.did, def.cid, 77, valid_payload(model, def));
             let responses = b.send_packet(&req);
             assert_eq!(responses.len(), 1, "{model:?} {}: {responses:?}", def.name);
             let r = &responses[0];
@@ -246,24 +287,19 @@ fn answers_every_catalogue_command() {
                     r.data
                 );
             } else {
-                assert_eq!(
-                    r.err,
-                    Some(ErrorCode::BadCommandId),
-                    "{model:?} {}",
-                    def.name
-                );
+                assert_eq!(r.err, Some(unknown_error(model)), "{model:?} {}", def.name);
             }
             // A payload of the wrong length is refused before anything else.
             if let Some(bad) = wrong_length(def.params) {
                 let mut b = Bench::new(model);
-                b.ok(cmd::wake());
+                b.send_packet(&addressed_packet(model, 0x13, 0x0D, 1, vec![]));
                 let r = b
-                    .send_packet(&Packet::command(def.did, def.cid, 9, bad))
+                    .send_packet(&addressed_packet(model, def.did, def.cid, 9, bad))
                     .remove(0);
                 let want = if model_knows(model, def.did, def.cid) {
                     ErrorCode::BadDataLength
                 } else {
-                    ErrorCode::BadCommandId
+                    unknown_error(model)
                 };
                 assert_eq!(
                     r.err,
@@ -770,29 +806,17 @@ fn dome_moves_at_a_finite_rate_and_is_clamped() {
     let read = b.ok(cmd::get_head_position()).data;
     assert_eq!(f32s(&read), [90.0]);
     // Out-of-range targets (sent raw: the typed constructor cannot make them) are clamped.
-    b.ok(Command {
-        did: 0x17,
-        cid: 0x0F,
-        data: 500.0f32.to_be_bytes().to_vec(),
-    });
+    b.ok(Command::new(0x17, 0x0F, 500.0f32.to_be_bytes().to_vec()));
     b.run_for(ms(1500));
     assert_eq!(b.state().head_deg, 180.0);
-    b.ok(Command {
-        did: 0x17,
-        cid: 0x0F,
-        data: (-500.0f32).to_be_bytes().to_vec(),
-    });
+    b.ok(Command::new(0x17, 0x0F, (-500.0f32).to_be_bytes().to_vec()));
     b.run_for(ms(1000));
     let h = b.state().head_deg;
     assert!(h > -160.0 && h < 180.0, "still moving: {h}");
     b.run_for(ms(1500));
     assert_eq!(b.state().head_deg, -160.0);
     assert_eq!(
-        b.err(Command {
-            did: 0x17,
-            cid: 0x0F,
-            data: f32::NAN.to_be_bytes().to_vec(),
-        }),
+        b.err(Command::new(0x17, 0x0F, f32::NAN.to_be_bytes().to_vec())),
         ErrorCode::BadParameterValue
     );
     // BB-9E has no dome.
@@ -1503,34 +1527,46 @@ async fn end_to_end_telemetry_matches_the_droid() {
 
 #[tokio::test(start_paused = true)]
 async fn end_to_end_every_catalogue_command_through_a_session() {
-    // One client paces R2-D2 writes at 12 ms (droid-facts.md §1).
-    let config = SessionConfig {
-        pacing: ms(12),
-        ..SessionConfig::default()
-    };
-    let link = SimLink::new(Model::R2D2, SimConfig::default(), Faults::none());
-    let s = session::start(Box::new(link), config);
-    for def in catalog::commands() {
-        s.request(cmd::wake()).await.unwrap();
-        let c = Command {
-            did: def.did,
-            cid: def.cid,
-            data: payload_for(def.params),
+    // One client paces R2-D2 writes at 12 ms (droid-facts.md §1). BOLT and RVR get each
+    // command addressed by the session's codec to the processor that has it.
+    for model in [Model::R2D2, Model::Bolt, Model::Rvr] {
+        let config = SessionConfig {
+            pacing: ms(12),
+            model: Some(model),
+            ..SessionConfig::default()
         };
-        let r = s
-            .request(c)
-            .await
-            .unwrap_or_else(|e| panic!("{}: {e}", def.name));
-        let r = r.as_v2().unwrap();
-        assert_eq!((r.did, r.cid), (def.did, def.cid));
-        assert!(
-            catalog::decode_fields(def.response, &r.data).is_ok(),
-            "{}",
-            def.name
+        let link = SimLink::new(model, SimConfig::default(), Faults::none());
+        let s = session::start(Box::new(link), config);
+        for def in catalog::commands() {
+            if !model_knows(model, def.did, def.cid) {
+                continue;
+            }
+            s.request(cmd::wake()).await.unwrap();
+            let c = Command::new(def.did, def.cid, valid_payload(model, def));
+            let r = s
+                .request(c)
+                .await
+                .unwrap_or_else(|e| panic!("{model:?} {}: {e}", def.name));
+            let r = r.as_v2().unwrap();
+            if model != Model::R2D2 && (def.did, def.cid) == (0x00, 0x01) {
+                // The newer robots are pinged with API and Shell's Echo.
+                assert_eq!((r.did, r.cid), (0x10, 0x00));
+                continue;
+            }
+            assert_eq!((r.did, r.cid), (def.did, def.cid));
+            assert!(
+                catalog::decode_fields(def.response, &r.data).is_ok(),
+                "{model:?} {}",
+                def.name
+            );
+        }
+        let st = s.stats();
+        assert_eq!(
+            (st.timeouts, st.errors, st.unmatched),
+            (0, 0, 0),
+            "{model:?}"
         );
     }
-    let st = s.stats();
-    assert_eq!((st.timeouts, st.errors, st.unmatched), (0, 0, 0));
 }
 
 #[tokio::test(start_paused = true)]
@@ -1551,4 +1587,140 @@ async fn shutdown_stop_reaches_the_simulated_droid() {
     let st = probe.state();
     assert_eq!(st.velocity_cm_s, 0.0, "{st:?}");
     assert_eq!(st.collisions, 0, "stopped by the stop, not by a wall");
+}
+
+/// Issue 19 point 3: BOLT's and RVR's processors are honoured: a command sent to the
+/// processor that has it is answered, to the other one it gets the robot's bad-command
+/// error, to a target that is no processor bad-target; RVR takes nothing without a target;
+/// Mini, with one processor, takes no target at all.
+#[test]
+fn processor_targets_are_honoured() {
+    let err = |model: Model, did: u8, cid: u8, tid: Option<u8>, data: Vec<u8>| {
+        let mut b = Bench::new(model);
+        b.send_packet(&addressed_packet(model, 0x13, 0x0D, 1, vec![]));
+        let mut c = Command::new(did, cid, data);
+        c.target = tid;
+        b.send_packet(&c.to_packet(5)).remove(0).err
+    };
+    let drive = || vec![50, 0, 90, 0];
+    assert_eq!(
+        err(Model::Bolt, 0x16, 0x07, Some(0x12), drive()),
+        Some(ErrorCode::Success)
+    );
+    assert_eq!(
+        err(Model::Bolt, 0x16, 0x07, Some(0x11), drive()),
+        Some(ErrorCode::BadCommandId)
+    );
+    assert_eq!(
+        err(Model::Bolt, 0x16, 0x07, Some(0x15), drive()),
+        Some(ErrorCode::BadTargetId)
+    );
+    assert_eq!(
+        err(Model::Bolt, 0x16, 0x07, None, drive()),
+        Some(ErrorCode::Success)
+    );
+    // The matrix is the secondary's, the front/back LEDs the primary's.
+    assert_eq!(
+        err(Model::Bolt, 0x1A, 0x2F, Some(0x11), vec![1, 2, 3]),
+        Some(ErrorCode::BadCommandId)
+    );
+    assert_eq!(
+        err(Model::Bolt, 0x1A, 0x1C, Some(0x11), vec![1, 9]),
+        Some(ErrorCode::Success)
+    );
+    assert_eq!(
+        err(Model::Rvr, 0x16, 0x07, None, drive()),
+        Some(ErrorCode::BadTargetId)
+    );
+    assert_eq!(
+        err(Model::Rvr, 0x16, 0x07, Some(0x12), drive()),
+        Some(ErrorCode::Success)
+    );
+    // RVR's colour sensor is the primary's; the streaming service runs on both.
+    assert_eq!(
+        err(Model::Rvr, 0x18, 0x38, Some(0x12), vec![1]),
+        Some(ErrorCode::BadCommandId)
+    );
+    assert_eq!(
+        err(Model::Rvr, 0x18, 0x38, Some(0x11), vec![1]),
+        Some(ErrorCode::Success)
+    );
+    assert_eq!(
+        err(Model::Rvr, 0x18, 0x3B, Some(0x12), vec![]),
+        Some(ErrorCode::Success)
+    );
+    assert_eq!(
+        err(Model::Rvr, 0x18, 0x3B, Some(0x11), vec![]),
+        Some(ErrorCode::Success)
+    );
+    assert_eq!(
+        err(Model::Mini, 0x16, 0x07, Some(0x12), drive()),
+        Some(ErrorCode::BadTargetId)
+    );
+    assert_eq!(
+        err(Model::Mini, 0x16, 0x07, None, drive()),
+        Some(ErrorCode::Success)
+    );
+}
+
+/// Issue 19 point 3: RVR's streaming service as the robot runs it: a configuration per token
+/// and processor (at most four sensors), started with a period, data from the processor that
+/// measures them, no reconfiguration while streaming, stopped and cleared.
+#[test]
+fn rvr_streaming_service_streams_named_values() {
+    use droidctl::protocol::v2::catalog::targets::Processor;
+    use droidctl::protocol::v2::stream::{ServiceConfig, decode};
+    let mut b = Bench::new(Model::Rvr);
+    let to = |c: Command, p: Processor| c.to(p);
+    b.ok(to(cmd::wake(), Processor::Primary));
+    let config = to(
+        Command::new(0x18, 0x39, vec![1, 0, 1, 2, 0, 6, 2]),
+        Processor::Secondary,
+    );
+    b.ok(config.clone());
+    b.ok(to(cmd::start_streaming_service(100), Processor::Secondary));
+    // No reconfiguration while streaming.
+    let busy = to(
+        Command::new(0x18, 0x39, vec![2, 0, 7, 2]),
+        Processor::Secondary,
+    );
+    assert_eq!(b.err(busy), ErrorCode::Busy);
+    b.ok(to(
+        cmd::drive_with_heading(100, Heading::new(90).unwrap(), DriveFlags::empty()),
+        Processor::Secondary,
+    ));
+    b.notes.clear();
+    b.run_for(ms(1000));
+    let out: Vec<Packet> = b.notes.iter().map(|(_, p)| p.clone()).collect();
+    let mut host = ServiceConfig::default();
+    host.snoop(&config);
+    let data: Vec<_> = out
+        .iter()
+        .filter(|p| (p.did, p.cid) == (0x18, 0x3D))
+        .collect();
+    assert!(
+        (8..=11).contains(&data.len()),
+        "every 100 ms: {}",
+        data.len()
+    );
+    assert!(
+        data.iter().all(|p| p.sid == Some(0x12)),
+        "from the secondary"
+    );
+    let last = decode(
+        &host,
+        Some(Processor::Secondary),
+        &data[data.len() - 1].data,
+    )
+    .unwrap();
+    assert!((last.get("yaw").unwrap() - 90.0).abs() < 1.0, "{last:?}");
+    assert!(last.get("locator_x").unwrap() > 5.0, "{last:?}");
+    b.ok(to(cmd::stop_streaming_service(), Processor::Secondary));
+    b.notes.clear();
+    b.run_for(ms(500));
+    assert!(b.notes.iter().all(|(_, p)| (p.did, p.cid) != (0x18, 0x3D)));
+    b.ok(to(
+        Command::new(0x18, 0x39, vec![2, 0, 7, 2]),
+        Processor::Secondary,
+    ));
 }

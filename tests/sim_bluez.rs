@@ -317,6 +317,52 @@ fn robi_mission_through_bluez_matches_the_simulator() {
     assert!((frames(&ble) - frames(&reference)).abs() <= 4.0);
 }
 
+/// Issue 19: BOLT, Mini and RVR found by `--name` and driven through btleplug on the virtual
+/// BlueZ, as in the simulator (BOLT and Mini unlock like R2-D2; RVR has no unlock and every
+/// command addressed; BOLT's matrix line and RVR's tracks on the way).
+#[test]
+fn bolt_mini_and_rvr_missions_through_bluez_match_the_simulator() {
+    mission_matches(
+        "bolt",
+        "matrix char A 255 0 0\ncalibrate compass\ndrive 80 90 for 1.5s\nwait 0.3s\n",
+    );
+    mission_matches("mini", "drive 80 90 for 1.5s\nwait 0.3s\n");
+    let (ble, _) = mission_matches("rvr", "tank 150 150 for 1.5s\nwait 0.3s\n");
+    let last = &ble.samples[ble.samples.len() - 1];
+    assert!(f(&last["y_cm"]) > 30.0, "both tracks forward: {last}");
+}
+
+#[test]
+fn scan_names_bolt_mini_and_rvr() {
+    let sim = Sim::start(&["bolt", "mini", "rvr"]);
+    let dir = TempDir::new("scan-robots");
+    let out = droidctl(
+        &["scan", "--timeout", "0.5", "--json"],
+        Some(&sim.address),
+        &dir,
+    );
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let seen: Vec<(String, String)> = text(&out.stdout)
+        .lines()
+        .map(|l| {
+            let v: serde_json::Value = serde_json::from_str(l).unwrap();
+            (
+                v["name"].as_str().unwrap_or("?").to_string(),
+                v["model"].as_str().unwrap_or("?").to_string(),
+            )
+        })
+        .collect();
+    assert_eq!(seen.len(), 3, "{seen:?}");
+    for ((name, model), (prefix, id)) in
+        seen.iter()
+            .zip([("SB-", "bolt"), ("SM-", "mini"), ("RV-", "rvr")])
+    {
+        assert!(name.starts_with(prefix), "{seen:?}");
+        assert_eq!(model, id);
+    }
+    sim.stop();
+}
+
 // -------------------------------------------------------------------------------------------
 // Scanning
 // -------------------------------------------------------------------------------------------

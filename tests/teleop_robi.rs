@@ -99,6 +99,7 @@ const FWD: Inputs = Inputs {
     estop: false,
     pad: None,
     pad_dome_rate: 0.0,
+    pad_tracks: None,
 };
 
 #[test]

@@ -3,9 +3,14 @@
 //! every notification of the catalogue, the 18-byte collision and sensor streaming with masks.
 
 use droidctl::hex;
+use droidctl::protocol::notify::RobotEvent;
 use droidctl::protocol::v2::catalog::{self, Command, cmd};
 use droidctl::protocol::v2::packet::{self, BodyError, parse_body};
 use droidctl::protocol::v2::sensor::{self, StreamingConfig, decode_sample, mask};
+use droidctl::protocol::v2::types::{
+    Char, FadeOverride, FrameList, FrameRotation, Palette, ScrollText, StreamSlots, StreamWidth,
+    U16List,
+};
 use droidctl::protocol::v2::wire::*;
 use droidctl::protocol::v2::{
     Collision, Decoder, ErrorCode, ErrorKind, Fields, Flags, Kind, Notification, Packet, Value,
@@ -467,7 +472,7 @@ constructors! {
     enable_color_detection_notify(true, 250, 80) => 0x18/0x35 [1, 0x00, 0xFA, 80];
     get_current_detected_color_reading() => 0x18/0x37 [];
     enable_color_detection(true) => 0x18/0x38 [1];
-    configure_streaming_service(Bytes(vec![1, 2, 3])) => 0x18/0x39 [1, 2, 3];
+    configure_streaming_service(1, StreamSlots(vec![(6, StreamWidth::Bits32)])) => 0x18/0x39 [1, 0, 6, 2];
     start_streaming_service(100) => 0x18/0x3A [0, 100];
     stop_streaming_service() => 0x18/0x3B [];
     clear_streaming_service() => 0x18/0x3C [];
@@ -475,7 +480,7 @@ constructors! {
     send_infrared_message([9, 8, 7, 6, 5]) => 0x18/0x3F [9, 8, 7, 6, 5];
     enable_motor_current_notify(true) => 0x18/0x41 [1];
     get_motor_temperature(2) => 0x18/0x42 [2];
-    configure_sensitivity_based_collision([1, 2, 3, 4]) => 0x18/0x47 [1, 2, 3, 4];
+    configure_sensitivity_based_collision(1, 2, 0x0304) => 0x18/0x47 [1, 2, 3, 4];
     enable_sensitivity_based_collision_notify(true) => 0x18/0x48 [1];
     get_motor_thermal_protection_status() => 0x18/0x4B [];
     enable_motor_thermal_protection_notify(false) => 0x18/0x4C [0];
@@ -490,6 +495,63 @@ constructors! {
     set_all_leds_with_32_bit_mask(Mask(0x0000_0007), Bytes(vec![255, 0, 0])) => 0x1A/0x1A [0, 0, 0, 7, 255, 0, 0];
     set_all_leds_with_8_bit_mask(Mask(0x03), Bytes(vec![10, 20])) => 0x1A/0x1C [3, 10, 20];
     enable_color_tap_notify(true) => 0x1A/0x1D [1];
+    // BOLT's matrix and RVR's palettes (IO 0x2D..=0x4E, spherov2 `commands/io.py`)
+    set_compressed_frame_player_pixel(2, 3, 255, 0, 0) => 0x1A/0x2D [2, 3, 255, 0, 0];
+    set_compressed_frame_player(Bytes(vec![1, 2, 3])) => 0x1A/0x2E [1, 2, 3];
+    set_compressed_frame_player_one_color(255, 0, 0) => 0x1A/0x2F [255, 0, 0];
+    save_compressed_frame_player_64_bit_frame(1, Bytes(vec![1, 2, 3, 4])) => 0x1A/0x30 [0, 1, 1, 2, 3, 4];
+    save_compressed_frame_player_animation(2, 10, true, Palette(vec![[255, 0, 0], [0, 255, 0]]), FrameList(vec![1, 2]))
+        => 0x1A/0x31 [2, 10, 1, 2, 255, 0, 0, 0, 255, 0, 0, 2, 0, 1, 0, 2];
+    play_compressed_frame_player_animation(2) => 0x1A/0x32 [2];
+    play_compressed_frame_player_frame(7) => 0x1A/0x33 [0, 7];
+    get_compressed_frame_player_list_of_frames() => 0x1A/0x34 [];
+    delete_all_compressed_frame_player_animations_and_frames() => 0x1A/0x35 [];
+    pause_compressed_frame_player_animation() => 0x1A/0x36 [];
+    resume_compressed_frame_player_animation() => 0x1A/0x37 [];
+    reset_compressed_frame_player_animation() => 0x1A/0x38 [];
+    override_compressed_frame_player_animation_global_settings(10, FadeOverride::NoFading) => 0x1A/0x39 [10, 1];
+    set_compressed_frame_player_frame_rotation(FrameRotation::Rotate90) => 0x1A/0x3A [1];
+    set_compressed_frame_player_text_scrolling(255, 0, 0, 7, true, ScrollText("HI".into())) => 0x1A/0x3B [255, 0, 0, 7, 1, b'H', b'I', 0];
+    draw_compressed_frame_player_line(0, 1, 7, 6, 255, 0, 0) => 0x1A/0x3D [0, 1, 7, 6, 255, 0, 0];
+    draw_compressed_frame_player_fill(0, 1, 7, 6, 255, 0, 0) => 0x1A/0x3E [0, 1, 7, 6, 255, 0, 0];
+    assign_compressed_frame_player_frames_to_animation(1, U16List(vec![7, 4, 5])) => 0x1A/0x40 [1, 0, 7, 0, 4, 0, 5];
+    save_compressed_frame_player_animation_without_frames(1, 2, true, Bytes(vec![3, 1, 2, 3, 0, 7])) => 0x1A/0x41 [1, 2, 1, 3, 1, 2, 3, 0, 7];
+    set_compressed_frame_player_single_character(255, 0, 0, Char(b'A')) => 0x1A/0x42 [255, 0, 0, b'A'];
+    play_compressed_frame_player_animation_with_loop_option(2, true) => 0x1A/0x43 [2, 1];
+    get_active_color_palette() => 0x1A/0x44 [];
+    set_active_color_palette(Bytes(vec![1, 2, 3])) => 0x1A/0x45 [1, 2, 3];
+    get_color_identification_report(10, 20, 30, 50) => 0x1A/0x46 [10, 20, 30, 50];
+    load_color_palette(1) => 0x1A/0x47 [1];
+    save_color_palette(1) => 0x1A/0x48 [1];
+    get_compressed_frame_player_frame_info_type() => 0x1A/0x4C [];
+    save_compressed_frame_player_16_bit_frame(U16List(vec![7, 8, 9, 10, 11])) => 0x1A/0x4D [0, 7, 0, 8, 0, 9, 0, 10, 0, 11];
+    release_led_requests() => 0x1A/0x4E [];
+    // API and Shell, System Mode, Connection, Firmware, Factory Test (spherov2 `commands/*.py`)
+    echo(Bytes(vec![1, 2])) => 0x10/0x00 [1, 2];
+    get_api_protocol_version() => 0x10/0x01 [];
+    send_command_to_shell(Text("hi".into())) => 0x10/0x02 [b'h', b'i', 0];
+    get_supported_dids() => 0x10/0x05 [];
+    get_supported_cids(1) => 0x10/0x06 [1];
+    enable_desktoy_mode(true) => 0x12/0x29 [1];
+    get_out_of_box_state() => 0x12/0x2B [];
+    enable_out_of_box_state(false) => 0x12/0x2C [0];
+    connection_set_bluetooth_name(Text("BOLT".into())) => 0x19/0x03 [b'B', b'O', b'L', b'T', 0];
+    get_bluetooth_name() => 0x19/0x04 [];
+    get_bluetooth_advertising_name() => 0x19/0x05 [];
+    get_pending_update_flags() => 0x1D/0x0D [];
+    get_current_application_id() => 0x1D/0x15 [];
+    get_all_updatable_processors() => 0x1D/0x16 [];
+    get_version_for_updatable_processors() => 0x1D/0x18 [];
+    set_pending_update_for_processors(Bytes(vec![1, 2])) => 0x1D/0x1A [1, 2];
+    get_pending_update_for_processors() => 0x1D/0x1B [];
+    reset_with_parameters(1) => 0x1D/0x1C [1];
+    clear_pending_update_processors(Bytes(vec![1, 2])) => 0x1D/0x26 [1, 2];
+    get_factory_mode_challenge() => 0x1F/0x13 [];
+    enter_factory_mode(0x0A0B_0C0D) => 0x1F/0x14 [0x0A, 0x0B, 0x0C, 0x0D];
+    exit_factory_mode() => 0x1F/0x15 [];
+    get_chassis_id() => 0x1F/0x27 [];
+    enable_extended_life_test(true) => 0x1F/0x31 [1];
+    get_factory_mode_status() => 0x1F/0x34 [];
 }
 
 #[test]
@@ -504,7 +566,7 @@ fn every_constructor_is_tested() {
         "a constructor is listed twice"
     );
     let catalogue: BTreeSet<String> = catalog::commands().iter().map(|c| c.name.clone()).collect();
-    assert_eq!(catalogue.len(), 133);
+    assert_eq!(catalogue.len(), 133 + 54);
     let missing: Vec<_> = catalogue.difference(&tested).collect();
     let extra: Vec<_> = tested.difference(&catalogue).collect();
     assert!(
@@ -912,6 +974,108 @@ fn response_cases() -> Vec<(&'static str, Vec<u8>, Fields)> {
         ),
         // IO
         ("get-audio-volume", h("80"), vec![("volume", int(128))]),
+        (
+            "get-compressed-frame-player-list-of-frames",
+            h("00 01 00 02"),
+            vec![("frames", Value::List(vec![int(1), int(2)]))],
+        ),
+        (
+            "get-active-color-palette",
+            h("01 02"),
+            vec![("data", bytes(&[1, 2]))],
+        ),
+        (
+            "get-color-identification-report",
+            h("03"),
+            vec![("data", bytes(&[3]))],
+        ),
+        (
+            "get-compressed-frame-player-frame-info-type",
+            h("03"),
+            vec![("info_type", en(3, "64-bit"))],
+        ),
+        (
+            "save-compressed-frame-player-16-bit-frame",
+            h("09"),
+            vec![("data", bytes(&[9]))],
+        ),
+        // API and Shell, System Mode, Connection, Firmware, Factory Test
+        ("echo", h("01 02"), vec![("data", bytes(&[1, 2]))]),
+        (
+            "get-api-protocol-version",
+            h("02 01"),
+            vec![("major", int(2)), ("minor", int(1))],
+        ),
+        (
+            "get-supported-dids",
+            h("10 11"),
+            vec![("dids", bytes(&[0x10, 0x11]))],
+        ),
+        (
+            "get-supported-cids",
+            h("01 02"),
+            vec![("cids", bytes(&[1, 2]))],
+        ),
+        (
+            "get-out-of-box-state",
+            h("01"),
+            vec![("enabled", boolean(true))],
+        ),
+        (
+            "get-bluetooth-name",
+            h("53 42 00"),
+            vec![("name", text("SB"))],
+        ),
+        (
+            "get-bluetooth-advertising-name",
+            h("53 42 00"),
+            vec![("name", text("SB"))],
+        ),
+        (
+            "get-pending-update-flags",
+            h("00 01"),
+            vec![("flags", bytes(&[0, 1]))],
+        ),
+        (
+            "get-current-application-id",
+            h("01"),
+            vec![("application", int(1))],
+        ),
+        (
+            "get-all-updatable-processors",
+            h("01"),
+            vec![("data", bytes(&[1]))],
+        ),
+        (
+            "get-version-for-updatable-processors",
+            h("01"),
+            vec![("data", bytes(&[1]))],
+        ),
+        (
+            "set-pending-update-for-processors",
+            h("01"),
+            vec![("reset_strategy", int(1))],
+        ),
+        (
+            "get-pending-update-for-processors",
+            h("01"),
+            vec![("data", bytes(&[1]))],
+        ),
+        (
+            "get-factory-mode-challenge",
+            h("01 02 03 04"),
+            vec![("challenge", int(0x01020304))],
+        ),
+        (
+            "get-chassis-id",
+            h("00 07"),
+            vec![("chassis_id", bytes(&[0, 7]))],
+        ),
+        (
+            "get-factory-mode-status",
+            h("00"),
+            vec![("enabled", boolean(false))],
+        ),
     ]
 }
 
@@ -929,7 +1093,7 @@ fn every_response_schema_has_a_case() {
         .map(|c| c.name.as_str())
         .collect();
     assert_eq!(cases, with_response);
-    assert_eq!(with_response.len(), 48);
+    assert_eq!(with_response.len(), 48 + 21);
 }
 
 #[test]
@@ -942,12 +1106,7 @@ fn response_decoders() {
             "{name}: decode_fields"
         );
         // Through the whole path: request, response on the wire, decoder, describe.
-        let request = Command {
-            did: def.did,
-            cid: def.cid,
-            data: vec![],
-        }
-        .to_packet(42);
+        let request = Command::new(def.did, def.cid, vec![]).to_packet(42);
         let response = Packet::response_to(&request, ErrorCode::Success, payload.clone());
         let out = Decoder::new().decode_all(&response.encode());
         let [Ok(p)] = &out[..] else {
@@ -1234,6 +1393,27 @@ fn notification_cases() -> Vec<(u8, u8, &'static str, Vec<u8>, Fields)> {
             vec![("data", bytes(&(10u8..20).collect::<Vec<_>>()))],
         ),
         (0x1A, 0x1E, "color-tap", h("04"), vec![("data", int(4))]),
+        (
+            0x1A,
+            0x3C,
+            "text-scrolling",
+            h("00"),
+            vec![("reason", en(0, "done"))],
+        ),
+        (
+            0x1A,
+            0x3F,
+            "compressed-frame-player-animation-complete",
+            h("02"),
+            vec![("animation_id", int(2))],
+        ),
+        (
+            0x10,
+            0x03,
+            "send-string-to-console",
+            h("68 69 00"),
+            vec![("text", text("hi"))],
+        ),
     ]
 }
 
@@ -1249,7 +1429,7 @@ fn every_notification_has_a_case() {
         .map(|n| (n.device.id(), n.cid, n.name.as_str()))
         .collect();
     assert_eq!(cases, catalogue);
-    assert_eq!(catalogue.len(), 27);
+    assert_eq!(catalogue.len(), 27 + 3);
 }
 
 #[test]
@@ -1537,6 +1717,7 @@ fn variant(n: &Notification) -> &'static str {
         Notification::AnimationComplete => "AnimationComplete",
         Notification::HeadResetToZero => "HeadResetToZero",
         Notification::Other { .. } => "Other",
+        Notification::Robot(_) => "Robot",
         // Sent by v1 droids only (tests/v1_vectors.rs); a v2 packet never decodes to them.
         Notification::PowerState(_) | Notification::OtherAsync { .. } => "v1 only",
         Notification::RobiHandshake(_) | Notification::RobiFrame(_) => "RSRCP only",
@@ -1607,6 +1788,16 @@ fn every_notification_variant_decodes() {
             "head-reset-to-zero",
         ),
         (
+            0x16,
+            0x26,
+            vec![1, 1],
+            Notification::Robot(RobotEvent::MotorStall {
+                motor: 1,
+                stalled: true,
+            }),
+            "motor-stall",
+        ),
+        (
             0x18,
             0x10,
             vec![3],
@@ -1637,7 +1828,7 @@ fn every_notification_variant_decodes() {
         assert_eq!(n.name(), name);
         seen.insert(variant(&n));
     }
-    assert_eq!(seen.len(), 11, "{seen:?}");
+    assert_eq!(seen.len(), 12, "{seen:?}");
 }
 
 #[test]

@@ -182,6 +182,7 @@ impl App {
             .drive()
             .map(|d| (d, self.pad.speed(&d, self.turbo_speed)));
         inp.pad_dome_rate = self.pad.dome_rate();
+        inp.pad_tracks = self.pad.tracks();
         inp
     }
 

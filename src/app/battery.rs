@@ -14,18 +14,19 @@ pub const BATTERY_EVERY: Duration = Duration::from_secs(10);
 pub fn spawn(
     session: Option<SessionHandle>,
     family: &'static dyn Family,
+    model: crate::model::Model,
 ) -> (JoinHandle<()>, mpsc::Receiver<f32>) {
     let (tx, rx) = mpsc::channel::<f32>(4);
     let task = tokio::spawn(async move {
         let Some(session) = session else {
             return;
         };
-        let Some(battery) = family.battery_request() else {
+        let Some(battery) = family.battery_request_for(model) else {
             return;
         };
         loop {
             let reading = match session.request(battery.clone()).await {
-                Ok(p) => family.battery_volts(p.data()),
+                Ok(p) => family.battery_volts_for(model, p.data()),
                 Err(_) => None,
             };
             if let Some(v) = reading

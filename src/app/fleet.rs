@@ -307,12 +307,12 @@ pub(super) fn attach(
             family: m.family,
         }));
         // Its session's events, log, link and battery into the one channel.
-        let (s, t, family) = (m.session.clone(), tx.clone(), m.family);
+        let (s, t, family, model) = (m.session.clone(), tx.clone(), m.family, m.model);
         tasks.push(tokio::spawn(async move {
             let mut ev = s.subscribe();
             let mut log = s.subscribe_log();
             let mut link = s.watch_state();
-            let (poller, mut battery) = super::battery::spawn(Some(s.clone()), family);
+            let (poller, mut battery) = super::battery::spawn(Some(s.clone()), family, model);
             let _poller = AbortOnDrop(poller);
             let (mut ev_open, mut log_open, mut link_open, mut bat_open) = (true, true, true, true);
             while ev_open || log_open || link_open || bat_open {

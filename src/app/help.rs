@@ -81,6 +81,7 @@ fn gamepad(config: &Config) -> HelpSection {
     let mut lines = vec![
         line("left stick", "heading and speed (polar)"),
         line("right stick X", "turn the dome"),
+        line("sticks Y", "tank mode: left and right track (RVR)"),
         line("right trigger", "more speed, up to turbo"),
     ];
     lines.extend(

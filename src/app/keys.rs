@@ -19,6 +19,19 @@ use crate::config::{Action, Context, Key, KeyCode};
 /// Longest log filter typed.
 const FILTER_MAX: usize = 80;
 
+/// Typing into a prompt's `input`: Backspace, Space, and the characters `ok` takes, up to
+/// `max` bytes.
+pub(super) fn edit(input: &mut String, key: Key, max: usize, ok: impl Fn(char) -> bool) {
+    match key.code {
+        KeyCode::Backspace => {
+            input.pop();
+        }
+        KeyCode::Char(c) if !key.ctrl && ok(c) && input.len() < max => input.push(c),
+        KeyCode::Space if input.len() < max => input.push(' '),
+        _ => {}
+    }
+}
+
 impl App {
     /// A terminal event; returns an exit reason when the app should stop.
     pub fn on_term(&mut self, e: TermEvent) -> Option<ExitReason> {
@@ -83,6 +96,10 @@ impl App {
             }
             Overlay::Filter { .. } => {
                 self.filter_key(key);
+                None
+            }
+            Overlay::Matrix { .. } => {
+                self.matrix_key(key);
                 None
             }
             Overlay::None if self.state.focus == Focus::Log => self.log_key(key, new_press),
@@ -162,14 +179,7 @@ impl App {
                 self.state.overlay = Overlay::None;
             }
             // The rest is typing.
-            _ => match key.code {
-                KeyCode::Backspace => {
-                    input.pop();
-                }
-                KeyCode::Char(c) if !key.ctrl && input.len() < FILTER_MAX => input.push(c),
-                KeyCode::Space if input.len() < FILTER_MAX => input.push(' '),
-                _ => {}
-            },
+            _ => edit(input, key, FILTER_MAX, |_| true),
         }
     }
 
@@ -268,6 +278,7 @@ impl App {
             }
             Action::Animations => self.state.overlay = Overlay::Animations { selected: 0 },
             Action::Sounds => self.state.overlay = Overlay::Sounds { selected: 0 },
+            a if self.robot_action(a) => {}
             a => {
                 let view = self.droid_view();
                 let outs = self.controller.on_press(a, &view);

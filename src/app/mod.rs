@@ -10,6 +10,7 @@
 //! - [`battery`]: the battery poller;
 //! - `fleet`, [`roster`]: several droids (the parked ones, choosing, mirror) and the roster
 //!   strip's view of them.
+//! - [`matrix`]: BOLT's LED matrix as droidctl drew it, its prompt, colour and compass keys.
 
 mod actions;
 pub mod battery;
@@ -19,6 +20,7 @@ mod fleet;
 pub mod help;
 pub mod input;
 mod keys;
+pub mod matrix;
 pub mod pacing;
 pub mod packet_log;
 mod pad;

@@ -133,6 +133,7 @@ fn build(source: Source, opts: AppOptions) -> App {
         driven: true,
         log_droid: None,
     };
+    app.controller.set_tracks(app.state.model.has_tracks());
     app.state.control = app.controller.view().clone();
     app
 }
@@ -236,7 +237,7 @@ async fn run_with<B: Backend>(
     tick.set_missed_tick_behavior(MissedTickBehavior::Delay);
     let mut second = interval(Duration::from_secs(1));
     second.set_missed_tick_behavior(MissedTickBehavior::Skip);
-    let (poller, mut battery_rx) = super::battery::spawn(session.clone(), family);
+    let (poller, mut battery_rx) = super::battery::spawn(session.clone(), family, app.state.model);
     let stats = |app: &App| match &app.session {
         Some(s) => s.stats(),
         None => app.state.stats,

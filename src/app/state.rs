@@ -48,6 +48,10 @@ pub enum Overlay {
     Filter {
         input: String,
     },
+    /// Typing what BOLT's matrix shows: one character is drawn, more scroll.
+    Matrix {
+        input: String,
+    },
 }
 
 /// Which pane has the keyboard.
@@ -119,6 +123,8 @@ pub struct AppState {
     pub replay: Option<ReplayView>,
     /// The fleet, when several droids are driven (`None` with one).
     pub roster: Option<super::roster::Roster>,
+    /// What BOLT's matrix shows, as droidctl drew it.
+    pub matrix: super::matrix::MatrixView,
 }
 
 /// A replay, for the status bar.
@@ -181,6 +187,7 @@ impl AppState {
             leds: LedView::default(),
             replay: None,
             roster: None,
+            matrix: Default::default(),
         }
     }
 

@@ -253,8 +253,8 @@ impl Mirror {
 
     /// What the app and missions read from answers: the battery, the stance.
     fn read_back(&self, request: &Command, packet: &Packet, out: &mut Vec<Output>) {
-        if self.family.battery_request().as_ref() == Some(request)
-            && let Some(v) = self.family.battery_volts(packet.data())
+        if self.family.battery_request_for(self.model).as_ref() == Some(request)
+            && let Some(v) = self.family.battery_volts_for(self.model, packet.data())
         {
             out.push(Output::Battery(v));
         }

@@ -101,6 +101,7 @@ pub fn session_config(model: Model, config: &Config, tripod: bool) -> SessionCon
     };
     SessionConfig {
         family: model.protocol(),
+        model: Some(model),
         request_timeout: Duration::from_millis(config.session.request_timeout_ms),
         pacing,
         setup: connect_setup(model, &setup),

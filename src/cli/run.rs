@@ -333,6 +333,7 @@ pub fn mission_session_config(model: Model, opts: &MissionOptions) -> SessionCon
     };
     SessionConfig {
         family: model.protocol(),
+        model: Some(model),
         pacing: model.write_pacing(),
         setup: connect_setup(model, &setup),
         ..SessionConfig::default()

@@ -224,6 +224,10 @@ actions! {
         NextDroid "next_droid" false "fleet: drive the next droid";
         PreviousDroid "previous_droid" false "fleet: drive the previous droid";
         Mirror "mirror" false "fleet: mirror mode (the same control to every droid)";
+        Tank "tank" false "tank mode: a track per stick (RVR)";
+        Matrix "matrix" false "type on the matrix (BOLT)";
+        MatrixColour "matrix_colour" false "next matrix colour (BOLT)";
+        Calibrate "calibrate" false "calibrate the compass (BOLT)";
         Log "log" false "the packet log has the keys (and back)";
         Help "help" false "this help";
         Quit "quit" false "quit (stops the droid first)";

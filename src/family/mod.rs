@@ -100,6 +100,12 @@ pub trait Family: Sync {
     /// `packet list`: the catalogue, names containing `filter` only.
     fn list(&self, filter: Option<&str>, out: &mut dyn std::io::Write) -> std::io::Result<()>;
     fn codec(&self) -> Box<dyn Codec>;
+    /// The codec for a connection to `model`: as [`Family::codec`], plus what the model
+    /// needs of every packet (the v2 robots with two processors address each command).
+    fn codec_for(&self, model: Model) -> Box<dyn Codec> {
+        let _ = model;
+        self.codec()
+    }
     /// The command that wakes a droid from soft sleep, first after every connect.
     fn wake(&self) -> Option<Command>;
     /// Cheap activity that keeps the droid awake.
@@ -160,6 +166,16 @@ pub trait Family: Sync {
     fn battery_volts(&self, _response: &[u8]) -> Option<f32> {
         None
     }
+    /// The battery request for `model`, addressed to the processor that measures it (RVR's
+    /// primary), and its answer read.
+    fn battery_request_for(&self, model: Model) -> Option<Command> {
+        let _ = model;
+        self.battery_request()
+    }
+    fn battery_volts_for(&self, model: Model, response: &[u8]) -> Option<f32> {
+        let _ = model;
+        self.battery_volts(response)
+    }
     /// The droid's own fail-safe, set on every connect: it stops by itself when the link
     /// drops or drive commands stop. Firmware that does not know it may refuse it; that is
     /// fine.
@@ -176,6 +192,18 @@ pub trait Family: Sync {
     /// Leave aim mode: the current facing becomes heading 0; back light off.
     fn aim_end(&self, _model: Model) -> Vec<Command> {
         Vec::new()
+    }
+    /// What a `matrix` line draws (BOLT's LED matrix).
+    fn matrix(&self, _action: &crate::script::MatrixAction) -> Option<Command> {
+        None
+    }
+    /// Drive each track at `left`/`right` in −255..=255 (RVR's raw motors).
+    fn tank(&self, _left: i16, _right: i16) -> Option<Command> {
+        None
+    }
+    /// Calibrate the compass to north; the droid answers with north's yaw (BOLT).
+    fn calibrate_compass(&self) -> Option<Command> {
+        None
     }
 }
 

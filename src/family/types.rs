@@ -55,7 +55,12 @@ impl Command {
     /// A drive command at speed 0 (a stop), in any family: the session writes those first.
     pub fn is_stop(&self) -> bool {
         match self {
-            Command::V2(c) => (c.did, c.cid) == (0x16, 0x07) && c.data.first() == Some(&0),
+            Command::V2(c) => match (c.did, c.cid) {
+                (0x16, 0x07) => c.data.first() == Some(&0),
+                // Raw motors with both speeds 0 (RVR's tracks).
+                (0x16, 0x01) => c.data.get(1) == Some(&0) && c.data.get(3) == Some(&0),
+                _ => false,
+            },
             Command::V1(c) => (c.did, c.cid) == (0x02, 0x30) && c.data.first() == Some(&0),
             Command::Robi(c) => c.velocity == 0,
         }
@@ -165,6 +170,7 @@ impl Packet {
                     did: p.did,
                     cid: p.cid,
                     data: p.data.clone(),
+                    target: p.tid,
                 }),
                 p.seq,
                 p.flags.contains(v2::Flags::REQUESTS_RESPONSE),

@@ -79,12 +79,46 @@ pub enum Notification {
         id_code: u8,
         data: Vec<u8>,
     },
+    /// What the newer v2 robots report beyond the droids (BOLT, RVR).
+    Robot(RobotEvent),
     /// Any other v2 (DID, CID), or a known one whose payload did not fit: bytes kept.
     Other {
         did: u8,
         cid: u8,
         data: Vec<u8>,
     },
+}
+
+/// What BOLT, Mini and RVR report that the Star Wars droids do not (spherov2.py's
+/// `commands/{drive,sensor,io}.py` notifications).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum RobotEvent {
+    /// Drive 0x26: a motor stalled or recovered (RVR).
+    MotorStall { motor: u8, stalled: bool },
+    /// Drive 0x28: the motors' fault state (RVR).
+    MotorFault(bool),
+    /// Sensor 0x26: compass calibration done; the yaw of north (BOLT).
+    CompassHeading(u16),
+    /// Sensor 0x36: the colour under the robot, its palette index and confidence (RVR).
+    Color {
+        rgb: [u8; 3],
+        index: u8,
+        confidence: u8,
+    },
+    /// IO 0x3C: the matrix's scrolling text is done (BOLT).
+    MatrixTextDone,
+}
+
+impl RobotEvent {
+    pub fn name(&self) -> &'static str {
+        match self {
+            RobotEvent::MotorStall { .. } => "motor-stall",
+            RobotEvent::MotorFault(_) => "motor-fault",
+            RobotEvent::CompassHeading(_) => "magnetometer-north-yaw",
+            RobotEvent::Color { .. } => "color-detection",
+            RobotEvent::MatrixTextDone => "text-scrolling",
+        }
+    }
 }
 
 /// Why a known notification could not be decoded.
@@ -117,6 +151,7 @@ impl Notification {
             Notification::PowerState(_) => "power-state",
             Notification::RobiHandshake(_) => "rsrcp-handshake",
             Notification::RobiFrame(_) => "rsrcp-frame",
+            Notification::Robot(e) => e.name(),
             Notification::OtherAsync { .. } | Notification::Other { .. } => "other",
         }
     }

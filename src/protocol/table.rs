@@ -78,6 +78,21 @@ impl CommandTable {
         }
     }
 
+    /// A table of several parts' rows, in order (a catalogue split by device).
+    pub fn from_parts(parts: &[&[RawCommand]]) -> CommandTable {
+        let mut table = CommandTable::new(&[]);
+        for raw in parts {
+            let more = CommandTable::new(raw);
+            for c in more.commands {
+                let i = table.commands.len();
+                table.by_id.insert((c.did, c.cid), i);
+                table.by_name.insert(c.name.clone(), i);
+                table.commands.push(c);
+            }
+        }
+        table
+    }
+
     /// Every command, in table order.
     pub fn commands(&self) -> &[CommandDef] {
         &self.commands

@@ -812,7 +812,7 @@ pub async fn stop(
 ) -> bool {
     let family = crate::family::for_model(model);
     let cmd = family.stop_after(last);
-    let (writes, _) = family.codec().encode_writes(&cmd, 0, false);
+    let (writes, _) = family.codec_for(model).encode_writes(&cmd, 0, false);
     let profile = crate::family::gatt_profile(model);
     let mut ok = true;
     for (endpoint, bytes) in writes {

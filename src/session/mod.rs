@@ -41,6 +41,9 @@ pub struct SessionConfig {
     /// Answer the droid's will-sleep warning with a ping, so it stays awake while droidctl
     /// holds the connection (as spherov2's SpheroEduAPI does).
     pub keep_awake: bool,
+    /// The model on the link, when known: its family's codec then addresses each command
+    /// to the processor that has it (BOLT, RVR).
+    pub model: Option<crate::model::Model>,
 }
 
 impl Default for SessionConfig {
@@ -55,6 +58,7 @@ impl Default for SessionConfig {
             queue_capacity: 64,
             event_capacity: 4096,
             keep_awake: true,
+            model: None,
         }
     }
 }

@@ -460,7 +460,10 @@ impl Task {
         // One codec for the whole session: what the droid was told to stream outlives a
         // dropped link (it keeps streaming with the old masks until the setup sets them
         // again), only the byte stream starts afresh.
-        let mut codec = self.codec.take().unwrap_or_else(|| self.family.codec());
+        let mut codec = self.codec.take().unwrap_or_else(|| match self.cfg.model {
+            Some(model) => self.family.codec_for(model),
+            None => self.family.codec(),
+        });
         codec.reset_stream();
         let ended = self.connected_with(&mut *codec, &mut conn).await;
         self.codec = Some(codec);

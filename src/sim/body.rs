@@ -85,6 +85,8 @@ pub struct Body {
     /// Differential drive (Robi 42): left and right wheel, 0..=1 of top speed. Replaces
     /// `drive` while set; there is no motion timeout (the robot holds its last command).
     wheels: Option<(f32, f32)>,
+    /// When the tracks were last commanded (RVR's raw motors), for the control timeout.
+    tracks_at: Option<Duration>,
     /// Stop when drive commands stop for this long (`None`: keep the last motion).
     control_timeout: Option<Duration>,
     head_target: f32,
@@ -140,6 +142,7 @@ impl Body {
             cfg,
             drive: None,
             wheels: None,
+            tracks_at: None,
             control_timeout,
             head_target: 0.0,
             transition: None,
@@ -247,6 +250,9 @@ impl Body {
 
     /// Roll at `speed` (0..=255 of top speed) facing `facing` degrees; `backward` backs up.
     pub fn drive(&mut self, speed: u8, facing: f32, backward: bool) {
+        // Driving by heading ends driving by tracks (RVR takes either).
+        self.wheels = None;
+        self.tracks_at = None;
         self.drive = Some(Drive {
             speed: speed as f32 / 255.0 * self.cfg.top_speed_cm_s,
             facing: wrap360(facing),
@@ -281,6 +287,21 @@ impl Body {
         };
         self.drive = None;
         self.wheels = Some((c(left), c(right)));
+    }
+
+    /// Tracks (RVR's raw motors): each side at `left`/`right` in −1..=1 of top speed, and
+    /// like a drive command, stopped by the control timeout when not renewed.
+    pub fn drive_tracks(&mut self, left: f32, right: f32) {
+        let c = |v: f32| {
+            if v.is_finite() {
+                v.clamp(-1.0, 1.0)
+            } else {
+                0.0
+            }
+        };
+        self.drive = None;
+        self.wheels = Some((c(left), c(right)));
+        self.tracks_at = Some(self.now);
     }
 
     /// Each wheel's commanded speed in rad/s (Robi's motor report).
@@ -486,6 +507,12 @@ impl Body {
         {
             d.speed = 0.0;
         }
+        if let (Some(limit), Some(at)) = (self.control_timeout, self.tracks_at)
+            && now.saturating_sub(at) > limit
+        {
+            self.wheels = Some((0.0, 0.0));
+            self.tracks_at = None;
+        }
         let rolling = self.can_roll() && self.state.awake;
         let (target_speed, target_facing, backward) = match (self.wheels, self.drive) {
             // Differential drive: the wheel difference turns the body at (l − r)·v / track.
@@ -640,6 +667,13 @@ impl Body {
             return;
         }
         self.next_sample = self.now + every;
+        let values = self.sample_values();
+        self.events.push(SimEvent::Sample(values));
+    }
+
+    /// What the sensors read now, by name, in the units the streaming decoders give
+    /// (degrees, g, cm, cm/s): the mask streaming's sample and the streaming service's data.
+    pub fn sample_values(&self) -> Vec<(&'static str, f32)> {
         let s = &self.state;
         let (hx, hy) = heading_vector(s.yaw_deg);
         let lateral = s.velocity_cm_s * self.yaw_rate.to_radians();
@@ -649,7 +683,7 @@ impl Body {
             s.yaw_deg
         };
         let half = s.yaw_deg.to_radians() / 2.0;
-        let values = vec![
+        vec![
             ("quaternion_w", half.cos()),
             ("quaternion_x", 0.0),
             ("quaternion_y", 0.0),
@@ -672,7 +706,14 @@ impl Body {
             ("gyro_x", 0.0),
             ("gyro_y", 0.0),
             ("gyro_z", self.yaw_rate),
-        ];
-        self.events.push(SimEvent::Sample(values));
+            // BOLT's ambient light and RVR's colour sensor see a lit, grey floor.
+            ("ambient_light", 320.0),
+            ("color_red", 128.0),
+            ("color_green", 128.0),
+            ("color_blue", 128.0),
+            ("color_index", 0.0),
+            ("color_confidence", 0.9),
+            ("core_time_lower", self.now.as_millis() as f32),
+        ]
     }
 }

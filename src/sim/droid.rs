@@ -1,11 +1,14 @@
-//! The simulated v2 droid (R2-D2, R2-Q5, BB-9E): the shared [`Body`] behind a Sphero API v2
-//! front. Sans-IO: wire bytes and time in, packets out.
+//! The simulated v2 droid (R2-D2, R2-Q5, BB-9E, BOLT, Mini, RVR): the shared [`Body`] behind
+//! a Sphero API v2 front, with the newer robots' parts ([`RobotParts`]: BOLT's matrix, RVR's
+//! streaming service, the processors). Sans-IO: wire bytes and time in, packets out.
 
 use super::SimConfig;
 pub use super::body::SimState;
 use super::body::{Body, SimEvent};
+use super::robots::{self, RobotParts};
 use crate::model::Model;
 use crate::protocol::v2::catalog;
+use crate::protocol::v2::catalog::targets::Processor;
 use crate::protocol::v2::sensor::{StreamingConfig, encode_sample};
 use crate::protocol::v2::wire::{DriveFlags, LegAction};
 use crate::protocol::v2::{Decoder, Device, ErrorCode, Flags, Packet};
@@ -19,6 +22,8 @@ pub struct SimDroid {
     streaming: StreamingConfig,
     battery_state_notify: bool,
     voltage_state_notify: bool,
+    /// BOLT's matrix, RVR's LEDs and streaming service.
+    robot: RobotParts,
     out: Vec<Packet>,
 }
 
@@ -26,7 +31,16 @@ pub struct SimDroid {
 fn answers_asleep(did: u8) -> bool {
     matches!(
         Device::from_id(did),
-        Some(Device::Core | Device::Power | Device::SystemInfo)
+        Some(
+            Device::Core
+                | Device::Power
+                | Device::SystemInfo
+                | Device::ApiAndShell
+                | Device::Connection
+                | Device::Firmware
+                | Device::FactoryTest
+                | Device::SystemMode
+        )
     )
 }
 
@@ -38,6 +52,7 @@ impl SimDroid {
             streaming: StreamingConfig::default(),
             battery_state_notify: false,
             voltage_state_notify: false,
+            robot: RobotParts::new(model),
             out: Vec::new(),
         }
     }
@@ -48,7 +63,13 @@ impl SimDroid {
 
     /// When the droid next has something to send ([`super::body::Body::next_due`]).
     pub fn next_due(&self) -> Option<Duration> {
-        self.body.next_due()
+        let body = self.body.next_due()?;
+        Some(self.robot.next_due().map_or(body, |r| r.min(body)))
+    }
+
+    /// BOLT's matrix, RVR's LEDs and streaming service, as the trace shows them.
+    pub fn robot(&self) -> &RobotParts {
+        &self.robot
     }
 
     pub fn state(&self) -> &SimState {
@@ -80,12 +101,39 @@ impl SimDroid {
     }
 
     fn notify(&mut self, did: u8, cid: u8, data: Vec<u8>) {
-        self.out.push(Packet::notification(did, cid, data));
+        let mut p = Packet::notification(did, cid, data);
+        // A robot with processors says which one speaks (spherov2 reads the source of
+        // streaming-service data); the secondary has the motors and motion sensors.
+        if self.body.model().processors() > 1 {
+            let from = match targets_home(self.body.model(), did, cid) {
+                Some(Processor::Primary) => 0x11,
+                _ => 0x12,
+            };
+            p.flags |= Flags::HAS_SOURCE_ID | Flags::HAS_TARGET_ID;
+            p.sid = Some(from);
+            p.tid = Some(0x01);
+        }
+        self.out.push(p);
     }
 
     fn advance_to(&mut self, now: Duration) {
         self.body.advance_to(now);
         self.flush_events();
+        if self.robot.text_done(now) {
+            self.notify(0x1A, 0x3C, vec![0]);
+        }
+        if !self.robot.service.running.is_empty() && self.body.state.awake {
+            let values = self.body.sample_values();
+            for (p, data) in self.robot.stream_due(now, &values) {
+                let mut packet = Packet::notification(0x18, 0x3D, data);
+                if self.body.model().processors() > 1 {
+                    packet.flags |= Flags::HAS_SOURCE_ID | Flags::HAS_TARGET_ID;
+                    packet.sid = Some(p.target_id());
+                    packet.tid = Some(0x01);
+                }
+                self.out.push(packet);
+            }
+        }
     }
 
     /// The body's events as v2 notifications.
@@ -97,6 +145,7 @@ impl SimDroid {
                 SimEvent::WillSleep => self.notify(0x13, 0x19, vec![]),
                 SimEvent::DidSleep => {
                     self.streaming = StreamingConfig::default();
+                    self.robot.service.running.clear();
                     self.notify(0x13, 0x1A, vec![]);
                 }
                 SimEvent::VoltageState(s) => {
@@ -152,12 +201,21 @@ impl SimDroid {
         let Some(def) = catalog::lookup(p.did, p.cid) else {
             return (ErrorCode::BadCommandId, vec![]);
         };
+        if device == Device::Animatronic
+            && matches!(self.body.model(), Model::Bolt | Model::Mini | Model::Rvr)
+        {
+            // The newer robots have no animatronic device at all.
+            return (ErrorCode::BadDeviceId, vec![]);
+        }
         if !self.body.model().has_legs()
             && device == Device::Animatronic
             && !matches!(p.cid, 0x05 | 0x2B | 0x2C)
         {
             // BB-9E has no legs and no dome to command.
             return (ErrorCode::BadCommandId, vec![]);
+        }
+        if let Err(e) = robots::route(self.body.model(), p.did, p.cid, p.tid) {
+            return (e, vec![]);
         }
         if !catalog::length_ok(def.params, p.data.len()) {
             return (ErrorCode::BadDataLength, vec![]);
@@ -170,6 +228,16 @@ impl SimDroid {
         let f32_at = |i: usize| f32::from_be_bytes([d[i], d[i + 1], d[i + 2], d[i + 3]]);
         let u32_at = |i: usize| u32::from_be_bytes([d[i], d[i + 1], d[i + 2], d[i + 3]]);
         let ok = (ErrorCode::Success, vec![]);
+        let now = self.body.now();
+        let answer = |r: Result<Vec<u8>, ErrorCode>| match r {
+            Ok(data) => (ErrorCode::Success, data),
+            Err(e) => (e, vec![]),
+        };
+        if device == Device::Io
+            && let Some(r) = self.robot.matrix(p.cid, d, now)
+        {
+            return answer(r);
+        }
         match (device, p.cid) {
             (Device::Power, 0x0D) => {
                 self.body.wake();
@@ -323,6 +391,76 @@ impl SimDroid {
                 self.body.stop_sounds();
                 ok
             }
+            (Device::Drive, 0x01) => {
+                // Raw motors: mode 0 off, 1 forward, 2 reverse, and a speed each.
+                let side = |mode: u8, speed: u8| match mode {
+                    1 => Some(speed as f32 / 255.0),
+                    2 => Some(-(speed as f32) / 255.0),
+                    0 => Some(0.0),
+                    _ => None,
+                };
+                match (side(d[0], d[1]), side(d[2], d[3])) {
+                    (Some(l), Some(r)) => {
+                        self.body.drive_tracks(l, r);
+                        ok
+                    }
+                    _ => (ErrorCode::BadParameterValue, vec![]),
+                }
+            }
+            (Device::Drive, 0x25) => {
+                self.robot.motor_stall_notify = d[0] != 0;
+                ok
+            }
+            (Device::Drive, 0x27) => {
+                self.robot.motor_fault_notify = d[0] != 0;
+                ok
+            }
+            (Device::Sensor, 0x39..=0x3C) => {
+                let processor = p
+                    .tid
+                    .and_then(Processor::of_id)
+                    .unwrap_or(Processor::Primary);
+                match self.robot.streaming(p.cid, d, processor, now) {
+                    Ok(()) => ok,
+                    Err(e) => (e, vec![]),
+                }
+            }
+            (Device::Sensor, 0x25) => {
+                // Calibrated at once: north is the room's +y, reported as a yaw.
+                self.robot.compass_calibrating = false;
+                let north = (360.0 - self.body.state.yaw_deg).rem_euclid(360.0) as u16 % 360;
+                self.notify(0x18, 0x26, north.to_be_bytes().to_vec());
+                ok
+            }
+            (Device::Sensor, 0x30) => (ErrorCode::Success, 320.0f32.to_be_bytes().to_vec()),
+            (Device::Sensor, 0x23) => (
+                ErrorCode::Success,
+                [128u16, 128, 128, 384]
+                    .iter()
+                    .flat_map(|v| v.to_be_bytes())
+                    .collect(),
+            ),
+            (Device::Sensor, 0x38) => {
+                self.robot.color_detection = d[0] != 0;
+                ok
+            }
+            (Device::Sensor, 0x35) => {
+                if d[0] != 0 {
+                    self.notify(0x18, 0x36, vec![128, 128, 128, 0, 230]);
+                }
+                ok
+            }
+            (Device::Sensor, 0x37) => {
+                self.notify(0x18, 0x36, vec![128, 128, 128, 0, 230]);
+                ok
+            }
+            (Device::ApiAndShell, 0x00) => (ErrorCode::Success, d.to_vec()),
+            (Device::ApiAndShell, 0x01) => (ErrorCode::Success, vec![2, 0]),
+            (Device::Connection, 0x04 | 0x05) => {
+                let mut name = self.advertised_name().into_bytes();
+                name.push(0);
+                (ErrorCode::Success, name)
+            }
             (Device::Io, 0x0E) => self.set_leds(u16_at(0) as u32, &d[2..]),
             (Device::Io, 0x1C) => self.set_leds(d[0] as u32, &d[1..]),
             (Device::Io, 0x1A) => self.set_leds(u32_at(0), &d[4..]),
@@ -336,11 +474,14 @@ impl SimDroid {
     }
 
     fn set_leds(&mut self, mask: u32, values: &[u8]) -> (ErrorCode, Vec<u8>) {
-        // R2: 8 LEDs; BB-9E: body RGB, aiming, head (`droid-facts.md` §2).
-        let valid: u32 = if self.body.model().has_legs() {
-            0xFF
-        } else {
-            0x1F
+        // R2: 8 LEDs; BB-9E: body RGB, aiming, head (`droid-facts.md` §2); BOLT front and
+        // back RGB, Mini aiming, body and user RGB, RVR 31 (spherov2 `toy/*.py` LEDs).
+        let valid: u32 = match self.body.model() {
+            m if m.has_legs() => 0xFF,
+            Model::Bolt => 0x3F,
+            Model::Mini => 0x7F,
+            Model::Rvr => 0x7FFF_FFFF,
+            _ => 0x1F,
         };
         if mask & !valid != 0 {
             return (ErrorCode::BadParameterValue, vec![]);
@@ -349,13 +490,24 @@ impl SimDroid {
             return (ErrorCode::BadDataLength, vec![]);
         }
         let mut v = values.iter();
-        for bit in 0..16 {
+        for bit in 0..32 {
             if mask & (1 << bit) != 0
                 && let Some(val) = v.next()
             {
-                self.body.state.leds[bit] = *val;
+                if bit < 16 {
+                    self.body.state.leds[bit] = *val;
+                }
+                self.robot.leds[bit] = *val;
             }
         }
         (ErrorCode::Success, vec![])
+    }
+}
+
+/// The processor a notification comes from on a two-processor robot.
+fn targets_home(model: Model, did: u8, cid: u8) -> Option<Processor> {
+    match crate::protocol::v2::catalog::targets::home(model, did, cid) {
+        crate::protocol::v2::catalog::targets::Home::On(p) => Some(p),
+        _ => None,
     }
 }

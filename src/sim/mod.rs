@@ -15,6 +15,7 @@ pub mod gatt;
 pub mod link;
 mod physics;
 pub mod robi;
+pub mod robots;
 pub mod room;
 pub mod sleep;
 pub mod trace;
@@ -63,6 +64,11 @@ pub trait WireDroid: Send {
     fn next_due(&self) -> Option<Duration> {
         None
     }
+    /// What the droid shows that no packet says, for traces: BOLT's matrix. `None` for
+    /// droids without such a thing.
+    fn shows(&self) -> Option<String> {
+        None
+    }
 }
 
 impl WireDroid for SimDroid {
@@ -87,6 +93,11 @@ impl WireDroid for SimDroid {
     }
     fn next_due(&self) -> Option<Duration> {
         SimDroid::next_due(self)
+    }
+    fn shows(&self) -> Option<String> {
+        self.model()
+            .has_matrix()
+            .then(|| format!("matrix: {}", self.robot().matrix.summary()))
     }
 }
 

@@ -66,6 +66,16 @@ impl TraceRecord {
         serde_json::from_str(&self.packet).unwrap_or(serde_json::Value::Null)
     }
 
+    /// What the droid shows now (`matrix: character 'A' in #ff0000`): `{"kind": "state",
+    /// "shows": …}`.
+    pub fn state(text: &str) -> TraceRecord {
+        TraceRecord {
+            dir: TraceDir::Out,
+            packet: serde_json::json!({"kind": "state", "shows": text}).to_string(),
+            text: text.to_string(),
+        }
+    }
+
     fn of(dir: TraceDir, f: &dyn Found) -> TraceRecord {
         let mut json = Vec::new();
         f.write_json(false, &mut json);

@@ -40,6 +40,8 @@ pub struct ControlView {
     /// On a steering robot (Robi 42): the steering commanded, −1 full left ..= 1 full right
     /// (`None` on droids driven toward a heading).
     pub steer: Option<f32>,
+    /// Tank mode (RVR): the tracks commanded, −255..=255 each.
+    pub tank: Option<(i16, i16)>,
 }
 
 impl Default for ControlView {
@@ -57,6 +59,7 @@ impl Default for ControlView {
             source: "-",
             aiming: false,
             steer: None,
+            tank: None,
         }
     }
 }
@@ -75,6 +78,8 @@ pub struct Inputs {
     pub pad: Option<(PadDrive, u8)>,
     /// Right stick dome rate, °/s.
     pub pad_dome_rate: f32,
+    /// Tank mode: the sticks' tracks, −1..=1 each (`None` when both rest).
+    pub pad_tracks: Option<(f32, f32)>,
 }
 
 /// What the controller needs to know about the droid.
@@ -125,6 +130,8 @@ pub struct Controller {
     tripod_asked: Option<Duration>,
     now: Duration,
     view: ControlView,
+    /// Tank mode, on a robot with tracks.
+    tank: super::tank::TankMode,
 }
 
 const TRIPOD_RETRY: Duration = Duration::from_secs(4);
@@ -163,6 +170,7 @@ impl Controller {
             last_drive: None,
             last_head: None,
             tripod_asked: None,
+            tank: Default::default(),
             now: Duration::ZERO,
             view: ControlView {
                 cruise,
@@ -183,6 +191,11 @@ impl Controller {
 
     pub fn aiming(&self) -> bool {
         self.aiming
+    }
+
+    /// The robot has tracks (RVR): tank mode is offered.
+    pub fn set_tracks(&mut self, has: bool) {
+        self.tank.available = has;
     }
 
     /// Emergency stop, now: the stop to put in the drive slot at once.
@@ -221,6 +234,12 @@ impl Controller {
                 self.latched = (self.latched - step).max(-255)
             }
             A::EStop => return vec![self.estop_now()],
+            A::Tank => {
+                let out = self.tank.toggle();
+                self.latched = 0;
+                self.view.tank = self.tank.on.then_some((0, 0));
+                return out;
+            }
             A::Aim => {
                 if !droid.can_aim {
                     return vec![Out::Hint("this droid has no aim mode".into())];
@@ -385,6 +404,29 @@ impl Controller {
             }
         }
 
+        // Tank mode: the tracks instead of a heading (RVR).
+        if self.tank.on {
+            let live = droid.connected && !self.estop && !self.aiming;
+            let cruise = if self.turbo {
+                self.cfg.turbo_speed
+            } else {
+                self.cruise
+            };
+            if let Some((tracks, c)) =
+                self.tank
+                    .tick(inp, live, cruise, heartbeat, self.family, droid.connected)
+            {
+                self.last_drive = None;
+                self.view.tank = Some(tracks);
+                out.push(Out::Drive(c));
+            }
+            self.view.speed = 0;
+            self.view.estop = self.estop;
+            self.view.turbo = self.turbo;
+            self.view.source = if self.tank.moving() { "tank" } else { "-" };
+            self.view.deadman = !self.tank.moving() && !self.estop;
+            return out;
+        }
         // Drive: while moving (heartbeat) and whenever it changes.
         let travel = Heading::wrapped(self.heading as f64);
         let mut steer = None;
@@ -435,6 +477,7 @@ impl Controller {
             source,
             aiming: self.aiming,
             steer,
+            tank: None,
         };
         out
     }

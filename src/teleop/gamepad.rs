@@ -174,6 +174,19 @@ impl PadState {
         (d.magnitude * top).round().clamp(0.0, 255.0) as u8
     }
 
+    /// Tank mode: each stick's Y (up = forward) as a track after the deadzone and curve, full
+    /// deflection the configured `max_speed` (as a fraction of 255); `None` when both sticks
+    /// rest (deadman).
+    pub fn tracks(&self) -> Option<(f32, f32)> {
+        if !self.connected {
+            return None;
+        }
+        let top = self.cfg.max_speed as f32 / 255.0;
+        let track = |y: f32| shape(y.abs(), self.cfg.deadzone, self.cfg.expo) * y.signum() * top;
+        let (l, r) = (track(self.axes[1]), track(self.axes[3]));
+        (l != 0.0 || r != 0.0).then_some((l, r))
+    }
+
     /// Dome rate from the right stick X, °/s (0 inside the deadzone).
     pub fn dome_rate(&self) -> f32 {
         if !self.connected {

@@ -5,3 +5,4 @@
 pub mod control;
 pub mod gamepad;
 pub mod held;
+pub mod tank;

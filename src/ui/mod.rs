@@ -18,6 +18,7 @@ mod map;
 mod overlay;
 pub mod picker;
 mod robi;
+mod robots;
 mod roster;
 mod sensors;
 mod status;
@@ -43,6 +44,16 @@ pub fn draw(frame: &mut Frame, state: &AppState) {
         area.height -= 1;
     }
     let p = layout::plan(area);
+    // The newer robots' panels want a few more rows in the dome's place (BOLT's matrix 4
+    // rows of half blocks, RVR two lines): taken from the panels around it.
+    let want = if state.model.has_matrix() {
+        6
+    } else if state.model.has_tracks() {
+        4
+    } else {
+        0
+    };
+    let p = robots::make_room(p, want);
     status::render(frame, p.status, state);
     if let Some(r) = p.drive {
         drive::render(frame, r, state);
@@ -63,26 +74,32 @@ pub fn draw(frame: &mut Frame, state: &AppState) {
             .collect();
         map::render_with(frame, r, &state.telemetry, &others);
     }
-    // Panels by capability: the dome's place shows the dome, Robi's motors, or the lights;
-    // the sensors' place shows Sphero sensors or Robi's I/O and link quality.
+    // Panels by capability: the dome's place shows the dome, Robi's motors, BOLT's matrix,
+    // RVR's rover panel or the lights; the sensors' place shows Sphero sensors or Robi's I/O
+    // and link quality.
     let frames = state.model.reports_state_frames();
-    if let Some(r) = p.dome {
+    let (dome_rect, sensors_rect, collisions_rect) = (p.dome, p.sensors, p.collisions);
+    if let Some(r) = dome_rect {
         if state.model.has_dome() {
             dome::render(frame, r, state);
         } else if frames {
             robi::motors(frame, r, state);
+        } else if state.model.has_matrix() {
+            robots::bolt(frame, r, state);
+        } else if state.model.has_tracks() {
+            robots::rvr(frame, r, state);
         } else {
             leds::render(frame, r, state);
         }
     }
-    if let Some(r) = p.sensors {
+    if let Some(r) = sensors_rect {
         if frames {
             robi::io(frame, r, state);
         } else {
             sensors::render(frame, r, &state.telemetry);
         }
     }
-    if let Some(r) = p.collisions {
+    if let Some(r) = collisions_rect {
         collisions::render(frame, r, state);
     }
     if let Some(r) = p.notice {

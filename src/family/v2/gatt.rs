@@ -27,11 +27,17 @@ pub fn profile(model: Model) -> GattProfile {
         write: api,
         notify: vec![api],
         inputs: Vec::new(),
-        handshake: vec![HandshakeStep::Write {
-            ch: CharRef::any_service(V2_ANTI_DOS, V2_ANTI_DOS_SERVICE),
-            bytes: V2_UNLOCK.to_vec(),
-            what: "v2 anti-DoS unlock",
-        }],
+        // RVR takes commands without the unlock (spherov2.py's `toy/rvr.py` writes none;
+        // `droid-facts.md` §6); BOLT and Mini want it like R2-D2.
+        handshake: if model == Model::Rvr {
+            Vec::new()
+        } else {
+            vec![HandshakeStep::Write {
+                ch: CharRef::any_service(V2_ANTI_DOS, V2_ANTI_DOS_SERVICE),
+                bytes: V2_UNLOCK.to_vec(),
+                what: "v2 anti-DoS unlock",
+            }]
+        },
         chunk_size: ATT_PAYLOAD,
         pacing: model.write_pacing(),
         write_with_response: true,
@@ -60,5 +66,7 @@ mod tests {
                 .matches(sphero_v2(0x0002_0001), V2_ANTI_DOS)
         );
         assert!(!p.write.matches(GattUuid::from_u16(1), V2_API));
+        assert!(profile(Model::Rvr).handshake.is_empty());
+        assert_eq!(profile(Model::Bolt).handshake.len(), 1);
     }
 }

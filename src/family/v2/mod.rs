@@ -3,6 +3,7 @@
 pub mod gatt;
 pub mod named;
 pub mod read;
+pub mod robots;
 
 use super::{
     Codec, Command, DroidError, Explained, Family, Incoming, Key, Packet, PacketKind, ReadOption,
@@ -11,6 +12,7 @@ use super::{
 use crate::family::setup::SetupOptions;
 use crate::model::{Model, Protocol};
 use crate::protocol::decode::ErrorKind;
+use crate::protocol::v2::catalog::targets;
 use crate::protocol::v2::sensor::StreamingConfig;
 use crate::protocol::v2::wire::{
     AudioMode, Bytes, CollisionMethod, DriveFlags, LegAction, Mask, StabilizationIndex,
@@ -29,6 +31,10 @@ pub const FAIL_SAFE_TIMEOUT_MS: u16 = 2000;
 pub struct V2Codec {
     decoder: Decoder,
     streaming: StreamingConfig,
+    /// The robot on the connection: BOLT and RVR have processors to address.
+    model: Option<Model>,
+    /// What the droid was told to stream through the streaming service (RVR).
+    service: crate::protocol::v2::stream::ServiceConfig,
 }
 
 impl V2Codec {
@@ -36,6 +42,17 @@ impl V2Codec {
         V2Codec {
             decoder: Decoder::new(),
             streaming: StreamingConfig::default(),
+            model: None,
+            service: Default::default(),
+        }
+    }
+
+    /// The codec of a connection to `model`: commands without a target get the one of the
+    /// processor that has them (`catalog::targets`).
+    pub fn for_model(model: Model) -> Self {
+        V2Codec {
+            model: Some(model),
+            ..V2Codec::new()
         }
     }
 
@@ -49,6 +66,7 @@ impl V2Codec {
             (0x18, 0x0C, m) if m.len() == 4 => {
                 self.streaming.ext_mask = u32::from_be_bytes([m[0], m[1], m[2], m[3]]);
             }
+            (0x18, 0x39..=0x3C, _) => self.service.snoop(c),
             _ => {}
         }
     }
@@ -57,6 +75,26 @@ impl V2Codec {
 impl Default for V2Codec {
     fn default() -> Self {
         Self::new()
+    }
+}
+
+impl V2Codec {
+    /// The command as it goes on the wire to this connection's robot: addressed to the
+    /// processor that has it (BOLT, RVR), and Core's Ping as API and Shell's Echo on the
+    /// newer robots, which have no Core device (spherov2.py pings them with 0x10/0x00).
+    fn wire_form(&self, c: &Command) -> v2::Command {
+        let mut c = v2_of(c);
+        let Some(model) = self.model else {
+            return c;
+        };
+        if matches!(model, Model::Bolt | Model::Mini | Model::Rvr) && (c.did, c.cid) == (0x00, 0x01)
+        {
+            c = cmd::echo(Bytes(Vec::new()));
+        }
+        if c.target.is_none() {
+            c.target = targets::addressed(model, c.did, c.cid).map(|p| p.target_id());
+        }
+        c
     }
 }
 
@@ -98,11 +136,12 @@ impl Codec for V2Codec {
     }
 
     fn key(&self, c: &Command, seq: u8) -> Key {
-        (c.did(), c.cid(), seq)
+        let c = self.wire_form(c);
+        (c.did, c.cid, seq)
     }
 
     fn encode(&mut self, c: &Command, seq: u8, want_response: bool) -> (Vec<u8>, Packet) {
-        let c = v2_of(c);
+        let c = self.wire_form(c);
         self.snoop(&c);
         let mut packet = c.to_packet(seq);
         if !want_response {
@@ -125,7 +164,11 @@ impl Codec for V2Codec {
                     packet: Packet::V2(p),
                 },
                 Ok(p) if p.is_notification() => Incoming::Async {
-                    notifications: vec![Notification::decode(&p, &self.streaming)],
+                    notifications: vec![Notification::decode_with(
+                        &p,
+                        &self.streaming,
+                        &self.service,
+                    )],
                     packet: Packet::V2(p),
                 },
                 Ok(p) => Incoming::Stray(Packet::V2(p)),
@@ -204,6 +247,10 @@ impl Family for V2 {
         Box::new(V2Codec::new())
     }
 
+    fn codec_for(&self, model: Model) -> Box<dyn Codec> {
+        Box::new(V2Codec::for_model(model))
+    }
+
     fn wake(&self) -> Option<Command> {
         Some(cmd::wake().into())
     }
@@ -228,10 +275,16 @@ impl Family for V2 {
     }
 
     fn is_drive(&self, c: &Command) -> bool {
-        matches!(c, Command::V2(c) if (c.did, c.cid) == (0x16, 0x07))
+        matches!(c, Command::V2(c) if matches!((c.did, c.cid), (0x16, 0x07) | (0x16, 0x01)))
     }
 
     fn stop_after(&self, last: Option<&Command>) -> Command {
+        // Tracks stop with both motors off.
+        if let Some(Command::V2(c)) = last
+            && (c.did, c.cid) == (0x16, 0x01)
+        {
+            return robots::tank(0, 0);
+        }
         let mut stop = match last {
             Some(Command::V2(c)) if (c.did, c.cid) == (0x16, 0x07) => c.clone(),
             _ => cmd::drive_with_heading(0, Heading::default(), DriveFlags::empty()),
@@ -265,6 +318,9 @@ impl Family for V2 {
     /// R2 bits 0..2 front RGB, 3 logic, 4..6 back RGB, 7 holo; BB-9E 0..2 body RGB,
     /// 3 aiming, 4 head (`droid-facts.md` §2).
     fn led(&self, model: Model, action: &Action) -> Option<Command> {
+        if let Some(c) = robots::led(model, action) {
+            return c;
+        }
         let r2 = model.has_legs();
         let (mask, values): (u32, Vec<u8>) = match *action {
             Action::LedRgb(LedGroup::Front, rgb) => (0x0007, rgb.to_vec()),
@@ -285,6 +341,17 @@ impl Family for V2 {
 
     fn battery_volts(&self, response: &[u8]) -> Option<f32> {
         crate::telemetry::battery_volts(response)
+    }
+
+    fn battery_request_for(&self, model: Model) -> Option<Command> {
+        robots::battery_request(model).or_else(|| self.battery_request())
+    }
+
+    fn battery_volts_for(&self, model: Model, response: &[u8]) -> Option<f32> {
+        match robots::battery_request(model) {
+            Some(_) => robots::battery_volts(response),
+            None => self.battery_volts(response),
+        }
     }
 
     /// Set Custom Control System Timeout (DID 16h, CID 22h): the droid stops by itself when
@@ -315,10 +382,14 @@ impl Family for V2 {
             10,
         ));
         out.push(cmd::enable_collision_detected_notify(true));
-        if opts.streaming_interval_ms > 0 {
+        if opts.streaming_interval_ms > 0 && !model.streams_by_service() {
             // Reconfigure as the reference clients do: mask with interval 0, extended mask,
             // then the mask again with the real interval (`droid-facts.md` §2).
-            let s = StreamingConfig::full(opts.streaming_interval_ms);
+            let mut s = StreamingConfig::full(opts.streaming_interval_ms);
+            if model.has_compass() {
+                // BOLT's ambient light (extended bit 18, spherov2 `toy/bolt.py`).
+                s.ext_mask |= 0x0004_0000;
+            }
             out.push(cmd::set_sensor_streaming_mask(0, 0, Mask(s.mask)));
             out.push(cmd::set_extended_sensor_streaming_mask(Mask(s.ext_mask)));
             out.push(cmd::set_sensor_streaming_mask(
@@ -329,12 +400,17 @@ impl Family for V2 {
         }
         out.push(cmd::enable_battery_state_changed_notify(true));
         out.push(cmd::enable_battery_voltage_state_change_notify(true));
-        out.into_iter().map(Command::from).collect()
+        let mut out: Vec<Command> = out.into_iter().map(Command::from).collect();
+        out.extend(robots::setup_extra(model, opts.streaming_interval_ms));
+        out
     }
 
     /// BB-9E rolls like BB-8 and has an aiming light (LED bit 3); R2 has legs and no aim
     /// light, so it drives without aiming.
     fn aim_begin(&self, model: Model) -> Option<Vec<Command>> {
+        if let Some(cmds) = robots::aim_begin(model) {
+            return Some(cmds);
+        }
         if model.has_legs() {
             return None;
         }
@@ -345,10 +421,25 @@ impl Family for V2 {
         ])
     }
 
-    fn aim_end(&self, _model: Model) -> Vec<Command> {
+    fn aim_end(&self, model: Model) -> Vec<Command> {
+        if let Some(cmds) = robots::aim_end(model) {
+            return cmds;
+        }
         vec![
             cmd::reset_yaw().into(),
             cmd::set_all_leds_with_16_bit_mask(Mask(0x0008), Bytes(vec![0])).into(),
         ]
+    }
+
+    fn matrix(&self, action: &crate::script::MatrixAction) -> Option<Command> {
+        Some(robots::matrix(action))
+    }
+
+    fn tank(&self, left: i16, right: i16) -> Option<Command> {
+        Some(robots::tank(left, right))
+    }
+
+    fn calibrate_compass(&self) -> Option<Command> {
+        Some(cmd::magnetometer_calibrate_to_north().into())
     }
 }

@@ -2,7 +2,9 @@
 //! and parameters, and the catalogue listed.
 
 use crate::family::named::{byte_opt, data_opt, keep, params_text};
+use crate::model::Model;
 use crate::protocol::table::unknown_command;
+use crate::protocol::v2::catalog::targets::{self, Home};
 use crate::protocol::v2::{Flags, Packet, catalog};
 use std::io::Write;
 
@@ -88,14 +90,51 @@ fn check_led_values(name: &str, data: &[u8]) -> Result<(), String> {
     Ok(())
 }
 
+/// Whether `model` has the command `did`/`cid`: R2's dome and legs, BOLT's matrix and
+/// RVR's palettes and streaming service are theirs alone (spherov2.py's `toy/*.py`).
+pub fn model_has(model: Model, did: u8, cid: u8) -> bool {
+    match (did, cid) {
+        (0x17, 0x05 | 0x11 | 0x2B | 0x2C) => {
+            matches!(model, Model::R2D2 | Model::R2Q5 | Model::BB9E)
+        }
+        (0x17, _) => model.has_legs(),
+        (0x1A, 0x07..=0x0A) => matches!(model, Model::R2D2 | Model::R2Q5 | Model::BB9E),
+        (0x1A, 0x0E) => !matches!(model, Model::Bolt | Model::Rvr),
+        (0x1A, 0x1A) => model == Model::Rvr,
+        (0x1A, 0x1C) => model == Model::Bolt,
+        (0x1A, 0x2D..=0x4E) => model.has_matrix() || model == Model::Rvr,
+        (0x18, 0x39..=0x3D) | (0x18, 0x35..=0x38) | (0x16, 0x25..=0x29) => {
+            model.streams_by_service()
+        }
+        (0x18, 0x25 | 0x26 | 0x30) => model.has_compass() || model == Model::Rvr,
+        _ => true,
+    }
+}
+
 /// `packet list` for v2: commands with their parameters, notifications with their fields.
+/// A model id as the filter (`bolt`) lists that model's commands, with the processor each
+/// is addressed to on robots with two.
 pub fn list(filter: Option<&str>, out: &mut dyn Write) -> std::io::Result<()> {
-    let keep = |n: &str| keep(filter, n);
+    let model = filter
+        .and_then(Model::from_id)
+        .filter(|m| m.protocol() == crate::model::Protocol::SpheroV2);
+    let keep = |n: &str, did: u8, cid: u8| match model {
+        Some(m) => model_has(m, did, cid),
+        None => keep(filter, n),
+    };
     writeln!(out, "Commands (DID/CID  name  parameters):")?;
-    for c in catalog::commands().iter().filter(|c| keep(&c.name)) {
+    for c in catalog::commands()
+        .iter()
+        .filter(|c| keep(&c.name, c.did, c.cid))
+    {
+        let to = match model.map(|m| targets::home(m, c.did, c.cid)) {
+            Some(Home::On(p)) => format!("  [{}]", p.name()),
+            Some(Home::Both) => "  [either]".to_string(),
+            _ => String::new(),
+        };
         writeln!(
             out,
-            "  {:02X}/{:02X}  {:<44} {}",
+            "  {:02X}/{:02X}  {:<44} {}{to}",
             c.did,
             c.cid,
             c.name,
@@ -103,7 +142,10 @@ pub fn list(filter: Option<&str>, out: &mut dyn Write) -> std::io::Result<()> {
         )?;
     }
     writeln!(out, "Notifications (DID/CID  name  fields):")?;
-    for n in catalog::notifications().iter().filter(|n| keep(&n.name)) {
+    for n in catalog::notifications()
+        .iter()
+        .filter(|n| keep(&n.name, n.device.id(), n.cid))
+    {
         let fields: Vec<_> = n.fields.iter().map(|f| f.name).collect();
         writeln!(
             out,

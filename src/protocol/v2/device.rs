@@ -1,4 +1,5 @@
-//! Device IDs (`r2d2-v2-protocol.md` §4.1).
+//! Device IDs (`r2d2-v2-protocol.md` §4.1; API and Shell, System Mode, Connection, Firmware
+//! and Factory Test from spherov2.py's `commands/*.py`, `droid-facts.md` §6).
 
 /// The virtual devices ("command groups") of API v2.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -10,10 +11,15 @@ pub enum Device {
     Animatronic,
     Sensor,
     Io,
+    ApiAndShell,
+    SystemMode,
+    Connection,
+    Firmware,
+    FactoryTest,
 }
 
 impl Device {
-    pub const ALL: [Device; 7] = [
+    pub const ALL: [Device; 12] = [
         Device::Core,
         Device::SystemInfo,
         Device::Power,
@@ -21,6 +27,11 @@ impl Device {
         Device::Animatronic,
         Device::Sensor,
         Device::Io,
+        Device::ApiAndShell,
+        Device::SystemMode,
+        Device::Connection,
+        Device::Firmware,
+        Device::FactoryTest,
     ];
 
     pub const fn id(self) -> u8 {
@@ -32,6 +43,11 @@ impl Device {
             Device::Animatronic => 0x17,
             Device::Sensor => 0x18,
             Device::Io => 0x1A,
+            Device::ApiAndShell => 0x10,
+            Device::SystemMode => 0x12,
+            Device::Connection => 0x19,
+            Device::Firmware => 0x1D,
+            Device::FactoryTest => 0x1F,
         }
     }
 
@@ -48,6 +64,11 @@ impl Device {
             Device::Animatronic => "animatronic",
             Device::Sensor => "sensor",
             Device::Io => "io",
+            Device::ApiAndShell => "api-and-shell",
+            Device::SystemMode => "system-mode",
+            Device::Connection => "connection",
+            Device::Firmware => "firmware",
+            Device::FactoryTest => "factory-test",
         }
     }
 

@@ -10,6 +10,8 @@ pub mod flags;
 pub mod notify;
 pub mod packet;
 pub mod sensor;
+pub mod stream;
+pub mod types;
 /// Re-exported from the shared core, where v1 uses them too.
 pub use super::{value, wire};
 

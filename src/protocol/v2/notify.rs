@@ -2,10 +2,12 @@
 //! catalogue is still decoded generically for display (see [`super::describe`]).
 
 use super::catalog;
+use super::catalog::targets::Processor;
 use super::device::Device;
 use super::packet::Packet;
 use super::sensor::{StreamingConfig, decode_sample};
-pub use crate::protocol::notify::{Collision, Notification, NotificationError};
+use super::stream::ServiceConfig;
+pub use crate::protocol::notify::{Collision, Notification, NotificationError, RobotEvent};
 
 /// The v2 side of the common [`Notification`]: decoding from v2 packets and v2 names.
 impl Notification {
@@ -15,6 +17,16 @@ impl Notification {
     pub fn decode(
         p: &Packet,
         streaming: &StreamingConfig,
+    ) -> Result<Notification, NotificationError> {
+        Self::decode_with(p, streaming, &ServiceConfig::default())
+    }
+
+    /// [`Notification::decode`], with what the streaming service was told too (RVR): its
+    /// data are named by the token and the processor that sent them.
+    pub fn decode_with(
+        p: &Packet,
+        streaming: &StreamingConfig,
+        service: &ServiceConfig,
     ) -> Result<Notification, NotificationError> {
         let bad = |name: &'static str, reason: String| NotificationError { name, reason };
         let byte = |name: &'static str| {
@@ -57,6 +69,52 @@ impl Notification {
             (Some(Device::Animatronic), 0x3A) => {
                 empty("head-reset-to-zero", Notification::HeadResetToZero)
             }
+            (Some(Device::Sensor), 0x3D) => {
+                super::stream::decode(service, p.sid.and_then(Processor::of_id), &p.data)
+                    .map(Notification::Sensors)
+                    .map_err(|e| bad("streaming-service-data", e.to_string()))
+            }
+            (Some(Device::Drive), 0x26) => match p.data[..] {
+                [motor, stalled] => Ok(Notification::Robot(RobotEvent::MotorStall {
+                    motor,
+                    stalled: stalled != 0,
+                })),
+                _ => Err(bad(
+                    "motor-stall",
+                    format!("expected 2 bytes, got {}", p.data.len()),
+                )),
+            },
+            (Some(Device::Drive), 0x28) => {
+                byte("motor-fault").map(|b| Notification::Robot(RobotEvent::MotorFault(b != 0)))
+            }
+            (Some(Device::Sensor), 0x26) => match p.data[..] {
+                [a, b] => Ok(Notification::Robot(RobotEvent::CompassHeading(
+                    u16::from_be_bytes([a, b]),
+                ))),
+                _ => Err(bad(
+                    "magnetometer-north-yaw",
+                    format!("expected 2 bytes, got {}", p.data.len()),
+                )),
+            },
+            (Some(Device::Sensor), 0x36) => match p.data[..] {
+                [r, g, b, index, confidence] => Ok(Notification::Robot(RobotEvent::Color {
+                    rgb: [r, g, b],
+                    index,
+                    confidence,
+                })),
+                _ => Err(bad(
+                    "color-detection",
+                    format!("expected 5 bytes, got {}", p.data.len()),
+                )),
+            },
+            (Some(Device::Io), 0x3C) => match p.data[..] {
+                [0] => Ok(Notification::Robot(RobotEvent::MatrixTextDone)),
+                _ => Ok(Notification::Other {
+                    did: p.did,
+                    cid: p.cid,
+                    data: p.data.clone(),
+                }),
+            },
             _ => Ok(Notification::Other {
                 did: p.did,
                 cid: p.cid,

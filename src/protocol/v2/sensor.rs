@@ -59,11 +59,13 @@ pub const STANDARD_FIELDS: [SensorField; 17] = [
 
 /// The extended mask (R2-D2 specific), descending bit order. Gyro scaling is disputed
 /// between clients (`droid-facts.md` §2, *unverified*): values are shown as sent.
-pub const EXTENDED_FIELDS: [SensorField; 4] = [
+pub const EXTENDED_FIELDS: [SensorField; 5] = [
     ext_field(26, "head_angle", "deg"),
     ext_field(25, "gyro_x", "deg/s"),
     ext_field(24, "gyro_y", "deg/s"),
     ext_field(23, "gyro_z", "deg/s"),
+    // BOLT's ambient light sensor: spherov2.py `toy/bolt.py` extended bit 0x40000.
+    ext_field(18, "ambient_light", "lux"),
 ];
 
 pub mod mask {
@@ -242,6 +244,28 @@ mod tests {
         assert_eq!(s.get("locator_y"), Some(-25.0));
         assert_eq!(s.get("head_angle"), Some(90.0));
         assert_eq!(encode_sample(&cfg, &s.values), data);
+    }
+
+    #[test]
+    fn bolts_ambient_light_is_named_after_the_gyro() {
+        // BOLT: extended bit 18 is the ambient light (spherov2 `toy/bolt.py`).
+        let cfg = StreamingConfig {
+            interval_ms: 100,
+            mask: mask::ATTITUDE,
+            ext_mask: mask::EXT_GYRO | 0x0004_0000,
+        };
+        let values = [
+            ("pitch", 1.0),
+            ("roll", 2.0),
+            ("yaw", 3.0),
+            ("gyro_x", 4.0),
+            ("gyro_y", 5.0),
+            ("gyro_z", 6.0),
+            ("ambient_light", 320.0),
+        ];
+        let s = decode_sample(&cfg, &encode_sample(&cfg, &values)).unwrap();
+        assert_eq!(s.get("ambient_light"), Some(320.0));
+        assert_eq!(s.get("gyro_z"), Some(6.0));
     }
 
     #[test]

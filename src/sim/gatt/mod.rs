@@ -206,6 +206,11 @@ impl GattDroid {
         &self.faults
     }
 
+    /// What the droid shows that no packet says (BOLT's matrix), for traces.
+    pub fn shows(&self) -> Option<String> {
+        self.droid.shows()
+    }
+
     /// The droid's body (position, speed, LEDs …) as of the last call.
     pub fn state(&self) -> &SimState {
         self.droid.state()

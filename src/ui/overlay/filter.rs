@@ -11,17 +11,18 @@ use ratatui::widgets::{Clear, Paragraph};
 
 const SYNTAX: &str = "in|out dev:NAME text";
 
-pub fn render(frame: &mut Frame, area: Rect, input: &str, current: &LogFilter) {
+/// A prompt box low on the screen: its inner rect and the input as it fits.
+fn prompt(frame: &mut Frame, area: Rect, title: &str, input: &str) -> (Rect, String) {
     let w = area.width.saturating_sub(4).clamp(1, 70).min(area.width);
     let h = 5.min(area.height);
-    // Low on the screen, over the packet log it filters.
+    // Low on the screen, over the packet log.
     let rect = Rect {
         x: area.x + area.width.saturating_sub(w) / 2,
         y: area.y + area.height.saturating_sub(h + 1),
         width: w,
         height: h,
     };
-    let block = theme::panel(Span::styled(" Filter packets ", theme::bold()))
+    let block = theme::panel(Span::styled(format!(" {title} "), theme::bold()))
         .border_style(theme::commanded())
         .title_bottom(
             Line::from(Span::styled(" Enter apply · Esc cancel ", theme::dim())).centered(),
@@ -29,8 +30,50 @@ pub fn render(frame: &mut Frame, area: Rect, input: &str, current: &LogFilter) {
     let inner = block.inner(rect);
     frame.render_widget(Clear, rect);
     frame.render_widget(block, rect);
+    let shown = truncate_left(&clean(input), (inner.width as usize).saturating_sub(3));
+    (inner, shown)
+}
+
+/// The cursor after the typed text.
+fn cursor(frame: &mut Frame, inner: Rect, shown: &str) {
+    if inner.height > 0 && inner.width > 0 {
+        let x = inner
+            .x
+            .saturating_add((2 + width(shown)) as u16)
+            .min(inner.right().saturating_sub(1));
+        frame.set_cursor_position(Position::new(x, inner.y));
+    }
+}
+
+/// BOLT's matrix prompt: one character is drawn, more scroll (up to 25).
+pub fn matrix(frame: &mut Frame, area: Rect, input: &str) {
+    let (inner, shown) = prompt(frame, area, "On the matrix", input);
+    let what = match crate::app::matrix::MatrixView::typed(input) {
+        None => "nothing yet".to_string(),
+        Some(crate::app::matrix::MatrixShows::Char(c)) => format!("draws {c:?}"),
+        Some(_) => format!("scrolls {} characters", input.trim().len()),
+    };
+    let lines = vec![
+        Line::from(vec![
+            Span::styled("> ", theme::commanded()),
+            Span::raw(shown.clone()),
+        ]),
+        Line::from(vec![
+            Span::styled("one character is drawn, more scroll ", theme::dim()),
+            Span::styled("(up to 25)", theme::dim()),
+        ]),
+        Line::from(vec![
+            Span::styled("now ", theme::label()),
+            Span::styled(what, theme::commanded()),
+        ]),
+    ];
+    frame.render_widget(Paragraph::new(lines), inner);
+    cursor(frame, inner, &shown);
+}
+
+pub fn render(frame: &mut Frame, area: Rect, input: &str, current: &LogFilter) {
+    let (inner, shown) = prompt(frame, area, "Filter packets", input);
     let iw = inner.width as usize;
-    let shown = truncate_left(&clean(input), iw.saturating_sub(3));
     let parsed = LogFilter::parse(input);
     let preview = if parsed.is_active() {
         parsed.describe()
@@ -61,11 +104,5 @@ pub fn render(frame: &mut Frame, area: Rect, input: &str, current: &LogFilter) {
         ]),
     ];
     frame.render_widget(Paragraph::new(lines), inner);
-    if inner.height > 0 && inner.width > 0 {
-        let x = inner
-            .x
-            .saturating_add((2 + width(&shown)) as u16)
-            .min(inner.right().saturating_sub(1));
-        frame.set_cursor_position(Position::new(x, inner.y));
-    }
+    cursor(frame, inner, &shown);
 }

@@ -21,5 +21,6 @@ pub fn render(frame: &mut Frame, s: &AppState) {
             palette::render(frame, area, "Sounds", &s.sounds, *selected)
         }
         Overlay::Filter { input } => filter::render(frame, area, input, &s.log.filter),
+        Overlay::Matrix { input } => filter::matrix(frame, area, input),
     }
 }

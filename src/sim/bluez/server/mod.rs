@@ -210,6 +210,8 @@ struct Device {
     /// When to say whether it still rolls, after a disconnect.
     motion_report: Option<Instant>,
     tracer: PacketTracer,
+    /// What the droid showed when last traced (BOLT's matrix).
+    shown: Option<String>,
     /// The GATT objects are on the bus.
     exported: bool,
     /// The client that connected.
@@ -275,6 +277,7 @@ impl Device {
         Device {
             rssi: None,
             tracer: PacketTracer::new(spec.model),
+            shown: None,
             spec,
             path,
             droid,
@@ -453,8 +456,16 @@ impl BluezSim {
         (self.report)(Report::Status(line));
     }
 
-    /// Trace what device `i` received or sent (with `trace`).
-    fn trace_records(&mut self, i: usize, records: Vec<TraceRecord>) {
+    /// Trace what device `i` received or sent (with `trace`), then what it shows when that
+    /// changed (BOLT's matrix).
+    fn trace_records(&mut self, i: usize, mut records: Vec<TraceRecord>) {
+        let shows = self.devices[i].droid.shows();
+        if shows != self.devices[i].shown {
+            if let Some(text) = &shows {
+                records.push(TraceRecord::state(text));
+            }
+            self.devices[i].shown = shows;
+        }
         let t_ms = self.now().as_millis() as u64;
         for r in records {
             let name = self.devices[i].name().to_string();

@@ -1,0 +1,154 @@
+//! BOLT's LED matrix in the app: what droidctl drew on it (the robot does not report it),
+//! the prompt that types on it (one character is drawn, more scroll), the colour key, and
+//! the compass calibration key. Every command is the family's (`Family::matrix`).
+
+use super::core::App;
+use super::state::{MAIN_LED_CYCLE, Overlay};
+use crate::config::{Action, Context, Key};
+use crate::protocol::v2::types::SCROLL_TEXT_MAX;
+use crate::script::MatrixAction;
+
+/// What the matrix shows, as last drawn.
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub enum MatrixShows {
+    #[default]
+    Unknown,
+    Fill,
+    Char(char),
+    Text(String),
+}
+
+/// The matrix as droidctl drew it: its colour and what is on it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct MatrixView {
+    pub colour: [u8; 3],
+    pub shows: MatrixShows,
+}
+
+impl Default for MatrixView {
+    fn default() -> Self {
+        MatrixView {
+            colour: MAIN_LED_CYCLE[0],
+            shows: MatrixShows::Unknown,
+        }
+    }
+}
+
+impl MatrixView {
+    /// The drawing that shows `shows` in the current colour.
+    fn action(&self) -> MatrixAction {
+        match &self.shows {
+            MatrixShows::Char(ch) => MatrixAction::Char {
+                ch: *ch,
+                rgb: self.colour,
+            },
+            MatrixShows::Text(text) => MatrixAction::Text {
+                text: text.clone(),
+                rgb: self.colour,
+            },
+            MatrixShows::Unknown | MatrixShows::Fill => MatrixAction::Fill(self.colour),
+        }
+    }
+
+    /// What typed `input` draws: a character, text to scroll, or nothing.
+    pub fn typed(input: &str) -> Option<MatrixShows> {
+        let t = input.trim();
+        let mut chars = t.chars();
+        match (chars.next(), chars.next()) {
+            (None, _) => None,
+            (Some(c), None) => Some(MatrixShows::Char(c)),
+            _ => Some(MatrixShows::Text(t.to_string())),
+        }
+    }
+}
+
+impl App {
+    /// The robot-only keys of the drive table; `false` when `a` is not one of them.
+    pub fn robot_action(&mut self, a: Action) -> bool {
+        match a {
+            Action::Matrix | Action::MatrixColour if !self.state.model.has_matrix() => {
+                self.hint("this droid has no LED matrix")
+            }
+            Action::Matrix => {
+                self.state.overlay = Overlay::Matrix {
+                    input: String::new(),
+                }
+            }
+            Action::MatrixColour => {
+                let m = &mut self.state.matrix;
+                let next = MAIN_LED_CYCLE
+                    .iter()
+                    .position(|c| *c == m.colour)
+                    .map_or(0, |i| (i + 1) % MAIN_LED_CYCLE.len());
+                m.colour = MAIN_LED_CYCLE[next];
+                self.draw_matrix();
+            }
+            Action::Calibrate => match self.family.calibrate_compass() {
+                Some(c) if self.state.model.has_compass() => {
+                    self.send(c, "compass calibration");
+                    self.hint("calibrating the compass: north is reported when done");
+                }
+                _ => self.hint("this droid has no compass"),
+            },
+            _ => return false,
+        }
+        true
+    }
+
+    /// Send what the matrix view says it shows.
+    fn draw_matrix(&mut self) {
+        let action = self.state.matrix.action();
+        if matches!(self.state.matrix.shows, MatrixShows::Unknown) {
+            self.state.matrix.shows = MatrixShows::Fill;
+        }
+        if let Some(c) = self.family.matrix(&action) {
+            self.send(c, "matrix");
+        }
+    }
+
+    /// A key while the matrix prompt is open (the filter table's apply and cancel keys).
+    pub fn matrix_key(&mut self, key: Key) {
+        let action = self.keymap.action_in(Context::Filter, &key);
+        let Overlay::Matrix { input } = &mut self.state.overlay else {
+            return;
+        };
+        match action {
+            Some(Action::FilterCancel) => self.state.overlay = Overlay::None,
+            Some(Action::FilterApply) => {
+                let typed = MatrixView::typed(input);
+                self.state.overlay = Overlay::None;
+                if let Some(shows) = typed {
+                    self.state.matrix.shows = shows;
+                    self.draw_matrix();
+                }
+            }
+            _ => super::keys::edit(input, key, SCROLL_TEXT_MAX, |c| c.is_ascii_graphic()),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn typing_draws_a_character_or_scrolls() {
+        assert_eq!(MatrixView::typed(""), None);
+        assert_eq!(MatrixView::typed(" A "), Some(MatrixShows::Char('A')));
+        assert_eq!(
+            MatrixView::typed("HI THERE"),
+            Some(MatrixShows::Text("HI THERE".into()))
+        );
+        let v = MatrixView {
+            shows: MatrixShows::Char('Z'),
+            ..Default::default()
+        };
+        assert_eq!(
+            v.action(),
+            MatrixAction::Char {
+                ch: 'Z',
+                rgb: MAIN_LED_CYCLE[0]
+            }
+        );
+    }
+}

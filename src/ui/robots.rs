@@ -1,0 +1,267 @@
+//! The newer robots' panels, in the dome's place (panels by capability): BOLT's LED matrix as
+//! droidctl drew it, in colour, beside its compass and ambient light; RVR's colour sensor,
+//! motors and tracks. Both fall back to one summary line when the rect is short.
+
+use super::layout::Plan;
+use super::text::{clean, truncate};
+use super::theme;
+use crate::app::matrix::MatrixShows;
+use crate::app::state::AppState;
+use ratatui::Frame;
+use ratatui::layout::Rect;
+use ratatui::style::{Color, Modifier, Style};
+use ratatui::text::{Line, Span};
+use ratatui::widgets::Paragraph;
+
+fn rgb(c: [u8; 3]) -> Color {
+    Color::Rgb(c[0], c[1], c[2])
+}
+
+fn title<'a>(name: &'a str, s: &AppState) -> Line<'a> {
+    let mut spans = vec![Span::raw(format!(" {name} "))];
+    if s.control.aiming {
+        spans.push(Span::styled("AIMING ", theme::attention()));
+    }
+    if s.control.tank.is_some() {
+        spans.push(Span::styled("TANK ", theme::attention()));
+    }
+    Line::from(spans)
+}
+
+/// The 8×8 matrix as four rows of half blocks (eight columns), or what it shows on them.
+fn matrix_rows(s: &AppState) -> Vec<Line<'static>> {
+    let m = &s.matrix;
+    let lit = Style::new().fg(rgb(m.colour)).bg(rgb(m.colour));
+    let off = theme::dim();
+    let row = |text: String, style: Style| Line::from(Span::styled(text, style));
+    match &m.shows {
+        MatrixShows::Unknown => (0..4).map(|_| row("· · · · ".into(), off)).collect(),
+        MatrixShows::Fill => (0..4).map(|_| row("▀".repeat(8), lit)).collect(),
+        MatrixShows::Char(c) => {
+            let glyph = Style::new().fg(rgb(m.colour)).add_modifier(Modifier::BOLD);
+            vec![
+                row("        ".into(), off),
+                row(format!("   {c}    "), glyph),
+                row("        ".into(), off),
+                row("        ".into(), off),
+            ]
+        }
+        MatrixShows::Text(t) => {
+            // A marquee: the text moves left a character every 150 ms.
+            let padded: Vec<char> = format!("{}        ", clean(t)).chars().collect();
+            let at = (s.now.as_millis() / 150) as usize % padded.len().max(1);
+            let window: String = padded.iter().cycle().skip(at).take(8).collect();
+            let glyph = Style::new().fg(rgb(m.colour)).add_modifier(Modifier::BOLD);
+            vec![
+                row("        ".into(), off),
+                row(window, glyph),
+                row("        ".into(), off),
+                row("        ".into(), off),
+            ]
+        }
+    }
+}
+
+fn what_it_shows(s: &AppState) -> String {
+    let [r, g, b] = s.matrix.colour;
+    let what = match &s.matrix.shows {
+        MatrixShows::Unknown => "not drawn yet".to_string(),
+        MatrixShows::Fill => "filled".to_string(),
+        MatrixShows::Char(c) => format!("{c:?}"),
+        MatrixShows::Text(t) => format!("scrolling {:?}", truncate(t, 12)),
+    };
+    format!("{what} #{r:02x}{g:02x}{b:02x}")
+}
+
+/// BOLT: the matrix, the compass and the light.
+pub fn bolt(frame: &mut Frame, area: Rect, s: &AppState) {
+    let block = theme::panel(title("Matrix", s));
+    let inner = block.inner(area);
+    frame.render_widget(block, area);
+    let r = &s.telemetry.robot;
+    // The compass heading: how far clockwise from north the robot faces (yaw grows
+    // clockwise; north's yaw is what the calibration reported).
+    let heading = r
+        .compass_north
+        .zip(s.telemetry.yaw.filter(|y| y.is_finite()));
+    let heading = heading.map(|(n, yaw)| (n, (yaw - n as f32).rem_euclid(360.0)));
+    let (compass, short) = match (heading, r.compass_north) {
+        (Some((n, h)), _) => (
+            format!("heading {h:.0}° (north at yaw {n}°)"),
+            format!("compass {h:.0}°"),
+        ),
+        (None, Some(n)) => (format!("north at yaw {n}°"), format!("north at yaw {n}°")),
+        (None, None) => (
+            "compass not calibrated".into(),
+            "compass not calibrated".into(),
+        ),
+    };
+    let light = match r.ambient_lux {
+        Some(l) if l.is_finite() => format!("light {l:.0} lx"),
+        _ => "light -".to_string(),
+    };
+    let swatch = Span::styled("■ ", Style::new().fg(rgb(s.matrix.colour)));
+    if inner.height < 4 || inner.width < 30 {
+        let lines = vec![
+            Line::from(vec![
+                Span::styled("shows ", theme::label()),
+                swatch,
+                Span::raw(what_it_shows(s)),
+            ]),
+            Line::from(Span::styled(format!("{short} · {light}"), theme::dim())),
+        ];
+        frame.render_widget(Paragraph::new(lines), inner);
+        return;
+    }
+    let (grid, side) = (
+        Rect { width: 9, ..inner },
+        Rect {
+            x: inner.x + 10,
+            width: inner.width - 10,
+            ..inner
+        },
+    );
+    frame.render_widget(Paragraph::new(matrix_rows(s)), grid);
+    let lines = vec![
+        Line::from(vec![
+            Span::styled("shows ", theme::label()),
+            swatch,
+            Span::raw(what_it_shows(s)),
+        ]),
+        Line::from(vec![
+            Span::styled("compass ", theme::label()),
+            Span::raw(compass),
+        ]),
+        Line::from(vec![
+            Span::styled("ambient ", theme::label()),
+            Span::raw(light),
+        ]),
+        Line::from(Span::styled(
+            "i type · k colour · N calibrate",
+            theme::dim(),
+        )),
+    ];
+    frame.render_widget(Paragraph::new(lines), side);
+}
+
+/// RVR: the colour under it, its motors, its tracks.
+pub fn rvr(frame: &mut Frame, area: Rect, s: &AppState) {
+    let block = theme::panel(title("Rover", s));
+    let inner = block.inner(area);
+    frame.render_widget(block, area);
+    let r = &s.telemetry.robot;
+    let colour = match r.color {
+        Some((c, index, confidence)) => vec![
+            Span::styled("floor ", theme::label()),
+            Span::styled("■", Style::new().fg(rgb(c))),
+            Span::raw(format!(
+                " {},{},{} #{index} {:.0}%",
+                c[0],
+                c[1],
+                c[2],
+                confidence * 100.0
+            )),
+        ],
+        None => vec![
+            Span::styled("floor ", theme::label()),
+            Span::styled("-", theme::dim()),
+        ],
+    };
+    let motors = if r.motor_fault {
+        Span::styled("MOTOR FAULT", theme::alarm())
+    } else {
+        match r.stalled {
+            [false, false] => Span::raw("motors ok"),
+            [true, true] => Span::styled("both motors stalled", theme::alarm()),
+            [true, false] => Span::styled("left motor stalled", theme::alarm()),
+            [false, true] => Span::styled("right motor stalled", theme::alarm()),
+        }
+    };
+    let tracks = match s.control.tank {
+        Some((l, rt)) => format!("tracks L {l:+} R {rt:+}"),
+        None => "v: tank mode".to_string(),
+    };
+    let mut lines = vec![
+        Line::from(colour),
+        Line::from(vec![
+            motors,
+            Span::raw("  "),
+            Span::styled(tracks, theme::dim()),
+        ]),
+    ];
+    if inner.height >= 3 {
+        // RVR's battery is read from its primary processor.
+        let volts = match s.telemetry.battery_v {
+            Some(v) if v.is_finite() => format!("{v:.2} V"),
+            _ => "-".to_string(),
+        };
+        lines.push(Line::from(vec![
+            Span::styled("battery ", theme::label()),
+            Span::raw(volts),
+            Span::styled(" (primary processor)", theme::dim()),
+        ]));
+    }
+    frame.render_widget(Paragraph::new(lines), inner);
+}
+
+/// The plan with the dome's place `want` rows tall where the panels around it can give
+/// them: the sensors below (keeping their three lines) and the collisions below them (keeping
+/// one) in the compact layout; the drive dial and the map above in the wide one.
+pub fn make_room(mut p: Plan, want: u16) -> Plan {
+    let Some(d) = p.dome.filter(|d| want > d.height) else {
+        return p;
+    };
+    let need = want - d.height;
+    if let (Some(s), Some(c)) = (p.sensors, p.collisions) {
+        let (s, c) = grow(s, c, s.height + need, 3);
+        let (d, s) = grow(d, s, want, 5);
+        (p.dome, p.sensors, p.collisions) = (Some(d), Some(s), Some(c));
+    }
+    // Wide: the dial and the map sit side by side right above, both taller than needed.
+    if let (Some(d), Some(dr), Some(m)) = (p.dome, p.drive, p.map)
+        && want > d.height
+        && dr.bottom() == d.y
+        && m.bottom() == d.y
+    {
+        let k = (want - d.height)
+            .min(dr.height.saturating_sub(16))
+            .min(m.height.saturating_sub(8));
+        p.drive = Some(Rect {
+            height: dr.height - k,
+            ..dr
+        });
+        p.map = Some(Rect {
+            height: m.height - k,
+            ..m
+        });
+        p.dome = Some(Rect {
+            y: d.y - k,
+            height: d.height + k,
+            ..d
+        });
+    }
+    p
+}
+
+/// Rows moved from `below` to `above` so `above` gets `want` rows, when they are one column
+/// (the dome's place over the sensors') and `below` keeps at least `keep`.
+pub fn grow(above: Rect, below: Rect, want: u16, keep: u16) -> (Rect, Rect) {
+    let stacked = above.x == below.x && above.width == below.width && above.bottom() == below.y;
+    let extra = want
+        .saturating_sub(above.height)
+        .min(below.height.saturating_sub(keep));
+    if !stacked || extra == 0 {
+        return (above, below);
+    }
+    (
+        Rect {
+            height: above.height + extra,
+            ..above
+        },
+        Rect {
+            y: below.y + extra,
+            height: below.height - extra,
+            ..below
+        },
+    )
+}
