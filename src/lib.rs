@@ -22,5 +22,6 @@ pub mod session;
 pub mod sim;
 pub mod telemetry;
 pub mod teleop;
+pub mod tuning;
 pub mod ui;
 pub mod units;

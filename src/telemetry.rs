@@ -1,6 +1,8 @@
 //! What the droid reports, aggregated from notifications: the live gauges of the TUI and the
 //! samples of `droidctl run --json` both read this.
 
+pub mod history;
+
 use crate::protocol::notify::{Collision, Notification};
 use crate::protocol::rsrcp;
 use crate::protocol::wire::{LegAction, LegState};
@@ -172,6 +174,8 @@ pub struct Telemetry {
     pub animations_completed: u32,
     /// Robi 42's state (`None` for other droids).
     pub robi: Option<RobiTelemetry>,
+    /// Every channel at each sample of the last two minutes: the scope, the measured rate.
+    pub history: history::History,
 }
 
 impl Default for Telemetry {
@@ -197,6 +201,7 @@ impl Default for Telemetry {
             asleep: false,
             animations_completed: 0,
             robi: None,
+            history: history::History::default(),
         }
     }
 }
@@ -221,6 +226,7 @@ impl Telemetry {
                 if let (Some(x), Some(y)) = (s.get("locator_x"), s.get("locator_y")) {
                     self.moved_to(x, y);
                 }
+                self.record(at);
             }
             Notification::Collision(c) => {
                 self.collisions += 1;
@@ -259,6 +265,7 @@ impl Telemetry {
                     self.y_cm = Some(0.0);
                     self.yaw = Some(0.0);
                 }
+                self.record(at);
             }
             Notification::WillSleep => self.will_sleep = true,
             Notification::DidSleep => {
@@ -267,6 +274,13 @@ impl Telemetry {
             }
             _ => {}
         }
+    }
+
+    /// A sample arrived at `at`: every channel as it is now goes into the history.
+    fn record(&mut self, at: Duration) {
+        let mut h = std::mem::take(&mut self.history);
+        h.record(at, self);
+        self.history = h;
     }
 
     /// Integrate differential-drive odometry: heading 0 is +y, 90 is +x (as the locator).

@@ -101,12 +101,20 @@ fn build(source: Source, opts: AppOptions) -> App {
     state.help_nav = super::help::nav(&keymap);
     let start = Instant::now();
     let family = crate::family::for_model(opts.model);
+    state.monitor = super::monitor::MonitorView::new(
+        opts.model,
+        config.stream_request(),
+        config.collision.config(),
+    );
     let (session, player) = match source {
         Source::Live(s) => {
             state.help = super::help::live(&config);
             (Some(s), None)
         }
         Source::Replay(r, file) => {
+            // What the capture's droid was told is in the capture, not in this config.
+            state.monitor.live = false;
+            state.monitor.plan = None;
             state.help = super::help::replay(&keymap);
             (None, Some(Player::new(*r, file, start)))
         }
@@ -129,6 +137,10 @@ fn build(source: Source, opts: AppOptions) -> App {
         dirty: true,
     };
     app.state.control = app.controller.view().clone();
+    if app.player.is_some() {
+        // Replay shows the commands in the capture, as they were sent.
+        app.state.control.source = "capture";
+    }
     app
 }
 

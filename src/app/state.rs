@@ -48,6 +48,15 @@ pub enum Overlay {
     Filter {
         input: String,
     },
+    /// Choosing the scope's channels; `selected` indexes the channels the droid reports.
+    Channels {
+        selected: usize,
+    },
+    /// The streaming and collision settings being edited (sent on apply).
+    Tuning {
+        selected: usize,
+        draft: super::monitor::TuningDraft,
+    },
 }
 
 /// Which pane has the keyboard.
@@ -117,6 +126,10 @@ pub struct AppState {
     pub leds: LedView,
     /// Replaying a capture (nothing is sent): where, how fast.
     pub replay: Option<ReplayView>,
+    /// The scope: which channels, what window, paused or following.
+    pub scope: super::monitor::ScopeView,
+    /// Streaming and collision detection as asked for and as sent.
+    pub monitor: super::monitor::MonitorView,
 }
 
 /// A replay, for the status bar.
@@ -178,6 +191,15 @@ impl AppState {
             collision_flash: Duration::from_millis(1500),
             leds: LedView::default(),
             replay: None,
+            scope: super::monitor::ScopeView::for_model(model),
+            monitor: super::monitor::MonitorView::new(
+                model,
+                crate::tuning::StreamRequest {
+                    rate_hz: 10,
+                    sensors: crate::family::stream::all_groups(model),
+                },
+                crate::tuning::CollisionConfig::default(),
+            ),
         }
     }
 

@@ -119,9 +119,17 @@ async fn drive(
     config: Config,
     log_path: Option<std::path::PathBuf>,
 ) -> Result<i32, CliError> {
+    // The streaming asked for, capped to what this droid's link carries (the app shows why).
+    let plan = crate::family::stream::plan_for(model, config.stream_request());
+    let collision = config.collision.config();
     let setup = SetupOptions {
         tripod: true,
-        streaming_interval_ms: config.control.streaming_interval_ms,
+        collision,
+        ..SetupOptions::default()
+    };
+    let setup = match &plan {
+        Some(p) => setup.with_plan(p),
+        None => setup,
     };
     let pacing = match config.session.pacing_ms {
         0 => model.write_pacing(),

@@ -169,10 +169,25 @@ pub async fn run_recorded(
     json: bool,
     recorder: Option<&crate::capture::record::Recorder>,
 ) -> Result<Summary, String> {
-    let interval_ms = opts.interval.as_millis().clamp(20, 1000) as u16;
+    // Stream at least as often as the samples are taken (10/s at the least), capped to what
+    // the droid's link carries; a `stream` line of the mission changes it.
+    let interval_ms = opts.interval.as_millis().clamp(10, 100) as u16;
+    let request = crate::tuning::StreamRequest {
+        rate_hz: 1000 / interval_ms,
+        sensors: crate::family::stream::all_groups(model),
+    };
     let setup = SetupOptions {
         tripod: false,
-        streaming_interval_ms: interval_ms.min(100),
+        ..SetupOptions::default()
+    };
+    let setup = match crate::family::stream::plan_for(model, request) {
+        Some(plan) => {
+            if let Some(note) = &plan.note {
+                eprintln!("droidctl: streaming: {note}");
+            }
+            setup.with_plan(&plan)
+        }
+        None => setup,
     };
     let config = SessionConfig {
         family: model.protocol(),

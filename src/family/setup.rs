@@ -3,7 +3,9 @@
 //! themselves come from the model's protocol family (`crate::family`).
 
 use super::Command;
+use super::stream::SensorSet;
 use crate::model::Model;
+use crate::tuning::CollisionConfig;
 
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SetupOptions {
@@ -11,6 +13,9 @@ pub struct SetupOptions {
     pub tripod: bool,
     /// Sensor streaming interval; 0 turns streaming off.
     pub streaming_interval_ms: u16,
+    /// The sensor groups streamed; `None`: everything the model streams.
+    pub sensors: Option<SensorSet>,
+    pub collision: CollisionConfig,
 }
 
 impl Default for SetupOptions {
@@ -18,6 +23,35 @@ impl Default for SetupOptions {
         SetupOptions {
             tripod: true,
             streaming_interval_ms: 100,
+            sensors: None,
+            collision: CollisionConfig::default(),
+        }
+    }
+}
+
+impl SetupOptions {
+    /// The streaming this setup asks for, as a plan (the interval as given, not capped: the
+    /// caller resolved it, [`super::stream::plan_for`]).
+    pub fn stream_plan(&self, model: Model) -> super::stream::StreamPlan {
+        let sensors = self
+            .sensors
+            .unwrap_or_else(|| super::stream::all_groups(model));
+        if self.streaming_interval_ms == 0 || sensors.is_empty() {
+            return super::stream::StreamPlan::off();
+        }
+        super::stream::StreamPlan {
+            interval_ms: self.streaming_interval_ms,
+            sensors,
+            note: None,
+        }
+    }
+
+    /// With a resolved plan's interval and groups.
+    pub fn with_plan(self, plan: &super::stream::StreamPlan) -> SetupOptions {
+        SetupOptions {
+            streaming_interval_ms: plan.interval_ms,
+            sensors: Some(plan.sensors),
+            ..self
         }
     }
 }

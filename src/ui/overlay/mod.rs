@@ -5,6 +5,7 @@
 mod filter;
 mod help;
 mod palette;
+mod settings;
 
 use crate::app::state::{AppState, Overlay};
 use ratatui::Frame;
@@ -21,5 +22,7 @@ pub fn render(frame: &mut Frame, s: &AppState) {
             palette::render(frame, area, "Sounds", &s.sounds, *selected)
         }
         Overlay::Filter { input } => filter::render(frame, area, input, &s.log.filter),
+        Overlay::Channels { selected } => settings::channels(frame, area, s, *selected),
+        Overlay::Tuning { selected, draft } => settings::tuning(frame, area, s, *selected, draft),
     }
 }
