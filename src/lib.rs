@@ -14,6 +14,7 @@ pub mod link;
 pub mod logging;
 pub mod mission;
 pub mod model;
+pub mod plot;
 pub mod protocol;
 pub mod relay;
 pub mod rng;

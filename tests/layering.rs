@@ -35,6 +35,8 @@ const RANKS: &[(&str, u32)] = &[
     // `serve --record` writes captures.
     ("relay", 55),
     ("app", 60),
+    // `droidctl plot`: pictures of runs (samples from missions and captures).
+    ("plot", 65),
     ("ui", 70),
     ("cli", 80),
 ];

@@ -34,6 +34,8 @@ pub struct AppOptions {
     /// Whether the session's connect setup puts a droid with legs into tripod (the app then
     /// shows the stance as requested on every connect).
     pub tripod_on_connect: bool,
+    /// Where every sample the droid streams is written (`drive --csv`, `--jsonl`).
+    pub samples: Option<crate::mission::csv::SampleFiles>,
 }
 
 /// Everything from outside the app.
@@ -132,6 +134,7 @@ fn build(source: Source, opts: AppOptions) -> App {
         family,
         turbo_speed: config.control.turbo_speed,
         tripod_on_connect: opts.tripod_on_connect,
+        samples: opts.samples,
         start,
         last_tick: start,
         dirty: true,
@@ -280,6 +283,7 @@ pub async fn run_source<B: Backend>(
                     app.state.stats = st;
                     app.dirty = true;
                 }
+                app.flush_samples();
             }
             _ = sleep_until(change.unwrap_or_else(Instant::now)), if change.is_some() && !app.dirty => {
                 app.dirty = true;
@@ -300,6 +304,7 @@ pub async fn run_source<B: Backend>(
         }
     };
     poller.abort();
+    app.flush_samples();
     let stop = family.drive(0, app.controller.view().heading, false);
     // The operator sees the droid stopped even before the session writes it.
     app.set(Slot::Drive, stop.clone());

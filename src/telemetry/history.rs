@@ -199,7 +199,9 @@ impl History {
         let buckets = buckets.max(1);
         let span = to.saturating_sub(from).as_secs_f64().max(1e-9);
         let mut out = Vec::with_capacity(buckets * 2);
-        let mut cur: Option<(usize, (f64, f32), (f64, f32))> = None;
+        // The column being filled: its index, its lowest and highest point (time, value).
+        type Column = (usize, (f64, f32), (f64, f32));
+        let mut cur: Option<Column> = None;
         let flush = |out: &mut Vec<(f64, f64)>, lo: (f64, f32), hi: (f64, f32)| {
             let (a, b) = if lo.0 <= hi.0 { (lo, hi) } else { (hi, lo) };
             out.push((a.0, a.1 as f64));
