@@ -147,8 +147,10 @@ pub fn draw<DB: DrawingBackend>(
     let (mut y0, mut y1) = padded(y0, y1);
     // The same cm per pixel on both axes: widen the narrower span to the area's shape.
     let (label_x, label_y, margin, caption) = (45, 70, 15, 30);
+    // A band at the top is kept free of data for the legend.
+    let legend = 70.0;
     let pw = (w as i32 - label_y - 2 * margin).max(10) as f64;
-    let ph = (floor_h as i32 - label_x - caption - 2 * margin).max(10) as f64;
+    let ph = ((floor_h as i32 - label_x - caption - 2 * margin) as f64 - legend).max(10.0);
     let (sx, sy) = ((x1 - x0) / pw, (y1 - y0) / ph);
     if sx > sy {
         let extra = (sx * ph - (y1 - y0)) / 2.0;
@@ -157,6 +159,7 @@ pub fn draw<DB: DrawingBackend>(
         let extra = (sy * pw - (x1 - x0)) / 2.0;
         (x0, x1) = (x0 - extra, x1 + extra);
     }
+    y1 += legend * (y1 - y0) / ph;
     let mut chart = ChartBuilder::on(&floor_area)
         .caption(
             format!("{}: path from above", run.title),
