@@ -76,21 +76,21 @@ pub struct Sample {
     pub frames: Option<u64>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub lost_frames: Option<u64>,
-    /// What the droid streams, when it streams it (absent otherwise).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    /// What the droid streams (null until it has streamed it, and on Robi 42).
+    #[serde(default)]
     pub pitch_deg: Option<f32>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(default)]
     pub roll_deg: Option<f32>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(default)]
     pub yaw_deg: Option<f32>,
     /// Accelerometer x, y, z in g.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(default)]
     pub accel_g: Option<[f32; 3]>,
     /// Gyro x, y, z in °/s.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(default)]
     pub gyro_deg_s: Option<[f32; 3]>,
     /// Velocity x, y in cm/s.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(default)]
     pub velocity_cm_s: Option<[f32; 2]>,
     /// Robi 42's potentiometer, 0..=255.
     #[serde(default, skip_serializing_if = "Option::is_none")]

@@ -188,7 +188,7 @@ fn collision_thresholds_are_honoured_by_the_simulator_on_v2_and_v1() {
             }
             _ => None,
         })
-        .last();
+        .next_back();
     assert_eq!(sent, Some(vec![1, 200, 20, 150, 30, 25]));
 }
 
