@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Idle cost of the running app: `droidctl --sim` (sensor streaming on, 10 Hz control loop,
 # nobody touching the keys) in a 160×48 tmux window, sampled from /proc.
-# Usage: bash benches/idle.sh [SECONDS] [scope]   (needs tmux; builds the release binary first)
-# With `scope`: the scope on screen (key g) with the droid streaming attitude at 50/s.
+# Usage: bash benches/idle.sh [SECONDS] [stream50|scope]   (needs tmux; builds the release binary)
+# `stream50`: the droid streams attitude at 50/s; `scope`: the same with the scope on screen
+# (key g).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 secs=${1:-30}
@@ -11,7 +12,7 @@ cargo build --release -q
 bin=${CARGO_TARGET_DIR:-$PWD/target}/release/droidctl
 tmp=$(mktemp -d)
 trap 'tmux kill-session -t droidctl-idle 2>/dev/null || true; rm -rf "$tmp"' EXIT
-if [ "$mode" = scope ]; then
+if [ "$mode" = scope ] || [ "$mode" = stream50 ]; then
   printf '[streaming]\nrate_hz = 50\nsensors = ["attitude"]\n' > "$tmp/config.toml"
 fi
 tmux new-session -d -s droidctl-idle -x 160 -y 48 \

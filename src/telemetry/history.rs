@@ -196,12 +196,29 @@ impl History {
         to: Duration,
         buckets: usize,
     ) -> Vec<(f64, f64)> {
-        let buckets = buckets.max(1);
-        let span = to.saturating_sub(from).as_secs_f64().max(1e-9);
-        let mut out = Vec::with_capacity(buckets * 2);
-        // The column being filled: its index, its lowest and highest point (time, value).
+        self.series_of(&[c], from, to, buckets)
+            .pop()
+            .unwrap_or_default()
+    }
+
+    /// [`History::series`] for several channels in one pass over the rows.
+    pub fn series_of(
+        &self,
+        channels: &[Channel],
+        from: Duration,
+        to: Duration,
+        buckets: usize,
+    ) -> Vec<Vec<(f64, f64)>> {
+        // The column being filled per channel: its index, lowest and highest (time, value).
         type Column = (usize, (f64, f32), (f64, f32));
-        let mut cur: Option<Column> = None;
+        let buckets = buckets.max(1);
+        let span = to.saturating_sub(from).as_nanos().max(1);
+        let end = to.as_secs_f64();
+        let mut out: Vec<Vec<(f64, f64)>> = channels
+            .iter()
+            .map(|_| Vec::with_capacity(buckets * 2))
+            .collect();
+        let mut cur: Vec<Option<Column>> = vec![None; channels.len()];
         let flush = |out: &mut Vec<(f64, f64)>, lo: (f64, f32), hi: (f64, f32)| {
             let (a, b) = if lo.0 <= hi.0 { (lo, hi) } else { (hi, lo) };
             out.push((a.0, a.1 as f64));
@@ -210,29 +227,33 @@ impl History {
             }
         };
         for r in self.between(from, to) {
-            let Some(v) = r.get(c) else { continue };
-            let t = r.at.as_secs_f64() - to.as_secs_f64();
-            let col = (((r.at - from).as_secs_f64() / span) * buckets as f64) as usize;
+            let col = ((r.at - from).as_nanos() * buckets as u128 / span) as usize;
             let col = col.min(buckets - 1);
-            match &mut cur {
-                Some((k, lo, hi)) if *k == col => {
-                    if v < lo.1 {
-                        *lo = (t, v);
+            let t = r.at.as_secs_f64() - end;
+            for (i, c) in channels.iter().enumerate() {
+                let Some(v) = r.get(*c) else { continue };
+                match &mut cur[i] {
+                    Some((k, lo, hi)) if *k == col => {
+                        if v < lo.1 {
+                            *lo = (t, v);
+                        }
+                        if v > hi.1 {
+                            *hi = (t, v);
+                        }
                     }
-                    if v > hi.1 {
-                        *hi = (t, v);
+                    slot => {
+                        if let Some((_, lo, hi)) = slot.take() {
+                            flush(&mut out[i], lo, hi);
+                        }
+                        *slot = Some((col, (t, v), (t, v)));
                     }
-                }
-                _ => {
-                    if let Some((_, lo, hi)) = cur.take() {
-                        flush(&mut out, lo, hi);
-                    }
-                    cur = Some((col, (t, v), (t, v)));
                 }
             }
         }
-        if let Some((_, lo, hi)) = cur {
-            flush(&mut out, lo, hi);
+        for (i, c) in cur.into_iter().enumerate() {
+            if let Some((_, lo, hi)) = c {
+                flush(&mut out[i], lo, hi);
+            }
         }
         out
     }

@@ -94,12 +94,17 @@ pub fn render(frame: &mut Frame, area: Rect, s: &AppState) {
 
     let end = v.end(s.now);
     let from = end.saturating_sub(window);
-    // Braille: two dots per column.
-    let columns = chart.width.saturating_sub(8).max(1) as usize * 2;
+    // A bucket per cell column: its lowest and highest point fill the cell top to bottom.
+    let columns = chart.width.saturating_sub(8).max(1) as usize;
     let series: Vec<(Channel, Vec<(f64, f64)>)> = v
         .channels
         .iter()
-        .map(|c| (*c, s.telemetry.history.series(*c, from, end, columns)))
+        .copied()
+        .zip(
+            s.telemetry
+                .history
+                .series_of(&v.channels, from, end, columns),
+        )
         .collect();
     let (lo, hi) = y_bounds(v.autoscale, &series);
     let datasets: Vec<Dataset> = series

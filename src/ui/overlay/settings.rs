@@ -107,7 +107,7 @@ pub fn tuning(frame: &mut Frame, area: Rect, s: &AppState, selected: usize, d: &
         frame,
         area,
         &title,
-        "↑↓ row · ←→ change · Space switch · Enter send · Esc",
+        "↑↓ ←→ value · Space on/off · Enter send · Esc",
         rows,
         selected,
     );
