@@ -65,6 +65,14 @@ fn screen(state: &AppState, w: u16, h: u16) -> String {
 /// The app on a simulated R2-D2; `keys` (at their ms) then quit. How it ended, and the names
 /// of the commands written, in order, with their times.
 async fn live(keys: Vec<(u64, TermEvent)>) -> (Exit, Vec<(Duration, String)>) {
+    live_writing(keys, None).await
+}
+
+/// [`live`], writing samples to `samples` (`drive --csv`, `--jsonl`).
+async fn live_writing(
+    keys: Vec<(u64, TermEvent)>,
+    samples: Option<droidctl::mission::csv::SampleFiles>,
+) -> (Exit, Vec<(Duration, String)>) {
     let model = Model::R2D2;
     let link = SimLink::new(model, SimConfig::default(), Faults::none());
     let session = session::start(
@@ -106,11 +114,13 @@ async fn live(keys: Vec<(u64, TermEvent)>) -> (Exit, Vec<(Duration, String)>) {
         term_tx.send(press(Key::ch('q'))).await.unwrap();
     };
     let mut terminal = Terminal::new(TestBackend::new(80, 24)).unwrap();
+    let mut o = opts(model);
+    o.samples = samples;
     let (exit, ()) = tokio::join!(
         run::run(
             &mut terminal,
             session.clone(),
-            opts(model),
+            o,
             inputs,
             droidctl::ui::draw
         ),
@@ -259,6 +269,46 @@ async fn a_capped_request_says_so() {
     );
     let hint = s.hint.as_ref().map(|h| h.text.clone()).unwrap_or_default();
     assert!(hint.contains("capped at 10/s"), "{hint}");
+}
+
+#[tokio::test(start_paused = true)]
+async fn the_app_writes_every_streamed_sample_as_csv_and_json_lines() {
+    let dir = std::env::temp_dir().join(format!("droidctl-monapp-csv-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (csv, jsonl) = (dir.join("t.csv"), dir.join("t.jsonl"));
+    let files = droidctl::mission::csv::SampleFiles::create(Some(&csv), Some(&jsonl)).unwrap();
+    let (exit, _) = live_writing(vec![(5000, press(Key::ch('?')))], Some(files)).await;
+    let (csv, jsonl) = (
+        std::fs::read_to_string(&csv).unwrap(),
+        std::fs::read_to_string(&jsonl).unwrap(),
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+    let rows: Vec<&str> = csv.lines().skip(1).collect();
+    // One row per sample the droid streamed (10/s for about 5 s), as many JSON objects.
+    let samples = exit.state.telemetry.samples as usize;
+    assert!(samples >= 40, "{samples}");
+    assert_eq!(rows.len(), samples);
+    assert_eq!(jsonl.lines().count(), samples);
+    assert!(csv.starts_with("t_s,x_cm,y_cm,speed_cm_s"));
+    let yaw = csv
+        .lines()
+        .next()
+        .unwrap()
+        .split(',')
+        .position(|c| c == "yaw_deg")
+        .unwrap();
+    assert!(
+        rows.iter()
+            .all(|r| r.split(',').nth(yaw).unwrap().parse::<f32>().is_ok())
+    );
+}
+
+#[test]
+fn robi_scopes_its_wheels_and_poti() {
+    let s = AppState::new(Model::Robi42, "Robi 42".into());
+    assert_eq!(s.scope.channels, [Channel::MotorLeft, Channel::MotorRight]);
+    assert!(Channel::Poti.reported_by(true) && !Channel::Poti.reported_by(false));
+    assert_eq!(s.monitor.requested(), "own rate");
 }
 
 const MISSION: &str = "stance tripod\ndrive 120 90 for 3s\nhead 30\nled front 0 0 255\nwait 2s\n";

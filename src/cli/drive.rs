@@ -4,7 +4,7 @@ use super::CliError;
 use super::term::{self, TerminalGuard};
 use crate::app::run::{self, AppInputs, AppOptions, ExitReason};
 use crate::config::Config;
-use crate::family::setup::{SetupOptions, connect_setup};
+use crate::family::setup::connect_setup;
 use crate::link::Link;
 use crate::model::Model;
 use crate::session::{self, SessionConfig, SessionHandle};
@@ -135,17 +135,7 @@ async fn drive(
     samples: Option<crate::mission::csv::SampleFiles>,
 ) -> Result<i32, CliError> {
     // The streaming asked for, capped to what this droid's link carries (the app shows why).
-    let plan = crate::family::stream::plan_for(model, config.stream_request());
-    let collision = config.collision.config();
-    let setup = SetupOptions {
-        tripod: true,
-        collision,
-        ..SetupOptions::default()
-    };
-    let setup = match &plan {
-        Some(p) => setup.with_plan(p),
-        None => setup,
-    };
+    let (setup, _) = crate::family::setup::from_config(model, &config);
     let pacing = match config.session.pacing_ms {
         0 => model.write_pacing(),
         ms => Duration::from_millis(ms),

@@ -56,6 +56,26 @@ impl SetupOptions {
     }
 }
 
+/// The setup the config file asks for on `model`: `[streaming]` resolved against what the
+/// droid's link carries (the plan says when it was capped; `None` for a droid that streams by
+/// itself), `[collision]`, tripod on.
+pub fn from_config(
+    model: Model,
+    config: &crate::config::Config,
+) -> (SetupOptions, Option<super::stream::StreamPlan>) {
+    let plan = super::stream::plan_for(model, config.stream_request());
+    let setup = SetupOptions {
+        tripod: true,
+        collision: config.collision.config(),
+        ..SetupOptions::default()
+    };
+    let setup = match &plan {
+        Some(p) => setup.with_plan(p),
+        None => setup,
+    };
+    (setup, plan)
+}
+
 /// The connect setup, in order.
 pub fn connect_setup(model: Model, opts: &SetupOptions) -> Vec<Command> {
     super::for_model(model).setup(model, opts)
@@ -88,6 +108,44 @@ mod tests {
         // The first mask write has interval 0, the last the real one (100 ms).
         assert_eq!(&cmds[6].data()[..2], &[0, 0]);
         assert_eq!(&cmds[8].data()[..2], &[0, 100]);
+    }
+
+    #[test]
+    fn the_config_files_streaming_and_collision_reach_the_setup() {
+        use crate::config::Config;
+        let c = Config::parse_merged(
+            None,
+            "[streaming]\nrate_hz = 50\nsensors = [\"attitude\"]\n[collision]\nx_threshold = 180\n",
+        )
+        .unwrap();
+        let (setup, plan) = from_config(Model::R2D2, &c);
+        assert_eq!(plan.unwrap().note, None);
+        let cmds = connect_setup(Model::R2D2, &setup);
+        let mask = cmds
+            .iter()
+            .rfind(|c| c.name() == "set-sensor-streaming-mask")
+            .unwrap();
+        // 20 ms, attitude (0x00070000).
+        assert_eq!(&mask.data()[..], &[0, 20, 0, 0, 7, 0, 0]);
+        let coll = cmds
+            .iter()
+            .find(|c| c.name() == "configure-collision-detection")
+            .unwrap();
+        assert_eq!(coll.data()[1], 180);
+        // Off: nothing streams; collision detection is still set.
+        let c = Config::parse_merged(None, "[streaming]\nrate_hz = 0\n").unwrap();
+        let (setup, _) = from_config(Model::BB8, &c);
+        let names: Vec<String> = connect_setup(Model::BB8, &setup)
+            .iter()
+            .map(|c| c.name())
+            .collect();
+        assert!(!names.iter().any(|n| n.contains("streaming")), "{names:?}");
+        assert!(names.iter().any(|n| n == "configure-collision-detection"));
+        // More than the link carries is capped, and the plan says so.
+        let c = Config::parse_merged(None, "[streaming]\nrate_hz = 100\n").unwrap();
+        let (setup, plan) = from_config(Model::BB8, &c);
+        assert_eq!(setup.streaming_interval_ms, 50, "20/s for every v1 sensor");
+        assert!(plan.unwrap().note.unwrap().contains("capped at 20/s"));
     }
 
     #[test]
