@@ -28,11 +28,6 @@ use crate::units::Heading;
 /// The v1 family.
 pub struct V1;
 
-/// Sensors droidctl streams from a v1 droid: accelerometer and gyro (filtered), pitch/roll/
-/// yaw, and in MASK2 the odometer and velocity (`droid-facts.md` §4).
-pub const STREAM_MASK: u32 = 0x0007_0000 | 0x0000_E000 | 0x0000_1C00;
-pub const STREAM_MASK2: u32 = 0x0C00_0000 | 0x0180_0000;
-
 /// The v1 sample clock: rate = 400 / N Hz (`droid-facts.md` §4).
 pub fn divisor_for(interval_ms: u16) -> u16 {
     ((interval_ms as u32 * 400) / 1000).clamp(1, u16::MAX as u32) as u16
