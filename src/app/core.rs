@@ -44,6 +44,8 @@ pub(super) struct App {
     /// Replay: what the last advance produced (kept to reuse its allocation).
     pub replayed: Vec<(Duration, Output)>,
     pub pacer: FramePacer,
+    /// Where samples are written (`drive --csv`, `--jsonl`).
+    pub samples: Option<crate::mission::csv::SampleFiles>,
 }
 
 impl App {
@@ -87,6 +89,25 @@ impl App {
     pub fn on_notification(&mut self, n: &Notification, at: Duration) {
         self.state.telemetry.apply(n, at);
         self.dirty = true;
+        if matches!(n, Notification::Sensors(_) | Notification::RobiFrame(_))
+            && let Some(files) = &mut self.samples
+        {
+            let s = crate::mission::sample_of(&self.state.telemetry, at.as_millis() as u64);
+            if let Err(e) = files.write(&s) {
+                self.samples = None;
+                self.hint(format!("telemetry file: {e}; no more samples are written"));
+            }
+        }
+    }
+
+    /// Write out what the sample files buffer (every second, and at exit).
+    pub fn flush_samples(&mut self) {
+        if let Some(files) = &mut self.samples
+            && let Err(e) = files.flush()
+        {
+            self.samples = None;
+            self.hint(format!("telemetry file: {e}; no more samples are written"));
+        }
     }
 
     /// A packet-log entry, from the session or the replay.

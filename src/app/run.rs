@@ -34,6 +34,8 @@ pub struct AppOptions {
     /// Whether the session's connect setup puts a droid with legs into tripod (the app then
     /// shows the stance as requested on every connect).
     pub tripod_on_connect: bool,
+    /// Where every sample the droid streams is written (`drive --csv`, `--jsonl`).
+    pub samples: Option<crate::mission::csv::SampleFiles>,
 }
 
 /// Everything from outside the app.
@@ -101,12 +103,20 @@ fn build(source: Source, opts: AppOptions) -> App {
     state.help_nav = super::help::nav(&keymap);
     let start = Instant::now();
     let family = crate::family::for_model(opts.model);
+    state.monitor = super::monitor::MonitorView::new(
+        opts.model,
+        config.stream_request(),
+        config.collision.config(),
+    );
     let (session, player) = match source {
         Source::Live(s) => {
             state.help = super::help::live(&config);
             (Some(s), None)
         }
         Source::Replay(r, file) => {
+            // What the capture's droid was told is in the capture, not in this config.
+            state.monitor.live = false;
+            state.monitor.plan = None;
             state.help = super::help::replay(&keymap);
             (None, Some(Player::new(*r, file, start)))
         }
@@ -124,12 +134,17 @@ fn build(source: Source, opts: AppOptions) -> App {
         family,
         turbo_speed: config.control.turbo_speed,
         tripod_on_connect: opts.tripod_on_connect,
+        samples: opts.samples,
         start,
         last_tick: start,
         dirty: true,
     };
     app.controller.set_tracks(app.state.model.has_tracks());
     app.state.control = app.controller.view().clone();
+    if app.player.is_some() {
+        // Replay shows the commands in the capture, as they were sent.
+        app.state.control.source = "capture";
+    }
     app
 }
 
@@ -269,6 +284,7 @@ pub async fn run_source<B: Backend>(
                     app.state.stats = st;
                     app.dirty = true;
                 }
+                app.flush_samples();
             }
             _ = sleep_until(change.unwrap_or_else(Instant::now)), if change.is_some() && !app.dirty => {
                 app.dirty = true;
@@ -289,6 +305,7 @@ pub async fn run_source<B: Backend>(
         }
     };
     poller.abort();
+    app.flush_samples();
     let stop = family.drive(0, app.controller.view().heading, false);
     // The operator sees the droid stopped even before the session writes it.
     app.set(Slot::Drive, stop.clone());

@@ -4,7 +4,7 @@ use super::CliError;
 use super::term::{self, TerminalGuard};
 use crate::app::run::{self, AppInputs, AppOptions, ExitReason};
 use crate::config::Config;
-use crate::family::setup::{SetupOptions, connect_setup};
+use crate::family::setup::connect_setup;
 use crate::link::Link;
 use crate::model::Model;
 use crate::session::{self, SessionConfig, SessionHandle};
@@ -25,6 +25,13 @@ pub struct DriveArgs {
     pub ble: super::connect::BleArgs,
     #[command(flatten)]
     pub record: super::replay::RecordArgs,
+    /// Write every telemetry sample the droid streams to FILE as CSV (columns named with
+    /// units).
+    #[arg(long, value_name = "FILE")]
+    pub csv: Option<std::path::PathBuf>,
+    /// Write every telemetry sample to FILE as JSON lines (the objects `run --json` prints).
+    #[arg(long, value_name = "FILE")]
+    pub jsonl: Option<std::path::PathBuf>,
 }
 
 /// The simulated model asked for, if any.
@@ -76,6 +83,13 @@ pub fn run(args: DriveArgs) -> Result<i32, CliError> {
     })?;
     let model = sim_model(&args.sim)?;
     let recorder = args.record.open()?;
+    let samples = match (&args.csv, &args.jsonl) {
+        (None, None) => None,
+        (csv, jsonl) => Some(
+            crate::mission::csv::SampleFiles::create(csv.as_deref(), jsonl.as_deref())
+                .map_err(CliError::usage)?,
+        ),
+    };
     let log_path = crate::logging::init().ok();
     let rt = super::realtime_runtime()?;
     rt.block_on(async move {
@@ -94,7 +108,7 @@ pub fn run(args: DriveArgs) -> Result<i32, CliError> {
             }
             None => link,
         };
-        let result = drive(link, model, name, config, log_path).await;
+        let result = drive(link, model, name, config, log_path, samples).await;
         super::replay::finish(recorder.as_ref());
         result
     })
@@ -118,11 +132,10 @@ async fn drive(
     name: String,
     config: Config,
     log_path: Option<std::path::PathBuf>,
+    samples: Option<crate::mission::csv::SampleFiles>,
 ) -> Result<i32, CliError> {
-    let setup = SetupOptions {
-        tripod: true,
-        streaming_interval_ms: config.control.streaming_interval_ms,
-    };
+    // The streaming asked for, capped to what this droid's link carries (the app shows why).
+    let (setup, _) = crate::family::setup::from_config(model, &config);
     let pacing = match config.session.pacing_ms {
         0 => model.write_pacing(),
         ms => Duration::from_millis(ms),
@@ -171,6 +184,7 @@ async fn drive(
         log_path: log_path.clone(),
         release,
         tripod_on_connect: setup.tripod,
+        samples,
     };
     let inputs = AppInputs {
         term: term_rx,

@@ -32,6 +32,9 @@ pub struct RunArgs {
     pub interval: u64,
     #[command(flatten)]
     pub record: super::replay::RecordArgs,
+    /// Also write every sample to FILE as CSV (columns named with units; see README).
+    #[arg(long, value_name = "FILE")]
+    pub csv: Option<PathBuf>,
 }
 
 /// Resolve `--sim MODEL` vs the script path: `droidctl run --sim mission.txt` puts the script
@@ -83,6 +86,12 @@ pub fn run(args: RunArgs) -> Result<i32, CliError> {
     let steps = crate::script::parse(&text).map_err(script_errors)?;
     let recorder = args.record.open()?;
     let recorder = recorder.as_ref();
+    let files = match &args.csv {
+        Some(p) => {
+            Some(crate::mission::csv::SampleFiles::create(Some(p), None).map_err(CliError::usage)?)
+        }
+        None => None,
+    };
     let opts = MissionOptions {
         interval: Duration::from_millis(args.interval),
         ..MissionOptions::default()
@@ -105,7 +114,7 @@ pub fn run(args: RunArgs) -> Result<i32, CliError> {
                 let link = SimLink::new(model, SimConfig::for_model(model), Faults::none());
                 let name = format!("{} (simulated)", model.display_name());
                 let link = recorded(recorder, Box::new(link), model, &name);
-                let r = run_recorded(link, model, &steps, opts, json, recorder).await;
+                let r = run_recorded(link, model, &steps, opts, json, recorder, files).await;
                 super::replay::finish(recorder);
                 r.map_err(CliError::failure)
             })
@@ -117,7 +126,7 @@ pub fn run(args: RunArgs) -> Result<i32, CliError> {
                 let c = args.ble.connect(super::connect::Chooser::Prompt).await?;
                 mission::validate(c.model, &steps).map_err(script_errors)?;
                 let link = recorded(recorder, c.link, c.model, &c.name);
-                let r = run_recorded(link, c.model, &steps, opts, json, recorder).await;
+                let r = run_recorded(link, c.model, &steps, opts, json, recorder, files).await;
                 super::replay::finish(recorder);
                 r.map_err(CliError::failure)
             })
@@ -156,7 +165,7 @@ pub async fn run_on(
     opts: MissionOptions,
     json: bool,
 ) -> Result<Summary, String> {
-    run_recorded(link, model, steps, opts, json, None).await
+    run_recorded(link, model, steps, opts, json, None, None).await
 }
 
 /// [`run_on`], marking the mission's start and end in the capture being recorded (replay
@@ -168,11 +177,30 @@ pub async fn run_recorded(
     opts: MissionOptions,
     json: bool,
     recorder: Option<&crate::capture::record::Recorder>,
+    files: Option<crate::mission::csv::SampleFiles>,
 ) -> Result<Summary, String> {
-    let interval_ms = opts.interval.as_millis().clamp(20, 1000) as u16;
+    let files = Arc::new(std::sync::Mutex::new(files));
+    let files_out = files.clone();
+    // Stream at least as often as the samples are taken (10/s at the least), capped to what
+    // the droid's link carries; a `stream` line of the mission changes it.
+    let interval_ms = opts.interval.as_millis().clamp(10, 100) as u16;
+    let tripod = opts.setup.tripod;
+    let request = crate::tuning::StreamRequest {
+        rate_hz: 1000 / interval_ms,
+        sensors: crate::family::stream::all_groups(model),
+    };
     let setup = SetupOptions {
-        tripod: false,
-        streaming_interval_ms: interval_ms.min(100),
+        tripod,
+        ..opts.setup
+    };
+    let setup = match crate::family::stream::plan_for(model, request) {
+        Some(plan) => {
+            if let Some(note) = &plan.note {
+                eprintln!("droidctl: streaming: {note}");
+            }
+            setup.with_plan(&plan)
+        }
+        None => setup,
     };
     let config = SessionConfig {
         family: model.protocol(),
@@ -182,6 +210,7 @@ pub async fn run_recorded(
         ..SessionConfig::default()
     };
     let session = session::start(link, config);
+    let opts = MissionOptions { setup, ..opts };
     let samples_per_line = (1000 / opts.interval.as_millis().max(1)).max(1) as u64;
     let count = std::sync::atomic::AtomicU64::new(0);
     let marker = recorder.cloned();
@@ -198,6 +227,14 @@ pub async fn run_recorded(
                 r.record(crate::capture::Event::Mark(format!("step {line} {text}")));
             }
             _ => {}
+        }
+        if let MissionEvent::Sample(s) = &e
+            && let Ok(mut f) = files_out.lock()
+            && let Some(w) = f.as_mut()
+            && let Err(err) = w.write(s)
+        {
+            eprintln!("droidctl: --csv: {err}; no more rows are written");
+            *f = None;
         }
         let mut out = std::io::stdout().lock();
         let _ = match e {
@@ -247,6 +284,12 @@ pub async fn run_recorded(
     });
     // Stop first (at the last heading: a stop at heading 0 would turn the droid), then close.
     session.shutdown_stopped(Vec::new()).await;
+    if let Ok(mut f) = files.lock()
+        && let Some(w) = f.as_mut()
+        && let Err(e) = w.flush()
+    {
+        eprintln!("droidctl: --csv: {e}");
+    }
     result
 }
 

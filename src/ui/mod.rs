@@ -19,6 +19,7 @@ mod overlay;
 pub mod picker;
 mod robi;
 mod robots;
+mod scope;
 mod sensors;
 mod status;
 mod text;
@@ -44,6 +45,18 @@ pub fn draw(frame: &mut Frame, state: &AppState) {
     };
     let p = robots::make_room(p, want);
     status::render(frame, p.status, state);
+    if state.scope.visible {
+        // The scope takes everything below the status bar.
+        let area = frame.area();
+        let body = ratatui::layout::Rect {
+            y: p.status.bottom(),
+            height: area.height.saturating_sub(p.status.height),
+            ..area
+        };
+        scope::render(frame, body, state);
+        overlay::render(frame, state);
+        return;
+    }
     if let Some(r) = p.drive {
         drive::render(frame, r, state);
     }
@@ -72,7 +85,7 @@ pub fn draw(frame: &mut Frame, state: &AppState) {
         if frames {
             robi::io(frame, r, state);
         } else {
-            sensors::render(frame, r, &state.telemetry);
+            sensors::render(frame, r, &state.telemetry, &scope::rates(state));
         }
     }
     if let Some(r) = collisions_rect {
