@@ -190,6 +190,7 @@ mod linux {
             log_path: None,
             release: ReleaseMode::Reported,
             tripod_on_connect: true,
+            samples: None,
         };
         let f = fleet.clone();
         let app = tokio::spawn(async move {
@@ -205,8 +206,8 @@ mod linux {
         let key = |key: Key, kind: KeyKind| TermEvent::Key { key, kind };
         // R2 stands up on three legs (about 2 s) before it rolls.
         sleep(Duration::from_secs(3)).await;
-        term.send(key(Key::ch('g'), KeyKind::Press)).await.ok();
-        term.send(key(Key::ch('g'), KeyKind::Release)).await.ok();
+        term.send(key(Key::ch('y'), KeyKind::Press)).await.ok();
+        term.send(key(Key::ch('y'), KeyKind::Release)).await.ok();
         for _ in 0..4 {
             term.send(key(Key::ch('-'), KeyKind::Press)).await.ok();
         }

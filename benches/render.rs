@@ -3,6 +3,9 @@
 //! populated: the worst case the event loop redraws at its frame rate. A second case adds a
 //! text filter, which makes the log pane scan entries until it has a screenful of matches.
 //!
+//! A third and fourth case draw the scope (issue 22) with two minutes of history at 50
+//! samples a second and four channels, at 200×60 and at 80×24.
+//!
 //! `cargo bench --bench render -- --warm-up-time 1 --measurement-time 3`
 
 // criterion is a dev-dependency on Linux only (see Cargo.toml); elsewhere this is an empty
@@ -115,6 +118,54 @@ fn render(c: &mut Criterion) {
                 .expect("draw");
         })
     });
+    let s = scope_state();
+    c.bench_function("frame_200x60_scope_50hz_2min", |b| {
+        b.iter(|| {
+            term.draw(|f| droidctl::ui::draw(f, black_box(&s)))
+                .expect("draw");
+        })
+    });
+    let mut small = Terminal::new(TestBackend::new(80, 24)).expect("test backend");
+    c.bench_function("frame_80x24_scope_50hz_2min", |b| {
+        b.iter(|| {
+            small
+                .draw(|f| droidctl::ui::draw(f, black_box(&s)))
+                .expect("draw");
+        })
+    });
+}
+
+/// The scope on screen over two minutes of samples at 50 a second (6,000 rows), four
+/// channels, the widest window.
+fn scope_state() -> AppState {
+    use droidctl::protocol::notify::{Notification, SensorSample};
+    use droidctl::telemetry::history::Channel;
+    let mut s = state();
+    for i in 0..6_000u64 {
+        let t = i as f32 / 50.0;
+        let n = Notification::Sensors(SensorSample {
+            values: vec![
+                ("pitch", 10.0 * (t * 1.3).sin()),
+                ("roll", 5.0 * (t * 0.7).cos()),
+                ("yaw", (t * 20.0) % 360.0 - 180.0),
+                ("gyro_z", 90.0 * (t * 0.5).sin()),
+                ("velocity_x", 40.0 * (t * 0.2).sin()),
+                ("velocity_y", 40.0 * (t * 0.2).cos()),
+            ],
+        });
+        s.telemetry
+            .apply(&n, Duration::from_millis(1_080_000 + i * 20));
+    }
+    s.now = Duration::from_millis(1_080_000 + 6_000 * 20);
+    s.scope.visible = true;
+    s.scope.window = 4;
+    s.scope.channels = vec![
+        Channel::Pitch,
+        Channel::Roll,
+        Channel::GyroZ,
+        Channel::Speed,
+    ];
+    s
 }
 
 #[cfg(target_os = "linux")]

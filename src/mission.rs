@@ -2,6 +2,8 @@
 //! telemetry at a fixed interval. Against the simulator under paused tokio time a 60 s
 //! mission takes well under a second of wall time with the same results as in real time.
 
+pub mod csv;
+
 use crate::family::{Command, Family};
 use crate::model::Model;
 use crate::protocol::notify::Notification;
@@ -29,6 +31,9 @@ pub struct MissionOptions {
     pub stance_timeout: Duration,
     /// How often the battery voltage is read.
     pub battery_poll: Duration,
+    /// The connect setup the session was started with: a `stream` or `collision` line
+    /// changes it, so a reconnect keeps what the mission set.
+    pub setup: crate::family::setup::SetupOptions,
 }
 
 impl Default for MissionOptions {
@@ -39,12 +44,16 @@ impl Default for MissionOptions {
             connect_timeout: Duration::from_secs(20),
             stance_timeout: Duration::from_secs(5),
             battery_poll: Duration::from_secs(10),
+            setup: crate::family::setup::SetupOptions {
+                tripod: false,
+                ..Default::default()
+            },
         }
     }
 }
 
-/// One telemetry sample (`--json` prints these).
-#[derive(Debug, Clone, PartialEq, Serialize)]
+/// One telemetry sample (`--json` prints these; `--csv` writes them as rows, [`csv`]).
+#[derive(Debug, Clone, PartialEq, Serialize, serde::Deserialize)]
 pub struct Sample {
     pub t_ms: u64,
     pub x_cm: Option<f32>,
@@ -67,6 +76,25 @@ pub struct Sample {
     pub frames: Option<u64>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub lost_frames: Option<u64>,
+    /// What the droid streams (null until it has streamed it, and on Robi 42).
+    #[serde(default)]
+    pub pitch_deg: Option<f32>,
+    #[serde(default)]
+    pub roll_deg: Option<f32>,
+    #[serde(default)]
+    pub yaw_deg: Option<f32>,
+    /// Accelerometer x, y, z in g.
+    #[serde(default)]
+    pub accel_g: Option<[f32; 3]>,
+    /// Gyro x, y, z in °/s.
+    #[serde(default)]
+    pub gyro_deg_s: Option<[f32; 3]>,
+    /// Velocity x, y in cm/s.
+    #[serde(default)]
+    pub velocity_cm_s: Option<[f32; 2]>,
+    /// Robi 42's potentiometer, 0..=255.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub poti: Option<u8>,
 }
 
 /// The end of a mission (`--json` prints it with `"done": true`).
@@ -139,6 +167,12 @@ pub fn validate(model: Model, steps: &[Step]) -> Result<(), Vec<crate::script::S
                 Action::Sound(_) if family.sound(0).is_none() => {
                     Some(format!("{name} cannot play sounds"))
                 }
+                Action::Stream { .. } if family.stream_caps(model).is_none() => Some(format!(
+                    "{name} streams by itself: its rate and sensors cannot be chosen"
+                )),
+                Action::Collision(c) if family.collision_detection(c).is_empty() => {
+                    Some(format!("{name} has no collision detection to configure"))
+                }
                 a @ (Action::LedRgb(..) | Action::LedBrightness(..))
                     if family.led(model, a).is_none() =>
                 {
@@ -198,6 +232,8 @@ struct Runner {
     failed: u32,
     /// A `sleep` line ran: the next `wake` re-runs the connect setup.
     slept: bool,
+    /// The connect setup as the mission has changed it.
+    setup: crate::family::setup::SetupOptions,
 }
 
 fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
@@ -393,7 +429,48 @@ impl Runner {
                     }
                 }
             }
+            Action::Stream { rate_hz, sensors } => {
+                let request = crate::tuning::StreamRequest {
+                    rate_hz: *rate_hz,
+                    sensors: sensors
+                        .unwrap_or_else(|| crate::family::stream::all_groups(self.model)),
+                };
+                if let Some(plan) = crate::family::stream::plan_for(self.model, request) {
+                    if let Some(note) = &plan.note {
+                        // Capped, not failed: said, and the mission goes on.
+                        (self.emit)(MissionEvent::Warning {
+                            t_ms: self.t_ms(),
+                            line: Some(s.line),
+                            message: format!("streaming: {note}"),
+                        });
+                    }
+                    self.setup = self.setup.with_plan(&plan);
+                    let cmds = crate::family::stream::reconfigure(
+                        self.model,
+                        &plan,
+                        &self.setup.collision,
+                    );
+                    self.reconfigure(s.line, cmds).await;
+                }
+            }
+            Action::Collision(c) => {
+                self.setup.collision = *c;
+                let cmds = self.family.collision_detection(c);
+                self.reconfigure(s.line, cmds).await;
+            }
         }
+    }
+
+    /// Send streaming or collision commands in order, and make the changed setup the one
+    /// every reconnect runs.
+    async fn reconfigure(&mut self, line: usize, cmds: Vec<Command>) {
+        for c in cmds {
+            if !self.request(line, c).await {
+                break;
+            }
+        }
+        self.session
+            .set_setup(crate::family::setup::connect_setup(self.model, &self.setup));
     }
 }
 
@@ -444,6 +521,14 @@ pub fn sample_of(t: &Telemetry, t_ms: u64) -> Sample {
             .map(|m| m.right_rad_s),
         frames: t.robi.as_ref().map(|r| r.frames),
         lost_frames: t.robi.as_ref().map(|r| r.lost),
+        pitch_deg: t.pitch,
+        roll_deg: t.roll,
+        // Robi's yaw is dead reckoning, already in the heading.
+        yaw_deg: t.yaw.filter(|_| t.robi.is_none()),
+        accel_g: t.accel,
+        gyro_deg_s: t.gyro,
+        velocity_cm_s: t.velocity_cm_s.filter(|_| t.robi.is_none()),
+        poti: t.robi.as_ref().and_then(|r| r.poti),
     }
 }
 
@@ -580,6 +665,7 @@ impl DroidMission {
             emit: emit.clone(),
             driving: None,
             tracking: None,
+            setup: opts.setup,
             last_heading: Heading::default(),
             events,
             failed: 0,

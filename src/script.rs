@@ -5,6 +5,8 @@
 //! wake · sleep · stance tripod|bipod|waddle|stop · drive SPEED HEADING [for DURATION] · stop
 //! head DEGREES · animation ID · sound ID · led front|back R G B · led logic|holo BRIGHTNESS
 //! wait DURATION          (durations: 500ms, 2s, 1.5s)
+//! stream off · stream RATE [SENSOR…]       (rate in samples/s; sensors: attitude, gyro, …)
+//! collision off · collision XT YT XSPEED YSPEED DEADTIME
 //! ```
 //! Blank lines and `#` comments are ignored. Missions for several droids address lines
 //! (`@R2 drive 100 90 for 2s`) and group them (`together { … }`): see [`fleet`].
@@ -58,6 +60,13 @@ pub enum Action {
     },
     /// Calibrate the compass to north (BOLT).
     CalibrateCompass,
+    /// Streaming: samples per second (0 off) and the groups (`None`: all the droid has).
+    Stream {
+        rate_hz: u16,
+        sensors: Option<crate::tuning::SensorSet>,
+    },
+    /// Collision detection's parameters.
+    Collision(crate::tuning::CollisionConfig),
 }
 
 /// One step with the line it came from.
@@ -267,8 +276,33 @@ fn parse_line(content: &str) -> Result<Action, String> {
                 other => Err(format!("unknown calibration {other:?}: use compass")),
             }
         }
+        "stream" => {
+            let usage = "stream off | stream RATE [SENSOR...]";
+            match words.get(1).map(|w| w.to_ascii_lowercase()) {
+                None => Err(format!("expected `{usage}`")),
+                Some(w) if w == "off" => {
+                    arity(&words, 2, usage)?;
+                    Ok(Action::Stream {
+                        rate_hz: 0,
+                        sensors: None,
+                    })
+                }
+                Some(_) => {
+                    let rate_hz = int(words[1], "streaming rate", 0, 100)?;
+                    let sensors = if words.len() > 2 {
+                        Some(crate::tuning::SensorSet::parse(words[2..].iter().copied())?)
+                    } else {
+                        None
+                    };
+                    Ok(Action::Stream { rate_hz, sensors })
+                }
+            }
+        }
+        "collision" => Ok(Action::Collision(
+            crate::tuning::CollisionConfig::parse_args(&words[1..])?,
+        )),
         other => Err(format!(
-            "unknown command {other:?}; expected one of wake, sleep, stance, drive, stop, head, animation, sound, led, wait"
+            "unknown command {other:?}; expected one of wake, sleep, stance, drive, stop, head, animation, sound, led, wait, stream, collision"
         )),
     }
 }
@@ -276,6 +310,33 @@ fn parse_line(content: &str) -> Result<Action, String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn parses_stream_and_collision_lines() {
+        use crate::tuning::{SensorGroup, SensorSet};
+        let steps = parse("stream 50 attitude gyro\nstream off\nstream 10\ncollision 200 200 50 50 300ms\ncollision off\n").unwrap();
+        assert_eq!(
+            steps[0].action,
+            Action::Stream {
+                rate_hz: 50,
+                sensors: Some(SensorSet::of(&[SensorGroup::Attitude, SensorGroup::Gyro]))
+            }
+        );
+        assert_eq!(
+            steps[1].action,
+            Action::Stream {
+                rate_hz: 0,
+                sensors: None
+            }
+        );
+        assert!(
+            matches!(steps[3].action, Action::Collision(c) if c.x_threshold == 200 && c.dead_time_ms == 300)
+        );
+        assert!(matches!(steps[4].action, Action::Collision(c) if !c.enabled));
+        let errs = parse("stream 500\nstream 10 sonar\ncollision 1 2\n").unwrap_err();
+        assert_eq!(errs.len(), 3);
+        assert!(errs[1].message.contains("sonar"), "{errs:?}");
+    }
 
     #[test]
     fn parses_every_command() {

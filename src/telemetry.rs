@@ -1,6 +1,8 @@
 //! What the droid reports, aggregated from notifications: the live gauges of the TUI and the
 //! samples of `droidctl run --json` both read this.
 
+pub mod history;
+
 use crate::protocol::notify::{Collision, Notification, RobotEvent};
 use crate::protocol::rsrcp;
 use crate::protocol::wire::{LegAction, LegState};
@@ -198,6 +200,8 @@ pub struct Telemetry {
     pub robi: Option<RobiTelemetry>,
     /// What BOLT and RVR report beyond the droids.
     pub robot: RobotReadings,
+    /// Every channel at each sample of the last two minutes: the scope, the measured rate.
+    pub history: history::History,
 }
 
 /// BOLT's compass and light, RVR's colour sensor and motors.
@@ -241,6 +245,7 @@ impl Default for Telemetry {
             animations_completed: 0,
             robi: None,
             robot: RobotReadings::default(),
+            history: history::History::default(),
         }
     }
 }
@@ -278,6 +283,7 @@ impl Telemetry {
                         s.get("color_confidence").unwrap_or(0.0).clamp(0.0, 1.0),
                     ));
                 }
+                self.record(at);
             }
             Notification::Robot(e) => self.robot.apply(e),
             Notification::Collision(c) => {
@@ -317,6 +323,7 @@ impl Telemetry {
                     self.y_cm = Some(0.0);
                     self.yaw = Some(0.0);
                 }
+                self.record(at);
             }
             Notification::WillSleep => self.will_sleep = true,
             Notification::DidSleep => {
@@ -325,6 +332,13 @@ impl Telemetry {
             }
             _ => {}
         }
+    }
+
+    /// A sample arrived at `at`: every channel as it is now goes into the history.
+    fn record(&mut self, at: Duration) {
+        let mut h = std::mem::take(&mut self.history);
+        h.record(at, self);
+        self.history = h;
     }
 
     /// Integrate differential-drive odometry: heading 0 is +y, 90 is +x (as the locator).

@@ -97,6 +97,7 @@ async fn start_with(
         log_path: None,
         release,
         tripod_on_connect,
+        samples: None,
     };
     let s = session.clone();
     let app = tokio::spawn(async move {

@@ -72,6 +72,7 @@ async fn start(model: Model) -> Harness {
         log_path: None,
         release: ReleaseMode::Reported,
         tripod_on_connect: false,
+        samples: None,
     };
     let app = tokio::spawn(async move {
         let mut terminal = Terminal::new(TestBackend::new(80, 24)).unwrap();

@@ -145,6 +145,7 @@ async fn replay_with(
         log_path: None,
         release: ReleaseMode::Reported,
         tripod_on_connect: false,
+        samples: None,
     };
     let inputs = AppInputs {
         term: term_rx,

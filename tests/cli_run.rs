@@ -97,6 +97,12 @@ fn json_prints_one_sample_per_interval_then_a_summary() {
         "stance",
         "battery_v",
         "collisions",
+        "pitch_deg",
+        "roll_deg",
+        "yaw_deg",
+        "accel_g",
+        "gyro_deg_s",
+        "velocity_cm_s",
     ];
     for s in samples {
         let got: Vec<&str> = s.keys().map(String::as_str).collect();

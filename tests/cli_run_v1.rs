@@ -172,6 +172,7 @@ async fn in_process_mission_telemetry_matches_the_droid() {
             &SetupOptions {
                 tripod: false,
                 streaming_interval_ms: 100,
+                ..Default::default()
             },
         ),
         ..SessionConfig::default()

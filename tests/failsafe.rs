@@ -36,6 +36,7 @@ fn setup_of(model: Model) -> Vec<Command> {
         &SetupOptions {
             tripod: false,
             streaming_interval_ms: 0,
+            ..Default::default()
         },
     )
 }

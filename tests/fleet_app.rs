@@ -82,6 +82,7 @@ fn opts(config: Config, tripod_on_connect: bool) -> AppOptions {
         droid_name: String::new(),
         log_path: None,
         release: ReleaseMode::Reported,
+        samples: None,
         tripod_on_connect,
     }
 }
@@ -163,7 +164,7 @@ impl Harness {
     /// Mirror on, cruise speed down to 40 on all four (slow enough to stay off the walls
     /// for several seconds), forward held.
     async fn mirrored_and_rolling(&self) {
-        self.tap(Key::ch('g')).await;
+        self.tap(Key::ch('y')).await;
         for _ in 0..4 {
             self.tap(Key::ch('-')).await;
         }

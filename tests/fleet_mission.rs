@@ -197,21 +197,26 @@ fn a_btsnoop_log_of_two_droids_keeps_them_apart_by_connection() {
     );
 }
 
-/// `run --csv`: a header row, then one row per sample with the droid first, for one droid
-/// and for a fleet; the summaries go to stderr.
+/// `run --csv FILE` on a fleet: the file's rows start with their droid (the header with a
+/// `droid` column), every droid's samples in it.
 #[test]
 fn csv_rows_name_their_droid() {
     let dir = Scratch::new("fleet-mission", "csv");
     let script = dir.file("crash.txt", CRASH);
-    let out = dir.run(&["run", path(&script), "--sim", "r2d2,bb8,robi", "--csv"]);
+    let csv = dir.0.join("fleet.csv");
+    let out = dir.run(&[
+        "run",
+        path(&script),
+        "--sim",
+        "r2d2,bb8,robi",
+        "--csv",
+        path(&csv),
+    ]);
     assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
-    let text = stdout(&out);
+    let text = std::fs::read_to_string(&csv).unwrap();
     let mut rows = text.lines();
     let header = rows.next().unwrap();
-    assert!(
-        header.starts_with("droid,t_ms,x_cm,y_cm,speed,heading"),
-        "{header}"
-    );
+    assert!(header.starts_with("droid,t_s,x_cm,y_cm"), "{header}");
     let width = header.split(',').count();
     let rows: Vec<Vec<&str>> = rows.map(|r| r.split(',').collect()).collect();
     assert!(
@@ -221,21 +226,11 @@ fn csv_rows_name_their_droid() {
     for d in ["D2-0001", "BB-0002", "Robi 42"] {
         assert!(rows.iter().filter(|r| r[0] == d).count() > 50, "{d}'s rows");
     }
-    assert!(
-        stderr(&out).contains("D2-0001: done in"),
-        "{}",
-        stderr(&out)
-    );
+    // A one-droid file is as it was: no droid column.
     let one = dir.file("one.txt", "drive 50 0 for 1s\n");
-    let out = dir.run(&["run", path(&one), "--sim", "bb8", "--csv"]);
+    let csv1 = dir.0.join("one.csv");
+    let out = dir.run(&["run", path(&one), "--sim", "bb8", "--csv", path(&csv1)]);
     assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
-    let text = stdout(&out);
-    let second = text.lines().nth(1).unwrap();
-    assert!(second.starts_with("BB-8 (simulated),0,"), "{second}");
-    assert!(
-        dir.run(&["run", path(&one), "--sim", "--csv", "--json"])
-            .status
-            .code()
-            == Some(2)
-    );
+    let text = std::fs::read_to_string(&csv1).unwrap();
+    assert!(text.starts_with("t_s,"), "{text}");
 }

@@ -15,6 +15,8 @@ const RANKS: &[(&str, u32)] = &[
     ("model", 0),
     ("gatt", 0),
     ("logging", 0),
+    // What a user tunes about monitoring: sensor groups, collision detection.
+    ("tuning", 0),
     // The sans-IO protocol core.
     ("protocol", 10),
     // Links, and the plain data built on the protocol (scripts, telemetry, configuration).
@@ -35,6 +37,8 @@ const RANKS: &[(&str, u32)] = &[
     // `serve --record` writes captures.
     ("relay", 55),
     ("app", 60),
+    // `droidctl plot`: pictures of runs (samples from missions and captures).
+    ("plot", 65),
     ("ui", 70),
     ("cli", 80),
 ];

@@ -21,6 +21,7 @@ async fn mission() -> Summary {
                 &SetupOptions {
                     tripod: false,
                     streaming_interval_ms: 50,
+                    ..Default::default()
                 },
             ),
             ..SessionConfig::default()

@@ -1796,7 +1796,7 @@ fn the_picker_marks_several_droids_and_the_app_drives_them_mirrored() {
         tui.wait_for(&format!("{n} ok"), Duration::from_secs(20));
     }
     tui.wait_for("stance tripod", Duration::from_secs(10));
-    tui.send(b"g");
+    tui.send(b"y");
     tui.wait_for("MIRROR", Duration::from_secs(5));
     tui.hold(b"w", Duration::from_millis(2500));
     let screen = tui.text();

@@ -308,6 +308,59 @@ snap!(
     24
 );
 snap!(tiny_40x12, driving(), 40, 12);
+
+/// The scope over 30 s of samples at 10/s: yaw turning, speed rising and falling, paused.
+fn scope() -> AppState {
+    use droidctl::protocol::notify::{Notification, SensorSample};
+    let mut s = driving();
+    for i in 0..300u64 {
+        let t = i as f32 / 10.0;
+        let v = 40.0 * (t / 30.0 * std::f32::consts::PI).sin();
+        s.telemetry.apply(
+            &Notification::Sensors(SensorSample {
+                values: vec![
+                    ("yaw", (t * 12.0) % 360.0 - 180.0),
+                    ("velocity_x", v),
+                    ("velocity_y", 0.0),
+                ],
+            }),
+            ms(12_000 + i * 100),
+        );
+    }
+    s.scope.visible = true;
+    s.scope.paused_at = Some(s.now);
+    s
+}
+
+snap!(scope_80x24, scope(), 80, 24);
+snap!(scope_160x48, scope(), 160, 48);
+snap!(
+    scope_channels_80x24,
+    {
+        let mut s = scope();
+        s.overlay = Overlay::Channels { selected: 2 };
+        s
+    },
+    80,
+    24
+);
+snap!(
+    tuning_palette_80x24,
+    {
+        let mut s = driving();
+        s.overlay = Overlay::Tuning {
+            selected: 0,
+            draft: droidctl::app::monitor::TuningDraft {
+                rate_hz: 10,
+                sensors: droidctl::family::stream::all_groups(Model::R2D2),
+                collision: Default::default(),
+            },
+        };
+        s
+    },
+    80,
+    24
+);
 snap!(
     empty_state_80x24,
     AppState::new(Model::R2D2, "D2-0000".into()),

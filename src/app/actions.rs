@@ -38,9 +38,10 @@ impl App {
             }
         }
         // Redraw only when what the screen shows of the control changed: an idle control
-        // loop ticks without drawing.
+        // loop ticks without drawing. In replay the screen shows the capture's commands
+        // instead (`super::replay`).
         let view = self.controller.view();
-        if *view != self.state.control {
+        if self.player.is_none() && *view != self.state.control {
             self.state.control = view.clone();
             self.dirty = true;
         }

@@ -51,6 +51,8 @@ pub(super) struct App {
     pub driven: bool,
     /// In a fleet, the droid whose events are being handled: its log lines are named.
     pub log_droid: Option<std::sync::Arc<str>>,
+    /// Where samples are written (`drive --csv`, `--jsonl`).
+    pub samples: Option<crate::mission::csv::SampleFiles>,
 }
 
 impl App {
@@ -94,6 +96,30 @@ impl App {
     pub fn on_notification(&mut self, n: &Notification, at: Duration) {
         self.state.telemetry.apply(n, at);
         self.dirty = true;
+        if matches!(n, Notification::Sensors(_) | Notification::RobiFrame(_))
+            && let Some(files) = &mut self.samples
+        {
+            let s = crate::mission::sample_of(&self.state.telemetry, at.as_millis() as u64);
+            // A fleet's rows name their droid.
+            let written = match &self.log_droid {
+                Some(droid) => files.write_for(droid, &s),
+                None => files.write(&s),
+            };
+            if let Err(e) = written {
+                self.samples = None;
+                self.hint(format!("telemetry file: {e}; no more samples are written"));
+            }
+        }
+    }
+
+    /// Write out what the sample files buffer (every second, and at exit).
+    pub fn flush_samples(&mut self) {
+        if let Some(files) = &mut self.samples
+            && let Err(e) = files.flush()
+        {
+            self.samples = None;
+            self.hint(format!("telemetry file: {e}; no more samples are written"));
+        }
     }
 
     /// A packet-log entry, from the session or the replay.

@@ -18,6 +18,8 @@ pub fn live(config: &Config) -> Vec<HelpSection> {
     sections.extend(
         [
             Context::Log,
+            Context::Scope,
+            Context::Settings,
             Context::Palette,
             Context::Filter,
             Context::Help,
@@ -33,7 +35,7 @@ pub fn live(config: &Config) -> Vec<HelpSection> {
 /// drives a replay), the packet log and help itself. No gamepad section.
 pub fn replay(km: &KeyMap) -> Vec<HelpSection> {
     let mut replay = section(km, Context::Replay);
-    for a in [Action::Log, Action::Help, Action::Quit] {
+    for a in [Action::Log, Action::Scope, Action::Help, Action::Quit] {
         if let Some(keys) = km.shown(a) {
             replay.lines.push(HelpLine {
                 keys,
@@ -44,6 +46,8 @@ pub fn replay(km: &KeyMap) -> Vec<HelpSection> {
     vec![
         replay,
         section(km, Context::Log),
+        section(km, Context::Scope),
+        section(km, Context::Settings),
         section(km, Context::Help),
     ]
 }
@@ -131,6 +135,8 @@ mod tests {
             [
                 "Keyboard",
                 "Packet log",
+                "Scope (other keys drive)",
+                "Channels, streaming and collision",
                 "Palettes",
                 "Log filter",
                 "Help",
@@ -139,6 +145,11 @@ mod tests {
         );
         assert_eq!(keys_of(find(&h, "Keyboard"), "drive forward"), ["↑ / w"]);
         assert_eq!(keys_of(find(&h, "Packet log"), "pause"), ["p"]);
+        assert_eq!(keys_of(find(&h, "Keyboard"), "the scope"), ["g"]);
+        assert_eq!(
+            keys_of(find(&h, "Scope (other keys drive)"), "choose the channels"),
+            ["Tab"]
+        );
         assert_eq!(keys_of(find(&h, "Gamepad"), "aim mode"), ["RightBumper"]);
         let r = replay(&c.keymap);
         assert_eq!(keys_of(find(&r, "Replay"), "pause / play"), ["Space / p"]);

@@ -102,6 +102,22 @@ impl App {
                 self.matrix_key(key);
                 None
             }
+            Overlay::Channels { .. } => {
+                self.channels_key(key, new_press);
+                None
+            }
+            Overlay::Tuning { .. } => {
+                self.tuning_key(key, new_press);
+                None
+            }
+            Overlay::None
+                if self.state.scope.visible
+                    && self.state.focus == Focus::Drive
+                    && self.keymap.action_in(Context::Scope, &key).is_some() =>
+            {
+                self.scope_key(key, new_press);
+                None
+            }
             Overlay::None if self.state.focus == Focus::Log => self.log_key(key, new_press),
             Overlay::None if self.player.is_some() => self.replay_key(key, new_press),
             Overlay::None => self.drive_key(key, new_press),
@@ -245,6 +261,8 @@ impl App {
             Some(Action::Quit) => return Some(ExitReason::Quit),
             Some(Action::Help) => self.open_help(),
             Some(Action::Log) => self.state.focus = Focus::Log,
+            Some(Action::Scope) => self.toggle_scope(),
+            Some(Action::Tuning) => self.open_tuning(),
             _ => {}
         }
         None
@@ -268,6 +286,8 @@ impl App {
             Action::NextDroid => self.choose_next(true),
             Action::PreviousDroid => self.choose_next(false),
             Action::Mirror => self.toggle_mirror(),
+            Action::Scope => self.toggle_scope(),
+            Action::Tuning => self.open_tuning(),
             Action::Colour => self.cycle_colour(),
             Action::BackLight => self.toggle_back_light(),
             Action::Animations if self.family.animation(0).is_none() => {

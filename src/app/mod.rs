@@ -6,6 +6,7 @@
 //! - [`actions`]: what reaches the droid (control outputs, lights, animations, sounds);
 //! - [`replay`], [`player`]: the app on a capture;
 //! - [`help`]: the help overlay's text, generated from the bindings;
+//! - [`monitor`]: the scope's view, the streaming and collision settings and their keys;
 //! - [`pacing`], [`rates`]: frame pacing and per-second rates, small state machines without IO;
 //! - [`battery`]: the battery poller;
 //! - `fleet`, [`roster`]: several droids (the parked ones, choosing, mirror) and the roster
@@ -21,6 +22,7 @@ pub mod help;
 pub mod input;
 mod keys;
 pub mod matrix;
+pub mod monitor;
 pub mod pacing;
 pub mod packet_log;
 mod pad;

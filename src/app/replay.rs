@@ -32,6 +32,7 @@ impl App {
                     }
                 }
                 Output::Mark(_) => {}
+                Output::Command(c) => self.commanded(&c),
             }
         }
         if let Some(p) = &self.player {
@@ -40,6 +41,34 @@ impl App {
                 self.state.stats = st;
                 self.dirty = true;
             }
+        }
+    }
+
+    /// A command of the capture: the Drive and Lights (or dome) panels show it as it was sent,
+    /// not the local controller's idle state.
+    fn commanded(&mut self, c: &crate::family::Command) {
+        let family = self.family;
+        let control = &mut self.state.control;
+        if let Some(d) = family.read_drive(c) {
+            control.speed = d.speed;
+            control.heading = d.heading;
+            control.reverse = d.reverse;
+            control.steer = d.steer;
+            control.deadman = d.speed == 0;
+            self.dirty = true;
+        }
+        if let Some(a) = family.read_head(c) {
+            control.head_target = a;
+            self.dirty = true;
+        }
+        if let Some(l) = family.read_leds(self.state.model, c) {
+            if l.main.is_some() {
+                self.state.leds.main = l.main;
+            }
+            if l.back.is_some() {
+                self.state.leds.back = l.back;
+            }
+            self.dirty = true;
         }
     }
 
@@ -124,6 +153,10 @@ impl App {
             self.state.log = fresh;
             self.state.telemetry = Default::default();
             self.state.stats = SessionStats::default();
+            let source = self.state.control.source;
+            self.state.control = Default::default();
+            self.state.control.source = source;
+            self.state.leds = Default::default();
             self.state.link = LinkState::Connecting;
             self.state.rate_in = 0.0;
             self.state.rate_out = 0.0;

@@ -34,6 +34,8 @@ pub struct AppOptions {
     /// Whether the session's connect setup puts a droid with legs into tripod (the app then
     /// shows the stance as requested on every connect).
     pub tripod_on_connect: bool,
+    /// Where every sample the droid streams is written (`drive --csv`, `--jsonl`).
+    pub samples: Option<crate::mission::csv::SampleFiles>,
 }
 
 /// Everything from outside the app.
@@ -103,12 +105,20 @@ fn build(source: Source, opts: AppOptions) -> App {
     state.help_nav = super::help::nav(&keymap);
     let start = Instant::now();
     let family = crate::family::for_model(opts.model);
+    state.monitor = super::monitor::MonitorView::new(
+        opts.model,
+        config.stream_request(),
+        config.collision.config(),
+    );
     let (session, player) = match source {
         Source::Live(s) => {
             state.help = super::help::live(&config);
             (Some(s), None)
         }
         Source::Replay(r, file) => {
+            // What the capture's droid was told is in the capture, not in this config.
+            state.monitor.live = false;
+            state.monitor.plan = None;
             state.help = super::help::replay(&keymap);
             (None, Some(Player::new(*r, file, start)))
         }
@@ -126,6 +136,7 @@ fn build(source: Source, opts: AppOptions) -> App {
         family,
         turbo_speed: config.control.turbo_speed,
         tripod_on_connect: opts.tripod_on_connect,
+        samples: opts.samples,
         start,
         last_tick: start,
         dirty: true,
@@ -135,6 +146,10 @@ fn build(source: Source, opts: AppOptions) -> App {
     };
     app.controller.set_tracks(app.state.model.has_tracks());
     app.state.control = app.controller.view().clone();
+    if app.player.is_some() {
+        // Replay shows the commands in the capture, as they were sent.
+        app.state.control.source = "capture";
+    }
     app
 }
 
@@ -348,6 +363,7 @@ async fn run_with<B: Backend>(
                 if app.sample_fleet_rates(app.clock()) {
                     app.dirty = true;
                 }
+                app.flush_samples();
             }
             _ = sleep_until(change.unwrap_or_else(Instant::now)), if change.is_some() && !app.dirty => {
                 app.dirty = true;
@@ -371,6 +387,7 @@ async fn run_with<B: Backend>(
         }
     };
     poller.abort();
+    app.flush_samples();
     for f in forwarders {
         f.abort();
     }

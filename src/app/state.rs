@@ -52,6 +52,15 @@ pub enum Overlay {
     Matrix {
         input: String,
     },
+    /// Choosing the scope's channels; `selected` indexes the channels the droid reports.
+    Channels {
+        selected: usize,
+    },
+    /// The streaming and collision settings being edited (sent on apply).
+    Tuning {
+        selected: usize,
+        draft: super::monitor::TuningDraft,
+    },
 }
 
 /// Which pane has the keyboard.
@@ -125,6 +134,10 @@ pub struct AppState {
     pub roster: Option<super::roster::Roster>,
     /// What BOLT's matrix shows, as droidctl drew it.
     pub matrix: super::matrix::MatrixView,
+    /// The scope: which channels, what window, paused or following.
+    pub scope: super::monitor::ScopeView,
+    /// Streaming and collision detection as asked for and as sent.
+    pub monitor: super::monitor::MonitorView,
 }
 
 /// A replay, for the status bar.
@@ -188,6 +201,15 @@ impl AppState {
             replay: None,
             roster: None,
             matrix: Default::default(),
+            scope: super::monitor::ScopeView::for_model(model),
+            monitor: super::monitor::MonitorView::new(
+                model,
+                crate::tuning::StreamRequest {
+                    rate_hz: 10,
+                    sensors: crate::family::stream::all_groups(model),
+                },
+                crate::tuning::CollisionConfig::default(),
+            ),
         }
     }
 

@@ -36,6 +36,9 @@ pub enum Output {
     StanceRead(LegState),
     /// A mark in the capture (`mission-start`).
     Mark(String),
+    /// A command the host sent, as it was sent (replay shows the drive, dome and lights
+    /// commanded).
+    Command(Command),
 }
 
 pub struct Mirror {
@@ -192,6 +195,7 @@ impl Mirror {
                     out.push(Output::StanceRequested(a));
                 }
             }
+            out.push(Output::Command(cmd.clone()));
             self.log_packet(at, Direction::Out, packet, Some(&cmd), out);
         }
     }

@@ -432,6 +432,7 @@ mod tests {
                     &crate::family::setup::SetupOptions {
                         tripod: false,
                         streaming_interval_ms: 100,
+                        ..Default::default()
                     },
                 ),
                 ..Default::default()

@@ -24,6 +24,13 @@ pub struct DriveArgs {
     pub ble: super::connect::BleArgs,
     #[command(flatten)]
     pub record: super::replay::RecordArgs,
+    /// Write every telemetry sample the droid streams to FILE as CSV (columns named with
+    /// units).
+    #[arg(long, value_name = "FILE")]
+    pub csv: Option<std::path::PathBuf>,
+    /// Write every telemetry sample to FILE as JSON lines (the objects `run --json` prints).
+    #[arg(long, value_name = "FILE")]
+    pub jsonl: Option<std::path::PathBuf>,
 }
 
 /// The simulated models asked for (`--sim r2d2,bb8`), none without `--sim`.
@@ -73,6 +80,7 @@ pub fn run(args: DriveArgs) -> Result<i32, CliError> {
     }
     let model = sims.first().copied();
     let recorder = args.record.open()?;
+    let samples = sample_files(&args, false)?;
     let log_path = crate::logging::init().ok();
     let rt = super::realtime_runtime()?;
     rt.block_on(async move {
@@ -88,8 +96,10 @@ pub fn run(args: DriveArgs) -> Result<i32, CliError> {
                     .connect(super::connect::Chooser::Screen(config.keymap.clone()))
                     .await?;
                 if !c.others.is_empty() {
-                    // Several marked in the picker: drive them all.
-                    return drive_several(c, config, log_path, recorder).await;
+                    // Several marked in the picker: drive them all (the files name each
+                    // droid on every row).
+                    let samples = sample_files(&args, true)?;
+                    return drive_several(c, config, log_path, recorder, samples).await;
                 }
                 (c.link, c.model, c.name)
             }
@@ -113,20 +123,40 @@ pub fn run(args: DriveArgs) -> Result<i32, CliError> {
             link,
             origin: origin.into(),
         }]);
-        let result = drive(fleet, config, log_path).await;
+        let result = drive(fleet, config, log_path, samples).await;
         super::replay::finish(recorder.as_ref());
         result
     })
 }
 
+/// `--csv` and `--jsonl`, created now so a refusal comes before anything connects; a fleet's
+/// rows start with their droid.
+fn sample_files(
+    args: &DriveArgs,
+    fleet: bool,
+) -> Result<Option<crate::mission::csv::SampleFiles>, CliError> {
+    use crate::mission::csv::SampleFiles;
+    let (csv, jsonl) = (args.csv.as_deref(), args.jsonl.as_deref());
+    if csv.is_none() && jsonl.is_none() {
+        return Ok(None);
+    }
+    let files = if fleet {
+        SampleFiles::create_for_fleet(csv, jsonl)
+    } else {
+        SampleFiles::create(csv, jsonl)
+    };
+    files.map(Some).map_err(CliError::usage)
+}
+
 /// Several droids: find them all, start a session each, and run the app on the fleet.
 fn run_fleet(args: DriveArgs, sims: Vec<Model>, config: Config) -> Result<i32, CliError> {
     let recorder = args.record.open()?;
+    let samples = sample_files(&args, true)?;
     let log_path = crate::logging::init().ok();
     let rt = super::realtime_runtime()?;
     rt.block_on(async move {
         let found = super::fleet::find_all(&sims, &args.ble, &config).await?;
-        drive_found(found, config, log_path, recorder).await
+        drive_found(found, config, log_path, recorder, samples).await
     })
 }
 
@@ -136,6 +166,7 @@ async fn drive_several(
     config: Config,
     log_path: Option<std::path::PathBuf>,
     recorder: Option<crate::capture::record::Recorder>,
+    samples: Option<crate::mission::csv::SampleFiles>,
 ) -> Result<i32, CliError> {
     let super::connect::Connected {
         link,
@@ -153,7 +184,7 @@ async fn drive_several(
             origin: "Bluetooth".into(),
         })
         .collect();
-    drive_found(found, config, log_path, recorder).await
+    drive_found(found, config, log_path, recorder, samples).await
 }
 
 /// Drive the droids found, recording them all into one capture when asked.
@@ -162,6 +193,7 @@ async fn drive_found(
     config: Config,
     log_path: Option<std::path::PathBuf>,
     recorder: Option<crate::capture::record::Recorder>,
+    samples: Option<crate::mission::csv::SampleFiles>,
 ) -> Result<i32, CliError> {
     super::fleet::record_all(recorder.as_ref(), &mut found);
     let specs = found
@@ -171,7 +203,7 @@ async fn drive_found(
             f.into_spec(cfg)
         })
         .collect();
-    let result = drive(Fleet::start(specs), config, log_path).await;
+    let result = drive(Fleet::start(specs), config, log_path, samples).await;
     super::replay::finish(recorder.as_ref());
     result
 }
@@ -180,6 +212,7 @@ async fn drive(
     fleet: Fleet,
     config: Config,
     log_path: Option<std::path::PathBuf>,
+    samples: Option<crate::mission::csv::SampleFiles>,
 ) -> Result<i32, CliError> {
     let Some(first) = fleet.member(0) else {
         return Err(CliError::usage("no droid to drive"));
@@ -219,6 +252,7 @@ async fn drive(
         log_path: log_path.clone(),
         release,
         tripod_on_connect: setup_tripod,
+        samples,
     };
     let inputs = AppInputs {
         term: term_rx,

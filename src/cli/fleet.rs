@@ -6,7 +6,7 @@
 
 use super::CliError;
 use crate::config::Config;
-use crate::family::setup::{SetupOptions, connect_setup};
+use crate::family::setup::connect_setup;
 use crate::fleet::DroidSpec;
 use crate::fleet::gate::{Adapters, GatedLink};
 use crate::link::Link;
@@ -88,13 +88,11 @@ pub fn is_fleet(sims: usize, ble: &super::connect::BleArgs) -> bool {
     sims + named + remotes > 1 && !(sims == 0 && one_remote)
 }
 
-/// The session settings for a droid of `model` under `config` (the app's: tripod on
-/// connect when `tripod`).
+/// The session settings for a droid of `model` under `config` (the app's: the streaming the
+/// config asks for, capped to the droid's link; tripod on connect when `tripod`).
 pub fn session_config(model: Model, config: &Config, tripod: bool) -> SessionConfig {
-    let setup = SetupOptions {
-        tripod,
-        streaming_interval_ms: config.control.streaming_interval_ms,
-    };
+    let (mut setup, _) = crate::family::setup::from_config(model, config);
+    setup.tripod = tripod;
     let pacing = match config.session.pacing_ms {
         0 => model.write_pacing(),
         ms => Duration::from_millis(ms),

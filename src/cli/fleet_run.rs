@@ -5,7 +5,7 @@
 //! give the same output every run.
 
 use super::CliError;
-use super::run::{RunArgs, mission_session_config, print_summary, report_link_of, sample_line};
+use super::run::{RunArgs, mission_session, print_summary, report_link_of, sample_line};
 use crate::fleet::Fleet;
 use crate::fleet::mission::{self as fleet_mission, FleetEmit};
 use crate::mission::{MissionEvent, MissionOptions};
@@ -38,7 +38,15 @@ pub fn run(
         ..MissionOptions::default()
     };
     let json = args.json;
-    let csv = args.csv;
+    // `--csv FILE`: every droid's samples, the droid first on each row.
+    let files = match &args.csv {
+        Some(p) => Some(
+            crate::mission::csv::SampleFiles::create_for_fleet(Some(p), None)
+                .map_err(CliError::usage)?,
+        ),
+        None => None,
+    };
+    let files = Arc::new(std::sync::Mutex::new(files));
     let _ = crate::logging::init();
     let only_sims = args.ble.name.is_empty() && args.ble.remote.is_empty();
     let rt = if only_sims {
@@ -61,10 +69,13 @@ pub fn run(
             ));
         }
         super::fleet::record_all(recorder.as_ref(), &mut found);
+        // Each droid's session and options (its own streaming plan and setup).
+        let mut per_droid = Vec::with_capacity(found.len());
         let specs = found
             .into_iter()
             .map(|f| {
-                let cfg = mission_session_config(f.model, &opts);
+                let (cfg, o) = mission_session(f.model, opts.clone());
+                per_droid.push(o);
                 f.into_spec(cfg)
             })
             .collect();
@@ -76,9 +87,6 @@ pub fn run(
                 return Err(script_errors(e));
             }
         };
-        if csv {
-            println!("{}", super::run::CSV_HEADER);
-        }
         let reporters: Vec<_> = fleet
             .members()
             .iter()
@@ -91,8 +99,8 @@ pub fn run(
             r = fleet_mission::run(
                 &fleet,
                 &plan,
-                opts.clone(),
-                printer(&fleet, (json, csv), &opts, recorder.clone()),
+                &per_droid,
+                printer(&fleet, json, &opts, recorder.clone(), files.clone()),
             ) => r,
             sig = super::signals::terminated() => Err(crate::mission::MissionError(format!(
                 "{sig}: mission interrupted, every droid was stopped"
@@ -108,6 +116,12 @@ pub fn run(
             }
         }
         fleet.shutdown_all(|_| Vec::new()).await;
+        if let Ok(mut f) = files.lock()
+            && let Some(w) = f.as_mut()
+            && let Err(e) = w.flush()
+        {
+            eprintln!("droidctl: --csv: {e}");
+        }
         // In the runtime: under simulated time the `end` line has the mission's time.
         super::replay::finish(recorder.as_ref());
         let summaries = r.map_err(|e| CliError::failure(e.to_string()))?;
@@ -123,8 +137,6 @@ pub fn run(
                 inner: s,
             };
             println!("{}", serde_json::to_string(&t).unwrap_or_default());
-        } else if csv {
-            eprintln!("droidctl: {name}: {}", super::run::summary_text(s));
         } else {
             print!("{name}: ");
             print_summary(s, false);
@@ -138,9 +150,10 @@ pub fn run(
 /// samples from there, as for one droid).
 fn printer(
     fleet: &Fleet,
-    (json, csv): (bool, bool),
+    json: bool,
     opts: &MissionOptions,
     recorder: Option<crate::capture::record::Recorder>,
+    files: Arc<std::sync::Mutex<Option<crate::mission::csv::SampleFiles>>>,
 ) -> FleetEmit {
     use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
     let names = fleet.names();
@@ -170,6 +183,14 @@ fn printer(
                 _ => {}
             }
         }
+        if let MissionEvent::Sample(s) = &e
+            && let Ok(mut f) = files.lock()
+            && let Some(w) = f.as_mut()
+            && let Err(err) = w.write_for(name, s)
+        {
+            eprintln!("droidctl: --csv: {err}; no more rows are written");
+            *f = None;
+        }
         let mut out = std::io::stdout().lock();
         let _ = match e {
             MissionEvent::Sample(s) if json => {
@@ -179,10 +200,6 @@ fn printer(
                 };
                 writeln!(out, "{}", serde_json::to_string(&t).unwrap_or_default())
             }
-            MissionEvent::Sample(s) if csv => {
-                writeln!(out, "{}", super::run::csv_row(name, &s))
-            }
-            MissionEvent::Step { .. } if csv => Ok(()),
             MissionEvent::Sample(s) => {
                 let n = counts
                     .get(i)

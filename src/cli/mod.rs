@@ -9,6 +9,7 @@ pub mod drive;
 pub mod fleet;
 mod fleet_run;
 pub mod packet;
+pub mod plot;
 pub mod replay;
 pub mod run;
 pub mod scan;
@@ -47,6 +48,9 @@ pub enum Command {
     /// Play a capture back in the app (droidctl's `--record` files and btsnoop logs); `--json`
     /// prints its telemetry samples instead.
     Replay(replay::ReplayArgs),
+    /// Draw a run as a PNG or SVG: the path from above with collisions, and chosen channels
+    /// against time (from a capture or a `run --json` output).
+    Plot(plot::PlotArgs),
     /// List nearby droids over Bluetooth LE, strongest signal first (`--all` for every device).
     Scan(scan::ScanArgs),
     /// Serve simulated droids on D-Bus as BlueZ does (`--bluez`), for droidctl and other
@@ -130,6 +134,10 @@ pub fn main() -> i32 {
         Some(Command::Replay(args)) => {
             drop(out);
             replay::run(args)
+        }
+        Some(Command::Plot(args)) => {
+            drop(out);
+            plot::run(args)
         }
         Some(Command::Scan(args)) => scan::run(args, &mut out),
         Some(Command::Serve(args)) => {

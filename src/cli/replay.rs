@@ -51,7 +51,11 @@ pub struct ReplayArgs {
     /// (the same samples as `droidctl run --json`).
     #[arg(long)]
     pub json: bool,
-    /// With --json: the sample interval in milliseconds.
+    /// Write the telemetry samples to FILE as CSV (columns named with units), without the
+    /// app (with --json, both).
+    #[arg(long, value_name = "FILE")]
+    pub csv: Option<PathBuf>,
+    /// With --json or --csv: the sample interval in milliseconds.
     #[arg(long, default_value_t = 100, value_name = "MS", value_parser = clap::value_parser!(u64).range(1..=60_000))]
     pub interval: u64,
     /// The droid model, for a capture that does not name it (a btsnoop log names only the
@@ -215,16 +219,23 @@ pub fn run(args: ReplayArgs) -> Result<i32, CliError> {
     for w in &capture.warnings {
         eprintln!("droidctl: {}: {w}", args.file.display());
     }
-    if args.json {
+    if args.json || args.csv.is_some() {
         use std::io::Write;
+        let mut files = crate::mission::csv::SampleFiles::create(args.csv.as_deref(), None)
+            .map_err(CliError::usage)?;
         let mut out = std::io::BufWriter::new(std::io::stdout().lock());
         let file = args.file.display().to_string();
+        let json = args.json;
         // Each sample is written as it is made: memory stays flat whatever the span.
         let summary = crate::capture::replay::samples(
             &capture,
             model,
             std::time::Duration::from_millis(args.interval),
             &mut |s| {
+                files.write(s)?;
+                if !json {
+                    return Ok(());
+                }
                 serde_json::to_writer(&mut out, s).map_err(std::io::Error::other)?;
                 writeln!(out)
             },
@@ -237,8 +248,11 @@ pub fn run(args: ReplayArgs) -> Result<i32, CliError> {
             },
         )
         .map_err(CliError::output)?;
-        serde_json::to_writer(&mut out, &summary).map_err(|e| CliError::output(e.into()))?;
-        writeln!(out).map_err(CliError::output)?;
+        files.flush().map_err(CliError::output)?;
+        if json {
+            serde_json::to_writer(&mut out, &summary).map_err(|e| CliError::output(e.into()))?;
+            writeln!(out).map_err(CliError::output)?;
+        }
         out.flush().map_err(CliError::output)?;
         return Ok(0);
     }
@@ -302,6 +316,7 @@ fn play(played: Played, file: String) -> Result<i32, CliError> {
             log_path,
             release,
             tripod_on_connect: false,
+            samples: None,
         };
         let inputs = AppInputs {
             term: term_rx,

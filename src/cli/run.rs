@@ -26,10 +26,6 @@ pub struct RunArgs {
     /// One JSON object per telemetry sample, then a summary object.
     #[arg(long)]
     pub json: bool,
-    /// One CSV row per telemetry sample after a header row, the droid first (the summary goes
-    /// to stderr).
-    #[arg(long, conflicts_with = "json")]
-    pub csv: bool,
     #[command(flatten)]
     pub ble: super::connect::BleArgs,
     /// Telemetry sample interval in milliseconds.
@@ -37,6 +33,10 @@ pub struct RunArgs {
     pub interval: u64,
     #[command(flatten)]
     pub record: super::replay::RecordArgs,
+    /// Also write every sample to FILE as CSV (columns named with units; see README; a fleet's
+    /// rows start with the droid).
+    #[arg(long, value_name = "FILE")]
+    pub csv: Option<PathBuf>,
 }
 
 /// Resolve `--sim MODEL[,MODEL…]` vs the script path: `droidctl run --sim mission.txt` puts
@@ -94,13 +94,17 @@ pub fn run(args: RunArgs) -> Result<i32, CliError> {
     let steps = crate::script::plain_steps(&items);
     let recorder = args.record.open()?;
     let recorder = recorder.as_ref();
+    let files = match &args.csv {
+        Some(p) => {
+            Some(crate::mission::csv::SampleFiles::create(Some(p), None).map_err(CliError::usage)?)
+        }
+        None => None,
+    };
     let opts = MissionOptions {
         interval: Duration::from_millis(args.interval),
         ..MissionOptions::default()
     };
     let json = args.json;
-    let csv = args.csv;
-    let format = |name: &str| Format::of(json, csv, name);
     let result = match sim {
         Some(model) => {
             mission::validate(model, &steps).map_err(script_errors)?;
@@ -118,7 +122,7 @@ pub fn run(args: RunArgs) -> Result<i32, CliError> {
                 let link = SimLink::new(model, SimConfig::for_model(model), Faults::none());
                 let name = format!("{} (simulated)", model.display_name());
                 let link = recorded(recorder, Box::new(link), model, &name);
-                let r = run_recorded(link, model, &steps, opts, format(&name), recorder).await;
+                let r = run_recorded(link, model, &steps, opts, json, recorder, files).await;
                 super::replay::finish(recorder);
                 r.map_err(CliError::failure)
             })
@@ -130,7 +134,7 @@ pub fn run(args: RunArgs) -> Result<i32, CliError> {
                 let c = args.ble.connect(super::connect::Chooser::Prompt).await?;
                 mission::validate(c.model, &steps).map_err(script_errors)?;
                 let link = recorded(recorder, c.link, c.model, &c.name);
-                let r = run_recorded(link, c.model, &steps, opts, format(&c.name), recorder).await;
+                let r = run_recorded(link, c.model, &steps, opts, json, recorder, files).await;
                 super::replay::finish(recorder);
                 r.map_err(CliError::failure)
             })
@@ -138,11 +142,7 @@ pub fn run(args: RunArgs) -> Result<i32, CliError> {
     };
     match result {
         Ok(summary) => {
-            if csv {
-                eprintln!("droidctl: {}", summary_text(&summary));
-            } else {
-                print_summary(&summary, json);
-            }
+            print_summary(&summary, json);
             Ok(if summary.failed_steps > 0 { 1 } else { 0 })
         }
         Err(e) => Err(e),
@@ -173,67 +173,7 @@ pub async fn run_on(
     opts: MissionOptions,
     json: bool,
 ) -> Result<Summary, String> {
-    let format = Format::of(json, false, "");
-    run_recorded(link, model, steps, opts, format, None).await
-}
-
-/// How `run` prints samples.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub enum Format {
-    /// A line a second, steps and the summary as text.
-    Text,
-    /// Every sample, then the summary, as JSON lines.
-    Json,
-    /// Every sample as a CSV row naming `droid`, after a header row.
-    Csv { droid: String },
-}
-
-impl Format {
-    pub fn of(json: bool, csv: bool, droid: &str) -> Format {
-        match (json, csv) {
-            (true, _) => Format::Json,
-            (false, true) => Format::Csv {
-                droid: droid.to_string(),
-            },
-            _ => Format::Text,
-        }
-    }
-}
-
-/// The CSV header row (`run --csv`).
-pub const CSV_HEADER: &str = "droid,t_ms,x_cm,y_cm,speed,heading,head_deg,stance,battery_v,\
-collisions,motor_left_rad_s,motor_right_rad_s,frames,lost_frames";
-
-/// One sample as a CSV row (empty cells for what the droid does not report).
-pub fn csv_row(droid: &str, s: &mission::Sample) -> String {
-    fn cell<T: std::fmt::Display>(v: Option<T>) -> String {
-        v.map(|v| v.to_string()).unwrap_or_default()
-    }
-    // A name with a comma or quote is quoted, as CSV readers expect.
-    let quote = |t: &str| {
-        if t.contains([',', '"', '\n']) {
-            format!("\"{}\"", t.replace('"', "\"\""))
-        } else {
-            t.to_string()
-        }
-    };
-    [
-        quote(droid),
-        s.t_ms.to_string(),
-        cell(s.x_cm),
-        cell(s.y_cm),
-        cell(s.speed),
-        cell(s.heading),
-        cell(s.head_deg),
-        quote(&s.stance),
-        cell(s.battery_v),
-        s.collisions.to_string(),
-        cell(s.motor_left_rad_s),
-        cell(s.motor_right_rad_s),
-        cell(s.frames),
-        cell(s.lost_frames),
-    ]
-    .join(",")
+    run_recorded(link, model, steps, opts, json, None, None).await
 }
 
 /// [`run_on`], marking the mission's start and end in the capture being recorded (replay
@@ -243,14 +183,14 @@ pub async fn run_recorded(
     model: Model,
     steps: &[crate::script::Step],
     opts: MissionOptions,
-    format: Format,
+    json: bool,
     recorder: Option<&crate::capture::record::Recorder>,
+    files: Option<crate::mission::csv::SampleFiles>,
 ) -> Result<Summary, String> {
-    let session = session::start(link, mission_session_config(model, &opts));
-    if matches!(format, Format::Csv { .. }) {
-        println!("{CSV_HEADER}");
-    }
-    let json = format == Format::Json;
+    let files = Arc::new(std::sync::Mutex::new(files));
+    let files_out = files.clone();
+    let (config, opts) = mission_session(model, opts);
+    let session = session::start(link, config);
     let samples_per_line = (1000 / opts.interval.as_millis().max(1)).max(1) as u64;
     let count = std::sync::atomic::AtomicU64::new(0);
     let marker = recorder.cloned();
@@ -268,15 +208,19 @@ pub async fn run_recorded(
             }
             _ => {}
         }
+        if let MissionEvent::Sample(s) = &e
+            && let Ok(mut f) = files_out.lock()
+            && let Some(w) = f.as_mut()
+            && let Err(err) = w.write(s)
+        {
+            eprintln!("droidctl: --csv: {err}; no more rows are written");
+            *f = None;
+        }
         let mut out = std::io::stdout().lock();
         let _ = match e {
             MissionEvent::Sample(s) if json => {
                 writeln!(out, "{}", serde_json::to_string(&s).unwrap_or_default())
             }
-            MissionEvent::Sample(s) if let Format::Csv { droid } = &format => {
-                writeln!(out, "{}", csv_row(droid, &s))
-            }
-            MissionEvent::Step { .. } if format != Format::Text => Ok(()),
             MissionEvent::Sample(s) => {
                 let n = count.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
                 if !n.is_multiple_of(samples_per_line) {
@@ -320,24 +264,50 @@ pub async fn run_recorded(
     });
     // Stop first (at the last heading: a stop at heading 0 would turn the droid), then close.
     session.shutdown_stopped(Vec::new()).await;
+    if let Ok(mut f) = files.lock()
+        && let Some(w) = f.as_mut()
+        && let Err(e) = w.flush()
+    {
+        eprintln!("droidctl: --csv: {e}");
+    }
     result
 }
 
-/// A mission's session settings for `model`: no tripod on connect (the script says), sensors
-/// streamed as often as the samples need (at most every 100 ms).
-pub fn mission_session_config(model: Model, opts: &MissionOptions) -> SessionConfig {
-    let interval_ms = opts.interval.as_millis().clamp(20, 1000) as u16;
-    let setup = SetupOptions {
-        tripod: false,
-        streaming_interval_ms: interval_ms.min(100),
+/// A mission's session settings for `model`, and its options with the connect setup they
+/// hold: sensors streamed at least as often as the samples are taken (10/s at the least),
+/// capped to what the droid's link carries (said on stderr); a `stream` line of the mission
+/// changes it.
+pub fn mission_session(model: Model, opts: MissionOptions) -> (SessionConfig, MissionOptions) {
+    // Stream at least as often as the samples are taken (10/s at the least), capped to what
+    // the droid's link carries; a `stream` line of the mission changes it.
+    let interval_ms = opts.interval.as_millis().clamp(10, 100) as u16;
+    let tripod = opts.setup.tripod;
+    let request = crate::tuning::StreamRequest {
+        rate_hz: 1000 / interval_ms,
+        sensors: crate::family::stream::all_groups(model),
     };
-    SessionConfig {
+    let setup = SetupOptions {
+        tripod,
+        ..opts.setup
+    };
+    let setup = match crate::family::stream::plan_for(model, request) {
+        Some(plan) => {
+            if let Some(note) = &plan.note {
+                eprintln!("droidctl: streaming: {note}");
+            }
+            setup.with_plan(&plan)
+        }
+        None => setup,
+    };
+    let config = SessionConfig {
         family: model.protocol(),
         model: Some(model),
         pacing: model.write_pacing(),
         setup: connect_setup(model, &setup),
         ..SessionConfig::default()
-    }
+    };
+    let opts = MissionOptions { setup, ..opts };
+    (config, opts)
 }
 
 /// A lost link and the reconnect, on stderr as they happen (`[    4.52s] link lost: the droid
@@ -455,22 +425,17 @@ pub fn print_summary(s: &Summary, json: bool) {
     if json {
         println!("{}", serde_json::to_string(s).unwrap_or_default());
     } else {
-        println!("{}", summary_text(s));
+        println!(
+            "done in {:.2} s: sent {}, received {}, errors {}, timeouts {}, collisions {}, failed steps {}, final position ({}, {}) cm",
+            s.t_ms as f64 / 1000.0,
+            s.sent,
+            s.received,
+            s.errors,
+            s.timeouts,
+            s.collisions,
+            s.failed_steps,
+            opt(s.x_cm, 1),
+            opt(s.y_cm, 1)
+        );
     }
-}
-
-/// The summary as text.
-pub fn summary_text(s: &Summary) -> String {
-    format!(
-        "done in {:.2} s: sent {}, received {}, errors {}, timeouts {}, collisions {}, failed steps {}, final position ({}, {}) cm",
-        s.t_ms as f64 / 1000.0,
-        s.sent,
-        s.received,
-        s.errors,
-        s.timeouts,
-        s.collisions,
-        s.failed_steps,
-        opt(s.x_cm, 1),
-        opt(s.y_cm, 1)
-    )
 }

@@ -129,10 +129,14 @@ pub enum Context {
     Replay,
     /// Choosing a droid among those a scan found.
     Picker,
+    /// The scope is on screen (keys it does not bind still drive).
+    Scope,
+    /// A settings list is open: the scope's channels, streaming and collision detection.
+    Settings,
 }
 
 impl Context {
-    pub const ALL: [Context; 7] = [
+    pub const ALL: [Context; 9] = [
         Context::Drive,
         Context::Log,
         Context::Palette,
@@ -140,6 +144,8 @@ impl Context {
         Context::Filter,
         Context::Replay,
         Context::Picker,
+        Context::Scope,
+        Context::Settings,
     ];
 
     /// The sub-table of `[keys]` (`None`: the `[keys]` table itself).
@@ -152,6 +158,8 @@ impl Context {
             Context::Filter => Some("filter"),
             Context::Replay => Some("replay"),
             Context::Picker => Some("picker"),
+            Context::Scope => Some("scope_view"),
+            Context::Settings => Some("settings"),
         }
     }
 
@@ -165,6 +173,8 @@ impl Context {
             Context::Filter => "Log filter",
             Context::Replay => "Replay",
             Context::Picker => "Choosing a droid",
+            Context::Scope => "Scope (other keys drive)",
+            Context::Settings => "Channels, streaming and collision",
         }
     }
 }
@@ -229,6 +239,8 @@ actions! {
         MatrixColour "matrix_colour" false "next matrix colour (BOLT)";
         Calibrate "calibrate" false "calibrate the compass (BOLT)";
         Log "log" false "the packet log has the keys (and back)";
+        Scope "scope" false "the scope: chosen channels against time (and back)";
+        Tuning "tuning" false "streaming (rate, sensors) and collision detection";
         Help "help" false "this help";
         Quit "quit" false "quit (stops the droid first)";
     }
@@ -281,6 +293,22 @@ actions! {
         PickerChoose "choose" false "connect to it (to the marked ones, if any)";
         PickerMark "mark" false "mark / unmark it (several marked: drive them all at once)";
         PickerCancel "cancel" false "cancel";
+    }
+    Scope {
+        ScopePause "pause" false "pause / follow (the droid still streams)";
+        ScopeZoomIn "zoom_in" false "shorter window (down to 10 s)";
+        ScopeZoomOut "zoom_out" false "longer window (up to 2 min)";
+        ScopeAutoscale "autoscale" false "autoscaled / fixed axes";
+        ScopeChannels "channels" false "choose the channels";
+    }
+    Settings {
+        SettingsUp "up" false "previous row";
+        SettingsDown "down" false "next row";
+        SettingsLess "less" false "value down / previous rate";
+        SettingsMore "more" false "value up / next rate";
+        SettingsToggle "toggle" false "switch a channel, sensor or collision detection on/off";
+        SettingsApply "apply" false "apply to the droid and close (channels: switch)";
+        SettingsClose "close" false "close (nothing sent)";
     }
 }
 

@@ -7,6 +7,7 @@
 //! types and never see a binding's name.
 
 pub mod keys;
+pub mod monitor;
 pub mod pad;
 
 pub use keys::{Action, Context, Key, KeyCode, KeyEntry, KeyMap};
@@ -40,7 +41,10 @@ pub struct Control {
     pub mode: DriveMode,
     pub auto_tripod: bool,
     pub sleep_on_exit: bool,
-    pub streaming_interval_ms: u16,
+    /// The older way to set the streaming rate (ms between samples; 0 off). When a file
+    /// still sets it, it wins over `streaming.rate_hz`.
+    #[serde(default)]
+    pub streaming_interval_ms: Option<u16>,
 }
 
 #[derive(Debug, Clone, PartialEq, Deserialize)]
@@ -112,6 +116,8 @@ struct RawConfig {
     keys: BTreeMap<String, KeyEntry>,
     gamepad: RawGamepad,
     fleet: FleetSettings,
+    streaming: monitor::Streaming,
+    collision: monitor::Collision,
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -125,6 +131,10 @@ pub struct Config {
     pub keymap: KeyMap,
     pub gamepad: Gamepad,
     pub fleet: FleetSettings,
+    /// `[streaming]`: the sensor groups and rate asked for.
+    pub streaming: monitor::Streaming,
+    /// `[collision]`: collision detection's parameters.
+    pub collision: monitor::Collision,
 }
 
 /// Why a config could not be used: where and what.
@@ -197,6 +207,20 @@ fn find_key_line(text: &str, section: &str, key: &str) -> Option<usize> {
 }
 
 impl Config {
+    /// The streaming asked for: `[streaming]`, or the older `control.streaming_interval_ms`
+    /// when a file still sets it.
+    pub fn stream_request(&self) -> crate::tuning::StreamRequest {
+        let rate_hz = match self.control.streaming_interval_ms {
+            Some(0) => 0,
+            Some(ms) => (1000 / ms).max(1),
+            None => self.streaming.rate_hz,
+        };
+        crate::tuning::StreamRequest {
+            rate_hz,
+            sensors: self.streaming.sensor_set(),
+        }
+    }
+
     /// The shipped defaults.
     pub fn defaults() -> Config {
         Config::parse_merged(None, "")
@@ -294,6 +318,8 @@ impl Config {
                 sound_right: g.sound_right,
             },
             fleet: raw.fleet,
+            streaming: raw.streaming,
+            collision: raw.collision,
         };
         cfg.validate()?;
         Ok(cfg)
@@ -335,6 +361,7 @@ impl Config {
                 "must be at least release_repeat_ms (the first repeat comes later than the next ones)".into(),
             );
         }
+        monitor::validate(&self.streaming, &self.collision)?;
         for (k, v) in [
             ("release_first_ms", self.keyboard.release_first_ms),
             ("release_repeat_ms", self.keyboard.release_repeat_ms),
@@ -435,6 +462,44 @@ mod tests {
             .unwrap_err();
         assert_eq!(e.key.as_deref(), Some("keys.packet_log.pause"));
         assert_eq!(e.line, Some(3));
+    }
+
+    #[test]
+    fn streaming_and_collision_tables() {
+        use crate::tuning::{SensorGroup, SensorSet};
+        let c = Config::defaults();
+        let r = c.stream_request();
+        assert_eq!(r.rate_hz, 10);
+        assert!(
+            r.sensors.contains(SensorGroup::Gyro) && r.sensors.contains(SensorGroup::HeadAngle)
+        );
+        assert_eq!(
+            c.collision.config(),
+            crate::tuning::CollisionConfig::default()
+        );
+        let c = Config::parse_merged(
+            None,
+            "[streaming]\nrate_hz = 50\nsensors = [\"attitude\"]\n[collision]\nx_threshold = 200\ndead_time_ms = 500\n",
+        )
+        .unwrap();
+        let r = c.stream_request();
+        assert_eq!(
+            (r.rate_hz, r.sensors),
+            (50, SensorSet::of(&[SensorGroup::Attitude]))
+        );
+        assert_eq!(c.collision.config().x_threshold, 200);
+        assert_eq!(c.collision.config().dead_time_units(), 50);
+        // The older key still works, and wins.
+        let c = Config::parse_merged(None, "[control]\nstreaming_interval_ms = 0\n").unwrap();
+        assert_eq!(c.stream_request().rate_hz, 0);
+        let p = Path::new("c.toml");
+        let e = Config::parse_merged(Some(p), "[streaming]\nsensors = [\"sonar\"]\n").unwrap_err();
+        assert_eq!(e.key.as_deref(), Some("streaming.sensors"));
+        assert_eq!(e.line, Some(2));
+        let e = Config::parse_merged(Some(p), "[streaming]\nrate_hz = 400\n").unwrap_err();
+        assert_eq!(e.key.as_deref(), Some("streaming.rate_hz"));
+        let e = Config::parse_merged(Some(p), "[collision]\ndead_time_ms = 9000\n").unwrap_err();
+        assert_eq!(e.key.as_deref(), Some("collision.dead_time_ms"));
     }
 
     #[test]

@@ -20,6 +20,7 @@ pub mod named;
 pub mod read;
 pub mod robi;
 pub mod setup;
+pub mod stream;
 pub mod types;
 pub mod v1;
 pub mod v2;
@@ -205,6 +206,54 @@ pub trait Family: Sync {
     fn calibrate_compass(&self) -> Option<Command> {
         None
     }
+    /// What `model` can stream and how fast ([`stream`]); `None` when the droid streams by
+    /// itself at its own rate (Robi 42's state frames) and nothing can be chosen.
+    fn stream_caps(&self, _model: Model) -> Option<stream::StreamCaps> {
+        None
+    }
+    /// The bytes of one sample's packet on the wire with `sensors` streaming (framing
+    /// included), for the BLE budget.
+    fn stream_sample_bytes(&self, _sensors: stream::SensorSet) -> usize {
+        0
+    }
+    /// The commands that make the droid stream as `plan` says (off included).
+    fn streaming(&self, _model: Model, _plan: &stream::StreamPlan) -> Vec<Command> {
+        Vec::new()
+    }
+    /// The commands that configure collision detection (and its notification) as `cfg`.
+    fn collision_detection(&self, _cfg: &crate::tuning::CollisionConfig) -> Vec<Command> {
+        Vec::new()
+    }
+    /// What a recorded drive command asked: speed 0..=255, heading, reverse; for a steering
+    /// family the steering −1..=1 as well (replay shows the commands of a capture).
+    fn read_drive(&self, _cmd: &Command) -> Option<RecordedDrive> {
+        None
+    }
+    /// The dome angle a recorded command set, degrees.
+    fn read_head(&self, _cmd: &Command) -> Option<f32> {
+        None
+    }
+    /// The lights a recorded command set: the main colour, the back light.
+    fn read_leds(&self, _model: Model, _cmd: &Command) -> Option<RecordedLeds> {
+        None
+    }
+}
+
+/// A drive command read back from a capture.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RecordedDrive {
+    pub speed: u8,
+    pub heading: Heading,
+    pub reverse: bool,
+    /// Steering robots: −1 full left ..= 1 full right.
+    pub steer: Option<f32>,
+}
+
+/// Lights read back from a capture (`None`: that light was not set by the command).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct RecordedLeds {
+    pub main: Option<[u8; 3]>,
+    pub back: Option<u8>,
 }
 
 /// Every family, in the order they are listed and detected.

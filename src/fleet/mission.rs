@@ -64,20 +64,22 @@ pub fn plan(fleet: &Fleet, items: &[Item]) -> Result<Plan, Vec<ScriptError>> {
     }
 }
 
-/// Run a planned mission on every droid of the fleet; one summary per droid, in fleet order.
-/// A droid that cannot connect within `opts.connect_timeout` fails the mission before a line
-/// is sent.
+/// Run a planned mission on every droid of the fleet, each with its own options (`opts` in
+/// fleet order; the last one's for droids past its end); one summary per droid, in fleet
+/// order. A droid that cannot connect within its `connect_timeout` fails the mission before
+/// a line is sent.
 pub async fn run(
     fleet: &Fleet,
     plan: &Plan,
-    opts: MissionOptions,
+    opts: &[MissionOptions],
     emit: FleetEmit,
 ) -> Result<Vec<Summary>, MissionError> {
+    let opts_of = |i: usize| opts.get(i).or(opts.last()).cloned().unwrap_or_default();
     // Connect everyone first (in parallel; a Bluetooth adapter's attempts take turns in
     // its gate), then start every droid's clock at once.
-    let connected = join_all(fleet.members().iter().map(|m| {
+    let connected = join_all(fleet.members().iter().enumerate().map(|(i, m)| {
         let s = m.session.clone();
-        let limit = opts.connect_timeout;
+        let limit = opts_of(i).connect_timeout;
         async move { mission::await_connected(&s, limit).await }
     }))
     .await;
@@ -89,7 +91,7 @@ pub async fn run(
     for (i, m) in fleet.members().iter().enumerate() {
         let emit = emit.clone();
         let one: mission::Emit = Arc::new(move |e| emit(i, e));
-        let d = DroidMission::start(&m.session, m.model, opts.clone(), one, start)
+        let d = DroidMission::start(&m.session, m.model, opts_of(i), one, start)
             .await
             .map_err(|e| MissionError(format!("{}: {e}", m.name)))?;
         droids.push(d);

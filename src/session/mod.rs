@@ -226,6 +226,8 @@ pub(crate) struct Shared {
     /// The last drive command written: the task's stop after a reconnect or on shutdown, and
     /// the panic hook's, keep its heading.
     pub last_drive: Mutex<Option<Command>>,
+    /// A new connect setup for the next (re)connect ([`SessionHandle::set_setup`]).
+    pub setup: Mutex<Option<Vec<Command>>>,
 }
 
 /// A handle to a running session. Cloning is cheap.
@@ -250,6 +252,7 @@ pub fn start(link: Box<dyn Link>, config: SessionConfig) -> SessionHandle {
         greeting: Mutex::new(Vec::new()),
         redo_setup: std::sync::atomic::AtomicBool::new(false),
         last_drive: Mutex::new(None),
+        setup: Mutex::new(None),
     });
     let (state_tx, state_rx) = watch::channel(LinkState::Connecting);
     let (events, _) = broadcast::channel(config.event_capacity.max(16));
@@ -358,6 +361,13 @@ impl SessionHandle {
             .redo_setup
             .store(true, std::sync::atomic::Ordering::SeqCst);
         self.shared.wake.notify_one();
+    }
+
+    /// Replace the connect setup run after every later (re)connect (and by
+    /// [`SessionHandle::redo_setup`]): what the operator changed while connected — streaming,
+    /// collision detection — survives a reconnect. Nothing is sent now.
+    pub fn set_setup(&self, setup: Vec<Command>) {
+        *lock(&self.shared.setup) = Some(setup);
     }
 
     /// What the droid announced once when the current connection opened (Robi 42's

@@ -165,6 +165,11 @@ impl Task {
             retries: SETUP_RETRIES,
             ..Queued::new(cmd)
         };
+        // A setup changed while connected (the streaming or collision settings) replaces the
+        // one the session started with, for every later (re)connect.
+        if let Some(new) = lock(&self.shared.setup).take() {
+            self.cfg.setup = new;
+        }
         let mut rest: Vec<Command> = self.cfg.setup.clone();
         let mut gate = Vec::new();
         if let Some(wake) = self.family.wake()

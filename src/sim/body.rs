@@ -18,6 +18,46 @@ const WARN_BEFORE_SLEEP: Duration = Duration::from_secs(10);
 /// The slowest contact with a wall that counts as a collision, cm/s.
 const MIN_IMPACT_CM_S: f32 = 10.0;
 
+/// The simulator's impact power per axis: the speed into the wall along that axis, cm/s, times
+/// this. A model of ours (no source gives the droids' power scale): with it the default
+/// thresholds (100 + 100 × speed) report a bump at a quarter of cruise speed, and a
+/// threshold of 250 ignores it.
+pub const POWER_PER_CM_S: f32 = 8.0;
+
+/// Collision detection's thresholds as configured: per axis, the power to exceed and the
+/// speed term added to it (`crate::family::collision`). World axes: x is a wall at ±x.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct CollisionThresholds {
+    pub x_threshold: u8,
+    pub y_threshold: u8,
+    pub x_speed: u8,
+    pub y_speed: u8,
+}
+
+impl Default for CollisionThresholds {
+    /// The common default of the reference clients (`droid-facts.md` §2: 90, 130, 90, 130).
+    fn default() -> Self {
+        CollisionThresholds {
+            x_threshold: 90,
+            y_threshold: 130,
+            x_speed: 90,
+            y_speed: 130,
+        }
+    }
+}
+
+impl CollisionThresholds {
+    /// Which axes an impact of `power` (x, y) at `speed` (0..=255 of top speed) trips: a
+    /// threshold of 0 turns its axis off; the speed term raises it as the droid goes faster.
+    pub fn tripped(&self, power: (f32, f32), speed: u8) -> (bool, bool) {
+        let over = |p: f32, t: u8, s: u8| t > 0 && p > t as f32 + s as f32 * speed as f32 / 255.0;
+        (
+            over(power.0, self.x_threshold, self.x_speed),
+            over(power.1, self.y_threshold, self.y_speed),
+        )
+    }
+}
+
 /// Everything observable about the simulated droid (for tests, `run` and the UI's sim panel).
 #[derive(Debug, Clone, PartialEq)]
 pub struct SimState {
@@ -99,6 +139,7 @@ pub struct Body {
     /// Collision detection on, and its dead time.
     pub(super) collision_notify: bool,
     pub(super) collision_dead_time: Duration,
+    pub(super) collision_thresholds: CollisionThresholds,
     last_collision: Option<Duration>,
     voltage_state: u8,
     animation_ends: Option<Duration>,
@@ -151,6 +192,7 @@ impl Body {
             next_sample: Duration::ZERO,
             collision_notify: false,
             collision_dead_time: Duration::from_millis(100),
+            collision_thresholds: CollisionThresholds::default(),
             last_collision: None,
             voltage_state: 1,
             animation_ends: None,
@@ -616,19 +658,38 @@ impl Body {
         if !self.collision_notify {
             return;
         }
+        // The detector: each axis's impact power against its threshold (a gentle bump under
+        // a hard threshold is felt by the body and not reported).
+        let speed = (v.abs() / self.cfg.top_speed_cm_s * 255.0).clamp(0.0, 255.0) as u8;
+        let power = (
+            if hit_x {
+                (hx * v).abs() * POWER_PER_CM_S
+            } else {
+                0.0
+            },
+            if hit_y {
+                (hy * v).abs() * POWER_PER_CM_S
+            } else {
+                0.0
+            },
+        );
+        let (x, y) = self.collision_thresholds.tripped(power, speed);
+        if !(x || y) {
+            return;
+        }
         // Impact deceleration over ~50 ms, in g (÷4096 on the wire).
         let g = |comp: f32| {
             AccelRaw((-(comp * v) / 0.05 / 981.0 * 4096.0).clamp(-32768.0, 32767.0) as i16)
         };
         let c = Collision {
             accel: [g(hx), g(hy), AccelRaw(4096)],
-            axis: CollisionAxis { x: hit_x, y: hit_y },
+            axis: CollisionAxis { x, y },
             power: [
-                (hx * v * 2.0).clamp(-32768.0, 32767.0) as i16,
-                (hy * v * 2.0).clamp(-32768.0, 32767.0) as i16,
+                (hx * v * POWER_PER_CM_S).clamp(-32768.0, 32767.0) as i16,
+                (hy * v * POWER_PER_CM_S).clamp(-32768.0, 32767.0) as i16,
                 0,
             ],
-            speed: (v.abs() / self.cfg.top_speed_cm_s * 255.0).clamp(0.0, 255.0) as u8,
+            speed,
             time_ms: now.as_millis() as u32,
         };
         self.events.push(SimEvent::Collision(c));

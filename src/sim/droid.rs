@@ -365,8 +365,16 @@ impl SimDroid {
                 ErrorCode::Success,
                 self.streaming.ext_mask.to_be_bytes().to_vec(),
             ),
+            // Configure Collision Detection: method, x and y thresholds, x and y speeds, dead
+            // time (10 ms), as spherov2 sends them (`droid-facts.md` §2).
             (Device::Sensor, 0x11) => {
                 self.body.collision_notify = d[0] != 0;
+                self.body.collision_thresholds = super::body::CollisionThresholds {
+                    x_threshold: d[1],
+                    y_threshold: d[2],
+                    x_speed: d[3],
+                    y_speed: d[4],
+                };
                 self.body.collision_dead_time = Duration::from_millis(d[5] as u64 * 10);
                 ok
             }

@@ -281,6 +281,12 @@ impl SimDroidV1 {
             // Configure Collision Detection: method, Xt, Xspd, Yt, Yspd, dead time (10 ms).
             (0x02, 0x12) => {
                 self.body.collision_notify = d[0] != 0;
+                self.body.collision_thresholds = super::body::CollisionThresholds {
+                    x_threshold: d[1],
+                    x_speed: d[2],
+                    y_threshold: d[3],
+                    y_speed: d[4],
+                };
                 self.body.collision_dead_time = Duration::from_millis(d[5] as u64 * 10);
                 ok
             }

@@ -20,6 +20,7 @@ pub mod picker;
 mod robi;
 mod robots;
 mod roster;
+mod scope;
 mod sensors;
 mod status;
 mod text;
@@ -55,6 +56,18 @@ pub fn draw(frame: &mut Frame, state: &AppState) {
     };
     let p = robots::make_room(p, want);
     status::render(frame, p.status, state);
+    if state.scope.visible {
+        // The scope takes everything below the status bar.
+        let area = frame.area();
+        let body = ratatui::layout::Rect {
+            y: p.status.bottom(),
+            height: area.height.saturating_sub(p.status.height),
+            ..area
+        };
+        scope::render(frame, body, state);
+        overlay::render(frame, state);
+        return;
+    }
     if let Some(r) = p.drive {
         drive::render(frame, r, state);
     }
@@ -96,7 +109,7 @@ pub fn draw(frame: &mut Frame, state: &AppState) {
         if frames {
             robi::io(frame, r, state);
         } else {
-            sensors::render(frame, r, &state.telemetry);
+            sensors::render(frame, r, &state.telemetry, &scope::rates(state));
         }
     }
     if let Some(r) = collisions_rect {

@@ -20,8 +20,15 @@ const ACCEL_RANGE_G: f32 = 2.0;
 const GYRO_RANGE: f32 = 500.0;
 const SPEED_RANGE: f32 = 200.0;
 
-pub fn render(frame: &mut Frame, area: Rect, t: &Telemetry) {
-    let block = theme::panel(" Sensors ");
+/// `rates`: the streaming rate requested and measured, in the title when it fits.
+pub fn render(frame: &mut Frame, area: Rect, t: &Telemetry, rates: &str) {
+    let title = format!(" Sensors {rates} ");
+    let title = if super::text::width(&title) + 2 <= area.width as usize {
+        title
+    } else {
+        " Sensors ".to_string()
+    };
+    let block = theme::panel(title);
     let inner = block.inner(area);
     frame.render_widget(block, area);
     let lines = if inner.height >= GAUGE_ROWS && inner.width >= 30 {

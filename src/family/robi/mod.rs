@@ -268,6 +268,18 @@ impl Family for Robi {
     fn setup(&self, _model: Model, _opts: &SetupOptions) -> Vec<Command> {
         Vec::new()
     }
+
+    /// The remote control as written: velocity, and the steering byte back to −1..=1
+    /// (the firmware's s' = 2(s/255 − 0.5), `droid-facts.md` §5).
+    fn read_drive(&self, c: &Command) -> Option<super::RecordedDrive> {
+        let Command::Robi(c) = c else { return None };
+        Some(super::RecordedDrive {
+            speed: c.velocity,
+            heading: Heading::default(),
+            reverse: false,
+            steer: Some(2.0 * (c.steering as f32 / 255.0 - 0.5)),
+        })
+    }
 }
 
 #[cfg(test)]

@@ -14,19 +14,19 @@ use super::{
     ReadOptions, Reader,
 };
 use crate::family::setup::SetupOptions;
+use crate::family::stream::{
+    BLE_SENSOR_NOTIFICATIONS_PER_S, STANDARD_RATES, SensorGroup, SensorSet, StreamCaps, StreamPlan,
+};
+use crate::family::{RecordedDrive, RecordedLeds};
 use crate::model::{Model, Protocol};
 use crate::protocol::decode::ErrorKind;
 use crate::protocol::v1::{self, Decoder, Source, StreamingConfig, cmd};
 use crate::script::{Action, LedGroup};
+use crate::tuning::CollisionConfig;
 use crate::units::Heading;
 
 /// The v1 family.
 pub struct V1;
-
-/// Sensors droidctl streams from a v1 droid: accelerometer and gyro (filtered), pitch/roll/
-/// yaw, and in MASK2 the odometer and velocity (`droid-facts.md` §4).
-pub const STREAM_MASK: u32 = 0x0007_0000 | 0x0000_E000 | 0x0000_1C00;
-pub const STREAM_MASK2: u32 = 0x0C00_0000 | 0x0180_0000;
 
 /// The v1 sample clock: rate = 400 / N Hz (`droid-facts.md` §4).
 pub fn divisor_for(interval_ms: u16) -> u16 {
@@ -308,27 +308,18 @@ impl Family for V1 {
         Some(cmd::set_temporary_option_flags(v1::catalog::TEMP_OPTION_STOP_ON_DISCONNECT).into())
     }
 
-    fn setup(&self, _model: Model, opts: &SetupOptions) -> Vec<Command> {
+    fn setup(&self, model: Model, opts: &SetupOptions) -> Vec<Command> {
         let mut out: Vec<Command> = vec![
             // Stop on disconnect first: from here on a dropped link stops the droid.
             cmd::set_temporary_option_flags(v1::catalog::TEMP_OPTION_STOP_ON_DISCONNECT).into(),
             // The first answer proves the link; it also resets the inactivity timer.
             cmd::ping().into(),
             cmd::set_stabilization(true).into(),
-            // Equal x and y values sidestep the disputed parameter order (§2, §4).
-            cmd::configure_collision_detection(1, 100, 100, 100, 100, 10).into(),
         ];
-        if opts.streaming_interval_ms > 0 {
-            out.push(
-                cmd::set_data_streaming(
-                    divisor_for(opts.streaming_interval_ms),
-                    1,
-                    STREAM_MASK,
-                    0,
-                    Some(STREAM_MASK2),
-                )
-                .into(),
-            );
+        out.extend(self.collision_detection(&opts.collision));
+        let plan = opts.stream_plan(model);
+        if plan.is_on() {
+            out.extend(self.streaming(model, &plan));
         }
         out.push(cmd::set_power_notification(true).into());
         out
@@ -349,4 +340,112 @@ impl Family for V1 {
             cmd::set_back_led(0).into(),
         ]
     }
+
+    fn stream_caps(&self, _model: Model) -> Option<StreamCaps> {
+        Some(StreamCaps {
+            groups: SensorSet::of(&[
+                SensorGroup::Attitude,
+                SensorGroup::Accelerometer,
+                SensorGroup::Gyro,
+                SensorGroup::Locator,
+                SensorGroup::Velocity,
+            ]),
+            // 400/N Hz: N = 400, 40, 20, 8, 4 make the standard rates exactly.
+            rates: &STANDARD_RATES,
+            notifications_per_s: BLE_SENSOR_NOTIFICATIONS_PER_S,
+        })
+    }
+
+    /// An async packet `FF FE 03 DLEN(2) … CHK` around one i16 per value, one frame each.
+    fn stream_sample_bytes(&self, sensors: SensorSet) -> usize {
+        6 + 2 * stream_config(sensors, 1).values_per_frame()
+    }
+
+    /// Set Data Streaming with the groups' MASK and MASK2 at 400/N Hz, one frame per packet;
+    /// off is N = 0 with empty masks (`droid-facts.md` §4: MASK 0 = off).
+    fn streaming(&self, _model: Model, plan: &StreamPlan) -> Vec<Command> {
+        let s = if plan.is_on() {
+            stream_config(plan.sensors, divisor_for(plan.interval_ms))
+        } else {
+            StreamingConfig::default()
+        };
+        vec![
+            cmd::set_data_streaming(
+                s.n,
+                s.m.max(1),
+                s.mask,
+                0,
+                (s.mask2 != 0).then_some(s.mask2),
+            )
+            .into(),
+        ]
+    }
+
+    /// Configure Collision Detection in the catalogue's order `[method, Xt, Xspd, Yt, Yspd,
+    /// dead]` (the Sphero API 1.50 order, `droid-facts.md` §4); v1 reports collisions once
+    /// configured.
+    fn collision_detection(&self, c: &CollisionConfig) -> Vec<Command> {
+        vec![
+            cmd::configure_collision_detection(
+                c.method(),
+                c.x_threshold,
+                c.x_speed,
+                c.y_threshold,
+                c.y_speed,
+                c.dead_time_units(),
+            )
+            .into(),
+        ]
+    }
+
+    /// Roll `[speed, heading u16, state]`; reversing is rolling toward the opposite heading,
+    /// so a capture shows a heading, never a reverse.
+    fn read_drive(&self, c: &Command) -> Option<RecordedDrive> {
+        let Command::V1(c) = c else { return None };
+        match (c.did, c.cid, c.data.as_slice()) {
+            (0x02, 0x30, [speed, h0, h1, state]) => Some(RecordedDrive {
+                speed: if *state == 0 { 0 } else { *speed },
+                heading: Heading::wrapped(u16::from_be_bytes([*h0, *h1]) as f64),
+                reverse: false,
+                steer: None,
+            }),
+            _ => None,
+        }
+    }
+
+    fn read_leds(&self, _model: Model, c: &Command) -> Option<RecordedLeds> {
+        let Command::V1(c) = c else { return None };
+        match (c.did, c.cid, c.data.as_slice()) {
+            (0x02, 0x20, [r, g, b, ..]) => Some(RecordedLeds {
+                main: Some([*r, *g, *b]),
+                back: None,
+            }),
+            (0x02, 0x21, [b]) => Some(RecordedLeds {
+                main: None,
+                back: Some(*b),
+            }),
+            _ => None,
+        }
+    }
+}
+
+/// The masks of `sensors` at divisor `n`, one frame per packet, forever.
+fn stream_config(sensors: SensorSet, n: u16) -> StreamingConfig {
+    use crate::protocol::v1::sensor::mask;
+    let mut s = StreamingConfig {
+        n,
+        m: 1,
+        ..StreamingConfig::default()
+    };
+    for g in sensors.iter() {
+        match g {
+            SensorGroup::Attitude => s.mask |= mask::IMU,
+            SensorGroup::Accelerometer => s.mask |= mask::ACCEL,
+            SensorGroup::Gyro => s.mask |= mask::GYRO,
+            SensorGroup::Locator => s.mask2 |= mask::LOCATOR,
+            SensorGroup::Velocity => s.mask2 |= mask::VELOCITY,
+            SensorGroup::HeadAngle => {}
+        }
+    }
+    s
 }

@@ -10,6 +10,10 @@ use super::{
     ReadOptions, Reader,
 };
 use crate::family::setup::SetupOptions;
+use crate::family::stream::{
+    BLE_SENSOR_NOTIFICATIONS_PER_S, STANDARD_RATES, SensorGroup, SensorSet, StreamCaps, StreamPlan,
+};
+use crate::family::{RecordedDrive, RecordedLeds};
 use crate::model::{Model, Protocol};
 use crate::protocol::decode::ErrorKind;
 use crate::protocol::v2::catalog::targets;
@@ -19,6 +23,7 @@ use crate::protocol::v2::wire::{
 };
 use crate::protocol::v2::{self, Decoder, Flags, Kind, Notification, cmd, describe};
 use crate::script::{Action, LedGroup};
+use crate::tuning::CollisionConfig;
 use crate::units::{HeadAngle, Heading};
 
 /// The v2 family.
@@ -372,36 +377,16 @@ impl Family for V2 {
         if model.has_dome() {
             out.push(cmd::set_head_position(HeadAngle::clamped(0.0)));
         }
-        // Equal x and y values sidestep the disputed parameter order (`droid-facts.md` §2).
-        out.push(cmd::configure_collision_detection(
-            CollisionMethod::Accelerometer,
-            100,
-            100,
-            100,
-            100,
-            10,
-        ));
-        out.push(cmd::enable_collision_detected_notify(true));
-        if opts.streaming_interval_ms > 0 && !model.streams_by_service() {
-            // Reconfigure as the reference clients do: mask with interval 0, extended mask,
-            // then the mask again with the real interval (`droid-facts.md` §2).
-            let mut s = StreamingConfig::full(opts.streaming_interval_ms);
-            if model.has_compass() {
-                // BOLT's ambient light (extended bit 18, spherov2 `toy/bolt.py`).
-                s.ext_mask |= 0x0004_0000;
-            }
-            out.push(cmd::set_sensor_streaming_mask(0, 0, Mask(s.mask)));
-            out.push(cmd::set_extended_sensor_streaming_mask(Mask(s.ext_mask)));
-            out.push(cmd::set_sensor_streaming_mask(
-                s.interval_ms,
-                0,
-                Mask(s.mask),
-            ));
-        }
-        out.push(cmd::enable_battery_state_changed_notify(true));
-        out.push(cmd::enable_battery_voltage_state_change_notify(true));
         let mut out: Vec<Command> = out.into_iter().map(Command::from).collect();
-        out.extend(robots::setup_extra(model, opts.streaming_interval_ms));
+        out.extend(self.collision_detection(&opts.collision));
+        let plan = opts.stream_plan(model);
+        if plan.is_on() {
+            out.extend(self.streaming(model, &plan));
+        }
+        out.push(cmd::enable_battery_state_changed_notify(true).into());
+        out.push(cmd::enable_battery_voltage_state_change_notify(true).into());
+        // RVR's motor notifications and colour detection (its streaming is `streaming`).
+        out.extend(robots::setup_extra(model, 0));
         out
     }
 
@@ -442,4 +427,150 @@ impl Family for V2 {
     fn calibrate_compass(&self) -> Option<Command> {
         Some(cmd::magnetometer_calibrate_to_north().into())
     }
+
+    fn stream_caps(&self, model: Model) -> Option<StreamCaps> {
+        let mut groups = SensorSet::of(&[
+            SensorGroup::Attitude,
+            SensorGroup::Accelerometer,
+            SensorGroup::Gyro,
+            SensorGroup::Locator,
+            SensorGroup::Velocity,
+        ]);
+        if model.has_dome() {
+            groups.insert(SensorGroup::HeadAngle);
+        }
+        Some(StreamCaps {
+            groups,
+            // The interval is in ms: every standard rate is exact.
+            rates: &STANDARD_RATES,
+            notifications_per_s: BLE_SENSOR_NOTIFICATIONS_PER_S,
+        })
+    }
+
+    /// SOP, flags, DID, CID, SEQ, checksum and EOP around one f32 per value (escapes aside:
+    /// they are rare in sensor floats).
+    fn stream_sample_bytes(&self, sensors: SensorSet) -> usize {
+        7 + 4 * stream_config(sensors, 1).value_count()
+    }
+
+    /// As the reference clients reconfigure: the mask with interval 0, the extended mask,
+    /// then the mask again with the real interval (`droid-facts.md` §2). Off is all three
+    /// with empty masks.
+    fn streaming(&self, model: Model, plan: &StreamPlan) -> Vec<Command> {
+        if model.streams_by_service() {
+            // RVR streams through its streaming service, not masks: its fixed tokens at the
+            // period asked for, or stopped.
+            return if plan.is_on() {
+                robots::rvr_streaming(plan.interval_ms)
+            } else {
+                robots::rvr_streaming_off()
+            };
+        }
+        let mut s = if plan.is_on() {
+            stream_config(plan.sensors, plan.interval_ms)
+        } else {
+            StreamingConfig::default()
+        };
+        if plan.is_on() && model.has_compass() {
+            // BOLT's ambient light (extended bit 18, spherov2 `toy/bolt.py`).
+            s.ext_mask |= 0x0004_0000;
+        }
+        vec![
+            cmd::set_sensor_streaming_mask(0, 0, Mask(s.mask)).into(),
+            cmd::set_extended_sensor_streaming_mask(Mask(s.ext_mask)).into(),
+            cmd::set_sensor_streaming_mask(s.interval_ms, 0, Mask(s.mask)).into(),
+        ]
+    }
+
+    /// Configure Collision Detection `[method, x_threshold, y_threshold, x_speed, y_speed,
+    /// dead_time]` (spherov2's order, `droid-facts.md` §2), then its notification.
+    fn collision_detection(&self, c: &CollisionConfig) -> Vec<Command> {
+        let method = if c.enabled {
+            CollisionMethod::Accelerometer
+        } else {
+            CollisionMethod::None
+        };
+        vec![
+            cmd::configure_collision_detection(
+                method,
+                c.x_threshold,
+                c.y_threshold,
+                c.x_speed,
+                c.y_speed,
+                c.dead_time_units(),
+            )
+            .into(),
+            cmd::enable_collision_detected_notify(c.enabled).into(),
+        ]
+    }
+
+    fn read_drive(&self, c: &Command) -> Option<RecordedDrive> {
+        let Command::V2(c) = c else { return None };
+        match (c.did, c.cid, c.data.as_slice()) {
+            (0x16, 0x07, [speed, h0, h1, flags]) => {
+                let reverse = DriveFlags::from_bits_truncate(*flags).contains(DriveFlags::BACKWARD);
+                let sent = Heading::wrapped(u16::from_be_bytes([*h0, *h1]) as f64);
+                // A reverse drive carries the heading + 180° (see `drive`).
+                let heading = if reverse { sent.reversed() } else { sent };
+                Some(RecordedDrive {
+                    speed: *speed,
+                    heading,
+                    reverse,
+                    steer: None,
+                })
+            }
+            _ => None,
+        }
+    }
+
+    fn read_head(&self, c: &Command) -> Option<f32> {
+        let Command::V2(c) = c else { return None };
+        match (c.did, c.cid, c.data.as_slice()) {
+            (0x17, 0x0F, [a, b, c, d]) => Some(f32::from_be_bytes([*a, *b, *c, *d])),
+            _ => None,
+        }
+    }
+
+    /// The 16-bit mask LED command: one value per set bit, ascending (`droid-facts.md` §2).
+    /// R2: bits 0..2 front RGB (the main colour); BB-9E: 0..2 body RGB, 3 the aiming light.
+    fn read_leds(&self, model: Model, c: &Command) -> Option<RecordedLeds> {
+        let Command::V2(c) = c else { return None };
+        if (c.did, c.cid) != (0x1A, 0x0E) || c.data.len() < 2 {
+            return None;
+        }
+        let mask = u16::from_be_bytes([c.data[0], c.data[1]]);
+        let mut values = c.data[2..].iter().copied();
+        let mut by_bit = [None; 16];
+        for (bit, slot) in by_bit.iter_mut().enumerate() {
+            if mask & (1 << bit) != 0 {
+                *slot = values.next();
+            }
+        }
+        let main = match (by_bit[0], by_bit[1], by_bit[2]) {
+            (Some(r), Some(g), Some(b)) => Some([r, g, b]),
+            _ => None,
+        };
+        let back = if model.has_legs() { None } else { by_bit[3] };
+        (main.is_some() || back.is_some()).then_some(RecordedLeds { main, back })
+    }
+}
+
+/// The masks of `sensors` at `interval_ms`.
+fn stream_config(sensors: SensorSet, interval_ms: u16) -> StreamingConfig {
+    use crate::protocol::v2::sensor::mask;
+    let mut s = StreamingConfig {
+        interval_ms,
+        ..StreamingConfig::default()
+    };
+    for g in sensors.iter() {
+        match g {
+            SensorGroup::Attitude => s.mask |= mask::ATTITUDE,
+            SensorGroup::Accelerometer => s.mask |= mask::ACCELEROMETER,
+            SensorGroup::Locator => s.mask |= mask::LOCATOR,
+            SensorGroup::Velocity => s.mask |= mask::VELOCITY,
+            SensorGroup::Gyro => s.ext_mask |= mask::EXT_GYRO,
+            SensorGroup::HeadAngle => s.ext_mask |= mask::EXT_HEAD_ANGLE,
+        }
+    }
+    s
 }

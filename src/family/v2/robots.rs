@@ -177,6 +177,14 @@ pub fn rvr_streaming(period_ms: u16) -> Vec<Command> {
     out.into_iter().map(Command::from).collect()
 }
 
+/// RVR's streaming service stopped on both processors.
+pub fn rvr_streaming_off() -> Vec<Command> {
+    [Processor::Primary, Processor::Secondary]
+        .into_iter()
+        .map(|p| cmd::stop_streaming_service().to(p).into())
+        .collect()
+}
+
 /// What the newer robots add to the connect setup: RVR's motor notifications, colour
 /// detection and streaming service; BOLT's ambient light rides on the extended mask.
 pub fn setup_extra(model: Model, streaming_interval_ms: u16) -> Vec<Command> {

@@ -5,6 +5,7 @@
 mod filter;
 mod help;
 mod palette;
+mod settings;
 
 use crate::app::state::{AppState, Overlay};
 use ratatui::Frame;
@@ -22,5 +23,7 @@ pub fn render(frame: &mut Frame, s: &AppState) {
         }
         Overlay::Filter { input } => filter::render(frame, area, input, &s.log.filter),
         Overlay::Matrix { input } => filter::matrix(frame, area, input),
+        Overlay::Channels { selected } => settings::channels(frame, area, s, *selected),
+        Overlay::Tuning { selected, draft } => settings::tuning(frame, area, s, *selected, draft),
     }
 }

@@ -1,0 +1,189 @@
+//! The scope (issue 22 point 1): the chosen channels against time over the last 10 s to
+//! 2 min, in place of the panels and the log. A header says the window, paused or live, the
+//! axes' mode and the streaming rate requested beside the one measured; a legend names each
+//! channel with its colour and unit; the chart plots them with a time axis in seconds before
+//! now.
+//!
+//! Each channel is reduced to two points per braille column before drawing
+//! ([`crate::telemetry::history::History::series`]), so a frame costs the same at 1 and at
+//! 100 samples a second.
+
+use super::text::num;
+use super::theme;
+use crate::app::state::AppState;
+use crate::telemetry::history::Channel;
+use ratatui::Frame;
+use ratatui::layout::Rect;
+use ratatui::style::{Color, Style};
+use ratatui::symbols::Marker;
+use ratatui::text::{Line, Span};
+use ratatui::widgets::{Axis, Chart, Dataset, GraphType, Paragraph};
+
+/// Colours of the channels, in the order they are listed.
+const COLOURS: [Color; 8] = [
+    Color::Cyan,
+    Color::Yellow,
+    Color::Magenta,
+    Color::Green,
+    Color::LightRed,
+    Color::LightBlue,
+    Color::White,
+    Color::LightGreen,
+];
+
+pub fn colour(i: usize) -> Color {
+    COLOURS[i % COLOURS.len()]
+}
+
+/// The streaming rate requested and measured: `10/s, measured 9.8/s`.
+pub fn rates(s: &AppState) -> String {
+    let measured = s
+        .telemetry
+        .history
+        .measured_rate(s.now)
+        .map_or("-".to_string(), |r| format!("{}/s", num(r, 1)));
+    format!("{}, measured {measured}", s.monitor.requested())
+}
+
+pub fn render(frame: &mut Frame, area: Rect, s: &AppState) {
+    let v = &s.scope;
+    let window = v.window();
+    let mut title = vec![
+        Span::styled(" Scope ", theme::bold()),
+        Span::styled(format!("last {} s ", window.as_secs()), theme::label()),
+    ];
+    if v.paused_at.is_some() {
+        title.push(Span::styled(" PAUSED ", theme::attention()));
+        title.push(Span::raw(" "));
+    }
+    title.push(Span::styled(
+        if v.autoscale { "auto " } else { "fixed " },
+        theme::dim(),
+    ));
+    let block = theme::panel(Line::from(title)).title_bottom(
+        Line::from(Span::styled(
+            format!(" stream {} ", rates(s)),
+            theme::reported(),
+        ))
+        .right_aligned(),
+    );
+    let inner = block.inner(area);
+    frame.render_widget(block, area);
+    if inner.height < 3 || inner.width < 20 {
+        return;
+    }
+    let legend = Rect { height: 1, ..inner };
+    let chart = Rect {
+        y: inner.y + 1,
+        height: inner.height - 1,
+        ..inner
+    };
+    let mut spans = Vec::new();
+    for (i, c) in v.channels.iter().enumerate() {
+        spans.push(Span::styled("■ ", Style::new().fg(colour(i))));
+        spans.push(Span::raw(c.label()));
+        spans.push(Span::raw("  "));
+    }
+    if spans.is_empty() {
+        spans.push(Span::styled(
+            "no channels chosen: the channels key (Tab) opens the list",
+            theme::dim(),
+        ));
+    }
+    frame.render_widget(Paragraph::new(Line::from(spans)), legend);
+
+    let end = v.end(s.now);
+    let from = end.saturating_sub(window);
+    // A bucket per cell column: its lowest and highest point fill the cell top to bottom.
+    let columns = chart.width.saturating_sub(8).max(1) as usize;
+    let series: Vec<(Channel, Vec<(f64, f64)>)> = v
+        .channels
+        .iter()
+        .copied()
+        .zip(
+            s.telemetry
+                .history
+                .series_of(&v.channels, from, end, columns),
+        )
+        .collect();
+    let (lo, hi) = y_bounds(v.autoscale, &series);
+    let datasets: Vec<Dataset> = series
+        .iter()
+        .enumerate()
+        .map(|(i, (_, pts))| {
+            Dataset::default()
+                .marker(Marker::Braille)
+                .graph_type(GraphType::Line)
+                .style(Style::new().fg(colour(i)))
+                .data(pts)
+        })
+        .collect();
+    let secs = window.as_secs_f64();
+    let mut units: Vec<&str> = v
+        .channels
+        .iter()
+        .map(|c| c.unit())
+        .filter(|u| !u.is_empty())
+        .collect();
+    units.dedup();
+    let x = Axis::default()
+        .title(Span::styled("s", theme::dim()))
+        .style(theme::dim())
+        .bounds([-secs, 0.0])
+        .labels([
+            Span::raw(format!("-{}", secs as u64)),
+            Span::raw(format!("-{}", (secs / 2.0) as u64)),
+            Span::raw("0"),
+        ]);
+    let y = Axis::default()
+        .title(Span::styled(units.join(","), theme::dim()))
+        .style(theme::dim())
+        .bounds([lo, hi])
+        .labels([
+            Span::raw(short(lo)),
+            Span::raw(short((lo + hi) / 2.0)),
+            Span::raw(short(hi)),
+        ]);
+    frame.render_widget(Chart::new(datasets).x_axis(x).y_axis(y), chart);
+}
+
+/// A number for an axis label, at most 6 cells.
+fn short(v: f64) -> String {
+    let a = v.abs();
+    if a >= 1000.0 {
+        format!("{:.0}", v)
+    } else if a >= 10.0 {
+        format!("{:.1}", v)
+    } else {
+        format!("{:.2}", v)
+    }
+}
+
+/// The y range: the data's (with a margin) when autoscaled, else the channels' sensor spans.
+fn y_bounds(autoscale: bool, series: &[(Channel, Vec<(f64, f64)>)]) -> (f64, f64) {
+    let fixed = || {
+        series.iter().fold(None, |acc: Option<(f64, f64)>, (c, _)| {
+            let (a, b) = c.range();
+            Some(acc.map_or((a, b), |(lo, hi)| (lo.min(a), hi.max(b))))
+        })
+    };
+    let data = series
+        .iter()
+        .flat_map(|(_, p)| p.iter().map(|(_, v)| *v))
+        .filter(|v| v.is_finite())
+        .fold(None, |acc: Option<(f64, f64)>, v| {
+            Some(acc.map_or((v, v), |(lo, hi)| (lo.min(v), hi.max(v))))
+        });
+    let (lo, hi) = match (autoscale, data) {
+        (true, Some((lo, hi))) => {
+            let pad = ((hi - lo) * 0.05).max(if hi == lo { 1.0 } else { 0.0 });
+            (lo - pad, hi + pad)
+        }
+        _ => fixed().unwrap_or((-1.0, 1.0)),
+    };
+    if hi > lo {
+        (lo, hi)
+    } else {
+        (lo - 1.0, lo + 1.0)
+    }
+}
