@@ -4,6 +4,7 @@
 //! touches a clock, a radio or a terminal sits at the edges.
 
 pub mod app;
+pub mod bridge;
 pub mod capture;
 pub mod cli;
 pub mod config;

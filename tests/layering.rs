@@ -36,6 +36,8 @@ const RANKS: &[(&str, u32)] = &[
     ("teleop", 50),
     // `serve --record` writes captures.
     ("relay", 55),
+    // Other programs drive a fleet through JSON lines and MQTT.
+    ("bridge", 57),
     ("app", 60),
     // `droidctl plot`: pictures of runs (samples from missions and captures).
     ("plot", 65),

@@ -2,6 +2,7 @@
 //! dispatches, and maps errors to exit codes: 2 for bad input (usage, malformed values),
 //! 1 for failures at run time.
 
+pub mod bridge;
 pub mod completions;
 pub mod config_cmd;
 pub mod connect;
@@ -59,6 +60,9 @@ pub enum Command {
     /// Relay droids to other machines over TCP (spherov2.py's relay protocol): Bluetooth
     /// droids, or simulated ones with `--sim`. Clients use `--remote HOST`.
     Serve(serve::ServeArgs),
+    /// Let other programs drive droids through JSON: lines on stdin/stdout (`--stdio`) or
+    /// MQTT topics per droid (`--mqtt mqtt://HOST`); see README, "A bridge for other programs".
+    Bridge(bridge::BridgeArgs),
     /// Show or create the configuration file.
     #[command(subcommand)]
     Config(config_cmd::ConfigCmd),
@@ -143,6 +147,10 @@ pub fn main() -> i32 {
         Some(Command::Serve(args)) => {
             drop(out);
             serve::run(args)
+        }
+        Some(Command::Bridge(args)) => {
+            drop(out);
+            bridge::run(args)
         }
         Some(Command::Sim(args)) => {
             drop(out);

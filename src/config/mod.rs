@@ -6,6 +6,7 @@
 //! ([`keys`]), gamepad buttons into [`PadBindings`] ([`pad`]). The layers above take those
 //! types and never see a binding's name.
 
+pub mod bridge;
 pub mod keys;
 pub mod monitor;
 pub mod pad;
@@ -118,6 +119,7 @@ struct RawConfig {
     fleet: FleetSettings,
     streaming: monitor::Streaming,
     collision: monitor::Collision,
+    bridge: bridge::Bridge,
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -135,6 +137,8 @@ pub struct Config {
     pub streaming: monitor::Streaming,
     /// `[collision]`: collision detection's parameters.
     pub collision: monitor::Collision,
+    /// `[bridge]`: `droidctl bridge`'s command timeout, telemetry rate and MQTT settings.
+    pub bridge: bridge::Bridge,
 }
 
 /// Why a config could not be used: where and what.
@@ -320,6 +324,7 @@ impl Config {
             fleet: raw.fleet,
             streaming: raw.streaming,
             collision: raw.collision,
+            bridge: raw.bridge,
         };
         cfg.validate()?;
         Ok(cfg)
@@ -362,6 +367,7 @@ impl Config {
             );
         }
         monitor::validate(&self.streaming, &self.collision)?;
+        bridge::validate(&self.bridge)?;
         for (k, v) in [
             ("release_first_ms", self.keyboard.release_first_ms),
             ("release_repeat_ms", self.keyboard.release_repeat_ms),

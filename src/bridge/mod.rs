@@ -1,0 +1,585 @@
+//! A bridge for other programs (issue 20): one versioned JSON interface at the level of
+//! "drive", "lights" and "telemetry", over standard input/output ([`stdio`]) and MQTT
+//! ([`mqtt`]), driving a [`Fleet`].
+//!
+//! - [`schema`] (sans-IO): commands parsed into typed values, what goes out serialized; the
+//!   same contract is `assets/bridge.schema.json`.
+//! - [`motion`] (sans-IO): each droid's held drive or twist and the command timeout.
+//! - This module: the [`Bridge`] that carries commands to the droids through their families
+//!   (a command a robot cannot do is an error naming the robot and the capability) and ticks
+//!   the command timeout under `tokio::time`; [`feeds`] what each droid reports (samples,
+//!   collisions, battery, link state).
+//! - The transports at the edges hand lines or payloads to [`Bridge::handle`] and take
+//!   [`Out`] values from the channel [`Bridge::start`] returns.
+
+pub mod feeds;
+pub mod motion;
+pub mod mqtt;
+pub mod schema;
+pub mod stdio;
+
+use crate::fleet::Fleet;
+use crate::model::Model;
+use crate::session::Slot;
+use crate::units::Heading;
+use motion::{Holder, Kinematics, Motion, Tick, Wheels};
+use schema::{Cmd, ErrorCode, Out, Request};
+use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+use tokio::sync::mpsc;
+use tokio::task::JoinHandle;
+use tokio::time::Instant;
+
+/// How many objects wait for the transport at most; past that, telemetry is dropped
+/// (counted) rather than the bridge waiting for a slow reader.
+pub const OUT_CAPACITY: usize = 4096;
+
+/// Requests (lights, sounds …) waiting for one droid's answer at most; more are refused
+/// as `busy`.
+pub const MAX_IN_FLIGHT: usize = 32;
+
+/// What the bridge is told by the command line and the config's `[bridge]`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Settings {
+    /// A droid driven over the bridge stops when no drive or twist came for this long.
+    pub command_timeout: Duration,
+    /// Telemetry samples per second per droid.
+    pub telemetry_hz: u16,
+    /// How often the battery is read.
+    pub battery_poll: Duration,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Settings {
+            command_timeout: Duration::from_millis(600),
+            telemetry_hz: 10,
+            battery_poll: Duration::from_secs(10),
+        }
+    }
+}
+
+/// A droid's speed at 255 and, for a steering robot, its yaw rate at full lock. No spec
+/// gives either: these are the simulator's figures (`sim::SimConfig`: 160 cm/s for the
+/// Spheros, 30 cm/s for Robi 42), so a twist on a simulated droid moves as asked; a real
+/// droid's may differ.
+pub fn kinematics(model: Model) -> Kinematics {
+    let family = crate::family::for_model(model);
+    Kinematics {
+        steers: family.steers(),
+        can_reverse: family.can_reverse(),
+        top_speed_m_s: if family.steers() { 0.30 } else { 1.60 },
+        full_lock_rad_s: 1.0,
+    }
+}
+
+/// The MQTT topic level of a droid's name: letters, digits, `-` and `_` kept, anything else
+/// (spaces, `/`, `+`, `#`) becomes `-` (`Robi 42` → `Robi-42`).
+pub fn topic_name(name: &str) -> String {
+    let t: String = name
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
+                c
+            } else {
+                '-'
+            }
+        })
+        .collect();
+    if t.is_empty() { "droid".into() } else { t }
+}
+
+struct DroidState {
+    holder: Holder,
+    setup: crate::family::setup::SetupOptions,
+}
+
+/// The bridge: a fleet, each droid's held motion and setup, and where objects go out.
+pub struct Bridge {
+    fleet: Fleet,
+    settings: Settings,
+    start: Instant,
+    droids: Vec<Mutex<DroidState>>,
+    in_flight: Vec<AtomicUsize>,
+    out: mpsc::Sender<Out>,
+    dropped: AtomicU64,
+    tasks: Mutex<Vec<JoinHandle<()>>>,
+    /// The latest battery reading per droid, for samples (the fleet's fold has only what
+    /// the droid notifies).
+    battery: Vec<Mutex<Option<f32>>>,
+}
+
+fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+impl Bridge {
+    /// Start the bridge on `fleet` (each droid's connect setup in `setups`, in the fleet's
+    /// order): its control tick and each droid's feeds. What goes out arrives on the
+    /// receiver, a link object per droid first.
+    pub fn start(
+        fleet: Fleet,
+        setups: Vec<crate::family::setup::SetupOptions>,
+        settings: Settings,
+    ) -> (Arc<Bridge>, mpsc::Receiver<Out>) {
+        let (tx, rx) = mpsc::channel(OUT_CAPACITY);
+        let droids = fleet
+            .members()
+            .iter()
+            .enumerate()
+            .map(|(i, m)| {
+                Mutex::new(DroidState {
+                    holder: Holder::new(kinematics(m.model), settings.command_timeout),
+                    setup: setups.get(i).copied().unwrap_or_default(),
+                })
+            })
+            .collect();
+        let n = fleet.len();
+        let bridge = Arc::new(Bridge {
+            fleet,
+            settings,
+            start: Instant::now(),
+            droids,
+            in_flight: (0..n).map(|_| AtomicUsize::new(0)).collect(),
+            out: tx,
+            dropped: AtomicU64::new(0),
+            tasks: Mutex::new(Vec::new()),
+            battery: (0..n).map(|_| Mutex::new(None)).collect(),
+        });
+        let mut tasks = vec![tokio::spawn(control(Arc::downgrade(&bridge)))];
+        for i in 0..n {
+            tasks.extend(feeds::spawn(&bridge, i));
+        }
+        *lock(&bridge.tasks) = tasks;
+        (bridge, rx)
+    }
+
+    pub fn fleet(&self) -> &Fleet {
+        &self.fleet
+    }
+
+    pub fn settings(&self) -> &Settings {
+        &self.settings
+    }
+
+    /// Milliseconds since the bridge started (the `t_ms` of what it sends).
+    pub fn t_ms(&self) -> u64 {
+        self.start.elapsed().as_millis() as u64
+    }
+
+    /// Objects dropped because the transport did not keep up.
+    pub fn dropped(&self) -> u64 {
+        self.dropped.load(Ordering::Relaxed)
+    }
+
+    /// The `hello` object: the droids and the settings that bind a client.
+    pub fn hello(&self) -> Out {
+        Out::Hello {
+            droidctl: env!("CARGO_PKG_VERSION"),
+            droids: self
+                .fleet
+                .members()
+                .iter()
+                .map(|m| schema::DroidInfo {
+                    droid: m.name.clone(),
+                    model: m.model.id(),
+                    robot: m.model.display_name(),
+                    origin: m.origin.clone(),
+                    topic: topic_name(&m.name),
+                })
+                .collect(),
+            command_timeout_ms: self.settings.command_timeout.as_millis() as u64,
+            telemetry_hz: self.settings.telemetry_hz,
+        }
+    }
+
+    /// Send `o` to the transport; dropped (counted) when it does not keep up.
+    pub fn emit(&self, o: Out) {
+        if self.out.try_send(o).is_err() {
+            let n = self.dropped.fetch_add(1, Ordering::Relaxed) + 1;
+            if n.is_power_of_two() {
+                tracing::warn!(dropped = n, "bridge: the transport does not keep up");
+            }
+        }
+    }
+
+    /// One command as received (a line, a payload). `default` is the droid a transport
+    /// addresses by itself (the MQTT topic's); a `droid` in the command must agree with it.
+    /// Never waits: commands that need the droid's answer reply when it comes.
+    pub fn handle(self: &Arc<Self>, text: &[u8], default: Option<usize>) {
+        match schema::parse(text) {
+            Ok(req) => self.execute(req, default),
+            Err(mut e) => {
+                if e.droid.is_none() {
+                    e.droid = default
+                        .and_then(|i| self.fleet.member(i))
+                        .map(|m| m.name.clone());
+                }
+                self.emit(Out::error(*e))
+            }
+        }
+    }
+
+    /// The droid a request is for.
+    fn target(&self, req: &Request, default: Option<usize>) -> Result<usize, String> {
+        let names = || self.fleet.names().join(", ");
+        match (&req.droid, default) {
+            (Some(asked), d) => {
+                let i = self.fleet.find(asked).map_err(|e| e.to_string())?;
+                match d {
+                    Some(d) if d != i => Err(format!(
+                        "this is {}'s topic: {asked:?} is another droid (send it to that droid's topic)",
+                        self.fleet.member(d).map_or("?", |m| m.name.as_str())
+                    )),
+                    _ => Ok(i),
+                }
+            }
+            (None, Some(d)) => Ok(d),
+            (None, None) if self.fleet.len() == 1 => Ok(0),
+            (None, None) => Err(format!(
+                "this bridge drives several droids: say which with \"droid\" (one of {})",
+                names()
+            )),
+        }
+    }
+
+    /// Carry out a parsed request.
+    pub fn execute(self: &Arc<Self>, req: Request, default: Option<usize>) {
+        if req.cmd == Cmd::Estop {
+            self.estop();
+            let droid = default
+                .and_then(|i| self.fleet.member(i))
+                .map(|m| m.name.clone());
+            self.reply(&req, droid, None);
+            return;
+        }
+        let i = match self.target(&req, default) {
+            Ok(i) => i,
+            Err(message) => {
+                return self.emit(Out::Error {
+                    id: req.id.clone(),
+                    droid: req.droid.clone(),
+                    cmd: Some(req.cmd.verb().into()),
+                    code: ErrorCode::NoSuchDroid,
+                    robot: None,
+                    capability: None,
+                    error: message,
+                });
+            }
+        };
+        let Some(m) = self.fleet.member(i) else {
+            return;
+        };
+        let (family, model, name) = (m.family, m.model, m.name.clone());
+        let unsupported = |capability: &'static str, what: String| {
+            self.emit(Out::Error {
+                id: req.id.clone(),
+                droid: Some(name.clone()),
+                cmd: Some(req.cmd.verb().into()),
+                code: ErrorCode::Unsupported,
+                robot: Some(model.display_name()),
+                capability: Some(capability),
+                error: format!("{} ({name}) {what}", model.display_name()),
+            })
+        };
+        let now = self.start.elapsed();
+        match &req.cmd {
+            Cmd::Drive { speed, heading } => {
+                let m = Motion::Drive {
+                    speed: *speed,
+                    heading: heading.degrees(),
+                };
+                let w = lock(&self.droids[i]).holder.command(now, m);
+                match w {
+                    Ok(w) => self.write_wheels(i, w),
+                    Err(_) => return unsupported("reverse", "cannot roll backwards".into()),
+                }
+            }
+            Cmd::Twist { linear, angular } => {
+                let m = Motion::Twist {
+                    linear: *linear,
+                    angular: *angular,
+                };
+                let w = lock(&self.droids[i]).holder.command(now, m);
+                match w {
+                    Ok(w) => self.write_wheels(i, w),
+                    Err(_) => {
+                        return unsupported(
+                            "reverse",
+                            "cannot roll backwards: its linear speed is 0 or more".into(),
+                        );
+                    }
+                }
+            }
+            Cmd::Stop => {
+                lock(&self.droids[i]).holder.stop();
+                let _ = self.fleet.command(i, crate::fleet::FleetCommand::Stop);
+            }
+            Cmd::Estop => {}
+            Cmd::Head(a) => match family.head(*a).filter(|_| model.has_dome()) {
+                Some(c) => self
+                    .fleet
+                    .members()
+                    .get(i)
+                    .map_or((), |m| m.session.set(Slot::Head, c)),
+                None => return unsupported("dome", "has no dome to turn".into()),
+            },
+            Cmd::Stance(a) => match family.stance(*a).filter(|_| model.has_legs()) {
+                Some(c) => return self.request(req, i, vec![c], None),
+                None => return unsupported("legs", "has no legs to change stance".into()),
+            },
+            Cmd::Lights(a) => match family.led(model, a) {
+                Some(c) => return self.request(req, i, vec![c], None),
+                None => {
+                    let group = match a {
+                        crate::script::Action::LedRgb(g, _)
+                        | crate::script::Action::LedBrightness(g, _) => g,
+                        _ => &crate::script::LedGroup::Front,
+                    };
+                    let kind = match a {
+                        crate::script::Action::LedRgb(..) => "colour",
+                        _ => "brightness",
+                    };
+                    return unsupported(
+                        "lights",
+                        format!("has no {} light to set by {kind}", group_name(*group)),
+                    );
+                }
+            },
+            Cmd::Animation(id) => match family.animation(*id) {
+                Some(c) => return self.request(req, i, vec![c], None),
+                None => return unsupported("animations", "has no animations".into()),
+            },
+            Cmd::Sound(id) => match family.sound(*id) {
+                Some(c) => return self.request(req, i, vec![c], None),
+                None => return unsupported("sounds", "cannot play sounds".into()),
+            },
+            Cmd::Matrix(a) => match family.matrix(a).filter(|_| model.has_matrix()) {
+                Some(c) => return self.request(req, i, vec![c], None),
+                None => return unsupported("matrix", "has no LED matrix".into()),
+            },
+            Cmd::Stream { rate_hz, sensors } => {
+                let ask = crate::tuning::StreamRequest {
+                    rate_hz: *rate_hz,
+                    sensors: sensors.unwrap_or_else(|| crate::family::stream::all_groups(model)),
+                };
+                let Some(plan) = crate::family::stream::plan_for(model, ask) else {
+                    return unsupported(
+                        "streaming",
+                        "streams by itself: its rate and sensors cannot be chosen".into(),
+                    );
+                };
+                let setup = {
+                    let mut d = lock(&self.droids[i]);
+                    d.setup = d.setup.with_plan(&plan);
+                    d.setup
+                };
+                let cmds = crate::family::stream::reconfigure(model, &plan, &setup.collision);
+                // Every reconnect keeps what the client set.
+                if let Some(m) = self.fleet.member(i) {
+                    m.session
+                        .set_setup(crate::family::setup::connect_setup(model, &setup));
+                }
+                return self.request(req, i, cmds, plan.note.clone());
+            }
+        }
+        self.reply(&req, Some(name), None);
+    }
+
+    /// The reply to a command with an `id` (none without).
+    fn reply(&self, req: &Request, droid: Option<String>, note: Option<String>) {
+        if let Some(id) = &req.id {
+            self.emit(Out::Reply {
+                id: id.clone(),
+                droid,
+                cmd: req.cmd.verb(),
+                ok: true,
+                note,
+            });
+        }
+    }
+
+    /// Send `cmds` to droid `i` in order, each waiting for the droid's answer, then reply
+    /// (or say what failed).
+    fn request(
+        self: &Arc<Self>,
+        req: Request,
+        i: usize,
+        cmds: Vec<crate::family::Command>,
+        note: Option<String>,
+    ) {
+        let Some(m) = self.fleet.member(i) else {
+            return;
+        };
+        let name = m.name.clone();
+        let busy = self.in_flight[i].fetch_add(1, Ordering::Relaxed) >= MAX_IN_FLIGHT;
+        if busy {
+            self.in_flight[i].fetch_sub(1, Ordering::Relaxed);
+            return self.emit(Out::Error {
+                id: req.id,
+                droid: Some(name),
+                cmd: Some(req.cmd.verb().into()),
+                code: ErrorCode::Busy,
+                robot: None,
+                capability: None,
+                error: format!(
+                    "{MAX_IN_FLIGHT} commands are waiting for this droid's answers: wait for their replies"
+                ),
+            });
+        }
+        let session = m.session.clone();
+        let bridge = self.clone();
+        tokio::spawn(async move {
+            let mut failed = None;
+            for c in cmds {
+                let what = c.name();
+                if let Err(e) = session.request(c).await {
+                    failed = Some(format!("{name}: {what}: {e}"));
+                    break;
+                }
+            }
+            bridge.in_flight[i].fetch_sub(1, Ordering::Relaxed);
+            match failed {
+                None => bridge.reply(&req, Some(name), note),
+                Some(error) => bridge.emit(Out::Error {
+                    id: req.id,
+                    droid: Some(name),
+                    cmd: Some(req.cmd.verb().into()),
+                    code: ErrorCode::Droid,
+                    robot: None,
+                    capability: None,
+                    error,
+                }),
+            }
+        });
+    }
+
+    /// Write the wheels' command into droid `i`'s drive slot.
+    fn write_wheels(&self, i: usize, w: Wheels) {
+        let Some(m) = self.fleet.member(i) else {
+            return;
+        };
+        let c = match w {
+            Wheels::Roll {
+                speed,
+                heading,
+                reverse,
+            } => m
+                .family
+                .drive(speed, Heading::new(heading).unwrap_or_default(), reverse),
+            Wheels::Steer { speed, turn } => match m.family.steer(speed, turn) {
+                Some(c) => c,
+                None => m.family.drive(speed, Heading::default(), false),
+            },
+        };
+        m.session.set(Slot::Drive, c);
+    }
+
+    /// Every droid stops now; nothing stays held.
+    pub fn estop(&self) {
+        self.fleet.estop_all();
+        for d in &self.droids {
+            lock(d).holder.stop();
+        }
+    }
+
+    /// Stop the droids of `which` that are being driven over the bridge (the client's
+    /// stream or the broker is gone), saying why.
+    pub fn release(&self, which: impl IntoIterator<Item = usize>, reason: &'static str) {
+        for i in which {
+            let Some(m) = self.fleet.member(i) else {
+                continue;
+            };
+            let driving = {
+                let mut d = lock(&self.droids[i]);
+                let was = d.holder.is_driving();
+                d.holder.stop();
+                was
+            };
+            if driving {
+                m.session.stop_now(m.family);
+                self.emit(Out::Stopped {
+                    droid: m.name.clone(),
+                    reason,
+                    message: match reason {
+                        "input_closed" => "the command stream ended: stopped".into(),
+                        "broker_lost" => "the connection to the broker was lost: stopped".into(),
+                        _ => "stopped".into(),
+                    },
+                });
+            }
+        }
+    }
+
+    /// One tick of every droid's command timeout and held motion.
+    fn tick(&self) {
+        let now = self.start.elapsed();
+        for (i, d) in self.droids.iter().enumerate() {
+            let t = lock(d).holder.tick(now);
+            match t {
+                Tick::Nothing => {}
+                Tick::Send(w) => self.write_wheels(i, w),
+                Tick::TimedOut => {
+                    if let Some(m) = self.fleet.member(i) {
+                        m.session.stop_now(m.family);
+                        self.emit(Out::Stopped {
+                            droid: m.name.clone(),
+                            reason: "timeout",
+                            message: format!(
+                                "no drive or twist for {} ms: stopped",
+                                self.settings.command_timeout.as_millis()
+                            ),
+                        });
+                    }
+                }
+            }
+        }
+    }
+
+    /// Stop the feeds and the tick, then stop and disconnect every droid.
+    pub async fn shutdown(&self) {
+        for t in lock(&self.tasks).drain(..) {
+            t.abort();
+        }
+        for d in &self.droids {
+            lock(d).holder.stop();
+        }
+        self.fleet.shutdown_all(|_| Vec::new()).await;
+    }
+
+    fn set_battery(&self, i: usize, v: f32) {
+        if let Some(b) = self.battery.get(i) {
+            *lock(b) = Some(v);
+        }
+    }
+
+    fn battery(&self, i: usize) -> Option<f32> {
+        self.battery.get(i).and_then(|b| *lock(b))
+    }
+}
+
+fn group_name(g: crate::script::LedGroup) -> &'static str {
+    match g {
+        crate::script::LedGroup::Front => "front",
+        crate::script::LedGroup::Back => "back",
+        crate::script::LedGroup::Logic => "logic",
+        crate::script::LedGroup::Holo => "holo",
+    }
+}
+
+/// The control tick: every [`motion::TICK`] while the bridge lives.
+async fn control(bridge: std::sync::Weak<Bridge>) {
+    let mut every = tokio::time::interval(motion::TICK);
+    every.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
+    loop {
+        every.tick().await;
+        match bridge.upgrade() {
+            Some(b) => b.tick(),
+            None => return,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,161 @@
+//! The bridge over standard input/output: one JSON command per line in, one JSON object per
+//! line out (`hello` first, then link states, telemetry, replies and errors as they come).
+//! Any language drives a droid with a pipe.
+//!
+//! A bad line gets one error line and changes nothing else. A line longer than
+//! [`schema::MAX_COMMAND_BYTES`] is refused without being kept (the reader holds at most that
+//! much). When the input ends (the client closed its end, or died), the droids it was
+//! driving are stopped and [`run`] returns.
+
+use super::Bridge;
+use super::schema::{self, BadCommand, ErrorCode, Out};
+use std::sync::Arc;
+use tokio::io::{AsyncBufRead, AsyncBufReadExt, AsyncWrite, AsyncWriteExt};
+use tokio::sync::mpsc;
+
+/// Why the bridge over stdio ended.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum End {
+    /// The input ended.
+    InputClosed,
+    /// The output cannot be written (the reader went away).
+    OutputClosed(String),
+    /// Told to stop (a signal).
+    Stopped,
+}
+
+/// One line from `input`, at most `max` bytes kept: `Ok(None)` at the end, `Err(n)` for a
+/// line of `n` bytes that was too long (skipped to its end).
+pub async fn read_line<R: AsyncBufRead + Unpin>(
+    input: &mut R,
+    max: usize,
+    line: &mut Vec<u8>,
+) -> std::io::Result<Option<Result<(), usize>>> {
+    line.clear();
+    let mut total = 0usize;
+    loop {
+        let buf = input.fill_buf().await?;
+        if buf.is_empty() {
+            return Ok(match total {
+                0 => None,
+                n if n > max => Some(Err(n)),
+                _ => Some(Ok(())),
+            });
+        }
+        let (chunk, done) = match memchr::memchr(b'\n', buf) {
+            Some(at) => (&buf[..at], at + 1),
+            None => (buf, buf.len()),
+        };
+        total += chunk.len();
+        if total <= max {
+            line.extend_from_slice(chunk);
+        }
+        let ended = done > chunk.len();
+        input.consume(done);
+        if ended {
+            return Ok(Some(if total > max { Err(total) } else { Ok(()) }));
+        }
+    }
+}
+
+/// Run the bridge over `input` and `output` until the input ends, the output fails or
+/// `stopped` completes; then stop the droids being driven (saying so when the input
+/// ended), stop and disconnect every droid, and write what is left.
+pub async fn run<R, W>(
+    bridge: Arc<Bridge>,
+    mut rx: mpsc::Receiver<Out>,
+    mut input: R,
+    mut output: W,
+    stopped: impl std::future::Future<Output = ()>,
+) -> End
+where
+    R: AsyncBufRead + Unpin,
+    W: AsyncWrite + Unpin + Send + 'static,
+{
+    let hello = bridge.hello();
+    let (finish, mut finished) = tokio::sync::oneshot::channel::<()>();
+    let mut writer = tokio::spawn(async move {
+        let mut text = hello.to_json();
+        text.push('\n');
+        output.write_all(text.as_bytes()).await?;
+        output.flush().await?;
+        let mut last = false;
+        loop {
+            text.clear();
+            tokio::select! {
+                o = rx.recv() => match o {
+                    Some(o) => text.push_str(&o.to_json()),
+                    None => last = true,
+                },
+                _ = &mut finished, if !last => last = true,
+            }
+            if !text.is_empty() {
+                text.push('\n');
+            }
+            // Whatever else is waiting goes in the same write.
+            while (last || text.len() < 64 * 1024)
+                && let Ok(o) = rx.try_recv()
+            {
+                text.push_str(&o.to_json());
+                text.push('\n');
+            }
+            output.write_all(text.as_bytes()).await?;
+            output.flush().await?;
+            if last {
+                return Ok::<(), std::io::Error>(());
+            }
+        }
+    });
+    let reader = async {
+        let mut line = Vec::with_capacity(256);
+        loop {
+            match read_line(&mut input, schema::MAX_COMMAND_BYTES, &mut line).await {
+                Ok(None) => return End::InputClosed,
+                Err(e) => {
+                    tracing::warn!(error = %e, "bridge: stdin cannot be read");
+                    return End::InputClosed;
+                }
+                Ok(Some(Err(n))) => bridge.emit(Out::error(BadCommand {
+                    id: None,
+                    droid: None,
+                    cmd: None,
+                    code: ErrorCode::BadJson,
+                    message: format!(
+                        "a line of {n} bytes: a command is at most {} bytes",
+                        schema::MAX_COMMAND_BYTES
+                    ),
+                })),
+                Ok(Some(Ok(()))) => {
+                    let text = line.strip_suffix(b"\r").unwrap_or(&line);
+                    // Blank lines are ignored (a client's keep-alive).
+                    if !text.iter().all(u8::is_ascii_whitespace) {
+                        bridge.handle(text, None);
+                    }
+                }
+            }
+        }
+    };
+    let mut writer_done = None;
+    let end = tokio::select! {
+        end = reader => end,
+        r = &mut writer => {
+            let why = match &r {
+                Ok(Ok(())) => "the output ended".to_string(),
+                Ok(Err(e)) => e.to_string(),
+                Err(e) => e.to_string(),
+            };
+            writer_done = Some(r);
+            End::OutputClosed(why)
+        }
+        _ = stopped => End::Stopped,
+    };
+    if end == End::InputClosed {
+        bridge.release(0..bridge.fleet().len(), "input_closed");
+    }
+    bridge.shutdown().await;
+    if writer_done.is_none() {
+        let _ = finish.send(());
+        let _ = tokio::time::timeout(std::time::Duration::from_secs(2), writer).await;
+    }
+    end
+}

@@ -1,0 +1,330 @@
+//! `droidctl bridge --stdio | --mqtt URL [--sim …|--name …|--remote …]`: other programs drive
+//! droids through one JSON interface (see [`crate::bridge`]), over standard input/output or
+//! through an MQTT broker.
+//!
+//! As `serve` keeps its relay on loopback unless told otherwise, the bridge takes commands
+//! only through a broker on this machine unless `--allow-remote` says so: anyone who can
+//! publish to the broker can drive the droids.
+
+use super::CliError;
+use crate::bridge::mqtt::{BrokerUrl, MqttSettings};
+use crate::bridge::{self, Bridge, Settings};
+use crate::fleet::Fleet;
+use clap::Args;
+use std::path::PathBuf;
+use std::time::Duration;
+
+#[derive(Debug, Args)]
+#[command(group(clap::ArgGroup::new("transport").required(true).args(["stdio", "mqtt"])))]
+pub struct BridgeArgs {
+    /// One JSON command per line on stdin; telemetry, replies and errors as JSON lines on
+    /// stdout. The droids stop when stdin ends.
+    #[arg(long)]
+    pub stdio: bool,
+    /// Through an MQTT broker: mqtt://HOST[:PORT] (1883), mqtts://HOST[:PORT] (TLS, 8883);
+    /// topics droidctl/DROID/cmd, …/telemetry, …/collision, …/battery, …/state, …/reply.
+    #[arg(long, value_name = "URL")]
+    pub mqtt: Option<BrokerUrl>,
+    /// Bridge simulated droids: r2d2 (default), bb8, robi …; several share one room:
+    /// --sim r2d2,bb8,robi.
+    #[arg(long, num_args = 0..=1, default_missing_value = "r2d2", value_name = "MODEL[,MODEL…]")]
+    pub sim: Option<String>,
+    #[command(flatten)]
+    pub ble: super::connect::BleArgs,
+    /// Stop a droid when no drive or twist came for this long (ms; config bridge.command_timeout_ms, 600).
+    #[arg(long, value_name = "MS", value_parser = clap::value_parser!(u64).range(100..=10_000))]
+    pub command_timeout: Option<u64>,
+    /// Telemetry samples per second per droid (config bridge.telemetry_hz, 10).
+    #[arg(long, value_name = "HZ", value_parser = clap::value_parser!(u16).range(1..=100))]
+    pub rate: Option<u16>,
+    /// MQTT QoS of commands, telemetry and replies: 0, 1 or 2 (config bridge.qos, 0).
+    #[arg(long, value_name = "QOS", value_parser = clap::value_parser!(u8).range(0..=2), requires = "mqtt")]
+    pub qos: Option<u8>,
+    /// MQTT: the first topic level (config bridge.topic_prefix, droidctl).
+    #[arg(long, value_name = "PREFIX", requires = "mqtt")]
+    pub topic_prefix: Option<String>,
+    /// MQTT: the client id's start (each droid's connection adds its number and name).
+    #[arg(long, value_name = "ID", requires = "mqtt")]
+    pub client_id: Option<String>,
+    /// MQTT: user name (or in the URL: mqtt://USER@HOST).
+    #[arg(long, value_name = "USER", requires = "mqtt")]
+    pub username: Option<String>,
+    /// MQTT: a file holding the password (its first line); or set DROIDCTL_MQTT_PASSWORD.
+    #[arg(long, value_name = "FILE", requires = "mqtt")]
+    pub password_file: Option<PathBuf>,
+    /// MQTT over TLS: the CA certificate (PEM) the broker's certificate must chain to
+    /// (without it, the system's).
+    #[arg(long, value_name = "PEM", requires = "mqtt")]
+    pub ca_file: Option<PathBuf>,
+    /// Take commands through a broker on another machine: anyone who can publish to it can
+    /// drive your droids (use TLS and a password).
+    #[arg(long, requires = "mqtt")]
+    pub allow_remote: bool,
+}
+
+/// Why a broker beyond loopback is refused, or the warning when it is allowed.
+pub fn exposure(url: &BrokerUrl, loopback: bool, allowed: bool) -> Result<Option<String>, String> {
+    if loopback {
+        return Ok(None);
+    }
+    if !allowed {
+        return Err(format!(
+            "{url} is not on this machine: anyone who can publish to that broker could drive \
+             your droids. Say --allow-remote if that is what you want (with TLS, mqtts://, and \
+             a password), or run a broker here (mqtt://localhost)."
+        ));
+    }
+    let mut missing = Vec::new();
+    if !url.tls {
+        missing.push("encryption (mqtts://)");
+    }
+    if url.username.is_none() {
+        missing.push("a user name and password");
+    }
+    Ok(Some(if missing.is_empty() {
+        format!(
+            "droidctl: warning: taking commands through {url}: whoever the broker lets publish \
+             to droidctl/…/cmd can drive your droids."
+        )
+    } else {
+        format!(
+            "droidctl: warning: taking commands through {url} without {}: anyone who reaches \
+             the broker can drive your droids. Use a trusted network only.",
+            missing.join(" or ")
+        )
+    }))
+}
+
+fn settings(args: &BridgeArgs, config: &crate::config::Config) -> Settings {
+    let b = &config.bridge;
+    Settings {
+        command_timeout: Duration::from_millis(
+            args.command_timeout.unwrap_or(b.command_timeout_ms),
+        ),
+        telemetry_hz: args.rate.unwrap_or(b.telemetry_hz),
+        battery_poll: Duration::from_secs(b.battery_poll_s),
+    }
+}
+
+fn mqtt_settings(
+    args: &BridgeArgs,
+    url: &BrokerUrl,
+    config: &crate::config::Config,
+) -> Result<MqttSettings, CliError> {
+    let b = &config.bridge;
+    let prefix = args
+        .topic_prefix
+        .clone()
+        .unwrap_or_else(|| b.topic_prefix.clone());
+    crate::config::bridge::check_prefix(&prefix).map_err(CliError::usage)?;
+    let password = match &args.password_file {
+        Some(p) => Some(
+            std::fs::read_to_string(p)
+                .map_err(|e| CliError::usage(format!("cannot read {}: {e}", p.display())))?
+                .lines()
+                .next()
+                .unwrap_or("")
+                .to_string(),
+        ),
+        None => std::env::var("DROIDCTL_MQTT_PASSWORD").ok(),
+    };
+    let ca_pem = match &args.ca_file {
+        Some(p) if url.tls => Some(
+            std::fs::read(p)
+                .map_err(|e| CliError::usage(format!("cannot read {}: {e}", p.display())))?,
+        ),
+        Some(_) => {
+            return Err(CliError::usage("--ca-file is for TLS: use an mqtts:// URL"));
+        }
+        None => None,
+    };
+    let client_id = args
+        .client_id
+        .clone()
+        .unwrap_or_else(|| format!("droidctl-{}", std::process::id()));
+    Ok(MqttSettings {
+        url: url.clone(),
+        qos: args.qos.unwrap_or(b.qos),
+        prefix,
+        client_id,
+        keepalive: Duration::from_secs(b.keepalive_s),
+        username: args.username.clone(),
+        password,
+        ca_pem,
+    })
+}
+
+pub fn run(args: BridgeArgs) -> Result<i32, CliError> {
+    let config = crate::config::Config::load(&crate::config::config_path())
+        .map_err(|e| CliError::usage(e.to_string()))?;
+    let sims = match &args.sim {
+        Some(list) => super::fleet::sim_models(list)?,
+        None => Vec::new(),
+    };
+    if sims.is_empty()
+        && args.ble.name.is_empty()
+        && args.ble.remote.is_empty()
+        && args.ble.address.is_none()
+    {
+        return Err(CliError::usage(
+            "say which droids to bridge: --sim MODEL[,MODEL…], --name NAME (repeatable), \
+             --remote [NAME@]HOST (repeatable) or --address ADDR",
+        ));
+    }
+    let settings = settings(&args, &config);
+    let mqtt = match &args.mqtt {
+        Some(url) => Some(mqtt_settings(&args, url, &config)?),
+        None => None,
+    };
+    let _ = crate::logging::init();
+    let rt = super::realtime_runtime()?;
+    let result = rt.block_on(async {
+        if let Some(m) = &mqtt {
+            let loopback = bridge::mqtt::is_loopback(&m.url.host, m.url.port)
+                .await
+                .map_err(CliError::failure)?;
+            if let Some(w) =
+                exposure(&m.url, loopback, args.allow_remote).map_err(CliError::usage)?
+            {
+                eprintln!("{w}");
+            }
+        }
+        let fleet = start_fleet(&sims, &args.ble, &config).await?;
+        let setups = fleet
+            .members()
+            .iter()
+            .map(|m| crate::family::setup::from_config(m.model, &config).0)
+            .collect();
+        for m in fleet.members() {
+            eprintln!(
+                "droidctl: bridge: {} ({}, {})",
+                m.name,
+                m.model.display_name(),
+                m.origin
+            );
+        }
+        let (bridge, rx) = Bridge::start(fleet, setups, settings);
+        let stopped = async {
+            let sig = super::signals::terminated().await;
+            eprintln!("droidctl: {sig}: stopping every droid");
+        };
+        match mqtt {
+            None => {
+                let end = bridge::stdio::run(
+                    bridge.clone(),
+                    rx,
+                    tokio::io::BufReader::new(tokio::io::stdin()),
+                    tokio::io::stdout(),
+                    stopped,
+                )
+                .await;
+                if let bridge::stdio::End::OutputClosed(why) = &end {
+                    eprintln!("droidctl: bridge: stdout closed ({why}): every droid stopped");
+                }
+                Ok(0)
+            }
+            Some(m) => {
+                eprintln!(
+                    "droidctl: bridge: through {} as {}/DROID/cmd (command timeout {} ms)",
+                    m.url,
+                    m.prefix,
+                    bridge.settings().command_timeout.as_millis()
+                );
+                let r = bridge::mqtt::run(bridge.clone(), rx, m, Duration::from_secs(10), stopped)
+                    .await;
+                bridge.shutdown().await;
+                r.map(|()| 0).map_err(CliError::failure)
+            }
+        }
+    });
+    // Stdin's reader thread may still wait for a line: do not wait for it.
+    rt.shutdown_timeout(Duration::from_millis(200));
+    result
+}
+
+/// The fleet the arguments name (one droid behind a relay by name, or by address, as the
+/// one-droid commands find it).
+async fn start_fleet(
+    sims: &[crate::model::Model],
+    ble: &super::connect::BleArgs,
+    config: &crate::config::Config,
+) -> Result<Fleet, CliError> {
+    let found = if sims.is_empty()
+        && !super::fleet::is_fleet(0, ble)
+        && (ble.address.is_some() || !ble.remote.is_empty())
+    {
+        let c = ble.connect(super::connect::Chooser::Prompt).await?;
+        let origin = match ble.remote.first() {
+            Some(r) => format!("relay {}", r.relay),
+            None => "Bluetooth".into(),
+        };
+        vec![super::fleet::Found {
+            link: c.link,
+            model: c.model,
+            name: c.name,
+            origin,
+        }]
+    } else {
+        super::fleet::find_all(sims, ble, config).await?
+    };
+    let specs = found
+        .into_iter()
+        .map(|f| {
+            let s = super::fleet::session_config(f.model, config, true);
+            f.into_spec(s)
+        })
+        .collect();
+    Ok(Fleet::start(specs))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_broker_beyond_loopback_needs_allow_remote() {
+        let url: BrokerUrl = "mqtt://broker.lan".parse().unwrap();
+        assert!(exposure(&url, true, false).unwrap().is_none());
+        let e = exposure(&url, false, false).unwrap_err();
+        assert!(e.contains("--allow-remote"), "{e}");
+        let w = exposure(&url, false, true).unwrap().unwrap();
+        assert!(w.contains("encryption") && w.contains("password"), "{w}");
+        let safe: BrokerUrl = "mqtts://u@broker.lan".parse().unwrap();
+        let w = exposure(&safe, false, true).unwrap().unwrap();
+        assert!(!w.contains("without"), "{w}");
+    }
+
+    #[test]
+    fn broker_urls() {
+        let u: BrokerUrl = "mqtt://127.0.0.1:1999".parse().unwrap();
+        assert_eq!((u.host.as_str(), u.port, u.tls), ("127.0.0.1", 1999, false));
+        let u: BrokerUrl = "mqtts://ann:secret@[::1]".parse().unwrap();
+        assert_eq!((u.host.as_str(), u.port, u.tls), ("::1", 8883, true));
+        assert_eq!(
+            (u.username.as_deref(), u.password.as_deref()),
+            (Some("ann"), Some("secret"))
+        );
+        assert_eq!(u.to_string(), "mqtts://[::1]:8883", "no password shown");
+        let u: BrokerUrl = "localhost".parse().unwrap();
+        assert_eq!((u.host.as_str(), u.port), ("localhost", 1883));
+        for bad in [
+            "http://x",
+            "mqtt://",
+            "mqtt://h:port",
+            "mqtt://h:0",
+            "mqtt://[::1",
+        ] {
+            assert!(bad.parse::<BrokerUrl>().is_err(), "{bad}");
+        }
+    }
+
+    #[tokio::test]
+    async fn loopback_names() {
+        use crate::bridge::mqtt::is_loopback;
+        assert!(is_loopback("127.0.0.1", 1883).await.unwrap());
+        assert!(is_loopback("::1", 1883).await.unwrap());
+        assert!(is_loopback("localhost", 1883).await.unwrap());
+        assert!(!is_loopback("192.168.1.10", 1883).await.unwrap());
+        assert!(!is_loopback("0.0.0.0", 1883).await.unwrap());
+    }
+}
