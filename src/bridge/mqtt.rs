@@ -205,8 +205,8 @@ pub enum BrokerState {
     Connected,
     /// Lost (or never made), retrying; why.
     Lost(String),
-    /// The broker refused the first connection (credentials, authorization): not retried
-    /// before the bridge has ever been connected.
+    /// The broker refused the first connection (credentials, authorization, TLS): not
+    /// retried before the bridge has ever been connected.
     Refused(String),
 }
 
@@ -373,7 +373,14 @@ async fn connection(
                         "droidctl: {name}: lost the broker ({why}): stopped; reconnecting, the droid stays connected"
                     );
                 }
-                if !ever && matches!(e, rumqttc::ConnectionError::ConnectionRefused(_)) {
+                // A refusal or an untrusted certificate will not mend by itself.
+                if !ever
+                    && matches!(
+                        e,
+                        rumqttc::ConnectionError::ConnectionRefused(_)
+                            | rumqttc::ConnectionError::Tls(_)
+                    )
+                {
                     state.send_replace(BrokerState::Refused(why));
                     return;
                 }

@@ -216,7 +216,7 @@ fn parse_text(text: &[u8]) -> Result<Request, Refused> {
 fn valid_id(v: &Value) -> bool {
     match v {
         Value::String(s) => s.chars().count() <= MAX_ID_CHARS,
-        Value::Number(n) => n.is_i64() || n.is_u64(),
+        Value::Number(_) => integer(v).is_some(),
         _ => false,
     }
 }
@@ -341,7 +341,7 @@ impl Fields<'_> {
 
     fn int(&self, k: &str, lo: i64, hi: i64) -> Result<i64, Refusal> {
         let v = self.get(k)?;
-        v.as_i64()
+        integer(v)
             .filter(|n| (lo..=hi).contains(n))
             .ok_or_else(|| field_err(format!("`{k}` is an integer in {lo}..={hi}, not {v}")))
     }
@@ -369,9 +369,8 @@ impl Fields<'_> {
         match parts {
             Some(a) => {
                 for (o, c) in out.iter_mut().zip(a) {
-                    *o = c
-                        .as_u64()
-                        .filter(|c| *c <= 255)
+                    *o = integer(c)
+                        .filter(|c| (0..=255).contains(c))
                         .ok_or_else(|| field_err(format!("`{k}` is [R, G, B], each 0..=255")))?
                         as u8;
                 }
@@ -476,11 +475,34 @@ impl Fields<'_> {
             .as_array()
             .filter(|a| a.len() <= 16)
             .and_then(|a| a.iter().map(Value::as_str).collect());
-        let names = names.ok_or_else(|| {
-            field_err("`sensors` is a list of sensor group names, e.g. [\"attitude\", \"gyro\"]")
+        let known = |n: &&str| {
+            *n == "accel"
+                || crate::tuning::SensorGroup::ALL
+                    .iter()
+                    .any(|g| g.name() == *n)
+        };
+        let names = names.filter(|n| n.iter().all(known)).ok_or_else(|| {
+            let all: Vec<&str> = crate::tuning::SensorGroup::ALL
+                .iter()
+                .map(|g| g.name())
+                .collect();
+            field_err(format!(
+                "`sensors` is a list of sensor group names: {}",
+                all.join(", ")
+            ))
         })?;
         SensorSet::parse(names).map(Some).map_err(field_err)
     }
+}
+
+/// A JSON integer, also written as a float with no fraction (`100.0`, as Python's `json`
+/// writes a float), as JSON Schema counts it.
+fn integer(v: &Value) -> Option<i64> {
+    v.as_i64().or_else(|| {
+        v.as_f64()
+            .filter(|f| f.fract() == 0.0 && f.abs() < 9.0e15)
+            .map(|f| f as i64)
+    })
 }
 
 /// A droid as `hello` lists it.

@@ -38,27 +38,27 @@ pub struct BridgeArgs {
     #[arg(long, value_name = "HZ", value_parser = clap::value_parser!(u16).range(1..=100))]
     pub rate: Option<u16>,
     /// MQTT QoS of commands, telemetry and replies: 0, 1 or 2 (config bridge.qos, 0).
-    #[arg(long, value_name = "QOS", value_parser = clap::value_parser!(u8).range(0..=2), requires = "mqtt")]
+    #[arg(long, value_name = "QOS", value_parser = clap::value_parser!(u8).range(0..=2))]
     pub qos: Option<u8>,
     /// MQTT: the first topic level (config bridge.topic_prefix, droidctl).
-    #[arg(long, value_name = "PREFIX", requires = "mqtt")]
+    #[arg(long, value_name = "PREFIX")]
     pub topic_prefix: Option<String>,
     /// MQTT: the client id's start (each droid's connection adds its number and name).
-    #[arg(long, value_name = "ID", requires = "mqtt")]
+    #[arg(long, value_name = "ID")]
     pub client_id: Option<String>,
     /// MQTT: user name (or in the URL: mqtt://USER@HOST).
-    #[arg(long, value_name = "USER", requires = "mqtt")]
+    #[arg(long, value_name = "USER")]
     pub username: Option<String>,
     /// MQTT: a file holding the password (its first line); or set DROIDCTL_MQTT_PASSWORD.
-    #[arg(long, value_name = "FILE", requires = "mqtt")]
+    #[arg(long, value_name = "FILE")]
     pub password_file: Option<PathBuf>,
     /// MQTT over TLS: the CA certificate (PEM) the broker's certificate must chain to
     /// (without it, the system's).
-    #[arg(long, value_name = "PEM", requires = "mqtt")]
+    #[arg(long, value_name = "PEM")]
     pub ca_file: Option<PathBuf>,
     /// Take commands through a broker on another machine: anyone who can publish to it can
     /// drive your droids (use TLS and a password).
-    #[arg(long, requires = "mqtt")]
+    #[arg(long)]
     pub allow_remote: bool,
 }
 
@@ -154,7 +154,31 @@ fn mqtt_settings(
     })
 }
 
+/// The MQTT options given without `--mqtt`.
+fn mqtt_only(args: &BridgeArgs) -> Vec<&'static str> {
+    [
+        ("--qos", args.qos.is_some()),
+        ("--topic-prefix", args.topic_prefix.is_some()),
+        ("--client-id", args.client_id.is_some()),
+        ("--username", args.username.is_some()),
+        ("--password-file", args.password_file.is_some()),
+        ("--ca-file", args.ca_file.is_some()),
+        ("--allow-remote", args.allow_remote),
+    ]
+    .into_iter()
+    .filter_map(|(name, given)| given.then_some(name))
+    .collect()
+}
+
 pub fn run(args: BridgeArgs) -> Result<i32, CliError> {
+    let stray = mqtt_only(&args);
+    if args.mqtt.is_none() && !stray.is_empty() {
+        return Err(CliError::usage(format!(
+            "{} {} for MQTT: add --mqtt mqtt://HOST",
+            stray.join(", "),
+            if stray.len() == 1 { "is" } else { "are" }
+        )));
+    }
     let config = crate::config::Config::load(&crate::config::config_path())
         .map_err(|e| CliError::usage(e.to_string()))?;
     let sims = match &args.sim {

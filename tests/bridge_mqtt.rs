@@ -1,0 +1,407 @@
+//! `droidctl bridge --mqtt` through a real broker (issue 20 points 3 and 4): mosquitto on a
+//! free loopback port, simulated droids behind the bridge, `mosquitto_pub`/`mosquitto_sub` as
+//! the outside client. Topics per droid, the retained state and the last will, replies and
+//! errors, the command timeout, the broker going away and coming back while the droids stay
+//! connected, a password, TLS.
+
+#[path = "common/mosquitto.rs"]
+mod mosquitto;
+
+use mosquitto::{Broker, Sub, publish};
+use serde_json::Value;
+use std::path::PathBuf;
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+fn scratch(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!(
+        "droidctl-bridge-mqtt-{}-{name}",
+        std::process::id()
+    ));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// The bridge as a process; its stderr kept in a file.
+struct BridgeProc {
+    child: Child,
+    stderr: PathBuf,
+}
+
+impl BridgeProc {
+    fn start(dir: &std::path::Path, args: &[&str]) -> BridgeProc {
+        static N: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+        let n = N.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let stderr = dir.join(format!("bridge-{n}.stderr"));
+        let child = Command::new(env!("CARGO_BIN_EXE_droidctl"))
+            .arg("bridge")
+            .args(args)
+            .env("DROIDCTL_CONFIG", dir.join("none.toml"))
+            .env("RUST_BACKTRACE", "1")
+            .stdin(Stdio::null())
+            .stdout(Stdio::null())
+            .stderr(std::fs::File::create(&stderr).unwrap())
+            .spawn()
+            .expect("run droidctl bridge");
+        BridgeProc { child, stderr }
+    }
+
+    fn stderr(&self) -> String {
+        std::fs::read_to_string(&self.stderr).unwrap_or_default()
+    }
+
+    /// Wait for the process to end; its status code.
+    fn wait(&mut self, secs: u64) -> Option<i32> {
+        let end = Instant::now() + Duration::from_secs(secs);
+        loop {
+            if let Some(s) = self.child.try_wait().unwrap() {
+                return s.code();
+            }
+            assert!(
+                Instant::now() < end,
+                "the bridge did not end: {}",
+                self.stderr()
+            );
+            std::thread::sleep(Duration::from_millis(50));
+        }
+    }
+}
+
+impl Drop for BridgeProc {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+fn speed(v: &Value) -> f64 {
+    v["speed"].as_f64().unwrap_or(0.0)
+}
+
+const DRIVE: &str = r#"{"v":1,"cmd":"drive","speed":120,"heading":90}"#;
+
+#[test]
+fn simulated_droids_through_a_real_broker() {
+    let dir = scratch("topics");
+    let broker = Broker::start(&dir);
+    let p = broker.port;
+    let sub = Sub::start(p, "droidctl/#", &[]);
+    let mut bridge = BridgeProc::start(
+        &dir,
+        &["--mqtt", &broker.url(), "--sim", "r2d2,bb8", "--rate", "10"],
+    );
+    // Each droid's retained state, then samples with values (the connect setup done).
+    let states = ["D2-0001", "BB-0002"].map(|d| format!("droidctl/{d}/state"));
+    sub.wait_all(15, &states, |v| v["v"] == 1 && v["state"] == "connected");
+    let samples = ["D2-0001", "BB-0002"].map(|d| format!("droidctl/{d}/telemetry"));
+    sub.wait_all(15, &samples, |v| v["x_cm"].is_number());
+    // A late subscriber gets the retained state at once.
+    let late = Sub::start(p, "droidctl/BB-0002/state", &[]);
+    late.wait(3, "droidctl/BB-0002/state", |v| v["state"] == "connected");
+    // Drive R2 for 2 s: its telemetry shows it rolling; BB-8's does not.
+    for _ in 0..8 {
+        assert!(publish(p, "droidctl/D2-0001/cmd", DRIVE, &[]));
+        std::thread::sleep(Duration::from_millis(250));
+    }
+    let t = sub.wait(5, "droidctl/D2-0001/telemetry", |v| speed(v) > 20.0);
+    assert_eq!(t["droid"], "D2-0001");
+    let bb = sub.wait(5, "droidctl/BB-0002/telemetry", |_| true);
+    assert!(speed(&bb) < 1.0, "{bb}");
+    // Silence: the command timeout stops R2, said on its reply topic.
+    let s = sub.wait(5, "droidctl/D2-0001/reply", |v| v["type"] == "stopped");
+    assert_eq!(s["reason"], "timeout");
+    // A command with an id is answered; one the robot cannot do names robot and capability.
+    assert!(publish(
+        p,
+        "droidctl/D2-0001/cmd",
+        r#"{"v":1,"cmd":"lights","group":"front","rgb":[255,0,0],"id":"red"}"#,
+        &[]
+    ));
+    let r = sub.wait(5, "droidctl/D2-0001/reply", |v| v["type"] == "reply");
+    assert_eq!(
+        (r["id"].as_str(), r["cmd"].as_str()),
+        (Some("red"), Some("lights"))
+    );
+    assert!(publish(
+        p,
+        "droidctl/BB-0002/cmd",
+        r#"{"v":1,"cmd":"head","angle":30,"id":4}"#,
+        &[]
+    ));
+    let e = sub.wait(5, "droidctl/BB-0002/reply", |v| v["type"] == "error");
+    assert_eq!(
+        (
+            e["code"].as_str(),
+            e["robot"].as_str(),
+            e["capability"].as_str(),
+            e["id"].as_u64()
+        ),
+        (Some("unsupported"), Some("BB-8"), Some("dome"), Some(4))
+    );
+    // A bad payload: one error, nothing else changes.
+    assert!(publish(p, "droidctl/BB-0002/cmd", "drive fast", &[]));
+    let e = sub.wait(5, "droidctl/BB-0002/reply", |v| v["type"] == "error");
+    assert_eq!(e["code"], "bad_json");
+    // The e-stop on any droid's topic stops every droid.
+    for _ in 0..4 {
+        assert!(publish(p, "droidctl/D2-0001/cmd", DRIVE, &[]));
+        assert!(publish(p, "droidctl/BB-0002/cmd", DRIVE, &[]));
+        std::thread::sleep(Duration::from_millis(200));
+    }
+    sub.wait(5, "droidctl/BB-0002/telemetry", |v| speed(v) > 20.0);
+    assert!(publish(
+        p,
+        "droidctl/BB-0002/cmd",
+        r#"{"v":1,"cmd":"estop","id":"all"}"#,
+        &[]
+    ));
+    sub.wait(5, "droidctl/BB-0002/reply", |v| {
+        v["type"] == "reply" && v["id"] == "all"
+    });
+    std::thread::sleep(Duration::from_millis(1500));
+    let _ = sub.drain();
+    for d in ["D2-0001", "BB-0002"] {
+        let t = sub.wait(3, &format!("droidctl/{d}/telemetry"), |_| true);
+        assert!(speed(&t) < 3.0, "{d} still rolls after the e-stop: {t}");
+    }
+    // The bridge dies: the broker sends each droid's last will.
+    let _ = bridge.child.kill();
+    let states = ["D2-0001", "BB-0002"].map(|d| format!("droidctl/{d}/state"));
+    sub.wait_all(10, &states, |v| v["state"] == "offline");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn losing_the_broker_stops_the_droid_and_keeps_its_link() {
+    let dir = scratch("lost");
+    let mut broker = Broker::start(&dir);
+    let p = broker.port;
+    let sub = Sub::start(p, "droidctl/#", &[]);
+    // A long command timeout: only the broker's loss can stop the droid in this test.
+    let bridge = BridgeProc::start(
+        &dir,
+        &[
+            "--mqtt",
+            &broker.url(),
+            "--sim",
+            "r2d2",
+            "--command-timeout",
+            "10000",
+        ],
+    );
+    sub.wait(15, "droidctl/D2-0001/state", |v| v["state"] == "connected");
+    sub.wait(15, "droidctl/D2-0001/telemetry", |v| v["x_cm"].is_number());
+    assert!(publish(
+        p,
+        "droidctl/D2-0001/cmd",
+        r#"{"v":1,"cmd":"drive","speed":60,"heading":90}"#,
+        &[]
+    ));
+    sub.wait(5, "droidctl/D2-0001/telemetry", |v| speed(v) > 10.0);
+    drop(sub);
+    broker.kill();
+    std::thread::sleep(Duration::from_millis(2500));
+    broker.restart();
+    let sub = Sub::start(p, "droidctl/#", &[]);
+    // Back: the retained state is made anew, and the droid's link never went down.
+    let s = sub.wait(15, "droidctl/D2-0001/state", |_| true);
+    assert_eq!(s["state"], "connected", "{s}");
+    let a = sub.wait(5, "droidctl/D2-0001/telemetry", |_| true);
+    std::thread::sleep(Duration::from_millis(1000));
+    let b = sub.wait(5, "droidctl/D2-0001/telemetry", |_| true);
+    assert!(speed(&b) < 2.0, "still rolling after the broker went: {b}");
+    assert_eq!(a["x_cm"], b["x_cm"], "it moved: {a} {b}");
+    let err = bridge.stderr();
+    assert!(err.contains("lost the broker"), "{err}");
+    assert!(err.contains("connected to the broker again"), "{err}");
+    // Commands work again.
+    assert!(publish(p, "droidctl/D2-0001/cmd", DRIVE, &[]));
+    sub.wait(5, "droidctl/D2-0001/telemetry", |v| speed(v) > 10.0);
+    let states: Vec<_> = sub
+        .drain()
+        .into_iter()
+        .filter(|(t, _)| t.ends_with("/state"))
+        .collect();
+    assert!(
+        states.iter().all(|(_, v)| v["state"] == "connected"),
+        "the droid's link changed: {states:?}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_broker_with_a_password() {
+    let dir = scratch("password");
+    let pw = dir.join("passwd");
+    let ok = Command::new(mosquitto::program("mosquitto_passwd"))
+        .args(["-c", "-b"])
+        .arg(&pw)
+        .args(["pupil", "r2-d2"])
+        .status()
+        .expect("mosquitto_passwd");
+    assert!(ok.success());
+    let broker = Broker::start_with(
+        &dir,
+        mosquitto::free_port(),
+        &format!("allow_anonymous false\npassword_file {}\n", pw.display()),
+    );
+    let p = broker.port;
+    std::fs::write(dir.join("wrong"), "c-3po\n").unwrap();
+    let mut wrong = BridgeProc::start(
+        &dir,
+        &[
+            "--mqtt",
+            &broker.url(),
+            "--sim",
+            "r2d2",
+            "--username",
+            "pupil",
+            "--password-file",
+        ],
+    );
+    // (--password-file needs its value: a usage error, status 2.)
+    assert_eq!(wrong.wait(10), Some(2));
+    let wrong_file = dir.join("wrong");
+    let mut wrong = BridgeProc::start(
+        &dir,
+        &[
+            "--mqtt",
+            &broker.url(),
+            "--sim",
+            "r2d2",
+            "--username",
+            "pupil",
+            "--password-file",
+            wrong_file.to_str().unwrap(),
+        ],
+    );
+    assert_eq!(wrong.wait(20), Some(1));
+    let err = wrong.stderr();
+    assert!(
+        err.contains("cannot connect D2-0001 to the broker"),
+        "{err}"
+    );
+    let sub = Sub::start(p, "droidctl/#", &["-u", "pupil", "-P", "r2-d2"]);
+    let url = format!("mqtt://pupil:r2-d2@127.0.0.1:{p}");
+    let _right = BridgeProc::start(&dir, &["--mqtt", &url, "--sim", "bb8"]);
+    sub.wait(15, "droidctl/BB-0001/state", |v| v["state"] == "connected");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A CA and a certificate for 127.0.0.1 made with the `openssl` command; `None` without it.
+fn certificates(dir: &std::path::Path) -> Option<()> {
+    let run = |args: &[&str]| {
+        Command::new("openssl")
+            .args(args)
+            .current_dir(dir)
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .status()
+            .ok()
+            .filter(|s| s.success())
+    };
+    run(&[
+        "req",
+        "-x509",
+        "-newkey",
+        "rsa:2048",
+        "-nodes",
+        "-days",
+        "2",
+        "-subj",
+        "/CN=droidctl test CA",
+        "-keyout",
+        "ca.key",
+        "-out",
+        "ca.pem",
+    ])?;
+    run(&[
+        "req",
+        "-newkey",
+        "rsa:2048",
+        "-nodes",
+        "-subj",
+        "/CN=127.0.0.1",
+        "-keyout",
+        "server.key",
+        "-out",
+        "server.csr",
+    ])?;
+    std::fs::write(
+        dir.join("san.ext"),
+        "subjectAltName=IP:127.0.0.1,DNS:localhost\n",
+    )
+    .ok()?;
+    run(&[
+        "x509",
+        "-req",
+        "-in",
+        "server.csr",
+        "-CA",
+        "ca.pem",
+        "-CAkey",
+        "ca.key",
+        "-CAcreateserial",
+        "-days",
+        "2",
+        "-extfile",
+        "san.ext",
+        "-out",
+        "server.pem",
+    ])?;
+    Some(())
+}
+
+#[test]
+fn a_broker_over_tls() {
+    let dir = scratch("tls");
+    if certificates(&dir).is_none() {
+        eprintln!("SKIPPED: the `openssl` command could not make test certificates");
+        return;
+    }
+    let d = dir.display();
+    let broker = Broker::start_with(
+        &dir,
+        mosquitto::free_port(),
+        &format!(
+            "allow_anonymous true\ncafile {d}/ca.pem\ncertfile {d}/server.pem\nkeyfile {d}/server.key\n"
+        ),
+    );
+    let p = broker.port;
+    let ca = dir.join("ca.pem");
+    let sub = Sub::start(p, "droidctl/#", &["--cafile", ca.to_str().unwrap()]);
+    let url = format!("mqtts://127.0.0.1:{p}");
+    let _bridge = BridgeProc::start(
+        &dir,
+        &[
+            "--mqtt",
+            &url,
+            "--ca-file",
+            ca.to_str().unwrap(),
+            "--sim",
+            "r2d2",
+        ],
+    );
+    sub.wait(15, "droidctl/D2-0001/state", |v| v["state"] == "connected");
+    sub.wait(15, "droidctl/D2-0001/telemetry", |v| v["x_cm"].is_number());
+    for _ in 0..8 {
+        assert!(publish(
+            p,
+            "droidctl/D2-0001/cmd",
+            DRIVE,
+            &["--cafile", ca.to_str().unwrap()]
+        ));
+        std::thread::sleep(Duration::from_millis(250));
+    }
+    sub.wait(5, "droidctl/D2-0001/telemetry", |v| speed(v) > 10.0);
+    // Without the CA, the broker's certificate is not trusted: refused, said.
+    let mut untrusted = BridgeProc::start(&dir, &["--mqtt", &url, "--sim", "r2d2"]);
+    assert_eq!(untrusted.wait(20), Some(1));
+    assert!(
+        untrusted.stderr().contains("cannot connect"),
+        "{}",
+        untrusted.stderr()
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

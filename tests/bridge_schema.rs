@@ -1,0 +1,252 @@
+//! The bridge's JSON Schema (`assets/bridge.schema.json`) and the bridge agree, both ways
+//! (issue 20 point 1): every command the schema accepts the bridge parses and every one it
+//! refuses the bridge refuses; every object the bridge sends on simulated droids (hello,
+//! telemetry, collision, battery, link, stopped, reply, error, the MQTT last will) is valid
+//! against the schema. Validated with the `jsonschema` crate (draft 2020-12).
+
+use droidctl::bridge::schema::{self, Out};
+use droidctl::bridge::{Bridge, Settings, stdio};
+use droidctl::model::Model;
+use serde_json::{Value, json};
+use std::time::Duration;
+use tokio::io::{AsyncBufReadExt, AsyncWriteExt};
+use tokio::time::{Instant, sleep};
+
+fn schema_doc() -> Value {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/bridge.schema.json");
+    serde_json::from_str(&std::fs::read_to_string(path).expect("the schema file")).expect("JSON")
+}
+
+/// A validator for one of the schema's definitions (`command`, `out`).
+fn validator(def: &str) -> jsonschema::Validator {
+    let mut doc = schema_doc();
+    let root = doc.as_object_mut().unwrap();
+    root.remove("anyOf");
+    root.insert("$ref".into(), json!(format!("#/$defs/{def}")));
+    jsonschema::draft202012::new(&doc).expect("a valid JSON Schema")
+}
+
+fn errors(v: &jsonschema::Validator, x: &Value) -> String {
+    v.iter_errors(x)
+        .map(|e| format!("{} at {}", e, e.instance_path()))
+        .collect::<Vec<_>>()
+        .join("; ")
+}
+
+#[test]
+fn the_schema_is_valid_and_takes_the_readme_examples() {
+    let commands = validator("command");
+    for c in [
+        json!({"v":1,"cmd":"drive","speed":100,"heading":90}),
+        json!({"v":1,"cmd":"twist","linear":0.3,"angular":0.5}),
+        json!({"v":1,"cmd":"stop"}),
+        json!({"v":1,"cmd":"estop"}),
+        json!({"v":1,"cmd":"head","angle":-45.5,"droid":"D2-0001"}),
+        json!({"v":1,"cmd":"stance","stance":"bipod","id":"s1"}),
+        json!({"v":1,"cmd":"lights","group":"front","rgb":[255,0,0],"id":7}),
+        json!({"v":1,"cmd":"lights","group":"logic","brightness":200}),
+        json!({"v":1,"cmd":"animation","animation":3}),
+        json!({"v":1,"cmd":"sound","sound":12}),
+        json!({"v":1,"cmd":"matrix","op":"text","text":"HELLO","rgb":[0,255,0]}),
+        json!({"v":1,"cmd":"matrix","op":"char","char":"A"}),
+        json!({"v":1,"cmd":"matrix","op":"fill","rgb":[0,0,255]}),
+        json!({"v":1,"cmd":"matrix","op":"pixel","x":7,"y":0}),
+        json!({"v":1,"cmd":"matrix","op":"clear"}),
+        json!({"v":1,"cmd":"matrix","op":"rotate","degrees":90}),
+        json!({"v":1,"cmd":"stream","rate_hz":20,"sensors":["attitude","gyro"]}),
+        json!({"v":1,"cmd":"stream","rate_hz":0}),
+        // Python's json writes floats: an integral one is an integer to both.
+        json!({"v":1,"cmd":"drive","speed":100.0,"heading":90}),
+    ] {
+        assert!(commands.is_valid(&c), "{c}: {}", errors(&commands, &c));
+        let parsed = schema::parse(c.to_string().as_bytes());
+        assert!(parsed.is_ok(), "{c}: {parsed:?}");
+    }
+}
+
+#[test]
+fn what_the_schema_refuses_the_bridge_refuses() {
+    let commands = validator("command");
+    for c in [
+        json!({"cmd":"stop"}),
+        json!({"v":2,"cmd":"stop"}),
+        json!({"v":1}),
+        json!({"v":1,"cmd":"fly"}),
+        json!({"v":1,"cmd":"drive","speed":256,"heading":0}),
+        json!({"v":1,"cmd":"drive","speed":-1,"heading":0}),
+        json!({"v":1,"cmd":"drive","speed":1.5,"heading":0}),
+        json!({"v":1,"cmd":"drive","speed":10,"heading":360}),
+        json!({"v":1,"cmd":"drive","speed":10}),
+        json!({"v":1,"cmd":"drive","speed":10,"heading":0,"sped":1}),
+        json!({"v":1,"cmd":"drive","speed":"10","heading":0}),
+        json!({"v":1,"cmd":"twist","linear":6,"angular":0}),
+        json!({"v":1,"cmd":"twist","linear":0.1}),
+        json!({"v":1,"cmd":"stop","speed":0}),
+        json!({"v":1,"cmd":"stop","droid":""}),
+        json!({"v":1,"cmd":"stop","id":[1]}),
+        json!({"v":1,"cmd":"stop","id":1.5}),
+        json!({"v":1,"cmd":"head","angle":-170}),
+        json!({"v":1,"cmd":"stance","stance":"sit"}),
+        json!({"v":1,"cmd":"lights","group":"front"}),
+        json!({"v":1,"cmd":"lights","group":"front","rgb":[1,2,3],"brightness":4}),
+        json!({"v":1,"cmd":"lights","group":"top","brightness":4}),
+        json!({"v":1,"cmd":"lights","group":"front","rgb":[1,2]}),
+        json!({"v":1,"cmd":"lights","group":"front","rgb":[1,2,256]}),
+        json!({"v":1,"cmd":"animation","animation":65536}),
+        json!({"v":1,"cmd":"matrix","op":"text","text":""}),
+        json!({"v":1,"cmd":"matrix","op":"text","text":"abcdefghijklmnopqrstuvwxyz"}),
+        json!({"v":1,"cmd":"matrix","op":"text","text":"é"}),
+        json!({"v":1,"cmd":"matrix","op":"char","char":"AB"}),
+        json!({"v":1,"cmd":"matrix","op":"char","char":" "}),
+        json!({"v":1,"cmd":"matrix","op":"fill"}),
+        json!({"v":1,"cmd":"matrix","op":"pixel","x":8,"y":0}),
+        json!({"v":1,"cmd":"matrix","op":"clear","rgb":[1,1,1]}),
+        json!({"v":1,"cmd":"matrix","op":"rotate","degrees":45}),
+        json!({"v":1,"cmd":"matrix","op":"spin"}),
+        json!({"v":1,"cmd":"stream","rate_hz":101}),
+        json!({"v":1,"cmd":"stream","rate_hz":10,"sensors":["sonar"]}),
+        json!({"v":1,"cmd":"stream","rate_hz":10,"sensors":"gyro"}),
+        json!([1, 2]),
+        json!("drive"),
+    ] {
+        assert!(!commands.is_valid(&c), "the schema takes {c}");
+        let parsed = schema::parse(c.to_string().as_bytes());
+        assert!(parsed.is_err(), "the bridge takes {c}: {parsed:?}");
+        let e = parsed.unwrap_err();
+        // The error object made of it is valid too.
+        let out = validator("out");
+        let o: Value = serde_json::from_str(&Out::error(*e).to_json()).unwrap();
+        assert!(out.is_valid(&o), "{o}: {}", errors(&out, &o));
+    }
+}
+
+/// Every line a bridge on simulated droids writes, over stdio under paused time: a
+/// session that drives into a wall, asks for lights and what a robot lacks, sends bad lines,
+/// lets the command timeout stop one droid, and ends its input.
+async fn a_session() -> Vec<Value> {
+    let models = [Model::R2D2, Model::BB8, Model::Robi42, Model::Bolt];
+    let config = droidctl::config::Config::defaults();
+    let found = droidctl::cli::fleet::simulated(&models);
+    let specs = found
+        .into_iter()
+        .map(|f| {
+            let s = droidctl::cli::fleet::session_config(f.model, &config, true);
+            f.into_spec(s)
+        })
+        .collect();
+    let fleet = droidctl::fleet::Fleet::start(specs);
+    let setups = models
+        .iter()
+        .map(|m| droidctl::family::setup::from_config(*m, &config).0)
+        .collect();
+    let settings = Settings {
+        battery_poll: Duration::from_secs(2),
+        ..Settings::default()
+    };
+    let (bridge, rx) = Bridge::start(fleet, setups, settings);
+    let (client, server) = tokio::io::duplex(1 << 20);
+    let (server_in, server_out) = tokio::io::split(server);
+    let task = tokio::spawn(stdio::run(
+        bridge,
+        rx,
+        tokio::io::BufReader::new(server_in),
+        server_out,
+        std::future::pending(),
+    ));
+    let (client_in, mut client_out) = tokio::io::split(client);
+    let reader = tokio::spawn(async move {
+        let mut lines = Vec::new();
+        let mut r = tokio::io::BufReader::new(client_in);
+        let mut l = String::new();
+        while r.read_line(&mut l).await.unwrap_or(0) > 0 {
+            lines.push(std::mem::take(&mut l));
+        }
+        lines
+    });
+    let mut send = async |line: &str| {
+        client_out.write_all(line.as_bytes()).await.unwrap();
+        client_out.write_all(b"\n").await.unwrap();
+    };
+    sleep(Duration::from_secs(1)).await;
+    send(r#"{"v":1,"cmd":"lights","droid":"D2-0001","group":"front","rgb":[0,0,255],"id":"l1"}"#)
+        .await;
+    send(r#"{"v":1,"cmd":"stream","droid":"D2-0001","rate_hz":50,"id":2}"#).await;
+    send(r#"{"v":1,"cmd":"head","droid":"BB-0002","angle":10,"id":3}"#).await;
+    send(r#"{"v":1,"cmd":"drive","droid":"nobody","speed":1,"heading":0}"#).await;
+    send("{\"v\":1,").await;
+    // BB-8 rolls into the wall, R2 turns and stops by the timeout.
+    let end = Instant::now() + Duration::from_secs(6);
+    while Instant::now() < end {
+        send(r#"{"v":1,"cmd":"drive","droid":"BB-0002","speed":255,"heading":0}"#).await;
+        sleep(Duration::from_millis(200)).await;
+    }
+    send(r#"{"v":1,"cmd":"twist","droid":"D2-0001","linear":0.2,"angular":0.3}"#).await;
+    sleep(Duration::from_secs(1)).await;
+    send(r#"{"v":1,"cmd":"drive","droid":"robi","speed":40,"heading":0}"#).await;
+    // The end of input (a half's drop is not: the duplex ends when both halves go).
+    client_out.shutdown().await.unwrap();
+    let end = task.await.unwrap();
+    assert_eq!(end, stdio::End::InputClosed);
+    reader
+        .await
+        .unwrap()
+        .iter()
+        .map(|l| serde_json::from_str(l).unwrap_or_else(|e| panic!("{l}: {e}")))
+        .collect()
+}
+
+#[tokio::test(start_paused = true)]
+async fn everything_the_bridge_sends_is_valid_against_the_schema() {
+    let out = validator("out");
+    let lines = a_session().await;
+    let mut seen = std::collections::BTreeSet::new();
+    for v in &lines {
+        assert!(out.is_valid(v), "{v}: {}", errors(&out, v));
+        seen.insert(v["type"].as_str().unwrap().to_string());
+    }
+    for t in [
+        "hello",
+        "telemetry",
+        "collision",
+        "battery",
+        "link",
+        "stopped",
+        "reply",
+        "error",
+    ] {
+        assert!(
+            seen.contains(t),
+            "no {t} object in {} lines: {seen:?}",
+            lines.len()
+        );
+    }
+    assert_eq!(lines[0]["type"], "hello");
+    // The capped streaming rate is said in the reply.
+    let r2 = lines
+        .iter()
+        .find(|v| v["type"] == "reply" && v["id"] == 2)
+        .expect("the stream reply");
+    assert!(
+        r2["note"].as_str().is_some_and(|n| n.contains("capped")),
+        "{r2}"
+    );
+    // Robi's samples carry its wheels; the others' do not.
+    assert!(
+        lines
+            .iter()
+            .any(|v| v["droid"] == "Robi 42" && v["motor_left_rad_s"].is_number())
+    );
+    // The will is valid too.
+    let will: Value =
+        serde_json::from_str(&droidctl::bridge::feeds::offline("D2-0001").to_json()).unwrap();
+    assert!(out.is_valid(&will), "{will}");
+    // Each kind of stop happened.
+    for reason in ["timeout", "input_closed"] {
+        assert!(
+            lines
+                .iter()
+                .any(|v| v["type"] == "stopped" && v["reason"] == reason),
+            "no stop for {reason}"
+        );
+    }
+}
