@@ -20,6 +20,10 @@ fn main() {
 }
 
 #[cfg(target_os = "linux")]
+#[path = "common/stats.rs"]
+mod stats;
+
+#[cfg(target_os = "linux")]
 mod linux {
     use droidctl::app::input::{KeyKind, TermEvent};
     use droidctl::app::run::{self, AppInputs, AppOptions};
@@ -54,28 +58,7 @@ mod linux {
     /// Each droid's drive writes: when (as the session logged them), and the speed.
     type Writes = Arc<Mutex<Vec<Vec<(Instant, u8)>>>>;
 
-    fn percentile(sorted: &[f64], p: f64) -> f64 {
-        if sorted.is_empty() {
-            return f64::NAN;
-        }
-        let i = ((sorted.len() - 1) as f64 * p).round() as usize;
-        sorted[i.min(sorted.len() - 1)]
-    }
-
-    fn cpu_ticks() -> u64 {
-        let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
-        // After the command name in parentheses: fields 14 and 15 (utime, stime).
-        let rest = stat.rsplit_once(") ").map(|(_, r)| r).unwrap_or("");
-        let f: Vec<&str> = rest.split_whitespace().collect();
-        let n = |i: usize| f.get(i).and_then(|v| v.parse::<u64>().ok()).unwrap_or(0);
-        n(11) + n(12)
-    }
-
-    fn clock_ticks_per_s() -> f64 {
-        // SAFETY: sysconf only reads a constant.
-        let v = unsafe { libc::sysconf(libc::_SC_CLK_TCK) };
-        if v > 0 { v as f64 } else { 100.0 }
-    }
+    use super::stats::{clock_ticks_per_s, cpu_ticks, percentile};
 
     pub fn main() {
         let secs: u64 = std::env::var("FLEET_BENCH_SECS")
