@@ -187,6 +187,11 @@ mod linux {
         let mut o = MqttOptions::new("bench-client", "127.0.0.1", port);
         o.set_max_packet_size(1 << 16, 1 << 16);
         let (client, mut eventloop) = AsyncClient::new(o, 4096);
+        // A control client sends each command at once (BRIDGE_BENCH_NAGLE=1: as rumqttc does
+        // by default, Nagle's algorithm holding a command until the broker's next segment).
+        let mut net = rumqttc::NetworkOptions::new();
+        net.set_tcp_nodelay(std::env::var_os("BRIDGE_BENCH_NAGLE").is_none());
+        eventloop.set_network_options(net);
         client
             .subscribe("droidctl/+/telemetry", QoS::AtMostOnce)
             .await

@@ -230,7 +230,12 @@ pub async fn run(
     let mut states = Vec::new();
     let mut loops = Vec::new();
     for (i, (name, t)) in members.iter().enumerate() {
-        let (client, eventloop) = AsyncClient::new(options(&settings, i, t, name)?, 1024);
+        let (client, mut eventloop) = AsyncClient::new(options(&settings, i, t, name)?, 1024);
+        // Small messages out at once: without TCP_NODELAY a reply or a state change can wait
+        // for the broker's delayed ACK (tens of ms) behind the telemetry before it.
+        let mut net = rumqttc::NetworkOptions::new();
+        net.set_tcp_nodelay(true);
+        eventloop.set_network_options(net);
         let (tx, st) = watch::channel(BrokerState::Connecting);
         loops.push(tokio::spawn(connection(
             bridge.clone(),
