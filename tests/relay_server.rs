@@ -1227,6 +1227,36 @@ async fn pipelined_requests_beyond_the_bound_close_the_client() {
     relay.stop().await;
 }
 
+/// The bound counts what waits behind the request being served, however the requests
+/// arrive: three scans in one write (one served, two waiting) are all answered, as when the
+/// third comes while the first is served; a fourth is one too many. (Found by the
+/// relay_server fuzz target: in one write, the first was counted as waiting.)
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn three_pipelined_scans_in_one_write_are_answered() {
+    let relay = Relay::start(&[Model::R2D2], cfg()).await;
+    let mut c = Raw::connect(relay.addr).await;
+    let request = Request::Scan { timeout: 0.1 };
+    let scan = request.to_bytes().unwrap();
+    for _ in 0..3 {
+        c.dec.expect(request.expect().unwrap());
+    }
+    c.send_raw(&scan.repeat(3)).await;
+    for i in 0..3 {
+        assert!(
+            matches!(c.reply().await, Some(Reply::Devices(_))),
+            "scan {} of 3 not answered",
+            i + 1
+        );
+    }
+    c.send_raw(&scan.repeat(4)).await;
+    relay
+        .wait_event("queue bound", |e| {
+            matches!(e, ServerEvent::ProtocolError { error, .. } if error.contains("scans queued"))
+        })
+        .await;
+    relay.stop().await;
+}
+
 /// A client that goes mid-drive leaves its droid stopped at the heading it last drove: the
 /// relay reads the client's writes with the droid's family (a stop at heading 0 turned the
 /// droid on the spot as it stopped).
