@@ -8,6 +8,8 @@ pub mod capture;
 pub mod cli;
 pub mod config;
 pub mod family;
+#[doc(hidden)]
+pub mod fuzzing;
 pub mod gatt;
 pub mod hex;
 pub mod link;

@@ -106,13 +106,9 @@ async fn connect_real(args: &DriveArgs) -> Result<(Box<dyn Link>, Model, String)
     Ok((c.link, c.model, c.name))
 }
 
-async fn drive(
-    link: Box<dyn Link>,
-    model: Model,
-    name: String,
-    config: Config,
-    log_path: Option<std::path::PathBuf>,
-) -> Result<i32, CliError> {
+/// The session the app drives `model` through, as the configuration sets it: the connect
+/// setup (tripod, sensor streaming), the request timeout, the pacing (0: the model's).
+pub fn session_config(model: Model, config: &Config) -> SessionConfig {
     let setup = SetupOptions {
         tripod: true,
         streaming_interval_ms: config.control.streaming_interval_ms,
@@ -121,16 +117,23 @@ async fn drive(
         0 => model.write_pacing(),
         ms => Duration::from_millis(ms),
     };
-    let session = session::start(
-        link,
-        SessionConfig {
-            family: model.protocol(),
-            request_timeout: Duration::from_millis(config.session.request_timeout_ms),
-            pacing,
-            setup: connect_setup(model, &setup),
-            ..SessionConfig::default()
-        },
-    );
+    SessionConfig {
+        family: model.protocol(),
+        request_timeout: Duration::from_millis(config.session.request_timeout_ms),
+        pacing,
+        setup: connect_setup(model, &setup),
+        ..SessionConfig::default()
+    }
+}
+
+async fn drive(
+    link: Box<dyn Link>,
+    model: Model,
+    name: String,
+    config: Config,
+    log_path: Option<std::path::PathBuf>,
+) -> Result<i32, CliError> {
+    let session = session::start(link, session_config(model, &config));
     let _ = PANIC_SESSION.set((session.clone(), model));
     install_panic_hook();
 
@@ -163,7 +166,7 @@ async fn drive(
         droid_name: name,
         log_path: log_path.clone(),
         release,
-        tripod_on_connect: setup.tripod,
+        tripod_on_connect: true,
     };
     let inputs = AppInputs {
         term: term_rx,
