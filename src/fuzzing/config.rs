@@ -1,8 +1,10 @@
 //! The configuration file: any text is a configuration or one error naming the file (and its
 //! line and key when there is one), never a panic. A configuration that loads is one the app
 //! runs with: every button it names exists, and the app drives a simulated droid through a
-//! session with its timing, every key it binds and every gamepad button pressed, then quits
-//! with the droid stopped.
+//! session with its timing: the stick drives it within 8 s (the connect setup and R2's stance
+//! may come first), letting go stops it within 2 s;
+//! every key it binds and every gamepad button pressed; then it quits with the droid
+//! stopped.
 //!
 //! Input layout: the whole input is the file (read as UTF-8, lossily).
 
@@ -109,6 +111,7 @@ fn drive(config: Config, model: Model) {
             .filter_map(|k| Key::parse(k))
             .collect();
         let k = &config.keyboard;
+        let max_speed = config.gamepad.max_speed;
         let opts = AppOptions {
             release: ReleaseMode::Emulated {
                 first: Duration::from_millis(k.release_first_ms),
@@ -134,7 +137,36 @@ fn drive(config: Config, model: Model) {
             };
             run::run(&mut terminal, app_session, opts, inputs, crate::ui::draw).await
         });
-        sleep(Duration::from_millis(500)).await;
+        // Connected and standing (R2's stance takes about 2 s): the stick drives, letting go
+        // stops, whatever the configuration.
+        sleep(Duration::from_secs(3)).await;
+        let _ = last_drive(&mut log, family);
+        let stick = |v: f32| PadEvent::Axis(Axis::LeftY, v);
+        // Forward (gilrs: up is +1).
+        for e in [PadEvent::Connected("pad".into()), stick(1.0)] {
+            pad.send(e).await.expect("the app reads the pad");
+        }
+        // The drive may wait for the connect setup and R2's stance (at the slowest pacing a
+        // second per write), not longer.
+        if max_speed > 0 {
+            let mut driven = false;
+            for _ in 0..80 {
+                sleep(Duration::from_millis(100)).await;
+                if last_drive(&mut log, family).is_some_and(|c| !c.is_stop()) {
+                    driven = true;
+                    break;
+                }
+            }
+            assert!(driven, "8 s after the stick went forward nothing drove");
+        }
+        pad.send(stick(0.0)).await.expect("the app reads the pad");
+        sleep(Duration::from_secs(2)).await;
+        if let Some(cmd) = last_drive(&mut log, family) {
+            assert!(
+                cmd.is_stop(),
+                "2 s after letting go the last drive is {cmd:?}"
+            );
+        }
         'input: for key in keys {
             for kind in [KeyKind::Press, KeyKind::Release] {
                 if term.send(TermEvent::Key { key, kind }).await.is_err() {
@@ -154,21 +186,40 @@ fn drive(config: Config, model: Model) {
             Button::RightBumper,
             Button::DPadUp,
         ];
-        let mut events = vec![PadEvent::Connected("pad".into())];
+        let mut events = Vec::new();
         for b in buttons {
             events.extend([PadEvent::Pressed(b), PadEvent::Released(b)]);
         }
         events.extend([
-            PadEvent::Axis(Axis::LeftY, -1.0),
+            PadEvent::Axis(Axis::LeftY, 1.0),
             PadEvent::Axis(Axis::RightTrigger, 1.0),
             PadEvent::Axis(Axis::RightX, 0.5),
             PadEvent::Axis(Axis::LeftX, 0.7),
         ]);
+        // Then the operator lets go of everything.
+        events.extend([
+            PadEvent::Axis(Axis::LeftY, 0.0),
+            PadEvent::Axis(Axis::LeftX, 0.0),
+            PadEvent::Axis(Axis::RightX, 0.0),
+            PadEvent::Axis(Axis::RightTrigger, 0.0),
+        ]);
+        let mut running = true;
         for e in events {
             if pad.send(e).await.is_err() {
+                running = false;
                 break;
             }
             sleep(Duration::from_millis(30)).await;
+        }
+        if running {
+            // Whatever the configuration, letting go stops the droid within 2 s.
+            sleep(Duration::from_secs(2)).await;
+            if let Some(cmd) = last_drive(&mut log, family) {
+                assert!(
+                    cmd.is_stop(),
+                    "2 s after letting go the last drive is {cmd:?}"
+                );
+            }
         }
         let _ = quit.send("fuzz".into()).await;
         let exit = app
@@ -186,22 +237,29 @@ fn drive(config: Config, model: Model) {
             .await
             .expect("the session ends within its budget");
         // The last drive command written is a stop.
-        let mut last = None;
-        loop {
-            let (dir, item) = match log.try_recv() {
-                Ok(LogEntry { dir, item, .. }) => (dir, item),
-                Err(broadcast::error::TryRecvError::Lagged(_)) => continue,
-                Err(_) => break,
-            };
-            if let (Direction::Out, LogItem::Packet { packet, .. }) = (dir, item)
-                && let Some((cmd, _, _)) = packet.as_command()
-                && family.is_drive(&cmd)
-            {
-                last = Some(cmd);
-            }
-        }
-        if let Some(cmd) = last {
+        if let Some(cmd) = last_drive(&mut log, family) {
             assert!(cmd.is_stop(), "the last drive written is {cmd:?}");
         }
     });
+}
+
+/// The last drive command the session wrote since the log was last read.
+fn last_drive(
+    log: &mut broadcast::Receiver<LogEntry>,
+    family: &dyn crate::family::Family,
+) -> Option<crate::family::Command> {
+    let mut last = None;
+    loop {
+        let (dir, item) = match log.try_recv() {
+            Ok(LogEntry { dir, item, .. }) => (dir, item),
+            Err(broadcast::error::TryRecvError::Lagged(_)) => continue,
+            Err(_) => return last,
+        };
+        if let (Direction::Out, LogItem::Packet { packet, .. }) = (dir, item)
+            && let Some((cmd, _, _)) = packet.as_command()
+            && family.is_drive(&cmd)
+        {
+            last = Some(cmd);
+        }
+    }
 }
