@@ -1,18 +1,21 @@
 #!/usr/bin/env bash
-# Idle cost of the running app: `droidctl --sim` (sensor streaming on, 10 Hz control loop,
+# Idle cost of the running app: `droidctl --sim MODEL` (sensor streaming on, 10 Hz control loop,
 # nobody touching the keys) in a 160×48 tmux window, sampled from /proc.
-# Usage: bash benches/idle.sh [SECONDS]   (needs tmux; builds the release binary first)
+# Usage: bash benches/idle.sh [SECONDS] [MODEL]   (MODEL: r2d2 (default), robi, bb8 …; needs
+# tmux; builds the release binary first, in $CARGO_TARGET_DIR when set)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 secs=${1:-30}
+model=${2:-r2d2}
 cargo build --release -q
-bin=$PWD/target/release/droidctl
+bin=${CARGO_TARGET_DIR:-$PWD/target}/release/droidctl
 tmp=$(mktemp -d)
-trap 'tmux kill-session -t droidctl-idle 2>/dev/null || true; rm -rf "$tmp"' EXIT
-tmux new-session -d -s droidctl-idle -x 160 -y 48 \
-  "DROIDCTL_LOG_FILE=$tmp/log DROIDCTL_CONFIG=$tmp/config.toml $bin --sim"
+session=droidctl-idle-$$
+trap 'tmux kill-session -t "$session" 2>/dev/null || true; rm -rf "$tmp"' EXIT
+tmux new-session -d -s "$session" -x 160 -y 48 \
+  "DROIDCTL_LOG_FILE=$tmp/log DROIDCTL_CONFIG=$tmp/config.toml $bin --sim $model"
 sleep 5   # connect, stand up, start streaming
-pid=$(pgrep -f "^$bin --sim" | head -n1)
+pid=$(pgrep -f "^$bin --sim $model\$" | head -n1)
 hz=$(getconf CLK_TCK)
 ticks() { awk '{print $14 + $15}' "/proc/$pid/stat"; }
 t0=$(ticks); s0=$(date +%s.%N)
@@ -21,6 +24,6 @@ t1=$(ticks); s1=$(date +%s.%N)
 rss=$(awk '/VmRSS/ {print $2}' "/proc/$pid/status")
 hwm=$(awk '/VmHWM/ {print $2}' "/proc/$pid/status")
 cpu=$(echo "($t1 - $t0) / $hz / ($s1 - $s0) * 100" | bc -l)
-printf 'idle over %ss: CPU %.2f %% of one core, RSS %.1f MiB (peak %.1f MiB)\n' \
-  "$secs" "$cpu" "$(echo "$rss/1024" | bc -l)" "$(echo "$hwm/1024" | bc -l)"
-tmux send-keys -t droidctl-idle q
+printf '%s idle over %ss: CPU %.2f %% of one core, RSS %.1f MiB (peak %.1f MiB)\n' \
+  "$model" "$secs" "$cpu" "$(echo "$rss/1024" | bc -l)" "$(echo "$hwm/1024" | bc -l)"
+tmux send-keys -t "$session" q
