@@ -36,7 +36,7 @@ pub struct Target {
 
 /// Every target, in the order README lists them.
 pub fn targets() -> Vec<&'static Target> {
-    let mut v: Vec<&'static Target> = vec![
+    let v: Vec<&'static Target> = vec![
         &decoder::TARGET,
         &relay_codec::TARGET,
         &btsnoop::TARGET,
@@ -48,7 +48,7 @@ pub fn targets() -> Vec<&'static Target> {
         &relay_server::TARGET,
     ];
     #[cfg(target_os = "linux")]
-    v.push(&bluez::TARGET);
+    let v = [v, vec![&bluez::TARGET]].concat();
     v
 }
 
