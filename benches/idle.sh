@@ -2,13 +2,18 @@
 # Idle cost of the running app: `droidctl --sim MODEL` (sensor streaming on, 10 Hz control loop,
 # nobody touching the keys) in a 160×48 tmux window, sampled from /proc.
 # Usage: bash benches/idle.sh [SECONDS] [MODEL]   (MODEL: r2d2 (default), robi, bb8 …; needs
-# tmux; builds the release binary first, in $CARGO_TARGET_DIR when set)
+# tmux; builds the release binary first, in $CARGO_TARGET_DIR when set, unless IDLE_BIN names
+# one to measure, e.g. an older build to compare with)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 secs=${1:-30}
 model=${2:-r2d2}
-cargo build --release -q
-bin=${CARGO_TARGET_DIR:-$PWD/target}/release/droidctl
+if [ -n "${IDLE_BIN:-}" ]; then
+  bin=$IDLE_BIN
+else
+  cargo build --release -q
+  bin=${CARGO_TARGET_DIR:-$PWD/target}/release/droidctl
+fi
 tmp=$(mktemp -d)
 session=droidctl-idle-$$
 trap 'tmux kill-session -t "$session" 2>/dev/null || true; rm -rf "$tmp"' EXIT
