@@ -350,6 +350,9 @@ impl ClientTask {
             }
             if served {
                 last_heard = Instant::now();
+                // What is buffered now is a new request: its own time runs from here (the
+                // first partial read of a steady stream is long gone).
+                partial_since = None;
             }
             partial_since = match (decoder.buffered(), partial_since) {
                 (0, _) => None,
