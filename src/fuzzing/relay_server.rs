@@ -3,8 +3,8 @@
 //! one process on paused time, no sockets. Whatever the stream: nothing panics; every
 //! request is answered in order (OK or the data asked for) or refused (ERROR), until the
 //! stream ends, the client says END, the stream cannot be followed (one ERROR, then the
-//! server closes) or the client queues more than the server takes (one ERROR, then it
-//! closes); notifications only for characteristics subscribed; and when the stream ends,
+//! server closes), the client queues more than the server takes (one ERROR, then it closes)
+//! or a request takes longer than 10 s to arrive (closed; never a faster one); notifications only for characteristics subscribed; and when the stream ends,
 //! every droid is released and stopped.
 //!
 //! Input layout: the first byte's low nibble counts chunk sizes (as the decoder target), its
@@ -106,6 +106,34 @@ fn wanted(stream: &[u8], limits: Limits) -> Vec<Wanted> {
     out
 }
 
+/// The longest any request (or the partial one the stream ends in) takes to arrive, with the
+/// stream cut into `pieces` and `pause` after each: the server may close a client whose
+/// request takes longer than its limit, and must not otherwise.
+fn slowest_request(stream: &[u8], pieces: &[&[u8]], pause: Duration, limits: Limits) -> Duration {
+    // When each byte is sent: after the pauses of the pieces before its own.
+    let mut sent_at = Vec::with_capacity(stream.len());
+    for (i, p) in pieces.iter().enumerate() {
+        sent_at.extend(std::iter::repeat_n(pause * i as u32, p.len()));
+    }
+    let mut d = RequestDecoder::new(limits);
+    let (mut start, mut slowest) = (0, Duration::ZERO);
+    for (i, b) in stream.iter().enumerate() {
+        d.push(std::slice::from_ref(b));
+        let mut done = false;
+        while d.next().is_some() {
+            done = true;
+        }
+        if done {
+            slowest = slowest.max(sent_at[i] - sent_at[start]);
+            start = i + 1;
+        }
+    }
+    if start < stream.len() {
+        slowest = slowest.max(sent_at[stream.len() - 1] - sent_at[start]);
+    }
+    slowest
+}
+
 fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
     m.lock().unwrap_or_else(|e| e.into_inner())
 }
@@ -117,6 +145,9 @@ pub fn run_input(data: &[u8]) {
     let cfg = ServerConfig::default();
     let limits = cfg.limits;
     let wanted = wanted(stream, limits);
+    let pause_each = Duration::from_millis(pause as u64);
+    let slow_client =
+        slowest_request(stream, &feeds(sizes, stream), pause_each, limits) >= cfg.request_timeout;
     let rt = tokio::runtime::Builder::new_current_thread()
         .enable_time()
         .start_paused(true)
@@ -207,7 +238,7 @@ pub fn run_input(data: &[u8]) {
             .expect("the server does not panic");
         let tail = replies.finish();
         let events = lock(&events).clone();
-        check(&wanted, &answers, tail, &events, &devices, closed_by_us);
+        check(&wanted, &answers, tail, &events, &devices, closed_by_us, slow_client);
         if subscribed_data > 0 {
             assert!(
                 events.iter().any(|e| matches!(e, ServerEvent::DroidConnected { .. })),
@@ -236,6 +267,7 @@ fn check(
     events: &[ServerEvent],
     devices: &[(String, String, Model)],
     closed_by_us: bool,
+    slow_client: bool,
 ) {
     let closes: Vec<&String> = events
         .iter()
@@ -281,6 +313,15 @@ fn check(
             Some(Reply::Error { seq: None, message }) if message.starts_with("more than")
         ) || matches!(&tail, Some(Ok(m)) if m.starts_with("more than"));
         assert!(refused, "{reason}: answers {answers:?}, tail {tail:?}");
+        return;
+    }
+    if reason == "incomplete request" {
+        // Only a request that took longer than the limit to arrive is given up on (the
+        // answers before it were checked above).
+        assert!(
+            slow_client,
+            "closed as incomplete, though no request took 10 s"
+        );
         return;
     }
     assert!(
