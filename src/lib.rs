@@ -10,6 +10,8 @@ pub mod cli;
 pub mod config;
 pub mod family;
 pub mod fleet;
+#[doc(hidden)]
+pub mod fuzzing;
 pub mod gatt;
 pub mod hex;
 pub mod link;

@@ -266,6 +266,14 @@ mod btsnoop {
             let lines = json_lines(&o);
             let summary = &lines.last().unwrap()["summary"];
             assert_eq!(summary["decode_errors"], serde_json::json!({}), "{model}");
+            // One vocabulary: the catalogue entry is `command`, as `packet decode --json` says.
+            let packets: Vec<_> = lines.iter().filter(|l| l["dir"] == "out").collect();
+            assert!(
+                packets.iter().all(|l| l.get("name").is_none())
+                    && packets.iter().any(|l| l["command"].is_string()),
+                "{model}: {:?}",
+                packets.first()
+            );
             let outs = lines.iter().filter(|l| l["dir"] == "out").count();
             let ins = lines.iter().filter(|l| l["dir"] == "in").count();
             assert!(outs >= 3 && ins >= 10, "{model}: {outs} out, {ins} in");

@@ -438,6 +438,45 @@ async fn target_unavailable_wakes_the_droid_and_resends_once() {
     );
 }
 
+/// Issue 21: an emergency stop never waits behind, nor is overtaken by, a drive queued
+/// before it. A drive that found the droid asleep is queued again behind a Wake; the operator
+/// hits the e-stop meanwhile: the stop goes right after the Wake (one pacing slot), and the
+/// older drive is dropped (its caller told it was superseded) instead of being written after
+/// the stop and driving the droid again.
+#[tokio::test(start_paused = true)]
+async fn an_emergency_stop_is_not_overtaken_by_a_drive_queued_before_it() {
+    let fake = Fake::new();
+    let s = connected(&fake, quick()).await;
+    let call = {
+        let s = s.clone();
+        tokio::spawn(async move { s.request(drive(100, 90)).await })
+    };
+    let first = fake.wait_packets(1).await.remove(0);
+    fake.respond(&first, ErrorCode::TargetUnavailable, vec![]);
+    // The Wake is written; the drive waits behind it.
+    let wake = fake.wait_packets(2).await.remove(1);
+    assert_eq!((wake.did, wake.cid), (0x13, 0x0D));
+    let estop_at = Instant::now();
+    s.set(Slot::Drive, drive(0, 90));
+    sleep(ms(500)).await;
+    let sent = fake.sent();
+    let stop = sent
+        .iter()
+        .position(|w| is_drive(&w.packet) && w.packet.data[0] == 0)
+        .expect("the stop was written");
+    assert!(
+        sent[stop].at - estop_at <= ms(10),
+        "the stop waited {:?}",
+        sent[stop].at - estop_at
+    );
+    let driven: Vec<_> = sent[stop..]
+        .iter()
+        .filter(|w| is_drive(&w.packet) && w.packet.data[0] > 0)
+        .collect();
+    assert!(driven.is_empty(), "driven after the e-stop: {driven:?}");
+    assert_eq!(call.await.unwrap(), Err(RequestError::Superseded));
+}
+
 #[tokio::test(start_paused = true)]
 async fn seq_runs_0_to_254_and_wraps_to_0() {
     let fake = Fake::new();

@@ -894,3 +894,108 @@ fn a_new_handshake_starts_a_new_frame_sequence() {
     t.apply(&frame(12), ms(8_100));
     assert_eq!(t.robi.as_ref().unwrap().lost, 3);
 }
+
+// ---------------------------------------------------------------------------------------------
+// Stepped only when due (issue 21): the same frames at the same times, far fewer steps idle.
+// ---------------------------------------------------------------------------------------------
+
+/// A simulator front with its steps counted; `every_step` hides when it is due, so the link
+/// steps it at the full physics rate (as before).
+struct Counted {
+    inner: Box<dyn WireDroid>,
+    every_step: bool,
+    advances: Arc<Mutex<u64>>,
+}
+
+impl WireDroid for Counted {
+    fn receive(&mut self, bytes: &[u8], now: Duration) -> Vec<Vec<u8>> {
+        self.inner.receive(bytes, now)
+    }
+    fn receive_at(&mut self, to: Endpoint, bytes: &[u8], now: Duration) -> Vec<Vec<u8>> {
+        self.inner.receive_at(to, bytes, now)
+    }
+    fn connect(&mut self, now: Duration) -> Vec<Vec<u8>> {
+        self.inner.connect(now)
+    }
+    fn disconnected(&mut self, now: Duration) {
+        self.inner.disconnected(now)
+    }
+    fn whole_notifications(&self) -> bool {
+        self.inner.whole_notifications()
+    }
+    fn advance(&mut self, now: Duration) -> Vec<Vec<u8>> {
+        *self.advances.lock().unwrap() += 1;
+        self.inner.advance(now)
+    }
+    fn state(&self) -> &SimState {
+        self.inner.state()
+    }
+    fn will_sleep(&self) -> Option<Vec<u8>> {
+        self.inner.will_sleep()
+    }
+    fn handshake_value(&self) -> Vec<u8> {
+        self.inner.handshake_value()
+    }
+    fn next_due(&self) -> Option<Duration> {
+        if self.every_step {
+            None
+        } else {
+            self.inner.next_due()
+        }
+    }
+}
+
+/// Idle 1 s, drive 1 s, stop, idle 4 s, through the link: every notification with when it
+/// came out, and how often the robot was stepped.
+async fn robi_run(every_step: bool) -> (Vec<(Duration, Vec<u8>)>, u64) {
+    use droidctl::link::Link;
+    let advances = Arc::new(Mutex::new(0));
+    let cfg = robi_cfg();
+    let droid = Counted {
+        inner: Box::new(SimRobi::new(cfg.clone())),
+        every_step,
+        advances: advances.clone(),
+    };
+    let mut link = SimLink::with_droid(Model::Robi42, Box::new(droid), &cfg, Faults::none());
+    let t0 = Instant::now();
+    let mut conn = link.open().await.expect("open");
+    let seen = Arc::new(Mutex::new(Vec::new()));
+    let recorder = {
+        let seen = seen.clone();
+        tokio::spawn(async move {
+            while let Some(ev) = conn.events.recv().await {
+                if let droidctl::link::LinkEvent::Data(b) = ev {
+                    seen.lock().unwrap().push((t0.elapsed(), b));
+                }
+            }
+        })
+    };
+    let w = &mut conn.writer;
+    sleep(secs(1.0)).await;
+    w.write_to(Endpoint::Velocity, &[200]).await.unwrap();
+    w.write_to(Endpoint::Steering, &[160]).await.unwrap();
+    sleep(secs(1.0)).await;
+    w.write_to(Endpoint::Velocity, &[0]).await.unwrap();
+    sleep(secs(4.0)).await;
+    w.close().await;
+    sleep(ms(50)).await;
+    recorder.abort();
+    let seen = seen.lock().unwrap().clone();
+    let n = *advances.lock().unwrap();
+    (seen, n)
+}
+
+#[tokio::test(start_paused = true)]
+async fn an_idle_robi_is_stepped_only_when_a_frame_is_due_with_identical_output() {
+    let (due, due_steps) = robi_run(false).await;
+    let (every, every_steps) = robi_run(true).await;
+    assert!(due.len() > 50, "{} notifications", due.len());
+    assert_eq!(due, every, "the same frames at the same times");
+    // 6 s: 600 physics steps; stepped when due, one per frame (100 ms) idle, every step only
+    // while it rolls (about 1.5 s with braking).
+    assert!(every_steps >= 590, "{every_steps}");
+    assert!(
+        due_steps * 2 < every_steps,
+        "stepped {due_steps} times (every step: {every_steps})"
+    );
+}

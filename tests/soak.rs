@@ -28,6 +28,8 @@ enum Outcome {
     QueueFull,
     /// Not acceptable while the session runs.
     Closed,
+    /// Only drives are superseded, and none is asked for here.
+    Superseded,
     /// The generous outer timeout fired: the request hung.
     Hung,
 }
@@ -108,6 +110,7 @@ async fn ten_minutes_noisy_driving_with_a_disconnect_every_minute() {
                     Ok(Err(RequestError::LinkLost)) => Outcome::LinkLost,
                     Ok(Err(RequestError::QueueFull)) => Outcome::QueueFull,
                     Ok(Err(RequestError::Closed)) => Outcome::Closed,
+                    Ok(Err(RequestError::Superseded)) => Outcome::Superseded,
                 };
                 *outcomes.lock().unwrap().entry((name, outcome)).or_default() += 1;
             }));
@@ -169,6 +172,7 @@ async fn ten_minutes_noisy_driving_with_a_disconnect_every_minute() {
         0,
         "session closed under load: {outcomes:?}"
     );
+    assert_eq!(count(&|o| o == Outcome::Superseded), 0, "{outcomes:?}");
     let answered = count(&|o| o == Outcome::Answered);
     assert!(answered > 0, "{outcomes:?}");
     assert!(

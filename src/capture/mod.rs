@@ -389,16 +389,20 @@ impl Capture {
     pub fn load_with(path: &std::path::Path, handles: &[u16]) -> Result<Capture, String> {
         let bytes =
             std::fs::read(path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
-        if btsnoop::sniff(&bytes) {
-            return hci::capture_from_btsnoop(&bytes, handles);
+        Capture::from_bytes(&bytes, handles, &path.display().to_string())
+    }
+
+    /// A capture of either kind from its bytes (`name` says what they are in messages).
+    pub fn from_bytes(bytes: &[u8], handles: &[u16], name: &str) -> Result<Capture, String> {
+        if btsnoop::sniff(bytes) {
+            return hci::capture_from_btsnoop(bytes, handles);
         }
-        if TextReader::sniff(&bytes) {
-            let text = String::from_utf8_lossy(&bytes);
+        if TextReader::sniff(bytes) {
+            let text = String::from_utf8_lossy(bytes);
             return Capture::from_text(&text);
         }
         Err(format!(
-            "{} is neither a droidctl capture (it starts with \"{MAGIC}\") nor a btsnoop log (\"btsnoop\\0\")",
-            path.display()
+            "{name} is neither a droidctl capture (it starts with \"{MAGIC}\") nor a btsnoop log (\"btsnoop\\0\")"
         ))
     }
 

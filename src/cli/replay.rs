@@ -85,9 +85,24 @@ pub fn load(args: &ReplayArgs) -> Result<(crate::capture::Capture, crate::model:
     let handles = handles(args)?;
     let capture =
         crate::capture::Capture::load_with(&args.file, &handles).map_err(CliError::failure)?;
-    crate::capture::replay::validate(&capture)
-        .map_err(|e| CliError::usage(format!("{}: {e}", args.file.display())))?;
-    let model = match &args.model {
+    let model = checked_model(
+        &capture,
+        args.model.as_deref(),
+        &args.file.display().to_string(),
+    )?;
+    Ok((capture, model))
+}
+
+/// Check a loaded capture for replay and pick its model: `model` (`--model`), the capture's,
+/// or one of its family's. `name` names the file in messages.
+pub fn checked_model(
+    capture: &crate::capture::Capture,
+    model: Option<&str>,
+    name: &str,
+) -> Result<crate::model::Model, CliError> {
+    crate::capture::replay::validate(capture)
+        .map_err(|e| CliError::usage(format!("{name}: {e}")))?;
+    let model = match model {
         Some(m) => crate::model::Model::from_id(m)
             .ok_or_else(|| CliError::usage(format!("unknown model {m:?}")))?,
         None => match (capture.header.model, capture.family()) {
@@ -95,8 +110,7 @@ pub fn load(args: &ReplayArgs) -> Result<(crate::capture::Capture, crate::model:
             (None, Some(f)) => crate::family::for_protocol(f).representative(),
             (None, None) => {
                 return Err(CliError::failure(format!(
-                    "{}: no droid traffic found in this {}",
-                    args.file.display(),
+                    "{name}: no droid traffic found in this {}",
                     capture.kind
                 )));
             }
@@ -112,7 +126,7 @@ pub fn load(args: &ReplayArgs) -> Result<(crate::capture::Capture, crate::model:
             crate::family::for_model(model).name()
         )));
     }
-    Ok((capture, model))
+    Ok(model)
 }
 
 /// A capture of several droids: each droid's capture, checked, with its model and name.

@@ -18,6 +18,9 @@ use serde::Deserialize;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
+/// The slowest write pacing `session.pacing_ms` may set.
+pub const MAX_PACING_MS: u64 = 1000;
+
 /// The shipped defaults (also what `droidctl config init` writes).
 pub const DEFAULT_TOML: &str = include_str!("../../assets/default-config.toml");
 
@@ -376,6 +379,18 @@ impl Config {
                 return bad("keyboard", k, format!("{v} is out of range 20..=5000"));
             }
         }
+        // Slower pacing would keep every command, the operator's stop included, waiting
+        // that long (with a huge value, forever: found by the config fuzz target).
+        if self.session.pacing_ms > MAX_PACING_MS {
+            return bad(
+                "session",
+                "pacing_ms",
+                format!(
+                    "{} is out of range 0..={MAX_PACING_MS} (0: the model's own)",
+                    self.session.pacing_ms
+                ),
+            );
+        }
         Ok(())
     }
 }
@@ -468,6 +483,12 @@ mod tests {
             .unwrap_err();
         assert_eq!(e.key.as_deref(), Some("keys.packet_log.pause"));
         assert_eq!(e.line, Some(3));
+        // A pacing that would keep the stop waiting for ever.
+        let e = Config::parse_merged(Some(p), "[session]\npacing_ms = 9223372036854775807\n")
+            .unwrap_err();
+        assert_eq!(e.key.as_deref(), Some("session.pacing_ms"));
+        assert!(e.message.contains("0..=1000"), "{e}");
+        assert!(Config::parse_merged(Some(p), "[session]\npacing_ms = 1000\n").is_ok());
     }
 
     #[test]

@@ -52,6 +52,15 @@ impl Command {
         }
     }
 
+    /// A drive command (speed and heading, or Robi's remote control), in any family.
+    pub fn is_drive(&self) -> bool {
+        match self {
+            Command::V2(c) => (c.did, c.cid) == (0x16, 0x07),
+            Command::V1(c) => (c.did, c.cid) == (0x02, 0x30),
+            Command::Robi(_) => true,
+        }
+    }
+
     /// A drive command at speed 0 (a stop), in any family: the session writes those first.
     pub fn is_stop(&self) -> bool {
         match self {

@@ -10,3 +10,4 @@ pub mod events;
 pub mod record;
 pub mod server;
 pub mod sim_backend;
+mod stream;

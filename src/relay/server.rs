@@ -16,6 +16,10 @@
 
 use super::backend::{Connected, DroidEvent, GattBackend, GattConnection};
 pub use super::events::ServerEvent;
+use super::stream::{
+    ClientReader, ClientWriter, READ_CHUNK, read_while_busy, take_requests, write_loop,
+};
+pub use super::stream::{MAX_QUEUED, MAX_QUEUED_SCANS};
 use crate::gatt::{CharRole, Endpoint, GattUuid};
 use crate::model::Model;
 use crate::protocol::relay::{DecodeError, Device, Limits, Reply, Request, RequestDecoder};
@@ -25,9 +29,8 @@ use std::net::SocketAddr;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
-use tokio::io::{AsyncReadExt, AsyncWriteExt};
-use tokio::net::tcp::{OwnedReadHalf, OwnedWriteHalf};
-use tokio::net::{TcpListener, TcpSocket, TcpStream};
+use tokio::io::{AsyncRead, AsyncReadExt, AsyncWrite};
+use tokio::net::{TcpListener, TcpSocket};
 use tokio::sync::{Semaphore, mpsc, watch};
 use tokio::time::{Instant, sleep_until, timeout};
 
@@ -116,6 +119,28 @@ fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
 }
 
 impl Shared {
+    fn new(backend: Arc<dyn GattBackend>, cfg: ServerConfig, sink: EventSink) -> Arc<Shared> {
+        Arc::new(Shared {
+            slots: Arc::new(Semaphore::new(cfg.max_clients)),
+            cfg,
+            backend,
+            sink,
+            held: Mutex::new(HashMap::new()),
+            next_id: AtomicU64::new(1),
+        })
+    }
+
+    /// A new client's task, announced.
+    fn client(self: &Arc<Self>, peer: SocketAddr) -> ClientTask {
+        let id = self.next_id.fetch_add(1, Ordering::Relaxed);
+        self.emit(ServerEvent::ClientConnected {
+            client: id,
+            peer: peer.to_string(),
+            clients: self.connected(),
+        });
+        ClientTask::new(self.clone(), id, peer)
+    }
+
     fn emit(&self, e: ServerEvent) {
         match &e {
             ServerEvent::ProtocolError { .. }
@@ -140,15 +165,7 @@ pub async fn serve(
     sink: EventSink,
     shutdown: impl Future<Output = ()>,
 ) {
-    let slots = Arc::new(Semaphore::new(cfg.max_clients));
-    let shared = Arc::new(Shared {
-        cfg,
-        backend,
-        sink,
-        held: Mutex::new(HashMap::new()),
-        next_id: AtomicU64::new(1),
-        slots,
-    });
+    let shared = Shared::new(backend, cfg, sink);
     if let Ok(a) = listener.local_addr() {
         shared.emit(ServerEvent::Listening {
             address: a.to_string(),
@@ -191,16 +208,11 @@ pub async fn serve(
             continue;
         };
         let _ = stream.set_nodelay(true);
-        let id = shared.next_id.fetch_add(1, Ordering::Relaxed);
-        shared.emit(ServerEvent::ClientConnected {
-            client: id,
-            peer: peer.to_string(),
-            clients: shared.connected(),
-        });
-        let shared = shared.clone();
+        let (rd, wr) = stream.into_split();
+        let client = shared.client(peer);
         let stop = stop_rx.clone();
         tasks.spawn(async move {
-            ClientTask::new(shared, id, peer).run(stream, stop).await;
+            client.run(Box::new(rd), Box::new(wr), stop).await;
             drop(permit);
         });
     }
@@ -210,6 +222,26 @@ pub async fn serve(
         while tasks.join_next().await.is_some() {}
     })
     .await;
+}
+
+/// Serve one client over any byte stream (`peer` names it in events) until it ends, as
+/// [`serve`] serves each TCP connection: for tests and fuzzing in one process, no sockets.
+pub async fn serve_stream(
+    stream: impl AsyncRead + AsyncWrite + Send + 'static,
+    peer: SocketAddr,
+    backend: Arc<dyn GattBackend>,
+    cfg: ServerConfig,
+    sink: EventSink,
+) {
+    let shared = Shared::new(backend, cfg, sink);
+    let (rd, wr) = tokio::io::split(stream);
+    // Nobody stops this server: the client ends it.
+    let (_stop, never) = watch::channel(false);
+    let _slot = shared.slots.clone().try_acquire_owned();
+    shared
+        .client(peer)
+        .run(Box::new(rd), Box::new(wr), never)
+        .await;
 }
 
 /// The droid a client holds.
@@ -244,71 +276,6 @@ struct ClientTask {
     notifications: u64,
 }
 
-/// Read buffer size: a few requests at a time.
-const READ_CHUNK: usize = 4096;
-
-/// Requests a client may have waiting behind the one being served: the protocol's SEQ is one
-/// byte, so more outstanding requests could not be told apart. A client that sends more
-/// without waiting for the answers is told so and closed.
-pub const MAX_QUEUED: usize = 256;
-
-/// Scans and finds (up to [`ServerConfig::max_scan`] each) a client may have waiting: one
-/// pipelining hundreds of SCANs in one write would hold its task, and the adapter's scan,
-/// for hours.
-pub const MAX_QUEUED_SCANS: usize = 2;
-
-/// Move the requests `decoder` has whole into `queue`; `Err` when more wait than the bounds
-/// allow.
-fn take_requests(
-    decoder: &mut RequestDecoder,
-    queue: &mut VecDeque<Result<Request, DecodeError>>,
-) -> Result<(), String> {
-    let is_scan = |r: &Result<Request, DecodeError>| {
-        matches!(r, Ok(Request::Scan { .. } | Request::Find { .. }))
-    };
-    let mut scans = queue.iter().filter(|r| is_scan(r)).count();
-    while let Some(r) = decoder.next() {
-        scans += is_scan(&r) as usize;
-        queue.push_back(r);
-        if scans > MAX_QUEUED_SCANS {
-            return Err(format!(
-                "more than {MAX_QUEUED_SCANS} scans queued behind the one being served; wait \
-                 for the answers"
-            ));
-        }
-        if queue.len() > MAX_QUEUED {
-            return Err(format!(
-                "more than {MAX_QUEUED} requests queued behind the one being served; wait for \
-                 the answers"
-            ));
-        }
-    }
-    Ok(())
-}
-
-/// While a request is served: keep reading the client, so its departure is noticed (and
-/// what it sends meanwhile queued). Resolves only with the reason to close: the client went,
-/// reading failed, or it queued too much.
-async fn read_while_busy(
-    rd: &mut OwnedReadHalf,
-    buf: &mut [u8],
-    decoder: &mut RequestDecoder,
-    queue: &mut VecDeque<Result<Request, DecodeError>>,
-) -> String {
-    loop {
-        match rd.read(buf).await {
-            Ok(0) => return "the client disconnected".to_string(),
-            Ok(n) => {
-                decoder.push(&buf[..n]);
-                if let Err(why) = take_requests(decoder, queue) {
-                    return why;
-                }
-            }
-            Err(e) => return format!("reading failed: {e}"),
-        }
-    }
-}
-
 impl ClientTask {
     fn new(shared: Arc<Shared>, id: u64, peer: SocketAddr) -> Self {
         ClientTask {
@@ -327,8 +294,12 @@ impl ClientTask {
         &self.shared.cfg
     }
 
-    async fn run(mut self, stream: TcpStream, mut stop: watch::Receiver<bool>) {
-        let (mut rd, wr) = stream.into_split();
+    async fn run(
+        mut self,
+        mut rd: ClientReader,
+        wr: ClientWriter,
+        mut stop: watch::Receiver<bool>,
+    ) {
         let (tx, rx) = mpsc::channel(self.cfg().send_queue.max(1));
         self.tx = Some(tx);
         let mut writer = tokio::spawn(write_loop(wr, rx, self.cfg().write_timeout));
@@ -345,7 +316,7 @@ impl ClientTask {
             // departure are still heard, so a droid is never left to a long scan.
             let mut served = false;
             loop {
-                if let Err(why) = take_requests(&mut decoder, &mut queue) {
+                if let Err(why) = take_requests(&mut decoder, &mut queue, false) {
                     self.protocol_error(why.clone());
                     let _ = self.send(&Reply::error(&why, None));
                     break 'client why;
@@ -379,6 +350,9 @@ impl ClientTask {
             }
             if served {
                 last_heard = Instant::now();
+                // What is buffered now is a new request: its own time runs from here (the
+                // first partial read of a steady stream is long gone).
+                partial_since = None;
             }
             partial_since = match (decoder.buffered(), partial_since) {
                 (0, _) => None,
@@ -831,36 +805,4 @@ pub async fn stop(
         }
     }
     ok
-}
-
-/// Send queued frames to the client; the reason it ended.
-async fn write_loop(
-    mut wr: OwnedWriteHalf,
-    mut rx: mpsc::Receiver<Vec<u8>>,
-    limit: Duration,
-) -> String {
-    let mut batch = Vec::new();
-    while let Some(first) = rx.recv().await {
-        batch.clear();
-        batch.extend_from_slice(&first);
-        // Whatever else is queued goes in the same write.
-        while batch.len() < 64 * 1024 {
-            match rx.try_recv() {
-                Ok(more) => batch.extend_from_slice(&more),
-                Err(_) => break,
-            }
-        }
-        match timeout(limit, wr.write_all(&batch)).await {
-            Ok(Ok(())) => {}
-            Ok(Err(e)) => return format!("writing to the client failed: {e}"),
-            Err(_) => {
-                return format!(
-                    "the client cannot keep up: a write stalled for {:.0} s",
-                    limit.as_secs_f64()
-                );
-            }
-        }
-    }
-    let _ = timeout(limit, wr.shutdown()).await;
-    "closed".to_string()
 }

@@ -76,6 +76,8 @@ pub enum RequestError {
     QueueFull,
     /// The session has ended.
     Closed,
+    /// A newer drive command (an e-stop) replaced this drive before it was written.
+    Superseded,
 }
 
 impl std::fmt::Display for RequestError {
@@ -86,6 +88,9 @@ impl std::fmt::Display for RequestError {
             RequestError::LinkLost => write!(f, "the connection was lost"),
             RequestError::QueueFull => write!(f, "too many commands waiting to be sent"),
             RequestError::Closed => write!(f, "the session has ended"),
+            RequestError::Superseded => {
+                write!(f, "a newer drive command replaced it before it was sent")
+            }
         }
     }
 }
@@ -315,14 +320,18 @@ impl SessionHandle {
     }
 
     /// Set the latest value of a continuous control (drive or head): replaces any older
-    /// unwritten one. Never blocks, never queues more than one per slot.
+    /// unwritten one, and a drive the drive commands queued before it. Never blocks, never
+    /// queues more than one per slot.
     pub fn set(&self, slot: Slot, cmd: impl Into<Command>) {
         let mut q = lock(&self.shared.queue);
-        q.set_slot(slot, cmd.into());
+        let superseded = q.set_slot(slot, cmd.into());
         let coalesced = q.coalesced;
         drop(q);
         lock(&self.shared.stats).coalesced = coalesced;
         self.shared.wake.notify_one();
+        for r in superseded.into_iter().filter_map(|q| q.reply) {
+            let _ = r.send(Err(RequestError::Superseded));
+        }
     }
 
     /// Commands waiting to be written (slots included).

@@ -88,9 +88,28 @@ impl OutQueue {
         }
     }
 
-    /// Put the latest value of a continuous control; replaces any unwritten older one.
-    pub fn set_slot(&mut self, slot: Slot, cmd: impl Into<Command>) {
+    /// Put the latest value of a continuous control; replaces any unwritten older one. A
+    /// drive also supersedes the drive commands waiting in the FIFO (a request's drive, or
+    /// one re-sent after a Wake): written after it, an older drive would undo it (an e-stop
+    /// followed by the drive it stopped). They are returned, for their callers to be told.
+    pub fn set_slot(&mut self, slot: Slot, cmd: impl Into<Command>) -> Vec<Queued> {
         let cmd = cmd.into();
+        let mut superseded = Vec::new();
+        if slot == Slot::Drive && self.fifo.iter().any(|q| q.cmd.is_drive()) {
+            let mut kept = VecDeque::with_capacity(self.fifo.len());
+            for (i, q) in std::mem::take(&mut self.fifo).into_iter().enumerate() {
+                // The connect setup's own stop (ahead of the slots) stays.
+                if q.cmd.is_drive() && !q.cmd.is_stop() {
+                    if i < self.setup_left {
+                        self.setup_left -= 1;
+                    }
+                    superseded.push(q);
+                } else {
+                    kept.push_back(q);
+                }
+            }
+            self.fifo = kept;
+        }
         let s = match slot {
             Slot::Drive => &mut self.drive,
             Slot::Head => &mut self.head,
@@ -98,6 +117,8 @@ impl OutQueue {
         if s.replace(cmd).is_some() {
             self.coalesced += 1;
         }
+        self.coalesced += superseded.len() as u64;
+        superseded
     }
 
     /// Queue a discrete request; a full queue hands it back.
@@ -260,6 +281,29 @@ mod tests {
             });
         }
         assert_eq!(popped[..2], [Slot::Drive, Slot::Head]);
+    }
+
+    #[test]
+    fn a_drive_supersedes_the_drives_queued_before_it() {
+        let mut q = OutQueue::new(8);
+        q.push_front(vec![req(cmd::wake()), req(drive(100))], 1);
+        q.push(req(cmd::ping())).unwrap();
+        let gone = q.set_slot(Slot::Drive, drive(0));
+        assert_eq!(gone.len(), 1);
+        assert_eq!(gone[0].cmd.data()[0], 100);
+        let order: Vec<u8> = std::iter::from_fn(|| q.pop())
+            .map(|n| match n {
+                Next::Fifo(q) => q.cmd.cid(),
+                Next::Slot(..) => 0xD0,
+            })
+            .collect();
+        // The Wake, the stop, the ping; the old drive never.
+        assert_eq!(order, [0x0D, 0xD0, 0x01]);
+        // The setup's own stop stays ahead of the slots.
+        let mut q = OutQueue::new(8);
+        q.push_front_all(vec![req(cmd::wake()), req(drive(0))]);
+        assert!(q.set_slot(Slot::Drive, drive(30)).is_empty());
+        assert_eq!(q.len(), 3);
     }
 
     #[test]

@@ -71,11 +71,23 @@ pub struct SimLink {
 impl SimLink {
     /// A simulated droid of `model`. Create it inside the tokio runtime that will drive it.
     pub fn new(model: Model, cfg: SimConfig, faults: Faults) -> Self {
+        let droid = wire_droid(model, cfg.clone());
+        SimLink::with_droid(model, droid, &cfg, faults)
+    }
+
+    /// A link to `droid` (a simulator front of `model`, perhaps wrapped to watch it), stepped
+    /// at `cfg`'s physics step.
+    pub fn with_droid(
+        model: Model,
+        droid: Box<dyn WireDroid>,
+        cfg: &SimConfig,
+        faults: Faults,
+    ) -> Self {
         let step = cfg.step.max(Duration::from_millis(1));
         let rng = Rng::new(faults.seed);
         SimLink {
             shared: Arc::new(Mutex::new(Shared {
-                droid: wire_droid(model, cfg),
+                droid,
                 rng,
                 next_disconnect: 0,
                 opens: 0,

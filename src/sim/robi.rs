@@ -130,6 +130,20 @@ impl SimRobi {
         self.body.drive_wheels(0.0, 0.0);
     }
 
+    /// When the robot next has something to send: its next frame while frames flow, else
+    /// what its body has due; `None` while it rolls (stepped every physics step). Frames are
+    /// made at their own times however often the robot is advanced, so a host that steps it
+    /// only then sees the same frames at the same times (issue 21: it was stepped at the full
+    /// physics rate, 100 times a second, when idle).
+    pub fn next_due(&self) -> Option<Duration> {
+        let body = self.body.next_due()?;
+        Some(if self.started {
+            body.min(self.next_frame)
+        } else {
+            body
+        })
+    }
+
     /// Let time pass; returns the frames due, each one notification.
     pub fn advance(&mut self, now: Duration) -> Vec<Vec<u8>> {
         self.advance_to(now);
@@ -227,5 +241,9 @@ impl super::WireDroid for SimRobi {
 
     fn handshake_value(&self) -> Vec<u8> {
         self.handshake().encode().to_vec()
+    }
+
+    fn next_due(&self) -> Option<Duration> {
+        SimRobi::next_due(self)
     }
 }

@@ -225,6 +225,22 @@ pub(super) fn decode(
                 .map_err(|e| CliError::usage(format!("cannot read {path}: {e}")))?,
         )
     };
+    decode_reader(&mut input, path, forced, handles, json, summary_only, out)
+}
+
+/// Decode the log `input` holds (`path` names it in messages), the family `forced` or found
+/// in the log: every packet printed (unless `summary_only`), then the summary. A damaged or
+/// unreadable log, or one without droid traffic, ends with an error after the summary of
+/// what was read.
+pub fn decode_reader(
+    input: &mut dyn Read,
+    path: &str,
+    forced: Option<Protocol>,
+    handles: &[u16],
+    json: bool,
+    summary_only: bool,
+    out: &mut dyn Write,
+) -> Result<i32, CliError> {
     let mut printer = Printer {
         out,
         json,

@@ -11,7 +11,8 @@ mod btsnoop;
 mod file;
 mod print;
 
-pub use file::{FileSummary, decode_reader};
+pub use btsnoop::decode_reader as decode_btsnoop_reader;
+pub use file::{BLOCK, FileSummary, decode_reader};
 
 use super::CliError;
 use crate::family::{self, Family, ReadOption, ReadOptions, Side};
