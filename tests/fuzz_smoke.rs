@@ -92,6 +92,11 @@ fn relay_server() {
     smoke("relay_server", 1000);
 }
 
+#[test]
+fn bridge() {
+    smoke("bridge", 300);
+}
+
 #[cfg(target_os = "linux")]
 #[test]
 fn bluez() {
@@ -577,4 +582,36 @@ fn write_seed_corpus() {
         "traced",
         &[[0x03].as_slice(), &calls[1..]].concat(),
     );
+    // bridge: a session of every verb and some bad lines, whole and in 7-byte pieces 50 ms
+    // apart; a drive left to time out; a line over the limit.
+    let session: &[u8] = b"{\"v\":1,\"cmd\":\"drive\",\"speed\":120,\"heading\":90,\"id\":1}\n\
+        {\"v\":1,\"cmd\":\"twist\",\"droid\":\"robi\",\"linear\":0.2,\"angular\":0.5}\n\
+        {\"v\":1,\"cmd\":\"lights\",\"droid\":\"D2-0001\",\"group\":\"front\",\"rgb\":[0,0,255],\"id\":\"l\"}\n\
+        {\"v\":1,\"cmd\":\"head\",\"droid\":\"D2-0001\",\"angle\":-30}\n\
+        {\"v\":1,\"cmd\":\"stance\",\"droid\":\"D2-0001\",\"stance\":\"bipod\",\"id\":2}\n\
+        {\"v\":1,\"cmd\":\"sound\",\"droid\":\"robi\",\"sound\":3,\"id\":3}\n\
+        {\"v\":1,\"cmd\":\"stream\",\"droid\":\"D2-0001\",\"rate_hz\":50,\"sensors\":[\"attitude\"],\"id\":4}\n\
+        {\"v\":1,\"cmd\":\"matrix\",\"droid\":\"D2-0001\",\"op\":\"fill\",\"rgb\":[1,2,3]}\n\
+        not json\n{\"v\":2,\"cmd\":\"stop\"}\n{\"v\":1,\"cmd\":\"drive\",\"speed\":300,\"heading\":0,\"id\":5}\n\
+        {\"v\":1,\"cmd\":\"stop\",\"droid\":\"D2-0001\"}\n{\"v\":1,\"cmd\":\"estop\",\"id\":\"e\"}\n";
+    write("bridge", "session", &[[0x00].as_slice(), session].concat());
+    write(
+        "bridge",
+        "session-paced",
+        &[[0x51, 7].as_slice(), session].concat(),
+    );
+    let drive: &[u8] =
+        b"{\"v\":1,\"droid\":\"D2-0001\",\"cmd\":\"drive\",\"speed\":200,\"heading\":180}\n";
+    write(
+        "bridge",
+        "drive-then-silence",
+        &[&[0x00], drive, drive, drive].concat(),
+    );
+    let long = [
+        b"\0{\"v\":1,\"cmd\":\"stop\",\"id\":\"".as_slice(),
+        &[b'x'; 5000],
+        b"\"}\n{\"v\":1,\"cmd\":\"stop\",\"id\":6}\n",
+    ]
+    .concat();
+    write("bridge", "long-line", &long);
 }

@@ -4,24 +4,20 @@
 
 use super::schema::{self, ErrorCode, Out};
 use super::*;
+use crate::family::Packet;
 use crate::family::setup::{SetupOptions, connect_setup};
-use crate::family::{Packet, RobiPacket};
 use crate::fleet::DroidSpec;
 use crate::session::{Direction, LinkState, LogItem, SessionConfig};
 use crate::sim::{Faults, SimConfig, SimLink};
 use proptest::prelude::*;
 use tokio::time::{Instant, sleep};
 
-/// A drive write's speed, by family: v2 Drive With Heading, v1 Roll, Robi's velocity.
+/// A drive write's speed, as the droid's family reads its own drive commands back.
 fn drive_speed(p: &Packet) -> Option<u8> {
-    match p {
-        Packet::V2(p) if (p.did, p.cid) == (0x16, 0x07) => p.data.first().copied(),
-        Packet::V1(crate::protocol::v1::Packet::Command(c)) if (c.did, c.cid) == (0x02, 0x30) => {
-            c.data.first().copied()
-        }
-        Packet::Robi(RobiPacket::Control(c)) => Some(c.velocity),
-        _ => None,
-    }
+    let (c, _, _) = p.as_command()?;
+    crate::family::for_protocol(p.protocol())
+        .read_drive(&c)
+        .map(|d| d.speed)
 }
 
 /// A droid's drive writes: when (since the rig started) and the speed.

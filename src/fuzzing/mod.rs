@@ -14,6 +14,7 @@
 
 #[cfg(target_os = "linux")]
 pub mod bluez;
+pub mod bridge;
 pub mod btsnoop;
 pub mod capture;
 pub mod config;
@@ -46,6 +47,7 @@ pub fn targets() -> Vec<&'static Target> {
         &config::TARGET,
         &packet_file::TARGET,
         &relay_server::TARGET,
+        &bridge::TARGET,
     ];
     #[cfg(target_os = "linux")]
     let v = [v, vec![&bluez::TARGET]].concat();
