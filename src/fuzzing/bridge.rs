@@ -12,11 +12,10 @@
 use super::{Target, feeds, split};
 use crate::bridge::schema::{self, ErrorCode};
 use crate::bridge::{Bridge, Settings, stdio};
-use crate::family::setup::{SetupOptions, connect_setup};
-use crate::fleet::{DroidSpec, Fleet};
+use crate::family::setup::SetupOptions;
+use crate::fleet::Fleet;
 use crate::model::Model;
-use crate::session::{Direction, LinkState, LogItem, SessionConfig};
-use crate::sim::{Faults, SimConfig, SimLink};
+use crate::session::{Direction, LinkState, LogItem};
 use serde_json::Value;
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
@@ -59,25 +58,22 @@ pub fn run_input(data: &[u8]) {
     rt.block_on(session(pause, sizes, stream));
 }
 
-fn fleet() -> Fleet {
-    let specs = [Model::R2D2, Model::Robi42]
+/// The droids as `droidctl bridge --sim r2d2,robi` starts them.
+fn fleet() -> (Fleet, Vec<SetupOptions>) {
+    let config = crate::config::Config::defaults();
+    let models = [Model::R2D2, Model::Robi42];
+    let specs = crate::cli::fleet::simulated(&models)
         .into_iter()
-        .enumerate()
-        .map(|(i, m)| DroidSpec {
-            name: crate::relay::sim_backend::sim_name(m, i),
-            model: m,
-            link: Box::new(SimLink::new(m, SimConfig::for_model(m), Faults::none())),
-            session: SessionConfig {
-                family: m.protocol(),
-                model: Some(m),
-                pacing: m.write_pacing(),
-                setup: connect_setup(m, &SetupOptions::default()),
-                ..SessionConfig::default()
-            },
-            origin: "simulated".into(),
+        .map(|f| {
+            let s = crate::cli::fleet::session_config(f.model, &config, true);
+            f.into_spec(s)
         })
         .collect();
-    Fleet::start(specs)
+    let setups = models
+        .iter()
+        .map(|m| crate::family::setup::from_config(*m, &config).0)
+        .collect();
+    (Fleet::start(specs), setups)
 }
 
 fn watch_writes(fleet: &Fleet) -> Writes {
@@ -112,7 +108,7 @@ fn still(writes: &Writes, when: &str) {
 }
 
 async fn session(pause: u8, sizes: &[u8], stream: &[u8]) {
-    let fleet = fleet();
+    let (fleet, setups) = fleet();
     let writes = watch_writes(&fleet);
     for i in 0..fleet.len() {
         if let Some(mut st) = fleet.link_state(i) {
@@ -121,7 +117,7 @@ async fn session(pause: u8, sizes: &[u8], stream: &[u8]) {
     }
     let settings = Settings::default();
     let timeout = settings.command_timeout;
-    let (bridge, rx) = Bridge::start(fleet, vec![SetupOptions::default(); 2], settings);
+    let (bridge, rx) = Bridge::start(fleet, setups, settings);
     let (client, server) = tokio::io::duplex(1 << 16);
     let (server_in, server_out) = tokio::io::split(server);
     let running = tokio::spawn(stdio::run(
