@@ -161,10 +161,10 @@ pub fn validate(model: Model, steps: &[Step]) -> Result<(), Vec<crate::script::S
                     Some(format!("{name} has no compass"))
                 }
                 Action::Head(_) if !model.has_dome() => Some(format!("{name} has no dome to turn")),
-                Action::Animation(_) if family.animation(0).is_none() => {
+                Action::Animation(_) if family.animation(model, 0).is_none() => {
                     Some(format!("{name} has no animations"))
                 }
-                Action::Sound(_) if family.sound(0).is_none() => {
+                Action::Sound(_) if family.sound(model, 0).is_none() => {
                     Some(format!("{name} cannot play sounds"))
                 }
                 Action::Stream { .. } if family.stream_caps(model).is_none() => Some(format!(
@@ -380,12 +380,12 @@ impl Runner {
                 }
             }
             Action::Animation(id) => {
-                if let Some(c) = self.family.animation(*id) {
+                if let Some(c) = self.family.animation(self.model, *id) {
                     self.request(s.line, c).await;
                 }
             }
             Action::Sound(id) => {
-                if let Some(c) = self.family.sound(*id) {
+                if let Some(c) = self.family.sound(self.model, *id) {
                     self.request(s.line, c).await;
                 }
             }

@@ -219,6 +219,12 @@ impl Model {
         self == Model::Rvr
     }
 
+    /// The Star Wars droids' animations and sounds (IO 0x17 `play_animation`,
+    /// `play_audio_file`); spherov2 binds neither to BOLT, Mini or RVR, which have no speaker.
+    pub fn plays_animations(self) -> bool {
+        matches!(self, Model::R2D2 | Model::R2Q5 | Model::BB9E)
+    }
+
     /// Whether the droid has R2's rotating dome.
     pub fn has_dome(self) -> bool {
         matches!(self, Model::R2D2 | Model::R2Q5)

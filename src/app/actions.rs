@@ -114,12 +114,12 @@ impl App {
     }
 
     pub fn play_animation(&mut self, id: u16, name: &str) {
-        let c = self.family.animation(id);
+        let c = self.family.animation(self.state.model, id);
         self.play(c, "animation", id, name, "this droid has no animations");
     }
 
     pub fn play_sound(&mut self, id: u16, name: &str) {
-        let c = self.family.sound(id);
+        let c = self.family.sound(self.state.model, id);
         self.play(c, "sound", id, name, "this droid cannot play sounds");
     }
 

@@ -290,10 +290,10 @@ impl App {
             Action::Tuning => self.open_tuning(),
             Action::Colour => self.cycle_colour(),
             Action::BackLight => self.toggle_back_light(),
-            Action::Animations if self.family.animation(0).is_none() => {
+            Action::Animations if self.family.animation(self.state.model, 0).is_none() => {
                 self.hint("this droid has no animations")
             }
-            Action::Sounds if self.family.sound(0).is_none() => {
+            Action::Sounds if self.family.sound(self.state.model, 0).is_none() => {
                 self.hint("this droid cannot play sounds")
             }
             Action::Animations => self.state.overlay = Overlay::Animations { selected: 0 },

@@ -347,11 +347,11 @@ impl Bridge {
                     );
                 }
             },
-            Cmd::Animation(id) => match family.animation(*id) {
+            Cmd::Animation(id) => match family.animation(model, *id) {
                 Some(c) => return self.request(req, i, vec![c], None),
                 None => return unsupported("animations", "has no animations".into()),
             },
-            Cmd::Sound(id) => match family.sound(*id) {
+            Cmd::Sound(id) => match family.sound(model, *id) {
                 Some(c) => return self.request(req, i, vec![c], None),
                 None => return unsupported("sounds", "cannot play sounds".into()),
             },

@@ -295,6 +295,11 @@ impl Link for RecordingLink {
         self.inner.retry_hint()
     }
 
+    /// A relay that closes quiet clients closes a recorded one just the same: keep it alive.
+    fn keepalive(&self) -> Option<std::time::Duration> {
+        self.inner.keepalive()
+    }
+
     fn describe(&self) -> String {
         self.inner.describe()
     }
@@ -399,6 +404,35 @@ mod tests {
         ));
         let _ = std::fs::remove_file(&p);
         p
+    }
+
+    /// A link that wants traffic when quiet (as a relay's does).
+    struct Quiet(SimLink);
+
+    impl Link for Quiet {
+        fn open(&mut self) -> BoxFuture<'_, Result<Connection, LinkError>> {
+            self.0.open()
+        }
+        fn keepalive(&self) -> Option<Duration> {
+            Some(Duration::from_secs(20))
+        }
+        fn describe(&self) -> String {
+            self.0.describe()
+        }
+    }
+
+    #[test]
+    fn recording_keeps_the_links_keepalive() {
+        let p = tmp("keepalive");
+        let rec = Recorder::create(&p, false).unwrap();
+        let sim = || SimLink::new(Model::Robi42, SimConfig::default(), Faults::none());
+        assert_eq!(
+            rec.wrap(Box::new(Quiet(sim()))).keepalive(),
+            Some(Duration::from_secs(20))
+        );
+        assert_eq!(rec.wrap(Box::new(sim())).keepalive(), None);
+        drop(rec);
+        let _ = std::fs::remove_file(&p);
     }
 
     #[test]

@@ -150,10 +150,12 @@ pub trait Family: Sync {
     fn get_stance(&self) -> Option<Command> {
         None
     }
-    fn animation(&self, _id: u16) -> Option<Command> {
+    /// Play animation `id` on `model` (`None`: it has none).
+    fn animation(&self, _model: Model, _id: u16) -> Option<Command> {
         None
     }
-    fn sound(&self, _id: u16) -> Option<Command> {
+    /// Play sound `id` on `model` (`None`: it cannot play sounds).
+    fn sound(&self, _model: Model, _id: u16) -> Option<Command> {
         None
     }
     /// The LED command for a script's LED line on `model`.

@@ -312,12 +312,16 @@ impl Family for V2 {
         Some(cmd::get_leg_action().into())
     }
 
-    fn animation(&self, id: u16) -> Option<Command> {
-        Some(cmd::play_animation(id).into())
+    fn animation(&self, model: Model, id: u16) -> Option<Command> {
+        model
+            .plays_animations()
+            .then(|| cmd::play_animation(id).into())
     }
 
-    fn sound(&self, id: u16) -> Option<Command> {
-        Some(cmd::play_audio_file(id, AudioMode::Immediate).into())
+    fn sound(&self, model: Model, id: u16) -> Option<Command> {
+        model
+            .plays_animations()
+            .then(|| cmd::play_audio_file(id, AudioMode::Immediate).into())
     }
 
     /// R2 bits 0..2 front RGB, 3 logic, 4..6 back RGB, 7 holo; BB-9E 0..2 body RGB,

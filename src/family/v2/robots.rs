@@ -209,6 +209,31 @@ mod tests {
     use super::*;
 
     #[test]
+    fn only_the_star_wars_droids_play_animations_and_sounds() {
+        use crate::family::Family;
+        let f = &super::super::V2;
+        for m in [Model::R2D2, Model::R2Q5, Model::BB9E] {
+            assert!(
+                f.animation(m, 3).is_some() && f.sound(m, 1915).is_some(),
+                "{m:?}"
+            );
+        }
+        // No speaker, and spherov2 binds neither: refused here, not by the robot.
+        for m in [Model::Bolt, Model::Mini, Model::Rvr] {
+            assert!(
+                f.animation(m, 3).is_none() && f.sound(m, 1915).is_none(),
+                "{m:?}"
+            );
+            let steps = crate::script::parse("animation 3\nsound 1915\n").unwrap();
+            assert_eq!(
+                crate::mission::validate(m, &steps).unwrap_err().len(),
+                2,
+                "{m:?}"
+            );
+        }
+    }
+
+    #[test]
     fn rvr_battery_is_read_from_the_primary() {
         let Some(Command::V2(c)) = battery_request(Model::Rvr) else {
             panic!("RVR has a battery request");
