@@ -832,10 +832,12 @@ fn sphero_edu(py: &str, how: &[&str], name: &str, bus: Option<&str>, dir: &TempD
     serde_json::from_str(text(&out.stdout).trim()).unwrap()
 }
 
-/// It rolled at heading 90: east (+x), far more than sideways.
+/// It rolled at heading 90: east (+x), far more than sideways. How far depends on when the
+/// client's stop and its last streamed location arrive (38 to 60 cm for 1.5 s at speed 100,
+/// more spread on a loaded machine): the direction is what is checked, with a clear distance.
 fn rolled_east(seen: &Value) {
     let (x, y) = (f(&seen["location"]["x"]), f(&seen["location"]["y"]));
-    assert!(x > 40.0 && y.abs() < x / 3.0, "rolled east: {seen}");
+    assert!(x > 20.0 && y.abs() < x / 3.0, "rolled east: {seen}");
 }
 
 /// Issue 19 point 4: spherov2's Sphero Edu API drives a simulated BOLT and a simulated Mini
