@@ -58,3 +58,21 @@ fn lines_a_model_lacks_are_refused_before_anything_is_sent() {
         assert!(err.contains("nothing was sent"), "{err}");
     }
 }
+
+/// BOLT, Mini and RVR have no speaker: a mission's animation and sound lines are refused
+/// with the robot's name before anything is sent (spherov2 binds neither to them).
+#[test]
+fn animations_and_sounds_are_refused_on_the_newer_robots() {
+    let dir = Scratch::new("cli-run-robots", "sounds");
+    let script = dir.file("sounds.txt", "wake\nanimation 3\nsound 1915\n");
+    for model in ["bolt", "mini", "rvr"] {
+        let o = dir.run(&["run", path(&script), "--sim", model]);
+        assert_eq!(o.status.code(), Some(2), "{model}: {}", stderr(&o));
+        let err = stderr(&o);
+        assert!(
+            err.contains("sounds.txt:2: ") && err.contains("has no animations"),
+            "{model}: {err}"
+        );
+        assert!(err.contains("cannot play sounds"), "{model}: {err}");
+    }
+}
