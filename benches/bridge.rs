@@ -30,7 +30,6 @@ mod linux {
     use super::stats::{clock_ticks_per_s, cpu_ticks, percentile};
     use droidctl::bridge::mqtt::{BrokerUrl, MqttSettings};
     use droidctl::bridge::{Bridge, Settings, topic_name};
-    use droidctl::family::{Packet, RobiPacket};
     use droidctl::fleet::Fleet;
     use droidctl::model::Model;
     use droidctl::session::{Direction, LinkState, LogItem};
@@ -41,19 +40,7 @@ mod linux {
     use std::time::Duration;
     use tokio::time::{Instant, sleep};
 
-    /// A drive write's speed, by family: v2 Drive With Heading, v1 Roll, Robi's velocity.
-    fn drive_speed(p: &Packet) -> Option<u8> {
-        match p {
-            Packet::V2(p) if (p.did, p.cid) == (0x16, 0x07) => p.data.first().copied(),
-            Packet::V1(droidctl::protocol::v1::Packet::Command(c))
-                if (c.did, c.cid) == (0x02, 0x30) =>
-            {
-                c.data.first().copied()
-            }
-            Packet::Robi(RobiPacket::Control(c)) => Some(c.velocity),
-            _ => None,
-        }
-    }
+    use droidctl::family::drive_speed;
 
     fn mosquitto() -> Option<std::path::PathBuf> {
         [

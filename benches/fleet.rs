@@ -29,7 +29,6 @@ mod linux {
     use droidctl::app::run::{self, AppInputs, AppOptions};
     use droidctl::cli::connect::BleArgs;
     use droidctl::config::{Config, Key, KeyCode};
-    use droidctl::family::{Packet, RobiPacket};
     use droidctl::fleet::Fleet;
     use droidctl::session::{Direction, LinkState, LogItem};
     use droidctl::teleop::held::ReleaseMode;
@@ -41,19 +40,7 @@ mod linux {
     use tokio::sync::mpsc;
     use tokio::time::{Instant, sleep};
 
-    /// A drive write's speed, by family: v2 Drive With Heading, v1 Roll, Robi's velocity.
-    fn drive_speed(p: &Packet) -> Option<u8> {
-        match p {
-            Packet::V2(p) if (p.did, p.cid) == (0x16, 0x07) => p.data.first().copied(),
-            Packet::V1(droidctl::protocol::v1::Packet::Command(c))
-                if (c.did, c.cid) == (0x02, 0x30) =>
-            {
-                c.data.first().copied()
-            }
-            Packet::Robi(RobiPacket::Control(c)) => Some(c.velocity),
-            _ => None,
-        }
-    }
+    use droidctl::family::drive_speed;
 
     /// Each droid's drive writes: when (as the session logged them), and the speed.
     type Writes = Arc<Mutex<Vec<Vec<(Instant, u8)>>>>;

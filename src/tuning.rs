@@ -140,8 +140,10 @@ pub struct StreamRequest {
     pub sensors: SensorSet,
 }
 
-/// Collision detection as configured.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+/// Collision detection as configured (also the config file's `[collision]` table, checked
+/// when it loads).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct CollisionConfig {
     /// Off: method 0 (no detection, no notifications).
     pub enabled: bool,

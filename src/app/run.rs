@@ -105,11 +105,8 @@ fn build(source: Source, opts: AppOptions) -> App {
     state.help_nav = super::help::nav(&keymap);
     let start = Instant::now();
     let family = crate::family::for_model(opts.model);
-    state.monitor = super::monitor::MonitorView::new(
-        opts.model,
-        config.stream_request(),
-        config.collision.config(),
-    );
+    state.monitor =
+        super::monitor::MonitorView::new(opts.model, config.stream_request(), config.collision);
     let (session, player) = match source {
         Source::Live(s) => {
             state.help = super::help::live(&config);

@@ -4,7 +4,6 @@
 
 use super::schema::{self, ErrorCode, Out};
 use super::*;
-use crate::family::Packet;
 use crate::family::setup::{SetupOptions, connect_setup};
 use crate::fleet::DroidSpec;
 use crate::session::{Direction, LinkState, LogItem, SessionConfig};
@@ -12,13 +11,7 @@ use crate::sim::{Faults, SimConfig, SimLink};
 use proptest::prelude::*;
 use tokio::time::{Instant, sleep};
 
-/// A drive write's speed, as the droid's family reads its own drive commands back.
-fn drive_speed(p: &Packet) -> Option<u8> {
-    let (c, _, _) = p.as_command()?;
-    crate::family::for_protocol(p.protocol())
-        .read_drive(&c)
-        .map(|d| d.speed)
-}
+use crate::family::drive_speed;
 
 /// A droid's drive writes: when (since the rig started) and the speed.
 type Writes = Arc<Mutex<Vec<(Duration, u8)>>>;

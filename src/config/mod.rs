@@ -121,7 +121,7 @@ struct RawConfig {
     gamepad: RawGamepad,
     fleet: FleetSettings,
     streaming: monitor::Streaming,
-    collision: monitor::Collision,
+    collision: crate::tuning::CollisionConfig,
     bridge: bridge::Bridge,
 }
 
@@ -139,7 +139,7 @@ pub struct Config {
     /// `[streaming]`: the sensor groups and rate asked for.
     pub streaming: monitor::Streaming,
     /// `[collision]`: collision detection's parameters.
-    pub collision: monitor::Collision,
+    pub collision: crate::tuning::CollisionConfig,
     /// `[bridge]`: `droidctl bridge`'s command timeout, telemetry rate and MQTT settings.
     pub bridge: bridge::Bridge,
 }
@@ -500,10 +500,7 @@ mod tests {
         assert!(
             r.sensors.contains(SensorGroup::Gyro) && r.sensors.contains(SensorGroup::HeadAngle)
         );
-        assert_eq!(
-            c.collision.config(),
-            crate::tuning::CollisionConfig::default()
-        );
+        assert_eq!(c.collision, crate::tuning::CollisionConfig::default());
         let c = Config::parse_merged(
             None,
             "[streaming]\nrate_hz = 50\nsensors = [\"attitude\"]\n[collision]\nx_threshold = 200\ndead_time_ms = 500\n",
@@ -514,8 +511,8 @@ mod tests {
             (r.rate_hz, r.sensors),
             (50, SensorSet::of(&[SensorGroup::Attitude]))
         );
-        assert_eq!(c.collision.config().x_threshold, 200);
-        assert_eq!(c.collision.config().dead_time_units(), 50);
+        assert_eq!(c.collision.x_threshold, 200);
+        assert_eq!(c.collision.dead_time_units(), 50);
         // The older key still works, and wins.
         let c = Config::parse_merged(None, "[control]\nstreaming_interval_ms = 0\n").unwrap();
         assert_eq!(c.stream_request().rate_hz, 0);

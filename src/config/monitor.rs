@@ -23,33 +23,8 @@ impl Streaming {
     }
 }
 
-/// `[collision]` as written.
-#[derive(Debug, Clone, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Collision {
-    pub enabled: bool,
-    pub x_threshold: u8,
-    pub y_threshold: u8,
-    pub x_speed: u8,
-    pub y_speed: u8,
-    pub dead_time_ms: u16,
-}
-
-impl Collision {
-    pub fn config(&self) -> CollisionConfig {
-        CollisionConfig {
-            enabled: self.enabled,
-            x_threshold: self.x_threshold,
-            y_threshold: self.y_threshold,
-            x_speed: self.x_speed,
-            y_speed: self.y_speed,
-            dead_time_ms: self.dead_time_ms,
-        }
-    }
-}
-
 /// Range checks: (section, key, message).
-pub fn validate(s: &Streaming, c: &Collision) -> Result<(), (String, String, String)> {
+pub fn validate(s: &Streaming, c: &CollisionConfig) -> Result<(), (String, String, String)> {
     let bad = |sec: &str, k: &str, m: String| Err((sec.to_string(), k.to_string(), m));
     if s.rate_hz > 100 {
         return bad(

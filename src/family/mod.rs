@@ -326,6 +326,13 @@ pub fn for_model(model: Model) -> &'static dyn Family {
     for_protocol(model.protocol())
 }
 
+/// A drive write's speed, as the packet's own family reads its drive commands back (`None`
+/// for anything else): what tests, benchmarks and fuzzing watch on a link.
+pub fn drive_speed(p: &Packet) -> Option<u8> {
+    let (c, _, _) = p.as_command()?;
+    for_protocol(p.protocol()).read_drive(&c).map(|d| d.speed)
+}
+
 /// The family of a protocol.
 pub fn for_protocol(p: Protocol) -> &'static dyn Family {
     match p {

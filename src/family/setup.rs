@@ -66,7 +66,7 @@ pub fn from_config(
     let plan = super::stream::plan_for(model, config.stream_request());
     let setup = SetupOptions {
         tripod: true,
-        collision: config.collision.config(),
+        collision: config.collision,
         ..SetupOptions::default()
     };
     let setup = match &plan {

@@ -80,16 +80,15 @@ fn watch_writes(fleet: &Fleet) -> Writes {
     let writes: Writes = Arc::new(Mutex::new(vec![Vec::new(); fleet.len()]));
     for (i, m) in fleet.members().iter().enumerate() {
         let mut log = m.session.subscribe_log();
-        let (w, family) = (writes.clone(), m.family);
+        let w = writes.clone();
         tokio::spawn(async move {
             while let Ok(e) = log.recv().await {
                 if e.dir == Direction::Out
                     && let LogItem::Packet { packet, .. } = &e.item
-                    && let Some((c, _, _)) = packet.as_command()
-                    && let Some(d) = family.read_drive(&c)
+                    && let Some(speed) = crate::family::drive_speed(packet)
                     && let Ok(mut w) = w.lock()
                 {
-                    w[i].push(d.speed);
+                    w[i].push(speed);
                 }
             }
         });

@@ -171,17 +171,10 @@ fn drive(config: Config, model: Model) {
                 sleep(Duration::from_millis(30)).await;
             }
         }
-        let buttons = [
-            Button::South,
-            Button::East,
-            Button::North,
-            Button::West,
-            Button::Start,
-            Button::Select,
-            Button::LeftBumper,
-            Button::RightBumper,
-            Button::DPadUp,
-        ];
+        let buttons: Vec<Button> = Button::BINDABLE
+            .into_iter()
+            .chain([Button::DPadUp])
+            .collect();
         let mut events = Vec::new();
         for b in buttons {
             events.extend([PadEvent::Pressed(b), PadEvent::Released(b)]);
