@@ -201,8 +201,17 @@ async fn without_mirror_only_the_chosen_droid_drives_and_the_e_stop_still_reache
     sleep(Duration::from_secs(2)).await;
     let v = h.speeds();
     assert!(v[0] > 5.0 && v[1..].iter().all(|v| *v == 0.0), "{v:?}");
-    // Tab: the next droid; the first one's deadman stops it, the second drives.
+    // Tab: the next droid. Choosing another droid lets go of every held key: nothing
+    // drives until a drive key is pressed again (issue 26), then only the second droid.
     h.tap(Key::plain(KeyCode::Tab)).await;
+    sleep(Duration::from_secs(2)).await;
+    let v = h.speeds();
+    assert!(
+        v.iter().all(|v| *v == 0.0),
+        "w held across Tab drives nothing: {v:?}"
+    );
+    h.key(Key::ch('w'), KeyKind::Release).await;
+    h.key(Key::ch('w'), KeyKind::Press).await;
     sleep(Duration::from_secs(2)).await;
     let v = h.speeds();
     assert!(v[0] == 0.0 && v[1] > 5.0 && v[2] == 0.0, "{v:?}");

@@ -97,6 +97,12 @@ fn bridge() {
     smoke("bridge", 300);
 }
 
+/// Each input runs the whole app on three simulated droids: fewer inputs.
+#[test]
+fn app_input() {
+    smoke("app_input", 40);
+}
+
 #[cfg(target_os = "linux")]
 #[test]
 fn bluez() {

@@ -134,14 +134,23 @@ impl App {
         }
     }
 
-    /// Latch the emergency stop now (not at the next tick), on every droid of a fleet.
+    /// The emergency stop: latched now (not at the next tick) and written to every droid at
+    /// once, ahead of pacing — idle ones too: a droid the app believes idle may be coasting,
+    /// pushed, or driven by something the app never saw.
     pub fn estop(&mut self) {
-        let o = self.controller.estop_now();
-        self.apply(vec![o]);
-        self.each_other(|a| {
-            let o = a.controller.estop_now();
-            a.apply(vec![o]);
-        });
+        self.trace.estops += 1;
+        self.estop_one();
+        self.each_other(App::estop_one);
+    }
+
+    fn estop_one(&mut self) {
+        let Out::Drive(stop) = self.controller.estop_now() else {
+            return;
+        };
+        if let Some(s) = &self.session {
+            s.emergency_stop(stop);
+        }
+        self.apply(Vec::new());
     }
 
     /// The driving input right now, from held keys and the pad. Nothing drives while the log

@@ -53,6 +53,38 @@ pub(super) struct App {
     pub log_droid: Option<std::sync::Arc<str>>,
     /// Where samples are written (`drive --csv`, `--jsonl`).
     pub samples: Option<crate::mission::csv::SampleFiles>,
+    /// What the input routing did so far, and where it is published.
+    pub trace: InputTrace,
+    pub trace_tx: Option<tokio::sync::watch::Sender<InputTrace>>,
+}
+
+/// What the input routing did, published after every terminal or gamepad event: the tests
+/// and the fuzz harness read it to know which place each key went to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct InputTrace {
+    /// Terminal and gamepad events handled so far.
+    pub handled: u64,
+    /// The place on top after the last event.
+    pub place: super::place::Place,
+    /// How often every held key was let go (a place change, another droid, focus lost).
+    pub clears: u64,
+    /// Emergency stops raised (keys, the pad).
+    pub estops: u64,
+    pub chosen: usize,
+    pub mirror: bool,
+}
+
+impl Default for InputTrace {
+    fn default() -> Self {
+        InputTrace {
+            handled: 0,
+            place: super::place::Place::Driving,
+            clears: 0,
+            estops: 0,
+            chosen: 0,
+            mirror: false,
+        }
+    }
 }
 
 impl App {
@@ -83,6 +115,31 @@ impl App {
             has_dome: self.state.model.has_dome(),
             can_aim: self.state.model.can_aim(),
             stance: self.state.telemetry.stance,
+        }
+    }
+
+    /// The place that has the keyboard now.
+    pub fn place(&self) -> super::place::Place {
+        super::place::Place::of(&self.state, self.player.is_some())
+    }
+
+    /// Let go of every held key and tell every droid's controller now (its next write is a
+    /// stop): the place on top changed, another droid was chosen, mirror mode switched, or
+    /// the terminal lost focus.
+    pub fn clear_held(&mut self) {
+        self.held.release_all();
+        self.trace.clears += 1;
+        self.control(false);
+    }
+
+    /// Publish what the input routing did (for tests and the fuzz harness).
+    pub fn traced(&mut self) {
+        self.trace.handled += 1;
+        self.trace.place = self.place();
+        self.trace.chosen = self.chosen();
+        self.trace.mirror = self.mirroring();
+        if let Some(tx) = &self.trace_tx {
+            tx.send_replace(self.trace);
         }
     }
 

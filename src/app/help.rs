@@ -153,7 +153,7 @@ mod tests {
         assert_eq!(keys_of(find(&h, "Gamepad"), "aim mode"), ["RightBumper"]);
         let r = replay(&c.keymap);
         assert_eq!(keys_of(find(&r, "Replay"), "pause / play"), ["Space / p"]);
-        assert_eq!(keys_of(find(&r, "Replay"), "quit"), ["q / Esc"]);
+        assert_eq!(keys_of(find(&r, "Replay"), "quit"), ["q"]);
         assert_eq!(nav(&c.keymap), "PgDn/PgUp");
     }
 

@@ -12,6 +12,7 @@
 use super::core::App;
 use super::input::{KeyKind, TermEvent};
 use super::packet_log::LogFilter;
+use super::place::Place;
 use super::run::ExitReason;
 use super::state::{Focus, Overlay};
 use crate::config::{Action, Context, Key, KeyCode};
@@ -36,92 +37,121 @@ impl App {
     /// A terminal event; returns an exit reason when the app should stop.
     pub fn on_term(&mut self, e: TermEvent) -> Option<ExitReason> {
         self.touched();
-        let now = self.now();
-        match e {
+        let r = match e {
             TermEvent::FocusLost => {
-                // Focus loss releases every key: the deadman stops the droid now.
-                self.held.release_all();
-                self.control(false);
+                // Focus loss lets go of every key: the deadman stops the droids now.
+                self.clear_held();
+                None
             }
-            TermEvent::FocusGained | TermEvent::Resize => self.dirty = true,
+            TermEvent::FocusGained | TermEvent::Resize => {
+                self.dirty = true;
+                None
+            }
             TermEvent::Key {
                 key,
                 kind: KeyKind::Release,
             } => {
-                self.held.release(key);
-                if let KeyCode::Char(c) = key.code {
-                    // Shift may be let go first: release both cases.
-                    for c in [c.to_ascii_lowercase(), c.to_ascii_uppercase()] {
-                        self.held.release(Key {
-                            code: KeyCode::Char(c),
-                            ctrl: key.ctrl,
-                        });
-                    }
-                }
-                self.control(false);
+                self.release(key);
+                None
             }
             TermEvent::Key { key, kind } => {
-                if key == Key::CTRL_C {
-                    return Some(ExitReason::Quit);
-                }
-                // Only keys bound to held actions track press and release; for the others
-                // every press counts, so tapping `?` twice quickly opens and closes help even
-                // when releases are only inferred.
-                let held_action = self.keymap.action(&key).is_some_and(Action::is_held);
-                let new = match (held_action, kind) {
-                    (true, KeyKind::Repeat) => {
-                        self.held.repeat(key, now);
-                        false
-                    }
-                    (true, _) => self.held.press(key, now),
-                    (false, kind) => kind == KeyKind::Press,
-                };
                 self.dirty = true;
-                return self.on_key(key, new);
+                self.on_key_event(key, kind)
             }
-        }
-        None
+        };
+        self.traced();
+        r
     }
 
-    /// A key press (`new_press`) or repeat, to whatever has the keyboard.
-    fn on_key(&mut self, key: Key, new_press: bool) -> Option<ExitReason> {
-        match self.state.overlay {
-            Overlay::Animations { .. } | Overlay::Sounds { .. } => {
-                self.palette_key(key, new_press);
-                None
+    /// A released key: let go of it (and of its other case: Shift may be let go first). A key
+    /// that is not held (pressed in another place) changes nothing.
+    fn release(&mut self, key: Key) {
+        let mut any = self.held.release(key);
+        if let KeyCode::Char(c) = key.code {
+            for c in [c.to_ascii_lowercase(), c.to_ascii_uppercase()] {
+                any |= self.held.release(Key {
+                    code: KeyCode::Char(c),
+                    ctrl: key.ctrl,
+                });
             }
-            Overlay::Help => {
-                self.help_key(key, new_press);
-                None
-            }
-            Overlay::Filter { .. } => {
-                self.filter_key(key);
-                None
-            }
-            Overlay::Matrix { .. } => {
-                self.matrix_key(key);
-                None
-            }
-            Overlay::Channels { .. } => {
-                self.channels_key(key, new_press);
-                None
-            }
-            Overlay::Tuning { .. } => {
-                self.tuning_key(key, new_press);
-                None
-            }
-            Overlay::None
-                if self.state.scope.visible
-                    && self.state.focus == Focus::Drive
-                    && self.keymap.action_in(Context::Scope, &key).is_some() =>
-            {
-                self.scope_key(key, new_press);
-                None
-            }
-            Overlay::None if self.state.focus == Focus::Log => self.log_key(key, new_press),
-            Overlay::None if self.player.is_some() => self.replay_key(key, new_press),
-            Overlay::None => self.drive_key(key, new_press),
         }
+        if any {
+            self.control(false);
+        }
+    }
+
+    /// A press or repeat: to the place on top, and only there. Keys are held (pressed and
+    /// not yet released) only in driving, and only those bound to a held action there;
+    /// everywhere else every press counts once and repeats are ignored for toggles. When the
+    /// key changes the place on top, the droid or mirror mode, every held key is let go.
+    fn on_key_event(&mut self, key: Key, kind: KeyKind) -> Option<ExitReason> {
+        if key == Key::CTRL_C {
+            return Some(ExitReason::Quit);
+        }
+        let before = (self.place(), self.chosen(), self.mirroring());
+        let scope_key = before.0 == Place::Driving
+            && self.state.scope.visible
+            && self.keymap.action_in(Context::Scope, &key).is_some();
+        let held_action = before.0 == Place::Driving
+            && !scope_key
+            && self.keymap.action(&key).is_some_and(Action::is_held);
+        let now = self.now();
+        let new = match (held_action, kind) {
+            // A repeat holds only a key pressed here (with reported releases, a key pressed in
+            // another place keeps repeating after that place closed: it must not drive).
+            (true, KeyKind::Repeat) => {
+                self.held.repeat(key, now);
+                false
+            }
+            (true, _) => self.held.press(key, now),
+            (false, kind) => kind == KeyKind::Press,
+        };
+        let r = self.on_key(before.0, scope_key, key, new);
+        if (self.place(), self.chosen(), self.mirroring()) != before {
+            self.clear_held();
+        }
+        r
+    }
+
+    /// A key press (`new_press`) or repeat, to the place on top.
+    fn on_key(
+        &mut self,
+        place: Place,
+        scope_key: bool,
+        key: Key,
+        new_press: bool,
+    ) -> Option<ExitReason> {
+        // The emergency stop works over every overlay whose own table leaves its key free
+        // (typing places take every printable key, so there it is the gamepad's or Esc
+        // first).
+        let overlay_table = match place {
+            Place::Palette => Some(Context::Palette),
+            Place::Help => Some(Context::Help),
+            Place::Channels | Place::Tuning => Some(Context::Settings),
+            _ => None,
+        };
+        if let Some(ctx) = overlay_table
+            && self.keymap.action_in(ctx, &key).is_none()
+            && self.keymap.action(&key) == Some(Action::EStop)
+        {
+            if new_press {
+                self.estop();
+            }
+            return None;
+        }
+        match place {
+            Place::Palette => self.palette_key(key, new_press),
+            Place::Help => self.help_key(key, new_press),
+            Place::Filter => self.filter_key(key),
+            Place::Matrix => self.matrix_key(key),
+            Place::Channels => self.channels_key(key, new_press),
+            Place::Tuning => self.tuning_key(key, new_press),
+            Place::Driving if scope_key => self.scope_key(key, new_press),
+            Place::Log => return self.log_key(key, new_press),
+            Place::Replay => return self.replay_key(key, new_press),
+            Place::Driving => return self.drive_key(key, new_press),
+        }
+        None
     }
 
     fn open_help(&mut self) {
@@ -270,19 +300,25 @@ impl App {
 
     /// Driving.
     fn drive_key(&mut self, key: Key, new_press: bool) -> Option<ExitReason> {
-        let action = self.keymap.action(&key)?;
+        let Some(action) = self.keymap.action(&key) else {
+            // Esc closes whatever is open; on the main screen there is nothing to close, and
+            // one Esc too many must not end the session.
+            if key == Key::plain(KeyCode::Esc) && new_press {
+                let quit = self.keymap.shown(Action::Quit).unwrap_or_default();
+                self.hint(format!("nothing to close — {quit} or Ctrl+c quits"));
+            }
+            return None;
+        };
         if !new_press {
             return None;
         }
         match action {
             Action::Quit => return Some(ExitReason::Quit),
             Action::Help => self.open_help(),
-            Action::Log => {
-                self.state.focus = Focus::Log;
-                // The droid is held stopped while the log has the keys.
-                self.held.release_all();
-                self.control(false);
-            }
+            // The droid is held stopped while the log has the keys (the place changes: every
+            // held key is let go).
+            Action::Log => self.state.focus = Focus::Log,
+            Action::EStop => self.estop(),
             Action::NextDroid => self.choose_next(true),
             Action::PreviousDroid => self.choose_next(false),
             Action::Mirror => self.toggle_mirror(),

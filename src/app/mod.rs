@@ -27,6 +27,7 @@ pub mod pacing;
 pub mod packet_log;
 mod pad;
 pub mod picker;
+pub mod place;
 pub mod player;
 pub mod rates;
 mod replay;
@@ -34,4 +35,6 @@ pub mod roster;
 pub mod run;
 pub mod state;
 
+pub use core::InputTrace;
+pub use place::Place;
 pub use state::AppState;

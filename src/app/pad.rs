@@ -26,16 +26,22 @@ impl App {
             }
             _ => {}
         }
+        let before = self.place();
         match self.pad.apply(&e) {
             Some(PadCommand::Action(a)) => self.on_pad_action(a),
             Some(PadCommand::Sound(id)) => self.play_sound(id, "from the D-pad"),
             None => {}
+        }
+        // The help button opens or closes a place: held keys are let go, as for a key.
+        if self.place() != before {
+            self.clear_held();
         }
         // Stick back in its deadzone or pad unplugged: stop at once.
         if matches!(e, PadEvent::Disconnected | PadEvent::Axis(..)) {
             self.control(false);
         }
         self.dirty = true;
+        self.traced();
     }
 
     fn on_pad_action(&mut self, a: PadAction) {

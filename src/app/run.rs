@@ -140,6 +140,8 @@ fn build(source: Source, opts: AppOptions) -> App {
         fleet: None,
         driven: true,
         log_droid: None,
+        trace: Default::default(),
+        trace_tx: None,
     };
     app.controller.set_tracks(app.state.model.has_tracks());
     app.state.control = app.controller.view().clone();
@@ -182,6 +184,39 @@ pub async fn run_fleet<B: Backend>(
     run_with(terminal, source, fleet, None, opts, inputs, draw).await
 }
 
+/// [`run_fleet`], publishing after every terminal and gamepad event what the input routing
+/// did ([`InputTrace`]: the place on top, held keys let go, emergency stops): the safety
+/// tests and the fuzz harness read it to know where each key went.
+///
+/// [`InputTrace`]: super::core::InputTrace
+pub async fn run_fleet_traced<B: Backend>(
+    terminal: &mut Terminal<B>,
+    fleet: crate::fleet::Fleet,
+    mut opts: AppOptions,
+    inputs: AppInputs,
+    draw: DrawFn,
+    trace: watch::Sender<super::core::InputTrace>,
+) -> std::io::Result<Exit> {
+    let Some(first) = fleet.member(0) else {
+        return Err(std::io::Error::other("a fleet without droids"));
+    };
+    opts.model = first.model;
+    opts.droid_name = first.name.clone();
+    let source = Source::Live(first.session.clone());
+    let fleet = (fleet.len() > 1).then_some(fleet);
+    run_traced(
+        terminal,
+        source,
+        fleet,
+        None,
+        opts,
+        inputs,
+        draw,
+        Some(trace),
+    )
+    .await
+}
+
 /// Replay a fleet's capture: every droid's replay on one clock, the roster and the choice
 /// of droid as live (nothing is sent). `replays` in fleet order, each with its name.
 pub async fn run_fleet_replay<B: Backend>(
@@ -212,12 +247,27 @@ async fn run_with<B: Backend>(
     fleet: Option<crate::fleet::Fleet>,
     replays: OtherReplays,
     opts: AppOptions,
+    inputs: AppInputs,
+    draw: DrawFn,
+) -> std::io::Result<Exit> {
+    run_traced(terminal, source, fleet, replays, opts, inputs, draw, None).await
+}
+
+#[allow(clippy::too_many_arguments)]
+async fn run_traced<B: Backend>(
+    terminal: &mut Terminal<B>,
+    source: Source,
+    fleet: Option<crate::fleet::Fleet>,
+    replays: OtherReplays,
+    opts: AppOptions,
     mut inputs: AppInputs,
     draw: DrawFn,
+    trace: Option<watch::Sender<super::core::InputTrace>>,
 ) -> std::io::Result<Exit> {
     let rate_hz = opts.config.control.rate_hz;
     let parked_config = (opts.config.clone(), opts.log_path.clone());
     let mut app = build(source, opts);
+    app.trace_tx = trace;
     // The other droids of a fleet, and one channel carrying their events.
     let (mut fleet_rx, forwarders) = match &fleet {
         Some(f) => super::fleet::attach(&mut app, f, &parked_config.0, parked_config.1),

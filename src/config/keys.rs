@@ -369,6 +369,16 @@ impl KeyMap {
                 return Err((a.config_key(), "must have at least one key".into()));
             }
         }
+        // Esc closes overlays and gives the log's keys back: pressed once too many, it would
+        // end the session and stop the droid abruptly.
+        if km.keys(Action::Quit).contains(&Key::plain(KeyCode::Esc)) {
+            return Err((
+                Action::Quit.config_key(),
+                "Esc closes panels and cannot quit (one Esc too many would end the session); \
+                 bind quit to another key, e.g. [\"q\"]"
+                    .into(),
+            ));
+        }
         Ok(km)
     }
 
@@ -535,6 +545,10 @@ mod tests {
         assert_eq!(KeyMap::from_config(&keys).unwrap_err().0, "fly");
         let keys = with(&[("quit", KeyEntry::Keys(vec![]))]);
         assert_eq!(KeyMap::from_config(&keys).unwrap_err().0, "quit");
+        let keys = with(&[("quit", KeyEntry::Keys(list(&["q", "Esc"])))]);
+        let (k, msg) = KeyMap::from_config(&keys).unwrap_err();
+        assert_eq!(k, "quit");
+        assert!(msg.contains("Esc closes panels"), "{msg}");
         let keys = with(&[("quit", KeyEntry::Keys(list(&["Ctrl+c"])))]);
         assert!(
             KeyMap::from_config(&keys)

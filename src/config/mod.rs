@@ -404,10 +404,7 @@ mod tests {
         let c = Config::defaults();
         assert_eq!(c.control.rate_hz, 10);
         assert_eq!(c.control.mode, DriveMode::Hold);
-        assert_eq!(
-            c.keys["quit"],
-            KeyEntry::Keys(vec!["q".into(), "Esc".into()])
-        );
+        assert_eq!(c.keys["quit"], KeyEntry::Keys(vec!["q".into()]));
     }
 
     #[test]

@@ -329,8 +329,14 @@ pub fn for_model(model: Model) -> &'static dyn Family {
 /// A drive write's speed, as the packet's own family reads its drive commands back (`None`
 /// for anything else): what tests, benchmarks and fuzzing watch on a link.
 pub fn drive_speed(p: &Packet) -> Option<u8> {
+    drive_read(p).map(|d| d.speed)
+}
+
+/// A drive write read back whole (speed, heading, direction, steering), as
+/// [`drive_speed`] reads its speed.
+pub fn drive_read(p: &Packet) -> Option<RecordedDrive> {
     let (c, _, _) = p.as_command()?;
-    for_protocol(p.protocol()).read_drive(&c).map(|d| d.speed)
+    for_protocol(p.protocol()).read_drive(&c)
 }
 
 /// The family of a protocol.

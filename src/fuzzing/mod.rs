@@ -12,6 +12,7 @@
 //! This module sits above everything (it drives the CLI's readers, the relay server and the
 //! virtual BlueZ) and nothing uses it but the fuzz binaries and tests.
 
+pub mod app_input;
 #[cfg(target_os = "linux")]
 pub mod bluez;
 pub mod bridge;
@@ -48,6 +49,7 @@ pub fn targets() -> Vec<&'static Target> {
         &packet_file::TARGET,
         &relay_server::TARGET,
         &bridge::TARGET,
+        &app_input::TARGET,
     ];
     #[cfg(target_os = "linux")]
     let v = [v, vec![&bluez::TARGET]].concat();

@@ -233,6 +233,9 @@ pub(crate) struct Shared {
     pub last_drive: Mutex<Option<Command>>,
     /// A new connect setup for the next (re)connect ([`SessionHandle::set_setup`]).
     pub setup: Mutex<Option<Vec<Command>>>,
+    /// An emergency stop to write at once, ahead of pacing ([`SessionHandle::emergency_stop`]).
+    pub urgent: Mutex<Option<Command>>,
+    pub urgent_wake: Notify,
 }
 
 /// A handle to a running session. Cloning is cheap.
@@ -258,6 +261,8 @@ pub fn start(link: Box<dyn Link>, config: SessionConfig) -> SessionHandle {
         redo_setup: std::sync::atomic::AtomicBool::new(false),
         last_drive: Mutex::new(None),
         setup: Mutex::new(None),
+        urgent: Mutex::new(None),
+        urgent_wake: Notify::new(),
     });
     let (state_tx, state_rx) = watch::channel(LinkState::Connecting);
     let (events, _) = broadcast::channel(config.event_capacity.max(16));
@@ -357,10 +362,23 @@ impl SessionHandle {
     }
 
     /// Stop now, at the heading of the last drive command written (a stop at heading 0
-    /// would turn the droid). Synchronous and lock-free of the task, for the panic hook.
+    /// would turn the droid), as an [emergency stop](Self::emergency_stop): ahead of pacing,
+    /// and again one slot later. Synchronous and lock-free of the task, for the panic hook.
     pub fn stop_now(&self, family: &dyn crate::family::Family) {
         let last = lock(&self.shared.last_drive).clone();
-        self.set(Slot::Drive, family.stop_after(last.as_ref()));
+        self.emergency_stop(family.stop_after(last.as_ref()));
+    }
+
+    /// An emergency stop: `stop` is written at once, ahead of pacing and of everything
+    /// queued (after the rest of a packet already half written, so its framing stays whole),
+    /// and again one pacing slot later through the drive slot (stops go first), in case the
+    /// droid dropped the first. Drives queued before it are superseded. While the link is
+    /// down it waits for the reconnect, whose own first write is a stop too.
+    pub fn emergency_stop(&self, stop: impl Into<Command>) {
+        let stop = stop.into();
+        self.set(Slot::Drive, stop.clone());
+        *lock(&self.shared.urgent) = Some(stop);
+        self.shared.urgent_wake.notify_one();
     }
 
     /// Write the connect setup again, ahead of everything queued: a droid woken from sleep

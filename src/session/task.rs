@@ -503,6 +503,14 @@ impl Task {
                         continue;
                     }
                 }
+                _ = self.shared.urgent_wake.notified() => {
+                    if let Err(e) = self.write_urgent(codec, conn, &mut chunks).await {
+                        conn.writer.close().await;
+                        return Ended::LinkLost(format!("write failed: {e}"));
+                    }
+                    next_write = Instant::now() + self.cfg.pacing;
+                    last_write = Instant::now();
+                }
                 ev = conn.events.recv() => match ev {
                     Some(LinkEvent::Data(bytes)) => self.handle_bytes(codec, &bytes),
                     Some(LinkEvent::Disconnected(reason)) => {
@@ -539,6 +547,38 @@ impl Task {
                 _ = sleep_until(deadline.unwrap_or_else(Instant::now)), if deadline.is_some() => self.expire(),
             }
         }
+    }
+
+    /// The emergency stop, now: the rest of the packet in flight first (its framing must stay
+    /// whole), then the stop, back to back with no pacing. The drive slot holds the same stop
+    /// for the re-send one pacing slot later.
+    async fn write_urgent(
+        &mut self,
+        codec: &mut dyn Codec,
+        conn: &mut Connection,
+        chunks: &mut VecDeque<(Endpoint, Vec<u8>)>,
+    ) -> Result<(), crate::link::LinkError> {
+        let Some(cmd) = lock(&self.shared.urgent).take() else {
+            return Ok(());
+        };
+        let seq = self.next_seq(codec, &cmd);
+        // Nobody waits for this answer; the re-send through the slot is matched as usual.
+        let (writes, packet) = codec.encode_writes(&cmd, seq, false);
+        if self.family.is_drive(&cmd) {
+            *lock(&self.shared.last_drive) = Some(cmd.clone());
+        }
+        let wire: Vec<_> = chunks.drain(..).chain(self.chunked(writes)).collect();
+        {
+            let mut st = lock(&self.shared.stats);
+            st.sent += 1;
+            st.bytes_out += wire.iter().map(|(_, w)| w.len() as u64).sum::<u64>();
+        }
+        tracing::info!(command = %cmd.name(), "emergency stop written ahead of pacing");
+        self.log_packet(codec, Direction::Out, packet, Some(&cmd));
+        for (to, chunk) in wire {
+            conn.writer.write_to(to, &chunk).await?;
+        }
+        Ok(())
     }
 
     /// Shutdown: finish the packet in flight, write the final commands (a stop), close.

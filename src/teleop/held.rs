@@ -61,9 +61,14 @@ impl HeldKeys {
         }
     }
 
-    /// An explicit repeat event (kitty protocol).
+    /// An explicit repeat event (kitty protocol). Only a key already held is refreshed: a key
+    /// whose press was not taken (pressed in another place, or let go since) stays released
+    /// however long it repeats.
     pub fn repeat(&mut self, key: Key, now: Duration) {
-        self.press(key, now);
+        if let Some(h) = self.held.get_mut(&key) {
+            h.last = now;
+            h.repeats += 1;
+        }
     }
 
     pub fn release(&mut self, key: Key) -> bool {
@@ -171,6 +176,20 @@ mod tests {
         assert!(h.is_held(&W));
         assert!(h.release(W));
         assert!(!h.is_held(&W));
+    }
+
+    #[test]
+    fn a_repeat_does_not_hold_a_key_that_was_let_go() {
+        let mut h = HeldKeys::new(ReleaseMode::Reported);
+        h.repeat(W, ms(0));
+        assert!(!h.is_held(&W), "a repeat without its press holds nothing");
+        h.press(W, ms(0));
+        h.release_all();
+        h.repeat(W, ms(50));
+        assert!(
+            h.is_empty(),
+            "let go by a place change: repeats do not take it back"
+        );
     }
 
     #[test]

@@ -1,0 +1,7 @@
+//! libFuzzer on `droidctl::fuzzing::app_input`: what it checks and the input's layout are
+//! documented there (the same harness runs on stable in `tests/fuzz_smoke.rs` and, as a
+//! property test, in `tests/safety.rs`).
+
+#![no_main]
+
+libfuzzer_sys::fuzz_target!(|data: &[u8]| droidctl::fuzzing::app_input::run_input(data));

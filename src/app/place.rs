@@ -1,0 +1,74 @@
+//! The place that has the keyboard. Keys go to one place only, and each place reads its own
+//! table of the key map; only [`Place::Driving`] turns keys into motion. Which place is on top
+//! follows from what the screen shows (an overlay, the focused log, a replay), so there is no
+//! second copy of it to fall out of step.
+//!
+//! The rule the safety promises rest on: whenever the place on top changes (an overlay opens
+//! or closes, the log takes or gives back the keys), another droid is chosen, mirror mode is
+//! switched or the terminal loses focus, every held key is let go and the droids' controllers
+//! are told at once ([`super::core::App::clear_held`]). A key pressed anywhere but in driving
+//! is never held, so it cannot drive once that place closes.
+
+use super::state::{AppState, Focus, Overlay};
+
+/// Where keys are read.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Place {
+    /// Keys drive the droid (or droids, mirrored). With the scope on screen its own keys go
+    /// to the scope (and never drive); every other key drives as usual, so one can watch the
+    /// scope while driving.
+    Driving,
+    /// A capture plays: the replay keys; nothing drives.
+    Replay,
+    /// The packet log has the keys (the droid is held stopped).
+    Log,
+    /// Typing a packet-log filter.
+    Filter,
+    /// Typing what BOLT's matrix shows.
+    Matrix,
+    /// The help overlay.
+    Help,
+    /// The animation or sound palette.
+    Palette,
+    /// The scope's channel list.
+    Channels,
+    /// The streaming and collision settings.
+    Tuning,
+}
+
+impl Place {
+    /// The place on top for what `state` shows (`replay`: a capture plays).
+    pub fn of(state: &AppState, replay: bool) -> Place {
+        match &state.overlay {
+            Overlay::Help => Place::Help,
+            Overlay::Animations { .. } | Overlay::Sounds { .. } => Place::Palette,
+            Overlay::Filter { .. } => Place::Filter,
+            Overlay::Matrix { .. } => Place::Matrix,
+            Overlay::Channels { .. } => Place::Channels,
+            Overlay::Tuning { .. } => Place::Tuning,
+            Overlay::None if state.focus == Focus::Log => Place::Log,
+            Overlay::None if replay => Place::Replay,
+            Overlay::None => Place::Driving,
+        }
+    }
+
+    /// Whether keys pressed here may drive.
+    pub fn drives(self) -> bool {
+        self == Place::Driving
+    }
+
+    /// A short name, for the status line and tests.
+    pub fn name(self) -> &'static str {
+        match self {
+            Place::Driving => "driving",
+            Place::Replay => "replay",
+            Place::Log => "packet log",
+            Place::Filter => "filter",
+            Place::Matrix => "matrix",
+            Place::Help => "help",
+            Place::Palette => "palette",
+            Place::Channels => "channels",
+            Place::Tuning => "settings",
+        }
+    }
+}

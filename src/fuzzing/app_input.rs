@@ -1,0 +1,505 @@
+//! The app's input routing against its safety promises: a fleet of simulated droids (R2-D2,
+//! BB-8, Robi 42) driven through the whole event loop on paused time by a sequence of key
+//! presses, repeats, releases, focus changes and pauses, in either keyboard mode. Whatever the
+//! sequence:
+//!
+//! 1. a drive with speed above 0 is written to a droid only while a drive key is held in the
+//!    driving place for that droid (pressed there, not released, not expired, and no place
+//!    change, droid change, mirror switch or focus loss since);
+//! 2. a droid's heading changes between two drive writes only while a turn key is held there
+//!    in the same sense (or the aim key was pressed there, which makes the facing heading 0);
+//! 3. every emergency stop raised is written to every connected droid at that same instant.
+//!
+//! The oracle knows only the default key map and, after each event, the place the app says
+//! the event left it in ([`InputTrace`]); it does not share the app's held-key code.
+//!
+//! Sessions write with no pacing here, so a write happens at the instant the app decides it;
+//! pacing is the session's business and is tested there.
+//!
+//! Input layout: the first byte's low bit chooses the keyboard mode (reported releases or
+//! emulated); then two bytes a step: the first picks the kind (press, repeat, release, pause,
+//! focus lost) and the second the key or the pause length.
+
+use super::Target;
+use crate::app::input::{KeyKind, TermEvent};
+use crate::app::run::{self, AppInputs, AppOptions};
+use crate::app::{AppState, InputTrace, Place};
+use crate::config::{Action, Config, Key, KeyCode};
+use crate::fleet::Fleet;
+use crate::model::Model;
+use crate::session::{Direction, LinkState, LogItem};
+use crate::teleop::held::ReleaseMode;
+use ratatui::{Frame, Terminal, backend::TestBackend};
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+use tokio::sync::{mpsc, watch};
+use tokio::time::{Instant, sleep};
+
+pub const TARGET: Target = Target {
+    name: "app_input",
+    run: run_input,
+    dictionary: &[
+        b"\x00\x00",
+        b"\x00\x01",
+        b"\x02\x00",
+        b"\x03\x20",
+        b"\x00\x08",
+        b"\x00\x0c",
+        b"\x00\x0d",
+        b"\x00\x0e",
+        b"\x00\x0f",
+        b"\x00\x10",
+    ],
+};
+
+/// The keys a sequence is made of: every place's way in and out, typing, and the drive keys.
+pub const KEYS: [Key; 32] = [
+    Key::plain(KeyCode::Up),
+    Key::plain(KeyCode::Down),
+    Key::plain(KeyCode::Left),
+    Key::plain(KeyCode::Right),
+    Key::ch('w'),
+    Key::ch('s'),
+    Key::ch('a'),
+    Key::ch('d'),
+    Key::plain(KeyCode::Esc),
+    Key::plain(KeyCode::Enter),
+    Key::plain(KeyCode::Tab),
+    Key::plain(KeyCode::Space),
+    Key::ch('?'),
+    Key::ch('g'),
+    Key::ch('l'),
+    Key::ch('u'),
+    Key::ch('n'),
+    Key::ch('m'),
+    Key::ch('/'),
+    Key::ch('y'),
+    Key::ch('t'),
+    Key::ch('o'),
+    Key::ch('1'),
+    Key::ch('2'),
+    Key::ch('p'),
+    Key::ch('+'),
+    Key::plain(KeyCode::PageDown),
+    Key::plain(KeyCode::Backspace),
+    Key::ch('`'),
+    Key::ch('c'),
+    Key::ch('f'),
+    Key::ch('x'),
+];
+
+/// One step of a sequence.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Step {
+    Press(Key),
+    Repeat(Key),
+    Release(Key),
+    FocusLost,
+    /// Nothing happens for this long (ticks, emulated releases, the droids move).
+    Pause(Duration),
+}
+
+/// The emulated release timeouts the rig uses (the config's defaults are of this order).
+pub const EMULATED: ReleaseMode = ReleaseMode::Emulated {
+    first: Duration::from_millis(650),
+    repeat: Duration::from_millis(150),
+};
+
+pub fn run_input(data: &[u8]) {
+    let Some((&mode, rest)) = data.split_first() else {
+        return;
+    };
+    let release = if mode & 1 == 0 {
+        ReleaseMode::Reported
+    } else {
+        EMULATED
+    };
+    let steps = decode(rest);
+    if let Err(v) = check(release, &steps) {
+        panic!("{v}");
+    }
+}
+
+/// Two bytes a step (at most 200 steps: the harness runs the whole app for each).
+pub fn decode(data: &[u8]) -> Vec<Step> {
+    data.chunks_exact(2)
+        .take(200)
+        .map(|c| {
+            let key = KEYS[c[1] as usize % KEYS.len()];
+            match c[0] % 8 {
+                0..=2 => Step::Press(key),
+                3 => Step::Repeat(key),
+                4 | 5 => Step::Release(key),
+                6 => Step::Pause(Duration::from_millis(c[1] as u64 * 8)),
+                _ if c[1] < 8 => Step::FocusLost,
+                _ => Step::Pause(Duration::from_millis(c[1] as u64)),
+            }
+        })
+        .collect()
+}
+
+/// Run `steps` against the app and check the promises; the first one broken, explained.
+pub fn check(release: ReleaseMode, steps: &[Step]) -> Result<(), String> {
+    run(release, steps).map(|_| ())
+}
+
+/// What a run left: the speeds written to each droid, and the last frame's state.
+pub struct Outcome {
+    pub speeds: Vec<Vec<u8>>,
+    pub state: Option<AppState>,
+    /// The app ended before the sequence did (a quit key).
+    pub quit: bool,
+}
+
+/// [`check`], keeping what the run left for a test's own assertions.
+pub fn run(release: ReleaseMode, steps: &[Step]) -> Result<Outcome, String> {
+    let rt = tokio::runtime::Builder::new_current_thread()
+        .enable_time()
+        .start_paused(true)
+        .build()
+        .map_err(|e| e.to_string())?;
+    SEEN.with(|s| s.borrow_mut().take());
+    rt.block_on(rig(release, steps))
+}
+
+thread_local! {
+    /// The last frame's state (the runtime runs on this thread).
+    static SEEN: std::cell::RefCell<Option<AppState>> = const { std::cell::RefCell::new(None) };
+}
+
+fn keep(_: &mut Frame, s: &AppState) {
+    SEEN.with(|seen| *seen.borrow_mut() = Some(s.clone()));
+}
+
+const MODELS: [Model; 3] = [Model::R2D2, Model::BB8, Model::Robi42];
+
+/// A drive write seen on a droid's link.
+#[derive(Debug, Clone, Copy)]
+struct Write {
+    at: Instant,
+    speed: u8,
+    /// Degrees (`None`: a steering robot, which has no heading).
+    heading: Option<u16>,
+}
+
+type Writes = Arc<Mutex<Vec<Vec<Write>>>>;
+
+async fn rig(release: ReleaseMode, steps: &[Step]) -> Result<Outcome, String> {
+    let config = Config::defaults();
+    let specs = crate::cli::fleet::simulated(&MODELS)
+        .into_iter()
+        .map(|f| {
+            let mut s = crate::cli::fleet::session_config(f.model, &config, true);
+            s.pacing = Duration::ZERO;
+            f.into_spec(s)
+        })
+        .collect();
+    let fleet = Fleet::start(specs);
+    let writes = watch_writes(&fleet);
+    for i in 0..fleet.len() {
+        if let Some(mut st) = fleet.link_state(i) {
+            let _ = st.wait_for(|s| *s == LinkState::Connected).await;
+        }
+    }
+    let (term, term_rx) = mpsc::channel(8);
+    let (_pad, pad_rx) = mpsc::channel(1);
+    let (_quit, quit_rx) = mpsc::channel(1);
+    let (trace_tx, mut trace) = watch::channel(InputTrace::default());
+    let opts = AppOptions {
+        config: config.clone(),
+        model: MODELS[0],
+        droid_name: String::new(),
+        log_path: None,
+        release,
+        tripod_on_connect: true,
+        samples: None,
+    };
+    let f = fleet.clone();
+    let app = tokio::spawn(async move {
+        let Ok(mut terminal) = Terminal::new(TestBackend::new(80, 24));
+        let inputs = AppInputs {
+            term: term_rx,
+            pad: pad_rx,
+            quit: quit_rx,
+        };
+        let _ = run::run_fleet_traced(&mut terminal, f, opts, inputs, keep, trace_tx).await;
+    });
+    // R2 up on three legs before the keys start.
+    sleep(Duration::from_secs(3)).await;
+    let mut oracle = Oracle::new(release, &config);
+    let mut quit = false;
+    for step in steps {
+        let event = match *step {
+            Step::Pause(d) => {
+                sleep(d).await;
+                continue;
+            }
+            Step::FocusLost => TermEvent::FocusLost,
+            Step::Press(key) => TermEvent::Key {
+                key,
+                kind: KeyKind::Press,
+            },
+            Step::Repeat(key) => TermEvent::Key {
+                key,
+                kind: KeyKind::Repeat,
+            },
+            Step::Release(key) => TermEvent::Key {
+                key,
+                kind: KeyKind::Release,
+            },
+        };
+        let before = *trace.borrow_and_update();
+        if term.send(event).await.is_err() {
+            quit = true;
+            break;
+        }
+        let after = match trace.wait_for(|t| t.handled > before.handled).await {
+            Ok(t) => *t,
+            // The app ended (the sequence quit): nothing more to check against.
+            Err(_) => {
+                quit = true;
+                break;
+            }
+        };
+        oracle.step(Instant::now(), step, &before, &after);
+    }
+    let end = Instant::now();
+    // A quit key ends the app after its event was traced: its input channel is closed then.
+    quit |= term.is_closed();
+    drop(term);
+    let _ = app.await;
+    fleet.shutdown_all(|_| Vec::new()).await;
+    let w = writes.lock().unwrap_or_else(|e| e.into_inner()).clone();
+    oracle.verify(&w, if quit { None } else { Some(end) })?;
+    Ok(Outcome {
+        speeds: w
+            .iter()
+            .map(|w| w.iter().map(|x| x.speed).collect())
+            .collect(),
+        state: SEEN.with(|s| s.borrow_mut().take()),
+        quit,
+    })
+}
+
+fn watch_writes(fleet: &Fleet) -> Writes {
+    let writes: Writes = Arc::new(Mutex::new(vec![Vec::new(); fleet.len()]));
+    for (i, m) in fleet.members().iter().enumerate() {
+        let mut log = m.session.subscribe_log();
+        let w = writes.clone();
+        let steers = crate::family::for_model(m.model).steers();
+        tokio::spawn(async move {
+            while let Ok(e) = log.recv().await {
+                if e.dir == Direction::Out
+                    && let LogItem::Packet { packet, .. } = &e.item
+                    && let Some(d) = crate::family::drive_read(packet)
+                    && let Ok(mut w) = w.lock()
+                {
+                    w[i].push(Write {
+                        at: Instant::now(),
+                        speed: d.speed,
+                        heading: (!steers).then(|| d.heading.degrees()),
+                    });
+                }
+            }
+        });
+    }
+    writes
+}
+
+/// What the operator holds in the driving place, by the promises' own reading of the events.
+struct Oracle {
+    release: ReleaseMode,
+    keymap: crate::config::KeyMap,
+    /// Keys held in driving: (pressed at, last press or repeat, repeats), and the droids they
+    /// drive (the chosen one, or all mirrored).
+    held: HashMap<Key, (Instant, Instant, u32, Vec<usize>)>,
+    /// Spans in which a key of each kind was held in driving, per droid.
+    drive_spans: Vec<Vec<(Instant, Instant)>>,
+    turn_spans: Vec<Vec<(Instant, Instant)>>,
+    /// When the aim key was pressed in driving (the facing becomes heading 0).
+    aims: Vec<Instant>,
+    /// When an emergency stop was raised.
+    estops: Vec<Instant>,
+}
+
+impl Oracle {
+    fn new(release: ReleaseMode, config: &Config) -> Oracle {
+        Oracle {
+            release,
+            keymap: config.keymap.clone(),
+            held: HashMap::new(),
+            drive_spans: vec![Vec::new(); MODELS.len()],
+            turn_spans: vec![Vec::new(); MODELS.len()],
+            aims: Vec::new(),
+            estops: Vec::new(),
+        }
+    }
+
+    /// When an emulated release lets go of a key last seen at `last`.
+    fn expiry(&self, last: Instant, repeats: u32) -> Option<Instant> {
+        match self.release {
+            ReleaseMode::Reported => None,
+            ReleaseMode::Emulated { first, repeat } => {
+                Some(last + if repeats == 0 { first } else { repeat })
+            }
+        }
+    }
+
+    /// Let go of `key` at `at` (or when it expired, if sooner).
+    fn let_go(&mut self, key: Key, at: Instant) {
+        if let Some((from, last, repeats, droids)) = self.held.remove(&key) {
+            let to = self.expiry(last, repeats).map_or(at, |e| e.min(at));
+            let spans = match self.keymap.action(&key) {
+                Some(Action::Forward | Action::Backward) => &mut self.drive_spans,
+                _ => &mut self.turn_spans,
+            };
+            for d in droids {
+                spans[d].push((from, to));
+            }
+        }
+    }
+
+    fn let_go_all(&mut self, at: Instant) {
+        let keys: Vec<Key> = self.held.keys().copied().collect();
+        for k in keys {
+            self.let_go(k, at);
+        }
+    }
+
+    fn step(&mut self, now: Instant, step: &Step, before: &InputTrace, after: &InputTrace) {
+        // Emulated releases that came due before this event.
+        let due: Vec<Key> = self
+            .held
+            .iter()
+            .filter(|(_, (_, last, r, _))| self.expiry(*last, *r).is_some_and(|e| e <= now))
+            .map(|(k, _)| *k)
+            .collect();
+        for k in due {
+            self.let_go(k, now);
+        }
+        if after.estops > before.estops {
+            self.estops.push(now);
+        }
+        let stayed = before.place == Place::Driving
+            && after.place == Place::Driving
+            && after.clears == before.clears;
+        match *step {
+            Step::Press(key) | Step::Repeat(key) if stayed => {
+                let action = self.keymap.action(&key);
+                if action == Some(Action::Aim) && matches!(step, Step::Press(_)) {
+                    self.aims.push(now);
+                }
+                let moves = matches!(
+                    action,
+                    Some(Action::Forward | Action::Backward | Action::Left | Action::Right)
+                );
+                match self.held.get_mut(&key) {
+                    Some(h) => {
+                        h.1 = now;
+                        h.2 += 1;
+                    }
+                    None if moves && matches!(step, Step::Press(_)) => {
+                        let droids = if after.mirror {
+                            (0..MODELS.len()).collect()
+                        } else {
+                            vec![after.chosen]
+                        };
+                        self.held.insert(key, (now, now, 0, droids));
+                    }
+                    None => {}
+                }
+            }
+            Step::Release(key) => {
+                for k in case_pair(key) {
+                    self.let_go(k, now);
+                }
+            }
+            _ => {}
+        }
+        if after.clears != before.clears {
+            self.let_go_all(now);
+        }
+    }
+
+    /// Check every write against what was held; `end`: when the sequence ended with the app
+    /// still running (held keys count until then).
+    fn verify(mut self, writes: &[Vec<Write>], end: Option<Instant>) -> Result<(), String> {
+        let end = end.unwrap_or_else(Instant::now);
+        self.let_go_all(end);
+        let within = |spans: &[(Instant, Instant)], t: Instant| {
+            spans.iter().any(|(a, b)| *a <= t && t <= *b)
+        };
+        let overlaps = |spans: &[(Instant, Instant)], t1: Instant, t2: Instant| {
+            spans.iter().any(|(a, b)| *a <= t2 && t1 <= *b)
+        };
+        for (i, w) in writes.iter().enumerate() {
+            for x in w.iter().filter(|x| x.speed > 0 && x.at <= end) {
+                if !within(&self.drive_spans[i], x.at) {
+                    return Err(format!(
+                        "droid {i} ({}) was written speed {} at {:?} with no drive key held in \
+                         driving: drive spans {:?}",
+                        MODELS[i].display_name(),
+                        x.speed,
+                        x.at,
+                        self.drive_spans[i]
+                    ));
+                }
+            }
+            for pair in w.windows(2) {
+                let (a, b) = (pair[0], pair[1]);
+                if b.at > end || a.heading == b.heading {
+                    continue;
+                }
+                let aimed = self.aims.iter().any(|t| a.at <= *t && *t <= b.at);
+                // A v1 droid backs up by rolling the other way: half a turn while a drive
+                // key is held (and back when it is let go) is the reverse, not a turn.
+                let reversed = a
+                    .heading
+                    .zip(b.heading)
+                    .is_some_and(|(x, y)| x.abs_diff(y) == 180)
+                    && overlaps(&self.drive_spans[i], a.at, b.at);
+                if !aimed && !reversed && !overlaps(&self.turn_spans[i], a.at, b.at) {
+                    return Err(format!(
+                        "droid {i} ({}) turned from {:?} to {:?} between {:?} and {:?} with no \
+                         turn key held in driving",
+                        MODELS[i].display_name(),
+                        a.heading,
+                        b.heading,
+                        a.at,
+                        b.at
+                    ));
+                }
+            }
+            for t in &self.estops {
+                if !w.iter().any(|x| x.at == *t && x.speed == 0) {
+                    return Err(format!(
+                        "the emergency stop at {t:?} was not written to droid {i} ({}) at once",
+                        MODELS[i].display_name()
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A character key's two cases (Shift may be let go first); other keys alone.
+fn case_pair(key: Key) -> Vec<Key> {
+    match key.code {
+        KeyCode::Char(c) => {
+            let mut v = vec![key];
+            for c in [c.to_ascii_lowercase(), c.to_ascii_uppercase()] {
+                let k = Key {
+                    code: KeyCode::Char(c),
+                    ctrl: key.ctrl,
+                };
+                if !v.contains(&k) {
+                    v.push(k);
+                }
+            }
+            v
+        }
+        _ => vec![key],
+    }
+}

@@ -1,0 +1,226 @@
+//! The safety promises of the app's input routing, each as the sequence that broke it (issue
+//! 26) and then over random sequences: nothing drives unless a drive key is held in the
+//! driving place, the heading changes only while a turn key is held there, and every
+//! emergency stop reaches every droid at once. The harness is `droidctl::fuzzing::app_input`
+//! (also a fuzz target): a fleet of simulated droids through the whole event loop on paused
+//! time, checked against an oracle that reads only the events and the place each one left
+//! the app in.
+
+use droidctl::config::{Key, KeyCode};
+use droidctl::fuzzing::app_input::{EMULATED, KEYS, Step, check, run};
+use droidctl::teleop::held::ReleaseMode;
+use proptest::prelude::*;
+use std::time::Duration;
+
+const UP: Key = Key::plain(KeyCode::Up);
+const DOWN: Key = Key::plain(KeyCode::Down);
+const RIGHT: Key = Key::plain(KeyCode::Right);
+const ESC: Key = Key::plain(KeyCode::Esc);
+const ENTER: Key = Key::plain(KeyCode::Enter);
+const TAB: Key = Key::plain(KeyCode::Tab);
+const SPACE: Key = Key::plain(KeyCode::Space);
+
+fn ms(n: u64) -> Step {
+    Step::Pause(Duration::from_millis(n))
+}
+
+fn tap(k: Key) -> Step {
+    Step::Press(k)
+}
+
+fn holds(release: ReleaseMode, steps: &[Step]) {
+    if let Err(e) = check(release, steps) {
+        panic!("{e}\nsteps: {steps:?}");
+    }
+}
+
+/// Issue 26, item 1: an arrow typed inside an overlay does not drive once it closes
+/// (emulated release: the arrow would count as held for the first-release timeout).
+#[test]
+fn keys_typed_in_an_overlay_never_drive_when_it_closes() {
+    let k = Key::ch;
+    let cases: Vec<Vec<Step>> = vec![
+        // `?`, `↓`, `Esc`: help, a page down, closed.
+        vec![tap(k('?')), ms(50), tap(DOWN), ms(100), tap(ESC), ms(1000)],
+        // `g`, `Tab`, `↑`, `Esc`, `g`: the scope's channel list, up, closed, scope off.
+        vec![
+            tap(k('g')),
+            ms(50),
+            tap(TAB),
+            ms(50),
+            tap(UP),
+            ms(50),
+            tap(ESC),
+            ms(50),
+            tap(k('g')),
+            ms(1000),
+        ],
+        // `u`, `→`, `Enter`: the settings palette, a value up, applied.
+        vec![
+            tap(k('u')),
+            ms(50),
+            tap(RIGHT),
+            ms(50),
+            tap(ENTER),
+            ms(1000),
+        ],
+        // `n`, `↓`, `Esc` and `l`, `↑`, `Esc`.
+        vec![tap(k('n')), ms(50), tap(DOWN), ms(50), tap(ESC), ms(1000)],
+        vec![tap(k('l')), ms(50), tap(UP), ms(50), tap(ESC), ms(1000)],
+    ];
+    for steps in &cases {
+        holds(EMULATED, steps);
+        holds(ReleaseMode::Reported, steps);
+    }
+}
+
+/// With reported releases, a key pressed in an overlay keeps repeating after it closes:
+/// the repeats must not drive.
+#[test]
+fn repeats_of_a_key_pressed_elsewhere_never_drive() {
+    let mut steps = vec![tap(Key::ch('?')), ms(20), tap(UP), ms(20), tap(ESC)];
+    for _ in 0..20 {
+        steps.push(ms(30));
+        steps.push(Step::Repeat(UP));
+    }
+    steps.push(Step::Release(UP));
+    holds(ReleaseMode::Reported, &steps);
+}
+
+/// Issue 26, item 2: the emergency stop is written to every droid, idle ones too, at once.
+#[test]
+fn the_emergency_stop_reaches_every_droid_idle_or_not() {
+    // R2-D2 chosen and rolling, the others idle; then BB-8 chosen and Space.
+    holds(
+        ReleaseMode::Reported,
+        &[
+            tap(UP),
+            ms(500),
+            tap(SPACE),
+            ms(100),
+            Step::Release(SPACE),
+            Step::Release(UP),
+            ms(100),
+            tap(TAB),
+            ms(100),
+            tap(SPACE),
+            ms(200),
+        ],
+    );
+    // From the packet log, the help overlay and a palette too.
+    for open in ['l', '?', 'n'] {
+        holds(EMULATED, &[tap(Key::ch(open)), ms(50), tap(SPACE), ms(300)]);
+    }
+}
+
+/// Quick double taps of toggles count twice in every place (none is mistaken for a held
+/// drive key): turbo on and off again; a filter typed with `d`, then `d` in the log.
+#[test]
+fn double_taps_count_twice() {
+    let out = run(
+        EMULATED,
+        &[
+            tap(Key::ch('t')),
+            ms(100),
+            tap(Key::ch('t')),
+            ms(100),
+            tap(UP),
+            ms(300),
+        ],
+    )
+    .unwrap();
+    let state = out.state.expect("a frame was drawn");
+    assert!(!state.control.turbo, "t t leaves turbo off");
+    let cruise = droidctl::config::Config::defaults().control.cruise_speed;
+    assert_eq!(
+        out.speeds[0].iter().max(),
+        Some(&cruise),
+        "{:?}",
+        out.speeds[0]
+    );
+
+    let out = run(
+        EMULATED,
+        &[
+            tap(Key::ch('l')),
+            ms(50),
+            tap(Key::ch('/')),
+            tap(Key::ch('d')),
+            tap(ENTER),
+            ms(100),
+            tap(Key::ch('d')),
+            ms(1000),
+        ],
+    )
+    .unwrap();
+    let log = out.state.expect("a frame was drawn").log;
+    assert!(
+        !log.decoded,
+        "d after typing a filter with d toggles the decoded view"
+    );
+    let out = run(
+        EMULATED,
+        &[
+            tap(Key::ch('l')),
+            tap(Key::ch('d')),
+            ms(100),
+            tap(Key::ch('d')),
+            ms(1000),
+        ],
+    )
+    .unwrap();
+    assert!(out.state.expect("a frame").log.decoded, "d d toggles twice");
+}
+
+/// Issue 26, item 4: `Esc` on the main screen does not quit; it says how to.
+#[test]
+fn esc_on_the_main_screen_does_not_quit() {
+    let out = run(
+        EMULATED,
+        &[
+            tap(Key::ch('?')),
+            ms(50),
+            tap(ESC),
+            ms(50),
+            tap(ESC),
+            ms(100),
+            tap(ESC),
+            ms(100),
+        ],
+    )
+    .unwrap();
+    assert!(!out.quit, "Esc ended the session");
+    let state = out.state.expect("a frame was drawn");
+    let hint = state.current_hint().unwrap_or_default().to_string();
+    assert!(hint.contains("q") && hint.contains("quits"), "{hint}");
+    let out = run(EMULATED, &[tap(Key::ch('q')), ms(100)]).unwrap();
+    assert!(out.quit, "q quits");
+}
+
+fn step() -> impl Strategy<Value = Step> {
+    let key = (0..KEYS.len()).prop_map(|i| KEYS[i]);
+    prop_oneof![
+        4 => key.clone().prop_map(Step::Press),
+        1 => key.clone().prop_map(Step::Repeat),
+        3 => key.prop_map(Step::Release),
+        3 => (0u64..800).prop_map(|n| Step::Pause(Duration::from_millis(n))),
+        1 => Just(Step::FocusLost),
+    ]
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 48, ..ProptestConfig::default() })]
+
+    /// The promises over random sequences of presses, repeats, releases, focus loss and
+    /// pauses across every place, in both keyboard modes.
+    #[test]
+    fn nothing_moves_unless_a_drive_key_is_held_in_driving(
+        emulated in any::<bool>(),
+        steps in prop::collection::vec(step(), 1..60),
+    ) {
+        let release = if emulated { EMULATED } else { ReleaseMode::Reported };
+        if let Err(e) = check(release, &steps) {
+            return Err(TestCaseError::fail(e));
+        }
+    }
+}
