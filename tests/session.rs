@@ -477,6 +477,56 @@ async fn an_emergency_stop_is_not_overtaken_by_a_drive_queued_before_it() {
     assert_eq!(call.await.unwrap(), Err(RequestError::Superseded));
 }
 
+/// Issue 26, item 3: an emergency stop goes out at once, ahead of pacing and of everything
+/// queued, and again one pacing slot later in case the droid dropped the first.
+#[tokio::test(start_paused = true)]
+async fn an_emergency_stop_is_written_at_once_and_again_one_slot_later() {
+    let fake = Fake::new();
+    fake.auto_respond(true);
+    let pacing = ms(120);
+    let s = connected(
+        &fake,
+        SessionConfig {
+            pacing,
+            ..SessionConfig::default()
+        },
+    )
+    .await;
+    // Driving, with requests queued behind: the next pacing slot is up to 120 ms away.
+    s.set(Slot::Drive, drive(120, 45));
+    for v in 0..5 {
+        s.send(cmd::set_audio_volume(v)).unwrap();
+    }
+    fake.wait_packets(1).await;
+    sleep(ms(30)).await;
+    let at = Instant::now();
+    s.emergency_stop(drive(0, 45));
+    sleep(ms(400)).await;
+    let stops: Vec<Sent> = fake
+        .sent()
+        .into_iter()
+        .filter(|w| w.at >= at && is_drive(&w.packet) && w.packet.data[0] == 0)
+        .collect();
+    assert!(stops.len() >= 2, "written twice: {stops:?}");
+    assert_eq!(
+        stops[0].at,
+        at,
+        "the first stop waited {:?}",
+        stops[0].at - at
+    );
+    let again = stops[1].at - stops[0].at;
+    assert!(
+        again >= pacing && again <= pacing + ms(5),
+        "the second stop came {again:?} after the first"
+    );
+    let driven = fake
+        .sent()
+        .into_iter()
+        .filter(|w| w.at >= at && is_drive(&w.packet) && w.packet.data[0] > 0)
+        .count();
+    assert_eq!(driven, 0, "nothing drives after the e-stop");
+}
+
 #[tokio::test(start_paused = true)]
 async fn seq_runs_0_to_254_and_wraps_to_0() {
     let fake = Fake::new();
