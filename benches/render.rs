@@ -40,16 +40,16 @@ fn line(at_ms: u64, dir: Direction, p: Packet) -> LogLine {
 fn state() -> AppState {
     let mut s = AppState::new(Model::R2D2, "D2-1A2B".into());
     s.now = Duration::from_secs(1200);
-    s.link = LinkState::Connected;
-    s.stats.errors = 12;
-    s.rate_in = 10.0;
-    s.rate_out = 10.0;
+    s.droid_mut().link = LinkState::Connected;
+    s.droid_mut().stats.errors = 12;
+    s.droid_mut().rate_in = 10.0;
+    s.droid_mut().rate_out = 10.0;
     s.gamepad = GamepadStatus::Connected("Xbox Wireless Controller".into());
     s.keyboard = KeyboardMode::ReleaseEvents;
     s.log_path = Some(PathBuf::from(
         "/home/pilot/.local/state/droidctl/logs/session.jsonl",
     ));
-    let t = &mut s.telemetry;
+    let t = &mut s.droid_mut().telemetry;
     t.pitch = Some(1.5);
     t.roll = Some(-0.5);
     t.yaw = Some(140.0);
@@ -78,10 +78,10 @@ fn state() -> AppState {
     }
     let (x, y) = *t.track.back().expect("track");
     (t.x_cm, t.y_cm) = (Some(x), Some(y));
-    s.control.speed = 120;
-    s.control.heading = Heading::new(140).expect("valid");
-    s.control.deadman = false;
-    s.control.head_target = -40.0;
+    s.droid_mut().control.speed = 120;
+    s.droid_mut().control.heading = Heading::new(140).expect("valid");
+    s.droid_mut().control.deadman = false;
+    s.droid_mut().control.head_target = -40.0;
     for i in 0..DEFAULT_CAPACITY as u64 / 2 {
         let seq = (i % 256) as u8;
         let heading = Heading::new((i % 360) as u16).expect("valid");
@@ -153,13 +153,14 @@ fn scope_state() -> AppState {
                 ("velocity_y", 40.0 * (t * 0.2).cos()),
             ],
         });
-        s.telemetry
+        s.droid_mut()
+            .telemetry
             .apply(&n, Duration::from_millis(1_080_000 + i * 20));
     }
     s.now = Duration::from_millis(1_080_000 + 6_000 * 20);
-    s.scope.visible = true;
-    s.scope.window = 4;
-    s.scope.channels = vec![
+    s.droid_mut().scope.visible = true;
+    s.droid_mut().scope.window = 4;
+    s.droid_mut().scope.channels = vec![
         Channel::Pitch,
         Channel::Roll,
         Channel::GyroZ,

@@ -377,7 +377,10 @@ async fn link_loss_drops_speed_and_reconnects() {
     assert_eq!(h.session.stats().reconnects, 1);
     h.quit.send("test".into()).await.unwrap();
     let exit = h.app.await.unwrap();
-    assert_eq!(exit.state.link, droidctl::session::LinkState::Connected);
+    assert_eq!(
+        exit.state.droid().link,
+        droidctl::session::LinkState::Connected
+    );
 }
 
 #[tokio::test(start_paused = true)]
@@ -458,7 +461,7 @@ async fn tripod_on_connect_is_shown_only_when_the_setup_asks_for_it() {
         let h = start_with(REPORTED, Faults::none(), 5, Config::defaults(), tripod).await;
         h.quit.send("test".into()).await.unwrap();
         let exit = h.app.await.unwrap();
-        let stance = exit.state.telemetry.stance;
+        let stance = exit.state.droid().telemetry.stance;
         let tripod_shown = matches!(
             stance,
             Stance::Transitioning(LegState::Tripod) | Stance::Tripod

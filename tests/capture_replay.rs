@@ -125,7 +125,7 @@ fn key(code: KeyCode) -> TermEvent {
 /// at the end.
 async fn replay_screen(capture: &Capture, keys: &[(u64, TermEvent)]) -> (Buffer, Vec<u8>) {
     let (buffer, exit) = replay_with(capture, keys, Config::defaults()).await;
-    let telemetry = format!("{:?}", exit.state.telemetry).into_bytes();
+    let telemetry = format!("{:?}", exit.state.droid().telemetry).into_bytes();
     (buffer, telemetry)
 }
 
@@ -186,7 +186,7 @@ async fn replay_keys_come_from_the_key_map() {
         (700, key(KeyCode::Char('k'))),
     ];
     let (screen, exit) = replay_with(&capture, &keys, config).await;
-    let view = exit.state.replay.expect("a replay view");
+    let view = exit.state.droid().replay.clone().expect("a replay view");
     assert!(view.paused, "k paused");
     assert_eq!(view.speed, 2.0, "F went faster");
     // Played 0.6 s at 1x (Space did not pause), then 0.1 s at 2x, then paused.

@@ -216,11 +216,12 @@ async fn without_mirror_only_the_chosen_droid_drives_and_the_e_stop_still_reache
     let v = h.speeds();
     assert!(v[0] == 0.0 && v[1] > 5.0 && v[2] == 0.0, "{v:?}");
     let seen = seen();
-    let roster = seen.roster.expect("a roster with four droids");
+    let roster = seen.roster().expect("a roster with four droids");
     assert_eq!(roster.droids.len(), 4);
     assert_eq!(roster.chosen, 1);
     assert_eq!(
-        seen.droid_name, "droid-1",
+        seen.droid().droid_name,
+        "droid-1",
         "the screen follows the chosen droid"
     );
     assert!(roster.droids.iter().all(|d| d.link == LinkState::Connected));
@@ -253,7 +254,7 @@ async fn a_droid_that_loses_its_link_is_stopped_by_its_own_fail_safe() {
     assert_eq!(v[0], 0.0, "R2 stopped by its fail-safe: {v:?}");
     assert!(v[1..].iter().all(|v| *v > 1.0), "the others roll on: {v:?}");
     let seen = seen();
-    let r = seen.roster.unwrap();
+    let r = seen.roster().unwrap();
     assert!(
         matches!(r.droids[0].link, LinkState::Reconnecting { .. }),
         "{:?}",
@@ -395,11 +396,11 @@ async fn a_fleet_capture_replays_every_droid_together() {
     // Past the end of the mission (7 s), at 1×.
     sleep(Duration::from_secs(9)).await;
     let s = seen();
-    let r = s.roster.clone().expect("a roster");
+    let r = s.roster().expect("a roster");
     let names: Vec<&str> = r.droids.iter().map(|d| d.name.as_str()).collect();
     assert_eq!(names, ["D2-0001", "BB-0002"]);
-    assert_eq!(s.droid_name, "D2-0001");
-    let r2_y = s.telemetry.y_cm.unwrap();
+    assert_eq!(s.droid().droid_name, "D2-0001");
+    let r2_y = s.droid().telemetry.y_cm.unwrap();
     assert!(r2_y > 20.0, "R2 went north in the replay: {r2_y}");
     // BB-8's position is in the roster too, south.
     let (_, bb_y) = r.droids[1].position.expect("BB-8's position");
@@ -420,9 +421,9 @@ async fn a_fleet_capture_replays_every_droid_together() {
     .unwrap();
     sleep(Duration::from_millis(300)).await;
     let s = seen();
-    assert_eq!(s.droid_name, "BB-0002");
-    assert!(s.telemetry.y_cm.unwrap() < -20.0);
-    assert!(s.replay.is_some(), "still a replay");
+    assert_eq!(s.droid().droid_name, "BB-0002");
+    assert!(s.droid().telemetry.y_cm.unwrap() < -20.0);
+    assert!(s.droid().replay.is_some(), "still a replay");
     term.send(TermEvent::Key {
         key: Key::ch('q'),
         kind: KeyKind::Press,

@@ -146,17 +146,17 @@ async fn the_scope_shows_chosen_channels_and_its_keys_work() {
     ];
     let (exit, _) = live(keys).await;
     let s = &exit.state;
-    assert!(s.scope.visible);
+    assert!(s.droid().scope.visible);
     assert_eq!(
-        s.scope.channels,
+        s.droid().scope.channels,
         [Channel::Pitch, Channel::Yaw, Channel::Speed]
     );
-    assert_eq!(s.scope.window(), Duration::from_secs(60));
-    assert!(!s.scope.autoscale);
-    assert!(s.scope.paused_at.is_some());
+    assert_eq!(s.droid().scope.window(), Duration::from_secs(60));
+    assert!(!s.droid().scope.autoscale);
+    assert!(s.droid().scope.paused_at.is_some());
     assert_eq!(s.overlay, Overlay::None);
     // The droid streamed at 10/s all along, and the scope keeps it.
-    let rate = s.telemetry.history.measured_rate(s.now).unwrap();
+    let rate = s.droid().telemetry.history.measured_rate(s.now).unwrap();
     assert!((rate - 10.0).abs() < 0.6, "{rate}");
     let text = screen(s, 80, 24);
     for want in [
@@ -218,12 +218,18 @@ async fn the_palette_sets_rate_sensors_and_collision_and_collisions_keep_coming(
     keys.push((11_000, release(Key::ch('w'))));
     let (exit, sent) = live(keys).await;
     let s = &exit.state;
-    let plan = s.monitor.plan.clone().unwrap();
-    assert_eq!(plan.interval_ms, 20, "50/s: {:?} {:?}", s.monitor, s.hint);
+    let plan = s.droid().monitor.plan.clone().unwrap();
+    assert_eq!(
+        plan.interval_ms,
+        20,
+        "50/s: {:?} {:?}",
+        s.droid().monitor,
+        s.hint
+    );
     assert_eq!(plan.sensors.to_string(), "attitude");
-    assert_eq!(s.monitor.collision.x_threshold, 80);
+    assert_eq!(s.droid().monitor.collision.x_threshold, 80);
     // The measured rate follows.
-    let r = s.telemetry.history.measured_rate(s.now).unwrap();
+    let r = s.droid().telemetry.history.measured_rate(s.now).unwrap();
     assert!((r - 50.0).abs() < 2.0, "{r}");
     // Streaming went out, then collision detection again, with the new threshold.
     let names: Vec<&str> = sent
@@ -243,7 +249,7 @@ async fn the_palette_sets_rate_sensors_and_collision_and_collisions_keep_coming(
         ]
     );
     // Collisions are still reported after the change.
-    assert!(s.telemetry.collisions >= 1, "no collision reported");
+    assert!(s.droid().telemetry.collisions >= 1, "no collision reported");
     let log = format!("{:?}", s.log);
     assert!(
         log.contains("x_threshold") && log.contains("80"),
@@ -261,9 +267,9 @@ async fn a_capped_request_says_so() {
     keys.push((3500, press(Key::plain(KeyCode::Enter))));
     let (exit, _) = live(keys).await;
     let s = &exit.state;
-    assert_eq!(s.monitor.request.rate_hz, 100);
+    assert_eq!(s.droid().monitor.request.rate_hz, 100);
     assert_eq!(
-        s.monitor.plan.as_ref().unwrap().interval_ms,
+        s.droid().monitor.plan.as_ref().unwrap().interval_ms,
         100,
         "capped at 10/s"
     );
@@ -285,7 +291,7 @@ async fn the_app_writes_every_streamed_sample_as_csv_and_json_lines() {
     let _ = std::fs::remove_dir_all(&dir);
     let rows: Vec<&str> = csv.lines().skip(1).collect();
     // One row per sample the droid streamed (10/s for about 5 s), as many JSON objects.
-    let samples = exit.state.telemetry.samples as usize;
+    let samples = exit.state.droid().telemetry.samples as usize;
     assert!(samples >= 40, "{samples}");
     assert_eq!(rows.len(), samples);
     assert_eq!(jsonl.lines().count(), samples);
@@ -306,9 +312,12 @@ async fn the_app_writes_every_streamed_sample_as_csv_and_json_lines() {
 #[test]
 fn robi_scopes_its_wheels_and_poti() {
     let s = AppState::new(Model::Robi42, "Robi 42".into());
-    assert_eq!(s.scope.channels, [Channel::MotorLeft, Channel::MotorRight]);
+    assert_eq!(
+        s.droid().scope.channels,
+        [Channel::MotorLeft, Channel::MotorRight]
+    );
     assert!(Channel::Poti.reported_by(true) && !Channel::Poti.reported_by(false));
-    assert_eq!(s.monitor.requested(), "own rate");
+    assert_eq!(s.droid().monitor.requested(), "own rate");
 }
 
 const MISSION: &str = "stance tripod\ndrive 120 90 for 3s\nhead 30\nled front 0 0 255\nwait 2s\n";
@@ -340,21 +349,24 @@ async fn replay_shows_the_recorded_commands_and_plays_the_scope() {
         .unwrap();
     let during = mission_start + Duration::from_millis(1500);
     let (mid, _) = replay_until(&capture, during, vec![(100, press(Key::ch('g')))]).await;
-    let c = &mid.state.control;
+    let c = &mid.state.droid().control;
     assert_eq!((c.speed, c.heading.degrees(), c.reverse), (120, 90, false));
     assert!(!c.deadman);
-    assert!(mid.state.scope.visible);
-    assert!(!mid.state.telemetry.history.is_empty(), "the scope plays");
+    assert!(mid.state.droid().scope.visible);
+    assert!(
+        !mid.state.droid().telemetry.history.is_empty(),
+        "the scope plays"
+    );
     let text = screen(&mid.state, 80, 24);
     assert!(
         text.contains("yaw (deg)") && text.contains("Scope"),
         "{text}"
     );
     let (end, _) = replay_until(&capture, capture.duration(), Vec::new()).await;
-    let c = &end.state.control;
+    let c = &end.state.droid().control;
     assert_eq!(c.speed, 0, "the drive ended with a stop");
     assert_eq!(c.head_target, 30.0);
-    assert_eq!(end.state.leds.main, Some([0, 0, 255]));
+    assert_eq!(end.state.droid().leds.main, Some([0, 0, 255]));
     let text = screen(&end.state, 80, 24);
     assert!(text.contains("90°"), "the commanded heading: {text}");
 }

@@ -130,7 +130,7 @@ fn double_taps_count_twice() {
     )
     .unwrap();
     let state = out.state.expect("a frame was drawn");
-    assert!(!state.control.turbo, "t t leaves turbo off");
+    assert!(!state.droid().control.turbo, "t t leaves turbo off");
     let cruise = droidctl::config::Config::defaults().control.cruise_speed;
     assert_eq!(
         out.speeds[0].iter().max(),

@@ -33,8 +33,8 @@ fn rows(buf: &Buffer) -> Vec<String> {
 fn connected(model: Model, name: &str) -> AppState {
     let mut s = AppState::new(model, name.into());
     s.now = Duration::from_secs(20);
-    s.link = LinkState::Connected;
-    let t = &mut s.telemetry;
+    s.droid_mut().link = LinkState::Connected;
+    let t = &mut s.droid_mut().telemetry;
     t.yaw = Some(90.0);
     t.x_cm = Some(40.0);
     t.y_cm = Some(3.0);
@@ -44,21 +44,21 @@ fn connected(model: Model, name: &str) -> AppState {
 
 fn bolt() -> AppState {
     let mut s = connected(Model::Bolt, "SB-5A1C");
-    s.matrix = MatrixView {
+    s.droid_mut().matrix = MatrixView {
         colour: [255, 0, 0],
         shows: MatrixShows::Char('A'),
     };
-    s.telemetry.robot.compass_north = Some(270);
-    s.telemetry.robot.ambient_lux = Some(320.0);
+    s.droid_mut().telemetry.robot.compass_north = Some(270);
+    s.droid_mut().telemetry.robot.ambient_lux = Some(320.0);
     s
 }
 
 fn rvr() -> AppState {
     let mut s = connected(Model::Rvr, "RV-F00D");
-    s.telemetry.robot.color = Some(([0, 200, 40], 3, 0.9));
-    s.telemetry.robot.stalled = [true, false];
-    s.control.tank = Some((200, -100));
-    s.control.source = "tank";
+    s.droid_mut().telemetry.robot.color = Some(([0, 200, 40], 3, 0.9));
+    s.droid_mut().telemetry.robot.stalled = [true, false];
+    s.droid_mut().control.tank = Some((200, -100));
+    s.droid_mut().control.source = "tank";
     s
 }
 
@@ -86,7 +86,7 @@ fn bolt_matrix_panel_shows_the_character_in_its_colour_and_the_compass() {
     }
     // With room, the matrix itself: scrolling text in green.
     let mut s = bolt();
-    s.matrix = MatrixView {
+    s.droid_mut().matrix = MatrixView {
         colour: [0, 255, 0],
         shows: MatrixShows::Text("HELLO".into()),
     };

@@ -130,18 +130,18 @@ fn driving() -> AppState {
     let mut s = AppState::new(Model::R2D2, "D2-1A2B".into());
     with_help(&mut s);
     s.now = Duration::from_secs(42);
-    s.link = LinkState::Connected;
-    s.stats.sent = 812;
-    s.stats.received = 1604;
-    s.stats.errors = 1;
-    s.rate_in = 9.8;
-    s.rate_out = 10.0;
+    s.droid_mut().link = LinkState::Connected;
+    s.droid_mut().stats.sent = 812;
+    s.droid_mut().stats.received = 1604;
+    s.droid_mut().stats.errors = 1;
+    s.droid_mut().rate_in = 9.8;
+    s.droid_mut().rate_out = 10.0;
     s.gamepad = GamepadStatus::Connected("Xbox Wireless Controller".into());
     s.keyboard = KeyboardMode::ReleaseEvents;
     s.log_path = Some(PathBuf::from(
         "/home/pilot/.local/state/droidctl/logs/2025-01-01T12-00-00-D2-1A2B.jsonl",
     ));
-    let t = &mut s.telemetry;
+    let t = &mut s.droid_mut().telemetry;
     t.pitch = Some(2.5);
     t.roll = Some(-1.25);
     t.yaw = Some(87.0);
@@ -165,7 +165,7 @@ fn driving() -> AppState {
     let (x, y) = *t.track.back().expect("track");
     t.x_cm = Some(x);
     t.y_cm = Some(y);
-    let c = &mut s.control;
+    let c = &mut s.droid_mut().control;
     c.speed = 100;
     c.heading = Heading::new(90).expect("valid");
     c.deadman = false;
@@ -179,14 +179,14 @@ fn driving() -> AppState {
 
 fn reconnecting() -> AppState {
     let mut s = driving();
-    s.link = LinkState::Reconnecting {
+    s.droid_mut().link = LinkState::Reconnecting {
         attempt: 2,
         reason: "device disconnected".into(),
     };
-    s.rate_in = 0.0;
-    s.rate_out = 0.0;
-    s.control.speed = 0;
-    s.control.deadman = true;
+    s.droid_mut().rate_in = 0.0;
+    s.droid_mut().rate_out = 0.0;
+    s.droid_mut().control.speed = 0;
+    s.droid_mut().control.deadman = true;
     s.show_hint(
         "link lost: the droid stops by itself; reconnecting",
         Duration::from_secs(5),
@@ -197,16 +197,16 @@ fn reconnecting() -> AppState {
 /// 0.3 s after a bump, e-stop latched, battery low.
 fn collision_flash() -> AppState {
     let mut s = driving();
-    s.telemetry.collisions = 3;
-    s.telemetry.last_collision = Some(CollisionSeen {
+    s.droid_mut().telemetry.collisions = 3;
+    s.droid_mut().telemetry.last_collision = Some(CollisionSeen {
         at: s.now - ms(300),
         collision: collision(),
     });
-    s.control.estop = true;
-    s.control.speed = 0;
-    s.telemetry.battery_v = Some(3.55);
-    s.telemetry.battery_voltage_state = Some(2);
-    s.telemetry.stance = Stance::Transitioning(LegState::Bipod);
+    s.droid_mut().control.estop = true;
+    s.droid_mut().control.speed = 0;
+    s.droid_mut().telemetry.battery_v = Some(3.55);
+    s.droid_mut().telemetry.battery_voltage_state = Some(2);
+    s.droid_mut().telemetry.stance = Stance::Transitioning(LegState::Bipod);
     s
 }
 
@@ -298,9 +298,9 @@ snap!(
     bb9e_hex_log_80x24,
     {
         let mut s = driving();
-        s.model = Model::BB9E;
-        s.droid_name = "GB-77AA".into();
-        s.telemetry.stance = Stance::Unknown;
+        s.droid_mut().model = Model::BB9E;
+        s.droid_mut().droid_name = "GB-77AA".into();
+        s.droid_mut().telemetry.stance = Stance::Unknown;
         s.log.decoded = false;
         s
     },
@@ -316,7 +316,7 @@ fn scope() -> AppState {
     for i in 0..300u64 {
         let t = i as f32 / 10.0;
         let v = 40.0 * (t / 30.0 * std::f32::consts::PI).sin();
-        s.telemetry.apply(
+        s.droid_mut().telemetry.apply(
             &Notification::Sensors(SensorSample {
                 values: vec![
                     ("yaw", (t * 12.0) % 360.0 - 180.0),
@@ -327,8 +327,8 @@ fn scope() -> AppState {
             ms(12_000 + i * 100),
         );
     }
-    s.scope.visible = true;
-    s.scope.paused_at = Some(s.now);
+    s.droid_mut().scope.visible = true;
+    s.droid_mut().scope.paused_at = Some(s.now);
     s
 }
 
@@ -463,7 +463,7 @@ fn reconnecting_is_highlighted() {
 /// A state with every number out of range: NaN, infinities, huge values, indexes past the end.
 fn hostile() -> AppState {
     let mut s = driving();
-    let t = &mut s.telemetry;
+    let t = &mut s.droid_mut().telemetry;
     t.pitch = Some(f32::NAN);
     t.roll = Some(f32::INFINITY);
     t.yaw = Some(f32::NEG_INFINITY);
@@ -487,12 +487,12 @@ fn hostile() -> AppState {
         },
     });
     t.collisions = u32::MAX;
-    s.control.head_target = f32::NAN;
-    s.rate_in = f32::INFINITY;
-    s.rate_out = f32::NAN;
-    s.stats.errors = u64::MAX;
-    s.droid_name = "\u{1b}[2J evil\nname \u{7}".repeat(10);
-    s.link = LinkState::Closed {
+    s.droid_mut().control.head_target = f32::NAN;
+    s.droid_mut().rate_in = f32::INFINITY;
+    s.droid_mut().rate_out = f32::NAN;
+    s.droid_mut().stats.errors = u64::MAX;
+    s.droid_mut().droid_name = "\u{1b}[2J evil\nname \u{7}".repeat(10);
+    s.droid_mut().link = LinkState::Closed {
         reason: Some("x".repeat(500)),
     };
     s.log.scroll = usize::MAX;
@@ -639,14 +639,14 @@ fn bb8_aiming() -> AppState {
     let mut s = AppState::new(Model::BB8, "BB-1A2B".into());
     with_help(&mut s);
     s.now = Duration::from_secs(12);
-    s.link = LinkState::Connected;
-    s.stats.sent = 96;
-    s.stats.received = 240;
-    s.rate_in = 11.0;
-    s.rate_out = 2.0;
+    s.droid_mut().link = LinkState::Connected;
+    s.droid_mut().stats.sent = 96;
+    s.droid_mut().stats.received = 240;
+    s.droid_mut().rate_in = 11.0;
+    s.droid_mut().rate_out = 2.0;
     s.gamepad = GamepadStatus::NoPad;
     s.keyboard = KeyboardMode::Emulated;
-    let t = &mut s.telemetry;
+    let t = &mut s.droid_mut().telemetry;
     t.pitch = Some(0.0);
     t.roll = Some(0.0);
     t.yaw = Some(35.0);
@@ -661,14 +661,14 @@ fn bb8_aiming() -> AppState {
     }
     t.x_cm = Some(12.0);
     t.y_cm = Some(48.0);
-    let c = &mut s.control;
+    let c = &mut s.droid_mut().control;
     c.speed = 0;
     c.heading = Heading::new(35).expect("valid");
     c.deadman = true;
     c.source = "aim";
     c.aiming = true;
-    s.leds.main = Some([255, 140, 0]);
-    s.leds.back = Some(255);
+    s.droid_mut().leds.main = Some([255, 140, 0]);
+    s.droid_mut().leds.back = Some(255);
     s.show_hint(
         "aim: ←/→ turn the droid, press the aim key again to set heading 0",
         Duration::from_secs(5),
@@ -707,7 +707,7 @@ fn bb8_has_the_lights_panel_in_colour_not_the_dome() {
     }
     // Not aiming: no AIMING, the lights stay.
     let mut s = bb8_aiming();
-    s.control.aiming = false;
+    s.droid_mut().control.aiming = false;
     let term = render(&s, 80, 24);
     let text = rows(term.backend().buffer());
     assert!(text.iter().any(|r| r.contains("Lights")));
@@ -769,14 +769,14 @@ fn robi_driving() -> AppState {
     let mut s = AppState::new(Model::Robi42, "Robi 42".into());
     with_help(&mut s);
     s.now = Duration::from_secs(31);
-    s.link = LinkState::Connected;
-    s.stats.sent = 140;
-    s.stats.received = 302;
-    s.rate_in = 10.0;
-    s.rate_out = 10.0;
+    s.droid_mut().link = LinkState::Connected;
+    s.droid_mut().stats.sent = 140;
+    s.droid_mut().stats.received = 302;
+    s.droid_mut().rate_in = 10.0;
+    s.droid_mut().rate_out = 10.0;
     s.gamepad = GamepadStatus::NoPad;
     s.keyboard = KeyboardMode::Emulated;
-    let t = &mut s.telemetry;
+    let t = &mut s.droid_mut().telemetry;
     t.apply(
         &Notification::RobiHandshake(Handshake {
             version: 1,
@@ -814,7 +814,7 @@ fn robi_driving() -> AppState {
         t.apply(&Notification::RobiFrame(f), ms(1_000 + 100 * i));
         id = (id + 1) & 0xFF_FFFF;
     }
-    let c = &mut s.control;
+    let c = &mut s.droid_mut().control;
     c.speed = 180;
     c.cruise = 100;
     c.deadman = false;
@@ -888,7 +888,7 @@ fn robi_panels_light_pressed_buttons_and_lit_lamps_and_never_cut_the_lost_count(
     // A long session's lost count is shown whole, also at 80×24.
     for lost in [12u64, 1234, 987_654] {
         let mut s = robi_driving();
-        s.telemetry.robi.as_mut().expect("robi").lost = lost;
+        s.droid_mut().telemetry.robi.as_mut().expect("robi").lost = lost;
         for (w, h) in [(60, 16), (80, 24), (100, 30), (160, 48)] {
             let text = rows(render(&s, w, h).backend().buffer());
             let line = text
@@ -908,61 +908,55 @@ fn robi_panels_light_pressed_buttons_and_lit_lamps_and_never_cut_the_lost_count(
 /// A fleet of four on screen: the roster strip above the one-droid screen (the chosen one's
 /// gauges), the other droids on its map by number, the log naming each line's droid.
 fn fleet() -> AppState {
-    use droidctl::app::roster::{Roster, RosterEntry};
+    use droidctl::app::state::DroidState;
     use std::sync::Arc;
     let mut s = driving();
-    s.droid_name = "D2-0001".into();
-    let entry = |name: &str, model, link, battery_v, moving, position| RosterEntry {
-        name: name.into(),
-        model,
-        link,
-        battery_v,
-        rate_in: 12.0,
-        rate_out: 10.0,
-        moving,
-        position,
+    s.droid_mut().droid_name = "D2-0001".into();
+    let other = |name: &str, model, link, battery_v, moving: bool, position: Option<(f32, f32)>| {
+        let mut d = DroidState::new(model, name.into());
+        d.link = link;
+        d.telemetry.battery_v = battery_v;
+        d.rate_in = 12.0;
+        d.rate_out = 10.0;
+        d.control.speed = if moving { 80 } else { 0 };
+        if let Some((x, y)) = position {
+            d.telemetry.x_cm = Some(x);
+            d.telemetry.y_cm = Some(y);
+        }
+        d
     };
-    s.roster = Some(Roster {
-        droids: vec![
-            entry(
-                "D2-0001",
-                Model::R2D2,
-                LinkState::Connected,
-                Some(3.9),
-                true,
-                Some((-60.0, 80.0)),
-            ),
-            entry(
-                "BB-0002",
-                Model::BB8,
-                LinkState::Connected,
-                Some(4.1),
-                true,
-                Some((0.0, 0.0)),
-            ),
-            entry(
-                "GB-0003",
-                Model::BB9E,
-                LinkState::Reconnecting {
-                    attempt: 2,
-                    reason: "the droid disconnected".into(),
-                },
-                None,
-                false,
-                Some((120.0, -40.0)),
-            ),
-            entry(
-                "Robi 42",
-                Model::Robi42,
-                LinkState::Connecting,
-                None,
-                false,
-                None,
-            ),
-        ],
-        chosen: 0,
-        mirror: true,
-    });
+    // The chosen droid is the driving screen's own (the roster reads the same state).
+    s.droids.extend([
+        other(
+            "BB-0002",
+            Model::BB8,
+            LinkState::Connected,
+            Some(4.1),
+            true,
+            Some((0.0, 0.0)),
+        ),
+        other(
+            "GB-0003",
+            Model::BB9E,
+            LinkState::Reconnecting {
+                attempt: 2,
+                reason: "the droid disconnected".into(),
+            },
+            None,
+            false,
+            Some((120.0, -40.0)),
+        ),
+        other(
+            "Robi 42",
+            Model::Robi42,
+            LinkState::Connecting,
+            None,
+            false,
+            None,
+        ),
+    ]);
+    s.chosen = 0;
+    s.mirror = true;
     let names: [Arc<str>; 2] = [Arc::from("D2-0001"), Arc::from("BB-0002")];
     let lines = session_log();
     s.log = Default::default();

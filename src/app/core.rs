@@ -1,20 +1,17 @@
-//! What the event loop owns: the [`AppState`] the screen shows, the control loop, the held
-//! keys and the gamepad, the key map, and where the droid comes from (a live session, or a
-//! replay's player). The handlers live in their own files: keys ([`super::keys`]), the gamepad
-//! ([`super::pad`]), what reaches the droid ([`super::actions`]) and replay
-//! ([`super::replay`]); this file keeps the state and the events every source shares.
+//! What the event loop owns: the [`AppState`] the screen shows (every droid's view, the
+//! packet log, the overlay), each droid's IO half ([`DroidIo`]: its session or replay, its
+//! controller and family) in the same order, the held keys and the gamepad, and the key map.
+//! Nothing is swapped: "the chosen droid" is an index, "every droid" is a loop. The handlers
+//! live in their own files: keys ([`super::keys`]), the gamepad ([`super::pad`]), what
+//! reaches a droid ([`super::droid`], [`super::actions`]), several droids
+//! ([`super::fleet`]) and replay ([`super::replay`]).
 
+use super::droid::{DroidIo, DroidMut};
 use super::pacing::FramePacer;
-use super::packet_log::LogLine;
-use super::player::Player;
+use super::place::Place;
 use super::state::AppState;
 use crate::capture::mirror::Output;
 use crate::config::KeyMap;
-use crate::family::Family;
-use crate::protocol::notify::Notification;
-use crate::protocol::wire::LegAction;
-use crate::session::{LinkState, LogEntry, SessionHandle};
-use crate::teleop::control::{Controller, DroidView};
 use crate::teleop::gamepad::PadState;
 use crate::teleop::held::HeldKeys;
 use std::time::Duration;
@@ -25,32 +22,21 @@ pub const HINT_TIME: Duration = Duration::from_secs(4);
 
 pub(super) struct App {
     pub state: AppState,
-    /// The live session; `None` in replay.
-    pub session: Option<SessionHandle>,
-    /// The capture played back, in replay.
-    pub player: Option<Player>,
-    pub controller: Controller,
+    /// Each droid's IO half, in the order of `state.droids`.
+    pub io: Vec<DroidIo>,
+    /// Keys held in the driving place (filled only there, let go when the place changes).
     pub held: HeldKeys,
     pub pad: PadState,
     pub keymap: KeyMap,
-    pub family: &'static dyn Family,
     pub turbo_speed: u8,
     /// Whether a (re)connect's setup puts a droid with legs into tripod.
     pub tripod_on_connect: bool,
     pub start: Instant,
-    pub last_tick: Instant,
     /// Something visible changed since the last frame.
     pub dirty: bool,
     /// Replay: what the last advance produced (kept to reuse its allocation).
     pub replayed: Vec<(Duration, Output)>,
     pub pacer: FramePacer,
-    /// The other droids of a fleet (`None` with one droid).
-    pub fleet: Option<super::fleet::FleetSide>,
-    /// The keys and the pad drive the droid swapped in (false for a parked droid outside
-    /// mirror mode: it gets no input, its deadman holds it; the e-stop still reaches it).
-    pub driven: bool,
-    /// In a fleet, the droid whose events are being handled: its log lines are named.
-    pub log_droid: Option<std::sync::Arc<str>>,
     /// Where samples are written (`drive --csv`, `--jsonl`).
     pub samples: Option<crate::mission::csv::SampleFiles>,
     /// What the input routing did so far, and where it is published.
@@ -65,7 +51,7 @@ pub struct InputTrace {
     /// Terminal and gamepad events handled so far.
     pub handled: u64,
     /// The place on top after the last event.
-    pub place: super::place::Place,
+    pub place: Place,
     /// How often every held key was let go (a place change, another droid, focus lost).
     pub clears: u64,
     /// Emergency stops raised (keys, the pad).
@@ -78,7 +64,7 @@ impl Default for InputTrace {
     fn default() -> Self {
         InputTrace {
             handled: 0,
-            place: super::place::Place::Driving,
+            place: Place::Driving,
             clears: 0,
             estops: 0,
             chosen: 0,
@@ -94,11 +80,76 @@ impl App {
     }
 
     /// The time telemetry and the screen run on: since the start live, capture time in
-    /// replay (so the same capture always folds and draws the same).
+    /// replay (so the same capture always folds and draws the same). Every droid of a
+    /// replayed fleet plays on one clock: the chosen one's.
     pub fn clock(&self) -> Duration {
-        match &self.player {
+        match self
+            .io
+            .get(self.state.chosen)
+            .and_then(|d| d.player.as_ref())
+        {
             Some(p) => p.clock(Instant::now()),
             None => self.now(),
+        }
+    }
+
+    /// The number of droids (one droid is a fleet of one).
+    pub fn len(&self) -> usize {
+        self.io.len()
+    }
+
+    /// The droid the keys drive.
+    pub fn chosen(&self) -> usize {
+        self.state.chosen
+    }
+
+    /// Whether mirror mode is on.
+    pub fn mirroring(&self) -> bool {
+        self.state.mirror
+    }
+
+    /// Whether driving input reaches droid `i`: the chosen one, or every one mirrored.
+    pub fn driven(&self, i: usize) -> bool {
+        i == self.state.chosen || self.state.mirror
+    }
+
+    /// Whether this is a replay (nothing is sent).
+    pub fn replaying(&self) -> bool {
+        self.io.iter().any(|d| d.player.is_some())
+    }
+
+    /// Droid `i`, with what its handlers share with the rest of the app (the hint, the log,
+    /// the sample files). `None` for an index out of range.
+    pub fn droid(&mut self, i: usize) -> Option<DroidMut<'_>> {
+        let fleet = self.io.len() > 1;
+        let now = self.now();
+        let AppState {
+            droids,
+            log,
+            hint,
+            now: screen_now,
+            ..
+        } = &mut self.state;
+        Some(DroidMut {
+            view: droids.get_mut(i)?,
+            io: self.io.get_mut(i)?,
+            log,
+            hint,
+            screen_now,
+            now,
+            dirty: &mut self.dirty,
+            samples: &mut self.samples,
+            fleet,
+            tripod_on_connect: self.tripod_on_connect,
+        })
+    }
+
+    /// `f` on every droid, in order.
+    pub fn each(&mut self, mut f: impl FnMut(&mut DroidMut<'_>)) {
+        for i in 0..self.io.len() {
+            if let Some(mut d) = self.droid(i) {
+                f(&mut d);
+            }
         }
     }
 
@@ -108,19 +159,9 @@ impl App {
         self.pacer.touched(now);
     }
 
-    pub fn droid_view(&self) -> DroidView {
-        DroidView {
-            connected: self.state.link == LinkState::Connected,
-            has_legs: self.state.model.has_legs(),
-            has_dome: self.state.model.has_dome(),
-            can_aim: self.state.model.can_aim(),
-            stance: self.state.telemetry.stance,
-        }
-    }
-
     /// The place that has the keyboard now.
-    pub fn place(&self) -> super::place::Place {
-        super::place::Place::of(&self.state, self.player.is_some())
+    pub fn place(&self) -> Place {
+        Place::of(&self.state, self.replaying())
     }
 
     /// Let go of every held key and tell every droid's controller now (its next write is a
@@ -149,26 +190,6 @@ impl App {
         self.dirty = true;
     }
 
-    /// A notification, from the session or the replay, received at `at`.
-    pub fn on_notification(&mut self, n: &Notification, at: Duration) {
-        self.state.telemetry.apply(n, at);
-        self.dirty = true;
-        if matches!(n, Notification::Sensors(_) | Notification::RobiFrame(_))
-            && let Some(files) = &mut self.samples
-        {
-            let s = crate::mission::sample_of(&self.state.telemetry, at.as_millis() as u64);
-            // A fleet's rows name their droid.
-            let written = match &self.log_droid {
-                Some(droid) => files.write_for(droid, &s),
-                None => files.write(&s),
-            };
-            if let Err(e) = written {
-                self.samples = None;
-                self.hint(format!("telemetry file: {e}; no more samples are written"));
-            }
-        }
-    }
-
     /// Write out what the sample files buffer (every second, and at exit).
     pub fn flush_samples(&mut self) {
         if let Some(files) = &mut self.samples
@@ -177,35 +198,5 @@ impl App {
             self.samples = None;
             self.hint(format!("telemetry file: {e}; no more samples are written"));
         }
-    }
-
-    /// A packet-log entry, from the session or the replay.
-    pub fn on_log(&mut self, entry: &LogEntry) {
-        let line = match &self.log_droid {
-            Some(droid) => LogLine::from_droid_entry(entry, droid.clone()),
-            None => LogLine::from_entry(entry),
-        };
-        self.state.log.push(line);
-        self.dirty = true;
-    }
-
-    pub fn on_battery(&mut self, volts: f32) {
-        self.state.telemetry.battery_v = Some(volts);
-        self.dirty = true;
-    }
-
-    pub fn on_link(&mut self, s: LinkState) {
-        if s != LinkState::Connected {
-            self.controller.link_lost();
-        } else if self.state.link != LinkState::Connected
-            && self.tripod_on_connect
-            && self.state.model.has_legs()
-        {
-            // The connect setup asks for tripod.
-            self.state.telemetry.stance_requested(LegAction::Tripod);
-        }
-        self.state.link = s;
-        self.control(false);
-        self.dirty = true;
     }
 }

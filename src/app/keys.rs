@@ -90,7 +90,7 @@ impl App {
         }
         let before = (self.place(), self.chosen(), self.mirroring());
         let scope_key = before.0 == Place::Driving
-            && self.state.scope.visible
+            && self.state.droid().scope.visible
             && self.keymap.action_in(Context::Scope, &key).is_some();
         let held_action = before.0 == Place::Driving
             && !scope_key
@@ -181,12 +181,18 @@ impl App {
                 return;
             }
             Some(Action::PalettePlay) if new_press => {
-                if animations {
-                    if let Some(e) = self.state.animations.get(selected).cloned() {
-                        self.play_animation(e.id, &e.name);
+                let chosen = self.chosen();
+                let entry = if animations {
+                    self.state.animations.get(selected).cloned()
+                } else {
+                    self.state.sounds.get(selected).cloned()
+                };
+                if let (Some(e), Some(mut d)) = (entry, self.droid(chosen)) {
+                    if animations {
+                        d.play_animation(e.id, &e.name);
+                    } else {
+                        d.play_sound(e.id, &e.name);
                     }
-                } else if let Some(e) = self.state.sounds.get(selected).cloned() {
-                    self.play_sound(e.id, &e.name);
                 }
                 self.state.overlay = Overlay::None;
                 return;
@@ -273,7 +279,6 @@ impl App {
         if let Some(a) = self.keymap.action_in(Context::Replay, &key) {
             // Every droid of a fleet's capture plays on the same clock.
             self.on_replay_action(a);
-            self.each_other(|o| o.on_replay_action(a));
             return None;
         }
         match self.keymap.action(&key) {
@@ -324,29 +329,31 @@ impl App {
             Action::Mirror => self.toggle_mirror(),
             Action::Scope => self.toggle_scope(),
             Action::Tuning => self.open_tuning(),
-            Action::Colour => self.cycle_colour(),
-            Action::BackLight => self.toggle_back_light(),
-            Action::Animations if self.family.animation(self.state.model, 0).is_none() => {
-                self.hint("this droid has no animations")
+            Action::Colour | Action::BackLight => {
+                if let Some(mut d) = self.droid(self.chosen()) {
+                    if action == Action::Colour {
+                        d.cycle_colour();
+                    } else {
+                        d.toggle_back_light();
+                    }
+                }
             }
-            Action::Sounds if self.family.sound(self.state.model, 0).is_none() => {
-                self.hint("this droid cannot play sounds")
+            Action::Animations | Action::Sounds => {
+                let model = self.state.droid().model;
+                let family = self.io[self.chosen()].family;
+                if action == Action::Animations && family.animation(model, 0).is_none() {
+                    self.hint("this droid has no animations")
+                } else if action == Action::Sounds && family.sound(model, 0).is_none() {
+                    self.hint("this droid cannot play sounds")
+                } else if action == Action::Animations {
+                    self.state.overlay = Overlay::Animations { selected: 0 }
+                } else {
+                    self.state.overlay = Overlay::Sounds { selected: 0 }
+                }
             }
-            Action::Animations => self.state.overlay = Overlay::Animations { selected: 0 },
-            Action::Sounds => self.state.overlay = Overlay::Sounds { selected: 0 },
             a if self.robot_action(a) => {}
             a => {
-                let view = self.droid_view();
-                let outs = self.controller.on_press(a, &view);
-                self.apply(outs);
-                // Mirror: speed, turbo, stance and aim keys act on every droid too.
-                if self.mirroring() && !a.is_held() {
-                    self.each_other(|o| {
-                        let view = o.droid_view();
-                        let outs = o.controller.on_press(a, &view);
-                        o.apply(outs);
-                    });
-                }
+                self.press(a);
                 if a.is_held() {
                     self.control(false);
                 }

@@ -65,8 +65,9 @@ impl MatrixView {
 impl App {
     /// The robot-only keys of the drive table; `false` when `a` is not one of them.
     pub fn robot_action(&mut self, a: Action) -> bool {
+        let model = self.state.droid().model;
         match a {
-            Action::Matrix | Action::MatrixColour if !self.state.model.has_matrix() => {
+            Action::Matrix | Action::MatrixColour if !model.has_matrix() => {
                 self.hint("this droid has no LED matrix")
             }
             Action::Matrix => {
@@ -75,7 +76,7 @@ impl App {
                 }
             }
             Action::MatrixColour => {
-                let m = &mut self.state.matrix;
+                let m = &mut self.state.droid_mut().matrix;
                 let next = MAIN_LED_CYCLE
                     .iter()
                     .position(|c| *c == m.colour)
@@ -83,26 +84,34 @@ impl App {
                 m.colour = MAIN_LED_CYCLE[next];
                 self.draw_matrix();
             }
-            Action::Calibrate => match self.family.calibrate_compass() {
-                Some(c) if self.state.model.has_compass() => {
-                    self.send(c, "compass calibration");
-                    self.hint("calibrating the compass: north is reported when done");
+            Action::Calibrate => {
+                let chosen = self.chosen();
+                match self.io[chosen].family.calibrate_compass() {
+                    Some(c) if model.has_compass() => {
+                        if let Some(mut d) = self.droid(chosen) {
+                            d.send(c, "compass calibration");
+                        }
+                        self.hint("calibrating the compass: north is reported when done");
+                    }
+                    _ => self.hint("this droid has no compass"),
                 }
-                _ => self.hint("this droid has no compass"),
-            },
+            }
             _ => return false,
         }
         true
     }
 
-    /// Send what the matrix view says it shows.
+    /// Send what the chosen droid's matrix view says it shows.
     fn draw_matrix(&mut self) {
-        let action = self.state.matrix.action();
-        if matches!(self.state.matrix.shows, MatrixShows::Unknown) {
-            self.state.matrix.shows = MatrixShows::Fill;
+        let Some(mut d) = self.droid(self.chosen()) else {
+            return;
+        };
+        let action = d.view.matrix.action();
+        if matches!(d.view.matrix.shows, MatrixShows::Unknown) {
+            d.view.matrix.shows = MatrixShows::Fill;
         }
-        if let Some(c) = self.family.matrix(&action) {
-            self.send(c, "matrix");
+        if let Some(c) = d.io.family.matrix(&action) {
+            d.send(c, "matrix");
         }
     }
 
@@ -118,7 +127,7 @@ impl App {
                 let typed = MatrixView::typed(input);
                 self.state.overlay = Overlay::None;
                 if let Some(shows) = typed {
-                    self.state.matrix.shows = shows;
+                    self.state.droid_mut().matrix.shows = shows;
                     self.draw_matrix();
                 }
             }

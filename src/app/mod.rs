@@ -15,8 +15,10 @@
 
 mod actions;
 pub mod battery;
+mod build;
 pub mod catalog;
 mod core;
+mod droid;
 mod fleet;
 pub mod help;
 pub mod input;

@@ -209,7 +209,7 @@ impl TuningDraft {
 impl App {
     /// The scope on or off.
     pub fn toggle_scope(&mut self) {
-        let s = &mut self.state.scope;
+        let s = &mut self.state.droid_mut().scope;
         s.visible = !s.visible;
         self.dirty = true;
     }
@@ -223,7 +223,7 @@ impl App {
             return;
         }
         let now = self.clock();
-        let s = &mut self.state.scope;
+        let s = &mut self.state.droid_mut().scope;
         match a {
             Action::ScopePause => {
                 s.paused_at = match s.paused_at {
@@ -242,7 +242,7 @@ impl App {
 
     /// The channels this droid reports, as the channel list shows them.
     pub fn channels_offered(&self) -> Vec<Channel> {
-        let robi = self.state.model.reports_state_frames();
+        let robi = self.state.droid().model.reports_state_frames();
         Channel::ALL
             .iter()
             .copied()
@@ -270,7 +270,7 @@ impl App {
             }
             Some(Action::SettingsToggle | Action::SettingsApply) if new_press => {
                 if let Some(c) = offered.get(selected) {
-                    self.state.scope.toggle(*c);
+                    self.state.droid_mut().scope.toggle(*c);
                 }
             }
             Some(Action::SettingsClose) => self.state.overlay = Overlay::None,
@@ -280,14 +280,14 @@ impl App {
 
     /// Open the streaming and collision settings.
     pub fn open_tuning(&mut self) {
-        let m = &self.state.monitor;
+        let m = &self.state.droid().monitor;
         if !m.live {
             return self.hint("replay: nothing is sent (the settings are the capture's)");
         }
         if tuning_rows(m).is_empty() {
             return self.hint(format!(
                 "{} sends its state by itself: nothing to set",
-                self.state.model.display_name()
+                self.state.droid().model.display_name()
             ));
         }
         let draft = TuningDraft {
@@ -304,11 +304,11 @@ impl App {
 
     /// A key in the settings palette.
     pub fn tuning_key(&mut self, key: Key, new_press: bool) {
+        let rows = tuning_rows(&self.state.droid().monitor);
+        let caps = self.state.droid().monitor.caps;
         let Overlay::Tuning { selected, draft } = &mut self.state.overlay else {
             return;
         };
-        let rows = tuning_rows(&self.state.monitor);
-        let caps = self.state.monitor.caps;
         let row = rows.get(*selected).copied();
         match self.keymap.action_in(Context::Settings, &key) {
             Some(Action::SettingsUp) => *selected = selected.saturating_sub(1),
@@ -333,30 +333,34 @@ impl App {
             Some(Action::SettingsApply) if new_press => {
                 let draft = draft.clone();
                 self.state.overlay = Overlay::None;
-                self.apply_tuning(draft);
+                if let Some(mut d) = self.droid(self.chosen()) {
+                    d.apply_tuning(draft);
+                }
             }
             Some(Action::SettingsClose) => self.state.overlay = Overlay::None,
             _ => {}
         }
     }
+}
 
+impl super::droid::DroidMut<'_> {
     /// Send the settings: streaming (capped to the link) then collision detection, and make
     /// them the setup of every later reconnect.
     pub fn apply_tuning(&mut self, draft: TuningDraft) {
-        let model = self.state.model;
+        let model = self.view.model;
         let request = StreamRequest {
             rate_hz: draft.rate_hz,
             sensors: draft.sensors,
         };
         let plan = stream::plan_for(model, request);
-        let family = self.family;
+        let family = self.io.family;
         let mut cmds = match &plan {
             Some(p) => stream::reconfigure(model, p, &draft.collision),
             None => family.collision_detection(&draft.collision),
         };
         // The session writes them in order; a full queue is said once.
         let mut failed = None;
-        if let Some(session) = &self.session {
+        if let Some(session) = &self.io.session {
             for c in cmds.drain(..) {
                 if let Err(e) = session.send(c) {
                     failed = Some(e);
@@ -374,7 +378,7 @@ impl App {
             };
             session.set_setup(connect_setup(model, &setup));
         }
-        let m = &mut self.state.monitor;
+        let m = &mut self.view.monitor;
         m.request = request;
         m.plan = plan;
         m.collision = draft.collision;

@@ -9,7 +9,7 @@ use crate::teleop::gamepad::{PadCommand, PadEvent};
 
 impl App {
     pub fn on_pad(&mut self, e: PadEvent) {
-        if self.player.is_some() {
+        if self.replaying() {
             return;
         }
         self.touched();
@@ -29,7 +29,11 @@ impl App {
         let before = self.place();
         match self.pad.apply(&e) {
             Some(PadCommand::Action(a)) => self.on_pad_action(a),
-            Some(PadCommand::Sound(id)) => self.play_sound(id, "from the D-pad"),
+            Some(PadCommand::Sound(id)) => {
+                if let Some(mut d) = self.droid(self.chosen()) {
+                    d.play_sound(id, "from the D-pad");
+                }
+            }
             None => {}
         }
         // The help button opens or closes a place: held keys are let go, as for a key.
@@ -53,9 +57,7 @@ impl App {
             _ => None,
         };
         if let Some(action) = key_action {
-            let view = self.droid_view();
-            let outs = self.controller.on_press(action, &view);
-            return self.apply(outs);
+            return self.press(action);
         }
         match a {
             PadAction::Tripod | PadAction::Bipod | PadAction::Aim => {}
@@ -72,8 +74,11 @@ impl App {
                     Overlay::Animations { selected } => selected,
                     _ => 0,
                 };
-                if let Some(a) = self.state.animations.get(sel).cloned() {
-                    self.play_animation(a.id, &a.name);
+                let chosen = self.chosen();
+                if let (Some(a), Some(mut d)) =
+                    (self.state.animations.get(sel).cloned(), self.droid(chosen))
+                {
+                    d.play_animation(a.id, &a.name);
                 }
             }
         }

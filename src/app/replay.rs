@@ -3,6 +3,7 @@
 //! actions (pause, speed, seek, step). Nothing is ever sent.
 
 use super::core::App;
+use super::droid::DroidMut;
 use super::packet_log::PacketLog;
 use super::player::{SEEK_LONG, SEEK_SHORT};
 use super::state::ReplayView;
@@ -13,7 +14,7 @@ use crate::telemetry::Stance;
 use std::time::Duration;
 use tokio::time::Instant;
 
-impl App {
+impl DroidMut<'_> {
     /// What the replay produced, through the same paths as a live session's events.
     fn on_replayed(&mut self, outs: &mut Vec<(Duration, Output)>) {
         for (at, o) in outs.drain(..) {
@@ -25,21 +26,14 @@ impl App {
                 }
                 Output::Link(s) => self.on_link(s),
                 Output::Battery(v) => self.on_battery(v),
-                Output::StanceRequested(a) => self.state.telemetry.stance_requested(a),
+                Output::StanceRequested(a) => self.view.telemetry.stance_requested(a),
                 Output::StanceRead(s) => {
-                    if self.state.telemetry.stance == Stance::Unknown {
-                        self.state.telemetry.stance = Stance::from_state(s);
+                    if self.view.telemetry.stance == Stance::Unknown {
+                        self.view.telemetry.stance = Stance::from_state(s);
                     }
                 }
                 Output::Mark(_) => {}
                 Output::Command(c) => self.commanded(&c),
-            }
-        }
-        if let Some(p) = &self.player {
-            let st = p.replay.mirror().stats();
-            if st != self.state.stats {
-                self.state.stats = st;
-                self.dirty = true;
             }
         }
     }
@@ -47,52 +41,39 @@ impl App {
     /// A command of the capture: the Drive and Lights (or dome) panels show it as it was sent,
     /// not the local controller's idle state.
     fn commanded(&mut self, c: &crate::family::Command) {
-        let family = self.family;
-        let control = &mut self.state.control;
+        let family = self.io.family;
+        let control = &mut self.view.control;
         if let Some(d) = family.read_drive(c) {
             control.speed = d.speed;
             control.heading = d.heading;
             control.reverse = d.reverse;
             control.steer = d.steer;
             control.deadman = d.speed == 0;
-            self.dirty = true;
+            *self.dirty = true;
         }
         if let Some(a) = family.read_head(c) {
             control.head_target = a;
-            self.dirty = true;
+            *self.dirty = true;
         }
-        if let Some(l) = family.read_leds(self.state.model, c) {
+        if let Some(l) = family.read_leds(self.view.model, c) {
             if l.main.is_some() {
-                self.state.leds.main = l.main;
+                self.view.leds.main = l.main;
             }
             if l.back.is_some() {
-                self.state.leds.back = l.back;
+                self.view.leds.back = l.back;
             }
-            self.dirty = true;
+            *self.dirty = true;
         }
     }
 
-    /// Replay: bring the capture up to the clock (every droid's of a fleet), and the status
-    /// bar's position.
-    pub fn replay_frame(&mut self) {
-        let chosen = self.chosen();
-        self.with_droid(chosen, App::replay_frame_one);
-        self.each_other(App::replay_frame_one);
-    }
-
-    fn replay_frame_one(&mut self) {
-        let Some(p) = self.player.as_mut() else {
+    /// Bring its capture up to the clock; the status bar's position.
+    fn replay_frame(&mut self, scratch: &mut Vec<(Duration, Output)>) {
+        let Some(p) = self.io.player.as_mut() else {
             return;
         };
-        let mut outs = std::mem::take(&mut self.replayed);
-        p.advance(Instant::now(), &mut outs);
+        p.advance(Instant::now(), scratch);
         let view = p.view(Instant::now());
-        self.on_replayed(&mut outs);
-        self.replayed = outs;
-        self.show_replay(view);
-    }
-
-    fn show_replay(&mut self, view: ReplayView) {
+        self.on_replayed(scratch);
         // The position is shown to a tenth of a second: redraw when that changes.
         let shown = |v: &ReplayView| {
             (
@@ -102,20 +83,20 @@ impl App {
                 v.events_done,
             )
         };
-        if self.state.replay.as_ref().map(shown) != Some(shown(&view)) {
-            self.dirty = true;
+        if self.view.replay.as_ref().map(shown) != Some(shown(&view)) {
+            *self.dirty = true;
         }
-        self.state.now = view.position;
-        self.state.replay = Some(view);
+        *self.screen_now = view.position;
+        self.view.replay = Some(view);
     }
 
-    /// A replay action from the key map's replay table.
-    pub fn on_replay_action(&mut self, a: Action) {
+    /// A replay action; returns whether the capture went back in time (its view starts
+    /// afresh and plays again up to there).
+    fn replay_action(&mut self, a: Action, scratch: &mut Vec<(Duration, Output)>) -> bool {
         let now = Instant::now();
-        let Some(p) = self.player.as_mut() else {
-            return;
+        let Some(p) = self.io.player.as_mut() else {
+            return false;
         };
-        let mut outs = std::mem::take(&mut self.replayed);
         let at = p.clock(now);
         let restart = match a {
             Action::ReplayPause => {
@@ -131,7 +112,7 @@ impl App {
                 false
             }
             Action::ReplayStep => {
-                p.step(now, &mut outs);
+                p.step(now, scratch);
                 false
             }
             Action::ReplayForward => p.seek(at + SEEK_SHORT, now),
@@ -143,25 +124,60 @@ impl App {
             _ => false,
         };
         if restart {
-            // Back in time: forget what the capture showed, then play it again up to there.
             p.replay_from_start();
-            outs.clear();
+            scratch.clear();
+            let v = &mut *self.view;
+            v.telemetry = Default::default();
+            v.stats = SessionStats::default();
+            let source = v.control.source;
+            v.control = Default::default();
+            v.control.source = source;
+            v.leds = Default::default();
+            v.link = LinkState::Connecting;
+            v.rate_in = 0.0;
+            v.rate_out = 0.0;
+        } else {
+            // A step's events.
+            self.on_replayed(scratch);
+        }
+        restart
+    }
+}
+
+impl App {
+    /// Replay: bring every droid's capture up to the clock, the chosen one's last (its
+    /// position is the one the screen shows).
+    pub fn replay_frame(&mut self) {
+        let mut scratch = std::mem::take(&mut self.replayed);
+        let chosen = self.chosen();
+        let order = (0..self.len()).filter(|i| *i != chosen).chain([chosen]);
+        for i in order {
+            if let Some(mut d) = self.droid(i) {
+                d.replay_frame(&mut scratch);
+            }
+        }
+        self.replayed = scratch;
+    }
+
+    /// A replay action from the key map's replay table: every droid of a fleet's capture
+    /// plays on the same clock.
+    pub fn on_replay_action(&mut self, a: Action) {
+        let mut scratch = std::mem::take(&mut self.replayed);
+        let mut restarted = false;
+        for i in 0..self.len() {
+            if let Some(mut d) = self.droid(i) {
+                restarted |= d.replay_action(a, &mut scratch);
+            }
+        }
+        if restarted {
+            // Back in time: forget what the capture showed, then play it again up to there.
             let log = &self.state.log;
             let mut fresh = PacketLog::with_capacity(log.capacity());
             fresh.decoded = log.decoded;
             fresh.filter = log.filter.clone();
             self.state.log = fresh;
-            self.state.telemetry = Default::default();
-            self.state.stats = SessionStats::default();
-            let source = self.state.control.source;
-            self.state.control = Default::default();
-            self.state.control.source = source;
-            self.state.leds = Default::default();
-            self.state.link = LinkState::Connecting;
-            self.state.rate_in = 0.0;
-            self.state.rate_out = 0.0;
         }
-        self.replayed = outs;
+        self.replayed = scratch;
         self.replay_frame();
         self.dirty = true;
     }

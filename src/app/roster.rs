@@ -1,7 +1,7 @@
 //! What the roster strip shows of a fleet: every droid with its state, battery and link
 //! rate, which one the keys drive, and whether mirror mode sends the same control to all.
-//! Plain data, made by the event loop before each frame; `None` in [`super::AppState`] with
-//! one droid (the screen is then as it always was).
+//! Plain data, made from [`super::AppState`] for drawing; `None` with one droid (the screen
+//! is then as it always was).
 
 use crate::model::Model;
 use crate::session::LinkState;
@@ -28,4 +28,32 @@ pub struct RosterEntry {
     pub moving: bool,
     /// Where its locator puts it, cm, for the map of all droids.
     pub position: Option<(f32, f32)>,
+}
+
+impl Roster {
+    /// Every droid of `state` as the strip shows it.
+    pub fn of(state: &super::AppState) -> Roster {
+        let droids = state
+            .droids
+            .iter()
+            .map(|d| {
+                let t = &d.telemetry;
+                RosterEntry {
+                    name: d.droid_name.clone(),
+                    model: d.model,
+                    link: d.link.clone(),
+                    battery_v: t.battery_v,
+                    rate_in: d.rate_in,
+                    rate_out: d.rate_out,
+                    moving: d.control.speed > 0 && !d.control.estop,
+                    position: t.x_cm.zip(t.y_cm),
+                }
+            })
+            .collect();
+        Roster {
+            droids,
+            chosen: state.chosen,
+            mirror: state.mirror,
+        }
+    }
 }

@@ -4,24 +4,22 @@
 //! [`super::pad`], [`super::core`], [`super::replay`]). Every outside input is a parameter, so
 //! tests drive it with fakes under paused time and render into ratatui's `TestBackend`.
 
-use super::core::App;
+use super::build::{Origin, build};
+use super::core::{App, InputTrace};
 use super::input::TermEvent;
-use super::pacing::FramePacer;
 use super::player::Player;
-use super::rates::Rates;
-use super::state::{AppState, GamepadStatus, KeyboardMode};
+use super::state::AppState;
 use crate::capture::replay::Replay;
 use crate::config::Config;
 use crate::family::Command;
 use crate::model::Model;
-use crate::session::{LinkState, SessionEvent, SessionHandle};
-use crate::teleop::control::Controller;
-use crate::teleop::gamepad::{PadEvent, PadState};
-use crate::teleop::held::{HeldKeys, ReleaseMode};
+use crate::session::SessionHandle;
+use crate::teleop::gamepad::PadEvent;
+use crate::teleop::held::ReleaseMode;
 use ratatui::{Frame, Terminal, backend::Backend};
 use std::path::PathBuf;
 use std::time::Duration;
-use tokio::sync::{broadcast, mpsc, watch};
+use tokio::sync::{mpsc, watch};
 use tokio::time::{Instant, MissedTickBehavior, interval, sleep_until};
 
 /// How the app is set up.
@@ -87,71 +85,6 @@ pub async fn run<B: Backend>(
     run_source(terminal, Source::Live(session), opts, inputs, draw).await
 }
 
-/// The app, set up for its source.
-fn build(source: Source, opts: AppOptions) -> App {
-    let config = opts.config;
-    let keymap = config.keymap.clone();
-    let mut state = AppState::new(opts.model, opts.droid_name);
-    state.log_path = opts.log_path;
-    state.keyboard = match opts.release {
-        ReleaseMode::Reported => KeyboardMode::ReleaseEvents,
-        ReleaseMode::Emulated { .. } => KeyboardMode::Emulated,
-    };
-    state.gamepad = if config.gamepad.enabled {
-        GamepadStatus::NoPad
-    } else {
-        GamepadStatus::Disabled
-    };
-    state.help_nav = super::help::nav(&keymap);
-    let start = Instant::now();
-    let family = crate::family::for_model(opts.model);
-    state.monitor =
-        super::monitor::MonitorView::new(opts.model, config.stream_request(), config.collision);
-    let (session, player) = match source {
-        Source::Live(s) => {
-            state.help = super::help::live(&config);
-            (Some(s), None)
-        }
-        Source::Replay(r, file) => {
-            // What the capture's droid was told is in the capture, not in this config.
-            state.monitor.live = false;
-            state.monitor.plan = None;
-            state.help = super::help::replay(&keymap);
-            (None, Some(Player::new(*r, file, start)))
-        }
-    };
-    let mut app = App {
-        state,
-        session,
-        player,
-        replayed: Vec::new(),
-        pacer: FramePacer::new(Duration::ZERO),
-        controller: Controller::with_family(config.control.clone(), family),
-        held: HeldKeys::new(opts.release),
-        pad: PadState::new(config.gamepad.clone()),
-        keymap,
-        family,
-        turbo_speed: config.control.turbo_speed,
-        tripod_on_connect: opts.tripod_on_connect,
-        samples: opts.samples,
-        start,
-        last_tick: start,
-        dirty: true,
-        fleet: None,
-        driven: true,
-        log_droid: None,
-        trace: Default::default(),
-        trace_tx: None,
-    };
-    app.controller.set_tracks(app.state.model.has_tracks());
-    app.state.control = app.controller.view().clone();
-    if app.player.is_some() {
-        // Replay shows the commands in the capture, as they were sent.
-        app.state.control.source = "capture";
-    }
-    app
-}
-
 /// Run the app on a live session or a replay (the status bar says REPLAY; nothing is sent).
 pub async fn run_source<B: Backend>(
     terminal: &mut Terminal<B>,
@@ -160,7 +93,34 @@ pub async fn run_source<B: Backend>(
     inputs: AppInputs,
     draw: DrawFn,
 ) -> std::io::Result<Exit> {
-    run_with(terminal, source, None, None, opts, inputs, draw).await
+    let origin = match source {
+        Source::Live(session) => Origin::Live {
+            session,
+            model: opts.model,
+            name: opts.droid_name.clone(),
+            family: crate::family::for_model(opts.model),
+        },
+        Source::Replay(replay, file) => Origin::Replay {
+            replay,
+            name: opts.droid_name.clone(),
+            file,
+        },
+    };
+    run_droids(terminal, vec![origin], opts, inputs, draw, None).await
+}
+
+/// The droids of a live fleet, in its order.
+fn live(fleet: &crate::fleet::Fleet) -> Vec<Origin> {
+    fleet
+        .members()
+        .iter()
+        .map(|m| Origin::Live {
+            session: m.session.clone(),
+            model: m.model,
+            name: m.name.clone(),
+            family: m.family,
+        })
+        .collect()
 }
 
 /// Run the app on a fleet: the roster strip shows every droid, the keys drive the chosen one
@@ -170,145 +130,85 @@ pub async fn run_source<B: Backend>(
 pub async fn run_fleet<B: Backend>(
     terminal: &mut Terminal<B>,
     fleet: crate::fleet::Fleet,
-    mut opts: AppOptions,
+    opts: AppOptions,
     inputs: AppInputs,
     draw: DrawFn,
 ) -> std::io::Result<Exit> {
-    let Some(first) = fleet.member(0) else {
-        return Err(std::io::Error::other("a fleet without droids"));
-    };
-    opts.model = first.model;
-    opts.droid_name = first.name.clone();
-    let source = Source::Live(first.session.clone());
-    let fleet = (fleet.len() > 1).then_some(fleet);
-    run_with(terminal, source, fleet, None, opts, inputs, draw).await
+    run_droids(terminal, live(&fleet), opts, inputs, draw, None).await
 }
 
 /// [`run_fleet`], publishing after every terminal and gamepad event what the input routing
 /// did ([`InputTrace`]: the place on top, held keys let go, emergency stops): the safety
 /// tests and the fuzz harness read it to know where each key went.
-///
-/// [`InputTrace`]: super::core::InputTrace
 pub async fn run_fleet_traced<B: Backend>(
     terminal: &mut Terminal<B>,
     fleet: crate::fleet::Fleet,
-    mut opts: AppOptions,
+    opts: AppOptions,
     inputs: AppInputs,
     draw: DrawFn,
-    trace: watch::Sender<super::core::InputTrace>,
+    trace: watch::Sender<InputTrace>,
 ) -> std::io::Result<Exit> {
-    let Some(first) = fleet.member(0) else {
-        return Err(std::io::Error::other("a fleet without droids"));
-    };
-    opts.model = first.model;
-    opts.droid_name = first.name.clone();
-    let source = Source::Live(first.session.clone());
-    let fleet = (fleet.len() > 1).then_some(fleet);
-    run_traced(
-        terminal,
-        source,
-        fleet,
-        None,
-        opts,
-        inputs,
-        draw,
-        Some(trace),
-    )
-    .await
+    run_droids(terminal, live(&fleet), opts, inputs, draw, Some(trace)).await
 }
 
 /// Replay a fleet's capture: every droid's replay on one clock, the roster and the choice
 /// of droid as live (nothing is sent). `replays` in fleet order, each with its name.
 pub async fn run_fleet_replay<B: Backend>(
     terminal: &mut Terminal<B>,
-    mut replays: Vec<(Replay, String)>,
+    replays: Vec<(Replay, String)>,
     file: String,
-    mut opts: AppOptions,
-    inputs: AppInputs,
-    draw: DrawFn,
-) -> std::io::Result<Exit> {
-    if replays.is_empty() {
-        return Err(std::io::Error::other("a capture without droids"));
-    }
-    let (first, name) = replays.remove(0);
-    opts.model = first.model();
-    opts.droid_name = name;
-    let rest = (!replays.is_empty()).then_some((replays, file.clone()));
-    let source = Source::Replay(Box::new(first), file);
-    run_with(terminal, source, None, rest, opts, inputs, draw).await
-}
-
-/// A fleet's other droids: live, or replayed (their replays and the file's name).
-type OtherReplays = Option<(Vec<(Replay, String)>, String)>;
-
-async fn run_with<B: Backend>(
-    terminal: &mut Terminal<B>,
-    source: Source,
-    fleet: Option<crate::fleet::Fleet>,
-    replays: OtherReplays,
     opts: AppOptions,
     inputs: AppInputs,
     draw: DrawFn,
 ) -> std::io::Result<Exit> {
-    run_traced(terminal, source, fleet, replays, opts, inputs, draw, None).await
+    let droids = replays
+        .into_iter()
+        .map(|(r, name)| Origin::Replay {
+            replay: Box::new(r),
+            name,
+            file: file.clone(),
+        })
+        .collect();
+    run_droids(terminal, droids, opts, inputs, draw, None).await
 }
 
-#[allow(clippy::too_many_arguments)]
-async fn run_traced<B: Backend>(
+async fn run_droids<B: Backend>(
     terminal: &mut Terminal<B>,
-    source: Source,
-    fleet: Option<crate::fleet::Fleet>,
-    replays: OtherReplays,
+    droids: Vec<Origin>,
     opts: AppOptions,
     mut inputs: AppInputs,
     draw: DrawFn,
-    trace: Option<watch::Sender<super::core::InputTrace>>,
+    trace: Option<watch::Sender<InputTrace>>,
 ) -> std::io::Result<Exit> {
+    if droids.is_empty() {
+        return Err(std::io::Error::other("no droid to drive"));
+    }
     let rate_hz = opts.config.control.rate_hz;
-    let parked_config = (opts.config.clone(), opts.log_path.clone());
-    let mut app = build(source, opts);
+    let lives: Vec<_> = droids
+        .iter()
+        .filter_map(|d| match d {
+            Origin::Live {
+                session,
+                model,
+                family,
+                ..
+            } => Some((session.clone(), *family, *model)),
+            Origin::Replay { .. } => None,
+        })
+        .collect();
+    // Every live droid's events, subscribed before anything can be missed.
+    let (mut events, forwarders) = super::fleet::forward(&lives);
+    let mut app = build(droids, opts);
     app.trace_tx = trace;
-    // The other droids of a fleet, and one channel carrying their events.
-    let (mut fleet_rx, forwarders) = match &fleet {
-        Some(f) => super::fleet::attach(&mut app, f, &parked_config.0, parked_config.1),
-        None => (mpsc::channel(1).1, Vec::new()),
-    };
-    let mut fleet_open = fleet.is_some();
-    if let Some((others, file)) = replays {
-        super::fleet::attach_replays(&mut app, others, &parked_config.0, &file);
-    }
     let start = app.start;
-    let family = app.family;
-    let session = app.session.clone();
-
-    // A replay has no session: its channels are closed from the start.
-    let (mut log_rx, mut events_rx, mut link_rx) = match &session {
-        Some(s) => (s.subscribe_log(), s.subscribe(), s.watch_state()),
-        None => (
-            broadcast::channel(1).1,
-            broadcast::channel(1).1,
-            watch::channel(LinkState::Connecting).1,
-        ),
-    };
-    // What the droid announced before we listened (Robi's handshake).
-    for n in session.iter().flat_map(SessionHandle::greeting) {
-        app.state.telemetry.apply(&n, Duration::ZERO);
-    }
     let period = Duration::from_secs_f64(1.0 / rate_hz.clamp(1, 50) as f64);
     let mut tick = interval(period);
     tick.set_missed_tick_behavior(MissedTickBehavior::Delay);
     let mut second = interval(Duration::from_secs(1));
     second.set_missed_tick_behavior(MissedTickBehavior::Skip);
-    let (poller, mut battery_rx) = super::battery::spawn(session.clone(), family, app.state.model);
-    let stats = |app: &App| match &app.session {
-        Some(s) => s.stats(),
-        None => app.state.stats,
-    };
-    let mut rates = Rates::new(stats(&app), app.clock());
     let mut pad_open = true;
     // Closed channels would fire their select branch forever: disable them instead.
-    let live = app.session.is_some();
-    let (mut events_open, mut log_open, mut link_open, mut battery_open) = (live, live, live, true);
+    let mut events_open = !lives.is_empty();
 
     // Test hook for the crash path (stop first, then restore the terminal): panic after this
     // many ms. Only read from the environment, never set by droidctl itself.
@@ -318,18 +218,12 @@ async fn run_traced<B: Backend>(
         .map(|ms| start + Duration::from_millis(ms));
     let reason = loop {
         let expiry = app.held.next_expiry().map(|d| start + d);
-        // Something on screen ends by itself (a hint, the collision flash): redraw then. In
-        // replay the screen's clock is capture time, which moves only while playing.
-        let change = app.state.next_change().and_then(|t| match &app.player {
-            None => Some(start + t),
-            Some(p) if p.running() => {
-                let ahead = t.saturating_sub(app.state.now).div_f64(p.speed());
-                Some(Instant::now() + ahead)
-            }
-            Some(_) => None,
-        });
-        let playing = app.player.as_ref().is_some_and(Player::running);
-        let busy = playing || !app.state.control.deadman;
+        let change = next_change(&app);
+        let playing = app
+            .io
+            .iter()
+            .any(|d| d.player.as_ref().is_some_and(Player::running));
+        let busy = playing || app.state.droids.iter().any(|d| !d.control.deadman);
         let frame_at = start + app.pacer.next_frame(app.now(), busy);
         tokio::select! {
             e = inputs.term.recv() => match e {
@@ -360,54 +254,13 @@ async fn run_traced<B: Backend>(
                     panic!("test panic requested by DROIDCTL_TEST_PANIC_AFTER_MS");
                 }
             }
-            e = events_rx.recv(), if events_open => match e {
-                Ok(SessionEvent::Notification(n)) => {
-                    let at = app.now();
-                    app.with_droid(0, |a| a.on_notification(&n, at));
-                }
-                Ok(SessionEvent::BadNotification { name, reason }) => {
-                    tracing::warn!(name, %reason, "malformed notification");
-                }
-                Err(broadcast::error::RecvError::Lagged(n)) => tracing::warn!(n, "notifications lagged"),
-                Err(broadcast::error::RecvError::Closed) => events_open = false,
-            },
-            e = log_rx.recv(), if log_open => match e {
-                Ok(entry) => app.on_droid_log(0, &entry),
-                Err(broadcast::error::RecvError::Lagged(n)) => app.state.log.dropped += n,
-                Err(broadcast::error::RecvError::Closed) => log_open = false,
-            },
-            r = link_rx.changed(), if link_open => {
-                if r.is_ok() {
-                    let s = link_rx.borrow_and_update().clone();
-                    app.on_droid_link(0, s);
-                } else {
-                    link_open = false;
-                    app.on_droid_link(0, LinkState::Closed { reason: Some("the session ended".into()) });
-                }
-            }
-            v = battery_rx.recv(), if battery_open => match v {
-                Some(v) => app.with_droid(0, |a| a.on_battery(v)),
-                None => battery_open = false,
-            },
-            e = fleet_rx.recv(), if fleet_open => match e {
+            e = events.recv(), if events_open => match e {
                 Some((i, e)) => app.on_droid_event(i, e),
-                None => fleet_open = false,
+                None => events_open = false,
             },
             _ = second.tick() => {
                 // Rates per second of the session's time: capture time in replay.
-                let st = stats(&app);
-                if let Some((rate_in, rate_out)) = rates.sample(st, app.clock())
-                    && (rate_in, rate_out) != (app.state.rate_in, app.state.rate_out)
-                {
-                    app.state.rate_in = rate_in;
-                    app.state.rate_out = rate_out;
-                    app.dirty = true;
-                }
-                if st != app.state.stats {
-                    app.state.stats = st;
-                    app.dirty = true;
-                }
-                if app.sample_fleet_rates(app.clock()) {
+                if app.sample_rates(app.clock()) {
                     app.dirty = true;
                 }
                 app.flush_samples();
@@ -421,10 +274,6 @@ async fn run_traced<B: Backend>(
                 app.replay_frame();
                 if app.dirty {
                     app.state.now = app.clock();
-                    app.state.stats = stats(&app);
-                    if app.fleet.is_some() {
-                        app.state.roster = app.roster();
-                    }
                     terminal
                         .draw(|f| draw(f, &app.state))
                         .map_err(|e| std::io::Error::other(e.to_string()))?;
@@ -433,27 +282,36 @@ async fn run_traced<B: Backend>(
             }
         }
     };
-    poller.abort();
     app.flush_samples();
     for f in forwarders {
         f.abort();
     }
     // Every droid gets its stop now (the operator sees them stopped before the sessions
-    // write them); the chosen one's state goes back to its place first.
-    if app.fleet.is_some() {
-        app.choose(0);
-    }
+    // write them).
     let stops = app.stop_all_for_exit();
-    let stop = stops
-        .first()
-        .cloned()
-        .unwrap_or_else(|| family.drive(0, app.controller.view().heading, false));
+    let stop = stops.first().cloned().unwrap_or_else(|| {
+        crate::family::for_model(app.state.droid().model).drive(0, Default::default(), false)
+    });
     Ok(Exit {
         reason,
         state: app.state,
         stop,
         stops,
     })
+}
+
+/// When something on screen ends by itself (a hint, the collision flash): redraw then. In
+/// replay the screen's clock is capture time, which moves only while playing.
+fn next_change(app: &App) -> Option<Instant> {
+    let t = app.state.next_change()?;
+    match app.io.get(app.chosen()).and_then(|d| d.player.as_ref()) {
+        None => Some(app.start + t),
+        Some(p) if p.running() => {
+            let ahead = t.saturating_sub(app.state.now).div_f64(p.speed());
+            Some(Instant::now() + ahead)
+        }
+        Some(_) => None,
+    }
 }
 
 /// The commands to send on exit after the session's stop at its last heading: the app's own

@@ -93,20 +93,19 @@ pub struct Hint {
     pub until: Duration,
 }
 
+/// What the screen shows: the droids (one droid is a fleet of one), which one the keys drive
+/// and the screen follows, and what belongs to no droid (the packet log, the overlay, hints).
 #[derive(Debug, Clone)]
 pub struct AppState {
     /// Time since the app started (drives the collision flash and hints).
     pub now: Duration,
-    pub model: Model,
-    /// The droid's name ("D2-1A2B", or "R2-D2 (simulated)").
-    pub droid_name: String,
-    pub link: LinkState,
-    pub stats: SessionStats,
-    /// Packets per second in and out, over the last second.
-    pub rate_in: f32,
-    pub rate_out: f32,
-    pub telemetry: Telemetry,
-    pub control: ControlView,
+    /// Every droid, in fleet order; never empty.
+    pub droids: Vec<DroidState>,
+    /// The droid the keys drive and the screen follows.
+    pub chosen: usize,
+    /// Driving input goes to every droid.
+    pub mirror: bool,
+    /// Every droid's packets, each line naming its droid in a fleet.
     pub log: PacketLog,
     pub overlay: Overlay,
     pub focus: Focus,
@@ -126,18 +125,59 @@ pub struct AppState {
     pub sounds: Vec<Entry>,
     /// A collision flashes this long.
     pub collision_flash: Duration,
+}
+
+/// What the screen shows of one droid.
+#[derive(Debug, Clone)]
+pub struct DroidState {
+    pub model: Model,
+    /// The droid's name ("D2-1A2B", or "R2-D2 (simulated)").
+    pub droid_name: String,
+    pub link: LinkState,
+    pub stats: SessionStats,
+    /// Packets per second in and out, over the last second.
+    pub rate_in: f32,
+    pub rate_out: f32,
+    pub telemetry: Telemetry,
+    pub control: ControlView,
     /// The lights as last commanded.
     pub leds: LedView,
     /// Replaying a capture (nothing is sent): where, how fast.
     pub replay: Option<ReplayView>,
-    /// The fleet, when several droids are driven (`None` with one).
-    pub roster: Option<super::roster::Roster>,
     /// What BOLT's matrix shows, as droidctl drew it.
     pub matrix: super::matrix::MatrixView,
-    /// The scope: which channels, what window, paused or following.
+    /// The scope: which channels, what window, paused or following (kept per droid: each
+    /// droid's view is as it was left when it is chosen again).
     pub scope: super::monitor::ScopeView,
     /// Streaming and collision detection as asked for and as sent.
     pub monitor: super::monitor::MonitorView,
+}
+
+impl DroidState {
+    pub fn new(model: Model, droid_name: String) -> Self {
+        DroidState {
+            model,
+            droid_name,
+            link: LinkState::Connecting,
+            stats: SessionStats::default(),
+            rate_in: 0.0,
+            rate_out: 0.0,
+            telemetry: Telemetry::default(),
+            control: ControlView::default(),
+            leds: LedView::default(),
+            replay: None,
+            matrix: Default::default(),
+            scope: super::monitor::ScopeView::for_model(model),
+            monitor: super::monitor::MonitorView::new(
+                model,
+                crate::tuning::StreamRequest {
+                    rate_hz: 10,
+                    sensors: crate::family::stream::all_groups(model),
+                },
+                crate::tuning::CollisionConfig::default(),
+            ),
+        }
+    }
 }
 
 /// A replay, for the status bar.
@@ -173,17 +213,22 @@ pub const MAIN_LED_CYCLE: [[u8; 3]; 6] = [
 ];
 
 impl AppState {
+    /// The screen of one droid.
     pub fn new(model: Model, droid_name: String) -> Self {
+        AppState::for_droids(vec![DroidState::new(model, droid_name)])
+    }
+
+    /// The screen of a fleet (`droids` must not be empty; an empty list gets a placeholder
+    /// R2-D2 rather than a panic).
+    pub fn for_droids(mut droids: Vec<DroidState>) -> Self {
+        if droids.is_empty() {
+            droids.push(DroidState::new(Model::R2D2, String::new()));
+        }
         AppState {
             now: Duration::ZERO,
-            model,
-            droid_name,
-            link: LinkState::Connecting,
-            stats: SessionStats::default(),
-            rate_in: 0.0,
-            rate_out: 0.0,
-            telemetry: Telemetry::default(),
-            control: ControlView::default(),
+            droids,
+            chosen: 0,
+            mirror: false,
             log: PacketLog::default(),
             overlay: Overlay::None,
             focus: Focus::Drive,
@@ -197,25 +242,29 @@ impl AppState {
             animations: catalog::animations(),
             sounds: catalog::sounds(),
             collision_flash: Duration::from_millis(1500),
-            leds: LedView::default(),
-            replay: None,
-            roster: None,
-            matrix: Default::default(),
-            scope: super::monitor::ScopeView::for_model(model),
-            monitor: super::monitor::MonitorView::new(
-                model,
-                crate::tuning::StreamRequest {
-                    rate_hz: 10,
-                    sensors: crate::family::stream::all_groups(model),
-                },
-                crate::tuning::CollisionConfig::default(),
-            ),
         }
     }
 
-    /// Whether the collision flash is on now.
+    /// The droid the screen follows.
+    pub fn droid(&self) -> &DroidState {
+        &self.droids[self.chosen.min(self.droids.len() - 1)]
+    }
+
+    pub fn droid_mut(&mut self) -> &mut DroidState {
+        let i = self.chosen.min(self.droids.len() - 1);
+        &mut self.droids[i]
+    }
+
+    /// The roster strip's view of a fleet (`None` with one droid: the screen is then as it
+    /// always was).
+    pub fn roster(&self) -> Option<super::roster::Roster> {
+        (self.droids.len() > 1).then(|| super::roster::Roster::of(self))
+    }
+
+    /// Whether the collision flash is on now (the droid shown).
     pub fn flashing(&self) -> bool {
-        self.telemetry
+        self.droid()
+            .telemetry
             .last_collision
             .is_some_and(|c| self.now.saturating_sub(c.at) < self.collision_flash)
     }
@@ -224,6 +273,7 @@ impl AppState {
     pub fn next_change(&self) -> Option<Duration> {
         let hint = self.hint.as_ref().map(|h| h.until);
         let flash = self
+            .droid()
             .telemetry
             .last_collision
             .map(|c| c.at + self.collision_flash);

@@ -11,7 +11,7 @@ use ratatui::text::{Line, Span};
 use ratatui::widgets::Paragraph;
 
 pub fn render(frame: &mut Frame, area: Rect, s: &AppState) {
-    let t = &s.telemetry;
+    let t = &s.droid().telemetry;
     let block = if s.flashing() {
         theme::panel(Span::styled(
             format!(" COLLISION! #{} ", t.collisions),

@@ -16,13 +16,13 @@ const LEFT_LABEL: &str = "-160 ";
 const RIGHT_LABEL: &str = " 180";
 
 pub fn render(frame: &mut Frame, area: Rect, s: &AppState) {
-    let cmd = s.control.head_target;
-    let rep = s.telemetry.head_deg;
-    if !s.model.has_dome() {
+    let cmd = s.droid().control.head_target;
+    let rep = s.droid().telemetry.head_deg;
+    if !s.droid().model.has_dome() {
         let block = theme::panel(" Dome ");
         let inner = block.inner(area);
         frame.render_widget(block, area);
-        let msg = format!("{} has no dome", s.model.display_name());
+        let msg = format!("{} has no dome", s.droid().model.display_name());
         frame.render_widget(Paragraph::new(Span::styled(msg, theme::dim())), inner);
         return;
     }

@@ -59,13 +59,17 @@ pub fn render(frame: &mut Frame, area: Rect, s: &AppState) {
     };
     // A steering robot has no commanded heading: the marker shows where the steering points,
     // relative to where the robot faces (45° per full lock).
-    let commanded = match s.control.steer {
+    let commanded = match s.droid().control.steer {
         Some(turn) => crate::units::Heading::wrapped(
-            s.telemetry.heading().map_or(0.0, |h| h.degrees() as f64) + turn as f64 * 45.0,
+            s.droid()
+                .telemetry
+                .heading()
+                .map_or(0.0, |h| h.degrees() as f64)
+                + turn as f64 * 45.0,
         ),
-        None => s.control.heading,
+        None => s.droid().control.heading,
     };
-    compass::render(frame, dial, commanded, s.telemetry.heading());
+    compass::render(frame, dial, commanded, s.droid().telemetry.heading());
     frame.render_widget(Paragraph::new(lines), info);
 }
 
@@ -82,8 +86,8 @@ fn flag(on: bool, name: &'static str) -> Span<'static> {
 }
 
 fn text(s: &AppState) -> Vec<Line<'static>> {
-    let c = &s.control;
-    let t = &s.telemetry;
+    let c = &s.droid().control;
+    let t = &s.droid().telemetry;
     let droid = t
         .heading()
         .map_or("-".to_string(), |h| format!("{}°", h.degrees()));
@@ -137,7 +141,7 @@ fn text(s: &AppState) -> Vec<Line<'static>> {
             flag(c.reverse, "REVERSE"),
         ]),
     ];
-    if s.model.has_legs() {
+    if s.droid().model.has_legs() {
         let style = match t.stance {
             Stance::Transitioning(_) => Style::new().fg(theme::WARN).add_modifier(Modifier::BOLD),
             Stance::Unknown => theme::dim(),

@@ -11,7 +11,7 @@ use ratatui::text::{Line, Span};
 use ratatui::widgets::Paragraph;
 
 pub fn render(frame: &mut Frame, area: Rect, s: &AppState) {
-    let title = if s.control.aiming {
+    let title = if s.droid().control.aiming {
         Line::from(vec![
             Span::raw(" Lights "),
             Span::styled("AIMING ", theme::attention()),
@@ -22,7 +22,7 @@ pub fn render(frame: &mut Frame, area: Rect, s: &AppState) {
     let block = theme::panel(title);
     let inner = block.inner(area);
     frame.render_widget(block, area);
-    let main = match s.leds.main {
+    let main = match s.droid().leds.main {
         Some([r, g, b]) => vec![
             Span::styled("main ", theme::label()),
             Span::styled("███", Style::new().fg(Color::Rgb(r, g, b))),
@@ -33,7 +33,7 @@ pub fn render(frame: &mut Frame, area: Rect, s: &AppState) {
             Span::styled("not set", theme::dim()),
         ],
     };
-    let back = match s.leds.back {
+    let back = match s.droid().leds.back {
         Some(0) => Span::raw("off"),
         Some(b) => Span::styled(
             format!("{b}/255"),
@@ -47,7 +47,7 @@ pub fn render(frame: &mut Frame, area: Rect, s: &AppState) {
     let mut lines = vec![Line::from(spans)];
     if inner.height >= 2 {
         lines.push(Line::from(Span::styled(
-            if s.control.aiming {
+            if s.droid().control.aiming {
                 "turn to face forward, then press aim again"
             } else {
                 "aim sets heading 0 · colour key cycles the main LED"

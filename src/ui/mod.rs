@@ -36,7 +36,8 @@ use ratatui::widgets::Paragraph;
 pub fn draw(frame: &mut Frame, state: &AppState) {
     // A fleet's roster strip takes the top row; the rest is the one-droid screen.
     let mut area = frame.area();
-    if let Some(roster) = &state.roster
+    let fleet = state.roster();
+    if let Some(roster) = &fleet
         && area.height > 1
     {
         let strip = ratatui::layout::Rect { height: 1, ..area };
@@ -47,16 +48,16 @@ pub fn draw(frame: &mut Frame, state: &AppState) {
     let p = layout::plan(area);
     // The newer robots' panels want a few more rows in the dome's place (BOLT's matrix 4
     // rows of half blocks, RVR two lines): taken from the panels around it.
-    let want = if state.model.has_matrix() {
+    let want = if state.droid().model.has_matrix() {
         6
-    } else if state.model.has_tracks() {
+    } else if state.droid().model.has_tracks() {
         4
     } else {
         0
     };
     let p = robots::make_room(p, want);
     status::render(frame, p.status, state);
-    if state.scope.visible {
+    if state.droid().scope.visible {
         // The scope takes everything below the status bar.
         let area = frame.area();
         let body = ratatui::layout::Rect {
@@ -73,8 +74,7 @@ pub fn draw(frame: &mut Frame, state: &AppState) {
     }
     if let Some(r) = p.map {
         // A fleet's other droids are on the chosen droid's map, by roster number.
-        let others: Vec<map::Other> = state
-            .roster
+        let others: Vec<map::Other> = fleet
             .iter()
             .flat_map(|roster| {
                 roster.droids.iter().enumerate().filter_map(|(i, d)| {
@@ -85,21 +85,21 @@ pub fn draw(frame: &mut Frame, state: &AppState) {
                 })
             })
             .collect();
-        map::render_with(frame, r, &state.telemetry, &others);
+        map::render_with(frame, r, &state.droid().telemetry, &others);
     }
     // Panels by capability: the dome's place shows the dome, Robi's motors, BOLT's matrix,
     // RVR's rover panel or the lights; the sensors' place shows Sphero sensors or Robi's I/O
     // and link quality.
-    let frames = state.model.reports_state_frames();
+    let frames = state.droid().model.reports_state_frames();
     let (dome_rect, sensors_rect, collisions_rect) = (p.dome, p.sensors, p.collisions);
     if let Some(r) = dome_rect {
-        if state.model.has_dome() {
+        if state.droid().model.has_dome() {
             dome::render(frame, r, state);
         } else if frames {
             robi::motors(frame, r, state);
-        } else if state.model.has_matrix() {
+        } else if state.droid().model.has_matrix() {
             robots::bolt(frame, r, state);
-        } else if state.model.has_tracks() {
+        } else if state.droid().model.has_tracks() {
             robots::rvr(frame, r, state);
         } else {
             leds::render(frame, r, state);
@@ -109,7 +109,7 @@ pub fn draw(frame: &mut Frame, state: &AppState) {
         if frames {
             robi::io(frame, r, state);
         } else {
-            sensors::render(frame, r, &state.telemetry, &scope::rates(state));
+            sensors::render(frame, r, &state.droid().telemetry, &scope::rates(state));
         }
     }
     if let Some(r) = collisions_rect {

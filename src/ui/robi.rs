@@ -57,7 +57,7 @@ fn spark(values: impl Iterator<Item = f32>, full: f32, width: usize) -> String {
 
 /// Wheel speeds: gauges and a history line per side.
 pub fn motors(frame: &mut Frame, area: Rect, s: &AppState) {
-    let Some(r) = &s.telemetry.robi else {
+    let Some(r) = &s.droid().telemetry.robi else {
         return empty(frame, area, " Motors ", "waiting for the first frame");
     };
     let block = theme::panel(" Motors (rad/s) ");
@@ -182,7 +182,7 @@ fn link_quality(r: &RobiTelemetry, width: usize) -> Line<'static> {
 
 /// Poti, buttons, lamps, piezo and link quality.
 pub fn io(frame: &mut Frame, area: Rect, s: &AppState) {
-    let Some(r) = &s.telemetry.robi else {
+    let Some(r) = &s.droid().telemetry.robi else {
         return empty(
             frame,
             area,

@@ -19,10 +19,10 @@ fn rgb(c: [u8; 3]) -> Color {
 
 fn title<'a>(name: &'a str, s: &AppState) -> Line<'a> {
     let mut spans = vec![Span::raw(format!(" {name} "))];
-    if s.control.aiming {
+    if s.droid().control.aiming {
         spans.push(Span::styled("AIMING ", theme::attention()));
     }
-    if s.control.tank.is_some() {
+    if s.droid().control.tank.is_some() {
         spans.push(Span::styled("TANK ", theme::attention()));
     }
     Line::from(spans)
@@ -30,7 +30,7 @@ fn title<'a>(name: &'a str, s: &AppState) -> Line<'a> {
 
 /// The 8×8 matrix as four rows of half blocks (eight columns), or what it shows on them.
 fn matrix_rows(s: &AppState) -> Vec<Line<'static>> {
-    let m = &s.matrix;
+    let m = &s.droid().matrix;
     let lit = Style::new().fg(rgb(m.colour)).bg(rgb(m.colour));
     let off = theme::dim();
     let row = |text: String, style: Style| Line::from(Span::styled(text, style));
@@ -63,8 +63,8 @@ fn matrix_rows(s: &AppState) -> Vec<Line<'static>> {
 }
 
 fn what_it_shows(s: &AppState) -> String {
-    let [r, g, b] = s.matrix.colour;
-    let what = match &s.matrix.shows {
+    let [r, g, b] = s.droid().matrix.colour;
+    let what = match &s.droid().matrix.shows {
         MatrixShows::Unknown => "not drawn yet".to_string(),
         MatrixShows::Fill => "filled".to_string(),
         MatrixShows::Char(c) => format!("{c:?}"),
@@ -78,12 +78,12 @@ pub fn bolt(frame: &mut Frame, area: Rect, s: &AppState) {
     let block = theme::panel(title("Matrix", s));
     let inner = block.inner(area);
     frame.render_widget(block, area);
-    let r = &s.telemetry.robot;
+    let r = &s.droid().telemetry.robot;
     // The compass heading: how far clockwise from north the robot faces (yaw grows
     // clockwise; north's yaw is what the calibration reported).
     let heading = r
         .compass_north
-        .zip(s.telemetry.yaw.filter(|y| y.is_finite()));
+        .zip(s.droid().telemetry.yaw.filter(|y| y.is_finite()));
     let heading = heading.map(|(n, yaw)| (n, (yaw - n as f32).rem_euclid(360.0)));
     let (compass, short) = match (heading, r.compass_north) {
         (Some((n, h)), _) => (
@@ -100,7 +100,7 @@ pub fn bolt(frame: &mut Frame, area: Rect, s: &AppState) {
         Some(l) if l.is_finite() => format!("light {l:.0} lx"),
         _ => "light -".to_string(),
     };
-    let swatch = Span::styled("■ ", Style::new().fg(rgb(s.matrix.colour)));
+    let swatch = Span::styled("■ ", Style::new().fg(rgb(s.droid().matrix.colour)));
     if inner.height < 4 || inner.width < 30 {
         let lines = vec![
             Line::from(vec![
@@ -149,7 +149,7 @@ pub fn rvr(frame: &mut Frame, area: Rect, s: &AppState) {
     let block = theme::panel(title("Rover", s));
     let inner = block.inner(area);
     frame.render_widget(block, area);
-    let r = &s.telemetry.robot;
+    let r = &s.droid().telemetry.robot;
     let colour = match r.color {
         Some((c, index, confidence)) => vec![
             Span::styled("floor ", theme::label()),
@@ -177,7 +177,7 @@ pub fn rvr(frame: &mut Frame, area: Rect, s: &AppState) {
             [false, true] => Span::styled("right motor stalled", theme::alarm()),
         }
     };
-    let tracks = match s.control.tank {
+    let tracks = match s.droid().control.tank {
         Some((l, rt)) => format!("tracks L {l:+} R {rt:+}"),
         None => "v: tank mode".to_string(),
     };
@@ -191,7 +191,7 @@ pub fn rvr(frame: &mut Frame, area: Rect, s: &AppState) {
     ];
     if inner.height >= 3 {
         // RVR's battery is read from its primary processor.
-        let volts = match s.telemetry.battery_v {
+        let volts = match s.droid().telemetry.battery_v {
             Some(v) if v.is_finite() => format!("{v:.2} V"),
             _ => "-".to_string(),
         };

@@ -38,15 +38,16 @@ pub fn colour(i: usize) -> Color {
 /// The streaming rate requested and measured: `10/s, measured 9.8/s`.
 pub fn rates(s: &AppState) -> String {
     let measured = s
+        .droid()
         .telemetry
         .history
         .measured_rate(s.now)
         .map_or("-".to_string(), |r| format!("{}/s", num(r, 1)));
-    format!("{}, measured {measured}", s.monitor.requested())
+    format!("{}, measured {measured}", s.droid().monitor.requested())
 }
 
 pub fn render(frame: &mut Frame, area: Rect, s: &AppState) {
-    let v = &s.scope;
+    let v = &s.droid().scope;
     let window = v.window();
     let mut title = vec![
         Span::styled(" Scope ", theme::bold()),
@@ -101,7 +102,8 @@ pub fn render(frame: &mut Frame, area: Rect, s: &AppState) {
         .iter()
         .copied()
         .zip(
-            s.telemetry
+            s.droid()
+                .telemetry
                 .history
                 .series_of(&v.channels, from, end, columns),
         )

@@ -79,50 +79,50 @@ pub fn render(frame: &mut Frame, area: Rect, state: &AppState) {
 }
 
 fn first_row(s: &AppState) -> Vec<Seg> {
-    let name = clean(&s.droid_name);
-    let model = s.model.display_name();
+    let name = clean(&s.droid().droid_name);
+    let model = s.droid().model.display_name();
     let mut id = vec![Span::styled(truncate(&name, 28), theme::bold())];
     if !name.contains(model) {
         id.push(Span::styled(format!(" {model}"), theme::label()));
     }
-    let drive = if s.control.estop {
+    let drive = if s.droid().control.estop {
         Span::styled(" E-STOP ", theme::alarm())
-    } else if s.control.deadman {
+    } else if s.droid().control.deadman {
         Span::styled("deadman", theme::dim())
     } else {
         Span::styled("driving", Style::new().fg(theme::OK))
     };
     let errors = Span::styled(
-        format!("err {}", s.stats.errors),
-        if s.stats.errors > 0 {
+        format!("err {}", s.droid().stats.errors),
+        if s.droid().stats.errors > 0 {
             Style::new().fg(theme::ALERT)
         } else {
             theme::dim()
         },
     );
     // Replaying: say so first; nothing is driven, so no drive state.
-    let (replay, drive) = match &s.replay {
+    let (replay, drive) = match &s.droid().replay {
         Some(r) => (Some(Seg::new(0, replay_spans(r))), None),
         None => (None, Some(Seg::new(0, vec![drive]))),
     };
     [
         Some(Seg::new(0, id)),
         replay,
-        Some(Seg::new(0, vec![link(&s.link)])),
+        Some(Seg::new(0, vec![link(&s.droid().link)])),
         drive,
     ]
     .into_iter()
     .flatten()
     .chain([
-        Seg::new(1, battery(&s.telemetry)),
+        Seg::new(1, battery(&s.droid().telemetry)),
         Seg::new(2, vec![errors]),
         Seg::new(
             3,
             vec![
                 Span::styled("in ", theme::label()),
-                Span::raw(format!("{}/s", rate(s.rate_in))),
+                Span::raw(format!("{}/s", rate(s.droid().rate_in))),
                 Span::styled(" out ", theme::label()),
-                Span::raw(format!("{}/s", rate(s.rate_out))),
+                Span::raw(format!("{}/s", rate(s.droid().rate_out))),
             ],
         ),
     ])
@@ -241,7 +241,7 @@ fn second_row(s: &AppState) -> Vec<Seg> {
             Style::new().fg(theme::OK),
         ),
     };
-    if let Some(r) = &s.replay {
+    if let Some(r) = &s.droid().replay {
         // No pad or keyboard mode in a replay: the capture's name instead.
         segs.push(Seg::new(
             2,

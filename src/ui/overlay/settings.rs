@@ -46,12 +46,12 @@ fn check(on: bool) -> &'static str {
 }
 
 pub fn channels(frame: &mut Frame, area: Rect, s: &AppState, selected: usize) {
-    let robi = s.model.reports_state_frames();
+    let robi = s.droid().model.reports_state_frames();
     let rows: Vec<Line> = Channel::ALL
         .iter()
         .filter(|c| c.reported_by(robi))
         .map(|c| {
-            let on = s.scope.channels.contains(c);
+            let on = s.droid().scope.channels.contains(c);
             Line::from(vec![Span::raw(check(on)), Span::raw(c.label())])
         })
         .collect();
@@ -66,7 +66,7 @@ pub fn channels(frame: &mut Frame, area: Rect, s: &AppState, selected: usize) {
 }
 
 pub fn tuning(frame: &mut Frame, area: Rect, s: &AppState, selected: usize, d: &TuningDraft) {
-    let m = &s.monitor;
+    let m = &s.droid().monitor;
     let c = &d.collision;
     let rows: Vec<Line> = tuning_rows(m)
         .into_iter()

@@ -1,0 +1,129 @@
+//! The app set up for its droids: each droid's view and IO half made the same way, live or
+//! replayed, one droid or a fleet.
+
+use super::core::App;
+use super::droid::DroidIo;
+use super::pacing::FramePacer;
+use super::player::Player;
+use super::rates::Rates;
+use super::run::AppOptions;
+use super::state::{AppState, DroidState, GamepadStatus, KeyboardMode};
+use crate::capture::replay::Replay;
+use crate::family::Family;
+use crate::model::Model;
+use crate::session::{SessionHandle, SessionStats};
+use crate::teleop::control::Controller;
+use crate::teleop::gamepad::PadState;
+use crate::teleop::held::{HeldKeys, ReleaseMode};
+use std::sync::Arc;
+use std::time::Duration;
+use tokio::time::Instant;
+
+/// Where a droid comes from.
+pub(super) enum Origin {
+    /// A live session: the droid is driven.
+    Live {
+        session: SessionHandle,
+        model: Model,
+        name: String,
+        family: &'static dyn Family,
+    },
+    /// A capture played back (the file's name shown): nothing is sent anywhere.
+    Replay {
+        replay: Box<Replay>,
+        name: String,
+        file: String,
+    },
+}
+
+/// The app for `droids` (at least one), in fleet order.
+pub(super) fn build(droids: Vec<Origin>, opts: AppOptions) -> App {
+    let config = opts.config;
+    let keymap = config.keymap.clone();
+    let start = Instant::now();
+    let live = droids.iter().any(|d| matches!(d, Origin::Live { .. }));
+    let mut views = Vec::with_capacity(droids.len());
+    let mut io = Vec::with_capacity(droids.len());
+    for origin in droids {
+        let (model, name, family, session, player) = match origin {
+            Origin::Live {
+                session,
+                model,
+                name,
+                family,
+            } => (model, name, family, Some(session), None),
+            Origin::Replay { replay, name, file } => {
+                let model = replay.model();
+                let family = crate::family::for_model(model);
+                let player = Player::new(*replay, file, start);
+                (model, name, family, None, Some(player))
+            }
+        };
+        let mut view = DroidState::new(model, name.clone());
+        view.monitor =
+            super::monitor::MonitorView::new(model, config.stream_request(), config.collision);
+        let mut controller = Controller::with_family(config.control.clone(), family);
+        controller.set_tracks(model.has_tracks());
+        view.control = controller.view().clone();
+        if let Some(s) = &session {
+            // Its link state arrives first thing through its forwarder (`super::fleet`), so a
+            // droid already connected is seen connecting (and a tripod setup shown).
+            // What the droid announced before we listened (Robi's handshake).
+            for n in s.greeting() {
+                view.telemetry.apply(&n, Duration::ZERO);
+            }
+        } else {
+            // What the capture's droid was told is in the capture, not in this config; the
+            // screen shows the capture's commands, as they were sent.
+            view.monitor.live = false;
+            view.monitor.plan = None;
+            view.control.source = "capture";
+        }
+        let stats = session
+            .as_ref()
+            .map_or(SessionStats::default(), |s| s.stats());
+        io.push(DroidIo {
+            session,
+            player,
+            controller,
+            family,
+            name: Arc::from(name.as_str()),
+            rates: Rates::new(stats, Duration::ZERO),
+            last_tick: start,
+        });
+        views.push(view);
+    }
+    let mut state = AppState::for_droids(views);
+    state.log_path = opts.log_path;
+    state.keyboard = match opts.release {
+        ReleaseMode::Reported => KeyboardMode::ReleaseEvents,
+        ReleaseMode::Emulated { .. } => KeyboardMode::Emulated,
+    };
+    state.gamepad = if config.gamepad.enabled {
+        GamepadStatus::NoPad
+    } else {
+        GamepadStatus::Disabled
+    };
+    state.help_nav = super::help::nav(&keymap);
+    state.help = if live {
+        super::help::live(&config)
+    } else {
+        super::help::replay(&keymap)
+    };
+    App {
+        state,
+        io,
+        replayed: Vec::new(),
+        pacer: FramePacer::new(Duration::ZERO),
+        held: HeldKeys::new(opts.release),
+        pad: PadState::new(config.gamepad.clone()),
+        keymap,
+        turbo_speed: config.control.turbo_speed,
+        tripod_on_connect: opts.tripod_on_connect,
+        samples: opts.samples,
+        start,
+        dirty: true,
+        trace: Default::default(),
+        trace_tx: None,
+    }
+}
