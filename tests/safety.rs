@@ -7,7 +7,7 @@
 //! the app in.
 
 use droidctl::config::{Key, KeyCode};
-use droidctl::fuzzing::app_input::{EMULATED, KEYS, Step, check, run};
+use droidctl::fuzzing::app_input::{EMULATED, KEYS, Step, check, run, run_with};
 use droidctl::teleop::held::ReleaseMode;
 use proptest::prelude::*;
 use std::time::Duration;
@@ -195,6 +195,31 @@ fn esc_on_the_main_screen_does_not_quit() {
     assert!(hint.contains("q") && hint.contains("quits"), "{hint}");
     let out = run(EMULATED, &[tap(Key::ch('q')), ms(100)]).unwrap();
     assert!(out.quit, "q quits");
+}
+
+/// Latched drive mode keeps its speed after `↑` is let go, by design; but opening a place,
+/// choosing another droid or losing focus drops it: the next write is a stop.
+#[test]
+fn a_latched_speed_is_dropped_when_the_place_changes() {
+    let config = droidctl::config::Config::parse_merged(None, "[control]\nmode = \"latched\"\n")
+        .expect("a latched configuration");
+    for leave in [
+        tap(Key::ch('?')),
+        tap(Key::ch('l')),
+        Step::FocusLost,
+        tap(TAB),
+    ] {
+        let steps = [tap(UP), ms(50), tap(UP), ms(800), leave, ms(1000)];
+        let out = run_with(config.clone(), EMULATED, &steps, false).unwrap();
+        let r2 = &out.drives[0];
+        assert!(r2.iter().any(|(_, s)| *s > 0), "latched ↑ drives: {r2:?}");
+        let left = out.steps_at[4];
+        let after: Vec<_> = r2.iter().filter(|(t, _)| *t >= left).collect();
+        assert!(
+            !after.is_empty() && after.iter().all(|(_, s)| *s == 0),
+            "{leave:?} stops it at once: {r2:?}"
+        );
+    }
 }
 
 fn step() -> impl Strategy<Value = Step> {

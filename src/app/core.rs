@@ -169,6 +169,9 @@ impl App {
     /// the terminal lost focus.
     pub fn clear_held(&mut self) {
         self.held.release_all();
+        for d in &mut self.io {
+            d.controller.let_go();
+        }
         self.trace.clears += 1;
         self.control(false);
     }

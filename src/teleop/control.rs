@@ -209,6 +209,13 @@ impl Controller {
         Out::Drive(stop)
     }
 
+    /// The operator's input went away (the place on top changed, another droid was chosen,
+    /// mirror mode switched, focus was lost): a latched speed is dropped too, so in latched
+    /// mode as in hold mode the next write is a stop.
+    pub fn let_go(&mut self) {
+        self.latched = 0;
+    }
+
     /// The link went down: forget what was sent, drop latched speed.
     pub fn link_lost(&mut self) {
         self.latched = 0;
