@@ -911,3 +911,132 @@ fn sphero_edu_drives_bolt_and_mini_through_bleak() {
         "{shown:?}"
     );
 }
+
+// ---------------------------------------------------------------------------------------------
+// Issue 32: spherov2's Sphero Edu API against every simulated model it drives, through
+// `droidctl serve --sim` (tests/sphero_edu_models.py; tests/sim_models.rs checks the same in
+// process and in simulated time).
+// ---------------------------------------------------------------------------------------------
+
+/// Run tests/sphero_edu_models.py on each of `models` served together; check each result.
+fn edu_models(test: &str, models: &[(&str, &str)]) {
+    let py = match python_with("spherov2.adapter.tcp_adapter, spherov2.sphero_edu") {
+        Ok(py) => py,
+        Err(why) => {
+            println!("SKIPPED {test}: {why}");
+            return;
+        }
+    };
+    let dir = TempDir::new(test);
+    let ids: Vec<&str> = models.iter().map(|(id, _)| *id).collect();
+    let serve = Serve::start(&ids, &[], &dir);
+    let port = serve.address.rsplit(':').next().unwrap().to_string();
+    let script = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/sphero_edu_models.py");
+    for (i, (id, class)) in models.iter().enumerate() {
+        let name = format!(
+            "{}{:04X}",
+            droidctl::model::Model::from_id(id)
+                .and_then(|m| m.name_prefix())
+                .unwrap(),
+            i + 1
+        );
+        let child = Command::new(&py)
+            .args([script, &port, &name])
+            .current_dir(&dir.0)
+            .stdin(Stdio::null())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        let out = finish(child, Duration::from_secs(90), "the Sphero Edu client");
+        assert!(out.status.success(), "{name}: {}", text(&out.stderr));
+        let seen: Value = serde_json::from_str(text(&out.stdout).trim()).unwrap();
+        assert_eq!(seen["class"], *class, "{seen}");
+        edu_spin_turned_once(&name, &seen);
+        edu_hit_head_on(&name, &seen);
+        edu_went_where_it_says(&name, &seen);
+    }
+    serve.stop();
+}
+
+/// spin(360, 1): the streamed yaw went once round, one way, and never turned back.
+fn edu_spin_turned_once(name: &str, seen: &Value) {
+    let yaws: Vec<f64> = seen["yaw"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| f(&s[1]))
+        .collect();
+    assert!(yaws.len() > 20, "{name}: yaw sampled: {seen}");
+    let steps: Vec<f64> = yaws
+        .windows(2)
+        .map(|w| (w[1] - w[0] + 540.0).rem_euclid(360.0) - 180.0)
+        .collect();
+    let total: f64 = steps.iter().sum();
+    assert!(
+        (total.abs() - 360.0).abs() < 20.0,
+        "{name}: turned {total}° for spin(360, 1): {yaws:?}"
+    );
+    let back = steps
+        .iter()
+        .map(|s| -s * total.signum())
+        .fold(0.0, f64::max);
+    assert!(back < 5.0, "{name}: turned back by {back}°: {yaws:?}");
+}
+
+/// The roll east ended against the east wall head-on: the hit is on the robot's forward axis
+/// (RVR reports no collisions to spherov2's Edu API).
+fn edu_hit_head_on(name: &str, seen: &Value) {
+    let hits = seen["collisions"].as_array().unwrap();
+    if name.starts_with("RV-") {
+        return;
+    }
+    let c = hits
+        .first()
+        .unwrap_or_else(|| panic!("{name}: no collision: {seen}"));
+    assert_eq!(c["y_axis"], true, "{name}: head-on is on y: {c}");
+    assert_eq!(c["x_axis"], false, "{name}: {c}");
+    assert!(f(&c["accel_y"]) < 0.0, "{name}: braking ahead: {c}");
+}
+
+/// Where spherov2 says the droid is: the v1 droids' raw motors drove it north (forward, as
+/// aimed), the roll east took it to the east wall (the room is 4 m, the droid starts in the
+/// middle), keeping its northing.
+fn edu_went_where_it_says(name: &str, seen: &Value) {
+    let north = if seen["raw_location"].is_null() {
+        0.0
+    } else {
+        let (x, y) = (f(&seen["raw_location"]["x"]), f(&seen["raw_location"]["y"]));
+        assert!(y > 20.0 && x.abs() < 5.0, "{name}: raw motors: {seen}");
+        y
+    };
+    let (x, y) = (f(&seen["location"]["x"]), f(&seen["location"]["y"]));
+    assert!(
+        x > 150.0 && (y - north).abs() < 10.0,
+        "{name}: rolled east to the wall: {seen}"
+    );
+}
+
+#[test]
+fn sphero_edu_drives_each_star_wars_droid() {
+    edu_models(
+        "sphero_edu_drives_each_star_wars_droid",
+        &[("r2d2", "R2D2"), ("r2q5", "R2Q5"), ("bb9e", "BB9E")],
+    );
+}
+
+#[test]
+fn sphero_edu_drives_each_v1_droid() {
+    edu_models(
+        "sphero_edu_drives_each_v1_droid",
+        &[("bb8", "BB8"), ("sprk", "Sprk2"), ("ollie", "Ollie")],
+    );
+}
+
+#[test]
+fn sphero_edu_drives_bolt_mini_and_rvr() {
+    edu_models(
+        "sphero_edu_drives_bolt_mini_and_rvr",
+        &[("bolt", "BOLT"), ("mini", "Mini"), ("rvr", "RVR")],
+    );
+}

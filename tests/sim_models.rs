@@ -122,7 +122,8 @@ impl Host {
             Model::Rvr => 1.5,
             Model::R2D2 | Model::R2Q5 => 0.7,
             Model::Mini => 0.5,
-            Model::Ollie => 0.6,
+            // spherov2's BB8 and Sprk2 classes derive from its Ollie.
+            Model::Ollie | Model::BB8 | Model::SprkPlus => 0.6,
             _ => 0.45,
         };
         let duration = duration.max(pre_rev * angle.unsigned_abs() as f32 / 360.0);

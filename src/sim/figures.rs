@@ -4,9 +4,10 @@
 //!
 //! `droid-facts.md` gives none of these. Turn rates are spherov2.py's (`sphero_edu.py`,
 //! `SpheroEduAPI.spin`: its least time per revolution, `time_pre_rev`, the pace at which it
-//! moves the target heading: 0.45 s by default, which covers BOLT, BB-8, SPRK+ and BB-9E;
-//! 0.5 s Mini; 0.6 s Ollie; 0.7 s R2-D2 and R2-Q5; 1.5 s RVR). Issue 32 point 1: at one
-//! 180°/s for every model a spin fell behind that pace. Sizes are the makers' published
+//! moves the target heading: 0.45 s by default, which covers BOLT and BB-9E; 0.5 s Mini;
+//! 0.6 s Ollie, and BB-8 and SPRK+, whose classes there derive from Ollie's (`toy/bb8.py`,
+//! `toy/sprk2.py`); 0.7 s R2-D2 and R2-Q5; 1.5 s RVR). Issue 32 point 1: at one 180°/s for
+//! every model a spin fell behind that pace. Sizes are the makers' published
 //! product dimensions (*unverified*: a single source each, kept here to be changed): Mini
 //! 42 mm across; BOLT, SPRK+ and BB-8's ball 73 mm; BB-9E's ball about 80 mm; Ollie 114 mm
 //! across its wheels; R2-D2 and R2-Q5 about 12 cm across the legs; RVR about 22 cm long.
@@ -39,7 +40,8 @@ pub fn of(model: Model) -> Option<Figures> {
     };
     Some(match model {
         Model::Mini => f(4.2, 0.5, 3.6),
-        Model::Bolt | Model::SprkPlus | Model::BB8 => f(7.3, 0.45, 6.4),
+        Model::Bolt => f(7.3, 0.45, 6.4),
+        Model::SprkPlus | Model::BB8 => f(7.3, 0.6, 6.4),
         Model::BB9E => f(8.0, 0.45, 7.0),
         Model::Ollie => f(11.4, 0.6, 11.4),
         Model::R2D2 | Model::R2Q5 => f(12.0, 0.7, 10.0),
