@@ -146,7 +146,7 @@ impl Host {
         self.notes
             .iter()
             .filter_map(|(_, n)| match n {
-                Notification::Collision(c) => Some(c.clone()),
+                Notification::Collision(c) => Some(*c),
                 _ => None,
             })
             .collect()
@@ -235,7 +235,7 @@ fn a_head_on_hit_is_on_the_forward_axis_on_every_model() {
                 h.send(&c);
                 h.run(Duration::from_millis(400));
                 if let Some(c) = h.collisions().first() {
-                    hit = Some(c.clone());
+                    hit = Some(*c);
                     break;
                 }
             }
