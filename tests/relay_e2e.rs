@@ -811,7 +811,20 @@ fn a_fleet_mixes_droids_behind_two_relays_and_a_local_one() {
 /// spherov2's Sphero Edu API on a simulated BOLT or Mini (tests/sphero_edu.py): `how` is
 /// `["tcp", PORT]` or `["bleak"]`. The JSON it prints.
 fn sphero_edu(py: &str, how: &[&str], name: &str, bus: Option<&str>, dir: &TempDir) -> Value {
-    let script = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/sphero_edu.py");
+    edu_script(py, "sphero_edu.py", how, name, bus, dir)
+}
+
+/// Run `tests/SCRIPT ARGS… NAME` with spherov2's Python (on the bus `bus` for bleak); the
+/// JSON it prints.
+fn edu_script(
+    py: &str,
+    script: &str,
+    how: &[&str],
+    name: &str,
+    bus: Option<&str>,
+    dir: &TempDir,
+) -> Value {
+    let script = format!("{}/tests/{script}", env!("CARGO_MANIFEST_DIR"));
     let mut cmd = Command::new(py);
     cmd.arg(script)
         .args(how)
@@ -931,7 +944,6 @@ fn edu_models(test: &str, models: &[(&str, &str)]) {
     let ids: Vec<&str> = models.iter().map(|(id, _)| *id).collect();
     let serve = Serve::start(&ids, &[], &dir);
     let port = serve.address.rsplit(':').next().unwrap().to_string();
-    let script = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/sphero_edu_models.py");
     for (i, (id, class)) in models.iter().enumerate() {
         let name = format!(
             "{}{:04X}",
@@ -940,23 +952,19 @@ fn edu_models(test: &str, models: &[(&str, &str)]) {
                 .unwrap(),
             i + 1
         );
-        let child = Command::new(&py)
-            .args([script, &port, &name])
-            .current_dir(&dir.0)
-            .stdin(Stdio::null())
-            .stdout(Stdio::piped())
-            .stderr(Stdio::piped())
-            .spawn()
-            .unwrap();
-        let out = finish(child, Duration::from_secs(90), "the Sphero Edu client");
-        assert!(out.status.success(), "{name}: {}", text(&out.stderr));
-        let seen: Value = serde_json::from_str(text(&out.stdout).trim()).unwrap();
-        assert_eq!(seen["class"], *class, "{seen}");
-        edu_spin_turned_once(&name, &seen);
-        edu_hit_head_on(&name, &seen);
-        edu_went_where_it_says(&name, &seen);
+        let how = ["tcp", port.as_str()];
+        let seen = edu_script(&py, "sphero_edu_models.py", &how, &name, None, &dir);
+        edu_checks(&name, class, &seen);
     }
     serve.stop();
+}
+
+/// Everything tests/sphero_edu_models.py saw of droid `name`, of spherov2's `class`.
+fn edu_checks(name: &str, class: &str, seen: &Value) {
+    assert_eq!(seen["class"], class, "{seen}");
+    edu_spin_turned_once(name, seen);
+    edu_hit_head_on(name, seen);
+    edu_went_where_it_says(name, seen);
 }
 
 /// spin(360, 1): the streamed yaw went once round, one way, and never turned back.
@@ -1039,4 +1047,50 @@ fn sphero_edu_drives_bolt_mini_and_rvr() {
         "sphero_edu_drives_bolt_mini_and_rvr",
         &[("bolt", "BOLT"), ("mini", "Mini"), ("rvr", "RVR")],
     );
+}
+
+/// The same over bleak on the virtual BlueZ for the v1 droids, whose trace decodes every
+/// Roll spherov2 sends (five bytes, with its reverse flag) with its fields.
+#[test]
+fn sphero_edu_drives_each_v1_droid_through_bleak_and_the_trace_reads_its_rolls() {
+    let test = "sphero_edu_drives_each_v1_droid_through_bleak_and_the_trace_reads_its_rolls";
+    let py = match python_with("spherov2.adapter.bleak_adapter, spherov2.sphero_edu, bleak")
+        .and_then(|py| dbus_daemon().map(|_| py))
+    {
+        Ok(py) => py,
+        Err(why) => {
+            println!("SKIPPED {test}: {why}");
+            return;
+        }
+    };
+    let dir = TempDir::new("sphero-edu-v1-bleak");
+    let mut trace = Vec::new();
+    // One bus each: droids served together share a room, and these all end at the east wall.
+    for (model, class) in [("bb8", "BB8"), ("sprk", "Sprk2"), ("ollie", "Ollie")] {
+        let bluez = Bluez::start(&[model], &dir);
+        let name = &bluez.names[0];
+        let how = ["bleak"];
+        let seen = edu_script(
+            &py,
+            "sphero_edu_models.py",
+            &how,
+            name,
+            Some(&bluez.bus),
+            &dir,
+        );
+        edu_checks(name, class, &seen);
+        trace.extend(bluez.trace.lock().unwrap().clone());
+        bluez.stop();
+    }
+    let rolls: Vec<&Value> = trace
+        .iter()
+        .filter(|t| t["packet"]["command"] == "roll")
+        .collect();
+    assert!(rolls.len() > 30, "spherov2 rolled: {} rolls", rolls.len());
+    for r in rolls {
+        let fields = &r["packet"]["fields"];
+        for k in ["speed", "heading", "state", "reverse"] {
+            assert!(!fields[k].is_null(), "{k} of {r}");
+        }
+    }
 }

@@ -22,18 +22,13 @@ use std::time::Duration;
 
 const STEP: Duration = Duration::from_millis(10);
 
-/// The models spherov2's Edu API drives (all but Robi 42).
-const SPHEROS: [Model; 9] = [
-    Model::R2D2,
-    Model::R2Q5,
-    Model::BB9E,
-    Model::BB8,
-    Model::SprkPlus,
-    Model::Ollie,
-    Model::Bolt,
-    Model::Mini,
-    Model::Rvr,
-];
+/// The simulated models spherov2's Edu API drives: every Sphero (all but Robi 42).
+fn spheros() -> Vec<Model> {
+    Model::ALL
+        .into_iter()
+        .filter(|m| droidctl::sim::simulates(*m) && *m != Model::Robi42)
+        .collect()
+}
 
 /// One simulated droid with its host's codec.
 struct Host {
@@ -168,7 +163,7 @@ impl Host {
 /// and the body never turns back on the way.
 #[test]
 fn spin_360_turns_a_whole_revolution_on_every_model_without_turning_back() {
-    for model in SPHEROS {
+    for model in spheros() {
         let mut h = Host::connected(model);
         h.spin(0, 360, 1.0);
         h.run(Duration::from_millis(1500));
@@ -222,7 +217,7 @@ fn a_body_that_falls_half_a_turn_behind_a_spin_keeps_turning_the_same_way() {
 /// v1 async 0x07 alike.
 #[test]
 fn a_head_on_hit_is_on_the_forward_axis_on_every_model() {
-    for model in SPHEROS {
+    for model in spheros() {
         if model == Model::Rvr {
             // RVR has no collision detection (spherov2 binds none to it).
             continue;

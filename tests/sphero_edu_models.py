@@ -1,10 +1,11 @@
 #!/usr/bin/env python3
-"""spherov2.py's Sphero Edu API against one simulated model through `droidctl serve --sim`
-(spherov2's TCP adapter), run by tests/sphero_edu_models.rs when a Python with spherov2 is at
-hand (issue 32): spin(360, 1) while sampling the streamed yaw, raw motors on a v1 droid,
-then a roll east into the wall with collision detection.
+"""spherov2.py's Sphero Edu API against one simulated model, through `droidctl serve --sim`
+(spherov2's TCP adapter) or on the virtual BlueZ of `droidctl sim --bluez` (bleak, with
+DBUS_SYSTEM_BUS_ADDRESS pointing at its bus); run by tests/relay_e2e.rs when a Python with
+spherov2 is at hand (issue 32): spin(360, 1) while sampling the streamed yaw, raw motors on a
+v1 droid, then a roll east into the wall with collision detection.
 
-Usage: sphero_edu_models.py PORT NAME
+Usage: sphero_edu_models.py tcp PORT NAME | sphero_edu_models.py bleak NAME
 Prints one JSON object:
   class         the class spherov2 made of the toy
   yaw           [t_s, yaw] streamed from the start of the spin to a second after it
@@ -18,15 +19,14 @@ import sys
 import threading
 import time
 
-from spherov2 import scanner
-from spherov2.adapter.tcp_adapter import get_tcp_adapter
 from spherov2.sphero_edu import SpheroEduAPI
 from spherov2.toy.sphero import Sphero
 
+from sphero_edu import find_toy
+
 
 def main():
-    port, name = int(sys.argv[1]), sys.argv[2]
-    toy = scanner.find_toy(toy_name=name, adapter=get_tcp_adapter("127.0.0.1", port), timeout=5.0)
+    toy = find_toy(sys.argv[1:])
     out = {"class": type(toy).__name__, "yaw": [], "raw_location": None, "collisions": []}
     v1 = isinstance(toy, Sphero)  # BB-8, SPRK+ and Ollie derive from spherov2's v1 Sphero
     with SpheroEduAPI(toy) as api:
