@@ -272,6 +272,19 @@ fn v1_raw_motors_drive_open_loop() {
         h.send(&v1::cmd::set_raw_motors(Off, 0, Off, 0).into());
         h.run(Duration::from_secs(1));
         assert_eq!(h.droid.state().velocity_cm_s, 0.0, "{model:?}");
+        // Motors left running stop when the droid sleeps, and stay stopped once it wakes.
+        h.send(&v1::cmd::set_raw_motors(Forward, 80, Forward, 80).into());
+        h.run(Duration::from_millis(500));
+        h.send(&v1::cmd::sleep(0, 0, 0).into());
+        h.send(&v1::cmd::ping().into());
+        h.run(Duration::from_secs(1));
+        let at = h.droid.state().clone();
+        h.run(Duration::from_secs(1));
+        assert_eq!(
+            h.droid.state().y_cm,
+            at.y_cm,
+            "{model:?} still after waking"
+        );
     }
 }
 

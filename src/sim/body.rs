@@ -451,6 +451,9 @@ impl Body {
         if self.state.awake {
             self.state.awake = false;
             self.drive = None;
+            // Raw motors and tracks stop too: a droid woken again holds still.
+            self.wheels = None;
+            self.tracks_at = None;
             self.stream_every = None;
             self.events.push(SimEvent::DidSleep);
         }
