@@ -4,28 +4,13 @@
 //! simulated model shares one physics.
 
 use super::SimConfig;
-use super::physics::{angle_diff, approach, clamp_to_room, heading_vector, wrap360};
+use super::physics::{approach, clamp_to_room, heading_vector, unwrap_toward, wrap360};
 use super::sleep::{SleepStep, SleepTimer};
 use crate::model::Model;
 use crate::protocol::notify::Collision;
 use crate::protocol::wire::{LegAction, LegState};
 use crate::units::{HEAD_MAX_DEG, HEAD_MIN_DEG};
 use std::time::Duration;
-
-/// The unwrapped angle of `heading` (0..360) for a drive command: the one nearest the last
-/// commanded target `last` (commands a spin sends arrive a few degrees apart, so nearest the
-/// last one follows the spin through 360), but never more than one turn from where the body
-/// faces, `yaw` (a target that ran further ahead drops its whole turns).
-pub fn unwrap_toward(last: f32, yaw: f32, heading: f32) -> f32 {
-    let mut t = last + angle_diff(last, heading);
-    while t - yaw > 360.0 {
-        t -= 360.0;
-    }
-    while yaw - t > 360.0 {
-        t += 360.0;
-    }
-    t
-}
 
 /// A droid warns this long before it falls asleep for inactivity.
 const WARN_BEFORE_SLEEP: Duration = Duration::from_secs(10);
