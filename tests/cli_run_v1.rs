@@ -16,8 +16,8 @@ use std::time::Duration;
 mod scratch;
 use scratch::{Scratch, json_lines, path, stderr, stdout};
 
-/// East for 2 s, a pause, then north into the wall (4 m room: the droid's centre stops
-/// 190 cm from the middle), then a pause against it.
+/// East for 2 s, a pause, then north into the wall (4 m room: the droid's centre stops its
+/// radius short of 200 cm from the middle), then a pause against it.
 const PATROL: &str = "\
 # BB-8: east, then north into the wall
 wake
@@ -33,9 +33,11 @@ wait 1s
 
 /// Where [`PATROL`] ends, by the simulator's figures: east for 2 s at 120/255 of 160 cm/s
 /// (after a quarter turn and the braking), plus the drift of the second quarter turn; north
-/// until the wall.
+/// until the wall (4 m room: 200 cm from the middle less BB-8's own radius, 3.65 cm).
 const END_X: f64 = 145.0;
-const END_Y: f64 = 190.0;
+fn end_y() -> f64 {
+    200.0 - SimConfig::for_model(Model::BB8).radius_cm as f64
+}
 
 #[test]
 fn bb8_mission_drives_turns_hits_the_wall_and_streams() {
@@ -58,7 +60,7 @@ fn bb8_mission_drives_turns_hits_the_wall_and_streams() {
         summary["y_cm"].as_f64().unwrap(),
     );
     assert!((x - END_X).abs() < 20.0, "x {x}");
-    assert!((y - END_Y).abs() <= 0.5, "at the wall: y {y}");
+    assert!((y - end_y()).abs() <= 0.5, "at the wall: y {y}");
     let bearing = x.atan2(y).to_degrees();
     let dist = (x * x + y * y).sqrt();
     assert!((25.0..50.0).contains(&bearing), "bearing {bearing}");
@@ -162,7 +164,8 @@ fn lines_a_bb8_cannot_do_are_refused_before_anything_is_sent() {
 #[tokio::test(start_paused = true)]
 async fn in_process_mission_telemetry_matches_the_droid() {
     let model = Model::BB8;
-    let link = SimLink::new(model, SimConfig::default(), Faults::none());
+    // BB-8's own figures, as `--sim bb8` has them.
+    let link = SimLink::new(model, SimConfig::for_model(model), Faults::none());
     let probe = link.probe();
     let config = SessionConfig {
         family: model.protocol(),
@@ -204,7 +207,7 @@ async fn in_process_mission_telemetry_matches_the_droid() {
         (x - st.x_cm).abs() <= 0.5 && (y - st.y_cm).abs() <= 0.5,
         "{summary:?} vs {st:?}"
     );
-    assert!((x as f64 - END_X).abs() < 20.0 && (y as f64 - END_Y).abs() <= 0.5);
+    assert!((x as f64 - END_X).abs() < 20.0 && (y as f64 - end_y()).abs() <= 0.5);
     assert_eq!(st.velocity_cm_s, 0.0);
     // The LED lines reached the droid: main LED blue, back LED full.
     assert_eq!(&st.leds[..4], &[0, 0, 255, 255]);

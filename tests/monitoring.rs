@@ -345,12 +345,18 @@ fn plot_draws_the_path_where_the_telemetry_says() {
         .collect();
     assert!(positions.len() > 30);
     let (mut east, mut north, mut west) = (0.0f64, 0.0f64, 0.0f64);
-    // The start and the collision have their own marks over the path.
+    // The start, the end and the collision have their own marks over the path (the
+    // collision's at the first sample that counts it, which may be short of the wall).
     let start = frame.pixel(positions[0].0, positions[0].1);
     let last = positions.last().unwrap();
     let end = frame.pixel(last.0, last.1);
+    let hit = samples
+        .windows(2)
+        .find(|w| w[1].collisions > w[0].collisions)
+        .and_then(|w| Some(frame.pixel(w[1].x_cm? as f64, w[1].y_cm? as f64)))
+        .unwrap_or(end);
     let marked = |p: (i32, i32)| {
-        [start, end]
+        [start, end, hit]
             .iter()
             .any(|m| (m.0 - p.0).abs() <= 10 && (m.1 - p.1).abs() <= 10)
     };

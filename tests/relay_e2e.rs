@@ -811,7 +811,20 @@ fn a_fleet_mixes_droids_behind_two_relays_and_a_local_one() {
 /// spherov2's Sphero Edu API on a simulated BOLT or Mini (tests/sphero_edu.py): `how` is
 /// `["tcp", PORT]` or `["bleak"]`. The JSON it prints.
 fn sphero_edu(py: &str, how: &[&str], name: &str, bus: Option<&str>, dir: &TempDir) -> Value {
-    let script = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/sphero_edu.py");
+    edu_script(py, "sphero_edu.py", how, name, bus, dir)
+}
+
+/// Run `tests/SCRIPT ARGS… NAME` with spherov2's Python (on the bus `bus` for bleak); the
+/// JSON it prints.
+fn edu_script(
+    py: &str,
+    script: &str,
+    how: &[&str],
+    name: &str,
+    bus: Option<&str>,
+    dir: &TempDir,
+) -> Value {
+    let script = format!("{}/tests/{script}", env!("CARGO_MANIFEST_DIR"));
     let mut cmd = Command::new(py);
     cmd.arg(script)
         .args(how)
@@ -910,4 +923,174 @@ fn sphero_edu_drives_bolt_and_mini_through_bleak() {
         shown.contains(&"matrix: character 'A' in #ff0000".to_string()),
         "{shown:?}"
     );
+}
+
+// ---------------------------------------------------------------------------------------------
+// Issue 32: spherov2's Sphero Edu API against every simulated model it drives, through
+// `droidctl serve --sim` (tests/sphero_edu_models.py; tests/sim_models.rs checks the same in
+// process and in simulated time).
+// ---------------------------------------------------------------------------------------------
+
+/// Run tests/sphero_edu_models.py on each of `models` served together; check each result.
+fn edu_models(test: &str, models: &[(&str, &str)]) {
+    let py = match python_with("spherov2.adapter.tcp_adapter, spherov2.sphero_edu") {
+        Ok(py) => py,
+        Err(why) => {
+            println!("SKIPPED {test}: {why}");
+            return;
+        }
+    };
+    let dir = TempDir::new(test);
+    let ids: Vec<&str> = models.iter().map(|(id, _)| *id).collect();
+    let serve = Serve::start(&ids, &[], &dir);
+    let port = serve.address.rsplit(':').next().unwrap().to_string();
+    for (i, (id, class)) in models.iter().enumerate() {
+        let name = format!(
+            "{}{:04X}",
+            droidctl::model::Model::from_id(id)
+                .and_then(|m| m.name_prefix())
+                .unwrap(),
+            i + 1
+        );
+        let how = ["tcp", port.as_str()];
+        let seen = edu_script(&py, "sphero_edu_models.py", &how, &name, None, &dir);
+        edu_checks(&name, class, &seen);
+    }
+    serve.stop();
+}
+
+/// Everything tests/sphero_edu_models.py saw of droid `name`, of spherov2's `class`.
+fn edu_checks(name: &str, class: &str, seen: &Value) {
+    assert_eq!(seen["class"], class, "{seen}");
+    edu_spin_turned_once(name, seen);
+    edu_hit_head_on(name, seen);
+    edu_went_where_it_says(name, seen);
+}
+
+/// spin(360, 1): the streamed yaw went once round, one way, and never turned back.
+fn edu_spin_turned_once(name: &str, seen: &Value) {
+    let yaws: Vec<f64> = seen["yaw"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| f(&s[1]))
+        .collect();
+    assert!(yaws.len() > 20, "{name}: yaw sampled: {seen}");
+    let steps: Vec<f64> = yaws
+        .windows(2)
+        .map(|w| (w[1] - w[0] + 540.0).rem_euclid(360.0) - 180.0)
+        .collect();
+    let total: f64 = steps.iter().sum();
+    assert!(
+        (total.abs() - 360.0).abs() < 20.0,
+        "{name}: turned {total}° for spin(360, 1): {yaws:?}"
+    );
+    let back = steps
+        .iter()
+        .map(|s| -s * total.signum())
+        .fold(0.0, f64::max);
+    assert!(back < 5.0, "{name}: turned back by {back}°: {yaws:?}");
+}
+
+/// The roll east ended against the east wall head-on: the hit is on the robot's forward axis
+/// (RVR reports no collisions to spherov2's Edu API).
+fn edu_hit_head_on(name: &str, seen: &Value) {
+    let hits = seen["collisions"].as_array().unwrap();
+    if name.starts_with("RV-") {
+        return;
+    }
+    let c = hits
+        .first()
+        .unwrap_or_else(|| panic!("{name}: no collision: {seen}"));
+    assert_eq!(c["y_axis"], true, "{name}: head-on is on y: {c}");
+    assert_eq!(c["x_axis"], false, "{name}: {c}");
+    assert!(f(&c["accel_y"]) < 0.0, "{name}: braking ahead: {c}");
+}
+
+/// Where spherov2 says the droid is: the v1 droids' raw motors drove it north (forward, as
+/// aimed), the roll east took it to the east wall (the room is 4 m, the droid starts in the
+/// middle), keeping its northing.
+fn edu_went_where_it_says(name: &str, seen: &Value) {
+    let north = if seen["raw_location"].is_null() {
+        0.0
+    } else {
+        let (x, y) = (f(&seen["raw_location"]["x"]), f(&seen["raw_location"]["y"]));
+        assert!(y > 20.0 && x.abs() < 5.0, "{name}: raw motors: {seen}");
+        y
+    };
+    let (x, y) = (f(&seen["location"]["x"]), f(&seen["location"]["y"]));
+    assert!(
+        x > 150.0 && (y - north).abs() < 10.0,
+        "{name}: rolled east to the wall: {seen}"
+    );
+}
+
+#[test]
+fn sphero_edu_drives_each_star_wars_droid() {
+    edu_models(
+        "sphero_edu_drives_each_star_wars_droid",
+        &[("r2d2", "R2D2"), ("r2q5", "R2Q5"), ("bb9e", "BB9E")],
+    );
+}
+
+#[test]
+fn sphero_edu_drives_each_v1_droid() {
+    edu_models(
+        "sphero_edu_drives_each_v1_droid",
+        &[("bb8", "BB8"), ("sprk", "Sprk2"), ("ollie", "Ollie")],
+    );
+}
+
+#[test]
+fn sphero_edu_drives_bolt_mini_and_rvr() {
+    edu_models(
+        "sphero_edu_drives_bolt_mini_and_rvr",
+        &[("bolt", "BOLT"), ("mini", "Mini"), ("rvr", "RVR")],
+    );
+}
+
+/// The same over bleak on the virtual BlueZ for the v1 droids, whose trace decodes every
+/// Roll spherov2 sends (five bytes, with its reverse flag) with its fields.
+#[test]
+fn sphero_edu_drives_each_v1_droid_through_bleak_and_the_trace_reads_its_rolls() {
+    let test = "sphero_edu_drives_each_v1_droid_through_bleak_and_the_trace_reads_its_rolls";
+    let py = match python_with("spherov2.adapter.bleak_adapter, spherov2.sphero_edu, bleak")
+        .and_then(|py| dbus_daemon().map(|_| py))
+    {
+        Ok(py) => py,
+        Err(why) => {
+            println!("SKIPPED {test}: {why}");
+            return;
+        }
+    };
+    let dir = TempDir::new("sphero-edu-v1-bleak");
+    let mut trace = Vec::new();
+    // One bus each: droids served together share a room, and these all end at the east wall.
+    for (model, class) in [("bb8", "BB8"), ("sprk", "Sprk2"), ("ollie", "Ollie")] {
+        let bluez = Bluez::start(&[model], &dir);
+        let name = &bluez.names[0];
+        let how = ["bleak"];
+        let seen = edu_script(
+            &py,
+            "sphero_edu_models.py",
+            &how,
+            name,
+            Some(&bluez.bus),
+            &dir,
+        );
+        edu_checks(name, class, &seen);
+        trace.extend(bluez.trace.lock().unwrap().clone());
+        bluez.stop();
+    }
+    let rolls: Vec<&Value> = trace
+        .iter()
+        .filter(|t| t["packet"]["command"] == "roll")
+        .collect();
+    assert!(rolls.len() > 30, "spherov2 rolled: {} rolls", rolls.len());
+    for r in rolls {
+        let fields = &r["packet"]["fields"];
+        for k in ["speed", "heading", "state", "reverse"] {
+            assert!(!fields[k].is_null(), "{k} of {r}");
+        }
+    }
 }

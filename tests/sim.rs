@@ -1015,11 +1015,18 @@ fn walls_stop_the_droid_with_a_collision_notification() {
         let (at, p) = &notes[0];
         assert_eq!(p.data.len(), 18, "18 bytes, not the seed's 17");
         let c = Collision::decode(&p.data).unwrap();
-        let along_x = heading % 180 == 90;
+        // In the robot's axes (issue 32 point 2): head-on is on its forward axis, y, braking,
+        // whichever wall it is (it used to be x at the east and west walls).
         assert_eq!(
             (c.axis.x, c.axis.y),
-            (along_x, !along_x),
-            "heading {heading}"
+            (false, true),
+            "heading {heading}: {c:?}"
+        );
+        assert!(c.accel[1].g() < -1.0, "braking ahead: {c:?}");
+        assert!(c.accel[0].g().abs() < 0.2, "nothing across: {c:?}");
+        assert!(
+            c.power[1] > 0 && c.power[0].abs() < c.power[1] / 10,
+            "{c:?}"
         );
         assert!(c.speed > 200, "hit at full speed: {}", c.speed);
         assert_eq!(c.time_ms as u128, at.as_millis());

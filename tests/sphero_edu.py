@@ -19,16 +19,22 @@ from spherov2.toy.bolt import BOLT
 from spherov2.types import Color
 
 
-def main():
-    if sys.argv[1] == "tcp":
+def find_toy(args):
+    """The toy `args` name: `tcp PORT NAME` (through `droidctl serve` on loopback) or `bleak
+    NAME` (on the bus DBUS_SYSTEM_BUS_ADDRESS names). Also used by sphero_edu_models.py."""
+    if args[0] == "tcp":
         from spherov2.adapter.tcp_adapter import get_tcp_adapter
 
-        adapter, name = get_tcp_adapter("127.0.0.1", int(sys.argv[2])), sys.argv[3]
+        adapter, name = get_tcp_adapter("127.0.0.1", int(args[1])), args[2]
     else:
         from spherov2.adapter.bleak_adapter import BleakAdapter
 
-        adapter, name = BleakAdapter, sys.argv[2]
-    toy = scanner.find_toy(toy_name=name, adapter=adapter, timeout=5.0)
+        adapter, name = BleakAdapter, args[1]
+    return scanner.find_toy(toy_name=name, adapter=adapter, timeout=5.0)
+
+
+def main():
+    toy = find_toy(sys.argv[1:])
     with SpheroEduAPI(toy) as api:
         if isinstance(toy, BOLT):
             api.set_matrix_character("A", Color(255, 0, 0))

@@ -96,3 +96,41 @@ fn packets_are_what_packet_decode_json_prints() {
     assert_eq!(w[0].packet_value()["kind"], "gatt-write");
     assert_eq!(w[0].packet_value()["hex"], "c8");
 }
+
+/// Issue 32: spherov2's v1 Roll carries a fifth byte, its reverse flag (and it turns the LEDs
+/// off with a 3-byte Set RGB LED): the trace decodes both with their fields, as `packet
+/// decode` does, instead of leaving `fields` empty.
+#[test]
+fn spherov2s_roll_and_led_are_traced_with_their_fields() {
+    let mut t = PacketTracer::new(Model::Ollie);
+    let frame = |cid: u8, seq: u8, data: Vec<u8>| {
+        v1::Packet::Command(v1::CommandPacket::new(0x02, cid, seq, data))
+            .encode()
+            .unwrap()
+    };
+    // spherov2 `Sphero.roll(toy, 60, 90, RollModes.GO, ReverseFlags.OFF)`.
+    let roll = frame(0x30, 6, vec![60, 0, 90, 1, 0]);
+    let traced = t.write(V1_COMMANDS, &roll)[0].packet_value();
+    assert_eq!(traced, decoded("v1", Some("host"), &roll));
+    assert_eq!(traced["command"], "roll");
+    assert_eq!(
+        traced["fields"],
+        serde_json::json!({"speed": 60, "heading": 90, "state": "go", "reverse": false}),
+        "{traced}"
+    );
+    let back = frame(0x30, 7, vec![60, 0, 90, 1, 1]);
+    assert_eq!(
+        t.write(V1_COMMANDS, &back)[0].packet_value()["fields"]["reverse"],
+        true
+    );
+    let leds_off = frame(0x20, 8, vec![0, 0, 0]);
+    let traced = t.write(V1_COMMANDS, &leds_off)[0].packet_value();
+    assert_eq!(
+        traced["fields"],
+        serde_json::json!({"red": 0, "green": 0, "blue": 0}),
+        "{traced}"
+    );
+    // Other wrong lengths still decode to nothing.
+    let short = frame(0x30, 9, vec![60, 0, 90]);
+    assert!(t.write(V1_COMMANDS, &short)[0].packet_value()["fields"].is_null());
+}

@@ -58,7 +58,9 @@ impl Mirror {
         Mirror {
             model,
             family,
-            codec: family.codec(),
+            // The model's codec, as the session has it (an Ollie's samples turned to the
+            // room's axes, `family::v1`), so a replay reads what the live run read.
+            codec: family.codec_for(model),
             host: host_reader(family),
             pending: HashMap::new(),
             stats: SessionStats::default(),
@@ -93,7 +95,7 @@ impl Mirror {
     /// A fresh decoder state for a new connection (as the session makes a codec per
     /// connection).
     fn reconnected(&mut self) {
-        self.codec = self.family.codec();
+        self.codec = self.family.codec_for(self.model);
         self.host = host_reader(self.family);
         self.pending.clear();
     }

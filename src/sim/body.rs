@@ -4,11 +4,11 @@
 //! simulated model shares one physics.
 
 use super::SimConfig;
-use super::physics::{angle_diff, approach, clamp_to_room, heading_vector, wrap360};
+use super::physics::{approach, clamp_to_room, heading_vector, unwrap_toward, wrap360};
 use super::sleep::{SleepStep, SleepTimer};
 use crate::model::Model;
 use crate::protocol::notify::Collision;
-use crate::protocol::wire::{AccelRaw, CollisionAxis, LegAction, LegState};
+use crate::protocol::wire::{LegAction, LegState};
 use crate::units::{HEAD_MAX_DEG, HEAD_MIN_DEG};
 use std::time::Duration;
 
@@ -18,45 +18,7 @@ const WARN_BEFORE_SLEEP: Duration = Duration::from_secs(10);
 /// The slowest contact with a wall that counts as a collision, cm/s.
 const MIN_IMPACT_CM_S: f32 = 10.0;
 
-/// The simulator's impact power per axis: the speed into the wall along that axis, cm/s, times
-/// this. A model of ours (no source gives the droids' power scale): with it the default
-/// thresholds (100 + 100 × speed) report a bump at a quarter of cruise speed, and a
-/// threshold of 250 ignores it.
-pub const POWER_PER_CM_S: f32 = 8.0;
-
-/// Collision detection's thresholds as configured: per axis, the power to exceed and the
-/// speed term added to it (`crate::family::collision`). World axes: x is a wall at ±x.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct CollisionThresholds {
-    pub x_threshold: u8,
-    pub y_threshold: u8,
-    pub x_speed: u8,
-    pub y_speed: u8,
-}
-
-impl Default for CollisionThresholds {
-    /// The common default of the reference clients (`droid-facts.md` §2: 90, 130, 90, 130).
-    fn default() -> Self {
-        CollisionThresholds {
-            x_threshold: 90,
-            y_threshold: 130,
-            x_speed: 90,
-            y_speed: 130,
-        }
-    }
-}
-
-impl CollisionThresholds {
-    /// Which axes an impact of `power` (x, y) at `speed` (0..=255 of top speed) trips: a
-    /// threshold of 0 turns its axis off; the speed term raises it as the droid goes faster.
-    pub fn tripped(&self, power: (f32, f32), speed: u8) -> (bool, bool) {
-        let over = |p: f32, t: u8, s: u8| t > 0 && p > t as f32 + s as f32 * speed as f32 / 255.0;
-        (
-            over(power.0, self.x_threshold, self.x_speed),
-            over(power.1, self.y_threshold, self.y_speed),
-        )
-    }
-}
+pub use super::impact::{CollisionThresholds, POWER_PER_CM_S};
 
 /// Everything observable about the simulated droid (for tests, `run` and the UI's sim panel).
 #[derive(Debug, Clone, PartialEq)]
@@ -102,7 +64,8 @@ pub enum SimEvent {
 struct Drive {
     /// Target speed magnitude, cm/s.
     speed: f32,
-    /// Target facing.
+    /// Target facing, unwrapped: on the same count of turns as [`Body::yaw`], so the body
+    /// turns toward it the way the commands went, not the short way.
     facing: f32,
     backward: bool,
     at: Duration,
@@ -129,6 +92,8 @@ pub struct Body {
     tracks_at: Option<Duration>,
     /// Stop when drive commands stop for this long (`None`: keep the last motion).
     control_timeout: Option<Duration>,
+    /// The facing counted in whole turns (not wrapped; `state.yaw_deg` is it wrapped).
+    yaw: f32,
     head_target: f32,
     transition: Option<Transition>,
     /// Soft sleep on inactivity, warning 10 s before (changed by Set Inactivity Timeout).
@@ -185,6 +150,7 @@ impl Body {
             wheels: None,
             tracks_at: None,
             control_timeout,
+            yaw: 0.0,
             head_target: 0.0,
             transition: None,
             sleep,
@@ -295,9 +261,10 @@ impl Body {
         // Driving by heading ends driving by tracks (RVR takes either).
         self.wheels = None;
         self.tracks_at = None;
+        let facing = unwrap_toward(self.drive.map_or(self.yaw, |d| d.facing), self.yaw, facing);
         self.drive = Some(Drive {
             speed: speed as f32 / 255.0 * self.cfg.top_speed_cm_s,
-            facing: wrap360(facing),
+            facing,
             backward,
             at: self.now,
         });
@@ -369,6 +336,7 @@ impl Body {
     pub fn set_heading(&mut self, deg: f32) {
         let deg = wrap360(deg);
         self.state.yaw_deg = deg;
+        self.yaw = deg;
         if let Some(dr) = &mut self.drive {
             dr.facing = deg;
         }
@@ -468,6 +436,9 @@ impl Body {
         if self.state.awake {
             self.state.awake = false;
             self.drive = None;
+            // Raw motors and tracks stop too: a droid woken again holds still.
+            self.wheels = None;
+            self.tracks_at = None;
             self.stream_every = None;
             self.events.push(SimEvent::DidSleep);
         }
@@ -561,23 +532,26 @@ impl Body {
             (Some((l, r)), _) if rolling => {
                 let top = self.cfg.top_speed_cm_s;
                 let rate = (l - r) * top / self.cfg.track_cm.max(0.1) * 57.29578;
-                (
-                    (l + r) / 2.0 * top,
-                    wrap360(self.state.yaw_deg + rate * dt),
-                    false,
-                )
+                ((l + r) / 2.0 * top, self.yaw + rate * dt, false)
             }
             (_, Some(d)) if rolling => (d.speed, d.facing, d.backward),
-            _ => (0.0, self.state.yaw_deg, self.state.velocity_cm_s < 0.0),
+            _ => (0.0, self.yaw, self.state.velocity_cm_s < 0.0),
         };
-        // Turn toward the commanded facing at a finite rate.
-        let before = self.state.yaw_deg;
-        let diff = angle_diff(before, target_facing);
-        let turn = diff.clamp(
-            -self.cfg.turn_rate_deg_s * dt,
-            self.cfg.turn_rate_deg_s * dt,
-        );
-        self.state.yaw_deg = wrap360(before + turn);
+        // Turn toward the commanded facing at the model's rate. Both are unwrapped, so the
+        // body goes the way the commands went (fix, issue 32 point 1: with wrapped angles a
+        // body that fell more than half a turn behind a spin's target turned back).
+        let max = self.cfg.turn_rate_deg_s * dt;
+        let turn = (target_facing - self.yaw).clamp(-max, max);
+        self.yaw += turn;
+        if self.yaw.abs() > 36_000.0 {
+            // Keep the count of turns small (f32 precision); the drive's target moves along.
+            let whole = (self.yaw / 360.0).trunc() * 360.0;
+            self.yaw -= whole;
+            if let Some(d) = &mut self.drive {
+                d.facing -= whole;
+            }
+        }
+        self.state.yaw_deg = wrap360(self.yaw);
         self.yaw_rate = turn / dt;
         // Speed with acceleration limits; signed along the facing.
         let target_v = if backward {
@@ -607,7 +581,11 @@ impl Body {
         self.state.x_cm = cx - ox;
         self.state.y_cm = cy - oy;
         if hit_x || hit_y {
-            self.collide(new_v, hx, hy, hit_x, hit_y);
+            let impact = (
+                if hit_x { hx * new_v } else { 0.0 },
+                if hit_y { hy * new_v } else { 0.0 },
+            );
+            self.collide(new_v.abs(), impact);
         }
         self.other_droids(cx, cy, hx * new_v, hy * new_v);
     }
@@ -618,33 +596,37 @@ impl Body {
         let Some(place) = self.cfg.place.clone() else {
             return;
         };
-        let v = self.state.velocity_cm_s;
+        let v = self.state.velocity_cm_s.abs();
         if let Some(c) = place.moved(x, y, vx, vy) {
             self.state.x_cm = c.x - place.origin.0;
             self.state.y_cm = c.y - place.origin.1;
-            self.collide(v.abs(), c.nx, c.ny, c.nx.abs() >= 0.5, c.ny.abs() >= 0.5);
+            self.collide(v, (c.nx * v, c.ny * v));
         }
         if let Some(h) = place.take_hit() {
-            self.report_collision(h.speed, h.dx, h.dy, h.dx.abs() >= 0.5, h.dy.abs() >= 0.5);
+            // Struck: the impact comes from the other droid's side.
+            self.report_collision(h.speed, (h.dx * h.speed, h.dy * h.speed));
         }
     }
 
-    fn collide(&mut self, v: f32, hx: f32, hy: f32, hit_x: bool, hit_y: bool) {
+    /// Stop against an obstacle: `speed` the droid's speed, `impact` the velocity it loses
+    /// against it (room axes, cm/s).
+    fn collide(&mut self, speed: f32, impact: (f32, f32)) {
         // A wall stops the droid; it stays stopped until the next drive command.
         self.state.velocity_cm_s = 0.0;
         if let Some(d) = &mut self.drive {
             d.speed = 0.0;
         }
-        self.report_collision(v, hx, hy, hit_x, hit_y);
+        self.report_collision(speed, impact);
     }
 
-    /// Count a collision at speed `v` along (`hx`, `hy`) and notify it when detection is on.
-    fn report_collision(&mut self, v: f32, hx: f32, hy: f32, hit_x: bool, hit_y: bool) {
+    /// Count a collision at `speed` cm/s with `impact` (room axes, cm/s, toward the obstacle)
+    /// and notify it, in the robot's axes, when detection is on.
+    fn report_collision(&mut self, speed: f32, impact: (f32, f32)) {
         // Fix: the bar was 1 cm/s, below one physics step of acceleration (1.5 cm/s at
         // 150 cm/s² and 10 ms), so a droid held against a wall by a drive heartbeat counted
         // (and reported) a fresh collision on every re-sent drive command. Pushing against
         // the wall is not an impact.
-        if v.abs() < MIN_IMPACT_CM_S {
+        if speed.abs() < MIN_IMPACT_CM_S {
             return;
         }
         let now = self.now;
@@ -658,41 +640,16 @@ impl Body {
         if !self.collision_notify {
             return;
         }
-        // The detector: each axis's impact power against its threshold (a gentle bump under
-        // a hard threshold is felt by the body and not reported).
-        let speed = (v.abs() / self.cfg.top_speed_cm_s * 255.0).clamp(0.0, 255.0) as u8;
-        let power = (
-            if hit_x {
-                (hx * v).abs() * POWER_PER_CM_S
-            } else {
-                0.0
-            },
-            if hit_y {
-                (hy * v).abs() * POWER_PER_CM_S
-            } else {
-                0.0
-            },
-        );
-        let (x, y) = self.collision_thresholds.tripped(power, speed);
-        if !(x || y) {
-            return;
-        }
-        // Impact deceleration over ~50 ms, in g (÷4096 on the wire).
-        let g = |comp: f32| {
-            AccelRaw((-(comp * v) / 0.05 / 981.0 * 4096.0).clamp(-32768.0, 32767.0) as i16)
-        };
-        let c = Collision {
-            accel: [g(hx), g(hy), AccelRaw(4096)],
-            axis: CollisionAxis { x, y },
-            power: [
-                (hx * v * POWER_PER_CM_S).clamp(-32768.0, 32767.0) as i16,
-                (hy * v * POWER_PER_CM_S).clamp(-32768.0, 32767.0) as i16,
-                0,
-            ],
+        let speed = (speed.abs() / self.cfg.top_speed_cm_s * 255.0).clamp(0.0, 255.0) as u8;
+        if let Some(c) = super::impact::detect(
+            &self.collision_thresholds,
+            self.state.yaw_deg,
+            impact,
             speed,
-            time_ms: now.as_millis() as u32,
-        };
-        self.events.push(SimEvent::Collision(c));
+            now.as_millis() as u32,
+        ) {
+            self.events.push(SimEvent::Collision(c));
+        }
     }
 
     fn dome(&mut self, dt: f32) {

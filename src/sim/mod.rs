@@ -11,7 +11,9 @@ pub mod body;
 pub mod bluez;
 pub mod droid;
 pub mod faults;
+pub mod figures;
 pub mod gatt;
+pub mod impact;
 pub mod link;
 mod physics;
 pub mod robi;
@@ -193,7 +195,8 @@ pub struct SimConfig {
     /// Acceleration and braking limits, cm/s².
     pub accel_cm_s2: f32,
     pub brake_cm_s2: f32,
-    /// How fast the body turns toward the commanded heading, °/s.
+    /// How fast the body turns toward the commanded heading, °/s (the model's own rate in
+    /// [`SimConfig::for_model`]; the default is a generic 180°/s).
     pub turn_rate_deg_s: f32,
     /// How fast the dome moves, °/s.
     pub head_rate_deg_s: f32,
@@ -219,7 +222,8 @@ pub struct SimConfig {
     pub sound_time: Duration,
     /// Physics step.
     pub step: Duration,
-    /// Differential-drive robots (Robi 42): distance between the wheels, and wheel radius
+    /// Differential drive (Robi 42; raw motors of the others, [`figures`]): distance between
+    /// the wheels, and wheel radius
     /// (motor rad/s = wheel speed / radius). *Unverified* figures for a small school robot.
     pub track_cm: f32,
     pub wheel_radius_cm: f32,
@@ -234,10 +238,16 @@ pub struct SimConfig {
 }
 
 impl SimConfig {
-    /// The defaults with the model's own figures, as its simulator front has them (Robi 42
-    /// is a slow differential-drive robot).
+    /// The defaults with the model's own figures: its size and turn rate ([`figures`]), as
+    /// its simulator front has them (Robi 42 is a slow differential-drive robot).
     pub fn for_model(model: Model) -> SimConfig {
-        (front(model).config)()
+        let mut cfg = (front(model).config)();
+        if let Some(f) = figures::of(model) {
+            cfg.radius_cm = f.radius_cm;
+            cfg.turn_rate_deg_s = f.turn_rate_deg_s;
+            cfg.track_cm = f.track_cm;
+        }
+        cfg
     }
 }
 

@@ -14,9 +14,20 @@ use std::time::Duration;
 pub const MATRIX: usize = 8;
 /// Saved frames and animations a BOLT keeps here (bounded; the real limit is unpublished).
 pub const SAVED_MAX: usize = 64;
-/// How long a scrolled character takes at speed 1 (spherov2 gives no figure: a guess kept
-/// here so tests can reason about it).
-const SCROLL_CHAR_TIME: Duration = Duration::from_millis(600);
+/// Columns one scrolled character takes: a cell of the 8×8 font (the simulator's glyphs are
+/// 8 columns wide; the real font is not public).
+const SCROLL_CHAR_COLUMNS: u32 = MATRIX as u32;
+
+/// How long scrolling `chars` characters takes at `fps` frames a second: the speed byte is
+/// frames per second (spherov2 `sphero_edu.py`, `scroll_matrix_text(text, color, fps, …)`,
+/// "fps 1 to 30"), and each frame moves the text one column, so every column of the text
+/// takes a frame. (Fix, issue 29 point 5: the simulator took 600 ms per character divided
+/// by the speed, and said done after 0.19 s where one character's 8 columns at 10 frames/s
+/// take 0.8 s.)
+pub fn scroll_time(chars: usize, fps: u8) -> Duration {
+    let columns = SCROLL_CHAR_COLUMNS * chars as u32;
+    Duration::from_millis(1000) * columns / fps.max(1) as u32
+}
 
 /// BOLT's LED matrix.
 #[derive(Debug, Clone, PartialEq, Default)]
@@ -217,8 +228,7 @@ impl RobotParts {
                     return Some(bad);
                 }
                 let text = String::from_utf8_lossy(text).into_owned();
-                let speed = d[3].max(1) as u32;
-                let done = (d[4] == 0).then(|| now + SCROLL_CHAR_TIME * text.len() as u32 / speed);
+                let done = (d[4] == 0).then(|| now + scroll_time(text.chars().count(), d[3]));
                 m.character = None;
                 m.pixels = [[[0; 3]; MATRIX]; MATRIX];
                 m.scrolling = Some((text, rgb(0), done));
@@ -452,6 +462,16 @@ mod tests {
         assert!(!r.text_done(Duration::from_millis(10)));
         assert!(r.text_done(Duration::from_secs(5)));
         assert!(!r.text_done(Duration::from_secs(6)));
+        // One character's 8 columns at 10 frames/s: 0.8 s, not sooner.
+        r.matrix(0x3B, &[0, 255, 0, 10, 0, b'A', 0], Duration::ZERO);
+        assert!(!r.text_done(Duration::from_millis(790)));
+        assert!(r.text_done(Duration::from_millis(800)));
+        assert_eq!(scroll_time(8, 10), Duration::from_millis(6400));
+        assert_eq!(
+            scroll_time(1, 0),
+            Duration::from_secs(8),
+            "speed 0 is read as 1"
+        );
     }
 
     #[test]

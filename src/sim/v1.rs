@@ -26,14 +26,6 @@ const ID_SENSORS: u8 = 0x03;
 const ID_PRE_SLEEP: u8 = 0x05;
 const ID_COLLISION: u8 = 0x07;
 
-/// Payload lengths that real clients send besides the catalogue's, and real droids accept.
-/// Fix: the simulator refused them with "bad message format", so spherov2.py could not get
-/// through its connect routine (it turns the LEDs off with a 3-byte Set RGB LED, without the
-/// persist flag) nor drive (its Roll carries a fifth byte, the reverse flag).
-fn client_variant(did: u8, cid: u8, len: usize) -> bool {
-    matches!((did, cid, len), (0x02, 0x20, 3) | (0x02, 0x30, 5))
-}
-
 /// The simulated v1 droid.
 #[derive(Debug, Clone)]
 pub struct SimDroidV1 {
@@ -47,6 +39,8 @@ pub struct SimDroidV1 {
     power_notify: bool,
     stabilization: bool,
     rotation_rate: u8,
+    /// The raw motors' last power per side, −1..=1 (Set Raw Motors' "ignore" keeps a side).
+    raw_motors: (f32, f32),
     /// Set Temporary Option Flags (bit 0: stop on disconnect).
     option_flags: u32,
     out: Vec<Packet>,
@@ -66,6 +60,7 @@ impl SimDroidV1 {
             power_notify: false,
             stabilization: true,
             rotation_rate: 0xC8,
+            raw_motors: (0.0, 0.0),
             option_flags: 0,
             out: Vec::new(),
         }
@@ -106,6 +101,7 @@ impl SimDroidV1 {
         self.advance_to(now);
         if self.option_flags & crate::protocol::v1::catalog::TEMP_OPTION_STOP_ON_DISCONNECT != 0 {
             self.body.stop_motion();
+            self.raw_motors = (0.0, 0.0);
         }
     }
 
@@ -163,7 +159,10 @@ impl SimDroidV1 {
     }
 
     /// One sensor frame; every M frames make a packet, for PCNT packets.
-    fn sample(&mut self, values: Vec<(&'static str, f32)>) {
+    fn sample(&mut self, mut values: Vec<(&'static str, f32)>) {
+        // Ollie streams its locator and velocity in its own axes (spherov2, see
+        // `v1::sensor::rotated_axes`).
+        v1::sensor::to_droid_axes(self.body.model(), &mut values);
         self.frames.push(values);
         if self.frames.len() < self.streaming.m.max(1) as usize {
             return;
@@ -213,8 +212,11 @@ impl SimDroidV1 {
                 vec![],
             );
         };
+        // Payloads real clients send besides the catalogue's are accepted as real droids
+        // accept them (fix: the simulator refused them with "bad message format", so
+        // spherov2.py could not get through its connect routine nor drive).
         if !schema::length_ok(def.params, p.data.len())
-            && !client_variant(p.did, p.cid, p.data.len())
+            && catalog::client_variant(p.did, p.cid, &p.data).is_none()
         {
             return (Mrsp::from_byte(0x06), vec![]);
         }
@@ -308,13 +310,35 @@ impl SimDroidV1 {
                 let speed = if d[3] == 0 { 0 } else { d[0] };
                 // spherov2.py's fifth byte: 1 backs up along the heading.
                 let reverse = d.get(4).is_some_and(|&r| r != 0);
+                // The control system takes the motors back.
+                self.raw_motors = (0.0, 0.0);
                 self.body.drive(speed, heading as f32, reverse);
                 ok
             }
-            // Set Raw Motors: the control system lets go; the simulation stops rolling.
+            // Set Raw Motors: [left mode, left power, right mode, right power]; modes 0 off,
+            // 1 forward, 2 reverse, 3 brake, 4 ignore (keep that side as it is). The control
+            // system lets go and the motors run open-loop: no stabilisation, each side at its
+            // power's share of top speed, the body turning by the difference of the two
+            // (fix, issue 32 point 3: the simulator stopped the body instead, so spherov2's
+            // `raw_motor` moved a v1 droid 0 cm).
             (0x02, 0x33) => {
-                self.body.drive(0, self.body.state.yaw_deg, false);
-                ok
+                let side = |mode: u8, power: u8, was: f32| match mode {
+                    0 | 3 => Some(0.0),
+                    1 => Some(power as f32 / 255.0),
+                    2 => Some(-(power as f32) / 255.0),
+                    4 => Some(was),
+                    _ => None,
+                };
+                let (was_l, was_r) = self.raw_motors;
+                match (side(d[0], d[1], was_l), side(d[2], d[3], was_r)) {
+                    (Some(l), Some(r)) => {
+                        self.raw_motors = (l, r);
+                        self.stabilization = false;
+                        self.body.drive_tracks(l, r);
+                        ok
+                    }
+                    _ => (Mrsp::from_byte(0x07), vec![]),
+                }
             }
             (0x02, 0x37) => {
                 self.option_flags = u32::from_be_bytes([d[0], d[1], d[2], d[3]]);

@@ -38,6 +38,8 @@ pub fn divisor_for(interval_ms: u16) -> u16 {
 pub struct V1Codec {
     decoder: Decoder,
     streaming: StreamingConfig,
+    /// The droid's model when known: Ollie's samples are turned to the room's axes.
+    model: Option<Model>,
 }
 
 impl V1Codec {
@@ -45,6 +47,16 @@ impl V1Codec {
         V1Codec {
             decoder: Decoder::new(Source::Droid),
             streaming: StreamingConfig::default(),
+            model: None,
+        }
+    }
+
+    /// The codec of a connection to `model`: an Ollie's locator and velocity are read in
+    /// the room's axes, as spherov2 reads them (`v1::sensor::rotated_axes`).
+    pub fn for_model(model: Model) -> Self {
+        V1Codec {
+            model: Some(model),
+            ..V1Codec::new()
         }
     }
 }
@@ -102,6 +114,17 @@ pub fn explain(
     }
 }
 
+/// A sample of `model` in the room's axes (an Ollie's turned back; the others as they came).
+fn room_axes(model: Option<Model>, n: v1::Notification) -> v1::Notification {
+    match (n, model) {
+        (v1::Notification::Sensors(mut s), Some(model)) => {
+            v1::sensor::from_droid_axes(model, &mut s.values);
+            v1::Notification::Sensors(s)
+        }
+        (n, _) => n,
+    }
+}
+
 impl Codec for V1Codec {
     fn protocol(&self) -> Protocol {
         Protocol::SpheroV1
@@ -137,6 +160,7 @@ impl Codec for V1Codec {
     }
 
     fn feed(&mut self, bytes: &[u8], out: &mut Vec<Incoming>) {
+        let model = self.model;
         for r in self.decoder.feed(bytes) {
             out.push(match r {
                 Err(e) => Incoming::Error(read::seam_error(e)),
@@ -156,7 +180,7 @@ impl Codec for V1Codec {
                         a.id_code == v1::catalog::id::SENSOR_DATA && !self.streaming.is_streaming();
                     let notifications = match v1::decode_async(&a, &self.streaming) {
                         _ if unknown_layout => Vec::new(),
-                        Ok(ns) => ns.into_iter().map(Ok).collect(),
+                        Ok(ns) => ns.into_iter().map(|n| Ok(room_axes(model, n))).collect(),
                         Err(e) => vec![Err(e)],
                     };
                     Incoming::Async {
@@ -239,6 +263,10 @@ impl Family for V1 {
 
     fn codec(&self) -> Box<dyn Codec> {
         Box::new(V1Codec::new())
+    }
+
+    fn codec_for(&self, model: Model) -> Box<dyn Codec> {
+        Box::new(V1Codec::for_model(model))
     }
 
     /// v1 droids wake at the GATT level (the wake sequence of `droid-facts.md` §4).

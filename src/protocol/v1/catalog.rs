@@ -190,6 +190,27 @@ catalogue! {
 
 static COMMANDS: LazyLock<CommandTable> = LazyLock::new(|| CommandTable::new(RAW_COMMANDS));
 
+/// Payloads real clients send besides the catalogue's, which real droids accept: spherov2.py
+/// (`commands/sphero.py`) turns the LEDs off with a 3-byte Set RGB LED (no persist flag) and
+/// rolls with a fifth byte, its reverse flag (`Sphero.roll(…, roll_mode, reverse_flag)`).
+/// The payload read as the catalogue's fields that it carries, plus the reverse flag; `None`
+/// for any other payload.
+pub fn client_variant(did: u8, cid: u8, data: &[u8]) -> Option<crate::protocol::value::Fields> {
+    let def = lookup(did, cid)?;
+    match (did, cid, data) {
+        (0x02, 0x20, [_, _, _]) => decode_fields(&def.params[..3], data).ok(),
+        (0x02, 0x30, [head @ .., reverse]) if head.len() == 4 => {
+            let mut f = decode_fields(def.params, head).ok()?;
+            f.push((
+                "reverse",
+                crate::protocol::value::Value::Bool(*reverse != 0),
+            ));
+            Some(f)
+        }
+        _ => None,
+    }
+}
+
 /// Every command, in table order.
 pub fn commands() -> &'static [CommandDef] {
     COMMANDS.commands()

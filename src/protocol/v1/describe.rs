@@ -68,7 +68,13 @@ pub fn describe(
         Packet::Command(c) => match catalog::lookup(c.did, c.cid) {
             Some(def) => {
                 d.name = Some(def.name.as_str());
-                decode(&mut d, def.params, &c.data);
+                // A payload of a real client's own (spherov2's Roll with its reverse byte)
+                // reads as the fields it carries (fix, issue 32: the virtual BlueZ's trace
+                // and `packet decode` showed spherov2's every Roll without fields).
+                match catalog::client_variant(c.did, c.cid, &c.data) {
+                    Some(f) => d.fields = Some(f),
+                    None => decode(&mut d, def.params, &c.data),
+                }
             }
             None => {
                 d.problem = Some(format!(

@@ -307,8 +307,82 @@ fn to_raw(v: f32) -> i16 {
     v.round() as i16
 }
 
+/// Whether `model` streams its locator and velocity in its own axes, a quarter turn from the
+/// other v1 droids': Ollie.
+///
+/// Source: spherov2.py (`controls/v1.py`, `SensorControl`), which for robots named `2B-`
+/// (Ollie) reads the streamed locator and velocity as (x, y) = (−y, x); it came with its
+/// Ollie support (commit 276590a, "implements Sphero 2.0, Ollie, and BB-8", 2020-07-08) and
+/// is kept to this day. Sphero's v1 documents (API 1.50, the locator note) describe the
+/// locator for Sphero alone and say nothing of Ollie; sphero.js, gobot and cylon-ollie pass
+/// the odometer through unchanged for every model, so they neither confirm nor refute it.
+/// spherov2 is the field's reference and the only client that treats Ollie apart, so
+/// droidctl takes its word: an Ollie rolling east (+x) streams (0, −d), rolling north (d, 0).
+pub fn rotated_axes(model: crate::model::Model) -> bool {
+    model == crate::model::Model::Ollie
+}
+
+/// The locator and velocity pairs a rotated-axes droid streams.
+const AXIS_PAIRS: [(&str, &str); 2] = [("locator_x", "locator_y"), ("velocity_x", "velocity_y")];
+
+/// Turn each pair of `values` by `f` (x, y) → (x', y'), where both are present.
+fn turn_pairs(values: &mut [(&'static str, f32)], f: impl Fn(f32, f32) -> (f32, f32)) {
+    for (xn, yn) in AXIS_PAIRS {
+        let xi = values.iter().position(|(n, _)| *n == xn);
+        let yi = values.iter().position(|(n, _)| *n == yn);
+        if let (Some(xi), Some(yi)) = (xi, yi) {
+            let (x, y) = f(values[xi].1, values[yi].1);
+            values[xi].1 = x;
+            values[yi].1 = y;
+        }
+    }
+}
+
+/// What `model` streams for room-axes values (x east, y north): unchanged for BB-8 and
+/// SPRK+, turned for Ollie ([`rotated_axes`]): (x, y) → (y, −x). The simulator's side.
+pub fn to_droid_axes(model: crate::model::Model, values: &mut [(&'static str, f32)]) {
+    if rotated_axes(model) {
+        turn_pairs(values, |x, y| (y, -x));
+    }
+}
+
+/// The room axes of what `model` streamed: Ollie's (x, y) → (−y, x), as spherov2 reads it;
+/// the inverse of [`to_droid_axes`]. The host's side.
+pub fn from_droid_axes(model: crate::model::Model, values: &mut [(&'static str, f32)]) {
+    if rotated_axes(model) {
+        turn_pairs(values, |x, y| (-y, x));
+    }
+}
+
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn ollie_streams_its_locator_a_quarter_turn_round_and_is_read_back() {
+        use crate::model::Model;
+        // Rolled 30 cm east (+x) at 50 cm/s.
+        let room = vec![
+            ("locator_x", 30.0),
+            ("locator_y", 0.0),
+            ("velocity_x", 50.0),
+            ("velocity_y", 0.0),
+            ("yaw", 90.0),
+        ];
+        let mut wire = room.clone();
+        super::to_droid_axes(Model::Ollie, &mut wire);
+        // spherov2's reading of it, (x, y) = (−y, x), is east again.
+        assert_eq!(&wire[..2], &[("locator_x", 0.0), ("locator_y", -30.0)]);
+        assert_eq!(wire[4], ("yaw", 90.0), "only locator and velocity turn");
+        let mut back = wire.clone();
+        super::from_droid_axes(Model::Ollie, &mut back);
+        assert_eq!(back, room);
+        for m in [Model::BB8, Model::SprkPlus] {
+            let mut same = room.clone();
+            super::to_droid_axes(m, &mut same);
+            super::from_droid_axes(m, &mut same);
+            assert_eq!(same, room, "{m:?}");
+        }
+    }
+
     use super::*;
 
     #[test]
