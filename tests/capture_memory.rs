@@ -192,3 +192,83 @@ fn feed_with_allocates_nothing_per_packet() {
         192 * 500
     );
 }
+
+/// A crafted capture of several droids (issue 27 point 3): 64 droids listed, then lines about
+/// a droid not listed and lines naming no droid. Their warnings are counted and summarised,
+/// nothing is copied per droid, and memory stays small (it was 325 MB for 1 MB of lines).
+#[test]
+fn a_crafted_fleet_capture_stays_small() {
+    use droidctl::capture::fleet;
+    let mut text = String::from("droidctl-capture 2\n# droids: 64\n");
+    for k in 1..=64 {
+        text += &format!("# droid-{k}: r2d2 v2 D2-{k:04}\n");
+    }
+    let n = 60_000;
+    for _ in 0..n {
+        text += "@99 0.000 connect\n";
+    }
+    for _ in 0..n {
+        text += "0.000 in notify 8d\n";
+    }
+    let (split, peak, _) = measure(|| fleet::read(&text).unwrap());
+    assert_eq!(split.droids.len(), 64);
+    assert!(split.droids.iter().all(|c| c.events.is_empty()));
+    // Said once, summarised: the first few, then a count.
+    assert!(split.warnings.len() <= droidctl::capture::KEPT_WARNINGS + 1);
+    let last = split.warnings.last().unwrap();
+    assert!(last.contains(&format!("{} in all", 2 * n)), "{last}");
+    assert!(
+        split.droids.iter().all(|c| c.warnings.is_empty()),
+        "nothing per droid"
+    );
+    assert!(
+        peak < 512 * 1024,
+        "peak {peak} bytes for a {} byte file",
+        text.len()
+    );
+    // The same for one droid's bad lines: kept to a dozen.
+    let mut bad = String::from("droidctl-capture 2\n# droid-1: r2d2 v2 D2-0001\n");
+    for _ in 0..n {
+        bad += "@1 not-a-time connect\n";
+    }
+    let split = fleet::read(&bad).unwrap();
+    assert!(split.droids[0].warnings.len() <= droidctl::capture::KEPT_WARNINGS + 2);
+}
+
+/// One huge chunk (issue 27 point 4): a line of 1 MiB of `8d` bytes made replay use 313 MB.
+/// Chunks beyond [`droidctl::capture::MAX_CHUNK`] are a counted, visible warning.
+#[test]
+fn one_huge_chunk_is_a_warning_not_150_times_its_size() {
+    use droidctl::capture::Capture;
+    let mut text =
+        String::from("droidctl-capture 1\n# model: r2d2\n0.000 connect\n1000.000 in notify ");
+    text += &"8d".repeat(1 << 20);
+    text += "\n2000.000 in notify 8d\n3000.000 end\n";
+    let ((capture, samples), peak, _) = measure(|| {
+        let c = Capture::from_text(&text).unwrap();
+        let mut n = 0;
+        droidctl::capture::replay::samples(
+            &c,
+            droidctl::model::Model::R2D2,
+            std::time::Duration::from_millis(100),
+            &mut |_| {
+                n += 1;
+                Ok(())
+            },
+            &mut |_, _| {},
+        )
+        .unwrap();
+        (c, n)
+    });
+    assert!(samples > 20);
+    assert_eq!(capture.events.len(), 3, "the huge chunk is skipped");
+    assert!(
+        capture
+            .warnings
+            .iter()
+            .any(|w| w.starts_with("line 4:") && w.contains("1048576 bytes")),
+        "{:?}",
+        capture.warnings
+    );
+    assert!(peak < 1 << 20, "peak {peak} bytes");
+}

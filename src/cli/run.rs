@@ -248,9 +248,8 @@ pub async fn run_recorded(
                     printer.stdout(|w| writeln!(w, "{}", sample_line(&s)));
                 }
             }
-            MissionEvent::Step { t_ms, line, text } if !json => printer.stdout(|w| {
-                writeln!(w, "[{:>8.2}s] line {line}: {text}", t_ms as f64 / 1000.0)
-            }),
+            MissionEvent::Step { t_ms, line, text } if !json => printer
+                .stdout(|w| writeln!(w, "[{:>8.2}s] line {line}: {text}", t_ms as f64 / 1000.0)),
             MissionEvent::Step { .. } => {}
             MissionEvent::Warning {
                 t_ms,

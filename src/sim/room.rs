@@ -212,7 +212,10 @@ mod tests {
             let o = SharedRoom::origins(n);
             assert_eq!(o.len(), n);
             for p in &o {
-                assert!(p.0.abs() <= half + 1e-3 && p.1.abs() <= half + 1e-3, "{n}: {p:?}");
+                assert!(
+                    p.0.abs() <= half + 1e-3 && p.1.abs() <= half + 1e-3,
+                    "{n}: {p:?}"
+                );
             }
             let closest = o
                 .iter()
