@@ -55,16 +55,20 @@ fn closed_pipe_ends_the_mission(name: &str, sims: &str) {
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
-    // Read until the droid is moving (`| head`), then go away.
+    // Read until every droid is moving (`| head`), then go away.
+    let droids = sims.split(',').count();
+    let mut moving = std::collections::BTreeSet::new();
     let mut lines = BufReader::new(child.stdout.take().unwrap()).lines();
-    let moving = lines.by_ref().take(2000).any(|l| {
-        let l = l.unwrap();
-        serde_json::from_str::<serde_json::Value>(&l)
-            .ok()
-            .and_then(|v| v["speed"].as_f64())
-            .is_some_and(|s| s > 20.0)
-    });
-    assert!(moving, "the droid never moved");
+    for l in lines.by_ref().take(5000) {
+        let v: serde_json::Value = serde_json::from_str(&l.unwrap()).unwrap();
+        if v["speed"].as_f64().is_some_and(|s| s > 20.0) {
+            moving.insert(v["droid"].as_str().unwrap_or("").to_string());
+        }
+        if moving.len() == droids {
+            break;
+        }
+    }
+    assert_eq!(moving.len(), droids, "every droid moved: {moving:?}");
     drop(lines);
     let o = child.wait_with_output().unwrap();
     let err = stderr(&o);

@@ -58,7 +58,8 @@ pub fn tracks(
         .map_err(|e| CliError::failure(format!("cannot read {name}: {e}")))?
         .to_vec();
     let mut tracks = crate::plot::track::Tracks::new(channels);
-    if first.iter().all(u8::is_ascii_whitespace) {
+    let whole = std::fs::metadata(file).is_ok_and(|m| m.len() <= first.len() as u64);
+    if whole && first.iter().all(u8::is_ascii_whitespace) {
         // Empty: nothing to plot (exit 1 below), not bad input.
         return Ok(tracks);
     }
@@ -73,7 +74,7 @@ pub fn tracks(
         interval: std::time::Duration::from_millis(args.interval),
         model,
     };
-    let mut reopen = || open();
+    let mut reopen = open;
     let r = match read::kind(&first) {
         Some(Kind::Json) => read::json(head, &name, &mut tracks),
         Some(Kind::Capture) => read::capture(&mut reopen, &name, opts, &mut tracks),
