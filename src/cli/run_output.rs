@@ -79,9 +79,11 @@ impl RunOutput {
     }
 
     fn csv_failed(&self, e: std::io::Error) {
-        let message = format!("--csv: {e}; the file is incomplete");
-        note(format_args!("droidctl: {message}"));
-        *lock(&self.csv_error) = Some(message);
+        // Said at once (a real mission may go on for long); the exit status says it again.
+        note(format_args!(
+            "droidctl: --csv: {e}; no more rows are written"
+        ));
+        *lock(&self.csv_error) = Some(format!("--csv: the file is incomplete ({e})"));
     }
 
     /// Resolves once stdout has failed (the mission ends: the droid is stopped).
