@@ -174,6 +174,23 @@ fn codec(c: &mut Criterion) {
     if let Some(path) = std::env::var_os("DROIDCTL_CODEC_STREAM") {
         std::fs::write(&path, &stream).expect("write the stream");
     }
+    // Only the full-mask sensor notifications (half of the mixed stream), and the masks
+    // `packet decode --sensor-mask M --ext-mask E` decodes them with (issue 27 point 10:
+    // `benches/spherov2_compare.sh` times `packet decode --json` on them against spherov2).
+    if let Some(path) = std::env::var_os("DROIDCTL_SENSOR_STREAM") {
+        let sensors: Vec<u8> = packets
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| i % 10 < 5)
+            .flat_map(|(_, p)| p.encode())
+            .collect();
+        std::fs::write(&path, &sensors).expect("write the sensor stream");
+        let cfg = StreamingConfig::full(150);
+        let masks = format!("0x{:08X} 0x{:08X}\n", cfg.mask, cfg.ext_mask);
+        let mut masks_path = path.clone();
+        masks_path.push(".masks");
+        std::fs::write(masks_path, masks).expect("write the masks");
+    }
 
     let mut group = c.benchmark_group("v2");
     group.throughput(Throughput::Bytes(stream.len() as u64));

@@ -21,7 +21,9 @@ stream=$work/stream.bin
 
 echo "building (release) and measuring droidctl's decoder with criterion..."
 cargo build --release -q
-bench_out=$(DROIDCTL_CODEC_STREAM="$PWD/$stream" cargo bench -q --bench codec -- \
+sensors=$work/sensors.bin
+bench_out=$(DROIDCTL_CODEC_STREAM="$PWD/$stream" DROIDCTL_SENSOR_STREAM="$PWD/$sensors" \
+  cargo bench -q --bench codec -- \
   --warm-up-time 1 --measurement-time 3 'v2/decode_borrowed$' 2>&1)
 # criterion: "thrpt:  [low MiB/s  median MiB/s  high MiB/s]"
 rust_mibs=$(echo "$bench_out" | awk '/thrpt:/ {gsub(/\[/, ""); print $4; exit}')
@@ -78,6 +80,38 @@ took = time.perf_counter() - start
 print(f"{reps * len(data) / took / 1e6:.4f} {count[0] // reps} {reps * len(data)} {took:.3f}")
 EOF
 )
+  # Full-mask sensor notifications only (issue 27 point 10): `packet decode --json` on a
+  # large file of them, packets/s, against spherov2's bare parser on the same stream.
+  read -r mask ext < "$sensors.masks"
+  sbig=$work/sensors-big.bin
+  sreps=$((64000000 / $(stat -c %s "$sensors") + 1))
+  for _ in $(seq "$sreps"); do cat "$sensors"; done > "$sbig"
+  cat "$sbig" > /dev/null
+  spackets=$(target/release/droidctl packet decode --file "$sbig" --json --sensor-mask "$mask" --ext-mask "$ext" | wc -l)
+  stiming=$( { /usr/bin/time -f '%e %M' target/release/droidctl packet decode --file "$sbig" --json --sensor-mask "$mask" --ext-mask "$ext" > /dev/null; } 2>&1 )
+  ssecs=$(echo "$stiming" | tail -n1 | awk '{print $1}')
+  srss=$(echo "$stiming" | tail -n1 | awk '{print $2}')
+  read -r py_spps < <("$venv/bin/python" - "$sensors" <<'EOF'
+import sys, time
+from spherov2.controls.v2 import Packet
+data = open(sys.argv[1], 'rb').read()
+reps = max(1, int(4e6 // len(data)))
+count = [0]
+def counted(packet):
+    count[0] += 1
+collector = Packet.Collector(counted)
+start = time.perf_counter()
+for _ in range(reps):
+    collector.add(data)
+took = time.perf_counter() - start
+print(f"{count[0] / took:.0f}")
+EOF
+)
+  rust_spps=$(echo "$spackets / $ssecs" | bc -l)
+  printf 'full-mask sensor notifications: droidctl packet decode --json, %d packets: %8.0f packets/s (peak RSS %.1f MiB)\n' \
+    "$spackets" "$rust_spps" "$(echo "$srss / 1024" | bc -l)"
+  printf 'full-mask sensor notifications: spherov2.py Packet.Collector:              %8.0f packets/s\n' "$py_spps"
+  printf 'ratio (packet decode --json / spherov2 parser) = %.1fx\n' "$(echo "$rust_spps / $py_spps" | bc -l)"
   printf 'spherov2.py %s Packet.Collector (Python %s, %s MB):   %8.3f MB/s (%s packets per stream)\n' \
     "$sv2_version" "$pyver" "$((py_bytes / 1000000))" "$py_mbs" "$py_packets"
   printf 'ratio: droidctl decoder / spherov2.py = %.0f×; droidctl CLI / spherov2.py = %.0f×\n' \

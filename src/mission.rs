@@ -10,7 +10,7 @@ use crate::protocol::notify::Notification;
 use crate::protocol::wire::{LegAction, LegState};
 use crate::script::{Action, Step};
 use crate::session::{LinkState, SessionEvent, SessionHandle, Slot};
-use crate::telemetry::Telemetry;
+use crate::telemetry::{Stance, Telemetry};
 use crate::units::Heading;
 use serde::Serialize;
 use std::sync::{Arc, Mutex};
@@ -311,6 +311,68 @@ impl Runner {
         }
     }
 
+    /// R2-D2 and R2-Q5 roll only in tripod, and wake on two legs: a drive on two legs would
+    /// do nothing, silently (issue 26 point 9). As the app does, the mission puts the droid
+    /// in tripod first, saying so (a note on stderr, and a step `stance tripod` of the same
+    /// line, which a recording marks so replay sees the stance change when it came). The
+    /// stance is read from the droid when the mission does not know it yet.
+    async fn ensure_tripod(&mut self, line: usize) {
+        if !self.model.has_legs() || self.family.steers() {
+            return;
+        }
+        let mut known = lock(&self.telemetry).stance;
+        if known == Stance::Unknown
+            && let Some(c) = self.family.get_stance()
+            && let Ok(p) = self.session.request(c).await
+            && let Some(s) = p.data().first().and_then(|b| LegState::from_byte(*b))
+        {
+            known = Stance::from_state(s);
+            let mut t = lock(&self.telemetry);
+            if t.stance == Stance::Unknown {
+                t.stance = known;
+            }
+        }
+        // On its way to tripod: the mission's own `stance tripod`, already waited for.
+        if matches!(
+            known,
+            Stance::Tripod | Stance::Transitioning(LegState::Tripod)
+        ) {
+            return;
+        }
+        let what = match known {
+            Stance::Unknown => "its stance is unknown".to_string(),
+            other => format!("it stands in {}", other.label()),
+        };
+        (self.emit)(MissionEvent::Warning {
+            t_ms: self.t_ms(),
+            line: Some(line),
+            message: format!(
+                "{} rolls only in tripod and {what}: putting it in tripod first",
+                self.model.display_name()
+            ),
+        });
+        (self.emit)(MissionEvent::Step {
+            t_ms: self.t_ms(),
+            line,
+            text: "stance tripod".into(),
+        });
+        self.stance(line, LegAction::Tripod).await;
+    }
+
+    /// A stance change, waited for (bounded).
+    async fn stance(&mut self, line: usize, a: LegAction) {
+        self.driving = None;
+        lock(&self.telemetry).stance_requested(a);
+        // Subscribe fresh so an old completion is not taken for this one.
+        self.events = self.events.resubscribe();
+        if let Some(c) = self.family.stance(a)
+            && self.request(line, c).await
+            && a != LegAction::Stop
+        {
+            self.await_stance().await;
+        }
+    }
+
     async fn step(&mut self, s: &Step) {
         (self.emit)(MissionEvent::Step {
             t_ms: self.t_ms(),
@@ -337,23 +399,15 @@ impl Runner {
                     self.request(s.line, c).await;
                 }
             }
-            Action::Stance(a) => {
-                self.driving = None;
-                lock(&self.telemetry).stance_requested(*a);
-                // Subscribe fresh so an old completion is not taken for this one.
-                self.events = self.events.resubscribe();
-                if let Some(c) = self.family.stance(*a)
-                    && self.request(s.line, c).await
-                    && *a != LegAction::Stop
-                {
-                    self.await_stance().await;
-                }
-            }
+            Action::Stance(a) => self.stance(s.line, *a).await,
             Action::Drive {
                 speed,
                 heading,
                 duration,
             } => {
+                if *speed > 0 {
+                    self.ensure_tripod(s.line).await;
+                }
                 self.last_heading = *heading;
                 self.session
                     .set(Slot::Drive, self.drive_cmd(*speed, *heading));
@@ -622,8 +676,8 @@ impl DroidMission {
                     && let Some(s) = p.data().first().and_then(|b| LegState::from_byte(*b))
                 {
                     let mut t = lock(&telemetry);
-                    if t.stance == crate::telemetry::Stance::Unknown {
-                        t.stance = crate::telemetry::Stance::from_state(s);
+                    if t.stance == Stance::Unknown {
+                        t.stance = Stance::from_state(s);
                     }
                 }
                 let Some(battery) = family.battery_request_for(model) else {

@@ -46,7 +46,7 @@ fn a_program_drives_a_simulated_droid_through_a_pipe() {
     std::fs::create_dir_all(&dir).unwrap();
     let mut child = Command::new(env!("CARGO_BIN_EXE_droidctl"))
         .args(["bridge", "--stdio", "--sim", "r2d2", "--rate", "20"])
-        .env("DROIDCTL_CONFIG", dir.join("none.toml"))
+        .env("DROIDCTL_CONFIG", "/dev/null")
         .env("RUST_BACKTRACE", "1")
         .stdin(Stdio::piped())
         .stdout(Stdio::piped())

@@ -37,7 +37,7 @@ impl BridgeProc {
         let child = Command::new(env!("CARGO_BIN_EXE_droidctl"))
             .arg("bridge")
             .args(args)
-            .env("DROIDCTL_CONFIG", dir.join("none.toml"))
+            .env("DROIDCTL_CONFIG", "/dev/null")
             .env("RUST_BACKTRACE", "1")
             .stdin(Stdio::null())
             .stdout(Stdio::null())

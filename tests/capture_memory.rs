@@ -192,3 +192,142 @@ fn feed_with_allocates_nothing_per_packet() {
         192 * 500
     );
 }
+
+/// A crafted capture of several droids (issue 27 point 3): 64 droids listed, then lines about
+/// a droid not listed and lines naming no droid. Their warnings are counted and summarised,
+/// nothing is copied per droid, and memory stays small (it was 325 MB for 1 MB of lines).
+#[test]
+fn a_crafted_fleet_capture_stays_small() {
+    use droidctl::capture::fleet;
+    let mut text = String::from("droidctl-capture 2\n# droids: 64\n");
+    for k in 1..=64 {
+        text += &format!("# droid-{k}: r2d2 v2 D2-{k:04}\n");
+    }
+    let n = 60_000;
+    for _ in 0..n {
+        text += "@99 0.000 connect\n";
+    }
+    for _ in 0..n {
+        text += "0.000 in notify 8d\n";
+    }
+    let (split, peak, _) = measure(|| fleet::read(&text).unwrap());
+    assert_eq!(split.droids.len(), 64);
+    // The first lines without `@K` are every droid's (as the recorder's `end` is); no more.
+    let shared = droidctl::capture::fleet::MAX_SHARED;
+    assert!(split.droids.iter().all(|c| c.events.len() == shared));
+    // Said once, summarised: the first few, then a count.
+    assert!(split.warnings.len() <= droidctl::capture::KEPT_WARNINGS + 1);
+    let last = split.warnings.last().unwrap();
+    assert!(
+        last.contains(&format!("{} in all", 2 * n - shared)),
+        "{last}"
+    );
+    // Each droid: at most its missing `end`.
+    assert!(
+        split.droids.iter().all(|c| c.warnings.len() <= 1),
+        "nothing per droid"
+    );
+    assert!(
+        peak < 512 * 1024,
+        "peak {peak} bytes for a {} byte file",
+        text.len()
+    );
+    // The same for one droid's bad lines: kept to a dozen.
+    let mut bad = String::from("droidctl-capture 2\n# droid-1: r2d2 v2 D2-0001\n");
+    for _ in 0..n {
+        bad += "@1 not-a-time connect\n";
+    }
+    let split = fleet::read(&bad).unwrap();
+    assert!(split.droids[0].warnings.len() <= droidctl::capture::KEPT_WARNINGS + 2);
+}
+
+/// One huge chunk (issue 27 point 4): a line of 1 MiB of `8d` bytes made replay use 313 MB.
+/// Chunks beyond [`droidctl::capture::MAX_CHUNK`] are a counted, visible warning.
+#[test]
+fn one_huge_chunk_is_a_warning_not_150_times_its_size() {
+    use droidctl::capture::Capture;
+    let mut text =
+        String::from("droidctl-capture 1\n# model: r2d2\n0.000 connect\n1000.000 in notify ");
+    text += &"8d".repeat(1 << 20);
+    text += "\n2000.000 in notify 8d\n3000.000 end\n";
+    let ((capture, samples), peak, _) = measure(|| {
+        let c = Capture::from_text(&text).unwrap();
+        let mut n = 0;
+        droidctl::capture::replay::samples(
+            &c,
+            droidctl::model::Model::R2D2,
+            std::time::Duration::from_millis(100),
+            &mut |_| {
+                n += 1;
+                Ok(())
+            },
+            &mut |_, _| {},
+        )
+        .unwrap();
+        (c, n)
+    });
+    assert!(samples > 20);
+    assert_eq!(capture.events.len(), 3, "the huge chunk is skipped");
+    assert!(
+        capture
+            .warnings
+            .iter()
+            .any(|w| w.starts_with("line 4:") && w.contains("1048576 bytes")),
+        "{:?}",
+        capture.warnings
+    );
+    assert!(peak < 1 << 20, "peak {peak} bytes");
+}
+
+/// `plot` streams and reduces (issue 27 point 6: 10 M samples took 3.5 GB): 300,000
+/// samples of a fleet's `run --json`, generated as they are read, fit in a few MB.
+#[test]
+fn plot_reads_any_number_of_samples_in_flat_memory() {
+    use droidctl::plot::read;
+    use droidctl::plot::track::Tracks;
+    struct Lines {
+        i: u64,
+        n: u64,
+        buf: Vec<u8>,
+    }
+    impl Read for Lines {
+        fn read(&mut self, out: &mut [u8]) -> std::io::Result<usize> {
+            if self.buf.is_empty() {
+                if self.i == self.n {
+                    return Ok(0);
+                }
+                let i = self.i;
+                self.i += 1;
+                let droid = ["D2-0001", "BB-0002"][(i % 2) as usize];
+                self.buf = format!(
+                    "{{\"droid\":\"{droid}\",\"t_ms\":{},\"x_cm\":{},\"y_cm\":{},\"speed\":{},\"heading\":90,\"head_deg\":null,\"stance\":\"tripod\",\"battery_v\":4.1,\"collisions\":{},\"yaw_deg\":{}}}\n",
+                    i * 50,
+                    (i % 1000) as f32 * 0.3,
+                    (i % 777) as f32 * -0.2,
+                    (i % 255) as f32,
+                    i / 1000,
+                    ((i % 360) as f32) - 180.0
+                )
+                .into_bytes();
+            }
+            let n = out.len().min(self.buf.len());
+            out[..n].copy_from_slice(&self.buf[..n]);
+            self.buf.drain(..n);
+            Ok(n)
+        }
+    }
+    let n = 300_000;
+    let (tracks, peak, _) = measure(|| {
+        let mut tracks = Tracks::new(&[]);
+        let input = std::io::BufReader::new(Lines {
+            i: 0,
+            n,
+            buf: Vec::new(),
+        });
+        read::json(input, "gen.jsonl", &mut tracks).unwrap();
+        tracks
+    });
+    assert_eq!(tracks.samples(), n);
+    assert_eq!(tracks.droids.len(), 2);
+    assert!(peak < 8 << 20, "peak {peak} bytes for {n} samples");
+}

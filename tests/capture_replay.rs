@@ -325,7 +325,7 @@ fn a_killed_recording_is_readable_up_to_the_last_flush() {
     let mut cmd = CommandBuilder::new(env!("CARGO_BIN_EXE_droidctl"));
     cmd.args(["drive", "--sim", "--record", capture.to_str().unwrap()]);
     cmd.env("DROIDCTL_LOG_FILE", dir.join("log"));
-    cmd.env("DROIDCTL_CONFIG", dir.join("config.toml"));
+    cmd.env("DROIDCTL_CONFIG", "/dev/null");
     cmd.env("TERM", "xterm-256color");
     let mut child = pty.slave.spawn_command(cmd).expect("spawn");
     // Keep the terminal's output flowing.

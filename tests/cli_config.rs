@@ -124,3 +124,23 @@ fn context_bindings_are_checked_with_their_line() {
         &["config.toml:5: key `keys.replay.step`", "replay.forward"],
     );
 }
+
+#[test]
+fn droidctl_config_naming_a_missing_file_is_an_error() {
+    let d = tmp("missing");
+    let out = droidctl(&d, &["config", "check"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(!String::from_utf8_lossy(&out.stdout).contains("ok"));
+    assert!(
+        err.contains("droidctl/config.toml") && err.contains("no such file"),
+        "{err}"
+    );
+    // /dev/null asks for the defaults.
+    let out = Command::new(env!("CARGO_BIN_EXE_droidctl"))
+        .args(["config", "check"])
+        .env("DROIDCTL_CONFIG", "/dev/null")
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+}

@@ -69,7 +69,7 @@ impl Tui {
         cmd.args(args);
         cmd.env("TERM", "xterm-256color");
         cmd.env("DROIDCTL_LOG_FILE", dir.0.join("droidctl.log"));
-        cmd.env("DROIDCTL_CONFIG", dir.0.join("config.toml"));
+        cmd.env("DROIDCTL_CONFIG", "/dev/null");
         for (k, v) in env {
             cmd.env(k, v);
         }

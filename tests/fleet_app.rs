@@ -366,7 +366,7 @@ async fn a_fleet_capture_replays_every_droid_together() {
         ])
         .arg(&capture)
         .env("DROIDCTL_LOG_FILE", dir.join("log"))
-        .env("DROIDCTL_CONFIG", dir.join("config.toml"))
+        .env("DROIDCTL_CONFIG", "/dev/null")
         .output()
         .unwrap();
     assert!(

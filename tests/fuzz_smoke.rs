@@ -73,6 +73,16 @@ fn capture() {
 }
 
 #[test]
+fn fleet_capture() {
+    smoke("fleet_capture", 1000);
+}
+
+#[test]
+fn plot() {
+    smoke("plot", 500);
+}
+
+#[test]
 fn script() {
     smoke("script", 4000);
 }

@@ -322,14 +322,14 @@ fn plot_draws_the_path_where_the_telemetry_says() {
         .filter(|j| j.get("done").is_none())
         .map(|j| serde_json::from_value(serde_json::Value::Object(j)).unwrap())
         .collect();
-    let run = droidctl::plot::Run {
-        title: "run.jsonl".into(),
-        samples: samples.clone(),
-        channels: vec![
+    let run = droidctl::plot::Run::of_samples(
+        "run.jsonl",
+        &samples,
+        &[
             droidctl::telemetry::history::Channel::Speed,
             droidctl::telemetry::history::Channel::GyroZ,
         ],
-    };
+    );
     let frame = droidctl::plot::png(&run, (900, 700), std::io::sink()).unwrap();
     let path_colour = [
         droidctl::plot::PATH.0,

@@ -21,7 +21,7 @@ fn check(args: &[&str]) {
     let out = Command::new(env!("CARGO_BIN_EXE_droidctl"))
         .args(&args)
         .env("DROIDCTL_LOG_FILE", dir.join("log"))
-        .env("DROIDCTL_CONFIG", dir.join("config.toml"))
+        .env("DROIDCTL_CONFIG", "/dev/null")
         .env(
             "DBUS_SYSTEM_BUS_ADDRESS",
             "unix:path=/nonexistent/droidctl-test-bus",

@@ -152,7 +152,7 @@ fn droidctl(args: &[&str], dir: &TempDir) -> Output {
         .args(args)
         .stdin(Stdio::null())
         .env("DROIDCTL_LOG_FILE", dir.path("droidctl.log"))
-        .env("DROIDCTL_CONFIG", dir.path("config.toml"))
+        .env("DROIDCTL_CONFIG", "/dev/null")
         // No Bluetooth is needed for any of this.
         .env(
             "DBUS_SYSTEM_BUS_ADDRESS",
@@ -433,7 +433,7 @@ fn the_app_drives_through_the_relay() {
     let dir = TempDir::new("app");
     let serve = Serve::start(&["r2d2"], &[], &dir);
     let log = dir.path("app.log");
-    let config = dir.path("config.toml");
+    let config = "/dev/null".to_string();
     let mut tui = pty::Tui::start(
         &["--remote", &serve.address, "--name", "D2-0001"],
         &[

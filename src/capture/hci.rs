@@ -399,6 +399,15 @@ impl Decoder {
             // A handle given by hand is read as a command channel.
             Role::Given => CharRole::Channel,
         };
+        if v.len() > super::MAX_CHUNK {
+            self.warn(format!(
+                "an ATT value of {} bytes on handle 0x{handle:04X} at {:.3} s: real chunks are at most 512 (the limit is {}); skipped",
+                v.len(),
+                at.as_secs_f64(),
+                super::MAX_CHUNK
+            ));
+            return;
+        }
         let event = match (role, write) {
             (CharRole::Channel, true) => Event::Out(Endpoint::Api, v.to_vec()),
             (CharRole::Channel | CharRole::ReadValue, false) => Event::In(v.to_vec()),

@@ -60,6 +60,50 @@ use std::time::Duration;
 pub const MAGIC: &str = "droidctl-capture";
 pub const VERSION: u32 = 1;
 
+/// The largest chunk a capture may hold, in bytes. Real ones are at most 512 (an ATT value:
+/// a BLE write or notification); a line claiming more is damage or a crafted file, and one
+/// such line of 1 MiB made replay build 150 times its size in decode errors (issue 27
+/// point 4). Larger chunks are a counted, visible warning, and skipped.
+pub const MAX_CHUNK: usize = 1024;
+
+/// Problems met reading a file, bounded: the first [`KEPT_WARNINGS`] word for word, the rest
+/// counted (a crafted file of a million bad lines gives a dozen lines, not a million).
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct Warnings {
+    kept: Vec<String>,
+    more: usize,
+}
+
+/// How many warnings a file keeps word for word.
+pub const KEPT_WARNINGS: usize = 10;
+
+impl Warnings {
+    pub fn push(&mut self, w: String) {
+        if self.kept.len() < KEPT_WARNINGS {
+            self.kept.push(w);
+        } else {
+            self.more += 1;
+        }
+    }
+
+    /// How many there were in all.
+    pub fn count(&self) -> usize {
+        self.kept.len() + self.more
+    }
+
+    /// The lines to show: the first ones, then how many more there were.
+    pub fn into_lines(mut self) -> Vec<String> {
+        if self.more > 0 {
+            self.kept.push(format!(
+                "… and {} more warning(s) like these ({} in all)",
+                self.more,
+                self.count()
+            ));
+        }
+        self.kept
+    }
+}
+
 /// Which way a chunk went.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Dir {
@@ -228,6 +272,13 @@ impl TextReader {
         bytes.starts_with(MAGIC.as_bytes())
     }
 
+    /// [`TextReader::line`] for line `n` of a file this reader sees only some lines of (a
+    /// droid's lines of a capture of several droids): messages give the file's line.
+    pub fn line_at(&mut self, n: usize, text: &str) -> Result<Line, LineError> {
+        self.line = n.saturating_sub(1).max(1);
+        self.line(text)
+    }
+
     pub fn line(&mut self, text: &str) -> Result<Line, LineError> {
         self.line += 1;
         let err = |message: String| LineError {
@@ -268,14 +319,14 @@ impl TextReader {
                     "model" => {
                         self.header.model = Some(
                             Model::from_id(&v)
-                                .ok_or_else(|| err(format!("unknown model {v:?}")))?,
+                                .ok_or_else(|| err(format!("unknown model {:?}", shown(&v))))?,
                         )
                     }
                     "family" => {
                         self.header.family = Some(
                             crate::family::by_name(&v)
                                 .map(|f| f.protocol())
-                                .ok_or_else(|| err(format!("unknown family {v:?}")))?,
+                                .ok_or_else(|| err(format!("unknown family {:?}", shown(&v))))?,
                         )
                     }
                     "droid" => self.header.droid = Some(v),
@@ -287,7 +338,7 @@ impl TextReader {
         }
         self.in_header = false;
         let (t, rest) = text.split_once(' ').unwrap_or((text, ""));
-        let at = parse_time(t).ok_or_else(|| err(format!("{t:?} is not a time in ms")))?;
+        let at = parse_time(t).ok_or_else(|| err(format!("{:?} is not a time in ms", shown(t))))?;
         if at < self.last {
             return Err(err(format!(
                 "time {t} goes back (the line before was at {})",
@@ -296,7 +347,16 @@ impl TextReader {
         }
         self.last = at;
         let (kind, args) = rest.split_once(' ').unwrap_or((rest, ""));
-        let hex = |s: &str| crate::hex::parse(s).map_err(&err);
+        let hex = |s: &str| {
+            let s = s.trim();
+            if s.len() > 2 * MAX_CHUNK {
+                return Err(err(format!(
+                    "a chunk of {} bytes: real chunks are at most 512 (the limit is {MAX_CHUNK}); skipped",
+                    s.len() / 2
+                )));
+            }
+            crate::hex::parse(s).map_err(&err)
+        };
         let event = match kind {
             "connect" => Event::Connect,
             "connect-failed" => Event::ConnectFailed(args.to_string()),
@@ -308,7 +368,7 @@ impl TextReader {
             "out" => {
                 let (ep, data) = args.split_once(' ').unwrap_or((args, ""));
                 let ep = endpoint_from_name(ep)
-                    .ok_or_else(|| err(format!("unknown endpoint {ep:?}")))?;
+                    .ok_or_else(|| err(format!("unknown endpoint {:?}", shown(ep))))?;
                 Event::Out(ep, hex(data)?)
             }
             "in" => {
@@ -334,7 +394,32 @@ pub struct Capture {
     pub kind: &'static str,
 }
 
+/// The warning for a line of an unknown kind.
+pub(crate) fn unknown_kind(line: usize, kind: &str) -> String {
+    format!("line {line}: unknown event kind {:?} skipped", shown(kind))
+}
+
+/// A word of a file as a message shows it: at most 40 characters (a crafted line of 10 MB
+/// is not copied into its warning).
+pub(crate) fn shown(s: &str) -> String {
+    match s.char_indices().nth(40) {
+        Some((i, _)) => format!("{}…", &s[..i]),
+        None => s.to_string(),
+    }
+}
+
 impl Capture {
+    /// The end of reading: the warnings, summarised, and a missing `end` line said.
+    pub(crate) fn finish(&mut self, warnings: Warnings) {
+        self.warnings.extend(warnings.into_lines());
+        if !self.events.iter().any(|t| t.event == Event::End) && !self.events.is_empty() {
+            self.warnings.push(
+                "the capture has no `end` line: the recording stopped early (a crash or a kill); it holds what was flushed"
+                    .into(),
+            );
+        }
+    }
+
     /// The family to decode with: the header's, else detected from the traffic.
     pub fn family(&self) -> Option<Protocol> {
         self.header
@@ -355,28 +440,21 @@ impl Capture {
             kind: "droidctl capture",
             ..Default::default()
         };
+        let mut warnings = Warnings::default();
         for (i, line) in text.split_inclusive('\n').enumerate() {
             match r.line(line) {
                 Ok(Line::Event(t)) => c.events.push(t),
                 Ok(Line::Nothing) => {}
-                Ok(Line::Unknown(kind)) => c.warnings.push(format!(
-                    "line {}: unknown event kind {kind:?} skipped",
-                    i + 1
-                )),
+                Ok(Line::Unknown(kind)) => warnings.push(unknown_kind(i + 1, &kind)),
                 Err(e) if e.line == 1 => return Err(e.to_string()),
-                Err(e) => c.warnings.push(e.to_string()),
+                Err(e) => warnings.push(e.to_string()),
             }
         }
         if r.line == 0 {
             return Err("the capture is empty".into());
         }
         c.header = r.header;
-        if !c.events.iter().any(|t| t.event == Event::End) && !c.events.is_empty() {
-            c.warnings.push(
-                "the capture has no `end` line: the recording stopped early (a crash or a kill); it holds what was flushed"
-                    .into(),
-            );
-        }
+        c.finish(warnings);
         Ok(c)
     }
 

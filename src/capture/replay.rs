@@ -107,14 +107,6 @@ impl Replay {
     }
 }
 
-/// The time of the first mark named `name`.
-fn mark(c: &Capture, name: &str) -> Option<Duration> {
-    c.events.iter().find_map(|t| match &t.event {
-        Event::Mark(m) if m == name => Some(t.at),
-        _ => None,
-    })
-}
-
 /// The action of a mission's `step LINE TEXT` mark.
 fn step_action(mark: &str) -> Option<crate::script::Action> {
     crate::script::parse(step_text(mark)?)
@@ -169,38 +161,271 @@ pub const MAX_GAP: Duration = Duration::from_secs(600);
 /// What replay refuses to read: a capture spanning more than [`MAX_SPAN`], or a mission step
 /// mark whose script line cannot be read (a `wait 1e20s`). One line saying where and why.
 pub fn validate(c: &Capture) -> Result<(), String> {
-    if let (Some(first), Some(last)) = (c.events.first(), c.events.last()) {
-        let span = last.at.saturating_sub(first.at);
-        if span > MAX_SPAN {
-            return Err(format!(
-                "the {} spans {:.0} days from its first event to its last; a recording holds at \
-                 most {} days (is a time stamp damaged?)",
-                c.kind,
-                span.as_secs_f64() / 86_400.0,
-                MAX_SPAN.as_secs() / 86_400
-            ));
-        }
-    }
+    let mut plan = PlanBuilder::default();
     for t in &c.events {
-        if let Event::Mark(m) = &t.event
-            && let Some(text) = step_text(m)
-            && let Err(errors) = crate::script::parse(text)
-        {
-            let why: Vec<String> = errors.iter().map(|e| e.message.clone()).collect();
-            return Err(format!(
-                "the mark at {} ms (`{m}`): {}",
-                super::format_time(t.at),
-                why.join("; ")
-            ));
-        }
+        plan.event(t);
     }
-    Ok(())
+    plan.check(c.kind)
 }
 
 /// The script line of a mission's `step LINE TEXT` mark.
 fn step_text(mark: &str) -> Option<&str> {
     let rest = mark.strip_prefix("step ")?;
     rest.split_once(' ').map(|(_, text)| text)
+}
+
+/// What sampling a capture needs to know before its first event: where the mission starts
+/// and ends, and whether it marks its steps. One pass over the events finds it
+/// ([`PlanBuilder`]), so a capture can be sampled from a file read twice, never held whole.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Plan {
+    start: Duration,
+    end: Duration,
+    /// Events from this index on are after the mission (its `mission-end` mark on).
+    end_idx: usize,
+    /// The index of the `mission-start` mark.
+    start_idx: Option<usize>,
+    steps: bool,
+}
+
+/// A [`Plan`] taken from the events one by one.
+#[derive(Debug, Clone, Default)]
+pub struct PlanBuilder {
+    n: usize,
+    mission_start: Option<(usize, Duration)>,
+    first_connect: Option<Duration>,
+    first: Option<Duration>,
+    last: Option<Duration>,
+    mission_end: Option<(usize, Duration)>,
+    steps: bool,
+    /// The first mission step mark whose script line cannot be read.
+    bad_mark: Option<String>,
+}
+
+impl PlanBuilder {
+    /// What replay refuses (see [`validate`]), once every event is in; `kind` names the
+    /// capture in the message.
+    pub fn check(&self, kind: &str) -> Result<(), String> {
+        let span = self.span();
+        if span > MAX_SPAN {
+            return Err(format!(
+                "the {kind} spans {:.0} days from its first event to its last; a recording holds at \
+                 most {} days (is a time stamp damaged?)",
+                span.as_secs_f64() / 86_400.0,
+                MAX_SPAN.as_secs() / 86_400
+            ));
+        }
+        match &self.bad_mark {
+            Some(m) => Err(m.clone()),
+            None => Ok(()),
+        }
+    }
+
+    pub fn event(&mut self, t: &super::Timed) {
+        if self.bad_mark.is_none()
+            && let Event::Mark(m) = &t.event
+            && let Some(text) = step_text(m)
+            && let Err(errors) = crate::script::parse(text)
+        {
+            let why: Vec<String> = errors.iter().map(|e| e.message.clone()).collect();
+            self.bad_mark = Some(format!(
+                "the mark at {} ms (`{}`): {}",
+                super::format_time(t.at),
+                super::shown(m),
+                why.join("; ")
+            ));
+        }
+        let i = self.n;
+        self.n += 1;
+        self.first.get_or_insert(t.at);
+        self.last = Some(t.at);
+        match &t.event {
+            Event::Connect if self.first_connect.is_none() => self.first_connect = Some(t.at),
+            Event::Mark(m) if m == "mission-start" && self.mission_start.is_none() => {
+                self.mission_start = Some((i, t.at))
+            }
+            Event::Mark(m) if m == "mission-end" && self.mission_end.is_none() => {
+                self.mission_end = Some((i, t.at))
+            }
+            Event::Mark(m) if m.starts_with("step ") => self.steps = true,
+            _ => {}
+        }
+    }
+
+    /// The time of the last event seen.
+    pub fn last(&self) -> Option<Duration> {
+        self.last
+    }
+
+    /// Events seen.
+    pub fn events(&self) -> usize {
+        self.n
+    }
+
+    /// The events' span from first to last.
+    pub fn span(&self) -> Duration {
+        match (self.first, self.last) {
+            (Some(a), Some(b)) => b.saturating_sub(a),
+            _ => Duration::ZERO,
+        }
+    }
+
+    pub fn plan(&self) -> Plan {
+        let start = self
+            .mission_start
+            .map(|(_, at)| at)
+            .or(self.first_connect)
+            .or(self.first)
+            .unwrap_or_default();
+        // The mission ends at its mark: what follows (the final stop, the close) is not its.
+        let (end_idx, end) = match self.mission_end {
+            Some((i, at)) => (i, at),
+            None => (self.n, self.last.unwrap_or_default()),
+        };
+        Plan {
+            start,
+            end: end.max(start),
+            end_idx,
+            start_idx: self.mission_start.map(|(i, _)| i),
+            steps: self.steps,
+        }
+    }
+}
+
+/// Telemetry samples made as a capture's events come, one by one, as [`samples`] makes them
+/// (memory flat whatever the capture's length).
+pub struct Sampler {
+    plan: Plan,
+    interval: Duration,
+    mirror: Mirror,
+    telemetry: Telemetry,
+    next_sample: Duration,
+    idx: usize,
+    out: Vec<Output>,
+}
+
+impl Sampler {
+    pub fn new(plan: Plan, model: Model, interval: Duration) -> Sampler {
+        Sampler {
+            plan,
+            interval: interval.max(Duration::from_millis(1)),
+            mirror: Mirror::new(model),
+            telemetry: Telemetry::default(),
+            next_sample: plan.start,
+            idx: 0,
+            out: Vec::new(),
+        }
+    }
+
+    fn sample(&self, at: Duration) -> Sample {
+        crate::mission::sample_of(
+            &self.telemetry,
+            at.saturating_sub(self.plan.start).as_millis() as u64,
+        )
+    }
+
+    fn apply(&mut self, e: &super::Timed) {
+        self.out.clear();
+        self.mirror.event(e, &mut self.out);
+        if e.at >= self.plan.start {
+            for o in &self.out {
+                fold(
+                    &mut self.telemetry,
+                    o,
+                    e.at.saturating_sub(self.plan.start),
+                    self.plan.steps,
+                );
+            }
+        }
+    }
+
+    /// The samples due before `quiet_until` (the next event's time, or the end) are emitted
+    /// as they come; a silence longer than [`MAX_GAP`] is jumped over.
+    fn jump_gap(&mut self, quiet_until: Duration, gap: &mut dyn FnMut(Duration, Duration)) {
+        if quiet_until.saturating_sub(self.next_sample) > MAX_GAP {
+            let steps =
+                (quiet_until - self.next_sample).as_nanos() / self.interval.as_nanos().max(1);
+            let resume = self.next_sample + self.interval * steps.min(u32::MAX as u128) as u32;
+            let start = self.plan.start;
+            gap(
+                self.next_sample.saturating_sub(start),
+                resume.saturating_sub(start),
+            );
+            self.next_sample = resume;
+        }
+    }
+
+    /// The next event of the capture (in order, every one).
+    pub fn event(
+        &mut self,
+        e: &super::Timed,
+        emit: &mut dyn FnMut(&Sample) -> std::io::Result<()>,
+        gap: &mut dyn FnMut(Duration, Duration),
+    ) -> std::io::Result<()> {
+        let idx = self.idx;
+        self.idx += 1;
+        if idx >= self.plan.end_idx {
+            return Ok(());
+        }
+        // The first sample holds what came up to the mission's start: the events before its
+        // mark, or at its time without one (the connect greeting); later ones what came
+        // before them.
+        while self.next_sample < self.plan.end {
+            let first = self.next_sample == self.plan.start;
+            let before = e.at < self.next_sample
+                || (first
+                    && self
+                        .plan
+                        .start_idx
+                        .map_or(e.at == self.plan.start, |s| idx < s));
+            if before {
+                break;
+            }
+            emit(&self.sample(self.next_sample))?;
+            self.next_sample += self.interval;
+            // Nothing happens until this event (or the end): jump a long silence.
+            self.jump_gap(e.at.min(self.plan.end), gap);
+        }
+        self.apply(e);
+        Ok(())
+    }
+
+    /// After the last event: the samples up to the end, the final one, and the summary.
+    pub fn finish(
+        mut self,
+        emit: &mut dyn FnMut(&Sample) -> std::io::Result<()>,
+        gap: &mut dyn FnMut(Duration, Duration),
+    ) -> std::io::Result<ReplaySummary> {
+        while self.next_sample < self.plan.end {
+            emit(&self.sample(self.next_sample))?;
+            self.next_sample += self.interval;
+            self.jump_gap(self.plan.end, gap);
+        }
+        emit(&self.sample(self.plan.end))?;
+        Ok(self.summary())
+    }
+
+    fn summary(&self) -> ReplaySummary {
+        let (end, start, telemetry, mirror) = (
+            self.plan.end,
+            self.plan.start,
+            &self.telemetry,
+            &self.mirror,
+        );
+        // Counters up to the end, as the mission counted them.
+        let st = mirror.stats();
+        ReplaySummary {
+            done: true,
+            t_ms: end.saturating_sub(start).as_millis() as u64,
+            sent: st.sent,
+            received: st.received,
+            errors: st.errors,
+            unanswered: mirror.pending() as u64,
+            collisions: telemetry.collisions,
+            x_cm: telemetry.x_cm,
+            y_cm: telemetry.y_cm,
+        }
+    }
 }
 
 /// The telemetry samples of a whole capture, every `interval` from the mission's start (its
@@ -220,96 +445,13 @@ pub fn samples(
     emit: &mut dyn FnMut(&Sample) -> std::io::Result<()>,
     gap: &mut dyn FnMut(Duration, Duration),
 ) -> std::io::Result<ReplaySummary> {
-    let interval = interval.max(Duration::from_millis(1));
-    let start = mark(capture, "mission-start")
-        .or_else(|| {
-            capture
-                .events
-                .iter()
-                .find(|t| t.event == Event::Connect)
-                .map(|t| t.at)
-        })
-        .or(capture.events.first().map(|t| t.at))
-        .unwrap_or_default();
-    // The mission ends at its mark: what follows (the final stop, the close) is not its.
-    let end_idx = capture
-        .events
-        .iter()
-        .position(|t| matches!(&t.event, Event::Mark(m) if m == "mission-end"))
-        .unwrap_or(capture.events.len());
-    let end = capture
-        .events
-        .get(end_idx)
-        .map(|t| t.at)
-        .unwrap_or(capture.duration())
-        .max(start);
-    let steps = capture
-        .events
-        .iter()
-        .any(|t| matches!(&t.event, Event::Mark(m) if m.starts_with("step ")));
-    let mut mirror = Mirror::new(model);
-    let mut telemetry = Telemetry::default();
-    let mut out = Vec::new();
-    let mut next_sample = start;
-    let mut events = capture.events[..end_idx].iter().peekable();
-    let sample = |t: &Telemetry, at: Duration| {
-        crate::mission::sample_of(t, at.saturating_sub(start).as_millis() as u64)
-    };
-    let mut apply = |e: &super::Timed, telemetry: &mut Telemetry| {
-        out.clear();
-        mirror.event(e, &mut out);
-        if e.at >= start {
-            for o in &out {
-                fold(telemetry, o, e.at.saturating_sub(start), steps);
-            }
-        }
-    };
-    // The first sample holds what came up to the mission's start: the events before its mark,
-    // or at its time without one (the connect greeting); later ones what came before them.
-    let start_idx = capture
-        .events
-        .iter()
-        .position(|t| matches!(&t.event, Event::Mark(m) if m == "mission-start"));
-    let mut idx = 0;
-    while next_sample < end {
-        let first = next_sample == start;
-        while let Some(e) = events.next_if(|e| {
-            e.at < next_sample || (first && start_idx.map_or(e.at == start, |s| idx < s))
-        }) {
-            apply(e, &mut telemetry);
-            idx += 1;
-        }
-        emit(&sample(&telemetry, next_sample))?;
-        next_sample += interval;
-        // Nothing happens until the next event (or the end): jump a long silence.
-        let quiet_until = events.peek().map_or(end, |e| e.at.min(end));
-        if quiet_until.saturating_sub(next_sample) > MAX_GAP {
-            let steps = (quiet_until - next_sample).as_nanos() / interval.as_nanos().max(1);
-            let resume = next_sample + interval * steps.min(u32::MAX as u128) as u32;
-            gap(
-                next_sample.saturating_sub(start),
-                resume.saturating_sub(start),
-            );
-            next_sample = resume;
-        }
+    let mut plan = PlanBuilder::default();
+    for t in &capture.events {
+        plan.event(t);
     }
-    // The rest up to the end, then the final sample.
-    for e in events {
-        apply(e, &mut telemetry);
+    let mut sampler = Sampler::new(plan.plan(), model, interval);
+    for t in &capture.events {
+        sampler.event(t, emit, gap)?;
     }
-    emit(&sample(&telemetry, end))?;
-    // Counters up to the end, as the mission counted them.
-    let st = mirror.stats();
-    let summary = ReplaySummary {
-        done: true,
-        t_ms: end.saturating_sub(start).as_millis() as u64,
-        sent: st.sent,
-        received: st.received,
-        errors: st.errors,
-        unanswered: mirror.pending() as u64,
-        collisions: telemetry.collisions,
-        x_cm: telemetry.x_cm,
-        y_cm: telemetry.y_cm,
-    };
-    Ok(summary)
+    sampler.finish(emit, gap)
 }

@@ -5,14 +5,16 @@
 //! give the same output every run.
 
 use super::CliError;
-use super::run::{RunArgs, mission_session, print_summary, report_link_of, sample_line};
+use super::run::{
+    RunArgs, finish_recording, mission_session, report_link_of, sample_line, summary_line,
+};
+use super::run_output::{OUTPUT_GONE, RunOutput, note};
 use crate::fleet::Fleet;
 use crate::fleet::mission::{self as fleet_mission, FleetEmit};
 use crate::mission::{MissionEvent, MissionOptions};
 use crate::model::Model;
 use crate::script::{Item, ScriptError};
 use serde::Serialize;
-use std::io::Write;
 use std::sync::Arc;
 use std::time::Duration;
 
@@ -46,7 +48,7 @@ pub fn run(
         ),
         None => None,
     };
-    let files = Arc::new(std::sync::Mutex::new(files));
+    let out = Arc::new(RunOutput::new(files));
     let _ = crate::logging::init();
     let only_sims = args.ble.name.is_empty() && args.ble.remote.is_empty();
     let rt = if only_sims {
@@ -100,11 +102,12 @@ pub fn run(
                 &fleet,
                 &plan,
                 &per_droid,
-                printer(&fleet, json, &opts, recorder.clone(), files.clone()),
+                printer(&fleet, json, &opts, recorder.clone(), out.clone()),
             ) => r,
             sig = super::signals::terminated() => Err(crate::mission::MissionError(format!(
                 "{sig}: mission interrupted, every droid was stopped"
             ))),
+            _ = out.closed() => Err(crate::mission::MissionError(OUTPUT_GONE.into())),
         };
         for t in reporters {
             t.abort();
@@ -116,18 +119,24 @@ pub fn run(
             }
         }
         fleet.shutdown_all(|_| Vec::new()).await;
-        if let Ok(mut f) = files.lock()
-            && let Some(w) = f.as_mut()
-            && let Err(e) = w.flush()
-        {
-            eprintln!("droidctl: --csv: {e}");
-        }
+        out.flush_csv();
         // In the runtime: under simulated time the `end` line has the mission's time.
-        super::replay::finish(recorder.as_ref());
-        let summaries = r.map_err(|e| CliError::failure(e.to_string()))?;
-        Ok(fleet.names().into_iter().zip(summaries).collect::<Vec<_>>())
+        let kept = finish_recording(recorder.as_ref());
+        let summaries = r.map_err(|e| CliError::failure(e.to_string()));
+        Ok((
+            summaries.map(|s| fleet.names().into_iter().zip(s).collect::<Vec<_>>()),
+            kept,
+        ))
     });
-    let summaries = summaries?;
+    let (summaries, kept) = summaries?;
+    let summaries = match summaries {
+        Ok(s) => s,
+        Err(e) => {
+            // The output that went away is why the mission ended.
+            out.result()?;
+            return Err(e);
+        }
+    };
     let mut failed = 0;
     for (name, s) in &summaries {
         failed += s.failed_steps;
@@ -136,12 +145,16 @@ pub fn run(
                 droid: name,
                 inner: s,
             };
-            println!("{}", serde_json::to_string(&t).unwrap_or_default());
+            out.stdout(|w| {
+                serde_json::to_writer(&mut *w, &t).map_err(std::io::Error::other)?;
+                writeln!(w)
+            });
         } else {
-            print!("{name}: ");
-            print_summary(s, false);
+            out.stdout(|w| writeln!(w, "{name}: {}", summary_line(s, false)));
         }
     }
+    out.result()?;
+    kept?;
     Ok(if failed > 0 { 1 } else { 0 })
 }
 
@@ -153,7 +166,7 @@ fn printer(
     json: bool,
     opts: &MissionOptions,
     recorder: Option<crate::capture::record::Recorder>,
-    files: Arc<std::sync::Mutex<Option<crate::mission::csv::SampleFiles>>>,
+    out: Arc<RunOutput>,
 ) -> FleetEmit {
     use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
     let names = fleet.names();
@@ -183,22 +196,19 @@ fn printer(
                 _ => {}
             }
         }
-        if let MissionEvent::Sample(s) = &e
-            && let Ok(mut f) = files.lock()
-            && let Some(w) = f.as_mut()
-            && let Err(err) = w.write_for(name, s)
-        {
-            eprintln!("droidctl: --csv: {err}; no more rows are written");
-            *f = None;
+        if let MissionEvent::Sample(s) = &e {
+            out.csv_sample(Some(name), s);
         }
-        let mut out = std::io::stdout().lock();
-        let _ = match e {
+        match e {
             MissionEvent::Sample(s) if json => {
                 let t = Tagged {
                     droid: name,
                     inner: &s,
                 };
-                writeln!(out, "{}", serde_json::to_string(&t).unwrap_or_default())
+                out.stdout(|w| {
+                    serde_json::to_writer(&mut *w, &t).map_err(std::io::Error::other)?;
+                    writeln!(w)
+                });
             }
             MissionEvent::Sample(s) => {
                 let n = counts
@@ -209,29 +219,30 @@ fn printer(
                 }
                 let line = sample_line(&s);
                 // `[   1.00s] pos …` becomes `[   1.00s] D2-0001 pos …`.
-                match line.split_once("] ") {
-                    Some((t, rest)) => writeln!(out, "{t}] {name} {rest}"),
-                    None => writeln!(out, "{name} {line}"),
-                }
+                out.stdout(|w| match line.split_once("] ") {
+                    Some((t, rest)) => writeln!(w, "{t}] {name} {rest}"),
+                    None => writeln!(w, "{name} {line}"),
+                });
             }
-            MissionEvent::Step { t_ms, line, text } if !json => writeln!(
-                out,
-                "[{:>8.2}s] {name} line {line}: {text}",
-                t_ms as f64 / 1000.0
-            ),
-            MissionEvent::Step { .. } => Ok(()),
+            MissionEvent::Step { t_ms, line, text } if !json => out.stdout(|w| {
+                writeln!(
+                    w,
+                    "[{:>8.2}s] {name} line {line}: {text}",
+                    t_ms as f64 / 1000.0
+                )
+            }),
+            MissionEvent::Step { .. } => {}
             MissionEvent::Warning {
                 t_ms,
                 line,
                 message,
             } => {
                 let at = line.map(|l| format!("line {l}: ")).unwrap_or_default();
-                eprintln!(
+                note(format_args!(
                     "[{:>8.2}s] {name}: warning: {at}{message}",
                     t_ms as f64 / 1000.0
-                );
-                Ok(())
+                ));
             }
-        };
+        }
     })
 }

@@ -13,6 +13,7 @@ pub mod packet;
 pub mod plot;
 pub mod replay;
 pub mod run;
+mod run_output;
 pub mod scan;
 pub mod serve;
 pub mod signals;

@@ -4,6 +4,7 @@
 use super::CliError;
 use crate::telemetry::history::Channel;
 use clap::Args;
+use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
 #[derive(Debug, Clone, Args)]
@@ -41,79 +42,135 @@ fn parse_size(s: &str) -> Result<(u32, u32), CliError> {
     Ok((w, h))
 }
 
-/// Samples of a `run --json` output: every object but the summary (`"done": true`).
-fn json_samples(text: &str, file: &Path) -> Result<Vec<crate::mission::Sample>, CliError> {
-    let mut out = Vec::new();
-    for (i, line) in text.lines().enumerate() {
-        let line = line.trim();
-        if line.is_empty() {
-            continue;
+/// The input's samples, streamed into tracks gathering `channels` (none: the defaults).
+pub fn tracks(
+    args: &PlotArgs,
+    channels: &[Channel],
+) -> Result<crate::plot::track::Tracks, CliError> {
+    use crate::plot::read::{self, Kind, ReadError};
+    use std::io::{BufRead, BufReader};
+    let file = &args.file;
+    let name = file.display().to_string();
+    let open = || std::fs::File::open(file).map(|f| BufReader::with_capacity(64 * 1024, f));
+    let mut head = open().map_err(|e| CliError::usage(format!("cannot read {name}: {e}")))?;
+    let first = head
+        .fill_buf()
+        .map_err(|e| CliError::failure(format!("cannot read {name}: {e}")))?
+        .to_vec();
+    let mut tracks = crate::plot::track::Tracks::new(channels);
+    let whole = std::fs::metadata(file).is_ok_and(|m| m.len() <= first.len() as u64);
+    if whole && first.iter().all(u8::is_ascii_whitespace) {
+        // Empty: nothing to plot (exit 1 below), not bad input.
+        return Ok(tracks);
+    }
+    let model = match &args.model {
+        Some(m) => Some(
+            crate::model::Model::from_id(m)
+                .ok_or_else(|| CliError::usage(format!("unknown model {m:?}")))?,
+        ),
+        None => None,
+    };
+    let opts = read::Options {
+        interval: std::time::Duration::from_millis(args.interval),
+        model,
+    };
+    let mut reopen = open;
+    let r = match read::kind(&first) {
+        Some(Kind::Json) => read::json(head, &name, &mut tracks),
+        Some(Kind::Capture) => read::capture(&mut reopen, &name, opts, &mut tracks),
+        Some(Kind::Fleet) => read::fleet(&mut reopen, &name, opts, &mut tracks),
+        Some(Kind::Btsnoop) => {
+            // A phone's log is sorted by time as a whole: loaded, then sampled.
+            let replay = super::replay::ReplayArgs {
+                file: file.clone(),
+                json: false,
+                csv: None,
+                interval: args.interval,
+                model: args.model.clone(),
+                handle: Vec::new(),
+            };
+            let (capture, model) = super::replay::load(&replay)?;
+            let mut failed = None;
+            crate::capture::replay::samples(
+                &capture,
+                model,
+                opts.interval,
+                &mut |s| {
+                    if let Err(e) = tracks.push(None, s) {
+                        failed = Some(e);
+                    }
+                    Ok(())
+                },
+                &mut |_, _| {},
+            )
+            .map_err(CliError::output)?;
+            failed.map_or(Ok(()), |e| Err(ReadError::Bad(e)))
         }
-        let v: serde_json::Value = serde_json::from_str(line)
-            .map_err(|e| CliError::usage(format!("{}:{}: not JSON: {e}", file.display(), i + 1)))?;
-        if v.get("done").is_some() {
-            continue;
-        }
-        let s = serde_json::from_value(v).map_err(|e| {
-            CliError::usage(format!(
-                "{}:{}: not a telemetry sample: {e}",
-                file.display(),
-                i + 1
-            ))
+        None => Err(ReadError::Bad(format!(
+            "{name} is neither a run's JSON output (`run --json`, `replay --json`) nor a \
+             capture (droidctl's or a btsnoop log)"
+        ))),
+    };
+    match r {
+        Ok(()) => Ok(tracks),
+        Err(ReadError::Bad(m)) => Err(CliError::usage(m)),
+        Err(ReadError::Io(m)) => Err(CliError::failure(m)),
+    }
+}
+
+/// The channels asked for: known names, each once, no more than stay legible at `height`.
+fn channels(args: &PlotArgs, height: u32) -> Result<Vec<Channel>, CliError> {
+    let mut out: Vec<Channel> = Vec::new();
+    for n in args
+        .channels
+        .iter()
+        .map(|n| n.trim())
+        .filter(|n| !n.is_empty())
+    {
+        let c = Channel::parse(n).ok_or_else(|| {
+            let all: Vec<&str> = Channel::ALL.iter().map(|c| c.name()).collect();
+            CliError::usage(format!("unknown channel {n:?}: use {}", all.join(", ")))
         })?;
-        out.push(s);
+        if !out.contains(&c) {
+            out.push(c);
+        }
+    }
+    let fit = crate::plot::strips_that_fit(height);
+    if out.len() > fit {
+        return Err(CliError::usage(format!(
+            "--channels: {} channels asked for; {fit} fit legibly in a picture {height} pixels \
+             high (each strip needs {} pixels): ask for fewer, or a taller --size",
+            out.len(),
+            crate::plot::MIN_STRIP_PX
+        )));
     }
     Ok(out)
 }
 
-/// The samples in `file`, whichever kind it is.
-pub fn samples(args: &PlotArgs) -> Result<Vec<crate::mission::Sample>, CliError> {
-    let bytes = std::fs::read(&args.file)
-        .map_err(|e| CliError::usage(format!("cannot read {}: {e}", args.file.display())))?;
-    let first = bytes.iter().find(|b| !b.is_ascii_whitespace());
-    if first == Some(&b'{') {
-        let text = String::from_utf8_lossy(&bytes);
-        return json_samples(&text, &args.file);
+/// Whether `a` and `b` are the same file (both exist and are one).
+fn same_file(a: &Path, b: &Path) -> bool {
+    match (std::fs::canonicalize(a), std::fs::canonicalize(b)) {
+        (Ok(x), Ok(y)) => x == y,
+        _ => false,
     }
-    let replay = super::replay::ReplayArgs {
-        file: args.file.clone(),
-        json: false,
-        csv: None,
-        interval: args.interval,
-        model: args.model.clone(),
-        handle: Vec::new(),
-    };
-    let (capture, model) = super::replay::load(&replay)?;
-    let mut out = Vec::new();
-    crate::capture::replay::samples(
-        &capture,
-        model,
-        std::time::Duration::from_millis(args.interval),
-        &mut |s| {
-            out.push(s.clone());
-            Ok(())
-        },
-        &mut |_, _| {},
-    )
-    .map_err(CliError::output)?;
-    Ok(out)
 }
 
 pub fn run(args: PlotArgs) -> Result<i32, CliError> {
     let size = parse_size(&args.size)?;
-    let channels = args
-        .channels
-        .iter()
-        .filter(|n| !n.trim().is_empty())
-        .map(|n| {
-            Channel::parse(n).ok_or_else(|| {
-                let all: Vec<&str> = Channel::ALL.iter().map(|c| c.name()).collect();
-                CliError::usage(format!("unknown channel {n:?}: use {}", all.join(", ")))
-            })
-        })
-        .collect::<Result<Vec<_>, _>>()?;
+    let channels = channels(&args, size.1)?;
+    // `plot X.png`: the default output is never the input itself.
     let outs = if args.out.is_empty() {
-        vec![args.file.with_extension("png")]
+        let png = args.file.with_extension("png");
+        if same_file(&png, &args.file) {
+            let stem = args
+                .file
+                .file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_default();
+            vec![args.file.with_file_name(format!("{stem}.plot.png"))]
+        } else {
+            vec![png]
+        }
     } else {
         args.out.clone()
     };
@@ -127,26 +184,30 @@ pub fn run(args: PlotArgs) -> Result<i32, CliError> {
                 )));
             }
         }
+        if same_file(o, &args.file) {
+            return Err(CliError::usage(format!(
+                "{}: that is the input; the picture would overwrite it (choose another -o)",
+                o.display()
+            )));
+        }
     }
-    let samples = samples(&args)?;
-    if samples.is_empty() {
+    let tracks = tracks(&args, &channels)?;
+    if tracks.samples() == 0 {
         return Err(CliError::failure(format!(
             "{}: no telemetry samples to plot",
             args.file.display()
         )));
     }
-    let channels = if channels.is_empty() {
-        crate::plot::default_channels(&samples)
-    } else {
-        channels
-    };
+    let mut channels = tracks.channels();
+    // The defaults, at a size too small for all of them: as many as fit.
+    channels.truncate(crate::plot::strips_that_fit(size.1));
     let run = crate::plot::Run {
         title: args
             .file
             .file_name()
             .map(|n| n.to_string_lossy().into_owned())
             .unwrap_or_default(),
-        samples,
+        tracks,
         channels,
     };
     for o in &outs {
@@ -157,10 +218,14 @@ pub fn run(args: PlotArgs) -> Result<i32, CliError> {
         } else {
             std::fs::File::create(o)
                 .map_err(|e| e.to_string())
-                .and_then(|f| crate::plot::png(&run, size, std::io::BufWriter::new(f)).map(|_| ()))
+                .and_then(|f| {
+                    let mut w = std::io::BufWriter::new(f);
+                    crate::plot::png(&run, size, &mut w)?;
+                    w.flush().map_err(|e| e.to_string())
+                })
         };
         written.map_err(|e| CliError::failure(format!("cannot write {}: {e}", o.display())))?;
-        eprintln!("droidctl: wrote {}", o.display());
+        let _ = writeln!(std::io::stderr(), "droidctl: wrote {}", o.display());
     }
     Ok(0)
 }

@@ -3,6 +3,7 @@
 use super::CliError;
 use crate::capture::record::Recorder;
 use clap::Args;
+use std::io::Write as _;
 use std::path::PathBuf;
 
 /// `--record FILE [--force]`.
@@ -138,8 +139,13 @@ fn load_fleet(args: &ReplayArgs) -> Result<Option<FleetCaptures>, CliError> {
         .map_err(|e| CliError::failure(format!("cannot read {}: {e}", args.file.display())))?;
     let shown = args.file.display();
     let droids = if crate::capture::fleet::sniff(&bytes) {
-        crate::capture::fleet::split(&String::from_utf8_lossy(&bytes))
-            .map_err(|e| CliError::usage(format!("{shown}: {e}")))?
+        let split = crate::capture::fleet::read(&String::from_utf8_lossy(&bytes))
+            .map_err(|e| CliError::usage(format!("{shown}: {e}")))?;
+        // The file's own warnings, once (not once per droid).
+        for w in &split.warnings {
+            let _ = writeln!(std::io::stderr(), "droidctl: {shown}: {w}");
+        }
+        split.droids
     } else if crate::capture::btsnoop::sniff(&bytes) {
         // A phone's log of several droids: one droid per connection.
         let handles = handles(args)?;

@@ -1,6 +1,7 @@
 //! `droidctl run SCRIPT [--sim [MODEL]] [--json] [--interval MS]`: run a mission script.
 
 use super::CliError;
+use super::run_output::{OUTPUT_GONE, RunOutput, note};
 use crate::family::setup::{SetupOptions, connect_setup};
 use crate::link::Link;
 use crate::mission::{self, MissionEvent, MissionOptions, Summary};
@@ -100,6 +101,7 @@ pub fn run(args: RunArgs) -> Result<i32, CliError> {
         }
         None => None,
     };
+    let out = Arc::new(RunOutput::new(files));
     let opts = MissionOptions {
         interval: Duration::from_millis(args.interval),
         ..MissionOptions::default()
@@ -118,34 +120,58 @@ pub fn run(args: RunArgs) -> Result<i32, CliError> {
                 .start_paused(true)
                 .build()
                 .map_err(|e| CliError::failure(format!("cannot start the runtime: {e}")))?;
+            let out = out.clone();
             rt.block_on(async move {
                 let link = SimLink::new(model, SimConfig::for_model(model), Faults::none());
                 let name = format!("{} (simulated)", model.display_name());
                 let link = recorded(recorder, Box::new(link), model, &name);
-                let r = run_recorded(link, model, &steps, opts, json, recorder, files).await;
-                super::replay::finish(recorder);
-                r.map_err(CliError::failure)
+                let r = run_recorded(link, model, &steps, opts, json, recorder, out).await;
+                let kept = finish_recording(recorder);
+                (r.map_err(CliError::failure), kept)
             })
         }
         None => {
             let _ = crate::logging::init();
             let rt = super::realtime_runtime()?;
+            let out = out.clone();
             rt.block_on(async move {
-                let c = args.ble.connect(super::connect::Chooser::Prompt).await?;
-                mission::validate(c.model, &steps).map_err(script_errors)?;
+                let c = match args.ble.connect(super::connect::Chooser::Prompt).await {
+                    Ok(c) => c,
+                    Err(e) => return (Err(e), finish_recording(recorder)),
+                };
+                if let Err(e) = mission::validate(c.model, &steps) {
+                    return (Err(script_errors(e)), finish_recording(recorder));
+                }
                 let link = recorded(recorder, c.link, c.model, &c.name);
-                let r = run_recorded(link, c.model, &steps, opts, json, recorder, files).await;
-                super::replay::finish(recorder);
-                r.map_err(CliError::failure)
+                let r = run_recorded(link, c.model, &steps, opts, json, recorder, out).await;
+                let kept = finish_recording(recorder);
+                (r.map_err(CliError::failure), kept)
             })
         }
     };
-    match result {
-        Ok(summary) => {
-            print_summary(&summary, json);
-            Ok(if summary.failed_steps > 0 { 1 } else { 0 })
+    let (result, kept) = result;
+    let summary = match result {
+        Ok(s) => s,
+        Err(e) => {
+            // The output that went away is why the mission ended: say that (or nothing, for
+            // a closed pipe).
+            out.result()?;
+            return Err(e);
         }
-        Err(e) => Err(e),
+    };
+    out.stdout(|w| writeln!(w, "{}", summary_line(&summary, json)));
+    out.result()?;
+    kept?;
+    Ok(if summary.failed_steps > 0 { 1 } else { 0 })
+}
+
+/// End a recording: an incomplete capture is a failure of the run (exit 1), said in one line.
+pub(super) fn finish_recording(
+    rec: Option<&crate::capture::record::Recorder>,
+) -> Result<(), CliError> {
+    match rec.map(|r| r.finish()) {
+        Some(Err(e)) => Err(CliError::failure(e)),
+        _ => Ok(()),
     }
 }
 
@@ -173,7 +199,8 @@ pub async fn run_on(
     opts: MissionOptions,
     json: bool,
 ) -> Result<Summary, String> {
-    run_recorded(link, model, steps, opts, json, None, None).await
+    let out = Arc::new(RunOutput::new(None));
+    run_recorded(link, model, steps, opts, json, None, out).await
 }
 
 /// [`run_on`], marking the mission's start and end in the capture being recorded (replay
@@ -185,10 +212,9 @@ pub async fn run_recorded(
     opts: MissionOptions,
     json: bool,
     recorder: Option<&crate::capture::record::Recorder>,
-    files: Option<crate::mission::csv::SampleFiles>,
+    out: Arc<RunOutput>,
 ) -> Result<Summary, String> {
-    let files = Arc::new(std::sync::Mutex::new(files));
-    let files_out = files.clone();
+    let printer = out.clone();
     let (config, opts) = mission_session(model, opts);
     let session = session::start(link, config);
     let samples_per_line = (1000 / opts.interval.as_millis().max(1)).max(1) as u64;
@@ -208,40 +234,35 @@ pub async fn run_recorded(
             }
             _ => {}
         }
-        if let MissionEvent::Sample(s) = &e
-            && let Ok(mut f) = files_out.lock()
-            && let Some(w) = f.as_mut()
-            && let Err(err) = w.write(s)
-        {
-            eprintln!("droidctl: --csv: {err}; no more rows are written");
-            *f = None;
+        if let MissionEvent::Sample(s) = &e {
+            printer.csv_sample(None, s);
         }
-        let mut out = std::io::stdout().lock();
-        let _ = match e {
-            MissionEvent::Sample(s) if json => {
-                writeln!(out, "{}", serde_json::to_string(&s).unwrap_or_default())
-            }
+        match e {
+            MissionEvent::Sample(s) if json => printer.stdout(|w| {
+                serde_json::to_writer(&mut *w, &s).map_err(std::io::Error::other)?;
+                writeln!(w)
+            }),
             MissionEvent::Sample(s) => {
                 let n = count.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                if !n.is_multiple_of(samples_per_line) {
-                    return;
+                if n.is_multiple_of(samples_per_line) {
+                    printer.stdout(|w| writeln!(w, "{}", sample_line(&s)));
                 }
-                writeln!(out, "{}", sample_line(&s))
             }
-            MissionEvent::Step { t_ms, line, text } if !json => {
-                writeln!(out, "[{:>8.2}s] line {line}: {text}", t_ms as f64 / 1000.0)
-            }
-            MissionEvent::Step { .. } => Ok(()),
+            MissionEvent::Step { t_ms, line, text } if !json => printer
+                .stdout(|w| writeln!(w, "[{:>8.2}s] line {line}: {text}", t_ms as f64 / 1000.0)),
+            MissionEvent::Step { .. } => {}
             MissionEvent::Warning {
                 t_ms,
                 line,
                 message,
             } => {
                 let at = line.map(|l| format!("line {l}: ")).unwrap_or_default();
-                eprintln!("[{:>8.2}s] warning: {at}{message}", t_ms as f64 / 1000.0);
-                Ok(())
+                note(format_args!(
+                    "[{:>8.2}s] warning: {at}{message}",
+                    t_ms as f64 / 1000.0
+                ));
             }
-        };
+        }
     });
     let link_lines = tokio::spawn(report_link(session.watch_state()));
     // Ctrl-C (also while reconnecting), SIGTERM and SIGHUP (console close on Windows) end the
@@ -250,6 +271,7 @@ pub async fn run_recorded(
     let result = tokio::select! {
         r = mission::run(&session, model, steps, opts, emit) => r,
         sig = interrupted => Err(mission::MissionError(format!("{sig}: mission interrupted, the droid was stopped"))),
+        _ = out.closed() => Err(mission::MissionError(OUTPUT_GONE.into())),
     };
     if let Some(r) = recorder {
         r.record(crate::capture::Event::Mark("mission-end".into()));
@@ -264,12 +286,7 @@ pub async fn run_recorded(
     });
     // Stop first (at the last heading: a stop at heading 0 would turn the droid), then close.
     session.shutdown_stopped(Vec::new()).await;
-    if let Ok(mut f) = files.lock()
-        && let Some(w) = f.as_mut()
-        && let Err(e) = w.flush()
-    {
-        eprintln!("droidctl: --csv: {e}");
-    }
+    out.flush_csv();
     result
 }
 
@@ -292,8 +309,8 @@ pub fn mission_session(model: Model, opts: MissionOptions) -> (SessionConfig, Mi
     };
     let setup = match crate::family::stream::plan_for(model, request) {
         Some(plan) => {
-            if let Some(note) = &plan.note {
-                eprintln!("droidctl: streaming: {note}");
+            if let Some(capped) = &plan.note {
+                note(format_args!("droidctl: streaming: {capped}"));
             }
             setup.with_plan(&plan)
         }
@@ -421,11 +438,12 @@ pub fn sample_line(s: &mission::Sample) -> String {
     )
 }
 
-pub fn print_summary(s: &Summary, json: bool) {
+/// The summary line (`--json`: the summary object).
+pub fn summary_line(s: &Summary, json: bool) -> String {
     if json {
-        println!("{}", serde_json::to_string(s).unwrap_or_default());
+        serde_json::to_string(s).unwrap_or_default()
     } else {
-        println!(
+        format!(
             "done in {:.2} s: sent {}, received {}, errors {}, timeouts {}, collisions {}, failed steps {}, final position ({}, {}) cm",
             s.t_ms as f64 / 1000.0,
             s.sent,
@@ -436,6 +454,6 @@ pub fn print_summary(s: &Summary, json: bool) {
             s.failed_steps,
             opt(s.x_cm, 1),
             opt(s.y_cm, 1)
-        );
+        )
     }
 }

@@ -349,17 +349,36 @@ impl KeyMap {
     /// Build from the config's `[keys]` table. Errors name the offending config key
     /// (`forward`, `log.pause`).
     pub fn from_config(keys: &BTreeMap<String, KeyEntry>) -> Result<KeyMap, (String, String)> {
+        KeyMap::from_config_with(keys, &|_| false)
+    }
+
+    /// [`KeyMap::from_config`], the bindings the user wrote (`touched("forward")`,
+    /// `touched("packet_log.pause")`) bound last: a key bound twice is reported on the binding
+    /// the user touched, not on the default it ran into (issue 27 point 7).
+    pub fn from_config_with(
+        keys: &BTreeMap<String, KeyEntry>,
+        touched: &dyn Fn(&str) -> bool,
+    ) -> Result<KeyMap, (String, String)> {
         let mut km = KeyMap::default();
-        for (name, entry) in keys {
-            match entry {
-                KeyEntry::Keys(names) => km.bind(Context::Drive, name, name, names)?,
-                KeyEntry::Table(table) => {
-                    let ctx = Context::ALL
-                        .into_iter()
-                        .find(|c| c.table() == Some(name.as_str()))
-                        .ok_or_else(|| unknown_action(name, Context::Drive))?;
-                    for (action, names) in table {
-                        km.bind(ctx, &format!("{name}.{action}"), action, names)?;
+        for users in [false, true] {
+            for (name, entry) in keys {
+                match entry {
+                    KeyEntry::Keys(names) => {
+                        if touched(name) == users {
+                            km.bind(Context::Drive, name, name, names)?;
+                        }
+                    }
+                    KeyEntry::Table(table) => {
+                        let ctx = Context::ALL
+                            .into_iter()
+                            .find(|c| c.table() == Some(name.as_str()))
+                            .ok_or_else(|| unknown_action(name, Context::Drive))?;
+                        for (action, names) in table {
+                            let key = format!("{name}.{action}");
+                            if touched(&key) == users {
+                                km.bind(ctx, &key, action, names)?;
+                            }
+                        }
                     }
                 }
             }

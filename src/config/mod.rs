@@ -21,6 +21,11 @@ use std::path::{Path, PathBuf};
 /// The slowest write pacing `session.pacing_ms` may set.
 pub const MAX_PACING_MS: u64 = 1000;
 
+/// The bounds of `session.request_timeout_ms`: a droid answers within tens of ms; 0 made
+/// every request fail at once, and a minute is already longer than anyone waits.
+pub const MIN_REQUEST_TIMEOUT_MS: u64 = 100;
+pub const MAX_REQUEST_TIMEOUT_MS: u64 = 60_000;
+
 /// The shipped defaults (also what `droidctl config init` writes).
 pub const DEFAULT_TOML: &str = include_str!("../../assets/default-config.toml");
 
@@ -180,6 +185,115 @@ pub fn config_path() -> PathBuf {
         .join("config.toml")
 }
 
+/// Whether `path` is the file DROIDCTL_CONFIG names.
+fn explicit(path: &Path) -> bool {
+    std::env::var_os("DROIDCTL_CONFIG").is_some_and(|p| Path::new(&p) == path)
+}
+
+/// The table and key whose value starts at `offset` of a TOML text (a line `key = value`
+/// under a `[table]` header): where a type error is.
+fn key_at(text: &str, offset: usize) -> Option<(String, String)> {
+    let mut table = String::new();
+    let mut at = 0;
+    for line in text.split_inclusive('\n') {
+        let end = at + line.len();
+        let l = line.trim();
+        if let Some(t) = l.strip_prefix('[').and_then(|l| l.strip_suffix(']')) {
+            table = t
+                .trim()
+                .trim_matches('[')
+                .trim_matches(']')
+                .trim()
+                .to_string();
+        } else if offset < end
+            && let Some((k, _)) = l.split_once('=')
+        {
+            return Some((table, k.trim().trim_matches('"').to_string()));
+        }
+        if offset < end {
+            return None;
+        }
+        at = end;
+    }
+    None
+}
+
+/// A type name of serde's as a person says it.
+fn expected_in_words(t: &str) -> String {
+    let range = |lo: &str, hi: &str| format!("a whole number from {lo} to {hi}");
+    match t.trim() {
+        "u8" => range("0", "255"),
+        "u16" => range("0", "65535"),
+        "u32" => range("0", "4294967295"),
+        "u64" | "usize" => "a whole number, 0 or more".into(),
+        "i8" | "i16" | "i32" | "i64" | "isize" => "a whole number".into(),
+        "f32" | "f64" => "a number".into(),
+        "a boolean" => "true or false".into(),
+        "a string" | "a borrowed string" => "text in quotes".into(),
+        "a sequence" => "a list in brackets, [ … ]".into(),
+        t if t.starts_with("struct ") || t.starts_with("a map") || t.contains("map") => {
+            "a table".into()
+        }
+        t => t.replace('`', ""),
+    }
+}
+
+/// serde's messages in words (`invalid value: integer `300`, expected u8` becomes `300 is not
+/// a whole number from 0 to 255`); `table` is where the key is, for an unknown one.
+fn in_words(msg: &str, table: &str) -> String {
+    let msg = msg.trim();
+    let value_of = |what: &str| {
+        let what = what.trim();
+        let (kind, val) = what.split_once(' ').unwrap_or((what, ""));
+        let val = val.trim().trim_matches('`');
+        match kind {
+            "string" => format!("{val} (text)"),
+            "integer" | "floating" => val
+                .trim_start_matches("point ")
+                .trim_matches('`')
+                .to_string(),
+            "boolean" => val.to_string(),
+            "sequence" => "a list".into(),
+            "map" => "a table".into(),
+            _ => what.replace('`', ""),
+        }
+    };
+    if let Some(rest) = msg
+        .strip_prefix("invalid value: ")
+        .or_else(|| msg.strip_prefix("invalid type: "))
+        && let Some((what, expected)) = rest.split_once(", expected ")
+    {
+        return format!("{} is not {}", value_of(what), expected_in_words(expected));
+    }
+    if let Some(rest) = msg.strip_prefix("unknown variant ")
+        && let Some((v, expected)) = rest.split_once(", expected ")
+    {
+        let options = expected
+            .trim_start_matches("one of ")
+            .replace('`', "")
+            .replace(" or ", ", ");
+        return format!("{} is not one of: {options}", v.replace('`', "\""));
+    }
+    if let Some(rest) = msg.strip_prefix("unknown field ")
+        && let Some((f, expected)) = rest.split_once(", expected ")
+    {
+        let options = expected
+            .trim_start_matches("one of ")
+            .replace('`', "")
+            .replace(" or ", ", ");
+        let place = if table.is_empty() {
+            "the file".to_string()
+        } else {
+            format!("[{table}]")
+        };
+        return format!(
+            "there is no setting {} in {place}; it has: {options}",
+            f.replace('`', "")
+        );
+    }
+    msg.replace('`', "")
+}
+
 /// Recursively merge `over` into `base` (tables merge, other values replace).
 fn merge(base: &mut toml::Table, over: toml::Table) {
     for (k, v) in over {
@@ -238,6 +352,18 @@ impl Config {
     pub fn load(path: &Path) -> Result<Config, ConfigError> {
         match std::fs::read_to_string(path) {
             Ok(text) => Config::parse_merged(Some(path), &text),
+            // A file named on purpose (DROIDCTL_CONFIG) that is not there is a mistake, not
+            // a wish for the defaults (`/dev/null` asks for them).
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound && explicit(path) => {
+                Err(ConfigError {
+                    path: Some(path.to_path_buf()),
+                    line: None,
+                    key: None,
+                    message: "no such file (DROIDCTL_CONFIG names it; unset it for the usual \
+                              place, or name /dev/null for the defaults)"
+                        .into(),
+                })
+            }
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(Config::defaults()),
             Err(e) => Err(ConfigError {
                 path: Some(path.to_path_buf()),
@@ -265,26 +391,52 @@ impl Config {
         })?;
         let mut base: toml::Table = toml::from_str(DEFAULT_TOML)
             .map_err(|e| err(None, None, format!("shipped defaults: {e}")))?;
+        let user_keys = user
+            .get("keys")
+            .and_then(toml::Value::as_table)
+            .cloned()
+            .unwrap_or_default();
         // Key bindings replace per action, so one action can be rebound without repeating
         // the whole table; other sections merge key by key.
         merge(&mut base, user);
         let merged = toml::to_string(&base).map_err(|e| err(None, None, e.to_string()))?;
         let raw: RawConfig = toml::from_str(&merged).map_err(|e: toml::de::Error| {
-            // The merged text's lines are not the user's: point at the key in the user's file.
+            // The merged text's lines are not the user's: find the key the error is about
+            // in the merged text, then that key's line in the user's file.
             let msg = e.message().to_string();
-            let key = msg
+            let (table, name) = e
+                .span()
+                .and_then(|sp| key_at(&merged, sp.start))
+                .unwrap_or_default();
+            let unknown = msg
                 .split('`')
                 .nth(1)
-                .map(str::to_string)
-                .filter(|_| msg.contains("unknown field"));
-            let line = key.as_deref().and_then(|k| {
+                .filter(|_| msg.starts_with("unknown field"))
+                .map(str::to_string);
+            let name = unknown.unwrap_or(name);
+            let line = find_key_line(text, &table, &name).or_else(|| {
                 text.lines()
-                    .position(|l| l.trim_start().starts_with(k) && l.contains('='))
+                    .position(|l| l.trim_start().starts_with(name.as_str()) && l.contains('='))
                     .map(|i| i + 1)
+                    .filter(|_| !name.is_empty())
             });
-            err(line, key, msg)
+            let key = match (table.is_empty(), name.is_empty()) {
+                (_, true) => None,
+                (true, false) => Some(name.clone()),
+                (false, false) => Some(format!("{table}.{name}")),
+            };
+            err(line, key, in_words(&msg, &table))
         })?;
-        Config::from_raw(raw).map_err(|(section, key, message)| {
+        // The bindings the user wrote (`forward`, `log.pause`): a conflict names the one they
+        // touched, not the default it ran into.
+        let touched = |key: &str| match key.split_once('.') {
+            Some((table, name)) => user_keys
+                .get(table)
+                .and_then(toml::Value::as_table)
+                .is_some_and(|t| t.contains_key(name)),
+            None => user_keys.contains_key(key),
+        };
+        Config::from_raw(raw, &touched).map_err(|(section, key, message)| {
             // A context's binding (`log.pause`) sits in its own table (`[keys.packet_log]`).
             let (table, name) = match key.rsplit_once('.') {
                 Some((sub, name)) => (format!("{section}.{sub}"), name.to_string()),
@@ -299,9 +451,12 @@ impl Config {
     }
 
     /// Parse the bindings and check ranges: (section, key, message) on error.
-    fn from_raw(raw: RawConfig) -> Result<Config, (String, String, String)> {
-        let keymap =
-            KeyMap::from_config(&raw.keys).map_err(|(key, msg)| ("keys".to_string(), key, msg))?;
+    fn from_raw(
+        raw: RawConfig,
+        touched: &dyn Fn(&str) -> bool,
+    ) -> Result<Config, (String, String, String)> {
+        let keymap = KeyMap::from_config_with(&raw.keys, touched)
+            .map_err(|(key, msg)| ("keys".to_string(), key, msg))?;
         let g = raw.gamepad;
         let buttons =
             PadBindings::parse([&g.tripod, &g.bipod, &g.aim, &g.estop, &g.animation, &g.help])
@@ -379,6 +534,19 @@ impl Config {
                 return bad("keyboard", k, format!("{v} is out of range 20..=5000"));
             }
         }
+        // 0 passed the check and then every request failed at once (issue 27 point 7).
+        if !(MIN_REQUEST_TIMEOUT_MS..=MAX_REQUEST_TIMEOUT_MS)
+            .contains(&self.session.request_timeout_ms)
+        {
+            return bad(
+                "session",
+                "request_timeout_ms",
+                format!(
+                    "{} is out of range {MIN_REQUEST_TIMEOUT_MS}..={MAX_REQUEST_TIMEOUT_MS} (ms a droid has to answer a request)",
+                    self.session.request_timeout_ms
+                ),
+            );
+        }
         // Slower pacing would keep every command, the operator's stop included, waiting
         // that long (with a huge value, forever: found by the config fuzz target).
         if self.session.pacing_ms > MAX_PACING_MS {
@@ -446,13 +614,10 @@ mod tests {
         );
 
         let e = Config::parse_merged(Some(p), "[control]\nrate_hz = \"fast\"\n").unwrap_err();
-        assert!(
-            e.message.contains("integer") || e.message.contains("invalid type"),
-            "{e}"
-        );
+        assert!(e.message.contains("is not a whole number"), "{e}");
 
         let e = Config::parse_merged(Some(p), "[control]\nwarp = 9\n").unwrap_err();
-        assert_eq!(e.key.as_deref(), Some("warp"));
+        assert_eq!(e.key.as_deref(), Some("control.warp"));
         assert_eq!(e.line, Some(2));
 
         let e = Config::parse_merged(Some(p), "[control\nrate_hz = 1").unwrap_err();
@@ -467,6 +632,9 @@ mod tests {
             e.message.contains("turbo") && e.message.contains("forward"),
             "{e}"
         );
+        // Named on the binding the user touched, with its line.
+        assert_eq!(e.key.as_deref(), Some("keys.forward"), "{e}");
+        assert_eq!(e.line, Some(2));
 
         let e = Config::parse_merged(Some(p), "[gamepad]\ntripod = \"Z\"\n").unwrap_err();
         assert_eq!(e.key.as_deref(), Some("gamepad.tripod"));
@@ -486,6 +654,76 @@ mod tests {
         assert_eq!(e.key.as_deref(), Some("session.pacing_ms"));
         assert!(e.message.contains("0..=1000"), "{e}");
         assert!(Config::parse_merged(Some(p), "[session]\npacing_ms = 1000\n").is_ok());
+    }
+
+    #[test]
+    fn type_and_range_errors_name_line_and_key_in_words() {
+        let p = Path::new("c.toml");
+        let cases: &[(&str, &str, usize, &str)] = &[
+            (
+                "[control]\n\ncruise_speed = 300\n",
+                "control.cruise_speed",
+                3,
+                "300 is not a whole number from 0 to 255",
+            ),
+            (
+                "[control]\nrate_hz = \"fast\"\n",
+                "control.rate_hz",
+                2,
+                "is not a whole number",
+            ),
+            (
+                "[control]\nmode = \"fast\"\n",
+                "control.mode",
+                2,
+                "is not one of: hold, latched",
+            ),
+            (
+                "# mine\n[gamepad]\nenabled = 1\n",
+                "gamepad.enabled",
+                3,
+                "1 is not true or false",
+            ),
+            (
+                "[gamepad]\ndeadzone = \"x\"\n",
+                "gamepad.deadzone",
+                2,
+                "is not a number",
+            ),
+            (
+                "[keyboard]\nrelease_first_ms = -5\n",
+                "keyboard.release_first_ms",
+                2,
+                "-5 is not a whole number",
+            ),
+            (
+                "[session]\nrequest_timeout_ms = 0\n",
+                "session.request_timeout_ms",
+                2,
+                "0 is out of range 100..=60000",
+            ),
+            (
+                "[control]\nwarp = 9\n",
+                "control.warp",
+                2,
+                "there is no setting warp in [control]",
+            ),
+        ];
+        for (text, key, line, words) in cases {
+            let e = Config::parse_merged(Some(p), text).unwrap_err();
+            assert_eq!(e.key.as_deref(), Some(*key), "{text:?}: {e}");
+            assert_eq!(e.line, Some(*line), "{text:?}: {e}");
+            assert!(e.message.contains(words), "{text:?}: {e}");
+            let shown = e.to_string();
+            assert!(
+                shown.starts_with(&format!("c.toml:{line}: key `{key}`: ")),
+                "{shown}"
+            );
+            for serde in ["invalid value", "invalid type", "expected u8", "`"] {
+                assert!(!e.message.contains(serde), "in words: {shown}");
+            }
+        }
+        assert!(Config::parse_merged(Some(p), "[session]\nrequest_timeout_ms = 100\n").is_ok());
     }
 
     #[test]

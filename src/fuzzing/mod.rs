@@ -20,9 +20,11 @@ pub mod btsnoop;
 pub mod capture;
 pub mod config;
 pub mod decoder;
+pub mod fleet_capture;
 pub mod hci;
 pub mod mutate;
 pub mod packet_file;
+pub mod plot;
 pub mod relay_codec;
 pub mod relay_server;
 pub mod runner;
@@ -44,6 +46,8 @@ pub fn targets() -> Vec<&'static Target> {
         &btsnoop::TARGET,
         &hci::TARGET,
         &capture::TARGET,
+        &fleet_capture::TARGET,
+        &plot::TARGET,
         &script::TARGET,
         &config::TARGET,
         &packet_file::TARGET,

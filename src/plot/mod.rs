@@ -4,9 +4,15 @@
 //! from a built-in bitmap font, [`pixel`]) or an SVG (text left to the viewer's fonts).
 //!
 //! The samples come from a `run --json` output or from a capture folded as replay folds it
-//! ([`crate::capture::replay::samples`]).
+//! ([`read`]), streamed and reduced as they come ([`track`], [`decimate`]): memory does not
+//! grow with the input. A fleet's droids are drawn each in its own colour, named in the
+//! legend; only as many channel strips as stay legible at the size asked are drawn
+//! ([`strips_that_fit`]).
 
+pub mod decimate;
 pub mod pixel;
+pub mod read;
+pub mod track;
 
 use crate::mission::Sample;
 use crate::telemetry::history::Channel;
@@ -19,7 +25,7 @@ pub const PATH: RGBColor = RGBColor(20, 90, 200);
 /// Collision marks.
 pub const COLLISION: RGBColor = RGBColor(220, 30, 30);
 const START: RGBColor = RGBColor(30, 160, 60);
-const CHANNEL_COLOURS: [RGBColor; 6] = [
+pub const CHANNEL_COLOURS: [RGBColor; 6] = [
     RGBColor(200, 100, 0),
     RGBColor(120, 40, 160),
     RGBColor(0, 140, 140),
@@ -28,12 +34,53 @@ const CHANNEL_COLOURS: [RGBColor; 6] = [
     RGBColor(200, 0, 120),
 ];
 
+/// Each droid's colour in a fleet's plot (the path, its channels), in order.
+pub const DROID_COLOURS: [RGBColor; 10] = [
+    RGBColor(20, 90, 200),
+    RGBColor(220, 120, 0),
+    RGBColor(0, 150, 70),
+    RGBColor(150, 40, 170),
+    RGBColor(0, 160, 180),
+    RGBColor(140, 90, 40),
+    RGBColor(230, 60, 150),
+    RGBColor(100, 100, 100),
+    RGBColor(120, 160, 0),
+    RGBColor(60, 60, 160),
+];
+
+/// A channel strip needs this many pixels to stay legible (title, values, axis labels).
+pub const MIN_STRIP_PX: u32 = 100;
+
+/// How many channel strips stay legible in a picture `height` pixels high: the floor keeps
+/// at least 40 % of the height, each strip at least [`MIN_STRIP_PX`], and the last strip its
+/// time axis.
+pub fn strips_that_fit(height: u32) -> usize {
+    (height * 60 / 100).saturating_sub(40) as usize / MIN_STRIP_PX as usize
+}
+
 /// What a plot shows.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone)]
 pub struct Run {
     pub title: String,
-    pub samples: Vec<Sample>,
+    pub tracks: track::Tracks,
     pub channels: Vec<Channel>,
+}
+
+impl Run {
+    /// A run of one droid from its samples (the channels: `channels`, or the defaults).
+    pub fn of_samples(title: &str, samples: &[Sample], channels: &[Channel]) -> Run {
+        let mut tracks = track::Tracks::new(channels);
+        for s in samples {
+            // One droid: never more than one track.
+            let _ = tracks.push(None, s);
+        }
+        let channels = tracks.channels();
+        Run {
+            title: title.to_string(),
+            tracks,
+            channels,
+        }
+    }
 }
 
 /// Where the floor plot landed: its pixel rect and the ranges its axes span, so a caller (a
@@ -80,30 +127,6 @@ pub fn value(c: Channel, s: &Sample) -> Option<f32> {
     .filter(|v| v.is_finite())
 }
 
-/// Points on the floor, cm.
-type Points = Vec<(f64, f64)>;
-
-/// The floor positions, and where collisions happened (the position of the sample whose
-/// count went up).
-fn path(samples: &[Sample]) -> (Points, Points) {
-    let mut pts = Vec::new();
-    let mut hits = Vec::new();
-    let mut count = samples.first().map_or(0, |s| s.collisions);
-    for s in samples {
-        if let (Some(x), Some(y)) = (s.x_cm, s.y_cm)
-            && x.is_finite()
-            && y.is_finite()
-        {
-            pts.push((x as f64, y as f64));
-            if s.collisions > count {
-                hits.push((x as f64, y as f64));
-            }
-        }
-        count = count.max(s.collisions);
-    }
-    (pts, hits)
-}
-
 /// A range around `lo..hi` with a margin, never empty.
 fn padded(lo: f64, hi: f64) -> (f64, f64) {
     let pad = ((hi - lo) * 0.08).max(5.0);
@@ -123,28 +146,34 @@ pub fn draw<DB: DrawingBackend>(
 ) -> DrawResult<FloorFrame> {
     root.fill(&WHITE).map_err(err)?;
     let (w, h) = root.dim_in_pixel();
-    let strips = run.channels.len().max(1) as u32;
+    let strips = run.channels.len() as u32;
     let floor_h = if run.channels.is_empty() {
         h
     } else {
-        (h * 55 / 100).max(h.saturating_sub(strips * 160))
+        h.saturating_sub((strips * 160 + 40).min(h * 60 / 100))
     };
     let (floor_area, rest) = root.split_vertically(floor_h);
-    let (pts, hits) = path(&run.samples);
-    let (x0, x1) = pts
-        .iter()
-        .fold(None, |a: Option<(f64, f64)>, p| {
-            Some(a.map_or((p.0, p.0), |(l, h)| (l.min(p.0), h.max(p.0))))
-        })
-        .unwrap_or((-50.0, 50.0));
-    let (y0, y1) = pts
-        .iter()
-        .fold(None, |a: Option<(f64, f64)>, p| {
-            Some(a.map_or((p.1, p.1), |(l, h)| (l.min(p.1), h.max(p.1))))
-        })
-        .unwrap_or((-50.0, 50.0));
-    let (mut x0, mut x1) = padded(x0, x1);
-    let (mut y0, mut y1) = padded(y0, y1);
+    let droids = &run.tracks.droids;
+    let fleet = run.tracks.is_fleet();
+    let colour = |i: usize| {
+        if fleet {
+            DROID_COLOURS[i % DROID_COLOURS.len()]
+        } else {
+            PATH
+        }
+    };
+    let span = |d: usize| {
+        droids
+            .iter()
+            .filter_map(|t| t.path.range(d))
+            .fold(None, |a: Option<(f64, f64)>, (lo, hi)| {
+                let (lo, hi) = (lo as f64, hi as f64);
+                Some(a.map_or((lo, hi), |(l, h)| (l.min(lo), h.max(hi))))
+            })
+            .unwrap_or((-50.0, 50.0))
+    };
+    let (mut x0, mut x1) = padded(span(0).0, span(0).1);
+    let (mut y0, mut y1) = padded(span(1).0, span(1).1);
     // The same cm per pixel on both axes: widen the narrower span to the area's shape.
     let (label_x, label_y, margin, caption) = (45, 70, 15, 30);
     // A band at the top is kept free of data for the legend.
@@ -178,26 +207,47 @@ pub fn draw<DB: DrawingBackend>(
         .light_line_style(RGBColor(235, 235, 235))
         .draw()
         .map_err(err)?;
-    chart
-        .draw_series(LineSeries::new(pts.iter().copied(), PATH.stroke_width(3)))
-        .map_err(err)?
-        .label("path")
-        .legend(|(x, y)| PathElement::new([(x, y), (x + 16, y)], PATH.stroke_width(3)));
-    if let Some(p) = pts.first() {
+    for (i, t) in droids.iter().enumerate() {
+        let c = colour(i);
+        let pts: Vec<(f64, f64)> = t
+            .path
+            .points()
+            .iter()
+            .map(|p| (p.v[0] as f64, p.v[1] as f64))
+            .collect();
+        let label = match (&t.name, fleet) {
+            (Some(n), true) => n.clone(),
+            _ => "path".to_string(),
+        };
         chart
-            .draw_series([Circle::new(*p, 6, START.filled())])
+            .draw_series(LineSeries::new(pts, c.stroke_width(3)))
+            .map_err(err)?
+            .label(label)
+            .legend(move |(x, y)| PathElement::new([(x, y), (x + 16, y)], c.stroke_width(3)));
+    }
+    let starts: Vec<(f64, f64)> = droids
+        .iter()
+        .filter_map(|t| t.path.ends())
+        .map(|(p, _)| (p.v[0] as f64, p.v[1] as f64))
+        .collect();
+    if !starts.is_empty() {
+        chart
+            .draw_series(starts.iter().map(|p| Circle::new(*p, 6, START.filled())))
             .map_err(err)?
             .label("start")
             .legend(|(x, y)| Circle::new((x + 8, y), 5, START.filled()));
     }
-    if !hits.is_empty() {
+    let hit_count: u64 = droids.iter().map(|t| t.hit_count).sum();
+    if hit_count > 0 {
         chart
             .draw_series(
-                hits.iter()
+                droids
+                    .iter()
+                    .flat_map(|t| t.hits.iter())
                     .map(|p| Cross::new(*p, 8, COLLISION.stroke_width(3))),
             )
             .map_err(err)?
-            .label(format!("collision ({})", hits.len()))
+            .label(format!("collision ({hit_count})"))
             .legend(|(x, y)| Cross::new((x + 8, y), 5, COLLISION.stroke_width(2)));
     }
     chart
@@ -217,23 +267,19 @@ pub fn draw<DB: DrawingBackend>(
     };
 
     // The channels, one strip each, sharing the time axis.
-    let t_end = run
-        .samples
+    let t_end = droids
         .iter()
-        .map(|s| s.t_ms as f64 / 1000.0)
+        .map(|t| t.t_end_ms as f64 / 1000.0)
         .fold(0.0f64, f64::max)
         .max(0.1);
-    let areas = rest.split_evenly((run.channels.len(), 1));
+    let areas = rest.split_evenly((run.channels.len().max(1), 1));
     for (i, (c, area)) in run.channels.iter().zip(areas.iter()).enumerate() {
-        let series: Vec<(f64, f64)> = run
-            .samples
+        let (lo, hi) = droids
             .iter()
-            .filter_map(|s| value(*c, s).map(|v| (s.t_ms as f64 / 1000.0, v as f64)))
-            .collect();
-        let (lo, hi) = series
-            .iter()
-            .fold(None, |a: Option<(f64, f64)>, p| {
-                Some(a.map_or((p.1, p.1), |(l, h)| (l.min(p.1), h.max(p.1))))
+            .filter_map(|t| t.channel(*c).and_then(|d| d.range(0)))
+            .fold(None, |a: Option<(f64, f64)>, (lo, hi)| {
+                let (lo, hi) = (lo as f64, hi as f64);
+                Some(a.map_or((lo, hi), |(l, h)| (l.min(lo), h.max(hi))))
             })
             .unwrap_or(c.range());
         let pad = ((hi - lo) * 0.1).max(if hi == lo { 1.0 } else { 0.0 });
@@ -254,10 +300,25 @@ pub fn draw<DB: DrawingBackend>(
             mesh.x_desc("time (s)");
         }
         mesh.draw().map_err(err)?;
-        let colour = CHANNEL_COLOURS[i % CHANNEL_COLOURS.len()];
-        chart
-            .draw_series(LineSeries::new(series, colour.stroke_width(2)))
-            .map_err(err)?;
+        // An angle that wraps (yaw at ±180°) is cut where it wraps, not joined by a
+        // vertical stroke across the strip.
+        let (clo, chi) = c.range();
+        let wrap = (chi - clo >= 360.0).then_some((chi - clo) as f32);
+        for (k, t) in droids.iter().enumerate() {
+            let Some(d) = t.channel(*c) else {
+                continue;
+            };
+            let stroke = if fleet {
+                colour(k)
+            } else {
+                CHANNEL_COLOURS[i % CHANNEL_COLOURS.len()]
+            };
+            for run in decimate::runs(&d.points(), wrap) {
+                chart
+                    .draw_series(LineSeries::new(run, stroke.stroke_width(2)))
+                    .map_err(err)?;
+            }
+        }
     }
     root.present().map_err(err)?;
     Ok(frame)
@@ -282,14 +343,4 @@ pub fn svg(run: &Run, size: (u32, u32)) -> DrawResult<String> {
         draw(&root, run)?;
     }
     Ok(text)
-}
-
-/// The channels a plot shows when none are asked for: the wheels on Robi 42, else speed
-/// and yaw.
-pub fn default_channels(samples: &[Sample]) -> Vec<Channel> {
-    if samples.iter().any(|s| s.motor_left_rad_s.is_some()) {
-        vec![Channel::MotorLeft, Channel::MotorRight]
-    } else {
-        vec![Channel::Speed, Channel::Yaw]
-    }
 }

@@ -84,6 +84,12 @@ impl Serialize for Value {
         match self {
             Value::Bool(b) => s.serialize_bool(*b),
             Value::Int(i) => s.serialize_i64(*i),
+            // Most fields are f32 on the wire, widened: printed at f32's shortest round trip
+            // (`-125.6943`, not `-125.69429779052734`: noise, and most of the cost of JSON
+            // output; issue 27 point 10). A value f32 cannot hold exactly keeps f64's.
+            Value::Float(x) if x.is_finite() && (*x as f32) as f64 == *x => {
+                s.serialize_f32(*x as f32)
+            }
             Value::Float(x) if x.is_finite() => s.serialize_f64(*x),
             Value::Float(_) => s.serialize_none(),
             Value::Hex { value, .. } => s.serialize_u64(*value),
@@ -167,4 +173,24 @@ pub fn fields_line(fields: &Fields) -> String {
         .map(|(n, v)| format!("{n}={v}"))
         .collect::<Vec<_>>()
         .join(" ")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn floats_print_at_their_own_precision() {
+        let json = |v: Value| serde_json::to_string(&v).unwrap();
+        assert_eq!(json(Value::Float(-125.694_3_f32 as f64)), "-125.6943");
+        assert_eq!(json(Value::Float(0.1_f32 as f64)), "0.1");
+        // A value computed in f64 keeps its digits.
+        assert_eq!(json(Value::Float(4.1)), "4.1");
+        assert_eq!(json(Value::Float(1.0 / 3.0)), "0.3333333333333333");
+        assert_eq!(json(Value::Float(f64::NAN)), "null");
+        for x in [1.0e-7_f32, 3.402_823_5e38, -0.0, 12_345.679] {
+            let back: f32 = json(Value::Float(x as f64)).parse().unwrap();
+            assert_eq!(back, x);
+        }
+    }
 }

@@ -14,6 +14,9 @@ use std::sync::{Arc, Mutex};
 /// Droids start this far apart along the x axis.
 pub const SPACING_CM: f32 = 60.0;
 
+/// A fleet's droids start at least this far from the walls (centre to wall).
+pub const EDGE_CM: f32 = 40.0;
+
 #[derive(Debug, Clone, Copy)]
 struct Occupant {
     x: f32,
@@ -80,11 +83,34 @@ impl SharedRoom {
         }
     }
 
-    /// Where the `n` droids of a fleet start: in a row along x, centred, [`SPACING_CM`] apart.
+    /// Where the `n` droids of a fleet start, inside the room (issue 27 point 9: 16 droids in
+    /// a row 60 cm apart sat at ±450 cm, the walls at ±190): in a row along x, centred,
+    /// [`SPACING_CM`] apart, while the row fits; else in a centred grid of rows as square as
+    /// can be, [`SPACING_CM`] apart while it fits (36 droids do) and closer beyond, always at
+    /// least [`EDGE_CM`] from the walls of the shared room (the default room every model has).
     pub fn origins(n: usize) -> Vec<(f32, f32)> {
-        let mid = (n.saturating_sub(1)) as f32 / 2.0;
+        let room = super::SimConfig::default().room_cm;
+        let usable = ((room.0.min(room.1)) - 2.0 * EDGE_CM).max(0.0);
+        let fits = (usable / SPACING_CM) as usize + 1;
+        let cols = if n <= fits {
+            n.max(1)
+        } else {
+            (n as f64).sqrt().ceil() as usize
+        };
+        let rows = n.div_ceil(cols).max(1);
+        let widest = cols.max(rows);
+        let spacing = if widest > 1 {
+            SPACING_CM.min(usable / (widest - 1) as f32)
+        } else {
+            SPACING_CM
+        };
+        let mid_x = (cols - 1) as f32 / 2.0;
+        let mid_y = (rows - 1) as f32 / 2.0;
         (0..n)
-            .map(|i| ((i as f32 - mid) * SPACING_CM, 0.0))
+            .map(|i| {
+                let (r, c) = (i / cols, i % cols);
+                ((c as f32 - mid_x) * spacing, (mid_y - r as f32) * spacing)
+            })
             .collect()
     }
 
@@ -177,5 +203,28 @@ mod tests {
             SharedRoom::origins(3),
             vec![(-SPACING_CM, 0.0), (0.0, 0.0), (SPACING_CM, 0.0)]
         );
+    }
+
+    #[test]
+    fn every_fleet_starts_inside_the_room_and_apart() {
+        let half = crate::sim::SimConfig::default().room_cm.0 / 2.0 - EDGE_CM;
+        for n in 1..=64 {
+            let o = SharedRoom::origins(n);
+            assert_eq!(o.len(), n);
+            for p in &o {
+                assert!(
+                    p.0.abs() <= half + 1e-3 && p.1.abs() <= half + 1e-3,
+                    "{n}: {p:?}"
+                );
+            }
+            let closest = o
+                .iter()
+                .enumerate()
+                .flat_map(|(i, a)| o[i + 1..].iter().map(move |b| (a.0 - b.0).hypot(a.1 - b.1)))
+                .fold(f32::MAX, f32::min);
+            // 60 cm apart as far as 36 droids; never touching beyond (radius 10 cm each).
+            let want = if n <= 36 { SPACING_CM - 1e-3 } else { 25.0 };
+            assert!(closest >= want, "{n} droids: {closest} cm apart");
+        }
     }
 }
