@@ -354,3 +354,42 @@ fn each_model_meets_the_wall_at_its_own_radius() {
         assert!((y - (200.0 - radius)).abs() < 0.01, "{model:?} at y {y}");
     }
 }
+
+/// Issue 29 point 5: BOLT says its scrolling text is done when every column has scrolled,
+/// one a frame at the speed's frames per second: one character's 8 columns at 10 frames/s
+/// take 0.8 s (it said done after 0.19 s for three), eight characters 6.4 s.
+#[test]
+fn bolt_says_scrolling_text_is_done_after_a_frame_per_column() {
+    use droidctl::protocol::notify::RobotEvent;
+    use droidctl::protocol::v2::{cmd, types::ScrollText};
+    for (text, fps, takes) in [
+        ("A", 10u8, 800u64),
+        ("ABC", 10, 2400),
+        ("DROIDCTL", 10, 6400),
+    ] {
+        let mut h = Host::connected(Model::Bolt);
+        let sent = h.now;
+        let scroll = cmd::set_compressed_frame_player_text_scrolling(
+            0,
+            255,
+            0,
+            fps,
+            false,
+            ScrollText(text.into()),
+        );
+        h.send(&scroll.into());
+        h.run(Duration::from_secs(8));
+        let done: Vec<Duration> = h
+            .notes
+            .iter()
+            .filter(|(_, n)| matches!(n, Notification::Robot(RobotEvent::MatrixTextDone)))
+            .map(|(at, _)| *at - sent)
+            .collect();
+        assert_eq!(done.len(), 1, "{text}: {done:?}");
+        let ms = done[0].as_millis() as u64;
+        assert!(
+            (takes..takes + 20).contains(&ms),
+            "{text} at {fps} frames/s: done after {ms} ms, not {takes}"
+        );
+    }
+}
