@@ -211,6 +211,33 @@ async fn writes_are_paced_per_model_even_when_called_faster() {
     }
 }
 
+/// The emergency stop's write does not wait out the pacing slot; the pacing after it counts
+/// from it.
+#[tokio::test(start_paused = true)]
+async fn an_urgent_write_skips_the_pacing_slot() {
+    let (_c, droid, mut link) = setup(Model::R2D2);
+    let mut conn = open(&mut link).await;
+    let ch = link.profile().write.characteristic;
+    let t0 = Instant::now();
+    conn.writer.write(&[0u8; 5]).await.unwrap();
+    sleep(Duration::from_millis(10)).await;
+    conn.writer
+        .write_urgent(droidctl::gatt::Endpoint::Api, &[1u8; 5])
+        .await
+        .unwrap();
+    conn.writer.write(&[2u8; 5]).await.unwrap();
+    let at: Vec<u64> = droid
+        .writes_to(ch)
+        .iter()
+        .map(|(t, _)| t.duration_since(t0).as_millis() as u64)
+        .collect();
+    assert_eq!(
+        at,
+        [0, 10, 130],
+        "the urgent write at once, the next one a slot after it"
+    );
+}
+
 #[tokio::test(start_paused = true)]
 async fn notifications_are_one_byte_stream() {
     let (_c, droid, mut link) = setup(Model::R2D2);

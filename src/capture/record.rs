@@ -360,6 +360,29 @@ struct RecordingWriter {
     closed: Arc<std::sync::atomic::AtomicBool>,
 }
 
+impl RecordingWriter {
+    /// Record the write, then hand it to the link (as urgent as it was asked).
+    fn recorded<'a>(
+        &'a mut self,
+        to: Endpoint,
+        chunk: &'a [u8],
+        urgent: bool,
+    ) -> BoxFuture<'a, Result<(), LinkError>> {
+        Box::pin(async move {
+            self.rec.record(Event::Out(to, chunk.to_vec()));
+            let r = if urgent {
+                self.inner.write_urgent(to, chunk).await
+            } else {
+                self.inner.write_to(to, chunk).await
+            };
+            if let Err(e) = &r {
+                self.rec.record(Event::WriteFailed(e.message.clone()));
+            }
+            r
+        })
+    }
+}
+
 impl LinkWriter for RecordingWriter {
     fn write<'a>(&'a mut self, chunk: &'a [u8]) -> BoxFuture<'a, Result<(), LinkError>> {
         self.write_to(Endpoint::Api, chunk)
@@ -370,14 +393,15 @@ impl LinkWriter for RecordingWriter {
         to: Endpoint,
         chunk: &'a [u8],
     ) -> BoxFuture<'a, Result<(), LinkError>> {
-        Box::pin(async move {
-            self.rec.record(Event::Out(to, chunk.to_vec()));
-            let r = self.inner.write_to(to, chunk).await;
-            if let Err(e) = &r {
-                self.rec.record(Event::WriteFailed(e.message.clone()));
-            }
-            r
-        })
+        self.recorded(to, chunk, false)
+    }
+
+    fn write_urgent<'a>(
+        &'a mut self,
+        to: Endpoint,
+        chunk: &'a [u8],
+    ) -> BoxFuture<'a, Result<(), LinkError>> {
+        self.recorded(to, chunk, true)
     }
 
     fn close(&mut self) -> BoxFuture<'_, ()> {

@@ -80,6 +80,16 @@ pub trait LinkWriter: Send {
             }),
         }
     }
+    /// Write one chunk to `to` now, without waiting for the link's own pacing slot: the
+    /// emergency stop's path (the session's pacing is skipped for it too). The pacing after
+    /// it counts from this write. Links that do not pace need not override this.
+    fn write_urgent<'a>(
+        &'a mut self,
+        to: Endpoint,
+        chunk: &'a [u8],
+    ) -> BoxFuture<'a, Result<(), LinkError>> {
+        self.write_to(to, chunk)
+    }
     /// Close the connection (best effort).
     fn close(&mut self) -> BoxFuture<'_, ()>;
 }

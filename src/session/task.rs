@@ -576,7 +576,7 @@ impl Task {
         tracing::info!(command = %cmd.name(), "emergency stop written ahead of pacing");
         self.log_packet(codec, Direction::Out, packet, Some(&cmd));
         for (to, chunk) in wire {
-            conn.writer.write_to(to, &chunk).await?;
+            conn.writer.write_urgent(to, &chunk).await?;
         }
         Ok(())
     }

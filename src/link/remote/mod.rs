@@ -328,6 +328,35 @@ impl LinkWriter for RemoteWriter {
         to: Endpoint,
         chunk: &'a [u8],
     ) -> BoxFuture<'a, Result<(), LinkError>> {
+        self.write_paced(to, chunk, false)
+    }
+
+    /// The emergency stop: not held back by the pacing slot.
+    fn write_urgent<'a>(
+        &'a mut self,
+        to: Endpoint,
+        chunk: &'a [u8],
+    ) -> BoxFuture<'a, Result<(), LinkError>> {
+        self.write_paced(to, chunk, true)
+    }
+
+    fn close(&mut self) -> BoxFuture<'_, ()> {
+        Box::pin(async move {
+            if let Some(c) = self.client.take() {
+                c.close().await;
+            }
+        })
+    }
+}
+
+impl RemoteWriter {
+    /// Write to `to`'s characteristic through the relay, paced unless `urgent`.
+    fn write_paced<'a>(
+        &'a mut self,
+        to: Endpoint,
+        chunk: &'a [u8],
+        urgent: bool,
+    ) -> BoxFuture<'a, Result<(), LinkError>> {
         Box::pin(async move {
             let ch = self.profile.endpoint(to).ok_or_else(|| {
                 LinkError::fatal(format!("{} has no {} input", self.name, to.name()))
@@ -338,7 +367,7 @@ impl LinkWriter for RemoteWriter {
                 .ok_or_else(|| LinkError::transient("the relay link is closed"))?;
             let uuid = ch.characteristic.to_string();
             for piece in chunk.chunks(self.profile.chunk_size.max(1)) {
-                if let Some(at) = self.next_write {
+                if let Some(at) = self.next_write.filter(|_| !urgent) {
                     sleep_until(at).await;
                 }
                 let (u, data) = (uuid.clone(), piece.to_vec());
@@ -356,14 +385,6 @@ impl LinkWriter for RemoteWriter {
                 r.map_err(|e| LinkError::transient(format!("writing to {}: {e}", self.name)))?;
             }
             Ok(())
-        })
-    }
-
-    fn close(&mut self) -> BoxFuture<'_, ()> {
-        Box::pin(async move {
-            if let Some(c) = self.client.take() {
-                c.close().await;
-            }
         })
     }
 }
