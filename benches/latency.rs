@@ -16,9 +16,9 @@
 //! driven too in mirror mode (`fleet mirrored`); Space timed to the stop taken by each
 //! droid's link, the last of the four (BB-9E, whose stop the app writes last) reported beside
 //! the chosen one. For every emergency stop the time is split where it goes: the key press to
-//! the session logging the stop (the app's event loop, the session task waking: the stop is
-//! encoded and logged just before its write), the log to the link's write being called, and
-//! the write itself (the link: btleplug, D-Bus, BlueZ; any pacing inside the link).
+//! the link's write of the stop being called (the app's event loop, the session task waking,
+//! the rest of a half-written packet) and the write itself (the link: btleplug, D-Bus, BlueZ,
+//! and any pacing inside the link).
 //!
 //! Between inputs it waits a random 0–250 ms, so inputs land anywhere in the 100 ms control
 //! tick and the 120 ms pacing slot. Prints p50, p99 and the maximum per input.
@@ -37,7 +37,7 @@ use droidctl::gatt::Endpoint;
 use droidctl::link::{Connection, Link, LinkError, LinkWriter};
 use droidctl::model::Model;
 use droidctl::rng::Rng;
-use droidctl::session::{Direction, LinkState, LogItem, SessionHandle};
+use droidctl::session::LinkState;
 use droidctl::teleop::gamepad::{Axis, PadEvent};
 use droidctl::teleop::held::ReleaseMode;
 use futures_util::future::BoxFuture;
@@ -58,12 +58,10 @@ struct Drive {
     speed: u8,
 }
 
-/// One droid's drive commands: as its link took them (read back with the droid's family),
-/// and as its session logged them (encoded, just before the write).
+/// One droid's drive commands as its link took them (read back with the droid's family).
 struct Recorded {
     reader: Box<dyn Reader>,
     drives: Vec<Drive>,
-    logged: Vec<(Instant, u8)>,
 }
 
 type Rec = Arc<Mutex<Recorded>>;
@@ -90,7 +88,6 @@ fn timed(
     let rec = Arc::new(Mutex::new(Recorded {
         reader: droidctl::family::for_model(model).side_reader(Side::Host, false),
         drives: Vec::new(),
-        logged: Vec::new(),
     }));
     let link = Timed {
         inner: link,
@@ -98,22 +95,6 @@ fn timed(
         written: written.clone(),
     };
     (Box::new(link), rec)
-}
-
-/// Note each drive command `session` logs as sent, at the session's own time (`base` is
-/// taken just before the session started).
-fn watch_log(session: &SessionHandle, base: Instant, rec: Rec) {
-    let mut log = session.subscribe_log();
-    tokio::spawn(async move {
-        while let Ok(e) = log.recv().await {
-            if e.dir == Direction::Out
-                && let LogItem::Packet { packet, .. } = &e.item
-                && let Some(speed) = drive_speed(packet)
-            {
-                rec.lock().unwrap().logged.push((base + e.at, speed));
-            }
-        }
-    });
 }
 
 impl TimedWriter {
@@ -263,34 +244,11 @@ impl Bench {
     }
 }
 
-/// A stop found on a droid: its sample and when its session logged it (`None` when the log
-/// lagged).
-struct Stop {
-    sample: Sample,
-    logged: Option<Instant>,
-}
-
-/// The stops of `samples` on the droid `rec`, with the session's log time of each.
-fn stops(samples: &[Sample], rec: &Rec) -> Vec<Stop> {
-    let r = rec.lock().unwrap();
-    samples
-        .iter()
-        .map(|&sample| Stop {
-            sample,
-            logged: r
-                .logged
-                .iter()
-                .find(|(t, s)| *t >= sample.since && *s == 0)
-                .map(|(t, _)| *t),
-        })
-        .collect()
-}
-
 #[derive(Default)]
 struct Results {
     press: Vec<Sample>,
     release: Vec<Sample>,
-    estop: Vec<Stop>,
+    estop: Vec<Sample>,
     stick: Vec<Sample>,
     stick_release: Vec<Sample>,
 }
@@ -344,26 +302,31 @@ async fn measure(link: Box<dyn Link>, model: Model, reps: usize) -> (Results, u3
     let (written_tx, written) = watch::channel(0);
     let (link, rec) = timed(link, model, &Arc::new(written_tx));
     let config = Config::defaults();
-    let base = Instant::now();
     let session = droidctl::session::start(
         link,
         droidctl::cli::fleet::session_config(model, &config, true),
     );
-    watch_log(&session, base, rec.clone());
     let io = inputs();
     let opts = options(config, model);
     let app_session = session.clone();
     let app_inputs = io.app;
     let app = tokio::spawn(async move {
         let mut terminal = terminal();
-        run::run(&mut terminal, app_session, opts, app_inputs, droidctl::ui::draw).await
+        run::run(
+            &mut terminal,
+            app_session,
+            opts,
+            app_inputs,
+            droidctl::ui::draw,
+        )
+        .await
     });
     // Connected, set up, standing in tripod.
     sleep(Duration::from_secs(5)).await;
     let mut b = Bench {
         term: io.term,
         pad: io.pad,
-        droids: vec![rec.clone()],
+        droids: vec![rec],
         written,
         rng: Rng::new(21),
         missed: 0,
@@ -375,7 +338,6 @@ async fn measure(link: Box<dyn Link>, model: Model, reps: usize) -> (Results, u3
     let w = Key::ch('w');
     let space = space();
     let mut r = Results::default();
-    let mut estops = Vec::new();
     let stick = |v: f32| PadEvent::Axis(Axis::LeftY, v);
     for _ in 0..reps {
         b.pause(0, 250).await;
@@ -391,7 +353,7 @@ async fn measure(link: Box<dyn Link>, model: Model, reps: usize) -> (Results, u3
         b.pause(200, 250).await;
         b.key(w, KeyKind::Press).await;
         b.pause(300, 400).await;
-        estops.extend(
+        r.estop.extend(
             b.timed_one(Want::Stop, async |b| b.key(space, KeyKind::Press).await)
                 .await,
         );
@@ -415,14 +377,13 @@ async fn measure(link: Box<dyn Link>, model: Model, reps: usize) -> (Results, u3
         session.shutdown_stopped(vec![exit.stop]),
     )
     .await;
-    r.estop = stops(&estops, &rec);
     (r, b.missed)
 }
 
 /// The emergency stop of a fleet, per droid of it (fleet order).
 struct FleetResults {
     names: Vec<String>,
-    stops: Vec<Vec<Stop>>,
+    stops: Vec<Vec<Sample>>,
     missed: u32,
 }
 
@@ -443,11 +404,7 @@ async fn measure_fleet(found: Vec<Found>, reps: usize, mirrored: bool) -> FleetR
             f.into_spec(c)
         })
         .collect();
-    let base = Instant::now();
     let fleet = Fleet::start(specs);
-    for (m, rec) in fleet.members().iter().zip(&recs) {
-        watch_log(&m.session, base, rec.clone());
-    }
     for m in fleet.members() {
         let mut st = m.session.watch_state();
         let up = tokio::time::timeout(Duration::from_secs(60), async {
@@ -506,11 +463,7 @@ async fn measure_fleet(found: Vec<Found>, reps: usize, mirrored: bool) -> FleetR
     .await;
     FleetResults {
         names: fleet.members().iter().map(|m| m.name.clone()).collect(),
-        stops: samples
-            .iter()
-            .zip(&recs)
-            .map(|(s, rec)| stops(s, rec))
-            .collect(),
+        stops: samples,
         missed: b.missed,
     }
 }
@@ -537,31 +490,20 @@ fn line(what: &str, v: Vec<Duration>) {
     }
 }
 
-/// An emergency stop's latency and where it went: the key press to the session logging the
-/// stop (the app's event loop and the session task waking), the log to the link's write
-/// being called, and the write (the link).
-fn stop_lines(what: &str, stops: &[Stop]) {
-    line(what, stops.iter().map(|s| s.sample.latency()).collect());
-    let split: Vec<(Duration, Duration, Duration)> = stops
-        .iter()
-        .filter_map(|s| {
-            let logged = s.logged?;
-            let d = s.sample.drive;
-            Some((
-                logged.saturating_duration_since(s.sample.since),
-                d.called.saturating_duration_since(logged),
-                d.at - d.called,
-            ))
-        })
-        .collect();
-    let part = |f: fn(&(Duration, Duration, Duration)) -> Duration| {
-        quantiles(split.iter().map(f).collect()).unwrap_or((f64::NAN, f64::NAN, f64::NAN))
+/// An emergency stop's latency and where it went: the key press to the link's write of the
+/// stop being called (the app's event loop, the session task waking, the rest of a packet
+/// half written), and the write (the link, with any pacing of its own).
+fn stop_lines(what: &str, stops: &[Sample]) {
+    line(what, stops.iter().map(Sample::latency).collect());
+    let part = |f: fn(&Sample) -> Duration| {
+        quantiles(stops.iter().map(f).collect()).unwrap_or((f64::NAN, f64::NAN, f64::NAN))
     };
-    let (a, b, c) = (part(|s| s.0), part(|s| s.1), part(|s| s.2));
+    let called = part(|s| s.drive.called.saturating_duration_since(s.since));
+    let write = part(|s| s.drive.at - s.drive.called);
     println!(
-        "    where (p50 / p99, ms): key to logged {:.1} / {:.1}; logged to write {:.1} / {:.1}; \
-         the write {:.1} / {:.1}",
-        a.0, a.1, b.0, b.1, c.0, c.1
+        "    where (p50 / p99 / max, ms): key to the write called {:.1} / {:.1} / {:.1}; \
+         the write {:.1} / {:.1} / {:.1}",
+        called.0, called.1, called.2, write.0, write.1, write.2
     );
 }
 
@@ -666,7 +608,10 @@ fn fleet_both(
     reps: usize,
     found: impl AsyncFn() -> Vec<Found>,
 ) {
-    for (mirrored, how) in [(false, "the other three idle"), (true, "mirror mode: all four driving")] {
+    for (mirrored, how) in [
+        (false, "the other three idle"),
+        (true, "mirror mode: all four driving"),
+    ] {
         let r = rt.block_on(async {
             let f = found().await;
             measure_fleet(f, reps, mirrored).await
