@@ -142,6 +142,20 @@ impl LinkWriter for TimedWriter {
         })
     }
 
+    /// The emergency stop's write, timed the same way (and as urgent as it was asked).
+    fn write_urgent<'a>(
+        &'a mut self,
+        to: Endpoint,
+        chunk: &'a [u8],
+    ) -> BoxFuture<'a, Result<(), LinkError>> {
+        Box::pin(async move {
+            let called = Instant::now();
+            let r = self.inner.write_urgent(to, chunk).await;
+            self.note(to, chunk, called);
+            r
+        })
+    }
+
     fn close(&mut self) -> BoxFuture<'_, ()> {
         self.inner.close()
     }
