@@ -20,7 +20,7 @@ type Writes = Arc<Mutex<Vec<(Duration, u8)>>>;
 /// the bridge started, speed) are collected.
 struct Rig {
     bridge: Arc<Bridge>,
-    rx: mpsc::Receiver<Out>,
+    rx: outbox::Outputs,
     writes: Vec<Writes>,
     start: Instant,
 }
