@@ -688,4 +688,6 @@ async fn control(bridge: std::sync::Weak<Bridge>) {
 }
 
 #[cfg(test)]
+mod safety_tests;
+#[cfg(test)]
 mod tests;
