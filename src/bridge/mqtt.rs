@@ -544,3 +544,59 @@ async fn connection(
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn repeated_immediate_ends_are_a_takeover_and_a_long_connection_resets_the_count() {
+        let t0 = Instant::now();
+        let at = |ms: u64| t0 + Duration::from_millis(ms);
+        let mut t = Takeovers::default();
+        // The broker restarting: a long connection, then failed attempts, then back.
+        t.connected(at(0));
+        assert!(!t.lost(at(60_000)));
+        assert!(!t.lost(at(61_000)));
+        assert!(!t.lost(at(62_000)));
+        // Another client with the same id: ended within moments each time.
+        let mut now = 70_000;
+        for n in 1..=TAKEOVERS {
+            t.connected(at(now));
+            now += 300;
+            assert_eq!(t.lost(at(now)), n == TAKEOVERS, "takeover {n}");
+            now += 250;
+        }
+        // Two quick ends and a long connection between: no takeover.
+        let mut t = Takeovers::default();
+        for (up, down) in [(0, 100), (400, 500), (800, 10_000), (10_300, 10_400)] {
+            t.connected(at(up));
+            assert!(!t.lost(at(down)));
+        }
+    }
+
+    #[test]
+    fn the_default_client_id_is_unique_per_process() {
+        let (a, b) = (default_client_id(), default_client_id());
+        let pid = format!("droidctl-{}-", std::process::id());
+        assert!(a.starts_with(&pid) && b.starts_with(&pid), "{a} {b}");
+        assert_ne!(a, b, "a random part besides the process id");
+    }
+
+    #[test]
+    fn the_client_takes_payloads_far_over_the_command_limit() {
+        let s = MqttSettings {
+            url: "mqtt://localhost".parse().unwrap(),
+            qos: 0,
+            prefix: "droidctl".into(),
+            client_id: "x".into(),
+            keepalive: Duration::from_secs(5),
+            username: None,
+            password: None,
+            ca_pem: None,
+        };
+        let o = options(&s, 0, "D2-0001", "D2-0001").unwrap();
+        assert!(o.max_packet_size() >= MAX_INCOMING_BYTES);
+        assert!(MAX_INCOMING_BYTES >= 100 * super::super::schema::MAX_COMMAND_BYTES);
+    }
+}
