@@ -15,6 +15,7 @@
 #[cfg(target_os = "linux")]
 pub mod bluez;
 pub mod bridge;
+pub mod bridge_mqtt;
 pub mod btsnoop;
 pub mod capture;
 pub mod config;
@@ -48,6 +49,7 @@ pub fn targets() -> Vec<&'static Target> {
         &packet_file::TARGET,
         &relay_server::TARGET,
         &bridge::TARGET,
+        &bridge_mqtt::TARGET,
     ];
     #[cfg(target_os = "linux")]
     let v = [v, vec![&bluez::TARGET]].concat();
