@@ -375,7 +375,6 @@ pub async fn run(
             client.clone(),
             eventloop,
             settings.clone(),
-            t.clone(),
             tx,
             fatal_tx.clone(),
         )));
@@ -461,10 +460,10 @@ async fn connection(
     client: AsyncClient,
     mut eventloop: EventLoop,
     settings: MqttSettings,
-    t: String,
     state: watch::Sender<BrokerState>,
     fatal: mpsc::Sender<String>,
 ) {
+    let t = bridge.topic(i).unwrap_or("droid").to_string();
     let mut inbox = Inbox::new(bridge.clone(), i, &settings.prefix);
     let cmd = inbox.cmd_topic().to_string();
     let mut takeovers = Takeovers::default();
@@ -597,6 +596,6 @@ mod tests {
         };
         let o = options(&s, 0, "D2-0001", "D2-0001").unwrap();
         assert!(o.max_packet_size() >= MAX_INCOMING_BYTES);
-        assert!(MAX_INCOMING_BYTES >= 100 * super::super::schema::MAX_COMMAND_BYTES);
+        const { assert!(MAX_INCOMING_BYTES >= 100 * super::super::schema::MAX_COMMAND_BYTES) };
     }
 }
