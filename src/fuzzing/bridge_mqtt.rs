@@ -174,7 +174,20 @@ fn check(
         let v: serde_json::Value =
             serde_json::from_str(&r.out.to_json()).expect("every object is JSON");
         assert_eq!(v["v"], 1);
-        if let (Some(i), Some(name)) = (r.droid, r.out.droid()) {
+        // An error about what the payload asked names what it asked (a `droid` of any
+        // name), and goes back to the topic it came on; anything else goes to its droid.
+        let asked = matches!(
+            &r.out,
+            Out::Error {
+                code: ErrorCode::BadJson
+                    | ErrorCode::BadVersion
+                    | ErrorCode::UnknownCmd
+                    | ErrorCode::BadField
+                    | ErrorCode::NoSuchDroid,
+                ..
+            }
+        );
+        if let (Some(i), Some(name), false) = (r.droid, r.out.droid(), asked) {
             assert_eq!(names[i], name, "routed to the droid it names: {v}");
         }
         let Out::Error { code, id, .. } = &r.out else {
