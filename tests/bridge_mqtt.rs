@@ -79,6 +79,20 @@ fn speed(v: &Value) -> f64 {
     v["speed"].as_f64().unwrap_or(0.0)
 }
 
+/// Every `state` received so far says `connected`: neither the droid's link nor the
+/// bridge's connection to the broker went down.
+fn stayed_connected(sub: &Sub) {
+    let states: Vec<_> = sub
+        .drain()
+        .into_iter()
+        .filter(|(t, _)| t.ends_with("/state"))
+        .collect();
+    assert!(
+        states.iter().all(|(_, v)| v["state"] == "connected"),
+        "a state changed: {states:?}"
+    );
+}
+
 const DRIVE: &str = r#"{"v":1,"cmd":"drive","speed":120,"heading":90}"#;
 
 #[test]
@@ -218,15 +232,7 @@ fn losing_the_broker_stops_the_droid_and_keeps_its_link() {
     // Commands work again.
     assert!(publish(p, "droidctl/D2-0001/cmd", DRIVE, &[]));
     sub.wait(5, "droidctl/D2-0001/telemetry", |v| speed(v) > 10.0);
-    let states: Vec<_> = sub
-        .drain()
-        .into_iter()
-        .filter(|(t, _)| t.ends_with("/state"))
-        .collect();
-    assert!(
-        states.iter().all(|(_, v)| v["state"] == "connected"),
-        "the droid's link changed: {states:?}"
-    );
+    stayed_connected(&sub);
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -479,15 +485,7 @@ fn a_retained_command_never_drives_and_a_large_payload_keeps_the_connection() {
         std::thread::sleep(Duration::from_millis(250));
     }
     sub.wait(5, "droidctl/BB-0001/telemetry", |v| speed(v) > 10.0);
-    let states: Vec<_> = sub
-        .drain()
-        .into_iter()
-        .filter(|(t, _)| t.ends_with("/state"))
-        .collect();
-    assert!(
-        states.iter().all(|(_, v)| v["state"] == "connected"),
-        "{states:?}"
-    );
+    stayed_connected(&sub);
     let err = bridge.stderr();
     assert!(!err.contains("lost the broker"), "{err}");
     assert_eq!(
