@@ -297,10 +297,11 @@ impl Inbox {
         self.retained
     }
 
-    /// One publish delivered by the broker.
-    pub fn publish(&mut self, topic: &str, retain: bool, payload: &[u8]) {
+    /// One publish delivered by the broker; the first retained command ignored is said on
+    /// the droid's `reply` topic and in the log, and returned for the terminal.
+    pub fn publish(&mut self, topic: &str, retain: bool, payload: &[u8]) -> Option<String> {
         if topic != self.cmd {
-            return;
+            return None;
         }
         if retain {
             // A retained command is one the broker kept for whoever subscribes: it would
@@ -315,7 +316,7 @@ impl Inbox {
                     self.cmd, self.cmd
                 );
                 tracing::warn!(topic = %self.cmd, "bridge: a retained command ignored");
-                eprintln!("droidctl: {error}");
+                let said = format!("droidctl: {error}");
                 self.bridge.emit(
                     Some(self.i),
                     Out::Error {
@@ -328,12 +329,13 @@ impl Inbox {
                         error,
                     },
                 );
-            } else {
-                tracing::debug!(topic = %self.cmd, "bridge: a retained command ignored");
+                return Some(said);
             }
-            return;
+            tracing::debug!(topic = %self.cmd, "bridge: a retained command ignored");
+            return None;
         }
         self.bridge.handle(payload, Some(self.i));
+        None
     }
 }
 
@@ -499,7 +501,9 @@ async fn connection(
                 state.send_replace(BrokerState::Connected);
             }
             Ok(Event::Incoming(Packet::Publish(p))) => {
-                inbox.publish(&p.topic, p.retain, &p.payload);
+                if let Some(said) = inbox.publish(&p.topic, p.retain, &p.payload) {
+                    eprintln!("{said}");
+                }
             }
             Ok(Event::Outgoing(rumqttc::Outgoing::Disconnect)) => return,
             Ok(_) => {}

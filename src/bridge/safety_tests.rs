@@ -124,8 +124,9 @@ async fn a_retained_mqtt_command_never_drives_and_is_said_once() {
     let t0 = r.now();
     let drive = br#"{"v":1,"cmd":"drive","speed":255,"heading":90,"id":1}"#;
     // As the broker delivers it at each (re)subscription.
-    for _ in 0..5 {
-        inbox.publish("droidctl/BB-0001/cmd", true, drive);
+    for n in 0..5 {
+        let said = inbox.publish("droidctl/BB-0001/cmd", true, drive);
+        assert_eq!(said.is_some(), n == 0, "said on the terminal once");
         run_for(300).await;
     }
     let said = r.said();
