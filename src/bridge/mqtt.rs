@@ -519,7 +519,7 @@ async fn connection(
                 if takeovers.lost(Instant::now()) {
                     let message = format!(
                         "{name}: the broker ended the connection right after accepting it, \
-                         {TAKEOVERS} times in a row: another client is connected with the same \
+                         {TAKEOVERS} times in a row: most likely another client is connected with the same \
                          client id ({}-{i}-{t}); give each bridge its own --client-id (or leave \
                          it out: the default is unique)",
                         settings.client_id
