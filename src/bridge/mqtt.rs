@@ -519,9 +519,9 @@ async fn connection(
                 if takeovers.lost(Instant::now()) {
                     let message = format!(
                         "{name}: the broker ended the connection right after accepting it, \
-                         {TAKEOVERS} times in a row: most likely another client is connected with the same \
-                         client id ({}-{i}-{t}); give each bridge its own --client-id (or leave \
-                         it out: the default is unique)",
+                         {TAKEOVERS} times in a row: most likely another client is connected \
+                         with the same client id ({}-{i}-{t}); give each bridge its own \
+                         --client-id (or leave it out: the default is unique)",
                         settings.client_id
                     );
                     tracing::error!("bridge: {message}");
