@@ -129,7 +129,13 @@ pub fn parse_duration(text: &str) -> Result<Duration, String> {
     let v: f64 = num
         .parse()
         .map_err(|_| format!("duration {t:?} is not a number followed by ms or s"))?;
-    if !v.is_finite() || v < 0.0 {
+    // `inf` and `NaN` parse as f64 but are no length of time (issue 27 point 8).
+    if !v.is_finite() {
+        return Err(format!(
+            "duration {t:?} is not a length of time: a number followed by ms or s (at most 86400s)"
+        ));
+    }
+    if v < 0.0 {
         return Err(format!("duration {t:?} must be zero or more"));
     }
     // Checked before converting: `Duration::from_secs_f64` panics on what it cannot hold
@@ -431,9 +437,13 @@ sleep
         assert!(err("wait").contains("wait DURATION"));
         assert!(err("wait -1s").contains("zero or more"));
         assert!(err("wait 100000s").contains("longer than a day"));
-        assert!(
-            err("wait NaNs").contains("zero or more") || err("wait NaNs").contains("not a number")
-        );
+        for w in ["wait NaNs", "wait infs", "wait -infms", "wait infinitys"] {
+            let e = err(w);
+            assert!(
+                e.contains("not a length of time") && !e.contains("zero or more"),
+                "{w}: {e}"
+            );
+        }
     }
 
     #[test]

@@ -167,3 +167,101 @@ fn the_command_line_refuses_what_it_cannot_do() {
         );
     }
 }
+
+/// Issue 27 point 5 (and 8): a client that writes everything at once and reads slowly
+/// (`| (sleep 1; cat)`) gets every reply and every error, and the `input_closed` notice;
+/// a byte-order mark on the first line and `"v":1.0` are taken.
+#[test]
+fn a_slow_reader_gets_every_answer_through_the_pipe() {
+    let dir = std::env::temp_dir().join(format!("droidctl-bridge-slow-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut input = b"\xEF\xBB\xBF{\"v\":1.0,\"cmd\":\"stop\",\"id\":\"bom\"}\n".to_vec();
+    input.extend_from_slice(b"{\"v\":1,\"cmd\":\"drive\",\"speed\":60,\"heading\":0}\n");
+    for n in 0..10_000 {
+        input.extend_from_slice(format!("{{\"v\":1,\"cmd\":\"stop\",\"id\":{n}}}\n").as_bytes());
+    }
+    input.extend_from_slice(&b"garbage\n".repeat(20_000));
+    input.extend_from_slice(b"{\"v\":1,\"cmd\":\"drive\",\"speed\":60,\"heading\":0}\n");
+    let file = dir.join("input.jsonl");
+    std::fs::write(&file, &input).unwrap();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_droidctl"))
+        .args(["bridge", "--stdio", "--sim", "r2d2"])
+        .env("DROIDCTL_CONFIG", dir.join("none.toml"))
+        .stdin(std::fs::File::open(&file).unwrap())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("run droidctl bridge");
+    let out = child.stdout.take().unwrap();
+    std::thread::sleep(Duration::from_secs(1));
+    let lines: Vec<Value> = BufReader::new(out)
+        .lines()
+        .map(|l| serde_json::from_str(&l.unwrap()).unwrap())
+        .collect();
+    let status = child.wait().unwrap();
+    assert_eq!(status.code(), Some(0));
+    let of = |t: &str| lines.iter().filter(|v| v["type"] == t).count();
+    assert_eq!(of("reply"), 10_001, "a reply per id");
+    assert_eq!(of("error"), 20_000, "an error per bad line");
+    assert!(
+        lines
+            .iter()
+            .any(|v| v["type"] == "reply" && v["id"] == "bom")
+    );
+    assert!(
+        lines
+            .iter()
+            .any(|v| v["type"] == "stopped" && v["reason"] == "input_closed"),
+        "the input_closed notice"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Issue 27 point 8: a `$` topic prefix is the broker's and a password file is read with a
+/// cap: both refused at once with a usage error, before any broker is asked.
+#[test]
+fn broker_reserved_prefixes_and_endless_password_files_are_refused() {
+    for prefix in ["$SYS", "$share/room", "$"] {
+        let e = cli::usage_error(&[
+            "bridge",
+            "--mqtt",
+            "mqtt://127.0.0.1:1",
+            "--sim",
+            "r2d2",
+            "--topic-prefix",
+            prefix,
+        ]);
+        assert!(e.contains("the broker's own"), "{prefix}: {e}");
+    }
+    let mut child = Command::new(env!("CARGO_BIN_EXE_droidctl"))
+        .args([
+            "bridge",
+            "--mqtt",
+            "mqtt://127.0.0.1:1",
+            "--sim",
+            "r2d2",
+            "--username",
+            "u",
+            "--password-file",
+            "/dev/zero",
+        ])
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let end = Instant::now() + Duration::from_secs(20);
+    let status = loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            break s;
+        }
+        if Instant::now() > end {
+            let _ = child.kill();
+            panic!("--password-file /dev/zero is read without end");
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    };
+    let mut err = String::new();
+    std::io::Read::read_to_string(&mut child.stderr.take().unwrap(), &mut err).unwrap();
+    assert_eq!(status.code(), Some(2), "{err}");
+    assert!(err.contains("not a password file"), "{err}");
+}

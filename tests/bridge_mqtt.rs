@@ -79,6 +79,20 @@ fn speed(v: &Value) -> f64 {
     v["speed"].as_f64().unwrap_or(0.0)
 }
 
+/// Every `state` received so far says `connected`: neither the droid's link nor the
+/// bridge's connection to the broker went down.
+fn stayed_connected(sub: &Sub) {
+    let states: Vec<_> = sub
+        .drain()
+        .into_iter()
+        .filter(|(t, _)| t.ends_with("/state"))
+        .collect();
+    assert!(
+        states.iter().all(|(_, v)| v["state"] == "connected"),
+        "a state changed: {states:?}"
+    );
+}
+
 const DRIVE: &str = r#"{"v":1,"cmd":"drive","speed":120,"heading":90}"#;
 
 #[test]
@@ -218,15 +232,7 @@ fn losing_the_broker_stops_the_droid_and_keeps_its_link() {
     // Commands work again.
     assert!(publish(p, "droidctl/D2-0001/cmd", DRIVE, &[]));
     sub.wait(5, "droidctl/D2-0001/telemetry", |v| speed(v) > 10.0);
-    let states: Vec<_> = sub
-        .drain()
-        .into_iter()
-        .filter(|(t, _)| t.ends_with("/state"))
-        .collect();
-    assert!(
-        states.iter().all(|(_, v)| v["state"] == "connected"),
-        "the droid's link changed: {states:?}"
-    );
+    stayed_connected(&sub);
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -403,5 +409,204 @@ fn a_broker_over_tls() {
         "{}",
         untrusted.stderr()
     );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `mosquitto_pub -f FILE` (payloads too large for a command line).
+fn publish_file(port: u16, topic: &str, payload: &[u8], retain: bool, dir: &std::path::Path) {
+    let f = dir.join("payload.bin");
+    std::fs::write(&f, payload).unwrap();
+    let mut c = Command::new(mosquitto::program("mosquitto_pub"));
+    c.args(["-h", "127.0.0.1", "-p", &port.to_string(), "-q", "1"]);
+    if retain {
+        c.arg("-r");
+    }
+    let ok = c
+        .args(["-t", topic, "-f"])
+        .arg(&f)
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success());
+    assert!(ok, "mosquitto_pub -f");
+}
+
+/// A command padded to `size` bytes.
+fn padded(size: usize) -> Vec<u8> {
+    let mut p = br#"{"v":1,"cmd":"stop","pad":""#.to_vec();
+    p.resize(size - 2, b'x');
+    p.extend_from_slice(b"\"}");
+    p
+}
+
+/// Issue 26 points 5 and 6: a retained command waiting on the broker never drives (said
+/// once on the error topic and on stderr), and payloads over the command limit (6,000 and
+/// 200,000 bytes, live and retained) are `bad_json` errors while the connection stays.
+#[test]
+fn a_retained_command_never_drives_and_a_large_payload_keeps_the_connection() {
+    let dir = scratch("retained");
+    let broker = Broker::start(&dir);
+    let p = broker.port;
+    let full = r#"{"v":1,"cmd":"drive","speed":255,"heading":90}"#;
+    assert!(publish(p, "droidctl/BB-0001/cmd", full, &["-r"]));
+    let sub = Sub::start(p, "droidctl/BB-0001/+", &[]);
+    let bridge = BridgeProc::start(
+        &dir,
+        &[
+            "--mqtt",
+            &broker.url(),
+            "--sim",
+            "bb8",
+            "--command-timeout",
+            "5000",
+        ],
+    );
+    sub.wait(15, "droidctl/BB-0001/state", |v| v["state"] == "connected");
+    let e = sub.wait(10, "droidctl/BB-0001/reply", |v| v["type"] == "error");
+    assert_eq!(e["code"], "retained", "{e}");
+    sub.wait(10, "droidctl/BB-0001/telemetry", |v| v["x_cm"].is_number());
+    std::thread::sleep(Duration::from_millis(1500));
+    for (_, v) in sub.drain() {
+        assert!(speed(&v) < 1.0, "the retained drive drove: {v}");
+    }
+    // Large payloads: an error each, and the connection stays.
+    publish_file(p, "droidctl/BB-0001/cmd", &padded(6000), false, &dir);
+    let e = sub.wait(5, "droidctl/BB-0001/reply", |v| v["type"] == "error");
+    assert_eq!(e["code"], "bad_json", "{e}");
+    publish_file(p, "droidctl/BB-0001/cmd", &padded(200_000), false, &dir);
+    let e = sub.wait(5, "droidctl/BB-0001/reply", |v| v["type"] == "error");
+    assert_eq!(e["code"], "bad_json", "{e}");
+    // A large retained one replaces the retained drive: ignored too, no loop.
+    publish_file(p, "droidctl/BB-0001/cmd", &padded(6000), true, &dir);
+    std::thread::sleep(Duration::from_millis(1500));
+    // Live commands still work over the same connection.
+    for _ in 0..6 {
+        assert!(publish(p, "droidctl/BB-0001/cmd", DRIVE, &[]));
+        std::thread::sleep(Duration::from_millis(250));
+    }
+    sub.wait(5, "droidctl/BB-0001/telemetry", |v| speed(v) > 10.0);
+    stayed_connected(&sub);
+    let err = bridge.stderr();
+    assert!(!err.contains("lost the broker"), "{err}");
+    assert_eq!(
+        err.matches("retained message").count(),
+        1,
+        "said once: {err}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Issue 26 point 7: two bridges with the same client id are told so, and the fight ends
+/// (one of them exits 1 saying why; the other stays).
+#[test]
+fn two_bridges_with_the_same_client_id_are_told() {
+    let dir = scratch("clientid");
+    let broker = Broker::start(&dir);
+    let p = broker.port;
+    let sub = Sub::start(p, "droidctl/#", &[]);
+    let args = [
+        "--mqtt",
+        &broker.url(),
+        "--sim",
+        "r2d2",
+        "--client-id",
+        "room1",
+    ];
+    let mut a = BridgeProc::start(&dir, &args);
+    sub.wait(15, "droidctl/D2-0001/state", |v| v["state"] == "connected");
+    let mut b = BridgeProc::start(&dir, &args);
+    let end = Instant::now() + Duration::from_secs(30);
+    let (gone, stays) = loop {
+        if let Some(s) = a.child.try_wait().unwrap() {
+            break ((a, s), b);
+        }
+        if let Some(s) = b.child.try_wait().unwrap() {
+            break ((b, s), a);
+        }
+        assert!(
+            Instant::now() < end,
+            "both still fighting: {}\n{}",
+            a.stderr(),
+            b.stderr()
+        );
+        std::thread::sleep(Duration::from_millis(100));
+    };
+    assert_eq!(gone.1.code(), Some(1), "{}", gone.0.stderr());
+    let err = gone.0.stderr();
+    assert!(
+        err.contains("same client id") && err.contains("--client-id"),
+        "{err}"
+    );
+    // The other one goes on, connected.
+    let mut stays = stays;
+    std::thread::sleep(Duration::from_secs(3));
+    assert!(
+        stays.child.try_wait().unwrap().is_none(),
+        "{}",
+        stays.stderr()
+    );
+    let _ = sub.drain();
+    sub.wait(10, "droidctl/D2-0001/telemetry", |_| true);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Issue 26 point 7: two robots with the same name (two Robi 42 behind relays, say; the
+/// command line's `--sim` refuses that, so the bridge is made here) get topics of their own,
+/// and what each reports goes to its own.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn two_droids_with_the_same_name_get_their_own_topics() {
+    use droidctl::bridge::{Bridge, Settings, mqtt};
+    use droidctl::model::Model;
+    let dir = scratch("names");
+    let broker = Broker::start(&dir);
+    let p = broker.port;
+    let config = droidctl::config::Config::defaults();
+    let models = [Model::Robi42, Model::Robi42];
+    let specs = droidctl::cli::fleet::simulated(&models)
+        .into_iter()
+        .map(|f| {
+            assert_eq!(f.name, "Robi 42");
+            let s = droidctl::cli::fleet::session_config(f.model, &config, true);
+            f.into_spec(s)
+        })
+        .collect();
+    let fleet = droidctl::fleet::Fleet::start(specs);
+    let setups = vec![Default::default(); 2];
+    let (bridge, rx) = Bridge::start(fleet, setups, Settings::default());
+    let settings = mqtt::MqttSettings {
+        url: broker.url().parse().unwrap(),
+        qos: 0,
+        prefix: "droidctl".into(),
+        client_id: mqtt::default_client_id(),
+        keepalive: Duration::from_secs(5),
+        username: None,
+        password: None,
+        ca_pem: None,
+    };
+    let running = tokio::spawn(mqtt::run(
+        bridge.clone(),
+        rx,
+        settings,
+        Duration::from_secs(10),
+        std::future::pending(),
+    ));
+    tokio::task::spawn_blocking(move || {
+        let sub = Sub::start(p, "droidctl/#", &[]);
+        let states = ["Robi-42", "Robi-42-2"].map(|d| format!("droidctl/{d}/state"));
+        sub.wait_all(15, &states, |v| v["state"] == "connected");
+        let drive = r#"{"v":1,"cmd":"drive","speed":255,"heading":0}"#;
+        for _ in 0..8 {
+            assert!(publish(p, "droidctl/Robi-42-2/cmd", drive, &[]));
+            std::thread::sleep(Duration::from_millis(250));
+        }
+        sub.wait(5, "droidctl/Robi-42-2/telemetry", |v| speed(v) > 5.0);
+        let _ = sub.drain();
+        let first = sub.wait(5, "droidctl/Robi-42/telemetry", |_| true);
+        assert!(speed(&first) < 1.0, "the other Robi moved: {first}");
+    })
+    .await
+    .unwrap();
+    running.abort();
+    bridge.shutdown().await;
     let _ = std::fs::remove_dir_all(&dir);
 }

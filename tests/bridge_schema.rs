@@ -236,10 +236,29 @@ async fn everything_the_bridge_sends_is_valid_against_the_schema() {
             .iter()
             .any(|v| v["droid"] == "Robi 42" && v["motor_left_rad_s"].is_number())
     );
-    // The will is valid too.
-    let will: Value =
-        serde_json::from_str(&droidctl::bridge::feeds::offline("D2-0001").to_json()).unwrap();
-    assert!(out.is_valid(&will), "{will}");
+    // The will is valid too, and the objects of issue 26 (a retained command refused, a
+    // drive let go when the link dropped).
+    use droidctl::bridge::schema::{ErrorCode, Out};
+    for o in [
+        droidctl::bridge::feeds::offline("D2-0001"),
+        Out::Error {
+            id: None,
+            droid: Some("BB-0001".into()),
+            cmd: None,
+            code: ErrorCode::Retained,
+            robot: None,
+            capability: None,
+            error: "a retained message".into(),
+        },
+        Out::Stopped {
+            droid: "D2-0001".into(),
+            reason: "link_lost",
+            message: "the link went down".into(),
+        },
+    ] {
+        let v: Value = serde_json::from_str(&o.to_json()).unwrap();
+        assert!(out.is_valid(&v), "{v}: {}", errors(&out, &v));
+    }
     // Each kind of stop happened.
     for reason in ["timeout", "input_closed"] {
         assert!(

@@ -107,6 +107,11 @@ fn bridge() {
     smoke("bridge", 300);
 }
 
+#[test]
+fn bridge_mqtt() {
+    smoke("bridge_mqtt", 200);
+}
+
 /// Each input runs the whole app on three simulated droids: fewer inputs.
 #[test]
 fn app_input() {
@@ -630,4 +635,41 @@ fn write_seed_corpus() {
     ]
     .concat();
     write("bridge", "long-line", &long);
+    // bridge_mqtt: publishes as a broker delivers them (flags, then a length-prefixed
+    // payload): a retained drive waiting on R2's topic, live commands on both droids'
+    // topics, a payload over the limit, one on another topic, a huge one.
+    let publish = |flags: u8, payload: &[u8]| [&[flags, payload.len() as u8][..], payload].concat();
+    let drive: &[u8] = b"{\"v\":1,\"cmd\":\"drive\",\"speed\":255,\"heading\":90}";
+    let stop: &[u8] = b"{\"v\":1,\"cmd\":\"stop\",\"id\":1}";
+    let twist: &[u8] = b"{\"v\":1,\"cmd\":\"twist\",\"linear\":0.2,\"angular\":0.5,\"id\":\"t\"}";
+    let sound: &[u8] = b"\xEF\xBB\xBF{\"v\":1.0,\"cmd\":\"sound\",\"sound\":3,\"id\":2}";
+    write(
+        "bridge_mqtt",
+        "retained-drive",
+        &[publish(0x01, drive), publish(0x21, drive)].concat(),
+    );
+    write(
+        "bridge_mqtt",
+        "live",
+        &[
+            publish(0x20, drive),
+            publish(0x22, twist),
+            publish(0x40, sound),
+            publish(0x00, b"not json"),
+            publish(0x02, stop),
+        ]
+        .concat(),
+    );
+    write(
+        "bridge_mqtt",
+        "large",
+        &[
+            publish(0x08, stop),
+            publish(0x09, drive),
+            [&[0x10u8, 2, b'{', b'x', 0x00, 0x10][..]].concat(),
+            publish(0x04, drive),
+            [&[0x06u8, 3][..], b"a/b", &[drive.len() as u8], drive].concat(),
+        ]
+        .concat(),
+    );
 }

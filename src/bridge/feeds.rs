@@ -52,6 +52,7 @@ pub fn spawn(bridge: &Arc<Bridge>, i: usize) -> Vec<JoinHandle<()>> {
         tokio::spawn(samples(weak.clone(), i, name.clone())),
         tokio::spawn(collisions(
             weak.clone(),
+            i,
             m.session.subscribe(),
             name.clone(),
         )),
@@ -87,15 +88,23 @@ async fn samples(bridge: Weak<Bridge>, i: usize, name: String) {
         if sample.battery_v.is_none() {
             sample.battery_v = b.battery(i);
         }
-        b.emit(Out::Telemetry {
-            droid: name.clone(),
-            sample,
-        });
+        b.emit(
+            Some(i),
+            Out::Telemetry {
+                droid: name.clone(),
+                sample,
+            },
+        );
     }
 }
 
 /// Every collision the droid reports.
-async fn collisions(bridge: Weak<Bridge>, mut rx: broadcast::Receiver<SessionEvent>, name: String) {
+async fn collisions(
+    bridge: Weak<Bridge>,
+    i: usize,
+    mut rx: broadcast::Receiver<SessionEvent>,
+    name: String,
+) {
     let mut count = 0u32;
     loop {
         match rx.recv().await {
@@ -104,14 +113,17 @@ async fn collisions(bridge: Weak<Bridge>, mut rx: broadcast::Receiver<SessionEve
                     return;
                 };
                 count = count.saturating_add(1);
-                b.emit(Out::Collision {
-                    droid: name.clone(),
-                    t_ms: b.t_ms(),
-                    axis: axis_label(c.axis.x, c.axis.y),
-                    power: [c.power[0], c.power[1]],
-                    speed: c.speed,
-                    collisions: count,
-                });
+                b.emit(
+                    Some(i),
+                    Out::Collision {
+                        droid: name.clone(),
+                        t_ms: b.t_ms(),
+                        axis: axis_label(c.axis.x, c.axis.y),
+                        power: [c.power[0], c.power[1]],
+                        speed: c.speed,
+                        collisions: count,
+                    },
+                );
             }
             Ok(_) | Err(broadcast::error::RecvError::Lagged(_)) => {}
             Err(broadcast::error::RecvError::Closed) => return,
@@ -127,7 +139,7 @@ async fn link(bridge: Weak<Bridge>, i: usize, name: String) {
     loop {
         let now = state.borrow_and_update().clone();
         match bridge.upgrade() {
-            Some(b) => b.emit(link_out(&name, &now)),
+            Some(b) => b.emit(Some(i), link_out(&name, &now)),
             None => return,
         }
         if state.changed().await.is_err() {
@@ -167,11 +179,14 @@ async fn battery(bridge: Weak<Bridge>, i: usize, name: String) {
                 return;
             };
             b.set_battery(i, v);
-            b.emit(Out::Battery {
-                droid: name.clone(),
-                t_ms: b.t_ms(),
-                volts: v,
-            });
+            b.emit(
+                Some(i),
+                Out::Battery {
+                    droid: name.clone(),
+                    t_ms: b.t_ms(),
+                    volts: v,
+                },
+            );
         }
         tokio::time::sleep(every).await;
     }

@@ -15,6 +15,7 @@
 pub mod feeds;
 pub mod motion;
 pub mod mqtt;
+pub mod outbox;
 pub mod schema;
 pub mod stdio;
 
@@ -23,17 +24,13 @@ use crate::model::Model;
 use crate::session::Slot;
 use crate::units::Heading;
 use motion::{Holder, Kinematics, Motion, Tick, Wheels};
+use outbox::{Outbox, Outputs};
 use schema::{Cmd, ErrorCode, Out, Request};
-use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
-use tokio::sync::mpsc;
 use tokio::task::JoinHandle;
 use tokio::time::Instant;
-
-/// How many objects wait for the transport at most; past that, telemetry is dropped
-/// (counted) rather than the bridge waiting for a slow reader.
-pub const OUT_CAPACITY: usize = 4096;
 
 /// Requests (lights, sounds …) waiting for one droid's answer at most; more are refused
 /// as `busy`.
@@ -90,6 +87,25 @@ pub fn topic_name(name: &str) -> String {
     if t.is_empty() { "droid".into() } else { t }
 }
 
+/// Each droid's topic level, distinct (issue 26 point 7): [`topic_name`], and when an
+/// earlier droid has it already (two robots both called `Robi 42`), `-2`, `-3` … added:
+/// two droids never share a topic.
+pub fn topic_names(names: &[String]) -> Vec<String> {
+    let mut taken = std::collections::HashSet::new();
+    let mut out = Vec::with_capacity(names.len());
+    for n in names {
+        let base = topic_name(n);
+        let mut t = base.clone();
+        let mut k = 2usize;
+        while !taken.insert(t.to_lowercase()) {
+            t = format!("{base}-{k}");
+            k += 1;
+        }
+        out.push(t);
+    }
+    out
+}
+
 struct DroidState {
     holder: Holder,
     setup: crate::family::setup::SetupOptions,
@@ -102,8 +118,9 @@ pub struct Bridge {
     start: Instant,
     droids: Vec<Mutex<DroidState>>,
     in_flight: Vec<AtomicUsize>,
-    out: mpsc::Sender<Out>,
-    dropped: AtomicU64,
+    out: Outbox,
+    /// Each droid's MQTT topic level ([`topic_names`]).
+    topics: Vec<String>,
     tasks: Mutex<Vec<JoinHandle<()>>>,
     /// The latest battery reading per droid, for samples (the fleet's fold has only what
     /// the droid notifies).
@@ -122,8 +139,9 @@ impl Bridge {
         fleet: Fleet,
         setups: Vec<crate::family::setup::SetupOptions>,
         settings: Settings,
-    ) -> (Arc<Bridge>, mpsc::Receiver<Out>) {
-        let (tx, rx) = mpsc::channel(OUT_CAPACITY);
+    ) -> (Arc<Bridge>, Outputs) {
+        let (tx, rx) = outbox::channel();
+        let topics = topic_names(&fleet.names());
         let droids = fleet
             .members()
             .iter()
@@ -143,7 +161,7 @@ impl Bridge {
             droids,
             in_flight: (0..n).map(|_| AtomicUsize::new(0)).collect(),
             out: tx,
-            dropped: AtomicU64::new(0),
+            topics,
             tasks: Mutex::new(Vec::new()),
             battery: (0..n).map(|_| Mutex::new(None)).collect(),
         });
@@ -168,9 +186,21 @@ impl Bridge {
         self.start.elapsed().as_millis() as u64
     }
 
-    /// Objects dropped because the transport did not keep up.
+    /// Telemetry objects dropped because the transport did not keep up (replies, errors,
+    /// `stopped` and `link` objects never are).
     pub fn dropped(&self) -> u64 {
-        self.dropped.load(Ordering::Relaxed)
+        self.out.dropped()
+    }
+
+    /// Droid `i`'s MQTT topic level (distinct per droid).
+    pub fn topic(&self, i: usize) -> Option<&str> {
+        self.topics.get(i).map(String::as_str)
+    }
+
+    /// Wait until the transport has taken enough of what waits for it: a transport reads
+    /// its next command only then, so answers are never dropped and never pile up.
+    pub async fn room(&self) {
+        self.out.room().await
     }
 
     /// The `hello` object: the droids and the settings that bind a client.
@@ -181,12 +211,13 @@ impl Bridge {
                 .fleet
                 .members()
                 .iter()
-                .map(|m| schema::DroidInfo {
+                .zip(&self.topics)
+                .map(|(m, topic)| schema::DroidInfo {
                     droid: m.name.clone(),
                     model: m.model.id(),
                     robot: m.model.display_name(),
                     origin: m.origin.clone(),
-                    topic: topic_name(&m.name),
+                    topic: topic.clone(),
                 })
                 .collect(),
             command_timeout_ms: self.settings.command_timeout.as_millis() as u64,
@@ -194,14 +225,10 @@ impl Bridge {
         }
     }
 
-    /// Send `o` to the transport; dropped (counted) when it does not keep up.
-    pub fn emit(&self, o: Out) {
-        if self.out.try_send(o).is_err() {
-            let n = self.dropped.fetch_add(1, Ordering::Relaxed) + 1;
-            if n.is_power_of_two() {
-                tracing::warn!(dropped = n, "bridge: the transport does not keep up");
-            }
-        }
+    /// Send `o`, about droid `droid` (its index), to the transport: telemetry is dropped
+    /// (counted) when the transport does not keep up, anything else is kept.
+    pub fn emit(&self, droid: Option<usize>, o: Out) {
+        self.out.send(droid, o)
     }
 
     /// One command as received (a line, a payload). `default` is the droid a transport
@@ -216,7 +243,7 @@ impl Bridge {
                         .and_then(|i| self.fleet.member(i))
                         .map(|m| m.name.clone());
                 }
-                self.emit(Out::error(*e))
+                self.emit(default, Out::error(*e))
             }
         }
     }
@@ -248,24 +275,24 @@ impl Bridge {
     pub fn execute(self: &Arc<Self>, req: Request, default: Option<usize>) {
         if req.cmd == Cmd::Estop {
             self.estop();
-            let droid = default
-                .and_then(|i| self.fleet.member(i))
-                .map(|m| m.name.clone());
-            self.reply(&req, droid, None);
+            self.reply(&req, default, None);
             return;
         }
         let i = match self.target(&req, default) {
             Ok(i) => i,
             Err(message) => {
-                return self.emit(Out::Error {
-                    id: req.id.clone(),
-                    droid: req.droid.clone(),
-                    cmd: Some(req.cmd.verb().into()),
-                    code: ErrorCode::NoSuchDroid,
-                    robot: None,
-                    capability: None,
-                    error: message,
-                });
+                return self.emit(
+                    default,
+                    Out::Error {
+                        id: req.id.clone(),
+                        droid: req.droid.clone(),
+                        cmd: Some(req.cmd.verb().into()),
+                        code: ErrorCode::NoSuchDroid,
+                        robot: None,
+                        capability: None,
+                        error: message,
+                    },
+                );
             }
         };
         let Some(m) = self.fleet.member(i) else {
@@ -273,16 +300,42 @@ impl Bridge {
         };
         let (family, model, name) = (m.family, m.model, m.name.clone());
         let unsupported = |capability: &'static str, what: String| {
-            self.emit(Out::Error {
-                id: req.id.clone(),
-                droid: Some(name.clone()),
-                cmd: Some(req.cmd.verb().into()),
-                code: ErrorCode::Unsupported,
-                robot: Some(model.display_name()),
-                capability: Some(capability),
-                error: format!("{} ({name}) {what}", model.display_name()),
-            })
+            self.emit(
+                Some(i),
+                Out::Error {
+                    id: req.id.clone(),
+                    droid: Some(name.clone()),
+                    cmd: Some(req.cmd.verb().into()),
+                    code: ErrorCode::Unsupported,
+                    robot: Some(model.display_name()),
+                    capability: Some(capability),
+                    error: format!("{} ({name}) {what}", model.display_name()),
+                },
+            )
         };
+        // Nothing waits for a link to come back (issue 26 point 8): a command kept until a
+        // reconnect would run when nobody expects it (the session's queue keeps what is sent
+        // while the link is down); the reconnect's own stop is all a droid gets then.
+        if let Some(state) = self.link_down(i) {
+            if req.cmd == Cmd::Stop {
+                lock(&self.droids[i]).holder.stop();
+            }
+            return self.emit(
+                Some(i),
+                Out::Error {
+                    id: req.id.clone(),
+                    droid: Some(name.clone()),
+                    cmd: Some(req.cmd.verb().into()),
+                    code: ErrorCode::Droid,
+                    robot: None,
+                    capability: None,
+                    error: format!(
+                        "{name} is not connected ({state}): not sent, and not kept for later; \
+                         send it again once its link says connected"
+                    ),
+                },
+            );
+        }
         let now = self.start.elapsed();
         match &req.cmd {
             Cmd::Drive { speed, heading } => {
@@ -384,19 +437,36 @@ impl Bridge {
                 return self.request(req, i, cmds, plan.note.clone());
             }
         }
-        self.reply(&req, Some(name), None);
+        self.reply(&req, Some(i), None);
     }
 
-    /// The reply to a command with an `id` (none without).
-    fn reply(&self, req: &Request, droid: Option<String>, note: Option<String>) {
+    /// Droid `i`'s link state when it is not connected.
+    fn link_down(&self, i: usize) -> Option<String> {
+        let s = self.fleet.link_state(i)?;
+        let s = s.borrow();
+        (*s != crate::session::LinkState::Connected).then(|| s.label())
+    }
+
+    fn connected(&self, i: usize) -> bool {
+        self.fleet
+            .link_state(i)
+            .is_some_and(|s| *s.borrow() == crate::session::LinkState::Connected)
+    }
+
+    /// The reply to a command with an `id` (none without), about droid `i`.
+    fn reply(&self, req: &Request, i: Option<usize>, note: Option<String>) {
         if let Some(id) = &req.id {
-            self.emit(Out::Reply {
-                id: id.clone(),
-                droid,
-                cmd: req.cmd.verb(),
-                ok: true,
-                note,
-            });
+            let droid = i.and_then(|i| self.fleet.member(i)).map(|m| m.name.clone());
+            self.emit(
+                i,
+                Out::Reply {
+                    id: id.clone(),
+                    droid,
+                    cmd: req.cmd.verb(),
+                    ok: true,
+                    note,
+                },
+            );
         }
     }
 
@@ -416,7 +486,7 @@ impl Bridge {
         let busy = self.in_flight[i].fetch_add(1, Ordering::Relaxed) >= MAX_IN_FLIGHT;
         if busy {
             self.in_flight[i].fetch_sub(1, Ordering::Relaxed);
-            return self.emit(Out::Error {
+            return self.emit(Some(i), Out::Error {
                 id: req.id,
                 droid: Some(name),
                 cmd: Some(req.cmd.verb().into()),
@@ -441,16 +511,19 @@ impl Bridge {
             }
             bridge.in_flight[i].fetch_sub(1, Ordering::Relaxed);
             match failed {
-                None => bridge.reply(&req, Some(name), note),
-                Some(error) => bridge.emit(Out::Error {
-                    id: req.id,
-                    droid: Some(name),
-                    cmd: Some(req.cmd.verb().into()),
-                    code: ErrorCode::Droid,
-                    robot: None,
-                    capability: None,
-                    error,
-                }),
+                None => bridge.reply(&req, Some(i), note),
+                Some(error) => bridge.emit(
+                    Some(i),
+                    Out::Error {
+                        id: req.id,
+                        droid: Some(name),
+                        cmd: Some(req.cmd.verb().into()),
+                        code: ErrorCode::Droid,
+                        robot: None,
+                        capability: None,
+                        error,
+                    },
+                ),
             }
         });
     }
@@ -499,23 +572,53 @@ impl Bridge {
             };
             if driving {
                 m.session.stop_now(m.family);
-                self.emit(Out::Stopped {
-                    droid: m.name.clone(),
-                    reason,
-                    message: match reason {
-                        "input_closed" => "the command stream ended: stopped".into(),
-                        "broker_lost" => "the connection to the broker was lost: stopped".into(),
-                        _ => "stopped".into(),
-                    },
-                });
+                self.said_stopped(i, reason);
             }
         }
+    }
+
+    /// The `stopped` object for droid `i`.
+    fn said_stopped(&self, i: usize, reason: &'static str) {
+        let Some(m) = self.fleet.member(i) else {
+            return;
+        };
+        let message = match reason {
+            "input_closed" => "the command stream ended: stopped".into(),
+            "broker_lost" => "the connection to the broker was lost: stopped".into(),
+            "link_lost" => "the droid's link went down: what it was told to do is dropped \
+                            (it stops by its own fail-safe and on reconnecting); drive it \
+                            again once its link says connected"
+                .into(),
+            _ => "stopped".into(),
+        };
+        self.emit(
+            Some(i),
+            Out::Stopped {
+                droid: m.name.clone(),
+                reason,
+                message,
+            },
+        );
     }
 
     /// One tick of every droid's command timeout and held motion.
     fn tick(&self) {
         let now = self.start.elapsed();
         for (i, d) in self.droids.iter().enumerate() {
+            // A droid whose link is down holds nothing: a held drive re-sent meanwhile
+            // would wait in its session's queue and drive it after the reconnect.
+            if !self.connected(i) {
+                let was = {
+                    let mut d = lock(d);
+                    let was = d.holder.is_driving();
+                    d.holder.stop();
+                    was
+                };
+                if was {
+                    self.said_stopped(i, "link_lost");
+                }
+                continue;
+            }
             let t = lock(d).holder.tick(now);
             match t {
                 Tick::Nothing => {}
@@ -523,14 +626,17 @@ impl Bridge {
                 Tick::TimedOut => {
                     if let Some(m) = self.fleet.member(i) {
                         m.session.stop_now(m.family);
-                        self.emit(Out::Stopped {
-                            droid: m.name.clone(),
-                            reason: "timeout",
-                            message: format!(
-                                "no drive or twist for {} ms: stopped",
-                                self.settings.command_timeout.as_millis()
-                            ),
-                        });
+                        self.emit(
+                            Some(i),
+                            Out::Stopped {
+                                droid: m.name.clone(),
+                                reason: "timeout",
+                                message: format!(
+                                    "no drive or twist for {} ms: stopped",
+                                    self.settings.command_timeout.as_millis()
+                                ),
+                            },
+                        );
                     }
                 }
             }
@@ -581,5 +687,7 @@ async fn control(bridge: std::sync::Weak<Bridge>) {
     }
 }
 
+#[cfg(test)]
+mod safety_tests;
 #[cfg(test)]
 mod tests;

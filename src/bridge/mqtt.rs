@@ -14,19 +14,42 @@
 //! When the broker goes, the droids driven through it are stopped and the connection is
 //! retried (backoff up to 5 s) while the droids' links stay up; back, the subscriptions and
 //! the retained state are made anew.
+//!
+//! What arrives is handled by an [`Inbox`] (no connection in it: the fuzz target drives
+//! it): a retained command never drives (issue 26 point 5), a payload over the command
+//! limit is a `bad_json` error (the client takes payloads far larger than that, so one
+//! large message does not end the connection: point 6), and a connection the broker ends
+//! right after making it, again and again, is another client with the same client id
+//! ([`Takeovers`], point 7).
 
+use super::Bridge;
 use super::feeds::{link_out, offline};
-use super::schema::Out;
-use super::{Bridge, topic_name};
+use super::outbox::Outputs;
+use super::schema::{ErrorCode, Out};
 use rumqttc::{AsyncClient, Event, EventLoop, LastWill, MqttOptions, Packet, QoS};
-use std::collections::HashMap;
 use std::sync::Arc;
 use std::time::Duration;
 use tokio::sync::{mpsc, watch};
+use tokio::time::Instant;
 
 /// MQTT's default ports.
 pub const PORT: u16 = 1883;
 pub const TLS_PORT: u16 = 8883;
+
+/// The largest packet the client takes from the broker: far above the command limit
+/// ([`super::schema::MAX_COMMAND_BYTES`]), so a large payload gets a `bad_json` error
+/// instead of ending the connection. MQTT 3.1.1 has no way to tell the broker a limit: a
+/// packet larger than this still ends it (a broker's `message_size_limit` prevents that).
+pub const MAX_INCOMING_BYTES: usize = 1 << 20;
+
+/// The default client id's start: unique per process (the process id and a random part,
+/// as two machines or containers may run bridges with the same process id).
+pub fn default_client_id() -> String {
+    use std::hash::BuildHasher;
+    let nonce = std::collections::hash_map::RandomState::new()
+        .hash_one((std::process::id(), std::time::SystemTime::now()));
+    format!("droidctl-{}-{:08x}", std::process::id(), nonce as u32)
+}
 
 /// `mqtt://[USER[:PASSWORD]@]HOST[:PORT]` or `mqtts://…` (TLS).
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -167,10 +190,7 @@ fn options(s: &MqttSettings, i: usize, t: &str, name: &str) -> Result<MqttOption
     let mut o = MqttOptions::new(id, s.url.host.clone(), s.url.port);
     o.set_keep_alive(s.keepalive.max(Duration::from_secs(1)));
     o.set_clean_session(true);
-    o.set_max_packet_size(
-        super::schema::MAX_COMMAND_BYTES + 1024,
-        super::schema::MAX_COMMAND_BYTES * 4,
-    );
+    o.set_max_packet_size(MAX_INCOMING_BYTES, super::schema::MAX_COMMAND_BYTES * 4);
     o.set_last_will(LastWill::new(
         topic(&s.prefix, t, "state"),
         offline(name).to_json(),
@@ -210,12 +230,121 @@ pub enum BrokerState {
     Refused(String),
 }
 
+/// How many connections in a row ended by the broker within [`TAKEOVER_WINDOW`] of being made
+/// mean that another client has taken the session over.
+pub const TAKEOVERS: u32 = 3;
+
+/// A connection the broker ends sooner than this after accepting it counts as taken over.
+pub const TAKEOVER_WINDOW: Duration = Duration::from_secs(2);
+
+/// Two clients with the same client id knock each other off for ever: the broker ends the
+/// older connection whenever the other one connects (MQTT 3.1.1, 3.1.4-2). Seen from one of
+/// them: connections accepted, then ended within moments, again and again. (sans-IO: the
+/// times are given.)
+#[derive(Debug, Default)]
+pub struct Takeovers {
+    since: Option<Instant>,
+    quick: u32,
+}
+
+impl Takeovers {
+    /// A connection was accepted at `now`.
+    pub fn connected(&mut self, now: Instant) {
+        self.since = Some(now);
+    }
+
+    /// The connection ended at `now`: true when that makes [`TAKEOVERS`] quick ends in a row.
+    pub fn lost(&mut self, now: Instant) -> bool {
+        match self.since.take() {
+            Some(t) if now.duration_since(t) < TAKEOVER_WINDOW => self.quick += 1,
+            Some(_) => self.quick = 0,
+            // Not connected: a failed attempt says nothing either way.
+            None => {}
+        }
+        self.quick >= TAKEOVERS
+    }
+}
+
+/// What a droid's connection does with what the broker delivers: commands on the droid's
+/// `cmd` topic go to the bridge; a retained one does not (said once); anything else is
+/// ignored.
+pub struct Inbox {
+    bridge: Arc<Bridge>,
+    i: usize,
+    cmd: String,
+    retained: u64,
+}
+
+impl Inbox {
+    /// Droid `i`'s inbox, its commands on `PREFIX/TOPIC/cmd`.
+    pub fn new(bridge: Arc<Bridge>, i: usize, prefix: &str) -> Inbox {
+        let t = bridge.topic(i).unwrap_or("droid").to_string();
+        Inbox {
+            cmd: topic(prefix, &t, "cmd"),
+            bridge,
+            i,
+            retained: 0,
+        }
+    }
+
+    /// The topic it takes commands on.
+    pub fn cmd_topic(&self) -> &str {
+        &self.cmd
+    }
+
+    /// Retained commands ignored so far.
+    pub fn retained(&self) -> u64 {
+        self.retained
+    }
+
+    /// One publish delivered by the broker; the first retained command ignored is said on
+    /// the droid's `reply` topic and in the log, and returned for the terminal.
+    pub fn publish(&mut self, topic: &str, retain: bool, payload: &[u8]) -> Option<String> {
+        if topic != self.cmd {
+            return None;
+        }
+        if retain {
+            // A retained command is one the broker kept for whoever subscribes: it would
+            // run at every (re)connect with nobody there (issue 26 point 5).
+            self.retained += 1;
+            if self.retained == 1 {
+                let name = self.bridge.fleet().member(self.i).map(|m| m.name.clone());
+                let error = format!(
+                    "a retained message on {} was ignored: commands are taken only from a \
+                     client that is there (publish without -r); clear it with \
+                     `mosquitto_pub -r -n -t {}`",
+                    self.cmd, self.cmd
+                );
+                tracing::warn!(topic = %self.cmd, "bridge: a retained command ignored");
+                let said = format!("droidctl: {error}");
+                self.bridge.emit(
+                    Some(self.i),
+                    Out::Error {
+                        id: None,
+                        droid: name,
+                        cmd: None,
+                        code: ErrorCode::Retained,
+                        robot: None,
+                        capability: None,
+                        error,
+                    },
+                );
+                return Some(said);
+            }
+            tracing::debug!(topic = %self.cmd, "bridge: a retained command ignored");
+            return None;
+        }
+        self.bridge.handle(payload, Some(self.i));
+        None
+    }
+}
+
 /// Run the bridge through the broker until `stopped` completes: a connection per droid,
 /// the objects routed to their topics. Fails when a droid's first connection to the broker
 /// does not come within `first_connect` (a wrong host, port, password or certificate).
 pub async fn run(
     bridge: Arc<Bridge>,
-    mut rx: mpsc::Receiver<Out>,
+    mut rx: Outputs,
     settings: MqttSettings,
     first_connect: Duration,
     stopped: impl std::future::Future<Output = ()>,
@@ -224,8 +353,13 @@ pub async fn run(
         .fleet()
         .members()
         .iter()
-        .map(|m| (m.name.clone(), topic_name(&m.name)))
+        .enumerate()
+        .map(|(i, m)| {
+            let t = bridge.topic(i).unwrap_or("droid").to_string();
+            (m.name.clone(), t)
+        })
         .collect();
+    let (fatal_tx, mut fatal) = mpsc::channel::<String>(members.len().max(1));
     let mut clients = Vec::new();
     let mut states = Vec::new();
     let mut loops = Vec::new();
@@ -243,8 +377,8 @@ pub async fn run(
             client.clone(),
             eventloop,
             settings.clone(),
-            t.clone(),
             tx,
+            fatal_tx.clone(),
         )));
         clients.push(client);
         states.push(st);
@@ -272,14 +406,10 @@ pub async fn run(
             ));
         }
     }
-    let index: HashMap<String, usize> = members
-        .iter()
-        .enumerate()
-        .map(|(i, (n, _))| (n.clone(), i))
-        .collect();
     let router = async {
-        while let Some(o) = rx.recv().await {
-            let i = o.droid().and_then(|d| index.get(d).copied()).unwrap_or(0);
+        // By the droid's index: two droids may share a name, never a topic.
+        while let Some(r) = rx.recv_routed().await {
+            let (i, o) = (r.droid.unwrap_or(0), r.out);
             let (leaf, retain) = route(&o);
             let q = if retain {
                 QoS::AtLeastOnce
@@ -297,9 +427,11 @@ pub async fn run(
             }
         }
     };
+    let mut result = Ok(());
     tokio::select! {
         _ = router => {}
         _ = stopped => {}
+        Some(why) = fatal.recv() => result = Err(why),
     }
     // A clean goodbye sends no will: say offline ourselves, then disconnect.
     for ((name, t), client) in members.iter().zip(&clients) {
@@ -319,7 +451,7 @@ pub async fn run(
     for l in &loops {
         l.abort();
     }
-    Ok(())
+    result
 }
 
 /// One droid's connection: subscribe on every connect, hand commands to the bridge, stop the
@@ -330,10 +462,13 @@ async fn connection(
     client: AsyncClient,
     mut eventloop: EventLoop,
     settings: MqttSettings,
-    t: String,
     state: watch::Sender<BrokerState>,
+    fatal: mpsc::Sender<String>,
 ) {
-    let cmd = topic(&settings.prefix, &t, "cmd");
+    let t = bridge.topic(i).unwrap_or("droid").to_string();
+    let mut inbox = Inbox::new(bridge.clone(), i, &settings.prefix);
+    let cmd = inbox.cmd_topic().to_string();
+    let mut takeovers = Takeovers::default();
     let name = bridge
         .fleet()
         .member(i)
@@ -347,6 +482,7 @@ async fn connection(
             Ok(Event::Incoming(Packet::ConnAck(_))) => {
                 up = true;
                 ever = true;
+                takeovers.connected(Instant::now());
                 backoff = Duration::from_millis(250);
                 let _ = client.try_subscribe(cmd.clone(), qos(settings.qos));
                 // The retained state anew (the will may have replaced it).
@@ -364,8 +500,10 @@ async fn connection(
                 }
                 state.send_replace(BrokerState::Connected);
             }
-            Ok(Event::Incoming(Packet::Publish(p))) if p.topic == cmd => {
-                bridge.handle(&p.payload, Some(i));
+            Ok(Event::Incoming(Packet::Publish(p))) => {
+                if let Some(said) = inbox.publish(&p.topic, p.retain, &p.payload) {
+                    eprintln!("{said}");
+                }
             }
             Ok(Event::Outgoing(rumqttc::Outgoing::Disconnect)) => return,
             Ok(_) => {}
@@ -377,6 +515,19 @@ async fn connection(
                     eprintln!(
                         "droidctl: {name}: lost the broker ({why}): stopped; reconnecting, the droid stays connected"
                     );
+                }
+                if takeovers.lost(Instant::now()) {
+                    let message = format!(
+                        "{name}: the broker ended the connection right after accepting it, \
+                         {TAKEOVERS} times in a row: most likely another client is connected \
+                         with the same client id ({}-{i}-{t}); give each bridge its own \
+                         --client-id (or leave it out: the default is unique)",
+                        settings.client_id
+                    );
+                    tracing::error!("bridge: {message}");
+                    state.send_replace(BrokerState::Lost(message.clone()));
+                    let _ = fatal.try_send(message);
+                    return;
                 }
                 // A refusal or an untrusted certificate will not mend by itself.
                 if !ever
@@ -394,5 +545,61 @@ async fn connection(
                 backoff = (backoff * 2).min(Duration::from_secs(5));
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn repeated_immediate_ends_are_a_takeover_and_a_long_connection_resets_the_count() {
+        let t0 = Instant::now();
+        let at = |ms: u64| t0 + Duration::from_millis(ms);
+        let mut t = Takeovers::default();
+        // The broker restarting: a long connection, then failed attempts, then back.
+        t.connected(at(0));
+        assert!(!t.lost(at(60_000)));
+        assert!(!t.lost(at(61_000)));
+        assert!(!t.lost(at(62_000)));
+        // Another client with the same id: ended within moments each time.
+        let mut now = 70_000;
+        for n in 1..=TAKEOVERS {
+            t.connected(at(now));
+            now += 300;
+            assert_eq!(t.lost(at(now)), n == TAKEOVERS, "takeover {n}");
+            now += 250;
+        }
+        // Two quick ends and a long connection between: no takeover.
+        let mut t = Takeovers::default();
+        for (up, down) in [(0, 100), (400, 500), (800, 10_000), (10_300, 10_400)] {
+            t.connected(at(up));
+            assert!(!t.lost(at(down)));
+        }
+    }
+
+    #[test]
+    fn the_default_client_id_is_unique_per_process() {
+        let (a, b) = (default_client_id(), default_client_id());
+        let pid = format!("droidctl-{}-", std::process::id());
+        assert!(a.starts_with(&pid) && b.starts_with(&pid), "{a} {b}");
+        assert_ne!(a, b, "a random part besides the process id");
+    }
+
+    #[test]
+    fn the_client_takes_payloads_far_over_the_command_limit() {
+        let s = MqttSettings {
+            url: "mqtt://localhost".parse().unwrap(),
+            qos: 0,
+            prefix: "droidctl".into(),
+            client_id: "x".into(),
+            keepalive: Duration::from_secs(5),
+            username: None,
+            password: None,
+            ca_pem: None,
+        };
+        let o = options(&s, 0, "D2-0001", "D2-0001").unwrap();
+        assert!(o.max_packet_size() >= MAX_INCOMING_BYTES);
+        const { assert!(MAX_INCOMING_BYTES >= 100 * super::super::schema::MAX_COMMAND_BYTES) };
     }
 }

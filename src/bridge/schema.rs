@@ -143,6 +143,8 @@ pub enum ErrorCode {
     Droid,
     /// Too many commands waiting for that droid.
     Busy,
+    /// A retained MQTT message on a `cmd` topic: never executed (said once per droid).
+    Retained,
 }
 
 /// Why a command is refused, before what could be read of it is added.
@@ -183,7 +185,12 @@ pub fn parse(text: &[u8]) -> Result<Request, Box<BadCommand>> {
 
 type Refused = (Refusal, Option<Map<String, Value>>);
 
+/// A UTF-8 byte-order mark, as some editors and Windows tools start a file with: not part
+/// of the command (issue 27 point 8).
+const BOM: &[u8] = b"\xEF\xBB\xBF";
+
 fn parse_text(text: &[u8]) -> Result<Request, Refused> {
+    let text = text.strip_prefix(BOM).unwrap_or(text);
     if text.len() > MAX_COMMAND_BYTES {
         return Err((
             bad(
@@ -223,7 +230,8 @@ fn valid_id(v: &Value) -> bool {
 
 fn parse_object(obj: &Map<String, Value>) -> Result<Request, Refusal> {
     match obj.get("v") {
-        Some(v) if v.as_u64() == Some(VERSION) => {}
+        // `1.0` too: README and the schema take integers written as floats.
+        Some(v) if integer(v) == Some(VERSION as i64) => {}
         Some(v) => {
             return Err(bad(
                 ErrorCode::BadVersion,
@@ -564,7 +572,8 @@ pub enum Out {
         reason: Option<String>,
     },
     /// The bridge stopped a droid by itself: `timeout` (no drive command within the command
-    /// timeout), `input_closed` (stdin ended), `broker_lost`.
+    /// timeout), `input_closed` (stdin ended), `broker_lost`, `link_lost` (the droid's link
+    /// went down: what it held is dropped).
     Stopped {
         droid: String,
         reason: &'static str,

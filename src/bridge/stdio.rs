@@ -6,12 +6,23 @@
 //! [`schema::MAX_COMMAND_BYTES`] is refused without being kept (the reader holds at most that
 //! much). When the input ends (the client closed its end, or died), the droids it was
 //! driving are stopped and [`run`] returns.
+//!
+//! Replies, errors, `stopped` and `link` objects are never dropped (issue 27 point 5): the
+//! next line is read only while the output keeps up with them ([`Bridge::room`]), and
+//! everything is written before [`run`] returns, for as long as the reader takes it. Only
+//! telemetry is dropped (counted: [`Bridge::dropped`]) for a reader that is too slow.
 
 use super::Bridge;
-use super::schema::{self, BadCommand, ErrorCode, Out};
+use super::outbox::Outputs;
+use super::schema::{self, BadCommand, ErrorCode};
 use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::Duration;
 use tokio::io::{AsyncBufRead, AsyncBufReadExt, AsyncWrite, AsyncWriteExt};
-use tokio::sync::mpsc;
+
+/// After the input ends, what is left is written for as long as the reader takes some of it
+/// within this long; a reader that takes nothing for this long is given up on.
+pub const DRAIN_STALL: Duration = Duration::from_secs(10);
 
 /// Why the bridge over stdio ended.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -63,7 +74,7 @@ pub async fn read_line<R: AsyncBufRead + Unpin>(
 /// ended), stop and disconnect every droid, and write what is left.
 pub async fn run<R, W>(
     bridge: Arc<Bridge>,
-    mut rx: mpsc::Receiver<Out>,
+    mut rx: Outputs,
     mut input: R,
     mut output: W,
     stopped: impl std::future::Future<Output = ()>,
@@ -74,6 +85,8 @@ where
 {
     let hello = bridge.hello();
     let (finish, mut finished) = tokio::sync::oneshot::channel::<()>();
+    let written = Arc::new(AtomicU64::new(0));
+    let progress = written.clone();
     let mut writer = tokio::spawn(async move {
         let mut text = hello.to_json();
         text.push('\n');
@@ -101,6 +114,7 @@ where
             }
             output.write_all(text.as_bytes()).await?;
             output.flush().await?;
+            progress.fetch_add(text.len() as u64 + 1, Ordering::Relaxed);
             if last {
                 return Ok::<(), std::io::Error>(());
             }
@@ -109,22 +123,27 @@ where
     let reader = async {
         let mut line = Vec::with_capacity(256);
         loop {
+            // The output keeps up with the answers before another line is read.
+            bridge.room().await;
             match read_line(&mut input, schema::MAX_COMMAND_BYTES, &mut line).await {
                 Ok(None) => return End::InputClosed,
                 Err(e) => {
                     tracing::warn!(error = %e, "bridge: stdin cannot be read");
                     return End::InputClosed;
                 }
-                Ok(Some(Err(n))) => bridge.emit(Out::error(BadCommand {
-                    id: None,
-                    droid: None,
-                    cmd: None,
-                    code: ErrorCode::BadJson,
-                    message: format!(
-                        "a line of {n} bytes: a command is at most {} bytes",
-                        schema::MAX_COMMAND_BYTES
-                    ),
-                })),
+                Ok(Some(Err(n))) => bridge.emit(
+                    None,
+                    schema::Out::error(BadCommand {
+                        id: None,
+                        droid: None,
+                        cmd: None,
+                        code: ErrorCode::BadJson,
+                        message: format!(
+                            "a line of {n} bytes: a command is at most {} bytes",
+                            schema::MAX_COMMAND_BYTES
+                        ),
+                    }),
+                ),
                 Ok(Some(Ok(()))) => {
                     let text = line.strip_suffix(b"\r").unwrap_or(&line);
                     // Blank lines are ignored (a client's keep-alive).
@@ -155,7 +174,20 @@ where
     bridge.shutdown().await;
     if writer_done.is_none() {
         let _ = finish.send(());
-        let _ = tokio::time::timeout(std::time::Duration::from_secs(2), writer).await;
+        // Everything is written while the reader takes it, however slowly.
+        let mut seen = written.load(Ordering::Relaxed);
+        while tokio::time::timeout(DRAIN_STALL, &mut writer)
+            .await
+            .is_err()
+        {
+            let now = written.load(Ordering::Relaxed);
+            if now == seen {
+                tracing::warn!("bridge: the reader took nothing for {DRAIN_STALL:?}: not waiting");
+                writer.abort();
+                break;
+            }
+            seen = now;
+        }
     }
     end
 }

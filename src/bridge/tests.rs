@@ -16,28 +16,56 @@ use crate::family::drive_speed;
 /// A droid's drive writes: when (since the rig started) and the speed.
 type Writes = Arc<Mutex<Vec<(Duration, u8)>>>;
 
+/// Every packet written to a droid: when (since the rig started) and its catalogue label.
+type Labels = Arc<Mutex<Vec<(Duration, String)>>>;
+
 /// Simulated droids in a bridge, each connected; the drive writes of each droid (time since
 /// the bridge started, speed) are collected.
-struct Rig {
-    bridge: Arc<Bridge>,
-    rx: mpsc::Receiver<Out>,
+pub(super) struct Rig {
+    pub(super) bridge: Arc<Bridge>,
+    pub(super) rx: outbox::Outputs,
     writes: Vec<Writes>,
-    start: Instant,
+    labels: Vec<Labels>,
+    pub(super) start: Instant,
 }
 
-async fn rig(models: &[Model], timeout_ms: u64) -> Rig {
+/// How the rig's droids are made, beyond their models.
+#[derive(Default)]
+pub(super) struct RigOptions {
+    /// Each droid's faults (none when absent).
+    pub(super) faults: Vec<Faults>,
+    /// The sessions' reconnect backoff (the session's default when absent).
+    pub(super) backoff: Option<crate::link::backoff::Backoff>,
+    /// Each droid's name (the simulator's when absent).
+    pub(super) names: Vec<String>,
+}
+
+pub(super) async fn rig(models: &[Model], timeout_ms: u64) -> Rig {
+    rig_with(models, timeout_ms, RigOptions::default()).await
+}
+
+pub(super) async fn rig_with(models: &[Model], timeout_ms: u64, o: RigOptions) -> Rig {
     let specs = models
         .iter()
         .enumerate()
         .map(|(i, &m)| DroidSpec {
-            name: crate::relay::sim_backend::sim_name(m, i),
+            name: o
+                .names
+                .get(i)
+                .cloned()
+                .unwrap_or_else(|| crate::relay::sim_backend::sim_name(m, i)),
             model: m,
-            link: Box::new(SimLink::new(m, SimConfig::for_model(m), Faults::none())),
+            link: Box::new(SimLink::new(
+                m,
+                SimConfig::for_model(m),
+                o.faults.get(i).cloned().unwrap_or_else(Faults::none),
+            )),
             session: SessionConfig {
                 family: m.protocol(),
                 model: Some(m),
                 pacing: m.write_pacing(),
                 setup: connect_setup(m, &SetupOptions::default()),
+                backoff: o.backoff.unwrap_or_default(),
                 ..SessionConfig::default()
             },
             origin: "simulated".into(),
@@ -46,21 +74,26 @@ async fn rig(models: &[Model], timeout_ms: u64) -> Rig {
     let fleet = Fleet::start(specs);
     let start = Instant::now();
     let mut writes = Vec::new();
+    let mut labels = Vec::new();
     for m in fleet.members() {
         let w = Arc::new(Mutex::new(Vec::new()));
+        let l = Arc::new(Mutex::new(Vec::new()));
         let mut log = m.session.subscribe_log();
-        let sink = w.clone();
+        let (sink, names) = (w.clone(), l.clone());
         tokio::spawn(async move {
             while let Ok(e) = log.recv().await {
                 if e.dir == Direction::Out
-                    && let LogItem::Packet { packet, .. } = &e.item
-                    && let Some(s) = drive_speed(packet)
+                    && let LogItem::Packet { packet, explained } = &e.item
                 {
-                    lock(&sink).push((start.elapsed(), s));
+                    lock(&names).push((start.elapsed(), explained.label.clone()));
+                    if let Some(s) = drive_speed(packet) {
+                        lock(&sink).push((start.elapsed(), s));
+                    }
                 }
             }
         });
         writes.push(w);
+        labels.push(l);
     }
     for i in 0..fleet.len() {
         let mut st = fleet.link_state(i).unwrap();
@@ -76,17 +109,18 @@ async fn rig(models: &[Model], timeout_ms: u64) -> Rig {
         bridge,
         rx,
         writes,
+        labels,
         start,
     }
 }
 
 impl Rig {
-    fn send(&self, line: &str) {
+    pub(super) fn send(&self, line: &str) {
         self.bridge.handle(line.as_bytes(), None);
     }
 
     /// Every object out so far, but telemetry, battery and link states.
-    fn said(&mut self) -> Vec<Out> {
+    pub(super) fn said(&mut self) -> Vec<Out> {
         let mut out = Vec::new();
         while let Ok(o) = self.rx.try_recv() {
             if !matches!(
@@ -99,16 +133,21 @@ impl Rig {
         out
     }
 
-    fn writes(&self, i: usize) -> Vec<(Duration, u8)> {
+    pub(super) fn writes(&self, i: usize) -> Vec<(Duration, u8)> {
         lock(&self.writes[i]).clone()
     }
 
-    fn now(&self) -> Duration {
+    /// The labels of the packets written to droid `i`.
+    pub(super) fn labels(&self, i: usize) -> Vec<(Duration, String)> {
+        lock(&self.labels[i]).clone()
+    }
+
+    pub(super) fn now(&self) -> Duration {
         self.start.elapsed()
     }
 }
 
-async fn run_for(ms: u64) {
+pub(super) async fn run_for(ms: u64) {
     let end = Instant::now() + Duration::from_millis(ms);
     while Instant::now() < end {
         sleep(Duration::from_millis(10)).await;

@@ -118,14 +118,7 @@ fn mqtt_settings(
         .unwrap_or_else(|| b.topic_prefix.clone());
     crate::config::bridge::check_prefix(&prefix).map_err(CliError::usage)?;
     let password = match &args.password_file {
-        Some(p) => Some(
-            std::fs::read_to_string(p)
-                .map_err(|e| CliError::usage(format!("cannot read {}: {e}", p.display())))?
-                .lines()
-                .next()
-                .unwrap_or("")
-                .to_string(),
-        ),
+        Some(p) => Some(password_file(p).map_err(CliError::usage)?),
         None => std::env::var("DROIDCTL_MQTT_PASSWORD").ok(),
     };
     let ca_pem = match &args.ca_file {
@@ -141,7 +134,7 @@ fn mqtt_settings(
     let client_id = args
         .client_id
         .clone()
-        .unwrap_or_else(|| format!("droidctl-{}", std::process::id()));
+        .unwrap_or_else(bridge::mqtt::default_client_id);
     Ok(MqttSettings {
         url: url.clone(),
         qos: args.qos.unwrap_or(b.qos),
@@ -152,6 +145,37 @@ fn mqtt_settings(
         password,
         ca_pem,
     })
+}
+
+/// The longest password file read (its first line is the password): `/dev/zero` or a large
+/// file given by mistake is refused, not read without end (issue 27 point 8).
+pub const MAX_PASSWORD_FILE_BYTES: u64 = 64 * 1024;
+
+/// The password in `path`: its first line, read from at most [`MAX_PASSWORD_FILE_BYTES`].
+fn password_file(path: &std::path::Path) -> Result<String, String> {
+    use std::io::Read;
+    let cannot = |e: std::io::Error| format!("cannot read {}: {e}", path.display());
+    let mut bytes = Vec::new();
+    std::fs::File::open(path)
+        .map_err(cannot)?
+        .take(MAX_PASSWORD_FILE_BYTES + 1)
+        .read_to_end(&mut bytes)
+        .map_err(cannot)?;
+    let first = match memchr::memchr(b'\n', &bytes) {
+        Some(at) => &bytes[..at],
+        None if bytes.len() as u64 > MAX_PASSWORD_FILE_BYTES => {
+            return Err(format!(
+                "{} is not a password file: no line end in its first {} KiB (the password is \
+                 the file's first line)",
+                path.display(),
+                MAX_PASSWORD_FILE_BYTES / 1024
+            ));
+        }
+        None => &bytes[..],
+    };
+    let first = first.strip_suffix(b"\r").unwrap_or(first);
+    String::from_utf8(first.to_vec())
+        .map_err(|_| format!("{}: the password is not UTF-8 text", path.display()))
 }
 
 /// The MQTT options given without `--mqtt`.
@@ -244,6 +268,13 @@ pub fn run(args: BridgeArgs) -> Result<i32, CliError> {
                 .await;
                 if let bridge::stdio::End::OutputClosed(why) = &end {
                     eprintln!("droidctl: bridge: stdout closed ({why}): every droid stopped");
+                }
+                let dropped = bridge.dropped();
+                if dropped > 0 {
+                    eprintln!(
+                        "droidctl: bridge: {dropped} telemetry objects were dropped: the reader \
+                         did not keep up (replies and errors never are); lower --rate"
+                    );
                 }
                 Ok(0)
             }

@@ -60,8 +60,16 @@ pub fn validate(b: &Bridge) -> Result<(), (String, String, String)> {
     Ok(())
 }
 
-/// A topic prefix: one or more levels, no wildcards, no empty level.
+/// A topic prefix: one or more levels, no wildcards, no empty level, not a broker's own
+/// (`$SYS`: a `$` topic is reserved for the broker and never matches the bridge's
+/// subscriptions as clients publish them: the bridge would never get a command).
 pub fn check_prefix(p: &str) -> Result<(), String> {
+    if p.starts_with('$') {
+        return Err(format!(
+            "{p:?} is not a topic prefix: topics starting with $ are the broker's own (like \
+             $SYS); use a name like `droidctl` or `school/room1`"
+        ));
+    }
     if p.is_empty()
         || p.len() > 128
         || p.contains(['+', '#', '\0'])
@@ -94,6 +102,11 @@ mod tests {
             ("[bridge]\nqos = 3\n", "bridge.qos"),
             ("[bridge]\ntopic_prefix = \"a/#\"\n", "bridge.topic_prefix"),
             ("[bridge]\ntopic_prefix = \"a//b\"\n", "bridge.topic_prefix"),
+            ("[bridge]\ntopic_prefix = \"$SYS\"\n", "bridge.topic_prefix"),
+            (
+                "[bridge]\ntopic_prefix = \"$share/x\"\n",
+                "bridge.topic_prefix",
+            ),
             ("[bridge]\nkeepalive_s = 0\n", "bridge.keepalive_s"),
         ] {
             let e = Config::parse_merged(None, text).unwrap_err();

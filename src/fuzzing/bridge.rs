@@ -44,7 +44,7 @@ pub const TARGET: Target = Target {
 };
 
 /// The droids' drive writes (the speed of each, in order).
-type Writes = Arc<Mutex<Vec<Vec<u8>>>>;
+pub(super) type Writes = Arc<Mutex<Vec<Vec<u8>>>>;
 
 pub fn run_input(data: &[u8]) {
     let Some((pause, sizes, stream)) = split(data) else {
@@ -59,7 +59,7 @@ pub fn run_input(data: &[u8]) {
 }
 
 /// The droids as `droidctl bridge --sim r2d2,robi` starts them.
-fn fleet() -> (Fleet, Vec<SetupOptions>) {
+pub(super) fn fleet() -> (Fleet, Vec<SetupOptions>) {
     let config = crate::config::Config::defaults();
     let models = [Model::R2D2, Model::Robi42];
     let specs = crate::cli::fleet::simulated(&models)
@@ -76,7 +76,7 @@ fn fleet() -> (Fleet, Vec<SetupOptions>) {
     (Fleet::start(specs), setups)
 }
 
-fn watch_writes(fleet: &Fleet) -> Writes {
+pub(super) fn watch_writes(fleet: &Fleet) -> Writes {
     let writes: Writes = Arc::new(Mutex::new(vec![Vec::new(); fleet.len()]));
     for (i, m) in fleet.members().iter().enumerate() {
         let mut log = m.session.subscribe_log();
@@ -96,7 +96,7 @@ fn watch_writes(fleet: &Fleet) -> Writes {
     writes
 }
 
-fn still(writes: &Writes, when: &str) {
+pub(super) fn still(writes: &Writes, when: &str) {
     let w = writes.lock().unwrap_or_else(|e| e.into_inner());
     for (i, speeds) in w.iter().enumerate() {
         assert!(

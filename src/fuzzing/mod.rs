@@ -16,6 +16,7 @@ pub mod app_input;
 #[cfg(target_os = "linux")]
 pub mod bluez;
 pub mod bridge;
+pub mod bridge_mqtt;
 pub mod btsnoop;
 pub mod capture;
 pub mod config;
@@ -53,6 +54,7 @@ pub fn targets() -> Vec<&'static Target> {
         &packet_file::TARGET,
         &relay_server::TARGET,
         &bridge::TARGET,
+        &bridge_mqtt::TARGET,
         &app_input::TARGET,
     ];
     #[cfg(target_os = "linux")]
