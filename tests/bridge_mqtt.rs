@@ -467,12 +467,11 @@ fn the_bridges_own_broker_shared_with_a_password() {
         DRIVE,
         &["-u", "pupil", "-P", "c-3po"]
     ));
-    assert!(publish(
-        p,
-        "droidctl/D2-0001/cmd",
-        DRIVE,
-        &["-u", "pupil", "-P", "r2-d2"]
-    ));
+    for _ in 0..8 {
+        let login = ["-u", "pupil", "-P", "r2-d2"];
+        assert!(publish(p, "droidctl/D2-0001/cmd", DRIVE, &login));
+        std::thread::sleep(Duration::from_millis(250));
+    }
     sub.wait(5, "droidctl/D2-0001/telemetry", |v| speed(v) > 20.0);
     let err = bridge.stderr();
     assert!(
