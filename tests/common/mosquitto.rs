@@ -306,7 +306,15 @@ fn options(id: &str, port: u16, extra: &[&str]) -> rumqttc::MqttOptions {
             "-P" => pass = args.next().map(|s| s.to_string()),
             "--cafile" => {
                 let ca = std::fs::read(args.next().expect("--cafile FILE")).unwrap();
-                o.set_transport(rumqttc::Transport::tls(ca, None, None));
+                #[cfg(target_os = "linux")]
+                let tls = rumqttc::Transport::tls(ca, None, None);
+                #[cfg(not(target_os = "linux"))]
+                let tls =
+                    rumqttc::Transport::tls_with_config(rumqttc::TlsConfiguration::SimpleNative {
+                        ca,
+                        client_auth: None,
+                    });
+                o.set_transport(tls);
             }
             other => panic!("the test client does not take {other}"),
         }

@@ -13,6 +13,9 @@
 //! Only the functions gilrs-core uses are here; a gilrs update calling another one fails to
 //! build (not to run), which is when to add it.
 
+// libudev is Linux's: elsewhere (the Windows and macOS cross checks build the workspace) the
+// crate is empty, as nothing there calls it.
+#![cfg(target_os = "linux")]
 #![allow(non_camel_case_types)]
 #![allow(clippy::missing_safety_doc)]
 
