@@ -1,9 +1,9 @@
 //! `droidctl scan` as a process, on machines without Bluetooth: it must exit 1 quickly with
 //! one line that names what is missing and mentions `--sim`.
 //!
-//! Beyond this machine's own "no system bus", the other cases run against a private
-//! `dbus-daemon` standing in for the system bus, with a tiny fake BlueZ on it (skipped when
-//! `dbus-daemon` is not installed). That exercises the real btleplug path end to end.
+//! Beyond this machine's own "no system bus", the other cases run against a private bus
+//! standing in for the system bus (`dbus-daemon` where installed, else busd in this process),
+//! with a tiny fake BlueZ on it. That exercises the real btleplug path end to end.
 
 // BlueZ and D-Bus exist only on Linux.
 #![cfg(target_os = "linux")]
@@ -15,8 +15,7 @@ use dbus::message::MatchRule;
 use dbus::strings::ErrorName;
 use dbus::{Message, Path};
 use std::collections::HashMap;
-use std::io::{BufRead, BufReader};
-use std::process::{Child, Command, Output, Stdio};
+use std::process::{Command, Output, Stdio};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::thread::JoinHandle;
@@ -80,38 +79,18 @@ fn bad_timeouts_are_usage_errors() {
 // A private bus with a fake BlueZ
 // -------------------------------------------------------------------------------------------
 
-/// A `dbus-daemon` of our own, killed on drop.
+/// A bus of our own: `sim --bluez`'s private bus (`dbus-daemon` where installed, else busd
+/// in this process), stopped on drop.
 struct Bus {
-    daemon: Child,
+    _bus: droidctl::sim::bluez::PrivateBus,
     address: String,
 }
 
 impl Bus {
-    fn start() -> Option<Bus> {
-        let mut daemon = Command::new("dbus-daemon")
-            .args(["--session", "--nofork", "--nopidfile", "--print-address=1"])
-            .stdin(Stdio::null())
-            .stdout(Stdio::piped())
-            .stderr(Stdio::null())
-            .spawn()
-            .ok()?;
-        let mut line = String::new();
-        let stdout = daemon.stdout.take()?;
-        BufReader::new(stdout).read_line(&mut line).ok()?;
-        let address = line.trim().to_string();
-        if address.is_empty() {
-            let _ = daemon.kill();
-            let _ = daemon.wait();
-            return None;
-        }
-        Some(Bus { daemon, address })
-    }
-}
-
-impl Drop for Bus {
-    fn drop(&mut self) {
-        let _ = self.daemon.kill();
-        let _ = self.daemon.wait();
+    fn start() -> Bus {
+        let bus = droidctl::sim::bluez::PrivateBus::start().expect("a private D-Bus bus");
+        let address = bus.address().to_string();
+        Bus { _bus: bus, address }
     }
 }
 
@@ -277,10 +256,7 @@ impl Drop for FakeBluez {
 }
 
 fn with_bus(f: impl FnOnce(&Bus)) {
-    match Bus::start() {
-        Some(bus) => f(&bus),
-        None => eprintln!("skipped: dbus-daemon is not available"),
-    }
+    f(&Bus::start())
 }
 
 #[test]

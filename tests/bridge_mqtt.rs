@@ -1,13 +1,14 @@
-//! `droidctl bridge --mqtt` through a real broker (issue 20 points 3 and 4): mosquitto on a
-//! free loopback port, simulated droids behind the bridge, `mosquitto_pub`/`mosquitto_sub` as
-//! the outside client. Topics per droid, the retained state and the last will, replies and
-//! errors, the command timeout, the broker going away and coming back while the droids stay
-//! connected, a password, TLS.
+//! `droidctl bridge --mqtt` through a real broker (issue 20 points 3 and 4): droidctl's own
+//! broker, and mosquitto where it is installed (issue 28), on a free loopback port, simulated
+//! droids behind the bridge, a rumqttc client as the outside client. Topics per droid, the
+//! retained state and the last will, replies and errors, the command timeout, the broker
+//! going away and coming back while the droids stay connected, a password, TLS; and
+//! `--mqtt` without a URL, the bridge hosting its own broker.
 
 #[path = "common/mosquitto.rs"]
 mod mosquitto;
 
-use mosquitto::{Broker, Sub, publish};
+use mosquitto::{Broker, Kind, Sub, mosquitto_here, publish};
 use serde_json::Value;
 use std::path::PathBuf;
 use std::process::{Child, Command, Stdio};
@@ -96,9 +97,20 @@ fn stayed_connected(sub: &Sub) {
 const DRIVE: &str = r#"{"v":1,"cmd":"drive","speed":120,"heading":90}"#;
 
 #[test]
-fn simulated_droids_through_a_real_broker() {
-    let dir = scratch("topics");
-    let broker = Broker::start(&dir);
+fn simulated_droids_through_droidctls_broker() {
+    simulated_droids_through_a_real_broker(Kind::Embedded);
+}
+
+#[test]
+fn simulated_droids_through_mosquitto() {
+    if mosquitto_here() {
+        simulated_droids_through_a_real_broker(Kind::Mosquitto);
+    }
+}
+
+fn simulated_droids_through_a_real_broker(kind: Kind) {
+    let dir = scratch(&format!("topics-{kind:?}"));
+    let broker = Broker::start_kind(&dir, kind);
     let p = broker.port;
     let sub = Sub::start(p, "droidctl/#", &[]);
     let mut bridge = BridgeProc::start(
@@ -187,9 +199,20 @@ fn simulated_droids_through_a_real_broker() {
 }
 
 #[test]
-fn losing_the_broker_stops_the_droid_and_keeps_its_link() {
-    let dir = scratch("lost");
-    let mut broker = Broker::start(&dir);
+fn losing_droidctls_broker_stops_the_droid_and_keeps_its_link() {
+    losing_the_broker_stops_the_droid_and_keeps_its_link(Kind::Embedded);
+}
+
+#[test]
+fn losing_mosquitto_stops_the_droid_and_keeps_its_link() {
+    if mosquitto_here() {
+        losing_the_broker_stops_the_droid_and_keeps_its_link(Kind::Mosquitto);
+    }
+}
+
+fn losing_the_broker_stops_the_droid_and_keeps_its_link(kind: Kind) {
+    let dir = scratch(&format!("lost-{kind:?}"));
+    let mut broker = Broker::start_kind(&dir, kind);
     let p = broker.port;
     let sub = Sub::start(p, "droidctl/#", &[]);
     // A long command timeout: only the broker's loss can stop the droid in this test.
@@ -237,21 +260,44 @@ fn losing_the_broker_stops_the_droid_and_keeps_its_link() {
 }
 
 #[test]
-fn a_broker_with_a_password() {
-    let dir = scratch("password");
-    let pw = dir.join("passwd");
-    let ok = Command::new(mosquitto::program("mosquitto_passwd"))
-        .args(["-c", "-b"])
-        .arg(&pw)
-        .args(["pupil", "r2-d2"])
-        .status()
-        .expect("mosquitto_passwd");
-    assert!(ok.success());
-    let broker = Broker::start_with(
-        &dir,
-        mosquitto::free_port(),
-        &format!("allow_anonymous false\npassword_file {}\n", pw.display()),
-    );
+fn droidctls_broker_with_a_password() {
+    a_broker_with_a_password(Kind::Embedded);
+}
+
+#[test]
+fn mosquitto_with_a_password() {
+    if mosquitto_here() {
+        a_broker_with_a_password(Kind::Mosquitto);
+    }
+}
+
+fn a_broker_with_a_password(kind: Kind) {
+    let dir = scratch(&format!("password-{kind:?}"));
+    let broker = match kind {
+        Kind::Embedded => Broker::embedded(
+            &dir,
+            mosquitto::free_port(),
+            droidctl::bridge::broker::Access {
+                login: Some(("pupil".into(), "r2-d2".into())),
+            },
+            false,
+        ),
+        Kind::Mosquitto => {
+            let pw = dir.join("passwd");
+            let ok = Command::new(mosquitto::program("mosquitto_passwd"))
+                .args(["-c", "-b"])
+                .arg(&pw)
+                .args(["pupil", "r2-d2"])
+                .status()
+                .expect("mosquitto_passwd");
+            assert!(ok.success());
+            Broker::start_with(
+                &dir,
+                mosquitto::free_port(),
+                &format!("allow_anonymous false\npassword_file {}\n", pw.display()),
+            )
+        }
+    };
     let p = broker.port;
     std::fs::write(dir.join("wrong"), "c-3po\n").unwrap();
     let mut wrong = BridgeProc::start(
@@ -295,87 +341,36 @@ fn a_broker_with_a_password() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// A CA and a certificate for 127.0.0.1 made with the `openssl` command; `None` without it.
-fn certificates(dir: &std::path::Path) -> Option<()> {
-    let run = |args: &[&str]| {
-        Command::new("openssl")
-            .args(args)
-            .current_dir(dir)
-            .stdout(Stdio::null())
-            .stderr(Stdio::null())
-            .status()
-            .ok()
-            .filter(|s| s.success())
-    };
-    run(&[
-        "req",
-        "-x509",
-        "-newkey",
-        "rsa:2048",
-        "-nodes",
-        "-days",
-        "2",
-        "-subj",
-        "/CN=droidctl test CA",
-        "-keyout",
-        "ca.key",
-        "-out",
-        "ca.pem",
-    ])?;
-    run(&[
-        "req",
-        "-newkey",
-        "rsa:2048",
-        "-nodes",
-        "-subj",
-        "/CN=127.0.0.1",
-        "-keyout",
-        "server.key",
-        "-out",
-        "server.csr",
-    ])?;
-    std::fs::write(
-        dir.join("san.ext"),
-        "subjectAltName=IP:127.0.0.1,DNS:localhost\n",
-    )
-    .ok()?;
-    run(&[
-        "x509",
-        "-req",
-        "-in",
-        "server.csr",
-        "-CA",
-        "ca.pem",
-        "-CAkey",
-        "ca.key",
-        "-CAcreateserial",
-        "-days",
-        "2",
-        "-extfile",
-        "san.ext",
-        "-out",
-        "server.pem",
-    ])?;
-    Some(())
+#[test]
+fn droidctls_broker_over_tls() {
+    a_broker_over_tls(Kind::Embedded);
 }
 
 #[test]
-fn a_broker_over_tls() {
-    let dir = scratch("tls");
-    if certificates(&dir).is_none() {
-        eprintln!("SKIPPED: the `openssl` command could not make test certificates");
-        return;
+fn mosquitto_over_tls() {
+    if mosquitto_here() {
+        a_broker_over_tls(Kind::Mosquitto);
     }
-    let d = dir.display();
-    let broker = Broker::start_with(
-        &dir,
-        mosquitto::free_port(),
-        &format!(
-            "allow_anonymous true\ncafile {d}/ca.pem\ncertfile {d}/server.pem\nkeyfile {d}/server.key\n"
+}
+
+/// The test certificate (tests/fixtures/tls: a CA, and a certificate for 127.0.0.1 it
+/// signed), so no `openssl` is needed to run this.
+fn a_broker_over_tls(kind: Kind) {
+    let dir = scratch(&format!("tls-{kind:?}"));
+    let port = mosquitto::free_port();
+    let broker = match kind {
+        Kind::Embedded => Broker::embedded(&dir, port, Default::default(), true),
+        Kind::Mosquitto => Broker::start_with(
+            &dir,
+            port,
+            &format!(
+                "allow_anonymous true\n{}",
+                mosquitto::mosquitto_tls_config()
+            ),
         ),
-    );
+    };
     let p = broker.port;
-    let ca = dir.join("ca.pem");
+    let ca = mosquitto::test_ca();
     let sub = Sub::start(p, "droidctl/#", &["--cafile", ca.to_str().unwrap()]);
     let url = format!("mqtts://127.0.0.1:{p}");
     let _bridge = BridgeProc::start(
@@ -412,23 +407,13 @@ fn a_broker_over_tls() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// `mosquitto_pub -f FILE` (payloads too large for a command line).
-fn publish_file(port: u16, topic: &str, payload: &[u8], retain: bool, dir: &std::path::Path) {
-    let f = dir.join("payload.bin");
-    std::fs::write(&f, payload).unwrap();
-    let mut c = Command::new(mosquitto::program("mosquitto_pub"));
-    c.args(["-h", "127.0.0.1", "-p", &port.to_string(), "-q", "1"]);
-    if retain {
-        c.arg("-r");
-    }
-    let ok = c
-        .args(["-t", topic, "-f"])
-        .arg(&f)
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .status()
-        .is_ok_and(|s| s.success());
-    assert!(ok, "mosquitto_pub -f");
+/// A payload too large for a command line, published (retained or not).
+fn publish_file(port: u16, topic: &str, payload: &[u8], retain: bool) {
+    assert!(
+        mosquitto::publish_bytes(port, topic, payload, retain, &[]),
+        "publish {} bytes",
+        payload.len()
+    );
 }
 
 /// A command padded to `size` bytes.
@@ -470,14 +455,14 @@ fn a_retained_command_never_drives_and_a_large_payload_keeps_the_connection() {
         assert!(speed(&v) < 1.0, "the retained drive drove: {v}");
     }
     // Large payloads: an error each, and the connection stays.
-    publish_file(p, "droidctl/BB-0001/cmd", &padded(6000), false, &dir);
+    publish_file(p, "droidctl/BB-0001/cmd", &padded(6000), false);
     let e = sub.wait(5, "droidctl/BB-0001/reply", |v| v["type"] == "error");
     assert_eq!(e["code"], "bad_json", "{e}");
-    publish_file(p, "droidctl/BB-0001/cmd", &padded(200_000), false, &dir);
+    publish_file(p, "droidctl/BB-0001/cmd", &padded(200_000), false);
     let e = sub.wait(5, "droidctl/BB-0001/reply", |v| v["type"] == "error");
     assert_eq!(e["code"], "bad_json", "{e}");
     // A large retained one replaces the retained drive: ignored too, no loop.
-    publish_file(p, "droidctl/BB-0001/cmd", &padded(6000), true, &dir);
+    publish_file(p, "droidctl/BB-0001/cmd", &padded(6000), true);
     std::thread::sleep(Duration::from_millis(1500));
     // Live commands still work over the same connection.
     for _ in 0..6 {
@@ -609,4 +594,100 @@ async fn two_droids_with_the_same_name_get_their_own_topics() {
     running.abort();
     bridge.shutdown().await;
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `--mqtt` without a URL: the bridge hosts droidctl's own broker (here on a free port with
+/// `--listen`; 127.0.0.1:1883 without it), and other programs drive through it.
+#[test]
+fn the_bridge_hosts_its_own_broker() {
+    let dir = scratch("own");
+    let p = mosquitto::free_port();
+    let listen = format!("127.0.0.1:{p}");
+    let bridge = BridgeProc::start(&dir, &["--mqtt", "--listen", &listen, "--sim", "r2d2"]);
+    let end = Instant::now() + Duration::from_secs(15);
+    while std::net::TcpStream::connect(("127.0.0.1", p)).is_err() {
+        assert!(Instant::now() < end, "no broker: {}", bridge.stderr());
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    let sub = Sub::start(p, "droidctl/#", &[]);
+    sub.wait(15, "droidctl/D2-0001/state", |v| v["state"] == "connected");
+    sub.wait(15, "droidctl/D2-0001/telemetry", |v| v["x_cm"].is_number());
+    for _ in 0..8 {
+        assert!(publish(p, "droidctl/D2-0001/cmd", DRIVE, &[]));
+        std::thread::sleep(Duration::from_millis(250));
+    }
+    sub.wait(5, "droidctl/D2-0001/telemetry", |v| speed(v) > 20.0);
+    let err = bridge.stderr();
+    assert!(
+        err.contains(&format!("MQTT broker (droidctl's own) on {listen}")),
+        "{err}"
+    );
+    assert!(!err.contains("warning"), "loopback needs no warning: {err}");
+}
+
+/// Shared on the network with a password: the warning says who can drive; a client without
+/// the password is refused, one with it drives.
+#[test]
+fn the_bridges_own_broker_shared_with_a_password() {
+    let dir = scratch("own-shared");
+    let p = mosquitto::free_port();
+    let listen = format!("0.0.0.0:{p}");
+    std::fs::write(dir.join("pw"), "r2-d2\n").unwrap();
+    let pw = dir.join("pw");
+    let bridge = BridgeProc::start(
+        &dir,
+        &[
+            "--mqtt",
+            "--listen",
+            &listen,
+            "--username",
+            "pupil",
+            "--password-file",
+            pw.to_str().unwrap(),
+            "--sim",
+            "r2d2",
+        ],
+    );
+    let end = Instant::now() + Duration::from_secs(15);
+    while std::net::TcpStream::connect(("127.0.0.1", p)).is_err() {
+        assert!(Instant::now() < end, "no broker: {}", bridge.stderr());
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    let sub = Sub::start(p, "droidctl/#", &["-u", "pupil", "-P", "r2-d2"]);
+    sub.wait(15, "droidctl/D2-0001/state", |v| v["state"] == "connected");
+    sub.wait(15, "droidctl/D2-0001/telemetry", |v| v["x_cm"].is_number());
+    assert!(!publish(
+        p,
+        "droidctl/D2-0001/cmd",
+        DRIVE,
+        &["-u", "pupil", "-P", "c-3po"]
+    ));
+    for _ in 0..8 {
+        let login = ["-u", "pupil", "-P", "r2-d2"];
+        assert!(publish(p, "droidctl/D2-0001/cmd", DRIVE, &login));
+        std::thread::sleep(Duration::from_millis(250));
+    }
+    sub.wait(5, "droidctl/D2-0001/telemetry", |v| speed(v) > 20.0);
+    let err = bridge.stderr();
+    assert!(
+        err.contains("warning: MQTT broker listening on 0.0.0.0")
+            && err.contains("drive your droids"),
+        "{err}"
+    );
+    assert!(!err.contains("no password"), "{err}");
+}
+
+/// A broker already on the port: said, with what to do instead.
+#[test]
+fn the_bridges_own_broker_on_a_taken_port() {
+    let dir = scratch("own-taken");
+    let taken = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let listen = taken.local_addr().unwrap().to_string();
+    let mut bridge = BridgeProc::start(&dir, &["--mqtt", "--listen", &listen, "--sim", "r2d2"]);
+    assert_eq!(bridge.wait(20), Some(1), "{}", bridge.stderr());
+    let err = bridge.stderr();
+    assert!(
+        err.contains(&format!("cannot listen on {listen}")) && err.contains("--mqtt mqtt://"),
+        "{err}"
+    );
 }

@@ -496,3 +496,37 @@ fn robi_shows_motors_and_io_drives_forward_refuses_reverse() {
     let raw = tui.raw();
     assert!(pos(&raw, b"\x1b[?1049l") > pos(&raw, b"\x1b[?1049h"));
 }
+
+/// Issue 28: where libudev cannot be loaded (here: a library name that does not exist), the
+/// status line says gamepads need it, and the keyboard drives as ever.
+#[test]
+fn without_libudev_the_status_line_says_so_and_the_keyboard_drives() {
+    let mut tui = Tui::start_with(
+        100,
+        30,
+        true,
+        &[("DROIDCTL_LIBUDEV", "libudev-not-installed.so.1")],
+    );
+    tui.wait_for(
+        "gamepads need libudev (systemd's udev library)",
+        Duration::from_secs(20),
+    );
+    tui.wait_for("connected", Duration::from_secs(20));
+    tui.wait_for("stance tripod", Duration::from_secs(10));
+    assert!(
+        tui.text().contains("pad n/a: gamepads need"),
+        "{}",
+        tui.text()
+    );
+    tui.send(b"\x1b[119u");
+    std::thread::sleep(Duration::from_millis(1500));
+    let moving = tui.text();
+    assert!(
+        moving.contains("speed 100/255"),
+        "driving with the keyboard:\n{moving}"
+    );
+    tui.send(b"\x1b[119;1:3u");
+    tui.send(b"\x1b[113u");
+    let status = tui.wait_exit(Duration::from_secs(10));
+    assert!(status.success(), "{status:?}");
+}

@@ -501,20 +501,6 @@ fn python_with(modules: &str) -> Result<String, String> {
     }
 }
 
-/// Whether a private bus can be run for the virtual BlueZ, or why not.
-fn dbus_daemon() -> Result<(), String> {
-    let ok = Command::new("dbus-daemon")
-        .arg("--version")
-        .stdout(Stdio::null())
-        .status()
-        .is_ok_and(|s| s.success());
-    if ok {
-        Ok(())
-    } else {
-        Err("no dbus-daemon".into())
-    }
-}
-
 /// Wait for a child with a limit; its output.
 fn finish(mut child: Child, limit: Duration, what: &str) -> Output {
     let start = Instant::now();
@@ -642,9 +628,7 @@ impl Bluez {
 /// droid on the virtual BlueZ of `droidctl sim --bluez`: the same telemetry as `--sim`.
 #[test]
 fn droidctl_drives_through_spherov2_tcp_server() {
-    let py = match python_with("spherov2.adapter.tcp_server, bleak")
-        .and_then(|py| dbus_daemon().map(|_| py))
-    {
+    let py = match python_with("spherov2.adapter.tcp_server, bleak") {
         Ok(py) => py,
         Err(why) => {
             println!("SKIPPED droidctl_drives_through_spherov2_tcp_server: {why}");
@@ -895,9 +879,7 @@ fn sphero_edu_drives_bolt_and_mini_through_serve() {
 /// whose trace shows the BOLT's matrix drawing the character.
 #[test]
 fn sphero_edu_drives_bolt_and_mini_through_bleak() {
-    let py = match python_with("spherov2.adapter.bleak_adapter, spherov2.sphero_edu, bleak")
-        .and_then(|py| dbus_daemon().map(|_| py))
-    {
+    let py = match python_with("spherov2.adapter.bleak_adapter, spherov2.sphero_edu, bleak") {
         Ok(py) => py,
         Err(why) => {
             println!("SKIPPED sphero_edu_drives_bolt_and_mini_through_bleak: {why}");
@@ -1054,9 +1036,7 @@ fn sphero_edu_drives_bolt_mini_and_rvr() {
 #[test]
 fn sphero_edu_drives_each_v1_droid_through_bleak_and_the_trace_reads_its_rolls() {
     let test = "sphero_edu_drives_each_v1_droid_through_bleak_and_the_trace_reads_its_rolls";
-    let py = match python_with("spherov2.adapter.bleak_adapter, spherov2.sphero_edu, bleak")
-        .and_then(|py| dbus_daemon().map(|_| py))
-    {
+    let py = match python_with("spherov2.adapter.bleak_adapter, spherov2.sphero_edu, bleak") {
         Ok(py) => py,
         Err(why) => {
             println!("SKIPPED {test}: {why}");

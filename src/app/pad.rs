@@ -15,6 +15,8 @@ impl App {
         self.touched();
         match &e {
             PadEvent::Unavailable(why) => {
+                // Said in full once (the pad field truncates it); the keyboard drives as ever.
+                self.hint(why.clone());
                 self.state.gamepad = GamepadStatus::Unavailable(why.clone())
             }
             PadEvent::Connected(name) => {

@@ -12,6 +12,7 @@
 //! - The transports at the edges hand lines or payloads to [`Bridge::handle`] and take
 //!   [`Out`] values from the channel [`Bridge::start`] returns.
 
+pub mod broker;
 pub mod feeds;
 pub mod motion;
 pub mod mqtt;

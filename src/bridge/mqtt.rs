@@ -206,16 +206,69 @@ fn options(s: &MqttSettings, i: usize, t: &str, name: &str) -> Result<MqttOption
         o.set_credentials(u, p);
     }
     if s.url.tls {
-        let tls = match &s.ca_pem {
-            Some(ca) => rumqttc::TlsConfiguration::SimpleNative {
-                ca: ca.clone(),
-                client_auth: None,
-            },
-            None => rumqttc::TlsConfiguration::Native,
-        };
-        o.set_transport(rumqttc::Transport::tls_with_config(tls));
+        o.set_transport(rumqttc::Transport::tls_with_config(tls(s
+            .ca_pem
+            .as_deref())?));
     }
     Ok(o)
+}
+
+/// TLS on Linux: rustls (ring), trusting `ca_pem` when given, else the platform's root
+/// certificates (the files under /etc/ssl, read by rustls-native-certs). No OpenSSL.
+#[cfg(target_os = "linux")]
+fn tls(ca_pem: Option<&[u8]>) -> Result<rumqttc::TlsConfiguration, String> {
+    use rustls::RootCertStore;
+    use rustls::pki_types::CertificateDer;
+    use rustls::pki_types::pem::PemObject;
+    let mut roots = RootCertStore::empty();
+    match ca_pem {
+        Some(pem) => {
+            let certs: Vec<CertificateDer> = CertificateDer::pem_slice_iter(pem)
+                .collect::<Result<_, _>>()
+                .map_err(|e| format!("the CA certificate is not PEM: {e}"))?;
+            let (added, _) = roots.add_parsable_certificates(certs);
+            if added == 0 {
+                return Err("the CA file holds no usable certificate".into());
+            }
+        }
+        None => {
+            let found = rustls_native_certs::load_native_certs();
+            let (added, _) = roots.add_parsable_certificates(found.certs);
+            if added == 0 {
+                return Err(format!(
+                    "no root certificates found on this machine ({}): give the broker's CA \
+                     with --ca-file FILE, or install the ca-certificates package",
+                    found
+                        .errors
+                        .first()
+                        .map(|e| e.to_string())
+                        .unwrap_or_else(|| "none installed".into())
+                ));
+            }
+        }
+    }
+    let config = rustls::ClientConfig::builder_with_provider(std::sync::Arc::new(
+        rustls::crypto::ring::default_provider(),
+    ))
+    .with_safe_default_protocol_versions()
+    .map_err(|e| format!("TLS: {e}"))?
+    .with_root_certificates(roots)
+    .with_no_client_auth();
+    Ok(rumqttc::TlsConfiguration::Rustls(std::sync::Arc::new(
+        config,
+    )))
+}
+
+/// TLS on Windows and macOS: the system's own (native-tls: SChannel, Security.framework).
+#[cfg(not(target_os = "linux"))]
+fn tls(ca_pem: Option<&[u8]>) -> Result<rumqttc::TlsConfiguration, String> {
+    Ok(match ca_pem {
+        Some(ca) => rumqttc::TlsConfiguration::SimpleNative {
+            ca: ca.to_vec(),
+            client_auth: None,
+        },
+        None => rumqttc::TlsConfiguration::Native,
+    })
 }
 
 /// A droid's connection to the broker: what it tells the others.

@@ -1,6 +1,7 @@
-//! `droidctl bridge --stdio | --mqtt URL [--sim …|--name …|--remote …]`: other programs drive
-//! droids through one JSON interface (see [`crate::bridge`]), over standard input/output or
-//! through an MQTT broker.
+//! `droidctl bridge --stdio | --mqtt [URL] [--sim …|--name …|--remote …]`: other programs
+//! drive droids through one JSON interface (see [`crate::bridge`]), over standard
+//! input/output or through an MQTT broker: the one at URL, or without a URL droidctl's own
+//! ([`crate::bridge::broker`]) on `--listen` (127.0.0.1:1883).
 //!
 //! As `serve` keeps its relay on loopback unless told otherwise, the bridge takes commands
 //! only through a broker on this machine unless `--allow-remote` says so: anyone who can
@@ -22,9 +23,16 @@ pub struct BridgeArgs {
     #[arg(long)]
     pub stdio: bool,
     /// Through an MQTT broker: mqtt://HOST[:PORT] (1883), mqtts://HOST[:PORT] (TLS, 8883);
-    /// topics droidctl/DROID/cmd, …/telemetry, …/collision, …/battery, …/state, …/reply.
-    #[arg(long, value_name = "URL")]
-    pub mqtt: Option<BrokerUrl>,
+    /// without a URL, droidctl's own broker on --listen (127.0.0.1:1883). Topics
+    /// droidctl/DROID/cmd, …/telemetry, …/collision, …/battery, …/state, …/reply.
+    #[arg(long, value_name = "URL", num_args = 0..=1)]
+    pub mqtt: Option<Option<BrokerUrl>>,
+    /// `--mqtt` without a URL: where droidctl's own broker listens, ADDR:PORT or ADDR (port
+    /// 1883). Anything but a loopback address lets other machines publish commands: anyone
+    /// who reaches the port can drive your droids (the broker has no encryption; give it a
+    /// password with --username and --password-file).
+    #[arg(long, value_name = "ADDR:PORT", value_parser = parse_broker_listen)]
+    pub listen: Option<std::net::SocketAddr>,
     /// Bridge simulated droids: r2d2 (default), bb8, robi …; several share one room:
     /// --sim r2d2,bb8,robi.
     #[arg(long, num_args = 0..=1, default_missing_value = "r2d2", value_name = "MODEL[,MODEL…]")]
@@ -60,6 +68,44 @@ pub struct BridgeArgs {
     /// drive your droids (use TLS and a password).
     #[arg(long)]
     pub allow_remote: bool,
+}
+
+fn parse_broker_listen(s: &str) -> Result<std::net::SocketAddr, String> {
+    super::serve::listen_addr(s, bridge::mqtt::PORT)
+}
+
+/// Where the embedded broker listens unless `--listen` says otherwise.
+pub const EMBEDDED_LISTEN: std::net::SocketAddr = std::net::SocketAddr::new(
+    std::net::IpAddr::V4(std::net::Ipv4Addr::LOCALHOST),
+    bridge::mqtt::PORT,
+);
+
+/// The warning for an embedded broker other machines can reach (as `serve`'s).
+pub fn listen_warning(addr: &std::net::SocketAddr, password: bool) -> Option<String> {
+    (!addr.ip().is_loopback()).then(|| {
+        format!(
+            "droidctl: warning: MQTT broker listening on {addr}: it has no encryption{} — \
+             anyone who can reach this port can publish to droidctl/…/cmd and drive your \
+             droids. Listen on a trusted network only.",
+            if password {
+                ""
+            } else {
+                " and no password (--username, --password-file)"
+            }
+        )
+    })
+}
+
+/// The URL the bridge reaches its own broker at: loopback, whatever address it listens on.
+fn embedded_url(listen: std::net::SocketAddr) -> BrokerUrl {
+    let host = if listen.is_ipv6() { "::1" } else { "127.0.0.1" };
+    BrokerUrl {
+        host: host.into(),
+        port: listen.port(),
+        tls: false,
+        username: None,
+        password: None,
+    }
 }
 
 /// Why a broker beyond loopback is refused, or the warning when it is allowed.
@@ -188,6 +234,7 @@ fn mqtt_only(args: &BridgeArgs) -> Vec<&'static str> {
         ("--password-file", args.password_file.is_some()),
         ("--ca-file", args.ca_file.is_some()),
         ("--allow-remote", args.allow_remote),
+        ("--listen", args.listen.is_some()),
     ]
     .into_iter()
     .filter_map(|(name, given)| given.then_some(name))
@@ -198,7 +245,7 @@ pub fn run(args: BridgeArgs) -> Result<i32, CliError> {
     let stray = mqtt_only(&args);
     if args.mqtt.is_none() && !stray.is_empty() {
         return Err(CliError::usage(format!(
-            "{} {} for MQTT: add --mqtt mqtt://HOST",
+            "{} {} for MQTT: add --mqtt mqtt://HOST (or --mqtt alone: droidctl's own broker)",
             stray.join(", "),
             if stray.len() == 1 { "is" } else { "are" }
         )));
@@ -220,13 +267,38 @@ pub fn run(args: BridgeArgs) -> Result<i32, CliError> {
         ));
     }
     let settings = settings(&args, &config);
+    // `--mqtt` alone: droidctl's own broker, reached over loopback.
+    let embedded = match &args.mqtt {
+        Some(None) => Some(args.listen.unwrap_or(EMBEDDED_LISTEN)),
+        Some(Some(_)) if args.listen.is_some() => {
+            return Err(CliError::usage(
+                "--listen is for droidctl's own broker: give --mqtt without a URL",
+            ));
+        }
+        _ => None,
+    };
+    if embedded.is_some() && (args.ca_file.is_some() || args.allow_remote) {
+        return Err(CliError::usage(
+            "--ca-file and --allow-remote are for a broker elsewhere (--mqtt URL)",
+        ));
+    }
     let mqtt = match &args.mqtt {
-        Some(url) => Some(mqtt_settings(&args, url, &config)?),
+        Some(Some(url)) => Some(mqtt_settings(&args, url, &config)?),
+        Some(None) => Some(mqtt_settings(
+            &args,
+            &embedded_url(embedded.unwrap_or(EMBEDDED_LISTEN)),
+            &config,
+        )?),
         None => None,
     };
     let _ = crate::logging::init();
     let rt = super::realtime_runtime()?;
     let result = rt.block_on(async {
+        // Kept until the bridge is done: the droids' last states go through it.
+        let _broker = match (embedded, &mqtt) {
+            (Some(listen), Some(m)) => Some(start_broker(listen, m).await?),
+            _ => None,
+        };
         if let Some(m) = &mqtt {
             let loopback = bridge::mqtt::is_loopback(&m.url.host, m.url.port)
                 .await
@@ -297,6 +369,39 @@ pub fn run(args: BridgeArgs) -> Result<i32, CliError> {
     result
 }
 
+/// droidctl's own broker on `listen`, taking the bridge's login when one is given.
+async fn start_broker(
+    listen: std::net::SocketAddr,
+    m: &MqttSettings,
+) -> Result<bridge::broker::Broker, CliError> {
+    let login = m
+        .username
+        .clone()
+        .map(|u| (u, m.password.clone().unwrap_or_default()));
+    let password = login.is_some();
+    let broker = bridge::broker::start(listen, bridge::broker::Access { login })
+        .await
+        .map_err(|e| {
+            CliError::failure(if e.kind() == std::io::ErrorKind::AddrInUse {
+                format!(
+                    "cannot listen on {listen}: {e}. Is a broker already running there? Use it \
+                     with --mqtt mqtt://{listen}, or put droidctl's on another port with \
+                     --listen ADDR:PORT"
+                )
+            } else {
+                format!("cannot listen on {listen}: {e}")
+            })
+        })?;
+    eprintln!(
+        "droidctl: bridge: MQTT broker (droidctl's own) on {}",
+        broker.addr()
+    );
+    if let Some(w) = listen_warning(&broker.addr(), password) {
+        eprintln!("{w}");
+    }
+    Ok(broker)
+}
+
 /// The fleet the arguments name (one droid behind a relay by name, or by address, as the
 /// one-droid commands find it).
 async fn start_fleet(
@@ -347,6 +452,23 @@ mod tests {
         let safe: BrokerUrl = "mqtts://u@broker.lan".parse().unwrap();
         let w = exposure(&safe, false, true).unwrap().unwrap();
         assert!(!w.contains("without"), "{w}");
+    }
+
+    #[test]
+    fn the_embedded_broker_listens_on_loopback_unless_told() {
+        assert_eq!(EMBEDDED_LISTEN.to_string(), "127.0.0.1:1883");
+        assert_eq!(parse_broker_listen("0.0.0.0").unwrap().port(), 1883);
+        assert_eq!(
+            embedded_url("0.0.0.0:1999".parse().unwrap()).to_string(),
+            "mqtt://127.0.0.1:1999"
+        );
+        assert_eq!(
+            embedded_url("[::]:1999".parse().unwrap()).to_string(),
+            "mqtt://[::1]:1999"
+        );
+        let w = listen_warning(&"0.0.0.0:1883".parse().unwrap(), false).unwrap();
+        assert!(w.contains("no password") && w.contains("drive"), "{w}");
+        assert!(listen_warning(&EMBEDDED_LISTEN, false).is_none());
     }
 
     #[test]

@@ -48,20 +48,22 @@ pub struct ServeArgs {
 }
 
 fn parse_listen(s: &str) -> Result<SocketAddr, String> {
+    listen_addr(s, DEFAULT_PORT)
+}
+
+/// A listening address: ADDR:PORT, or ADDR (an IP address or `localhost`) for `port`.
+pub fn listen_addr(s: &str, port: u16) -> Result<SocketAddr, String> {
     if let Ok(a) = s.parse::<SocketAddr>() {
         return Ok(a);
     }
     if let Ok(ip) = s.trim_matches(['[', ']']).parse::<IpAddr>() {
-        return Ok(SocketAddr::new(ip, DEFAULT_PORT));
+        return Ok(SocketAddr::new(ip, port));
     }
     if s == "localhost" {
-        return Ok(SocketAddr::new(
-            IpAddr::V4(Ipv4Addr::LOCALHOST),
-            DEFAULT_PORT,
-        ));
+        return Ok(SocketAddr::new(IpAddr::V4(Ipv4Addr::LOCALHOST), port));
     }
     Err(format!(
-        "`{s}` is not ADDR:PORT or ADDR (e.g. 127.0.0.1:50004, 0.0.0.0, [::1]:50004)"
+        "`{s}` is not ADDR:PORT or ADDR (e.g. 127.0.0.1:{port}, 0.0.0.0, [::1]:{port})"
     ))
 }
 

@@ -148,6 +148,12 @@ fn serve(args: SimArgs, plan: Plan) -> Result<i32, CliError> {
         Some(_) => None,
         None => Some(PrivateBus::start().map_err(CliError::failure)?),
     };
+    if let Some(p) = private.as_ref().filter(|p| p.kind() != "dbus-daemon") {
+        say(&format!(
+            "bus: {} (dbus-daemon is not installed, or not asked for)",
+            p.kind()
+        ));
+    }
     let address = match (&args.bus, &private) {
         (Some(a), _) => a.trim().to_string(),
         (None, Some(p)) => p.address().to_string(),

@@ -203,6 +203,11 @@ pub fn spawn(tx: mpsc::Sender<PadEvent>) -> std::io::Result<std::thread::JoinHan
     std::thread::Builder::new()
         .name("gamepad".into())
         .spawn(move || {
+            // libudev is loaded now, on the first look for a gamepad (crates/libudev-sys).
+            if let Err(why) = udev() {
+                let _ = tx.blocking_send(PadEvent::Unavailable(why));
+                return;
+            }
             let mut gilrs = match gilrs::Gilrs::new() {
                 Ok(g) => g,
                 Err(e) => {
@@ -252,6 +257,20 @@ pub fn spawn(tx: mpsc::Sender<PadEvent>) -> std::io::Result<std::thread::JoinHan
                 }
             }
         })
+}
+
+/// What the status line says where libudev cannot be loaded.
+pub const NO_LIBUDEV: &str = "gamepads need libudev (systemd's udev library)";
+
+/// Whether gilrs can look for gamepads: on Linux it needs libudev, loaded at run time; why
+/// not, for the status line (the reason dlopen gave goes to the log).
+fn udev() -> Result<(), String> {
+    #[cfg(target_os = "linux")]
+    if let Err(e) = libudev_sys::available() {
+        tracing::warn!("cannot load {:?}: {e}", libudev_sys::LIBRARY);
+        return Err(NO_LIBUDEV.into());
+    }
+    Ok(())
 }
 
 fn describe_error(e: &gilrs::Error) -> String {

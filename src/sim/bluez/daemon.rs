@@ -1,5 +1,8 @@
-//! A private `dbus-daemon` for the virtual BlueZ: a session-like configuration written to a
-//! temporary directory, listening on a unix socket there. Dropping it kills the daemon and
+//! A private D-Bus bus for the virtual BlueZ, listening on a unix socket in a temporary
+//! directory: `dbus-daemon` with a session-like configuration written there, or, where
+//! `dbus-daemon` is not installed (containers, fresh machines), busd, a bus written in Rust,
+//! run on a thread of this process. `DROIDCTL_DBUS_DAEMON=embedded` asks for busd even where
+//! `dbus-daemon` is installed (the tests use it to try both). Dropping it stops the bus and
 //! removes the directory.
 
 use std::fs;
@@ -15,11 +18,26 @@ const START_TIMEOUT: Duration = Duration::from_secs(5);
 /// The longest unix socket path the kernel takes (`sun_path` holds 108 bytes with its NUL).
 const MAX_SOCKET_PATH: usize = 107;
 
-/// A `dbus-daemon` of our own.
+/// A bus of our own.
 pub struct PrivateBus {
-    child: Child,
+    daemon: Daemon,
     dir: PathBuf,
     address: String,
+}
+
+enum Daemon {
+    /// `dbus-daemon`, a child process.
+    Child(Child),
+    /// busd on a thread of ours.
+    Embedded(Embedded),
+}
+
+/// The environment variable that picks the bus: `embedded` for busd.
+pub const DAEMON_ENV: &str = "DROIDCTL_DBUS_DAEMON";
+
+/// Whether busd is asked for though `dbus-daemon` may be installed.
+fn embedded_asked() -> bool {
+    std::env::var(DAEMON_ENV).as_deref() == Ok("embedded")
 }
 
 impl PrivateBus {
@@ -28,9 +46,19 @@ impl PrivateBus {
     /// starting *thread*: call this from the one that lives as long as the simulator).
     pub fn start() -> Result<PrivateBus, String> {
         let dir = make_dir()?;
-        match Self::start_in(&dir) {
-            Ok((child, address)) => Ok(PrivateBus {
-                child,
+        let started = if embedded_asked() {
+            Err(Missing)
+        } else {
+            Self::start_in(&dir)
+        };
+        let started = match started {
+            Ok((child, address)) => Ok((Daemon::Child(child), address)),
+            Err(Missing) => Embedded::start(&dir).map(|(e, a)| (Daemon::Embedded(e), a)),
+            Err(Failed(why)) => Err(why),
+        };
+        match started {
+            Ok((daemon, address)) => Ok(PrivateBus {
+                daemon,
                 dir,
                 address,
             }),
@@ -41,19 +69,19 @@ impl PrivateBus {
         }
     }
 
-    fn start_in(dir: &Path) -> Result<(Child, String), String> {
-        let socket = dir.join("bus");
-        let socket_text = socket.to_string_lossy().into_owned();
-        if socket_text.len() > MAX_SOCKET_PATH || socket.to_str().is_none() {
-            return Err(format!(
-                "the temporary directory {} makes too long a socket path: set TMPDIR to a \
-                 shorter one",
-                dir.display()
-            ));
+    /// Which bus runs: `dbus-daemon` or `busd (embedded)`.
+    pub fn kind(&self) -> &'static str {
+        match self.daemon {
+            Daemon::Child(_) => "dbus-daemon",
+            Daemon::Embedded(_) => "busd (embedded)",
         }
+    }
+
+    fn start_in(dir: &Path) -> Result<(Child, String), Start> {
+        let socket_text = socket_path(dir).map_err(Failed)?;
         let config = dir.join("bus.conf");
         fs::write(&config, config_xml(&socket_text))
-            .map_err(|e| format!("cannot write {}: {e}", config.display()))?;
+            .map_err(|e| Failed(format!("cannot write {}: {e}", config.display())))?;
         let mut cmd = Command::new("dbus-daemon");
         cmd.arg(format!("--config-file={}", config.display()))
             .arg("--nofork")
@@ -88,11 +116,9 @@ impl PrivateBus {
         }
         let mut child = cmd.spawn().map_err(|e| {
             if e.kind() == std::io::ErrorKind::NotFound {
-                "dbus-daemon is not installed — install it (Debian/Ubuntu: `sudo apt install \
-                 dbus-daemon`), or serve on a bus of your own with --bus ADDRESS"
-                    .to_string()
+                Missing
             } else {
-                format!("cannot start dbus-daemon: {e}")
+                Failed(format!("cannot start dbus-daemon: {e}"))
             }
         })?;
         let (tx, rx) = mpsc::channel();
@@ -113,14 +139,14 @@ impl PrivateBus {
                 let _ = err.read_to_string(&mut why);
             }
             let why = why.split_whitespace().collect::<Vec<_>>().join(" ");
-            return Err(if why.is_empty() {
+            return Err(Failed(if why.is_empty() {
                 format!(
                     "dbus-daemon did not start within {} s",
                     START_TIMEOUT.as_secs()
                 )
             } else {
                 format!("dbus-daemon did not start: {why}")
-            });
+            }));
         }
         // Whatever it says from now on goes nowhere (unread, a full pipe would stall it).
         if let Some(mut err) = child.stderr.take() {
@@ -136,17 +162,113 @@ impl PrivateBus {
         &self.address
     }
 
-    /// Whether the daemon still runs.
+    /// Whether the bus still runs.
     pub fn running(&mut self) -> bool {
-        matches!(self.child.try_wait(), Ok(None))
+        match &mut self.daemon {
+            Daemon::Child(child) => matches!(child.try_wait(), Ok(None)),
+            Daemon::Embedded(e) => !e.thread.as_ref().is_none_or(|t| t.is_finished()),
+        }
     }
 }
 
 impl Drop for PrivateBus {
     fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
+        match &mut self.daemon {
+            Daemon::Child(child) => {
+                let _ = child.kill();
+                let _ = child.wait();
+            }
+            Daemon::Embedded(e) => e.stop(),
+        }
         let _ = fs::remove_dir_all(&self.dir);
+    }
+}
+
+/// Why `dbus-daemon` did not start: not installed (then busd runs instead), or another
+/// failure (said as it is).
+enum Start {
+    Missing,
+    Failed(String),
+}
+use Start::{Failed, Missing};
+
+/// The socket's path in `dir`, checked to fit a unix socket address.
+fn socket_path(dir: &Path) -> Result<String, String> {
+    let socket = dir.join("bus");
+    match socket.to_str() {
+        Some(s) if s.len() <= MAX_SOCKET_PATH => Ok(s.to_string()),
+        _ => Err(format!(
+            "the temporary directory {} makes too long a socket path: set TMPDIR to a \
+             shorter one",
+            dir.display()
+        )),
+    }
+}
+
+/// busd on a thread of its own, with its own (zbus's) runtime: independent of the tokio
+/// runtime of the simulator it carries. It dies with the process whatever way the process
+/// ends (nothing is left behind to keep the bus alive); dropping it stops it first.
+struct Embedded {
+    stop: Option<tokio::sync::oneshot::Sender<()>>,
+    thread: Option<std::thread::JoinHandle<()>>,
+}
+
+impl Embedded {
+    fn start(dir: &Path) -> Result<(Embedded, String), String> {
+        let socket = socket_path(dir)?;
+        let address = format!("unix:path={}", escape_address(&socket));
+        let (ready_tx, ready) = mpsc::channel();
+        let (stop, stopped) = tokio::sync::oneshot::channel::<()>();
+        let listen = address.clone();
+        let thread = std::thread::Builder::new()
+            .name("busd".into())
+            .spawn(move || {
+                zruntime::block_on(async move {
+                    let mut bus = match busd::bus::Bus::for_address(Some(&listen)).await {
+                        Ok(bus) => bus,
+                        Err(e) => {
+                            let _ = ready_tx.send(Err(format!("{e:#}")));
+                            return;
+                        }
+                    };
+                    let _ = ready_tx.send(Ok(()));
+                    {
+                        let run = std::pin::pin!(bus.run());
+                        if let futures_util::future::Either::Left((Err(e), _)) =
+                            futures_util::future::select(run, stopped).await
+                        {
+                            tracing::warn!("the embedded D-Bus bus stopped: {e:#}")
+                        }
+                    }
+                    let _ = bus.cleanup().await;
+                })
+            })
+            .map_err(|e| format!("cannot start the embedded D-Bus bus: {e}"))?;
+        match ready.recv_timeout(START_TIMEOUT) {
+            Ok(Ok(())) => Ok((
+                Embedded {
+                    stop: Some(stop),
+                    thread: Some(thread),
+                },
+                address,
+            )),
+            Ok(Err(why)) => Err(format!(
+                "the embedded D-Bus bus (busd) did not start: {why}"
+            )),
+            Err(_) => Err(format!(
+                "the embedded D-Bus bus (busd) did not start within {} s",
+                START_TIMEOUT.as_secs()
+            )),
+        }
+    }
+
+    fn stop(&mut self) {
+        if let Some(stop) = self.stop.take() {
+            let _ = stop.send(());
+        }
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
     }
 }
 
