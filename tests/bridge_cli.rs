@@ -186,7 +186,7 @@ fn a_slow_reader_gets_every_answer_through_the_pipe() {
     std::fs::write(&file, &input).unwrap();
     let mut child = Command::new(env!("CARGO_BIN_EXE_droidctl"))
         .args(["bridge", "--stdio", "--sim", "r2d2"])
-        .env("DROIDCTL_CONFIG", dir.join("none.toml"))
+        .env("DROIDCTL_CONFIG", "/dev/null")
         .stdin(std::fs::File::open(&file).unwrap())
         .stdout(Stdio::piped())
         .stderr(Stdio::null())
