@@ -26,11 +26,6 @@
 //!     cargo bench --bench latency                  # both links, 100 of each input
 //!     cargo bench --bench latency -- --reps 300 --only sim
 //!     cargo bench --bench latency -- --reps 50 --part fleet   # the fleet's e-stop only
-//!     cargo bench --bench latency -- --only bluez --part single --unpaced-ble
-//!
-//! `--unpaced-ble` is an experiment, not how droidctl runs: the one droid's Bluetooth link
-//! gets a GATT profile without write pacing (the session still paces), to show how much of
-//! the time is the link's own pacing.
 
 use droidctl::app::input::{KeyKind, TermEvent};
 use droidctl::app::run::{self, AppInputs, AppOptions};
@@ -639,26 +634,16 @@ fn fleet_both(
     }
 }
 
-/// The droid's GATT profile without the link's write pacing (`--unpaced-ble`).
-fn unpaced_profile(model: Model) -> droidctl::gatt::GattProfile {
-    droidctl::gatt::GattProfile {
-        pacing: Duration::ZERO,
-        ..droidctl::family::gatt_profile(model)
-    }
-}
-
 fn main() {
     let mut args = std::env::args().skip(1);
     let mut reps = 100;
     let mut only: Option<String> = None;
     let mut part: Option<String> = None;
-    let mut unpaced = false;
     while let Some(a) = args.next() {
         match a.as_str() {
             "--reps" => reps = args.next().and_then(|v| v.parse().ok()).expect("--reps N"),
             "--only" => only = args.next(),
             "--part" => part = args.next(),
-            "--unpaced-ble" => unpaced = true,
             // cargo bench passes --bench.
             _ => {}
         }
@@ -705,22 +690,13 @@ fn main() {
                         name: Some(served.names[0].clone()),
                         ..Default::default()
                     },
-                    if unpaced {
-                        unpaced_profile
-                    } else {
-                        droidctl::family::gatt_profile
-                    },
+                    droidctl::family::gatt_profile,
                 )
                 .await
                 .expect("the virtual R2-D2 is found");
                 measure(Box::new(found.link), found.model, reps).await
             });
-            let link = if unpaced {
-                "btleplug on the virtual BlueZ, the link's own pacing off (--unpaced-ble)"
-            } else {
-                "btleplug on the virtual BlueZ"
-            };
-            report(link, &r, missed);
+            report("btleplug on the virtual BlueZ", &r, missed);
         }
         if fleet {
             let ble = droidctl::cli::connect::BleArgs {

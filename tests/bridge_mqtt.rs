@@ -543,7 +543,8 @@ async fn two_droids_with_the_same_name_get_their_own_topics() {
     use droidctl::bridge::{Bridge, Settings, mqtt};
     use droidctl::model::Model;
     let dir = scratch("names");
-    let broker = Broker::start(&dir);
+    // The broker runs its own runtime: started (and dropped below) off this one's threads.
+    let broker = tokio::task::block_in_place(|| Broker::start(&dir));
     let p = broker.port;
     let config = droidctl::config::Config::defaults();
     let models = [Model::Robi42, Model::Robi42];
@@ -593,6 +594,7 @@ async fn two_droids_with_the_same_name_get_their_own_topics() {
     .unwrap();
     running.abort();
     bridge.shutdown().await;
+    tokio::task::block_in_place(move || drop(broker));
     let _ = std::fs::remove_dir_all(&dir);
 }
 
