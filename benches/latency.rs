@@ -119,6 +119,27 @@ impl TimedWriter {
     }
 }
 
+impl TimedWriter {
+    /// Hand the write to the link (urgent or paced) and note when it returned.
+    fn timed_write<'a>(
+        &'a mut self,
+        to: Endpoint,
+        chunk: &'a [u8],
+        urgent: bool,
+    ) -> BoxFuture<'a, Result<(), LinkError>> {
+        Box::pin(async move {
+            let called = Instant::now();
+            let r = if urgent {
+                self.inner.write_urgent(to, chunk).await
+            } else {
+                self.inner.write_to(to, chunk).await
+            };
+            self.note(to, chunk, called);
+            r
+        })
+    }
+}
+
 impl LinkWriter for TimedWriter {
     fn write<'a>(&'a mut self, chunk: &'a [u8]) -> BoxFuture<'a, Result<(), LinkError>> {
         self.write_to(Endpoint::Api, chunk)
@@ -129,12 +150,7 @@ impl LinkWriter for TimedWriter {
         to: Endpoint,
         chunk: &'a [u8],
     ) -> BoxFuture<'a, Result<(), LinkError>> {
-        Box::pin(async move {
-            let called = Instant::now();
-            let r = self.inner.write_to(to, chunk).await;
-            self.note(to, chunk, called);
-            r
-        })
+        self.timed_write(to, chunk, false)
     }
 
     /// The emergency stop's write, timed the same way (and as urgent as it was asked).
@@ -143,12 +159,7 @@ impl LinkWriter for TimedWriter {
         to: Endpoint,
         chunk: &'a [u8],
     ) -> BoxFuture<'a, Result<(), LinkError>> {
-        Box::pin(async move {
-            let called = Instant::now();
-            let r = self.inner.write_urgent(to, chunk).await;
-            self.note(to, chunk, called);
-            r
-        })
+        self.timed_write(to, chunk, true)
     }
 
     fn close(&mut self) -> BoxFuture<'_, ()> {
