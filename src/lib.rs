@@ -8,6 +8,7 @@ pub mod bridge;
 pub mod capture;
 pub mod cli;
 pub mod config;
+pub mod edu;
 pub mod family;
 pub mod fleet;
 #[doc(hidden)]

@@ -738,6 +738,12 @@ impl DroidMission {
         self.runner.step(s).await;
     }
 
+    /// The droid's telemetry as the mission folds it (a Sphero Edu program reads its sensors
+    /// from it, `crate::edu`).
+    pub fn telemetry(&self) -> Arc<Mutex<Telemetry>> {
+        self.runner.telemetry.clone()
+    }
+
     /// Whether the session has ended (a fatal link error): the rest is skipped.
     pub fn closed(&self) -> bool {
         self.runner.session.is_closed()

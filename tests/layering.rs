@@ -32,6 +32,8 @@ const RANKS: &[(&str, u32)] = &[
     ("mission", 45),
     // Several sessions at once, and missions on them.
     ("fleet", 47),
+    // Sphero Edu programs run on a droid's mission machinery.
+    ("edu", 48),
     ("capture", 50),
     ("teleop", 50),
     // `serve --record` writes captures.

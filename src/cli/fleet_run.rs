@@ -161,7 +161,7 @@ pub fn run(
 /// Print each droid's steps, samples and warnings as they come, naming the droid; with a
 /// recorder, mark each droid's mission start and steps in its lines of the capture (replay
 /// samples from there, as for one droid).
-fn printer(
+pub(super) fn printer(
     fleet: &Fleet,
     json: bool,
     opts: &MissionOptions,

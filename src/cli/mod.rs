@@ -11,6 +11,7 @@ pub mod fleet;
 mod fleet_run;
 pub mod packet;
 pub mod plot;
+mod program;
 pub mod replay;
 pub mod run;
 mod run_output;

@@ -34,15 +34,29 @@ pub struct RunArgs {
     pub interval: u64,
     #[command(flatten)]
     pub record: super::replay::RecordArgs,
+    /// A Sphero Edu program (`PROGRAM.js`): end it after SECONDS on droidctl's clock
+    /// (simulated with --sim), and after SECONDS of computing without waiting (default 5).
+    #[arg(long, value_name = "SECONDS", value_parser = parse_seconds)]
+    pub timeout: Option<f64>,
     /// Also write every sample to FILE as CSV (columns named with units; see README; a fleet's
     /// rows start with the droid).
     #[arg(long, value_name = "FILE")]
     pub csv: Option<PathBuf>,
 }
 
+/// `--timeout`: seconds, more than 0 and at most a day.
+fn parse_seconds(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if v > 0.0 && v <= 86_400.0 => Ok(v),
+        _ => Err(format!(
+            "`{s}` is not a number of seconds (more than 0, at most 86400)"
+        )),
+    }
+}
+
 /// Resolve `--sim MODEL[,MODEL…]` vs the script path: `droidctl run --sim mission.txt` puts
 /// the script where the model would go.
-fn resolve(args: &RunArgs) -> Result<(PathBuf, Vec<Model>), CliError> {
+pub(super) fn resolve(args: &RunArgs) -> Result<(PathBuf, Vec<Model>), CliError> {
     let mut script = args.script.clone();
     let models = match &args.sim {
         None => Vec::new(),
@@ -87,6 +101,9 @@ pub fn run(args: RunArgs) -> Result<i32, CliError> {
             lines.join("\n")
         ))
     };
+    if crate::edu::is_program(&path, &text) {
+        return super::program::run(&args, sims, text, &shown);
+    }
     let items = crate::script::parse_fleet(&text).map_err(script_errors)?;
     if super::fleet::is_fleet(sims.len(), &args.ble) || crate::script::is_fleet(&items) {
         return super::fleet_run::run(&args, sims, &items, script_errors);
@@ -214,6 +231,34 @@ pub async fn run_recorded(
     recorder: Option<&crate::capture::record::Recorder>,
     out: Arc<RunOutput>,
 ) -> Result<Summary, String> {
+    run_session(
+        link,
+        model,
+        opts,
+        json,
+        recorder,
+        out,
+        |session, opts, emit| async move { mission::run(&session, model, steps, opts, emit).await },
+    )
+    .await
+}
+
+/// The session, outputs, recording marks and signals of a run on one droid around `body`
+/// (a mission's steps, or a Sphero Edu program, `crate::edu`): `body` gets the session, the
+/// options with the connect setup, and where its events go.
+pub async fn run_session<F, Fut>(
+    link: Box<dyn Link>,
+    model: Model,
+    opts: MissionOptions,
+    json: bool,
+    recorder: Option<&crate::capture::record::Recorder>,
+    out: Arc<RunOutput>,
+    body: F,
+) -> Result<Summary, String>
+where
+    F: FnOnce(session::SessionHandle, MissionOptions, mission::Emit) -> Fut,
+    Fut: std::future::Future<Output = Result<Summary, mission::MissionError>>,
+{
     let printer = out.clone();
     let (config, opts) = mission_session(model, opts);
     let session = session::start(link, config);
@@ -269,7 +314,7 @@ pub async fn run_recorded(
     // mission with a stop.
     let interrupted = super::signals::terminated();
     let result = tokio::select! {
-        r = mission::run(&session, model, steps, opts, emit) => r,
+        r = body(session.clone(), opts, emit) => r,
         sig = interrupted => Err(mission::MissionError(format!("{sig}: mission interrupted, the droid was stopped"))),
         _ = out.closed() => Err(mission::MissionError(OUTPUT_GONE.into())),
     };

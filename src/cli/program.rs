@@ -1,0 +1,235 @@
+//! `droidctl run PROGRAM.js`: a Sphero Edu JavaScript program ([`crate::edu`]) with every
+//! option `run` has: `--sim` in simulated time, `--name`, `--remote`, fleets (the program runs
+//! on each droid), `--json`, `--csv`, `--record`, Ctrl+c. A syntax error is exit 2 before
+//! anything is sent; an uncaught exception stops the droid and is exit 1 naming the line.
+
+use super::CliError;
+use super::fleet_run::{Tagged, printer};
+use super::run::{
+    RunArgs, finish_recording, mission_session, report_link_of, run_session, summary_line,
+};
+use super::run_output::{OUTPUT_GONE, RunOutput};
+use crate::edu::{Program, ProgramOptions};
+use crate::fleet::Fleet;
+use crate::mission::{MissionError, MissionOptions, Summary};
+use crate::model::Model;
+use crate::sim::{Faults, SimConfig, SimLink};
+use std::sync::Arc;
+use std::time::Duration;
+
+pub fn run(args: &RunArgs, sims: Vec<Model>, text: String, shown: &str) -> Result<i32, CliError> {
+    let program = Program::new(text, shown.to_string()).map_err(|e| {
+        CliError::usage(format!(
+            "{shown}:{}:{}: {}\nthe program has an error; nothing was sent",
+            e.line, e.column, e.message
+        ))
+    })?;
+    let mission = MissionOptions {
+        interval: Duration::from_millis(args.interval),
+        ..MissionOptions::default()
+    };
+    let mut opts = ProgramOptions {
+        mission,
+        ..ProgramOptions::default()
+    };
+    if let Some(t) = args.timeout {
+        opts.timeout = Some(Duration::from_secs_f64(t));
+        opts.no_yield = Duration::from_secs_f64(t.min(opts.no_yield.as_secs_f64()));
+    }
+    if super::fleet::is_fleet(sims.len(), &args.ble) {
+        return fleet(args, sims, &program, opts);
+    }
+    let recorder = args.record.open()?;
+    let recorder = recorder.as_ref();
+    let files = match &args.csv {
+        Some(p) => {
+            Some(crate::mission::csv::SampleFiles::create(Some(p), None).map_err(CliError::usage)?)
+        }
+        None => None,
+    };
+    let out = Arc::new(RunOutput::new(files));
+    let json = args.json;
+    let _ = crate::logging::init();
+    let (rt, sim) = match sims.first().copied() {
+        // Simulated time, as missions: the clock jumps whenever everything waits.
+        Some(model) => (paused_runtime()?, Some(model)),
+        None => (super::realtime_runtime()?, None),
+    };
+    let r = rt.block_on(async {
+        let (link, model, name) = match sim {
+            Some(model) => {
+                let link = SimLink::new(model, SimConfig::for_model(model), Faults::none());
+                let name = format!("{} (simulated)", model.display_name());
+                (Box::new(link) as Box<dyn crate::link::Link>, model, name)
+            }
+            None => match args.ble.connect(super::connect::Chooser::Prompt).await {
+                Ok(c) => (c.link, c.model, c.name),
+                Err(e) => return (Err(e), finish_recording(recorder)),
+            },
+        };
+        let link = match recorder {
+            Some(r) => {
+                r.start(&crate::capture::record::Recorder::header_for(model, &name));
+                r.wrap(link)
+            }
+            None => link,
+        };
+        let p = &program;
+        let r = run_session(
+            link,
+            model,
+            opts.mission.clone(),
+            json,
+            recorder,
+            out.clone(),
+            {
+                let opts = opts.clone();
+                move |session, mission, emit| async move {
+                    let opts = ProgramOptions { mission, ..opts };
+                    crate::edu::run(&session, model, p, opts, emit, tokio::time::Instant::now())
+                        .await
+                }
+            },
+        )
+        .await;
+        let kept = finish_recording(recorder);
+        (r.map_err(CliError::failure), kept)
+    });
+    // An engine still spinning in a program that never yields is not waited for.
+    rt.shutdown_background();
+    let (result, kept) = r;
+    let summary = match result {
+        Ok(s) => s,
+        Err(e) => {
+            out.result()?;
+            return Err(e);
+        }
+    };
+    out.stdout(|w| writeln!(w, "{}", summary_line(&summary, json)));
+    out.result()?;
+    kept?;
+    Ok(if summary.failed_steps > 0 { 1 } else { 0 })
+}
+
+fn paused_runtime() -> Result<tokio::runtime::Runtime, CliError> {
+    tokio::runtime::Builder::new_current_thread()
+        .enable_time()
+        .enable_io()
+        .start_paused(true)
+        .build()
+        .map_err(|e| CliError::failure(format!("cannot start the runtime: {e}")))
+}
+
+/// The program on every droid of a fleet at once, each its own run from one start.
+fn fleet(
+    args: &RunArgs,
+    sims: Vec<Model>,
+    program: &Program,
+    opts: ProgramOptions,
+) -> Result<i32, CliError> {
+    let recorder = args.record.open()?;
+    let config = crate::config::Config::load(&crate::config::config_path())
+        .map_err(|e| CliError::usage(e.to_string()))?;
+    let files = match &args.csv {
+        Some(p) => Some(
+            crate::mission::csv::SampleFiles::create_for_fleet(Some(p), None)
+                .map_err(CliError::usage)?,
+        ),
+        None => None,
+    };
+    let out = Arc::new(RunOutput::new(files));
+    let json = args.json;
+    let _ = crate::logging::init();
+    let only_sims = args.ble.name.is_empty() && args.ble.remote.is_empty();
+    let rt = if only_sims {
+        paused_runtime()?
+    } else {
+        super::realtime_runtime()?
+    };
+    let r = rt.block_on(async {
+        let mut found = super::fleet::find_all(&sims, &args.ble, &config).await?;
+        super::fleet::record_all(recorder.as_ref(), &mut found);
+        let mut per_droid = Vec::with_capacity(found.len());
+        let specs = found
+            .into_iter()
+            .map(|f| {
+                let (cfg, o) = mission_session(f.model, opts.mission.clone());
+                per_droid.push(o);
+                f.into_spec(cfg)
+            })
+            .collect();
+        let fleet = Fleet::start(specs);
+        let reporters: Vec<_> = fleet
+            .members()
+            .iter()
+            .map(|m| {
+                tokio::spawn(report_link_of(
+                    m.session.watch_state(),
+                    format!("{}: ", m.name),
+                ))
+            })
+            .collect();
+        let emit = printer(&fleet, json, &opts.mission, recorder.clone(), out.clone());
+        let start = tokio::time::Instant::now();
+        let runs = fleet.members().iter().enumerate().map(|(i, m)| {
+            let emit = emit.clone();
+            let one: crate::mission::Emit = Arc::new(move |e| emit(i, e));
+            let o = ProgramOptions {
+                mission: per_droid.get(i).cloned().unwrap_or_default(),
+                ..opts.clone()
+            };
+            let name = m.name.clone();
+            async move {
+                crate::edu::run(&m.session, m.model, program, o, one, start)
+                    .await
+                    .map_err(|e| MissionError(format!("{name}: {e}")))
+            }
+        });
+        let all = futures_util::future::join_all(runs);
+        let r: Result<Vec<Summary>, MissionError> = tokio::select! {
+            r = all => r.into_iter().collect(),
+            sig = super::signals::terminated() => Err(MissionError(format!(
+                "{sig}: program interrupted, every droid was stopped"
+            ))),
+            _ = out.closed() => Err(MissionError(OUTPUT_GONE.into())),
+        };
+        for t in reporters {
+            t.abort();
+        }
+        fleet.shutdown_all(|_| Vec::new()).await;
+        out.flush_csv();
+        let kept = finish_recording(recorder.as_ref());
+        Ok::<_, CliError>((
+            r.map(|s| fleet.names().into_iter().zip(s).collect::<Vec<_>>()),
+            kept,
+        ))
+    });
+    rt.shutdown_background();
+    let (summaries, kept) = r?;
+    let summaries = match summaries {
+        Ok(s) => s,
+        Err(e) => {
+            out.result()?;
+            return Err(CliError::failure(e.to_string()));
+        }
+    };
+    let mut failed = 0;
+    for (name, s) in &summaries {
+        failed += s.failed_steps;
+        if json {
+            let t = Tagged {
+                droid: name,
+                inner: s,
+            };
+            out.stdout(|w| {
+                serde_json::to_writer(&mut *w, &t).map_err(std::io::Error::other)?;
+                writeln!(w)
+            });
+        } else {
+            out.stdout(|w| writeln!(w, "{name}: {}", summary_line(s, false)));
+        }
+    }
+    out.result()?;
+    kept?;
+    Ok(if failed > 0 { 1 } else { 0 })
+}

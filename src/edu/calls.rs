@@ -1,0 +1,494 @@
+//! The Sphero Edu JavaScript calls droidctl offers, with the robots each applies to: one
+//! table, read by the engine (a call on a robot it does not apply to throws "… is not on
+//! R2-D2"), by `droidctl run --list-calls` and by the docs (docs/edu-programs.md lists it, and
+//! a test checks the two agree).
+//!
+//! Names, arguments and units are Sphero Edu's JavaScript ones (its public docs, "Movement",
+//! "Lights", "Sensors", "Events"); where spherov2.py's `SpheroEduAPI` (`sphero_edu.py`)
+//! implements a call, [`super::api`] behaves as it does.
+
+use crate::model::Model;
+
+/// Which robots a call applies to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Robots {
+    /// Every robot droidctl drives.
+    All,
+    /// The Sphero robots (not Robi 42, which only steers).
+    Sphero,
+    /// BOLT's 8×8 matrix.
+    Matrix,
+    /// R2-D2 and R2-Q5: dome, stance, waddle, holo projector and logic display.
+    Dome,
+    /// The Star Wars droids that play animations and sounds: R2-D2, R2-Q5, BB-9E.
+    Animations,
+    /// BB-9E's dome lights.
+    Bb9e,
+    /// Robots with a front light of its own: R2-D2, R2-Q5, BOLT, RVR, Mini.
+    FrontLed,
+    /// BOLT's compass and ambient light.
+    Compass,
+    /// BOLT's and RVR's luminosity.
+    Light,
+    /// RVR's colour sensor.
+    ColorSensor,
+    /// Robots that roll on two motors droidctl can drive raw: BOLT, Mini, RVR, Ollie, SPRK+,
+    /// BB-8 (spherov2's `raw_motor`; not R2's legs, not Robi).
+    RawMotors,
+}
+
+impl Robots {
+    pub fn applies(self, m: Model) -> bool {
+        match self {
+            Robots::All => true,
+            Robots::Sphero => m != Model::Robi42,
+            Robots::Matrix => m.has_matrix(),
+            Robots::Dome => m.has_dome(),
+            Robots::Animations => m.plays_animations(),
+            Robots::Bb9e => m == Model::BB9E,
+            Robots::FrontLed => matches!(
+                m,
+                Model::R2D2 | Model::R2Q5 | Model::Bolt | Model::Rvr | Model::Mini
+            ),
+            Robots::Compass => m.has_compass(),
+            Robots::Light => matches!(m, Model::Bolt | Model::Rvr),
+            Robots::ColorSensor => m.has_color_sensor(),
+            Robots::RawMotors => matches!(
+                m,
+                Model::Bolt
+                    | Model::Mini
+                    | Model::Rvr
+                    | Model::Ollie
+                    | Model::SprkPlus
+                    | Model::BB8
+            ),
+        }
+    }
+
+    /// The robots, by name, for the docs and error messages.
+    pub fn names(self) -> String {
+        let all: Vec<&str> = Model::ALL
+            .into_iter()
+            .filter(|m| self.applies(*m))
+            .map(Model::display_name)
+            .collect();
+        if all.len() == Model::ALL.len() {
+            "all".into()
+        } else {
+            all.join(", ")
+        }
+    }
+}
+
+/// One call of the API.
+#[derive(Debug, Clone, Copy)]
+pub struct Call {
+    pub name: &'static str,
+    /// Its arguments as Sphero documents them.
+    pub args: &'static str,
+    /// Whether a program `await`s it (it returns a promise that droidctl's clock resolves).
+    pub waits: bool,
+    pub robots: Robots,
+    /// What it does, in a few words (units included).
+    pub what: &'static str,
+}
+
+const fn call(
+    name: &'static str,
+    args: &'static str,
+    waits: bool,
+    robots: Robots,
+    what: &'static str,
+) -> Call {
+    Call {
+        name,
+        args,
+        waits,
+        robots,
+        what,
+    }
+}
+
+use Robots::*;
+
+/// Every call, in the order the docs list them.
+pub const CALLS: &[Call] = &[
+    // Movement.
+    call(
+        "roll",
+        "heading, speed, duration",
+        true,
+        All,
+        "roll toward heading (degrees) at speed (−255..255) for duration (s), then stop",
+    ),
+    call(
+        "rollDistance",
+        "heading, speed, distance",
+        true,
+        Sphero,
+        "roll toward heading at speed until distance (cm) is covered, then stop",
+    ),
+    call(
+        "setSpeed",
+        "speed",
+        false,
+        All,
+        "keep rolling at speed (−255..255; 0 stops)",
+    ),
+    call(
+        "setHeading",
+        "heading",
+        false,
+        All,
+        "turn to heading (degrees, 0 forward, 90 right)",
+    ),
+    call(
+        "stopRoll",
+        "[heading]",
+        false,
+        All,
+        "speed 0 (at heading, when given)",
+    ),
+    call(
+        "spin",
+        "degrees, duration",
+        true,
+        Sphero,
+        "turn degrees (positive clockwise) over duration (s)",
+    ),
+    call(
+        "rawMotor",
+        "left, right, duration",
+        true,
+        RawMotors,
+        "motor power −255..255 each for duration (s), stabilization off",
+    ),
+    call(
+        "setStabilization",
+        "on",
+        false,
+        Sphero,
+        "the control system on or off",
+    ),
+    call(
+        "resetAim",
+        "",
+        false,
+        Sphero,
+        "where the robot faces becomes heading 0",
+    ),
+    call("delay", "seconds", true, All, "wait"),
+    call(
+        "exitProgram",
+        "",
+        false,
+        All,
+        "end the program (the robot stops)",
+    ),
+    // Lights.
+    call(
+        "setMainLed",
+        "color",
+        false,
+        Sphero,
+        "the main light {r, g, b} 0..255 (BOLT: front and back)",
+    ),
+    call("setFrontLed", "color", false, FrontLed, "the front light"),
+    call(
+        "setBackLed",
+        "color or brightness",
+        false,
+        Sphero,
+        "the back light: a colour, or the blue aiming light 0..255",
+    ),
+    call(
+        "fade",
+        "fromColor, toColor, duration",
+        true,
+        Sphero,
+        "the main light from one colour to another over duration (s)",
+    ),
+    call(
+        "strobe",
+        "color, period, count",
+        true,
+        Sphero,
+        "blink the main light count times, period (s) on then off",
+    ),
+    call(
+        "setHoloProjectorLed",
+        "brightness",
+        false,
+        Dome,
+        "the holo projector 0..255",
+    ),
+    call(
+        "setLogicDisplayLeds",
+        "brightness",
+        false,
+        Dome,
+        "the logic displays 0..255",
+    ),
+    call(
+        "setDomeLeds",
+        "brightness",
+        false,
+        Bb9e,
+        "BB-9E's dome lights 0..15",
+    ),
+    // BOLT's matrix.
+    call(
+        "setMatrixCharacter",
+        "character, color",
+        false,
+        Matrix,
+        "one character on the matrix",
+    ),
+    call(
+        "scrollMatrixText",
+        "text, color, fps, wait",
+        true,
+        Matrix,
+        "scroll up to 25 characters at fps (1..30); waits until done when wait is true",
+    ),
+    call(
+        "drawMatrixPixel",
+        "color, {x, y}",
+        false,
+        Matrix,
+        "one pixel (x, y 0..7)",
+    ),
+    call(
+        "drawMatrixLine",
+        "color, {x, y}, {x, y}",
+        false,
+        Matrix,
+        "a line of pixels",
+    ),
+    call(
+        "drawMatrixFill",
+        "color, {x, y}, {x, y}",
+        false,
+        Matrix,
+        "a filled rectangle of pixels",
+    ),
+    call("clearMatrix", "", false, Matrix, "every pixel off"),
+    call(
+        "setMatrixRotation",
+        "degrees",
+        false,
+        Matrix,
+        "turn what the matrix shows: 0, 90, 180 or 270",
+    ),
+    // Sounds and speech: printed (the robots droidctl drives have no speech).
+    call("speak", "text, wait", true, All, "say text (printed)"),
+    call(
+        "playSound",
+        "sound, wait",
+        true,
+        All,
+        "a sound: played by R2-D2, R2-Q5 and BB-9E, printed by the others",
+    ),
+    // Star Wars droids.
+    call(
+        "playAnimation",
+        "animation",
+        false,
+        Animations,
+        "an animation by number",
+    ),
+    call(
+        "setDomePosition",
+        "degrees",
+        false,
+        Dome,
+        "turn the dome, −160..180",
+    ),
+    call(
+        "setStance",
+        "Stance.Bipod or Stance.Tripod",
+        true,
+        Dome,
+        "two or three legs",
+    ),
+    call("setWaddle", "on", false, Dome, "waddle on or off"),
+    // Sensors.
+    call(
+        "getLocation",
+        "",
+        false,
+        Sphero,
+        "{x, y} from the start, cm",
+    ),
+    call("getVelocity", "", false, Sphero, "{x, y}, cm/s"),
+    call("getSpeed", "", false, All, "the speed asked for, −255..255"),
+    call(
+        "getHeading",
+        "",
+        false,
+        All,
+        "the heading asked for, degrees",
+    ),
+    call(
+        "getOrientation",
+        "",
+        false,
+        Sphero,
+        "{pitch, roll, yaw}, degrees",
+    ),
+    call("getAcceleration", "", false, Sphero, "{x, y, z}, g"),
+    call(
+        "getVerticalAcceleration",
+        "",
+        false,
+        Sphero,
+        "up and down whatever the tilt, g",
+    ),
+    call(
+        "getGyroscope",
+        "",
+        false,
+        Sphero,
+        "{pitch, roll, yaw}, degrees/s",
+    ),
+    call(
+        "getDistance",
+        "",
+        false,
+        Sphero,
+        "distance covered since the start, cm",
+    ),
+    call("getElapsedTime", "", false, All, "seconds since the start"),
+    call("getLuminosity", "", false, Light, "ambient light, lux"),
+    call(
+        "getColor",
+        "",
+        false,
+        ColorSensor,
+        "{r, g, b} under the robot",
+    ),
+    call(
+        "getCompassDirection",
+        "",
+        false,
+        Compass,
+        "north as a heading after a calibration, degrees",
+    ),
+    call("calibrateCompass", "", true, Compass, "find north"),
+    call("getBatteryVoltage", "", false, All, "volts"),
+    call(
+        "getMainLed",
+        "",
+        false,
+        Sphero,
+        "the main light's {r, g, b}",
+    ),
+    call(
+        "getLastIRMessage",
+        "",
+        false,
+        Compass,
+        "the last infrared message's channel",
+    ),
+    // Events.
+    call(
+        "registerEvent",
+        "EventType.NAME, function",
+        false,
+        All,
+        "call function on each event (see the events)",
+    ),
+];
+
+/// The events `registerEvent` takes, with the robots that report them.
+pub const EVENTS: &[(&str, Robots, &str)] = &[
+    ("onCollision", Sphero, "the robot hit something"),
+    ("onFreefall", Sphero, "the robot is falling"),
+    ("onLanding", Sphero, "the robot landed after a fall"),
+    (
+        "onGyroMax",
+        Sphero,
+        "the robot spun faster than its gyroscope measures",
+    ),
+    ("onCharging", Sphero, "the robot was put on its charger"),
+    (
+        "onNotCharging",
+        Sphero,
+        "the robot was taken off its charger",
+    ),
+    (
+        "onIRMessage",
+        Compass,
+        "an infrared message arrived (its channel is the argument)",
+    ),
+    (
+        "onColor",
+        ColorSensor,
+        "the colour sensor saw a new colour (the argument)",
+    ),
+];
+
+/// The call named `name`.
+pub fn find(name: &str) -> Option<&'static Call> {
+    CALLS.iter().find(|c| c.name == name)
+}
+
+/// The event named `name`.
+pub fn event(name: &str) -> Option<Robots> {
+    EVENTS.iter().find(|e| e.0 == name).map(|e| e.1)
+}
+
+/// Why `name` cannot run on `model` (`None`: it can).
+pub fn not_on(name: &str, model: Model) -> Option<String> {
+    let c = find(name)?;
+    (!c.robots.applies(model)).then(|| {
+        format!(
+            "{name}() is not on {} (it is on {})",
+            model.display_name(),
+            c.robots.names()
+        )
+    })
+}
+
+/// The table as Markdown rows (`| call | robots | what |`), as docs/edu-programs.md has it.
+pub fn markdown() -> String {
+    let mut out = String::from("| call | robots | what it does |\n| --- | --- | --- |\n");
+    for c in CALLS {
+        let aw = if c.waits { "await " } else { "" };
+        out.push_str(&format!(
+            "| `{aw}{}({})` | {} | {} |\n",
+            c.name,
+            c.args,
+            c.robots.names(),
+            c.what
+        ));
+    }
+    out.push_str("\n| event | robots | when |\n| --- | --- | --- |\n");
+    for (name, robots, what) in EVENTS {
+        out.push_str(&format!(
+            "| `EventType.{name}` | {} | {what} |\n",
+            robots.names()
+        ));
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn calls_are_unique_and_say_where_they_are_missing() {
+        for (i, c) in CALLS.iter().enumerate() {
+            assert!(
+                CALLS[i + 1..].iter().all(|d| d.name != c.name),
+                "{}",
+                c.name
+            );
+        }
+        assert!(not_on("setMatrixCharacter", Model::Bolt).is_none());
+        let e = not_on("setMatrixCharacter", Model::R2D2).unwrap();
+        assert!(e.contains("not on R2-D2") && e.contains("BOLT"), "{e}");
+        assert_eq!(Robots::All.names(), "all");
+    }
+}

@@ -1,0 +1,671 @@
+//! The JavaScript engine: Boa on a thread of its own, driven in turns.
+//!
+//! Why a thread: a program that never yields (`while (true) {}`) must not hang droidctl. Boa
+//! cannot be interrupted from outside, so it runs where it can spin without stopping anyone:
+//! droidctl's runtime keeps serving Ctrl+c, the emergency stop and `--timeout` (they stop the
+//! droid and end the run; the engine is abandoned and its loop limit ends it soon after).
+//!
+//! Why turns: the program's promises are droidctl's clock. A turn hands the engine what
+//! happened (promises due, events, the latest readings), the engine runs every job that
+//! became ready, and hands back the calls the program made, in order, with their JS line.
+//! droidctl waits for a turn in `spawn_blocking`, which holds tokio's paused clock still
+//! while the program computes: under `--sim` a turn takes no simulated time at all, exactly as
+//! if the program ran between two packets, and a 60 s program runs in well under a second.
+
+use super::api::{Arg, Driver, Effect};
+use super::calls;
+use crate::model::Model;
+use boa_engine::object::builtins::{JsArray, JsFunction, JsPromise};
+use boa_engine::{
+    Context, JsError, JsNativeError, JsResult, JsValue, NativeFunction, Source, js_string,
+};
+use std::cell::RefCell;
+use std::collections::HashMap;
+use std::sync::mpsc;
+use std::time::Duration;
+
+/// The JS API as programs see it (Sphero Edu's names and shapes).
+const PRELUDE: &str = include_str!("prelude.js");
+const PRELUDE_PATH: &str = "droidctl-edu-prelude.js";
+/// A program's loops may turn this often in one function call before it throws: the
+/// engine thread of a run that was abandoned (Ctrl+c on `while (true) {}`) ends by itself.
+const LOOP_LIMIT: u64 = 50_000_000;
+
+/// A syntax error: where, and what.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct SyntaxError {
+    pub line: u32,
+    pub column: u32,
+    pub message: String,
+}
+
+/// Why a program stopped before its end.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Failure {
+    /// The program's line, when known.
+    pub line: Option<u32>,
+    pub message: String,
+}
+
+/// What the robot measures, as the program reads it (a snapshot per turn).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Readings {
+    pub location: Option<[f32; 2]>,
+    pub velocity: Option<[f32; 2]>,
+    pub orientation: Option<[f32; 3]>,
+    pub acceleration: Option<[f32; 3]>,
+    pub vertical_acceleration: Option<f32>,
+    pub gyroscope: Option<[f32; 3]>,
+    pub distance: f32,
+    pub elapsed_s: f64,
+    pub luminosity: Option<f32>,
+    pub color: Option<[u8; 3]>,
+    pub compass: Option<u16>,
+    pub battery_v: Option<f32>,
+    pub ir_message: Option<u8>,
+}
+
+/// An event a program can register for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Event {
+    Collision,
+    Freefall,
+    Landing,
+    GyroMax,
+    Charging,
+    NotCharging,
+    IrMessage(u8),
+    Color([u8; 3]),
+}
+
+impl Event {
+    pub fn name(self) -> &'static str {
+        match self {
+            Event::Collision => "onCollision",
+            Event::Freefall => "onFreefall",
+            Event::Landing => "onLanding",
+            Event::GyroMax => "onGyroMax",
+            Event::Charging => "onCharging",
+            Event::NotCharging => "onNotCharging",
+            Event::IrMessage(_) => "onIRMessage",
+            Event::Color(_) => "onColor",
+        }
+    }
+}
+
+/// One call the program made.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Op {
+    /// The program's line that made it.
+    pub line: u32,
+    /// The call as written (`roll(90, 100, 2)`), for the output.
+    pub text: String,
+    pub effect: Effect,
+    /// The promise to resolve once the effect's wait is over (`None`: it returned at once).
+    pub promise: Option<u64>,
+}
+
+/// Where the program stands after a turn.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Status {
+    Running,
+    /// `startProgram` returned and no event is registered, or `exitProgram()` was called.
+    Finished,
+    Failed(Failure),
+}
+
+/// A turn's result.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TurnOut {
+    pub ops: Vec<Op>,
+    pub status: Status,
+    /// The events the program listens for (by name).
+    pub listening: Vec<&'static str>,
+}
+
+/// Parse `source` without running it: a syntax error with its line and column.
+pub fn check(source: &str, path: &str) -> Result<(), SyntaxError> {
+    let mut ctx = Context::default();
+    let src = Source::from_bytes(source).with_path(std::path::Path::new(path));
+    match boa_engine::Script::parse(src, None, &mut ctx) {
+        Ok(_) => {}
+        Err(e) => {
+            let message = e.to_string();
+            let (line, column) = line_col(&message).unwrap_or((1, 1));
+            return Err(SyntaxError {
+                line,
+                column,
+                message,
+            });
+        }
+    }
+    if !source.contains("startProgram") {
+        return Err(SyntaxError {
+            line: 1,
+            column: 1,
+            message: "a Sphero Edu program defines `async function startProgram() { … }`".into(),
+        });
+    }
+    Ok(())
+}
+
+/// `line 3, col 7` or `:3:7` in an engine message.
+fn line_col(message: &str) -> Option<(u32, u32)> {
+    if let Some(at) = message.rfind("line ") {
+        let rest = &message[at + 5..];
+        let line: String = rest.chars().take_while(char::is_ascii_digit).collect();
+        let col = rest
+            .find("col")
+            .map(|c| {
+                rest[c..]
+                    .chars()
+                    .skip_while(|ch| !ch.is_ascii_digit())
+                    .take_while(char::is_ascii_digit)
+                    .collect::<String>()
+            })
+            .unwrap_or_default();
+        if let (Ok(l), Ok(c)) = (line.parse(), col.parse()) {
+            return Some((l, c));
+        }
+    }
+    None
+}
+
+/// The program's line in an error's backtrace (`at startProgram (square.js:3:5)`).
+fn line_in(text: &str, path: &str) -> Option<u32> {
+    let key = format!("{path}:");
+    let at = text.find(&key)?;
+    text[at + key.len()..]
+        .chars()
+        .take_while(char::is_ascii_digit)
+        .collect::<String>()
+        .parse()
+        .ok()
+}
+
+enum ToJs {
+    Turn {
+        fired: Vec<u64>,
+        events: Vec<Event>,
+        readings: Readings,
+    },
+}
+
+enum FromJs {
+    Done(TurnOut),
+    /// The run was abandoned while waiting for a turn.
+    Cancelled,
+}
+
+/// The engine, seen from droidctl's side.
+pub struct Engine {
+    tx: mpsc::Sender<ToJs>,
+    rx: Option<mpsc::Receiver<FromJs>>,
+    /// Wakes a turn being waited for when the engine is dropped.
+    back: mpsc::Sender<FromJs>,
+}
+
+impl Engine {
+    /// Start the engine thread for `source` on `model`. Nothing runs until the first turn.
+    pub fn start(source: String, path: String, model: Model) -> Result<Engine, String> {
+        let (tx, to_js) = mpsc::channel::<ToJs>();
+        let (back, rx) = mpsc::channel::<FromJs>();
+        let reply = back.clone();
+        std::thread::Builder::new()
+            .name("edu-program".into())
+            // Boa's parser and interpreter recurse: a roomy stack for nested programs.
+            .stack_size(16 << 20)
+            .spawn(move || js_thread(source, path, model, to_js, reply))
+            .map_err(|e| format!("cannot start the JavaScript engine: {e}"))?;
+        Ok(Engine {
+            tx,
+            rx: Some(rx),
+            back,
+        })
+    }
+
+    /// Run one turn. `limit` bounds how long the program may compute without waiting: past
+    /// it the run fails (the engine goes on spinning until its loop limit; it is abandoned).
+    pub async fn turn(
+        &mut self,
+        fired: Vec<u64>,
+        events: Vec<Event>,
+        readings: Readings,
+        limit: Duration,
+    ) -> Result<TurnOut, Failure> {
+        let gone = || Failure {
+            line: None,
+            message: "the JavaScript engine stopped".into(),
+        };
+        let rx = self.rx.take().ok_or_else(gone)?;
+        self.tx
+            .send(ToJs::Turn {
+                fired,
+                events,
+                readings,
+            })
+            .map_err(|_| gone())?;
+        // In `spawn_blocking`: tokio's paused clock stands still while the program computes.
+        let waited = tokio::task::spawn_blocking(move || {
+            let r = rx.recv_timeout(limit);
+            (rx, r)
+        })
+        .await;
+        let (rx, r) = waited.map_err(|_| gone())?;
+        match r {
+            Ok(FromJs::Done(out)) => {
+                self.rx = Some(rx);
+                Ok(out)
+            }
+            Ok(FromJs::Cancelled) | Err(mpsc::RecvTimeoutError::Disconnected) => Err(gone()),
+            Err(mpsc::RecvTimeoutError::Timeout) => Err(Failure {
+                line: None,
+                message: format!(
+                    "the program computed for {} s without waiting: a loop without `await` \
+                     (e.g. `await delay(0.1)`) never lets the robot move",
+                    limit.as_secs_f64()
+                ),
+            }),
+        }
+    }
+}
+
+impl Drop for Engine {
+    fn drop(&mut self) {
+        // A turn being waited for returns; the engine thread ends when its channel closes
+        // (or, spinning, at its loop limit).
+        let _ = self.back.send(FromJs::Cancelled);
+    }
+}
+
+/// The engine thread's state, reached by the native functions.
+struct Js {
+    driver: Driver,
+    path: String,
+    ops: Vec<Op>,
+    next_promise: u64,
+    pending: HashMap<u64, JsFunction>,
+    readings: Readings,
+    handlers: Vec<(&'static str, JsFunction)>,
+    /// Promises of `startProgram` and of event handlers: a rejection fails the program.
+    watched: Vec<JsPromise>,
+    main: Option<JsPromise>,
+    exit: bool,
+}
+
+thread_local! {
+    static JS: RefCell<Option<Js>> = const { RefCell::new(None) };
+}
+
+fn with_js<T>(f: impl FnOnce(&mut Js) -> T) -> Option<T> {
+    JS.with(|j| j.borrow_mut().as_mut().map(f))
+}
+
+fn js_thread(
+    source: String,
+    path: String,
+    model: Model,
+    to_js: mpsc::Receiver<ToJs>,
+    reply: mpsc::Sender<FromJs>,
+) {
+    let mut ctx = Context::default();
+    ctx.runtime_limits_mut()
+        .set_loop_iteration_limit(LOOP_LIMIT);
+    JS.with(|j| {
+        *j.borrow_mut() = Some(Js {
+            driver: Driver::new(model),
+            path: path.clone(),
+            ops: Vec::new(),
+            next_promise: 0,
+            pending: HashMap::new(),
+            readings: Readings::default(),
+            handlers: Vec::new(),
+            watched: Vec::new(),
+            main: None,
+            exit: false,
+        })
+    });
+    let mut started = false;
+    while let Ok(ToJs::Turn {
+        fired,
+        events,
+        readings,
+    }) = to_js.recv()
+    {
+        with_js(|js| js.readings = readings);
+        let r = if started {
+            turn(&mut ctx, fired, events)
+        } else {
+            started = true;
+            start(&mut ctx, &source, &path)
+        };
+        let status = match r {
+            Ok(()) => status(&mut ctx),
+            Err(e) => Status::Failed(failure(&e, &path, &mut ctx)),
+        };
+        let out = with_js(|js| TurnOut {
+            ops: std::mem::take(&mut js.ops),
+            status,
+            listening: js.handlers.iter().map(|h| h.0).collect(),
+        });
+        let Some(out) = out else { break };
+        let end = out.status != Status::Running;
+        if reply.send(FromJs::Done(out)).is_err() || end {
+            break;
+        }
+    }
+    // Drop the engine's objects before the engine.
+    JS.with(|j| j.borrow_mut().take());
+}
+
+fn start(ctx: &mut Context, source: &str, path: &str) -> JsResult<()> {
+    ctx.register_global_builtin_callable(
+        js_string!("__call"),
+        1,
+        NativeFunction::from_fn_ptr(native_call),
+    )?;
+    ctx.register_global_builtin_callable(
+        js_string!("__read"),
+        1,
+        NativeFunction::from_fn_ptr(native_read),
+    )?;
+    ctx.register_global_builtin_callable(
+        js_string!("__on"),
+        2,
+        NativeFunction::from_fn_ptr(native_on),
+    )?;
+    let prelude = Source::from_bytes(PRELUDE).with_path(std::path::Path::new(PRELUDE_PATH));
+    ctx.eval(prelude)?;
+    let program = Source::from_bytes(source).with_path(std::path::Path::new(path));
+    ctx.eval(program)?;
+    ctx.run_jobs()?;
+    let start = ctx.global_object().get(js_string!("startProgram"), ctx)?;
+    let Some(f) = start.as_function() else {
+        return Err(JsNativeError::reference()
+            .with_message("the program has no `async function startProgram()`")
+            .into());
+    };
+    let v = f.call(&JsValue::undefined(), &[], ctx)?;
+    if let Some(p) = v.as_promise() {
+        with_js(|js| {
+            js.main = Some(p.clone());
+            js.watched.push(p);
+        });
+    } else {
+        // A plain `function startProgram()`: done when it returned.
+        let done = JsPromise::resolve(JsValue::undefined(), ctx)?;
+        with_js(|js| js.main = Some(done));
+    }
+    ctx.run_jobs()
+}
+
+fn turn(ctx: &mut Context, fired: Vec<u64>, events: Vec<Event>) -> JsResult<()> {
+    for id in fired {
+        if let Some(resolve) = with_js(|js| js.pending.remove(&id)).flatten() {
+            resolve.call(&JsValue::undefined(), &[], ctx)?;
+        }
+    }
+    ctx.run_jobs()?;
+    for e in events {
+        let handlers: Vec<JsFunction> = with_js(|js| {
+            js.handlers
+                .iter()
+                .filter(|h| h.0 == e.name())
+                .map(|h| h.1.clone())
+                .collect()
+        })
+        .unwrap_or_default();
+        let arg = match e {
+            Event::IrMessage(ch) => JsValue::from(ch),
+            Event::Color([r, g, b]) => {
+                let o = JsValue::from(boa_engine::object::ObjectInitializer::new(ctx).build());
+                if let Some(obj) = o.as_object() {
+                    obj.set(js_string!("r"), r, false, ctx)?;
+                    obj.set(js_string!("g"), g, false, ctx)?;
+                    obj.set(js_string!("b"), b, false, ctx)?;
+                }
+                o
+            }
+            _ => JsValue::undefined(),
+        };
+        for h in handlers {
+            let v = h.call(&JsValue::undefined(), std::slice::from_ref(&arg), ctx)?;
+            if let Some(p) = v.as_promise() {
+                with_js(|js| js.watched.push(p));
+            }
+        }
+        ctx.run_jobs()?;
+    }
+    Ok(())
+}
+
+fn status(ctx: &mut Context) -> Status {
+    use boa_engine::builtins::promise::PromiseState;
+    let path = with_js(|js| js.path.clone()).unwrap_or_default();
+    let watched = with_js(|js| std::mem::take(&mut js.watched)).unwrap_or_default();
+    let mut keep = Vec::new();
+    for p in watched {
+        match p.state() {
+            PromiseState::Rejected(v) => {
+                let e = JsError::from_opaque(v);
+                return Status::Failed(failure(&e, &path, ctx));
+            }
+            PromiseState::Pending => keep.push(p),
+            PromiseState::Fulfilled(_) => {}
+        }
+    }
+    let (exit, main_done, listening) = with_js(|js| {
+        js.watched = keep;
+        let done = js
+            .main
+            .as_ref()
+            .is_some_and(|m| matches!(m.state(), PromiseState::Fulfilled(_)));
+        (js.exit, done, !js.handlers.is_empty())
+    })
+    .unwrap_or((true, true, false));
+    if exit || (main_done && !listening) {
+        Status::Finished
+    } else {
+        Status::Running
+    }
+}
+
+/// An uncaught exception as the user sees it: its message and the program's line.
+fn failure(e: &JsError, path: &str, ctx: &mut Context) -> Failure {
+    let text = e.to_string();
+    // `throw new Error("x")`: the message is the error object's; the line its stack's.
+    let mut message = text.lines().next().unwrap_or("").trim().to_string();
+    if let Ok(v) = e.clone().into_opaque(ctx)
+        && let Some(o) = v.as_object()
+        && let Ok(m) = o.get(js_string!("message"), ctx)
+        && let Ok(n) = o.get(js_string!("name"), ctx)
+        && !m.is_undefined()
+    {
+        message = format!(
+            "{}: {}",
+            n.to_string(ctx)
+                .map(|s| s.to_std_string_escaped())
+                .unwrap_or_default(),
+            m.to_string(ctx)
+                .map(|s| s.to_std_string_escaped())
+                .unwrap_or_default()
+        );
+    }
+    let line = line_in(&text, path);
+    // Strip the engine's own ` at path:line:col` decoration from the first line.
+    if let Some(at) = message.find(&format!(" at {path}")) {
+        message.truncate(at);
+    }
+    Failure { line, message }
+}
+
+/// The program's line making the current native call.
+fn user_line(ctx: &Context, path: &str) -> u32 {
+    ctx.stack_trace()
+        .map(|f| f.position())
+        .find(|p| p.path.to_string() == path)
+        .and_then(|p| p.position)
+        .map(|p| p.line_number())
+        .unwrap_or(0)
+}
+
+fn args_of(args: &[JsValue], ctx: &mut Context) -> JsResult<Vec<Arg>> {
+    args.iter()
+        .map(|v| {
+            Ok(match v.as_string() {
+                Some(s) => Arg::Text(s.to_std_string_escaped()),
+                None => Arg::Num(v.to_number(ctx)?),
+            })
+        })
+        .collect()
+}
+
+fn shown(name: &str, args: &[Arg]) -> String {
+    let parts: Vec<String> = args
+        .iter()
+        .map(|a| match a {
+            Arg::Num(n) => format!("{n}"),
+            Arg::Text(t) => format!("{t:?}"),
+        })
+        .collect();
+    format!("{name}({})", parts.join(", "))
+}
+
+fn native_call(_this: &JsValue, args: &[JsValue], ctx: &mut Context) -> JsResult<JsValue> {
+    let name = args
+        .first()
+        .and_then(JsValue::as_string)
+        .map(|s| s.to_std_string_escaped())
+        .unwrap_or_default();
+    let rest = args_of(args.get(1..).unwrap_or(&[]), ctx)?;
+    let (model, path) = with_js(|js| (js.driver.model, js.path.clone()))
+        .ok_or_else(|| JsNativeError::error().with_message("no program"))?;
+    // The table's name (`setBackLed(255)` arrives as `setBackLedBrightness`).
+    let public = name.trim_end_matches("Brightness");
+    if let Some(why) = calls::not_on(public, model) {
+        return Err(JsNativeError::typ().with_message(why).into());
+    }
+    let line = user_line(ctx, &path);
+    let effect = with_js(|js| js.driver.call(&name, &rest))
+        .unwrap_or_else(|| Err("no program".into()))
+        .map_err(|m| JsNativeError::range().with_message(m))?;
+    let text = shown(public, &rest);
+    if effect.wait.is_none() {
+        let exit = effect.exit;
+        with_js(|js| {
+            js.exit |= exit;
+            js.ops.push(Op {
+                line,
+                text,
+                effect,
+                promise: None,
+            })
+        });
+        return Ok(JsValue::undefined());
+    }
+    let (promise, resolvers) = JsPromise::new_pending(ctx);
+    with_js(|js| {
+        let id = js.next_promise;
+        js.next_promise += 1;
+        js.pending.insert(id, resolvers.resolve);
+        js.ops.push(Op {
+            line,
+            text,
+            effect,
+            promise: Some(id),
+        });
+    });
+    Ok(promise.into())
+}
+
+fn native_read(_this: &JsValue, args: &[JsValue], ctx: &mut Context) -> JsResult<JsValue> {
+    let name = args
+        .first()
+        .and_then(JsValue::as_string)
+        .map(|s| s.to_std_string_escaped())
+        .unwrap_or_default();
+    let model = with_js(|js| js.driver.model).unwrap_or(Model::R2D2);
+    if let Some(why) = calls::not_on(&name, model) {
+        return Err(JsNativeError::typ().with_message(why).into());
+    }
+    enum V {
+        N(Option<f64>),
+        A(Option<Vec<f64>>),
+    }
+    let v = with_js(|js| {
+        let r = &js.readings;
+        let arr = |a: Option<&[f32]>| V::A(a.map(|a| a.iter().map(|v| *v as f64).collect()));
+        match name.as_str() {
+            "getLocation" => arr(r.location.as_ref().map(|a| &a[..])),
+            "getVelocity" => arr(r.velocity.as_ref().map(|a| &a[..])),
+            "getOrientation" => arr(r.orientation.as_ref().map(|a| &a[..])),
+            "getAcceleration" => arr(r.acceleration.as_ref().map(|a| &a[..])),
+            "getGyroscope" => arr(r.gyroscope.as_ref().map(|a| &a[..])),
+            "getVerticalAcceleration" => V::N(r.vertical_acceleration.map(f64::from)),
+            "getSpeed" => V::N(Some(js.driver.speed as f64)),
+            "getHeading" => V::N(Some(js.driver.heading as f64)),
+            "getDistance" => V::N(Some(r.distance as f64)),
+            "getElapsedTime" => V::N(Some(r.elapsed_s)),
+            "getLuminosity" => V::N(r.luminosity.map(f64::from)),
+            "getColor" => V::A(r.color.map(|c| c.iter().map(|v| *v as f64).collect())),
+            "getCompassDirection" => V::N(r.compass.map(f64::from)),
+            "getBatteryVoltage" => V::N(r.battery_v.map(f64::from)),
+            "getMainLed" => V::A(Some(js.driver.main.iter().map(|v| *v as f64).collect())),
+            "getLastIRMessage" => V::N(r.ir_message.map(f64::from)),
+            _ => V::N(None),
+        }
+    })
+    .unwrap_or(V::N(None));
+    Ok(match v {
+        V::N(Some(n)) => JsValue::from(n),
+        V::A(Some(a)) => JsArray::from_iter(a.into_iter().map(JsValue::from), ctx).into(),
+        _ => JsValue::null(),
+    })
+}
+
+fn native_on(_this: &JsValue, args: &[JsValue], ctx: &mut Context) -> JsResult<JsValue> {
+    let name = args
+        .first()
+        .map(|v| v.to_string(ctx))
+        .transpose()?
+        .map(|s| s.to_std_string_escaped())
+        .unwrap_or_default();
+    let Some(event) = calls::EVENTS.iter().find(|e| e.0 == name) else {
+        return Err(JsNativeError::typ()
+            .with_message(format!("{name} is not an EventType droidctl knows"))
+            .into());
+    };
+    let model = with_js(|js| js.driver.model).unwrap_or(Model::R2D2);
+    if !event.1.applies(model) {
+        return Err(JsNativeError::typ()
+            .with_message(format!(
+                "{name} is not on {} (it is on {})",
+                model.display_name(),
+                event.1.names()
+            ))
+            .into());
+    }
+    let Some(f) = args.get(1).and_then(JsValue::as_function) else {
+        return Err(JsNativeError::typ()
+            .with_message("registerEvent needs a function to call")
+            .into());
+    };
+    with_js(|js| js.handlers.push((event.0, f)));
+    Ok(JsValue::undefined())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_syntax_error_has_its_line_and_column() {
+        let e = check(
+            "async function startProgram() {\n  roll(0, 50, 1;\n}\n",
+            "p.js",
+        )
+        .unwrap_err();
+        assert_eq!(e.line, 2, "{e:?}");
+        assert!(e.column > 1, "{e:?}");
+    }
+}

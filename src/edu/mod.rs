@@ -1,0 +1,34 @@
+//! Sphero Edu JavaScript programs (`droidctl run PROGRAM.js`, `droidctl --program
+//! PROGRAM.js`): the programs people write in Sphero's own app, run on any droid droidctl
+//! drives, real or simulated, alone or in a fleet, under the operator's emergency stop.
+//!
+//! - [`calls`]: the API's calls and the robots each applies to (one table: the engine's "not
+//!   on this robot" errors and the docs' list come from it);
+//! - [`api`]: what each call does, sans-IO, as spherov2.py's `SpheroEduAPI` does it;
+//! - [`engine`]: the JavaScript engine, on a thread of its own, driven in turns;
+//! - [`run`]: a program on one droid, on droidctl's clock.
+//!
+//! The engine is Boa (`boa_engine`), not QuickJS (`rquickjs`): Boa is pure Rust, so the
+//! Windows and macOS cross checks build it with no C compiler (rquickjs-sys compiles QuickJS's
+//! C in its build script, which fails there), and its promises and job queue are plain Rust
+//! to drive from droidctl's clock. Built without default features (no Temporal, no ICU data)
+//! it costs about a minute of a cold release build on two cores and ~5 MB of binary; what it
+//! lacks next to QuickJS (speed) matters little to programs that mostly wait for the robot.
+//!
+//! Layering: above missions and fleets (a program reuses a mission's telemetry, samples and
+//! summary), below the app and the CLI.
+
+pub mod api;
+pub mod calls;
+pub mod engine;
+pub mod run;
+
+pub use run::{Program, ProgramOptions, run};
+
+/// Whether the file at `path` holding `text` is a Sphero Edu program rather than a mission
+/// script: a `.js` name, or a `startProgram` function in it.
+pub fn is_program(path: &std::path::Path, text: &str) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("js") || e.eq_ignore_ascii_case("mjs"))
+        || (text.contains("function startProgram") && text.contains('('))
+}

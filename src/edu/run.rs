@@ -1,0 +1,669 @@
+//! A Sphero Edu program on one droid: the engine's calls played on droidctl's clock.
+//!
+//! The mission machinery does the rest as for `run SCRIPT` ([`DroidMission`]): the wait for
+//! the link, telemetry, samples (`--json`, `--csv`), the battery poll and the summary. Calls
+//! become the droid's commands here, timed waits (`roll`'s duration, `spin`'s steps, `fade`,
+//! `delay`) run on tokio's clock, and the droid's notifications become the program's events.
+
+use super::api::{Act, Matrix, Wait};
+use super::engine::{Engine, Event, Failure, Op, Readings, Status};
+use crate::family::{Command, Family};
+use crate::mission::{DroidMission, Emit, MissionError, MissionEvent, MissionOptions, Summary};
+use crate::model::Model;
+use crate::protocol::notify::{Notification, RobotEvent};
+use crate::protocol::v2::cmd;
+use crate::protocol::v2::types::ScrollText;
+use crate::protocol::wire::LegAction;
+use crate::script::{Action, LedGroup, MatrixAction, Step};
+use crate::session::{SessionEvent, SessionHandle, Slot};
+use crate::telemetry::{Stance, Telemetry};
+use crate::units::Heading;
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+use tokio::sync::broadcast;
+use tokio::time::{Instant, sleep_until};
+
+/// A program checked and ready to run.
+#[derive(Debug, Clone)]
+pub struct Program {
+    pub source: String,
+    /// The name errors give (`square.js:3: …`).
+    pub path: String,
+}
+
+impl Program {
+    /// Read and check `source`: a syntax error names its line and column.
+    pub fn new(source: String, path: String) -> Result<Program, super::engine::SyntaxError> {
+        super::engine::check(&source, &path)?;
+        Ok(Program { source, path })
+    }
+}
+
+/// How a program runs.
+#[derive(Debug, Clone)]
+pub struct ProgramOptions {
+    pub mission: MissionOptions,
+    /// End the program after this long on droidctl's clock (simulated under `--sim`).
+    pub timeout: Option<Duration>,
+    /// The longest the program may compute without waiting (wall-clock time).
+    pub no_yield: Duration,
+}
+
+impl Default for ProgramOptions {
+    fn default() -> Self {
+        ProgramOptions {
+            mission: MissionOptions::default(),
+            timeout: None,
+            no_yield: Duration::from_secs(5),
+        }
+    }
+}
+
+/// A timed action of a call: its acts at `at`, then its promise resolved (when the last).
+struct Timed {
+    at: Instant,
+    acts: Vec<Act>,
+    fire: Option<u64>,
+}
+
+/// A wait on the droid rather than the clock.
+enum Until {
+    Distance {
+        from: f32,
+        cm: f32,
+        then: Vec<Act>,
+        fire: u64,
+    },
+    Stance {
+        by: Instant,
+        fire: u64,
+    },
+    Compass {
+        by: Instant,
+        fire: u64,
+    },
+}
+
+struct Player {
+    session: SessionHandle,
+    model: Model,
+    family: &'static dyn Family,
+    emit: Emit,
+    start: Instant,
+    telemetry: Arc<Mutex<Telemetry>>,
+    timed: Vec<Timed>,
+    until: Vec<Until>,
+    fired: Vec<u64>,
+    events: Vec<Event>,
+    /// The drive being held (re-sent on the heartbeat).
+    drive: Option<Command>,
+    last_heading: u16,
+    raw: bool,
+    /// Distance covered, cm (spherov2 sums the locator's steps).
+    distance: f32,
+    last_location: Option<[f32; 2]>,
+    falling: Falling,
+    stance_done: bool,
+    mission: DroidMission,
+}
+
+/// spherov2's fall detector (`__process_falling`), on the acceleration's size.
+struct Falling {
+    v: f32,
+    since: Option<Instant>,
+    free: bool,
+    should_land: bool,
+    gyro_max: bool,
+}
+
+fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// Run `program` on the droid behind `session`.
+pub async fn run(
+    session: &SessionHandle,
+    model: Model,
+    program: &Program,
+    opts: ProgramOptions,
+    emit: Emit,
+    start: Instant,
+) -> Result<Summary, MissionError> {
+    let events = session.subscribe();
+    let mission =
+        DroidMission::start(session, model, opts.mission.clone(), emit.clone(), start).await?;
+    let mut p = Player {
+        session: session.clone(),
+        model,
+        family: crate::family::for_model(model),
+        emit,
+        start,
+        telemetry: mission.telemetry(),
+        timed: Vec::new(),
+        until: Vec::new(),
+        fired: Vec::new(),
+        events: Vec::new(),
+        drive: None,
+        last_heading: 0,
+        raw: false,
+        distance: 0.0,
+        last_location: None,
+        falling: Falling {
+            v: 1.0,
+            since: None,
+            free: false,
+            should_land: false,
+            gyro_max: false,
+        },
+        stance_done: false,
+        mission,
+    };
+    let r = p.play(program, &opts, events).await;
+    p.stop_motion();
+    let summary = p.mission.finish().await;
+    match r {
+        Ok(()) => summary,
+        Err(f) => {
+            let at = f.line.map(|l| format!(":{l}")).unwrap_or_default();
+            Err(MissionError(format!(
+                "{}{at}: {}; the program was ended and the droid stopped",
+                program.path, f.message
+            )))
+        }
+    }
+}
+
+impl Player {
+    fn t_ms(&self) -> u64 {
+        self.start.elapsed().as_millis() as u64
+    }
+
+    async fn play(
+        &mut self,
+        program: &Program,
+        opts: &ProgramOptions,
+        mut rx: broadcast::Receiver<SessionEvent>,
+    ) -> Result<(), Failure> {
+        let mut engine = Engine::start(program.source.clone(), program.path.clone(), self.model)
+            .map_err(|message| Failure {
+                line: None,
+                message,
+            })?;
+        let deadline = opts.timeout.map(|t| Instant::now() + t);
+        let far = Instant::now() + Duration::from_secs(86_400 * 365);
+        let mut heartbeat = tokio::time::interval(opts.mission.heartbeat);
+        heartbeat.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
+        let mut listening: Vec<&'static str> = Vec::new();
+        let mut first = true;
+        loop {
+            if first || !self.fired.is_empty() || !self.events.is_empty() {
+                first = false;
+                let fired = std::mem::take(&mut self.fired);
+                let events = std::mem::take(&mut self.events);
+                let out = engine
+                    .turn(fired, events, self.readings(), opts.no_yield)
+                    .await?;
+                listening = out.listening;
+                for op in out.ops {
+                    self.apply(op).await;
+                }
+                match out.status {
+                    Status::Finished => return Ok(()),
+                    Status::Failed(f) => return Err(f),
+                    Status::Running => {}
+                }
+                if !self.fired.is_empty() {
+                    continue;
+                }
+            }
+            let next = self.timed.iter().map(|t| t.at).min().unwrap_or(far);
+            let by = deadline.unwrap_or(far);
+            tokio::select! {
+                _ = sleep_until(next) => self.due().await,
+                _ = sleep_until(by) => {
+                    return Err(Failure {
+                        line: None,
+                        message: format!(
+                            "--timeout: the program ran {} s",
+                            opts.timeout.unwrap_or_default().as_secs_f64()
+                        ),
+                    });
+                }
+                _ = heartbeat.tick() => {
+                    if let Some(c) = &self.drive {
+                        self.session.set(Slot::Drive, c.clone());
+                    }
+                    self.check_until().await;
+                }
+                ev = rx.recv() => match ev {
+                    Ok(SessionEvent::Notification(n)) => self.notified(&n, &listening).await,
+                    Ok(_) | Err(broadcast::error::RecvError::Lagged(_)) => {}
+                    Err(broadcast::error::RecvError::Closed) => {
+                        return Err(Failure { line: None, message: "the session ended".into() });
+                    }
+                },
+            }
+            if self.session.is_closed() {
+                return Err(Failure {
+                    line: None,
+                    message: "the link to the droid closed".into(),
+                });
+            }
+        }
+    }
+
+    /// What the program reads this turn.
+    fn readings(&mut self) -> Readings {
+        let t = lock(&self.telemetry).clone();
+        self.track(&t);
+        let v_acc = t
+            .accel
+            .map(|a| (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt());
+        Readings {
+            location: t.x_cm.zip(t.y_cm).map(|(x, y)| [x, y]),
+            velocity: t.velocity_cm_s,
+            orientation: match (t.pitch, t.roll, t.yaw) {
+                (Some(p), Some(r), Some(y)) => Some([p, r, y]),
+                _ => None,
+            },
+            acceleration: t.accel,
+            vertical_acceleration: v_acc,
+            gyroscope: t.gyro,
+            distance: self.distance,
+            elapsed_s: self.start.elapsed().as_secs_f64(),
+            luminosity: t.robot.ambient_lux,
+            color: t.robot.color.map(|c| c.0),
+            compass: t.robot.compass_north,
+            battery_v: t.battery_v,
+            ir_message: None,
+        }
+    }
+
+    /// Add the locator's latest step to the distance covered.
+    fn track(&mut self, t: &Telemetry) {
+        if let (Some(x), Some(y)) = (t.x_cm, t.y_cm) {
+            if let Some([lx, ly]) = self.last_location {
+                self.distance += ((x - lx).powi(2) + (y - ly).powi(2)).sqrt();
+            }
+            self.last_location = Some([x, y]);
+        }
+    }
+
+    /// One call of the program: said, done now, and its wait scheduled.
+    async fn apply(&mut self, op: Op) {
+        (self.emit)(MissionEvent::Step {
+            t_ms: self.t_ms(),
+            line: op.line as usize,
+            text: op.text.clone(),
+        });
+        for a in &op.effect.now {
+            self.act(op.line, a).await;
+        }
+        let now = Instant::now();
+        match (op.effect.wait, op.promise) {
+            (None, Some(id)) => self.fired.push(id),
+            (None, None) => {}
+            (Some(Wait::Timeline { steps, end }), id) => {
+                for (at, acts) in steps {
+                    self.timed.push(Timed {
+                        at: now + at,
+                        acts,
+                        fire: None,
+                    });
+                }
+                self.timed.push(Timed {
+                    at: now + end,
+                    acts: Vec::new(),
+                    fire: id,
+                });
+            }
+            (Some(Wait::Distance { cm, then }), Some(fire)) => {
+                self.readings();
+                self.until.push(Until::Distance {
+                    from: self.distance,
+                    cm,
+                    then,
+                    fire,
+                });
+            }
+            (Some(Wait::Stance), Some(fire)) => {
+                self.stance_done = false;
+                self.until.push(Until::Stance {
+                    by: now + Duration::from_secs(5),
+                    fire,
+                });
+            }
+            (Some(Wait::Compass), Some(fire)) => self.until.push(Until::Compass {
+                by: now + Duration::from_secs(10),
+                fire,
+            }),
+            (Some(_), None) => {}
+        }
+    }
+
+    /// The timed actions that are due, in order.
+    async fn due(&mut self) {
+        let now = Instant::now();
+        let mut due: Vec<Timed> = Vec::new();
+        let mut i = 0;
+        while i < self.timed.len() {
+            if self.timed[i].at <= now {
+                due.push(self.timed.remove(i));
+            } else {
+                i += 1;
+            }
+        }
+        due.sort_by_key(|t| t.at);
+        for t in due {
+            for a in &t.acts {
+                self.act(0, a).await;
+            }
+            if let Some(id) = t.fire {
+                self.fired.push(id);
+            }
+        }
+    }
+
+    /// Waits on the droid that are over.
+    async fn check_until(&mut self) {
+        self.readings();
+        let now = Instant::now();
+        let (distance, stance_done) = (self.distance, self.stance_done);
+        let compass = lock(&self.telemetry).robot.compass_north.is_some();
+        let mut over = Vec::new();
+        self.until.retain(|u| {
+            let done = match u {
+                Until::Distance { from, cm, .. } => distance - from >= *cm,
+                Until::Stance { by, .. } => stance_done || now >= *by,
+                Until::Compass { by, .. } => compass || now >= *by,
+            };
+            if done {
+                over.push(match u {
+                    Until::Distance { then, fire, .. } => (then.clone(), *fire),
+                    Until::Stance { fire, .. } | Until::Compass { fire, .. } => (Vec::new(), *fire),
+                });
+            }
+            !done
+        });
+        for (acts, fire) in over {
+            for a in &acts {
+                self.act(0, a).await;
+            }
+            self.fired.push(fire);
+        }
+    }
+
+    /// A notification: telemetry is the mission's; events for the program here.
+    async fn notified(&mut self, n: &Notification, listening: &[&'static str]) {
+        let mut seen = Vec::new();
+        match n {
+            Notification::Collision(_) => seen.push(Event::Collision),
+            Notification::LegActionComplete => self.stance_done = true,
+            Notification::ChargerStateChanged(s) | Notification::BatteryStateChanged(s) => {
+                // spherov2: charging or charged is "charging", anything else "not charging".
+                seen.push(if matches!(s, 1 | 2) {
+                    Event::Charging
+                } else {
+                    Event::NotCharging
+                });
+            }
+            Notification::Robot(RobotEvent::Color {
+                rgb, confidence, ..
+            }) if *confidence as f32 / 255.0 >= 0.71 => seen.push(Event::Color(*rgb)),
+            Notification::Sensors(_) => {
+                let t = lock(&self.telemetry).clone();
+                if let Some(a) = t.accel {
+                    seen.extend(self.fall(a));
+                }
+                if let Some(g) = t.gyro {
+                    let max = g.iter().any(|v| v.abs() >= 2000.0);
+                    if max && !self.falling.gyro_max {
+                        seen.push(Event::GyroMax);
+                    }
+                    self.falling.gyro_max = max;
+                }
+                self.check_until().await;
+            }
+            _ => {}
+        }
+        self.events
+            .extend(seen.into_iter().filter(|e| listening.contains(&e.name())));
+        if matches!(n, Notification::LegActionComplete) {
+            self.check_until().await;
+        }
+    }
+
+    /// spherov2's free fall and landing, on the acceleration's size (1 g at rest, 0 falling).
+    fn fall(&mut self, a: [f32; 3]) -> Vec<Event> {
+        let size = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
+        let f = &mut self.falling;
+        f.v = (f.v + size * 3.0) / 4.0;
+        let now = Instant::now();
+        let mut out = Vec::new();
+        if f.v.abs() < 0.5 {
+            let since = *f.since.get_or_insert(now);
+            if now - since > Duration::from_millis(200) && !f.free {
+                out.push(Event::Freefall);
+                f.free = true;
+                f.should_land = true;
+            }
+        } else {
+            f.since = None;
+            f.free = false;
+        }
+        if f.should_land && f.v > 1.1 {
+            out.push(Event::Landing);
+            f.should_land = false;
+        }
+        out
+    }
+
+    fn send(&mut self, line: u32, c: Option<Command>, what: &str) {
+        match c {
+            Some(c) => {
+                if let Err(e) = self.session.send(c) {
+                    self.warn(line, format!("{what}: {e}"));
+                }
+            }
+            None => self.warn(
+                line,
+                format!(
+                    "{what}: droidctl cannot do this on {}",
+                    self.model.display_name()
+                ),
+            ),
+        }
+    }
+
+    fn warn(&self, line: u32, message: String) {
+        (self.emit)(MissionEvent::Warning {
+            t_ms: self.t_ms(),
+            line: (line > 0).then_some(line as usize),
+            message,
+        });
+    }
+
+    fn led(&mut self, line: u32, a: Action) {
+        let c = self.family.led(self.model, &a);
+        self.send(line, c, "light");
+    }
+
+    /// R2-D2 and R2-Q5 roll only in tripod: put them there first, as missions do.
+    async fn tripod(&mut self, line: u32) {
+        if !self.model.has_legs() {
+            return;
+        }
+        let stance = lock(&self.telemetry).stance;
+        if matches!(
+            stance,
+            Stance::Tripod | Stance::Transitioning(crate::protocol::wire::LegState::Tripod)
+        ) {
+            return;
+        }
+        let step = Step {
+            line: line as usize,
+            text: "stance tripod".into(),
+            action: Action::Stance(LegAction::Tripod),
+        };
+        self.mission.step(&step).await;
+    }
+
+    async fn act(&mut self, line: u32, a: &Act) {
+        match a {
+            Act::Drive {
+                speed,
+                heading,
+                reverse,
+            } => {
+                if *speed > 0 {
+                    self.tripod(line).await;
+                }
+                let h = Heading::wrapped(*heading as f64);
+                let c = if *reverse && self.family.can_reverse() {
+                    self.family.drive(*speed, h, true)
+                } else {
+                    crate::mission::drive_command(self.family, *speed, h)
+                };
+                self.last_heading = *heading;
+                self.session.set(Slot::Drive, c.clone());
+                self.drive = (*speed > 0).then_some(c);
+            }
+            Act::Raw(l, r) => {
+                self.drive = None;
+                let c = self.family.tank(*l, *r);
+                self.raw = *l != 0 || *r != 0;
+                self.send(line, c, "rawMotor");
+            }
+            Act::Stabilization(on) => {
+                let c = (self.model.protocol() == crate::model::Protocol::SpheroV2).then(|| {
+                    use crate::protocol::wire::StabilizationIndex;
+                    let i = if *on {
+                        StabilizationIndex::Full
+                    } else {
+                        StabilizationIndex::None
+                    };
+                    cmd::set_stabilization(i).into()
+                });
+                if self.model.protocol() == crate::model::Protocol::SpheroV2 {
+                    self.send(line, c, "setStabilization");
+                }
+            }
+            Act::ResetAim => {
+                for c in self.family.aim_end(self.model) {
+                    self.send(line, Some(c), "resetAim");
+                }
+            }
+            Act::Main(rgb) => match self.model {
+                // spherov2 lights BOLT's whole matrix (`set_led_matrix_one_colour`).
+                Model::Bolt => self.matrix(line, &Matrix::Fill([0, 0, 7, 7], *rgb)),
+                Model::R2D2 | Model::R2Q5 | Model::Rvr => {
+                    self.led(line, Action::LedRgb(LedGroup::Front, *rgb));
+                    self.led(line, Action::LedRgb(LedGroup::Back, *rgb));
+                }
+                _ => self.led(line, Action::LedRgb(LedGroup::Front, *rgb)),
+            },
+            Act::Front(rgb) => self.led(line, Action::LedRgb(LedGroup::Front, *rgb)),
+            Act::Back(rgb) => self.led(line, Action::LedRgb(LedGroup::Back, *rgb)),
+            Act::BackBrightness(b) => self.led(line, Action::LedBrightness(LedGroup::Back, *b)),
+            Act::Holo(b) => self.led(line, Action::LedBrightness(LedGroup::Holo, *b)),
+            Act::Logic(b) => self.led(line, Action::LedBrightness(LedGroup::Logic, *b)),
+            // BB-9E's dome light, 0..15 scaled to 0..255 as spherov2 does.
+            Act::DomeLeds(b) => self.led(
+                line,
+                Action::LedBrightness(LedGroup::Holo, (*b as u16 * 255 / 15) as u8),
+            ),
+            Act::Matrix(m) => self.matrix(line, m),
+            Act::Dome(deg) => {
+                let c = self.family.head(crate::units::HeadAngle::clamped(*deg));
+                match c {
+                    Some(c) => self.session.set(Slot::Head, c),
+                    None => self.warn(line, "setDomePosition: no dome".into()),
+                }
+            }
+            Act::Stance(s) => {
+                self.drive = None;
+                lock(&self.telemetry).stance_requested(*s);
+                let c = self.family.stance(*s);
+                self.send(line, c, "setStance");
+            }
+            Act::Animation(id) => {
+                self.drive = None;
+                let c = self.family.animation(self.model, *id);
+                self.send(line, c, "playAnimation");
+            }
+            Act::Sound(s) => match s
+                .parse::<u16>()
+                .ok()
+                .and_then(|id| self.family.sound(self.model, id))
+            {
+                Some(c) => self.send(line, Some(c), "playSound"),
+                None => self.say(line, format!("plays sound {s:?}")),
+            },
+            Act::Say(text) => self.say(line, format!("says {text:?}")),
+            Act::CalibrateCompass => {
+                let c = self.family.calibrate_compass();
+                self.send(line, c, "calibrateCompass");
+            }
+        }
+    }
+
+    /// What a robot without a speaker would have said: a line of the output.
+    fn say(&self, line: u32, text: String) {
+        (self.emit)(MissionEvent::Step {
+            t_ms: self.t_ms(),
+            line: line as usize,
+            text: format!("{} {text}", self.model.display_name()),
+        });
+    }
+
+    fn matrix(&mut self, line: u32, m: &Matrix) {
+        let plain = |a: MatrixAction, f: &dyn Family| f.matrix(&a);
+        let c: Option<Command> = match m {
+            Matrix::Char(ch, rgb) => plain(MatrixAction::Char { ch: *ch, rgb: *rgb }, self.family),
+            Matrix::Pixel(x, y, rgb) => plain(
+                MatrixAction::Pixel {
+                    x: *x,
+                    y: *y,
+                    rgb: *rgb,
+                },
+                self.family,
+            ),
+            Matrix::Clear => plain(MatrixAction::Clear, self.family),
+            Matrix::Rotate(d) => plain(MatrixAction::Rotate(*d), self.family),
+            Matrix::Text { text, rgb, fps } => Some(
+                cmd::set_compressed_frame_player_text_scrolling(
+                    rgb[0],
+                    rgb[1],
+                    rgb[2],
+                    *fps,
+                    false,
+                    ScrollText(text.clone()),
+                )
+                .into(),
+            ),
+            Matrix::Line([x1, y1, x2, y2], [r, g, b]) => {
+                Some(cmd::draw_compressed_frame_player_line(*x1, *y1, *x2, *y2, *r, *g, *b).into())
+            }
+            Matrix::Fill([x1, y1, x2, y2], [r, g, b]) => {
+                Some(cmd::draw_compressed_frame_player_fill(*x1, *y1, *x2, *y2, *r, *g, *b).into())
+            }
+        };
+        self.send(line, c, "matrix");
+    }
+
+    /// Stop rolling and the motors (the run ends, or the program failed).
+    fn stop_motion(&mut self) {
+        self.drive = None;
+        let stop = crate::mission::drive_command(
+            self.family,
+            0,
+            Heading::wrapped(self.last_heading as f64),
+        );
+        self.session.set(Slot::Drive, stop);
+        if self.raw
+            && let Some(c) = self.family.tank(0, 0)
+        {
+            let _ = self.session.send(c);
+        }
+    }
+}
