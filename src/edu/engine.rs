@@ -130,8 +130,13 @@ pub fn check(source: &str, path: &str) -> Result<(), SyntaxError> {
     match boa_engine::Script::parse(src, None, &mut ctx) {
         Ok(_) => {}
         Err(e) => {
-            let message = e.to_string();
-            let (line, column) = line_col(&message).unwrap_or((1, 1));
+            let text = e.to_string();
+            let (line, column) = line_col(&text).unwrap_or((1, 1));
+            // `… in argument list at line 4, col 1 (native)`: the place is said apart.
+            let message = text
+                .rfind(" at line ")
+                .map_or(text.as_str(), |at| &text[..at])
+                .to_string();
             return Err(SyntaxError {
                 line,
                 column,
@@ -295,6 +300,8 @@ struct Js {
 
 thread_local! {
     static JS: RefCell<Option<Js>> = const { RefCell::new(None) };
+    /// The program's source, for [`refine_line`].
+    static SOURCE: RefCell<String> = const { RefCell::new(String::new()) };
 }
 
 fn with_js<T>(f: impl FnOnce(&mut Js) -> T) -> Option<T> {
@@ -308,6 +315,7 @@ fn js_thread(
     to_js: mpsc::Receiver<ToJs>,
     reply: mpsc::Sender<FromJs>,
 ) {
+    SOURCE.with(|s| *s.borrow_mut() = source.clone());
     let mut ctx = Context::default();
     ctx.runtime_limits_mut()
         .set_loop_iteration_limit(LOOP_LIMIT);
@@ -491,12 +499,45 @@ fn failure(e: &JsError, path: &str, ctx: &mut Context) -> Failure {
                 .unwrap_or_default()
         );
     }
-    let line = line_in(&text, path);
+    let line = line_in(&text, path).map(|l| refine_line(l, &message, path));
     // Strip the engine's own ` at path:line:col` decoration from the first line.
     if let Some(at) = message.find(&format!(" at {path}")) {
         message.truncate(at);
     }
     Failure { line, message }
+}
+
+/// Boa places the errors its VM throws (`x is not defined`) at the start of the function
+/// they happened in, not at their line; the name the message gives is looked for from there
+/// on in the program's source (kept by the thread), and its first use is the line.
+fn refine_line(line: u32, message: &str, _path: &str) -> u32 {
+    let name: String = message
+        .split_once(": ")
+        .map_or(message, |(_, m)| m)
+        .chars()
+        .take_while(|c| c.is_alphanumeric() || *c == '_' || *c == '$' || *c == '.')
+        .collect();
+    let known = message.contains(" is not defined") || message.contains(" is not a");
+    if name.is_empty() || !known {
+        return line;
+    }
+    let name = name.rsplit('.').next().unwrap_or(&name).to_string();
+    SOURCE.with(|s| {
+        s.borrow()
+            .lines()
+            .enumerate()
+            .skip(line.saturating_sub(1) as usize)
+            .find(|(_, l)| {
+                l.match_indices(name.as_str()).any(|(at, _)| {
+                    let before = l[..at].chars().last();
+                    let after = l[at + name.len()..].chars().next();
+                    let ident =
+                        |c: Option<char>| c.is_some_and(|c| c.is_alphanumeric() || c == '_');
+                    !ident(before) && !ident(after)
+                })
+            })
+            .map_or(line, |(i, _)| i as u32 + 1)
+    })
 }
 
 /// The program's line making the current native call.

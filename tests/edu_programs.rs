@@ -1,0 +1,214 @@
+//! `droidctl run PROGRAM.js`: Sphero Edu JavaScript programs end to end, as a teacher runs
+//! them: the examples run as written, in simulated time; errors say where, before anything
+//! is sent (syntax) or with the droid stopped (exceptions); a program that never waits
+//! cannot hang droidctl (`--timeout`, Ctrl+c).
+
+use serde_json::Value;
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+#[path = "common/scratch.rs"]
+mod scratch;
+use scratch::{Scratch, json_lines, path, stderr, stdout};
+
+fn example(name: &str) -> String {
+    format!("{}/examples/edu/{name}", env!("CARGO_MANIFEST_DIR"))
+}
+
+fn summary(out: &std::process::Output) -> scratch::Obj {
+    json_lines(&stdout(out))
+        .into_iter()
+        .find(|o| o.get("done") == Some(&Value::Bool(true)))
+        .expect("a summary line")
+}
+
+fn num(o: &scratch::Obj, k: &str) -> f64 {
+    o.get(k).and_then(Value::as_f64).unwrap_or(f64::NAN)
+}
+
+#[test]
+fn the_examples_run_as_written_in_simulated_time() {
+    let dir = Scratch::new("edu", "examples");
+    // The square: four sides, back where it started.
+    let sq = example("square.js");
+    let (out, wall) = dir.run_timed(&["run", &sq, "--sim", "bolt", "--json"]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let s = summary(&out);
+    assert!(num(&s, "t_ms") >= 6000.0, "{s:?}");
+    assert!(
+        num(&s, "x_cm").abs() < 5.0 && num(&s, "y_cm").abs() < 5.0,
+        "a closed square: {s:?}"
+    );
+    assert!(wall < Duration::from_secs(20), "simulated time: {wall:?}");
+    // Pong: three hits, then exitProgram().
+    let (out, _) = dir.run_timed(&["run", &example("pong.js"), "--sim", "bolt", "--json"]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    assert_eq!(summary(&out)["collisions"], 3, "{}", stdout(&out));
+    // The matrix program: its steps name their lines.
+    let (out, _) = dir.run_timed(&["run", &example("matrix.js"), "--sim", "bolt"]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let text = stdout(&out);
+    assert!(text.contains("line 11: scrollMatrixText"), "{text}");
+    // The text takes 16 columns at 10 frames/s: the spin starts 1.6 s after it.
+    let at = |needle: &str| -> f64 {
+        let line = text.lines().find(|l| l.contains(needle)).unwrap();
+        line[1..line.find('s').unwrap()].trim().parse().unwrap()
+    };
+    let took = at("line 12: spin") - at("line 11: scrollMatrixText");
+    assert!((took - 1.6).abs() < 0.05, "{text}");
+}
+
+#[test]
+fn a_minute_long_program_takes_well_under_a_minute() {
+    let dir = Scratch::new("edu", "minute");
+    let p = dir.file(
+        "minute.js",
+        "async function startProgram() {\n  for (let i = 0; i < 6; i++) {\n    await roll(i * 60, 60, 5);\n    await delay(5);\n  }\n}\n",
+    );
+    let (out, wall) = dir.run_timed(&["run", path(&p), "--sim", "--json"]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    assert!(num(&summary(&out), "t_ms") >= 60_000.0);
+    assert!(wall < Duration::from_secs(20), "simulated time: {wall:?}");
+}
+
+#[test]
+fn a_syntax_error_is_exit_2_with_line_and_column_and_nothing_is_sent() {
+    let dir = Scratch::new("edu", "syntax");
+    let p = dir.file(
+        "bad.js",
+        "async function startProgram() {\n  await roll(0, 50, 1);\n  setMainLed({ r: 1, g: 2, b: 3 }\n}\n",
+    );
+    let out = dir.run(&["run", path(&p), "--sim", "bolt", "--json"]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    let err = stderr(&out);
+    assert!(err.contains("bad.js:4:1: SyntaxError"), "{err}");
+    assert!(err.contains("nothing was sent"), "{err}");
+    assert!(stdout(&out).is_empty(), "nothing ran: {}", stdout(&out));
+}
+
+#[test]
+fn an_exception_stops_the_droid_and_names_its_line() {
+    let dir = Scratch::new("edu", "exception");
+    let p = dir.file(
+        "oops.js",
+        "async function startProgram() {\n  setSpeed(120);\n  await delay(1);\n  undefinedCall(3);\n}\n",
+    );
+    let out = dir.run(&["run", path(&p), "--sim", "bolt", "--json"]);
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    let err = stderr(&out);
+    assert!(
+        err.contains("oops.js:4: ReferenceError: undefinedCall is not defined"),
+        "{err}"
+    );
+    assert!(err.contains("droid stopped"), "{err}");
+    // The last sample: slowing to a stop (the simulated body brakes over a few tenths).
+    let samples = json_lines(&stdout(&out));
+    let last = samples.last().expect("samples");
+    let top = samples.iter().map(|s| num(s, "speed")).fold(0.0, f64::max);
+    assert!(
+        num(last, "speed") < top / 2.0,
+        "stopping: {last:?}, top {top}"
+    );
+    // A thrown error names its line too.
+    let p = dir.file(
+        "throw.js",
+        "async function startProgram() {\n  await delay(0.2);\n  throw new Error(\"boom\");\n}\n",
+    );
+    let out = dir.run(&["run", path(&p), "--sim", "bolt"]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(
+        stderr(&out).contains("throw.js:3: Error: boom"),
+        "{}",
+        stderr(&out)
+    );
+}
+
+#[test]
+fn a_call_a_robot_does_not_have_is_an_error_naming_the_robots_it_is_on() {
+    let dir = Scratch::new("edu", "not-on");
+    let p = dir.file(
+        "m.js",
+        "async function startProgram() {\n  await delay(0.1);\n  setMatrixCharacter(\"A\", { r: 255, g: 0, b: 0 });\n}\n",
+    );
+    let out = dir.run(&["run", path(&p), "--sim", "r2d2"]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = stderr(&out);
+    assert!(
+        err.contains(
+            "m.js:3: TypeError: setMatrixCharacter() is not on R2-D2 (it is on Sphero BOLT)"
+        ),
+        "{err}"
+    );
+}
+
+#[test]
+fn a_program_that_never_waits_cannot_hang_droidctl() {
+    let dir = Scratch::new("edu", "spin");
+    let p = dir.file(
+        "busy.js",
+        "async function startProgram() {\n  setSpeed(80);\n  while (true) {}\n}\n",
+    );
+    let child = Command::new(env!("CARGO_BIN_EXE_droidctl"))
+        .args(["run", path(&p), "--sim", "bolt", "--timeout", "1"])
+        .current_dir(&dir.0)
+        .env("DROIDCTL_LOG_FILE", dir.log())
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let out = bounded(child, Duration::from_secs(60));
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    assert!(stderr(&out).contains("without waiting"), "{}", stderr(&out));
+    // A program that waits forever ends at --timeout, on the simulated clock.
+    let p = dir.file(
+        "forever.js",
+        "async function startProgram() {\n  while (true) { await delay(1); }\n}\n",
+    );
+    let (out, wall) = dir.run_timed(&["run", path(&p), "--sim", "bolt", "--timeout", "120"]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(stderr(&out).contains("--timeout"), "{}", stderr(&out));
+    assert!(wall < Duration::from_secs(30), "{wall:?}");
+}
+
+#[cfg(unix)]
+#[test]
+fn ctrl_c_ends_a_program_that_never_waits() {
+    let dir = Scratch::new("edu", "ctrl-c");
+    let p = dir.file(
+        "busy.js",
+        "async function startProgram() {\n  setSpeed(80);\n  while (true) {}\n}\n",
+    );
+    let child = Command::new(env!("CARGO_BIN_EXE_droidctl"))
+        .args(["run", path(&p), "--sim", "bolt"])
+        .current_dir(&dir.0)
+        .env("DROIDCTL_LOG_FILE", dir.log())
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(700));
+    let pid = child.id().to_string();
+    let sent = Command::new("kill").args(["-INT", &pid]).status().unwrap();
+    assert!(sent.success());
+    let out = bounded(child, Duration::from_secs(60));
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    assert!(stderr(&out).contains("SIGINT"), "{}", stderr(&out));
+}
+
+/// Wait for `child`, failing (and killing it) past `limit`.
+fn bounded(mut child: std::process::Child, limit: Duration) -> std::process::Output {
+    let start = Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if start.elapsed() > limit {
+            let _ = child.kill();
+            panic!(
+                "droidctl hung: {}",
+                stderr(&child.wait_with_output().unwrap())
+            );
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    child.wait_with_output().unwrap()
+}
