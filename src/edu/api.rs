@@ -87,6 +87,8 @@ pub struct Effect {
     pub wait: Option<Wait>,
     /// `exitProgram()`.
     pub exit: bool,
+    /// The target speed is 0 once the wait is over (`roll` stops, as spherov2's `stop_roll`).
+    pub stops: bool,
 }
 
 /// Steps of `spin` and `fade` (spherov2 loops as fast as its link goes; 20 a second keeps
@@ -170,6 +172,11 @@ impl Driver {
         }
     }
 
+    /// A wait that stopped the robot is over: the target speed is 0 ([`Effect::stops`]).
+    pub fn stopped(&mut self) {
+        self.speed = 0;
+    }
+
     fn rolling(&self) -> Act {
         Driver::drive(self.heading, self.speed)
     }
@@ -218,6 +225,7 @@ impl Driver {
                     self.heading = (self.heading + 180).rem_euclid(360);
                 }
                 e.now.push(self.rolling());
+                e.stops = true;
                 let stop = vec![Driver::drive(self.heading, 0)];
                 e.wait = Some(if name == "roll" {
                     Wait::Timeline {

@@ -289,7 +289,7 @@ struct Js {
     path: String,
     ops: Vec<Op>,
     next_promise: u64,
-    pending: HashMap<u64, JsFunction>,
+    pending: HashMap<u64, (JsFunction, bool)>,
     readings: Readings,
     handlers: Vec<(&'static str, JsFunction)>,
     /// Promises of `startProgram` and of event handlers: a rejection fails the program.
@@ -409,7 +409,15 @@ fn start(ctx: &mut Context, source: &str, path: &str) -> JsResult<()> {
 
 fn turn(ctx: &mut Context, fired: Vec<u64>, events: Vec<Event>) -> JsResult<()> {
     for id in fired {
-        if let Some(resolve) = with_js(|js| js.pending.remove(&id)).flatten() {
+        let resolve = with_js(|js| {
+            let (f, stops) = js.pending.remove(&id)?;
+            if stops {
+                js.driver.stopped();
+            }
+            Some(f)
+        })
+        .flatten();
+        if let Some(resolve) = resolve {
             resolve.call(&JsValue::undefined(), &[], ctx)?;
         }
     }
@@ -608,7 +616,7 @@ fn native_call(_this: &JsValue, args: &[JsValue], ctx: &mut Context) -> JsResult
     with_js(|js| {
         let id = js.next_promise;
         js.next_promise += 1;
-        js.pending.insert(id, resolvers.resolve);
+        js.pending.insert(id, (resolvers.resolve, effect.stops));
         js.ops.push(Op {
             line,
             text,

@@ -1,0 +1,88 @@
+#!/usr/bin/env python3
+"""The Sphero Edu programs of tests/fixtures/edu/*.js written again in Python, run by
+spherov2.py's own SpheroEduAPI against `droidctl serve --sim bolt` (tests/edu_spherov2.rs
+compares where the droid went, its lights and its matrix with droidctl's runs of the
+JavaScript).
+
+Usage: edu_judge.py PORT NAME PROGRAM    (PROGRAM: square, pong, spin, matrix)
+Prints one JSON object: the location spherov2 read at the end of the program.
+"""
+
+import json
+import sys
+import threading
+import time
+
+from spherov2.sphero_edu import EventType, SpheroEduAPI
+from spherov2.types import Color
+
+from sphero_edu import find_toy
+
+
+def square(api):
+    colours = [Color(255, 0, 0), Color(0, 255, 0), Color(0, 0, 255), Color(255, 255, 0)]
+    for side in range(4):
+        api.set_main_led(colours[side])
+        api.roll(side * 90, 80, 1)
+        time.sleep(0.5)
+    api.set_main_led(Color(255, 255, 255))
+
+
+def pong(api):
+    done = threading.Event()
+    hits = [0]
+
+    def on_collision(api):
+        hits[0] += 1
+        api.stop_roll()
+        api.set_main_led(Color(255, 0, 0))
+        if hits[0] >= 3:
+            done.set()
+            return
+        time.sleep(0.5)
+        api.set_main_led(Color(0, 255, 0))
+        api.set_heading((api.get_heading() + 180) % 360)
+        api.set_speed(100)
+
+    api.register_event(EventType.on_collision, on_collision)
+    api.set_main_led(Color(0, 255, 0))
+    api.set_heading(0)
+    api.set_speed(100)
+    done.wait(60)
+
+
+def spin(api):
+    api.set_main_led(Color(0, 0, 255))
+    api.roll(0, 60, 1)
+    api.spin(450, 1.5)
+    api.roll(api.get_heading(), 60, 1)
+    api.spin(-90, 1)
+    api.roll(api.get_heading(), 60, 1)
+
+
+def matrix(api):
+    api.set_matrix_character("A", Color(255, 0, 0))
+    time.sleep(1)
+    api.clear_matrix()
+    api.set_main_led(Color(0, 0, 0))
+    api.set_matrix_line(0, 0, 7, 0, Color(0, 0, 255))
+    api.set_matrix_fill(2, 2, 5, 5, Color(0, 255, 0))
+    api.set_matrix_pixel(7, 7, Color(255, 255, 255))
+    api.set_front_led(Color(255, 0, 255))
+    api.set_back_led(Color(0, 255, 255))
+    time.sleep(1)
+
+
+def main():
+    port, name, program = sys.argv[1:4]
+    toy = find_toy(["tcp", port, name])
+    with SpheroEduAPI(toy) as api:
+        time.sleep(0.5)
+        globals()[program](api)
+        time.sleep(1.0)
+        location = api.get_location()
+    print(json.dumps({"location": location}))
+
+
+if __name__ == "__main__":
+    main()
