@@ -31,6 +31,65 @@ pub struct DriveArgs {
     /// Write every telemetry sample to FILE as JSON lines (the objects `run --json` prints).
     #[arg(long, value_name = "FILE")]
     pub jsonl: Option<std::path::PathBuf>,
+    /// Run a Sphero Edu JavaScript program on the droid (every droid of a fleet) with the
+    /// screen live; the emergency stop ends it and the motion (see docs/edu-programs.md).
+    #[arg(long, value_name = "PROGRAM.js")]
+    pub program: Option<std::path::PathBuf>,
+}
+
+/// `--program FILE`, read and checked before anything connects (a syntax error is exit 2).
+fn program(args: &DriveArgs) -> Result<Option<crate::edu::Program>, CliError> {
+    let Some(path) = &args.program else {
+        return Ok(None);
+    };
+    let shown = path.display().to_string();
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| CliError::usage(format!("cannot read program {shown}: {e}")))?;
+    crate::edu::Program::new(text, shown.clone())
+        .map(Some)
+        .map_err(|e| {
+            CliError::usage(format!(
+                "{shown}:{}:{}: {}\nthe program has an error; nothing was sent",
+                e.line, e.column, e.message
+            ))
+        })
+}
+
+/// The program on every droid of the fleet, as tasks beside the app: its calls and warnings
+/// go to the log file (the screen is the app's); each ends with its droid's result.
+fn start_programs(
+    fleet: &Fleet,
+    program: Option<crate::edu::Program>,
+) -> Vec<tokio::task::JoinHandle<Result<(), String>>> {
+    let Some(program) = program else {
+        return Vec::new();
+    };
+    let program = std::sync::Arc::new(program);
+    fleet
+        .members()
+        .iter()
+        .map(|m| {
+            let (session, model, name) = (m.session.clone(), m.model, m.name.clone());
+            let program = program.clone();
+            tokio::spawn(async move {
+                let who = name.clone();
+                let emit: crate::mission::Emit = std::sync::Arc::new(move |e| match e {
+                    crate::mission::MissionEvent::Step { t_ms, line, text } => {
+                        tracing::info!(droid = %who, t_ms, line, %text, "program")
+                    }
+                    crate::mission::MissionEvent::Warning { line, message, .. } => {
+                        tracing::warn!(droid = %who, ?line, %message, "program")
+                    }
+                    crate::mission::MissionEvent::Sample(_) => {}
+                });
+                let opts = crate::edu::ProgramOptions::default();
+                let start = tokio::time::Instant::now();
+                let r = crate::edu::run(&session, model, &program, opts, emit, start).await;
+                tracing::info!(droid = %name, ?r, "program ended");
+                r.map(|_| ()).map_err(|e| format!("{name}: {e}"))
+            })
+        })
+        .collect()
 }
 
 /// The simulated models asked for (`--sim r2d2,bb8`), none without `--sim`.
@@ -75,8 +134,9 @@ pub fn run(args: DriveArgs) -> Result<i32, CliError> {
         ))
     })?;
     let sims = sim_models(&args.sim)?;
+    let program = program(&args)?;
     if super::fleet::is_fleet(sims.len(), &args.ble) {
-        return run_fleet(args, sims, config);
+        return run_fleet(args, sims, config, program);
     }
     let model = sims.first().copied();
     let recorder = args.record.open()?;
@@ -99,7 +159,7 @@ pub fn run(args: DriveArgs) -> Result<i32, CliError> {
                     // Several marked in the picker: drive them all (the files name each
                     // droid on every row).
                     let samples = sample_files(&args, true)?;
-                    return drive_several(c, config, log_path, recorder, samples).await;
+                    return drive_several(c, config, log_path, recorder, samples, program).await;
                 }
                 (c.link, c.model, c.name)
             }
@@ -123,7 +183,7 @@ pub fn run(args: DriveArgs) -> Result<i32, CliError> {
             link,
             origin: origin.into(),
         }]);
-        let result = drive(fleet, config, log_path, samples).await;
+        let result = drive(fleet, config, log_path, samples, program).await;
         super::replay::finish(recorder.as_ref());
         result
     })
@@ -149,14 +209,19 @@ fn sample_files(
 }
 
 /// Several droids: find them all, start a session each, and run the app on the fleet.
-fn run_fleet(args: DriveArgs, sims: Vec<Model>, config: Config) -> Result<i32, CliError> {
+fn run_fleet(
+    args: DriveArgs,
+    sims: Vec<Model>,
+    config: Config,
+    program: Option<crate::edu::Program>,
+) -> Result<i32, CliError> {
     let recorder = args.record.open()?;
     let samples = sample_files(&args, true)?;
     let log_path = crate::logging::init().ok();
     let rt = super::realtime_runtime()?;
     rt.block_on(async move {
         let found = super::fleet::find_all(&sims, &args.ble, &config).await?;
-        drive_found(found, config, log_path, recorder, samples).await
+        drive_found(found, config, log_path, recorder, samples, program).await
     })
 }
 
@@ -167,6 +232,7 @@ async fn drive_several(
     log_path: Option<std::path::PathBuf>,
     recorder: Option<crate::capture::record::Recorder>,
     samples: Option<crate::mission::csv::SampleFiles>,
+    program: Option<crate::edu::Program>,
 ) -> Result<i32, CliError> {
     let super::connect::Connected {
         link,
@@ -184,7 +250,7 @@ async fn drive_several(
             origin: "Bluetooth".into(),
         })
         .collect();
-    drive_found(found, config, log_path, recorder, samples).await
+    drive_found(found, config, log_path, recorder, samples, program).await
 }
 
 /// Drive the droids found, recording them all into one capture when asked.
@@ -194,6 +260,7 @@ async fn drive_found(
     log_path: Option<std::path::PathBuf>,
     recorder: Option<crate::capture::record::Recorder>,
     samples: Option<crate::mission::csv::SampleFiles>,
+    program: Option<crate::edu::Program>,
 ) -> Result<i32, CliError> {
     super::fleet::record_all(recorder.as_ref(), &mut found);
     let specs = found
@@ -203,7 +270,7 @@ async fn drive_found(
             f.into_spec(cfg)
         })
         .collect();
-    let result = drive(Fleet::start(specs), config, log_path, samples).await;
+    let result = drive(Fleet::start(specs), config, log_path, samples, program).await;
     super::replay::finish(recorder.as_ref());
     result
 }
@@ -213,6 +280,7 @@ async fn drive(
     config: Config,
     log_path: Option<std::path::PathBuf>,
     samples: Option<crate::mission::csv::SampleFiles>,
+    program: Option<crate::edu::Program>,
 ) -> Result<i32, CliError> {
     let Some(first) = fleet.member(0) else {
         return Err(CliError::usage("no droid to drive"));
@@ -269,7 +337,17 @@ async fn drive(
         let mut terminal = Terminal::new(backend)?;
         run::run_fleet(&mut terminal, app_fleet, opts, inputs, crate::ui::draw).await
     });
+    let programs = start_programs(&fleet, program);
     let result = app.await;
+    // A program still running ends with the app (the stops below stop its motion).
+    let mut program_results = Vec::new();
+    for p in programs {
+        if p.is_finished() {
+            program_results.push(p.await.unwrap_or_else(|e| Err(e.to_string())));
+        } else {
+            p.abort();
+        }
+    }
     // Every droid: its app stop, then sleep when configured; after a crash there is no
     // controller to ask, and each session stops at the last heading it wrote. The sessions'
     // own budget (1 s of final writes, 1.5 s to close) fits inside the fleet's 3 s.
@@ -286,6 +364,12 @@ async fn drive(
     reader.abort();
     signals.abort();
     guard.restore();
+    for r in program_results {
+        match r {
+            Ok(()) => eprintln!("droidctl: the program ended"),
+            Err(e) => eprintln!("droidctl: the program: {e}"),
+        }
+    }
     match result {
         Ok(Ok(exit)) => {
             if let ExitReason::Signal(s) = &exit.reason {

@@ -193,6 +193,8 @@ impl Player {
         let far = Instant::now() + Duration::from_secs(86_400 * 365);
         let mut heartbeat = tokio::time::interval(opts.mission.heartbeat);
         heartbeat.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
+        let mut estops = self.session.watch_estops();
+        estops.mark_unchanged();
         let mut listening: Vec<&'static str> = Vec::new();
         let mut first = true;
         loop {
@@ -200,9 +202,14 @@ impl Player {
                 first = false;
                 let fired = std::mem::take(&mut self.fired);
                 let events = std::mem::take(&mut self.events);
-                let out = engine
-                    .turn(fired, events, self.readings(), opts.no_yield)
-                    .await?;
+                let readings = self.readings();
+                // The emergency stop ends a program even while it computes.
+                let out = tokio::select! {
+                    out = engine.turn(fired, events, readings, opts.no_yield) => out?,
+                    _ = estops.changed() => {
+                        return Err(Failure { line: None, message: "emergency stop".into() });
+                    }
+                };
                 listening = out.listening;
                 for op in out.ops {
                     self.apply(op).await;
@@ -227,6 +234,12 @@ impl Player {
                             "--timeout: the program ran {} s",
                             opts.timeout.unwrap_or_default().as_secs_f64()
                         ),
+                    });
+                }
+                _ = estops.changed() => {
+                    return Err(Failure {
+                        line: None,
+                        message: "emergency stop".into(),
                     });
                 }
                 _ = heartbeat.tick() => {

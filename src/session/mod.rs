@@ -236,6 +236,9 @@ pub(crate) struct Shared {
     /// An emergency stop to write at once, ahead of pacing ([`SessionHandle::emergency_stop`]).
     pub urgent: Mutex<Option<Command>>,
     pub urgent_wake: Notify,
+    /// Emergency stops so far: whatever drives the droid besides the operator (a Sphero Edu
+    /// program, `crate::edu`) watches it and ends.
+    pub estops: watch::Sender<u64>,
 }
 
 /// A handle to a running session. Cloning is cheap.
@@ -263,6 +266,7 @@ pub fn start(link: Box<dyn Link>, config: SessionConfig) -> SessionHandle {
         setup: Mutex::new(None),
         urgent: Mutex::new(None),
         urgent_wake: Notify::new(),
+        estops: watch::channel(0).0,
     });
     let (state_tx, state_rx) = watch::channel(LinkState::Connecting);
     let (events, _) = broadcast::channel(config.event_capacity.max(16));
@@ -379,6 +383,12 @@ impl SessionHandle {
         self.set(Slot::Drive, stop.clone());
         *lock(&self.shared.urgent) = Some(stop);
         self.shared.urgent_wake.notify_one();
+        self.shared.estops.send_modify(|n| *n += 1);
+    }
+
+    /// The count of emergency stops, changing with each ([`SessionHandle::emergency_stop`]).
+    pub fn watch_estops(&self) -> watch::Receiver<u64> {
+        self.shared.estops.subscribe()
     }
 
     /// Write the connect setup again, ahead of everything queued: a droid woken from sleep
