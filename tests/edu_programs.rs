@@ -212,3 +212,14 @@ fn bounded(mut child: std::process::Child, limit: Duration) -> std::process::Out
     }
     child.wait_with_output().unwrap()
 }
+
+#[test]
+fn the_docs_list_every_call_with_its_robots() {
+    let docs = std::fs::read_to_string(format!("{}/docs/edu-programs.md", env!("CARGO_MANIFEST_DIR")))
+        .expect("docs/edu-programs.md");
+    let table = droidctl::edu::calls::markdown();
+    assert!(
+        docs.contains(&table),
+        "docs/edu-programs.md must hold the table of calls as src/edu/calls.rs has it:\n{table}"
+    );
+}

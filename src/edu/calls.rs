@@ -74,6 +74,8 @@ impl Robots {
             .collect();
         if all.len() == Model::ALL.len() {
             "all".into()
+        } else if all.len() == Model::ALL.len() - 1 && !self.applies(Model::Robi42) {
+            "all but Robi 42".into()
         } else {
             all.join(", ")
         }
@@ -492,3 +494,4 @@ mod tests {
         assert_eq!(Robots::All.names(), "all");
     }
 }
+
