@@ -12,8 +12,10 @@
 //! Windows and macOS cross checks build it with no C compiler (rquickjs-sys compiles QuickJS's
 //! C in its build script, which fails there), and its promises and job queue are plain Rust
 //! to drive from droidctl's clock. Built without default features (no Temporal, no ICU data)
-//! it costs about a minute of a cold release build on two cores and ~5 MB of binary; what it
-//! lacks next to QuickJS (speed) matters little to programs that mostly wait for the robot.
+//! it is still the biggest crate in the tree: a cold release build of `boa_engine` alone took
+//! 7.5 min on the shared two-core development machine (other builds running; measured while
+//! choosing, issue 29). What it lacks next to QuickJS (speed) matters little to programs that
+//! mostly wait for the robot.
 //!
 //! Layering: above missions and fleets (a program reuses a mission's telemetry, samples and
 //! summary), below the app and the CLI.
