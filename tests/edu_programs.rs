@@ -215,8 +215,11 @@ fn bounded(mut child: std::process::Child, limit: Duration) -> std::process::Out
 
 #[test]
 fn the_docs_list_every_call_with_its_robots() {
-    let docs = std::fs::read_to_string(format!("{}/docs/edu-programs.md", env!("CARGO_MANIFEST_DIR")))
-        .expect("docs/edu-programs.md");
+    let docs = std::fs::read_to_string(format!(
+        "{}/docs/edu-programs.md",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .expect("docs/edu-programs.md");
     let table = droidctl::edu::calls::markdown();
     assert!(
         docs.contains(&table),
