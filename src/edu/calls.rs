@@ -32,8 +32,8 @@ pub enum Robots {
     Light,
     /// RVR's colour sensor.
     ColorSensor,
-    /// Robots that roll on two motors droidctl can drive raw: BOLT, Mini, RVR, Ollie, SPRK+,
-    /// BB-8 (spherov2's `raw_motor`; not R2's legs, not Robi).
+    /// Robots whose two motors droidctl drives raw: BOLT, Mini, RVR (spherov2's `raw_motor`
+    /// drives the API v1 robots' too; droidctl's v1 family has no raw motor command yet).
     RawMotors,
 }
 
@@ -53,15 +53,7 @@ impl Robots {
             Robots::Compass => m.has_compass(),
             Robots::Light => matches!(m, Model::Bolt | Model::Rvr),
             Robots::ColorSensor => m.has_color_sensor(),
-            Robots::RawMotors => matches!(
-                m,
-                Model::Bolt
-                    | Model::Mini
-                    | Model::Rvr
-                    | Model::Ollie
-                    | Model::SprkPlus
-                    | Model::BB8
-            ),
+            Robots::RawMotors => matches!(m, Model::Bolt | Model::Mini | Model::Rvr),
         }
     }
 
