@@ -226,3 +226,71 @@ fn the_docs_list_every_call_with_its_robots() {
         "docs/edu-programs.md must hold the table of calls as src/edu/calls.rs has it:\n{table}"
     );
 }
+
+/// The sensors read what the simulated droid streams, in Sphero Edu's shapes and units; the
+/// program throws (exit 1) on anything else.
+const SENSORS: &str = r#"function check(ok, what) { if (!ok) throw new Error(what); }
+async function startProgram() {
+  check(getSpeed() === 0 && getHeading() === 0, "targets start at 0");
+  await roll(90, 100, 2);
+  await delay(0.5);
+  const at = getLocation();
+  check(at !== null && at.x > 30 && Math.abs(at.y) < 5, "location east: " + JSON.stringify(at));
+  check(getDistance() > 30, "distance: " + getDistance());
+  check(getHeading() === 90 && getSpeed() === 0, "targets after roll: " + getHeading() + " " + getSpeed());
+  const o = getOrientation();
+  check(o !== null && typeof o.yaw === "number", "orientation: " + JSON.stringify(o));
+  const a = getAcceleration();
+  check(a !== null && Math.abs(a.z) > 0.5, "acceleration: " + JSON.stringify(a));
+  check(getGyroscope() !== null && getVelocity() !== null, "gyro and velocity");
+  check(getElapsedTime() >= 2.5, "elapsed: " + getElapsedTime());
+  setMainLed({ r: 10, g: 20, b: 30 });
+  const m = getMainLed();
+  check(m.r === 10 && m.g === 20 && m.b === 30, "main led: " + JSON.stringify(m));
+  setSpeed(60);
+  await delay(1);
+  const v = getVelocity();
+  check(Math.hypot(v.x, v.y) > 10, "velocity while rolling: " + JSON.stringify(v));
+  stopRoll();
+}
+"#;
+
+#[test]
+fn sensors_read_what_the_droid_streams() {
+    let dir = Scratch::new("edu", "sensors");
+    let p = dir.file("sensors.js", SENSORS);
+    let out = dir.run(&["run", path(&p), "--sim", "bolt"]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+}
+
+/// R2-D2's own calls: the dome, stances waited for, its lights, a sound, speech printed.
+const R2: &str = r#"async function startProgram() {
+  setDomePosition(45);
+  await setStance(Stance.Bipod);
+  await setStance(Stance.Tripod);
+  setHoloProjectorLed(255);
+  setLogicDisplayLeds(128);
+  playSound("1915");
+  speak("beep boop");
+  await roll(0, 80, 1);
+}
+"#;
+
+#[test]
+fn r2d2s_calls_run_and_speech_is_printed() {
+    let dir = Scratch::new("edu", "r2");
+    let p = dir.file("r2.js", R2);
+    let out = dir.run(&["run", path(&p), "--sim", "r2d2"]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let text = stdout(&out);
+    assert!(text.contains("R2-D2 says \"beep boop\""), "{text}");
+    // The stance change is waited for: the next line comes after it.
+    let at = |needle: &str| -> f64 {
+        let line = text.lines().find(|l| l.contains(needle)).unwrap();
+        line[1..line.find('s').unwrap()].trim().parse().unwrap()
+    };
+    assert!(
+        at("line 4: setStance") - at("line 3: setStance") > 0.5,
+        "{text}"
+    );
+}
