@@ -294,3 +294,19 @@ fn r2d2s_calls_run_and_speech_is_printed() {
         "{text}"
     );
 }
+
+#[test]
+fn a_runaway_loop_of_calls_is_an_error_not_unbounded_memory() {
+    let dir = Scratch::new("edu", "many");
+    let p = dir.file(
+        "many.js",
+        "async function startProgram() {\n  for (let i = 0; i < 100000; i++) { setMainLed({ r: i % 256, g: 0, b: 0 }); }\n}\n",
+    );
+    let out = dir.run(&["run", path(&p), "--sim", "bolt"]);
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("many.js:2: RangeError: more than 1000 calls without waiting"),
+        "{}",
+        stderr(&out)
+    );
+}

@@ -46,7 +46,8 @@ pub enum Command {
     /// Decode, encode and list packets: Sphero API v2 and v1, Robi 42 RSRCP.
     #[command(subcommand)]
     Packet(packet::PacketCmd),
-    /// Run a mission script against a droid (`--sim` for the simulator, in simulated time).
+    /// Run a mission script or a Sphero Edu JavaScript program (`PROGRAM.js`) against a droid
+    /// (`--sim` for the simulator, in simulated time).
     Run(run::RunArgs),
     /// Play a capture back in the app (droidctl's `--record` files and btsnoop logs); `--json`
     /// prints its telemetry samples instead.

@@ -17,7 +17,8 @@ use std::time::Duration;
 #[derive(Debug, Args)]
 pub struct RunArgs {
     /// The mission script (see README, "Mission scripts"; `@NAME` lines and `together { }`
-    /// blocks for several droids).
+    /// blocks for several droids), or a Sphero Edu JavaScript program (`.js`, see
+    /// docs/edu-programs.md).
     #[arg(value_name = "SCRIPT")]
     pub script: Option<PathBuf>,
     /// Run against a simulated droid: r2d2 (default), r2q5, bb9e, bb8, sprk, ollie or robi. The mission runs in

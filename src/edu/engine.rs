@@ -30,6 +30,10 @@ const PRELUDE_PATH: &str = "droidctl-edu-prelude.js";
 /// A program's loops may turn this often in one function call before it throws: the
 /// engine thread of a run that was abandoned (Ctrl+c on `while (true) {}`) ends by itself.
 const LOOP_LIMIT: u64 = 50_000_000;
+/// Calls a program may make in one turn (between two waits), and promises it may leave
+/// waiting at once: a runaway loop of calls is an error, not unbounded memory.
+const MAX_CALLS_PER_TURN: usize = 1_000;
+const MAX_PENDING: usize = 1_000;
 
 /// A syntax error: where, and what.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -595,6 +599,15 @@ fn native_call(_this: &JsValue, args: &[JsValue], ctx: &mut Context) -> JsResult
         return Err(JsNativeError::typ().with_message(why).into());
     }
     let line = user_line(ctx, &path);
+    let (calls, pending) = with_js(|js| (js.ops.len(), js.pending.len())).unwrap_or_default();
+    if calls >= MAX_CALLS_PER_TURN || pending >= MAX_PENDING {
+        return Err(JsNativeError::range()
+            .with_message(format!(
+                "more than {MAX_CALLS_PER_TURN} calls without waiting, or {MAX_PENDING} \
+                 waiting at once: is an `await` missing?"
+            ))
+            .into());
+    }
     let effect = with_js(|js| js.driver.call(&name, &rest))
         .unwrap_or_else(|| Err("no program".into()))
         .map_err(|m| JsNativeError::range().with_message(m))?;
