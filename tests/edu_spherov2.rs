@@ -261,7 +261,8 @@ fn pong_turns_on_each_hit_as_with_spherov2() {
 
 #[test]
 fn a_spin_moves_the_heading_as_spherov2_does() {
-    // The spins end on network timing in spherov2 (a turn may lag its last step): a little more room.
+    // Three rolls in a row: each of spherov2's runs a few hundredths of a second longer in real
+    // time (its stop goes out after its sleep and the link's latency), ~2 cm a roll.
     judge("spin", 8.0);
 }
 
