@@ -9,6 +9,7 @@ pub mod connect;
 pub mod drive;
 pub mod fleet;
 mod fleet_run;
+pub mod models;
 pub mod packet;
 pub mod plot;
 pub mod replay;

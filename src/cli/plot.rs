@@ -27,7 +27,7 @@ pub struct PlotArgs {
     #[arg(long, default_value_t = 100, value_name = "MS", value_parser = clap::value_parser!(u64).range(1..=60_000))]
     pub interval: u64,
     /// For a capture that does not name its droid: the model.
-    #[arg(long, value_name = "MODEL")]
+    #[arg(long, value_name = "MODEL", value_parser = super::models::ModelNames::one())]
     pub model: Option<String>,
 }
 
@@ -64,10 +64,7 @@ pub fn tracks(
         return Ok(tracks);
     }
     let model = match &args.model {
-        Some(m) => Some(
-            crate::model::Model::from_id(m)
-                .ok_or_else(|| CliError::usage(format!("unknown model {m:?}")))?,
-        ),
+        Some(m) => Some(crate::model::Model::parse_id(m).map_err(CliError::usage)?),
         None => None,
     };
     let opts = read::Options {

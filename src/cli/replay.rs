@@ -60,8 +60,8 @@ pub struct ReplayArgs {
     #[arg(long, default_value_t = 100, value_name = "MS", value_parser = clap::value_parser!(u64).range(1..=60_000))]
     pub interval: u64,
     /// The droid model, for a capture that does not name it (a btsnoop log names only the
-    /// protocol family): r2d2, r2q5, bb9e, bb8, sprk, ollie or robi.
-    #[arg(long, value_name = "MODEL")]
+    /// protocol family; without it R2-D2, BB-8 or Robi 42 by family).
+    #[arg(long, value_name = "MODEL", value_parser = super::models::ModelNames::one())]
     pub model: Option<String>,
     /// For a btsnoop log that starts after the GATT discovery: the ATT handle(s) of the
     /// droid's characteristics (decimal or 0x hex; repeat for several).
@@ -104,8 +104,7 @@ pub fn checked_model(
     crate::capture::replay::validate(capture)
         .map_err(|e| CliError::usage(format!("{name}: {e}")))?;
     let model = match model {
-        Some(m) => crate::model::Model::from_id(m)
-            .ok_or_else(|| CliError::usage(format!("unknown model {m:?}")))?,
+        Some(m) => crate::model::Model::parse_id(m).map_err(CliError::usage)?,
         None => match (capture.header.model, capture.family()) {
             (Some(m), _) => m,
             (None, Some(f)) => crate::family::for_protocol(f).representative(),

@@ -20,9 +20,10 @@ pub struct RunArgs {
     /// blocks for several droids).
     #[arg(value_name = "SCRIPT")]
     pub script: Option<PathBuf>,
-    /// Run against a simulated droid: r2d2 (default), r2q5, bb9e, bb8, sprk, ollie or robi. The mission runs in
-    /// simulated time. Several share one room: --sim r2d2,bb8,robi.
-    #[arg(long, num_args = 0..=1, default_missing_value = "r2d2", value_name = "MODEL[,MODEL…]")]
+    /// Run against a simulated droid (r2d2 without a MODEL); the mission runs in simulated
+    /// time. Several share one room: --sim r2d2,bb8,robi.
+    #[arg(long, num_args = 0..=1, default_missing_value = "r2d2", value_name = "MODEL[,MODEL…]",
+          value_parser = super::models::ModelNames::list_or_other())]
     pub sim: Option<String>,
     /// One JSON object per telemetry sample, then a summary object.
     #[arg(long)]
@@ -61,10 +62,9 @@ fn resolve(args: &RunArgs) -> Result<(PathBuf, Vec<Model>), CliError> {
                 vec![Model::R2D2]
             }
             None => {
-                return Err(CliError::usage(format!(
-                    "unknown simulated model {m:?}: use one of {}",
-                    crate::sim::simulated_ids().join(", ")
-                )));
+                return Err(CliError::usage(
+                    Model::parse_id(m).err().unwrap_or_default(),
+                ));
             }
         },
     };
