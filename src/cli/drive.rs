@@ -142,9 +142,9 @@ fn sample_files(
         return Ok(None);
     }
     let files = if fleet {
-        SampleFiles::create_for_fleet(csv, jsonl)
+        SampleFiles::create_for_fleet(csv, jsonl, args.record.force)
     } else {
-        SampleFiles::create(csv, jsonl)
+        SampleFiles::create(csv, jsonl, args.record.force)
     };
     files.map(Some).map_err(CliError::usage)
 }

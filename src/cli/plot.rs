@@ -16,6 +16,10 @@ pub struct PlotArgs {
     /// with `.png`.
     #[arg(short, long = "out", value_name = "PATH")]
     pub out: Vec<PathBuf>,
+    /// Replace the pictures when they exist (without it an existing file is kept and nothing
+    /// is drawn).
+    #[arg(long)]
+    pub force: bool,
     /// Channels plotted against time, comma separated (e.g. `speed,yaw,gyro_z`; see README
     /// for the names). Default: speed and yaw, Robi's wheels on Robi 42.
     #[arg(long, value_delimiter = ',', value_name = "NAMES")]
@@ -82,6 +86,7 @@ pub fn tracks(
                 file: file.clone(),
                 json: false,
                 csv: None,
+                force: false,
                 interval: args.interval,
                 model: args.model.clone(),
                 handle: Vec::new(),
@@ -187,6 +192,7 @@ pub fn run(args: PlotArgs) -> Result<i32, CliError> {
                 o.display()
             )));
         }
+        crate::output::check(o, args.force).map_err(CliError::usage)?;
     }
     let tracks = tracks(&args, &channels)?;
     if tracks.samples() == 0 {
@@ -210,16 +216,16 @@ pub fn run(args: PlotArgs) -> Result<i32, CliError> {
     for o in &outs {
         let svg = o.extension().is_some_and(|e| e.eq_ignore_ascii_case("svg"));
         let written = if svg {
-            crate::plot::svg(&run, size)
-                .and_then(|t| std::fs::write(o, t).map_err(|e| e.to_string()))
+            crate::plot::svg(&run, size).and_then(|t| {
+                crate::output::create(o, args.force)
+                    .and_then(|mut f| f.write_all(t.as_bytes()).map_err(|e| e.to_string()))
+            })
         } else {
-            std::fs::File::create(o)
-                .map_err(|e| e.to_string())
-                .and_then(|f| {
-                    let mut w = std::io::BufWriter::new(f);
-                    crate::plot::png(&run, size, &mut w)?;
-                    w.flush().map_err(|e| e.to_string())
-                })
+            crate::output::create(o, args.force).and_then(|f| {
+                let mut w = std::io::BufWriter::new(f);
+                crate::plot::png(&run, size, &mut w)?;
+                w.flush().map_err(|e| e.to_string())
+            })
         };
         written.map_err(|e| CliError::failure(format!("cannot write {}: {e}", o.display())))?;
         let _ = writeln!(std::io::stderr(), "droidctl: wrote {}", o.display());

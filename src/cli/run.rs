@@ -96,9 +96,10 @@ pub fn run(args: RunArgs) -> Result<i32, CliError> {
     let recorder = args.record.open()?;
     let recorder = recorder.as_ref();
     let files = match &args.csv {
-        Some(p) => {
-            Some(crate::mission::csv::SampleFiles::create(Some(p), None).map_err(CliError::usage)?)
-        }
+        Some(p) => Some(
+            crate::mission::csv::SampleFiles::create(Some(p), None, args.record.force)
+                .map_err(CliError::usage)?,
+        ),
         None => None,
     };
     let out = Arc::new(RunOutput::new(files));
