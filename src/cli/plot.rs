@@ -109,8 +109,8 @@ pub fn tracks(
             failed.map_or(Ok(()), |e| Err(ReadError::Bad(e)))
         }
         None => Err(ReadError::Bad(format!(
-            "{name} is neither a run's JSON output (`run --json`, `replay --json`) nor a \
-             capture (droidctl's or a btsnoop log)"
+            "{name} is neither a run's JSON output nor a capture: {}",
+            crate::plot::read::READS
         ))),
     };
     match r {
