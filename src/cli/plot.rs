@@ -20,7 +20,7 @@ pub struct PlotArgs {
     /// is drawn).
     #[arg(long)]
     pub force: bool,
-    /// Channels plotted against time, comma separated (e.g. `speed,yaw,gyro_z`; see README
+    /// Channels plotted against time, comma separated (e.g. `speed,yaw,gyro_z`; see docs/monitoring.md
     /// for the names). Default: speed and yaw, Robi's wheels on Robi 42.
     #[arg(long, value_delimiter = ',', value_name = "NAMES")]
     pub channels: Vec<String>,

@@ -16,7 +16,7 @@ use std::time::Duration;
 
 #[derive(Debug, Args)]
 pub struct RunArgs {
-    /// The mission script (see README, "Mission scripts"; `@NAME` lines and `together { }`
+    /// The mission script (see docs/missions.md; `@NAME` lines and `together { }`
     /// blocks for several droids).
     #[arg(value_name = "SCRIPT")]
     pub script: Option<PathBuf>,
@@ -35,7 +35,7 @@ pub struct RunArgs {
     pub interval: u64,
     #[command(flatten)]
     pub record: super::replay::RecordArgs,
-    /// Also write every sample to FILE as CSV (columns named with units; see README; a fleet's
+    /// Also write every sample to FILE as CSV (columns named with units; see docs/monitoring.md; a fleet's
     /// rows start with the droid).
     #[arg(long, value_name = "FILE")]
     pub csv: Option<PathBuf>,

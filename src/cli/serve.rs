@@ -41,7 +41,7 @@ pub struct ServeArgs {
     #[arg(long, value_name = "N", default_value_t = 16, value_parser = clap::value_parser!(u16).range(1..=1024))]
     pub max_clients: u16,
     /// Record every droid session in droidctl's capture format: FILE for the first, then
-    /// FILE-2, FILE-3 … (see README, "Captures"). Existing files are kept unless --force.
+    /// FILE-2, FILE-3 … (see docs/captures.md). Existing files are kept unless --force.
     #[command(flatten)]
     pub record: super::replay::RecordArgs,
 }
