@@ -486,8 +486,9 @@ fn run_in_a_terminal(scratch: &Scratch, c: &DocCommand) -> Result<(), String> {
     });
     let text = || screen.lock().unwrap().screen().contents();
     let start = Instant::now();
-    // Drawn: a panel's border is on screen.
-    while !text().contains('╭') {
+    // Drawn: a few lines of the app are on screen.
+    let drawn = || text().lines().filter(|l| !l.trim().is_empty()).count() >= 3;
+    while !drawn() {
         if let Some(status) = child.try_wait().map_err(|e| e.to_string())? {
             return Err(format!("exited ({status:?}) before drawing:\n{}", text()));
         }

@@ -103,10 +103,7 @@ fn every_page_named_is_written_and_each_subcommand_has_one() {
         decode,
         std::fs::read_to_string(dir.join("droidctl-packet-decode.1")).unwrap()
     );
-    assert!(
-        decode.contains(".TH droidctl-packet-decode 1"),
-        "{decode}"
-    );
+    assert!(decode.contains(".TH droidctl-packet-decode 1"), "{decode}");
     // Pages that exist are kept unless --force, as every output droidctl writes.
     let again = droidctl(&["man", "--dir", d]);
     assert_eq!(again.status.code(), Some(2));
