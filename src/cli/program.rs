@@ -42,9 +42,10 @@ pub fn run(args: &RunArgs, sims: Vec<Model>, text: String, shown: &str) -> Resul
     let recorder = args.record.open()?;
     let recorder = recorder.as_ref();
     let files = match &args.csv {
-        Some(p) => {
-            Some(crate::mission::csv::SampleFiles::create(Some(p), None).map_err(CliError::usage)?)
-        }
+        Some(p) => Some(
+            crate::mission::csv::SampleFiles::create(Some(p), None, args.record.force)
+                .map_err(CliError::usage)?,
+        ),
         None => None,
     };
     let out = Arc::new(RunOutput::new(files));
@@ -132,7 +133,7 @@ fn fleet(
         .map_err(|e| CliError::usage(e.to_string()))?;
     let files = match &args.csv {
         Some(p) => Some(
-            crate::mission::csv::SampleFiles::create_for_fleet(Some(p), None)
+            crate::mission::csv::SampleFiles::create_for_fleet(Some(p), None, args.record.force)
                 .map_err(CliError::usage)?,
         ),
         None => None,
