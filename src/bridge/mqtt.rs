@@ -526,19 +526,19 @@ pub async fn run(
     // A clean goodbye sends no will: say offline ourselves, clear what describes a running
     // bridge, then disconnect.
     for (i, ((name, t), client)) in members.iter().zip(&clients).enumerate() {
+        let mut gone = vec![topic(&settings.prefix, t, "info")];
+        if i == 0 {
+            gone.insert(0, bridge_topic(&settings.prefix));
+        }
+        for g in gone {
+            let _ = client.try_publish(g, QoS::AtLeastOnce, true, Vec::new());
+        }
         let _ = client.try_publish(
             topic(&settings.prefix, t, "state"),
             QoS::AtLeastOnce,
             true,
             offline(name).to_json(),
         );
-        let mut gone = vec![topic(&settings.prefix, t, "info")];
-        if i == 0 {
-            gone.push(bridge_topic(&settings.prefix));
-        }
-        for g in gone {
-            let _ = client.try_publish(g, QoS::AtLeastOnce, true, Vec::new());
-        }
         let _ = client.try_disconnect();
     }
     let _ = tokio::time::timeout(
