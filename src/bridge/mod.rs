@@ -14,6 +14,7 @@
 
 pub mod broker;
 pub mod feeds;
+pub mod homeassistant;
 pub mod motion;
 pub mod mqtt;
 pub mod outbox;
@@ -47,6 +48,9 @@ pub struct Settings {
     pub telemetry_hz: u16,
     /// How often the battery is read.
     pub battery_poll: Duration,
+    /// MQTT: Home Assistant's discovery prefix, to publish discovery under
+    /// ([`homeassistant`]); `None`: none published.
+    pub homeassistant: Option<String>,
 }
 
 impl Default for Settings {
@@ -55,6 +59,7 @@ impl Default for Settings {
             command_timeout: Duration::from_millis(600),
             telemetry_hz: 10,
             battery_poll: Duration::from_secs(10),
+            homeassistant: None,
         }
     }
 }

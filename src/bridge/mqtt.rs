@@ -526,7 +526,11 @@ pub async fn run(
     // A clean goodbye sends no will: say offline ourselves, clear what describes a running
     // bridge, then disconnect.
     for (i, ((name, t), client)) in members.iter().zip(&clients).enumerate() {
-        let mut gone = vec![topic(&settings.prefix, t, "info")];
+        let mut gone: Vec<String> = discovery(&bridge, &settings.prefix, i)
+            .into_iter()
+            .map(|(t, _)| t)
+            .collect();
+        gone.push(topic(&settings.prefix, t, "info"));
         if i == 0 {
             gone.insert(0, bridge_topic(&settings.prefix));
         }
@@ -552,6 +556,26 @@ pub async fn run(
     result
 }
 
+/// Droid `i`'s Home Assistant discovery messages, when the bridge was asked for them.
+fn discovery(bridge: &Bridge, prefix: &str, i: usize) -> Vec<(String, String)> {
+    let (Some(ha), Some(m), Some(t)) = (
+        bridge.settings().homeassistant.as_deref(),
+        bridge.fleet().member(i),
+        bridge.topic(i),
+    ) else {
+        return Vec::new();
+    };
+    super::homeassistant::configs(
+        ha,
+        &super::homeassistant::Droid {
+            prefix,
+            topic: t,
+            name: &m.name,
+            model: m.model,
+        },
+    )
+}
+
 /// One droid's connection: subscribe on every connect, hand commands to the bridge, stop the
 /// droid and retry when the broker goes.
 async fn connection(
@@ -575,6 +599,7 @@ async fn connection(
     let mut backoff = Duration::from_millis(250);
     let mut up = false;
     let mut ever = false;
+    let mut closing = false;
     loop {
         match eventloop.poll().await {
             Ok(Event::Incoming(Packet::ConnAck(_))) => {
@@ -610,6 +635,9 @@ async fn connection(
                 for (topic, o) in retained {
                     let _ = client.try_publish(topic, QoS::AtLeastOnce, true, o.to_json());
                 }
+                for (topic, payload) in discovery(&bridge, &settings.prefix, i) {
+                    let _ = client.try_publish(topic, QoS::AtLeastOnce, true, payload);
+                }
                 if *state.borrow() != BrokerState::Connecting {
                     eprintln!("droidctl: {name}: connected to the broker again");
                 }
@@ -620,8 +648,13 @@ async fn connection(
                     eprintln!("{said}");
                 }
             }
-            Ok(Event::Outgoing(rumqttc::Outgoing::Disconnect)) => return,
+            // Said goodbye: wait for the broker to close the connection, so it has read
+            // everything before (a process that ends with unread data on its socket resets
+            // the connection, and the broker may drop what it had not read yet: the
+            // retained clears of a clean end).
+            Ok(Event::Outgoing(rumqttc::Outgoing::Disconnect)) => closing = true,
             Ok(_) => {}
+            Err(_) if closing => return,
             Err(e) => {
                 let why = e.to_string();
                 // Telemetry that did not go out before the loss is not sent late.
