@@ -227,3 +227,154 @@ fn home_assistant_discovery_through_mosquitto() {
     assert!(left.is_empty(), "still retained: {left:?}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The corners an example printed (`corner N x_cm=… y_cm=…`) and the speed it stopped at.
+fn square(out: &str) -> (Vec<(f64, f64)>, f64) {
+    let num = |s: &str, key: &str| -> Option<f64> {
+        s.split_whitespace()
+            .find_map(|w| w.strip_prefix(key))
+            .and_then(|v| v.parse().ok())
+    };
+    let corners = out
+        .lines()
+        .filter(|l| l.starts_with("corner "))
+        .filter_map(|l| Some((num(l, "x_cm=")?, num(l, "y_cm=")?)))
+        .collect();
+    let stopped = out
+        .lines()
+        .find(|l| l.starts_with("stopped "))
+        .and_then(|l| num(l, "speed="))
+        .unwrap_or(f64::NAN);
+    (corners, stopped)
+}
+
+/// A square: up (+y, heading 0), right (+x, 90), down, left; then stopped.
+fn assert_square(out: &str) {
+    let (c, stopped) = square(out);
+    assert_eq!(c.len(), 4, "{out}");
+    assert!(c[0].1 > 30.0, "side 1 goes +y: {c:?}");
+    assert!(c[1].0 - c[0].0 > 30.0, "side 2 goes +x: {c:?}");
+    assert!(c[1].1 - c[2].1 > 30.0, "side 3 goes -y: {c:?}");
+    assert!(c[2].0 - c[3].0 > 30.0, "side 4 goes -x: {c:?}");
+    assert!(stopped < 3.0, "stopped at {stopped}: {out}");
+}
+
+fn example(name: &str) -> String {
+    format!("{}/examples/{name}", env!("CARGO_MANIFEST_DIR"))
+}
+
+fn run_python(python: &str, args: &[&str]) -> String {
+    let out = std::process::Command::new(python)
+        .args(args)
+        .env("DROIDCTL_CONFIG", "/dev/null")
+        .output()
+        .unwrap_or_else(|e| panic!("cannot run {python}: {e}"));
+    let text = String::from_utf8_lossy(&out.stdout).into_owned();
+    assert!(
+        out.status.success(),
+        "{args:?}: {}\n{text}\n{}",
+        out.status,
+        String::from_utf8_lossy(&out.stderr)
+    );
+    text
+}
+
+#[test]
+fn the_stdio_example_drives_a_square_and_stops() {
+    let out = run_python(
+        "python3",
+        &[
+            &example("bridge_stdio_square.py"),
+            "--droidctl",
+            env!("CARGO_BIN_EXE_droidctl"),
+            "--sim",
+            "bb8",
+        ],
+    );
+    assert_square(&out);
+}
+
+/// What pip says when it cannot reach the package registry.
+const OFFLINE: &[&str] = &[
+    "Could not fetch",
+    "NewConnectionError",
+    "Temporary failure in name resolution",
+    "Network is unreachable",
+    "No matching distribution found",
+    "Connection refused",
+    "timed out",
+];
+
+/// A Python that imports paho-mqtt: CI's venv (`.ci/run` installs it beside spherov2), or
+/// one made under target/ with pip. `Err` (the test is skipped) only when the package
+/// registry cannot be reached.
+fn python_with_paho() -> Result<String, String> {
+    let imports = |py: &str| {
+        std::process::Command::new(py)
+            .args(["-c", "import paho.mqtt.client"])
+            .output()
+            .is_ok_and(|o| o.status.success())
+    };
+    let venv = format!("{}/target/bridge-examples-venv", env!("CARGO_MANIFEST_DIR"));
+    let python = format!("{venv}/bin/python");
+    let candidates = [
+        std::env::var("DROIDCTL_TEST_SPHEROV2_PYTHON").ok(),
+        Some(python.clone()),
+    ];
+    if let Some(py) = candidates.into_iter().flatten().find(|p| imports(p)) {
+        return Ok(py);
+    }
+    if !std::path::Path::new(&python).exists() {
+        let made = std::process::Command::new("python3")
+            .args(["-m", "venv", &venv])
+            .output()
+            .expect("python3 (to make a venv for paho-mqtt)");
+        assert!(
+            made.status.success(),
+            "python3 -m venv {venv}: {}",
+            String::from_utf8_lossy(&made.stderr)
+        );
+    }
+    let pip = std::process::Command::new(&python)
+        .args([
+            "-m",
+            "pip",
+            "install",
+            "-q",
+            "--disable-pip-version-check",
+            "paho-mqtt",
+        ])
+        .output()
+        .expect("pip");
+    let said = String::from_utf8_lossy(&pip.stderr).into_owned();
+    if !pip.status.success() {
+        if OFFLINE.iter().any(|s| said.contains(s)) {
+            return Err(format!("the package registry cannot be reached: {said}"));
+        }
+        panic!("pip install paho-mqtt failed: {said}");
+    }
+    assert!(imports(&python), "paho-mqtt installed but not importable");
+    Ok(python)
+}
+
+#[test]
+fn the_paho_mqtt_example_drives_a_square_and_stops() {
+    let python = match python_with_paho() {
+        Ok(p) => p,
+        Err(why) => {
+            eprintln!("SKIPPED: no paho-mqtt: {why}");
+            return;
+        }
+    };
+    let dir = scratch("paho-example");
+    let broker = Broker::start_kind(&dir, Kind::Embedded);
+    let p = broker.port;
+    let _bridge = BridgeProc::start(&dir, &["--mqtt", &broker.url(), "--sim", "r2d2"]);
+    let out = run_python(
+        &python,
+        &[&example("bridge_mqtt_square.py"), "--port", &p.to_string()],
+    );
+    assert!(out.contains("driving D2-0001 (R2-D2)"), "{out}");
+    assert_square(&out);
+    let _ = std::fs::remove_dir_all(&dir);
+}
