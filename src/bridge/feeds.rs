@@ -63,9 +63,11 @@ pub fn spawn(bridge: &Arc<Bridge>, i: usize) -> Vec<JoinHandle<()>> {
     ]
 }
 
-/// A sample each time the droid reported something new (issue 31 point 2), at most its
-/// offered rate ([`Bridge::offered`]): reports that come faster are folded into the next
-/// sample; nothing is repeated while the droid reports nothing.
+/// A sample each time the droid reported something new (issue 31 point 2), at most the
+/// bridge's rate: reports that come faster are folded into the next sample; nothing is
+/// repeated while the droid reports nothing. (The cap is the bridge's rate, not the droid's
+/// own: a gap of exactly the droid's interval after each sample would beat against its
+/// stream and skip every other sample now and then.)
 async fn samples(bridge: Weak<Bridge>, i: usize, name: String) {
     let (telemetry, state) = match bridge.upgrade() {
         Some(b) => (b.fleet.telemetry(i), b.fleet.link_state(i)),
@@ -89,7 +91,7 @@ async fn samples(bridge: Weak<Bridge>, i: usize, name: String) {
             let t = telemetry.borrow_and_update();
             crate::mission::sample_of(&t, b.t_ms())
         };
-        let gap = Duration::from_secs(1) / u32::from(b.offered(i).max(1));
+        let gap = Duration::from_secs(1) / u32::from(b.settings.telemetry_hz.max(1));
         b.emit(Some(i), telemetry_out(&name, sample, b.battery(i)));
         drop(b);
         tokio::time::sleep(gap).await;

@@ -299,12 +299,6 @@ impl Bridge {
         })
     }
 
-    /// Droid `i`'s telemetry samples a second now.
-    pub fn offered(&self, i: usize) -> u16 {
-        self.droid_info(i)
-            .map_or(self.settings.telemetry_hz, |d| d.telemetry_hz)
-    }
-
     /// Whether droid `i` is ready: a drive sent now moves it.
     pub fn is_ready(&self, i: usize) -> bool {
         self.ready.get(i).is_some_and(|r| r.load(Ordering::SeqCst))
