@@ -96,14 +96,14 @@ async fn r2d2_is_ready_once_on_three_legs_and_a_drive_then_moves_it() {
 
 #[tokio::test(start_paused = true)]
 async fn a_droid_without_legs_is_ready_after_its_setup() {
-    let mut r = rig(&[Model::Bolt, Model::BB8], 600).await;
+    let mut r = rig(&[Model::Bolt, Model::BB8, Model::Robi42], 600).await;
     run_for(1500).await;
-    assert!(r.bridge.is_ready(0) && r.bridge.is_ready(1));
+    assert!((0..3).all(|i| r.bridge.is_ready(i)));
     let ready: Vec<_> = all(&mut r)
         .into_iter()
         .filter(|o| matches!(o, Out::Link { ready: true, .. }))
         .collect();
-    assert_eq!(ready.len(), 2, "{ready:?}");
+    assert_eq!(ready.len(), 3, "{ready:?}");
 }
 
 fn turned(a: u16, b: u16) -> u16 {

@@ -9,7 +9,8 @@
 //! So each droid is *ready* once, after its link says connected, a ping queued behind the
 //! setup has been answered (the setup was written before it and the droid answers), and,
 //! for a droid with legs, the leg-action-complete notification came (or
-//! [`STANCE_WAIT`] passed). The link object says it (`"ready":true`); a drive or twist held
+//! [`STANCE_WAIT`] passed). Robi 42 is ready once connected (no setup, and its ping would
+//! be a stop). The link object says it (`"ready":true`); a drive or twist held
 //! before it is written again at once, so it moves the droid as soon as it can.
 
 use super::Bridge;
@@ -27,6 +28,10 @@ pub const STANCE_WAIT: Duration = Duration::from_secs(4);
 
 /// How long a ping that failed (a timeout) waits before the next one.
 const RETRY: Duration = Duration::from_millis(250);
+
+/// Pings unanswered for this long after connecting: the droid counts as ready anyway (its
+/// setup was written long ago; a droid that answers nothing would otherwise never be).
+const GIVE_UP: Duration = Duration::from_secs(10);
 
 /// Watch droid `i`'s link and say when it is ready, for as long as the bridge lives.
 pub async fn watch(bridge: Weak<Bridge>, i: usize) {
@@ -52,10 +57,15 @@ pub async fn watch(bridge: Weak<Bridge>, i: usize) {
         let mut events = session.subscribe();
         let setup_done = async {
             let started = tokio::time::Instant::now();
-            loop {
+            // Robi 42 has no connect setup to wait for and no ping that is not a command
+            // (its "ping" is the remote control's stop): ready once connected.
+            while model.protocol() != crate::model::Protocol::Rsrcp {
                 match session.request(family.ping()).await {
                     Ok(_) => break,
                     Err(crate::session::RequestError::Closed) => return false,
+                    // Unanswered for this long: the setup is long written; say ready
+                    // rather than never.
+                    Err(_) if started.elapsed() >= GIVE_UP => break,
                     Err(_) => tokio::time::sleep(RETRY).await,
                 }
             }
