@@ -5,80 +5,16 @@
 //! going away and coming back while the droids stay connected, a password, TLS; and
 //! `--mqtt` without a URL, the bridge hosting its own broker.
 
+#[path = "common/bridge_proc.rs"]
+mod bridge_proc;
 #[path = "common/mosquitto.rs"]
 mod mosquitto;
 
+use bridge_proc::{BridgeProc, gather, interrupt, scratch, speed};
 use mosquitto::{Broker, Kind, Sub, mosquitto_here, publish};
 use serde_json::Value;
-use std::path::PathBuf;
-use std::process::{Child, Command, Stdio};
+use std::process::Command;
 use std::time::{Duration, Instant};
-
-fn scratch(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!(
-        "droidctl-bridge-mqtt-{}-{name}",
-        std::process::id()
-    ));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-/// The bridge as a process; its stderr kept in a file.
-struct BridgeProc {
-    child: Child,
-    stderr: PathBuf,
-}
-
-impl BridgeProc {
-    fn start(dir: &std::path::Path, args: &[&str]) -> BridgeProc {
-        static N: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
-        let n = N.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-        let stderr = dir.join(format!("bridge-{n}.stderr"));
-        let child = Command::new(env!("CARGO_BIN_EXE_droidctl"))
-            .arg("bridge")
-            .args(args)
-            .env("DROIDCTL_CONFIG", "/dev/null")
-            .env("RUST_BACKTRACE", "1")
-            .stdin(Stdio::null())
-            .stdout(Stdio::null())
-            .stderr(std::fs::File::create(&stderr).unwrap())
-            .spawn()
-            .expect("run droidctl bridge");
-        BridgeProc { child, stderr }
-    }
-
-    fn stderr(&self) -> String {
-        std::fs::read_to_string(&self.stderr).unwrap_or_default()
-    }
-
-    /// Wait for the process to end; its status code.
-    fn wait(&mut self, secs: u64) -> Option<i32> {
-        let end = Instant::now() + Duration::from_secs(secs);
-        loop {
-            if let Some(s) = self.child.try_wait().unwrap() {
-                return s.code();
-            }
-            assert!(
-                Instant::now() < end,
-                "the bridge did not end: {}",
-                self.stderr()
-            );
-            std::thread::sleep(Duration::from_millis(50));
-        }
-    }
-}
-
-impl Drop for BridgeProc {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
-}
-
-fn speed(v: &Value) -> f64 {
-    v["speed"].as_f64().unwrap_or(0.0)
-}
 
 /// Every `state` received so far says `connected`: neither the droid's link nor the
 /// bridge's connection to the broker went down.
@@ -692,4 +628,156 @@ fn the_bridges_own_broker_on_a_taken_port() {
         err.contains(&format!("cannot listen on {listen}")) && err.contains("--mqtt mqtt://"),
         "{err}"
     );
+}
+
+/// Issue 31 point 1: samples the bridge could not deliver while the broker was gone are
+/// dropped, not replayed after it came back as if the droid were doing that now; the
+/// `stopped` notice of the loss is delivered.
+#[test]
+fn telemetry_from_a_broker_outage_is_dropped_and_its_stop_delivered() {
+    let dir = scratch("stale");
+    let mut broker = Broker::start_kind(&dir, Kind::Embedded);
+    let p = broker.port;
+    let sub = Sub::start(p, "droidctl/#", &[]);
+    let bridge = BridgeProc::start(
+        &dir,
+        &[
+            "--mqtt",
+            &broker.url(),
+            "--sim",
+            "bb8",
+            "--rate",
+            "100",
+            "--command-timeout",
+            "10000",
+        ],
+    );
+    let tel = "droidctl/BB-0001/telemetry";
+    sub.wait(15, "droidctl/BB-0001/state", |v| v["ready"] == true);
+    assert!(publish(p, "droidctl/BB-0001/cmd", DRIVE, &[]));
+    sub.wait(5, tel, |v| speed(v) > 10.0);
+    std::thread::sleep(Duration::from_millis(300));
+    let before = sub
+        .drain()
+        .into_iter()
+        .filter(|(t, _)| t == tel)
+        .filter_map(|(_, v)| v["t_ms"].as_u64())
+        .max()
+        .expect("samples while driving");
+    drop(sub);
+    broker.kill();
+    let outage = 2500;
+    std::thread::sleep(Duration::from_millis(outage));
+    broker.restart();
+    let sub = Sub::start(p, "droidctl/#", &[]);
+    let got = gather(&sub, 20, |got| {
+        got.iter().filter(|(t, _)| t == tel).count() >= 20
+    });
+    let stopped = got
+        .iter()
+        .find(|(t, v)| t == "droidctl/BB-0001/reply" && v["type"] == "stopped");
+    assert!(
+        stopped.is_some_and(|(_, v)| v["reason"] == "broker_lost"),
+        "no stopped notice after the reconnect: {got:?}"
+    );
+    let samples: Vec<u64> = got
+        .iter()
+        .filter(|(t, _)| t == tel)
+        .filter_map(|(_, v)| v["t_ms"].as_u64())
+        .collect();
+    assert!(samples.len() >= 20, "{got:?}");
+    let stale: Vec<_> = samples.iter().filter(|t| **t < before + outage).collect();
+    assert!(
+        stale.is_empty(),
+        "samples from the outage (last before it at {before} ms) replayed: {stale:?}"
+    );
+    drop(bridge);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Issue 31 point 4: a retained `info` topic per droid (what `hello` says on stdio) and a
+/// retained `bridge` topic listing the droids, both cleared on a clean end; `connected`
+/// said once per droid at the start, then `ready`.
+#[test]
+fn info_and_bridge_topics_are_retained_and_connected_is_said_once() {
+    let dir = scratch("info");
+    let broker = Broker::start_kind(&dir, Kind::Embedded);
+    let p = broker.port;
+    let sub = Sub::start(p, "droidctl/#", &[]);
+    let mut bridge = BridgeProc::start(
+        &dir,
+        &[
+            "--mqtt",
+            &broker.url(),
+            "--sim",
+            "r2d2,bolt",
+            "--rate",
+            "50",
+        ],
+    );
+    let ready = |got: &[(String, Value)], d: &str| {
+        got.iter()
+            .any(|(t, v)| *t == format!("droidctl/{d}/state") && v["ready"] == true)
+    };
+    let got = gather(&sub, 20, |got| {
+        ready(got, "D2-0001") && ready(got, "SB-0002")
+    });
+    for d in ["D2-0001", "SB-0002"] {
+        let states: Vec<_> = got
+            .iter()
+            .filter(|(t, _)| *t == format!("droidctl/{d}/state"))
+            .map(|(_, v)| (v["state"].as_str().unwrap_or(""), v["ready"] == true))
+            .collect();
+        let connected = states
+            .iter()
+            .filter(|s| **s == ("connected", false))
+            .count();
+        assert_eq!(connected, 1, "{d}: {states:?}");
+        assert_eq!(states.last(), Some(&("connected", true)), "{d}: {states:?}");
+    }
+    // A late subscriber finds the bridge and each droid.
+    let late = Sub::start(p, "droidctl/+/info", &[]);
+    let info = late.wait(5, "droidctl/D2-0001/info", |_| true);
+    assert_eq!(
+        (info["type"].as_str(), info["model"].as_str()),
+        (Some("info"), Some("r2d2"))
+    );
+    assert_eq!(info["command_timeout_ms"], 600);
+    // R2 streams at 10/s: 50 asked, 10 offered.
+    assert_eq!(info["telemetry_hz"], 10);
+    let caps: Vec<&str> = info["capabilities"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter_map(Value::as_str)
+        .collect();
+    assert!(caps.contains(&"dome") && caps.contains(&"legs"), "{caps:?}");
+    let bolt = late.wait(5, "droidctl/SB-0002/info", |_| true);
+    assert!(
+        bolt["capabilities"].to_string().contains("matrix"),
+        "{bolt}"
+    );
+    let late = Sub::start(p, "droidctl/bridge", &[]);
+    let hello = late.wait(5, "droidctl/bridge", |_| true);
+    assert_eq!(hello["type"], "hello");
+    let topics: Vec<&str> = hello["droids"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter_map(|d| d["topic"].as_str())
+        .collect();
+    assert_eq!(topics, ["D2-0001", "SB-0002"]);
+    // A clean end clears them (the state says offline).
+    interrupt(&mut bridge);
+    // The broker takes the bridge's last packets after its end.
+    std::thread::sleep(Duration::from_millis(500));
+    let after = Sub::start(p, "droidctl/#", &[]);
+    let got = gather(&after, 2, |_| false);
+    assert!(
+        got.iter()
+            .all(|(t, _)| t.ends_with("/state") && !t.ends_with("/info")),
+        "retained after a clean end: {got:?}"
+    );
+    assert!(got.iter().any(|(_, v)| v["state"] == "offline"), "{got:?}");
+    let _ = std::fs::remove_dir_all(&dir);
 }

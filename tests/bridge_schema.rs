@@ -39,6 +39,9 @@ fn the_schema_is_valid_and_takes_the_readme_examples() {
     for c in [
         json!({"v":1,"cmd":"drive","speed":100,"heading":90}),
         json!({"v":1,"cmd":"twist","linear":0.3,"angular":0.5}),
+        // ROS's geometry_msgs/Twist (issue 31 point 5).
+        json!({"v":1,"cmd":"twist","linear":{"x":0.3,"y":0,"z":0},"angular":{"x":0,"y":0.0,"z":-0.5}}),
+        json!({"v":1,"cmd":"twist","linear":{"x":0.3},"angular":0.5}),
         json!({"v":1,"cmd":"stop"}),
         json!({"v":1,"cmd":"estop"}),
         json!({"v":1,"cmd":"head","angle":-45.5,"droid":"D2-0001"}),
@@ -81,6 +84,12 @@ fn what_the_schema_refuses_the_bridge_refuses() {
         json!({"v":1,"cmd":"drive","speed":"10","heading":0}),
         json!({"v":1,"cmd":"twist","linear":6,"angular":0}),
         json!({"v":1,"cmd":"twist","linear":0.1}),
+        json!({"v":1,"cmd":"twist","linear":{"x":0.1,"y":0.2},"angular":0}),
+        json!({"v":1,"cmd":"twist","linear":{"x":0,"z":1},"angular":0}),
+        json!({"v":1,"cmd":"twist","linear":0,"angular":{"x":0.1,"z":0}}),
+        json!({"v":1,"cmd":"twist","linear":{"x":6},"angular":0}),
+        json!({"v":1,"cmd":"twist","linear":{"x":"1"},"angular":0}),
+        json!({"v":1,"cmd":"twist","linear":{"w":1},"angular":0}),
         json!({"v":1,"cmd":"stop","speed":0}),
         json!({"v":1,"cmd":"stop","droid":""}),
         json!({"v":1,"cmd":"stop","id":[1]}),
@@ -206,6 +215,7 @@ async fn everything_the_bridge_sends_is_valid_against_the_schema() {
     }
     for t in [
         "hello",
+        "info",
         "telemetry",
         "collision",
         "battery",
@@ -221,6 +231,13 @@ async fn everything_the_bridge_sends_is_valid_against_the_schema() {
         );
     }
     assert_eq!(lines[0]["type"], "hello");
+    // Readiness and odometry (issue 31 points 3 and 5).
+    assert!(
+        lines
+            .iter()
+            .any(|v| v["type"] == "link" && v["ready"] == true)
+    );
+    assert!(lines.iter().any(|v| v["odom"]["x_m"].is_number()));
     // The capped streaming rate is said in the reply.
     let r2 = lines
         .iter()

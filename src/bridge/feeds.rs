@@ -13,8 +13,8 @@ use std::time::Duration;
 use tokio::sync::broadcast;
 use tokio::task::JoinHandle;
 
-/// The link object for a state.
-pub fn link_out(droid: &str, s: &LinkState) -> Out {
+/// The link object for a state; `ready` only counts when connected.
+pub fn link_out(droid: &str, s: &LinkState, ready: bool) -> Out {
     let (state, attempt, reason) = match s {
         LinkState::Connecting => ("connecting", None, None),
         LinkState::Connected => ("connected", None, None),
@@ -26,6 +26,7 @@ pub fn link_out(droid: &str, s: &LinkState) -> Out {
     Out::Link {
         droid: droid.to_string(),
         state,
+        ready: ready && *s == LinkState::Connected,
         attempt,
         reason,
     }
@@ -36,6 +37,7 @@ pub fn offline(droid: &str) -> Out {
     Out::Link {
         droid: droid.to_string(),
         state: "offline",
+        ready: false,
         attempt: None,
         reason: None,
     }
@@ -61,40 +63,60 @@ pub fn spawn(bridge: &Arc<Bridge>, i: usize) -> Vec<JoinHandle<()>> {
     ]
 }
 
-/// A sample every 1/rate while the droid is connected.
+/// A sample each time the droid reported something new (issue 31 point 2), at most the
+/// bridge's rate: reports that come faster are folded into the next sample; nothing is
+/// repeated while the droid reports nothing. (The cap is the bridge's rate, not the droid's
+/// own: a gap of exactly the droid's interval after each sample would beat against its
+/// stream and skip every other sample now and then.)
 async fn samples(bridge: Weak<Bridge>, i: usize, name: String) {
-    let (rate, telemetry, state) = match bridge.upgrade() {
-        Some(b) => (
-            b.settings.telemetry_hz.max(1),
-            b.fleet.telemetry(i),
-            b.fleet.link_state(i),
-        ),
+    let (telemetry, state) = match bridge.upgrade() {
+        Some(b) => (b.fleet.telemetry(i), b.fleet.link_state(i)),
         None => return,
     };
-    let (Some(telemetry), Some(state)) = (telemetry, state) else {
+    let (Some(mut telemetry), Some(state)) = (telemetry, state) else {
         return;
     };
-    let mut every = tokio::time::interval(Duration::from_secs(1) / rate as u32);
-    every.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
     loop {
-        every.tick().await;
+        if telemetry.changed().await.is_err() {
+            return;
+        }
         let Some(b) = bridge.upgrade() else {
             return;
         };
         if *state.borrow() != LinkState::Connected {
+            telemetry.mark_unchanged();
             continue;
         }
-        let mut sample = crate::mission::sample_of(&telemetry.borrow(), b.t_ms());
-        if sample.battery_v.is_none() {
-            sample.battery_v = b.battery(i);
-        }
-        b.emit(
-            Some(i),
-            Out::Telemetry {
-                droid: name.clone(),
-                sample,
-            },
-        );
+        let sample = {
+            let t = telemetry.borrow_and_update();
+            crate::mission::sample_of(&t, b.t_ms())
+        };
+        let gap = Duration::from_secs(1) / u32::from(b.settings.telemetry_hz.max(1));
+        b.emit(Some(i), telemetry_out(&name, sample, b.battery(i)));
+        drop(b);
+        tokio::time::sleep(gap).await;
+    }
+}
+
+/// The telemetry object of a sample: the battery as last read when the droid does not
+/// notify it, and the position as a ROS user reads it.
+pub fn telemetry_out(droid: &str, mut sample: crate::mission::Sample, battery: Option<f32>) -> Out {
+    if sample.battery_v.is_none() {
+        sample.battery_v = battery;
+    }
+    let odom = match (sample.x_cm, sample.y_cm) {
+        (Some(x), Some(y)) => Some(super::schema::Odom::from_droid(
+            x,
+            y,
+            // The droid's own yaw where it streams one, else the heading it reports.
+            sample.yaw_deg.or_else(|| sample.heading.map(f32::from)),
+        )),
+        _ => None,
+    };
+    Out::Telemetry {
+        droid: droid.to_string(),
+        sample,
+        odom,
     }
 }
 
@@ -139,7 +161,13 @@ async fn link(bridge: Weak<Bridge>, i: usize, name: String) {
     loop {
         let now = state.borrow_and_update().clone();
         match bridge.upgrade() {
-            Some(b) => b.emit(Some(i), link_out(&name, &now)),
+            Some(b) => {
+                // A change of the link: not ready until [`super::ready`] says so anew.
+                if let Some(r) = b.ready.get(i) {
+                    r.store(false, std::sync::atomic::Ordering::SeqCst);
+                }
+                b.emit(Some(i), link_out(&name, &now, false))
+            }
             None => return,
         }
         if state.changed().await.is_err() {

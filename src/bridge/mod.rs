@@ -14,9 +14,11 @@
 
 pub mod broker;
 pub mod feeds;
+pub mod homeassistant;
 pub mod motion;
 pub mod mqtt;
 pub mod outbox;
+pub mod ready;
 pub mod schema;
 pub mod stdio;
 
@@ -27,7 +29,7 @@ use crate::units::Heading;
 use motion::{Holder, Kinematics, Motion, Tick, Wheels};
 use outbox::{Outbox, Outputs};
 use schema::{Cmd, ErrorCode, Out, Request};
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 use tokio::task::JoinHandle;
@@ -46,6 +48,9 @@ pub struct Settings {
     pub telemetry_hz: u16,
     /// How often the battery is read.
     pub battery_poll: Duration,
+    /// MQTT: Home Assistant's discovery prefix, to publish discovery under
+    /// ([`homeassistant`]); `None`: none published.
+    pub homeassistant: Option<String>,
 }
 
 impl Default for Settings {
@@ -54,6 +59,7 @@ impl Default for Settings {
             command_timeout: Duration::from_millis(600),
             telemetry_hz: 10,
             battery_poll: Duration::from_secs(10),
+            homeassistant: None,
         }
     }
 }
@@ -112,6 +118,47 @@ struct DroidState {
     setup: crate::family::setup::SetupOptions,
 }
 
+/// What droid `model` can do, in the words of an `unsupported` error's `capability`.
+pub fn capabilities(model: Model) -> Vec<&'static str> {
+    use crate::script::{Action, LedGroup};
+    let family = crate::family::for_model(model);
+    let lights = [
+        LedGroup::Front,
+        LedGroup::Back,
+        LedGroup::Logic,
+        LedGroup::Holo,
+    ]
+    .iter()
+    .any(|g| family.led(model, &Action::LedRgb(*g, [0, 0, 0])).is_some());
+    [
+        ("dome", model.has_dome()),
+        ("legs", model.has_legs()),
+        ("lights", lights),
+        ("animations", family.animation(model, 0).is_some()),
+        ("sounds", family.sound(model, 0).is_some()),
+        ("matrix", model.has_matrix()),
+        ("streaming", family.stream_caps(model).is_some()),
+        ("reverse", family.can_reverse()),
+    ]
+    .into_iter()
+    .filter_map(|(c, has)| has.then_some(c))
+    .collect()
+}
+
+/// New samples a second droid `model` offers with `setup`: the bridge's rate `hz`, or its
+/// streaming rate when slower (0: it streams nothing). A droid that streams by itself
+/// (Robi 42's state frames) is sampled at the bridge's rate.
+pub fn offered_hz(model: Model, setup: &crate::family::setup::SetupOptions, hz: u16) -> u16 {
+    if crate::family::for_model(model).stream_caps(model).is_none() {
+        return hz;
+    }
+    let plan = setup.stream_plan(model);
+    if !plan.is_on() {
+        return 0;
+    }
+    (plan.rate_hz().floor() as u16).clamp(1, hz.max(1))
+}
+
 /// The bridge: a fleet, each droid's held motion and setup, and where objects go out.
 pub struct Bridge {
     fleet: Fleet,
@@ -126,6 +173,8 @@ pub struct Bridge {
     /// The latest battery reading per droid, for samples (the fleet's fold has only what
     /// the droid notifies).
     battery: Vec<Mutex<Option<f32>>>,
+    /// Whether each droid is ready: connected and its connect setup done ([`ready`]).
+    ready: Vec<AtomicBool>,
 }
 
 fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
@@ -165,10 +214,12 @@ impl Bridge {
             topics,
             tasks: Mutex::new(Vec::new()),
             battery: (0..n).map(|_| Mutex::new(None)).collect(),
+            ready: (0..n).map(|_| AtomicBool::new(false)).collect(),
         });
         let mut tasks = vec![tokio::spawn(control(Arc::downgrade(&bridge)))];
         for i in 0..n {
             tasks.extend(feeds::spawn(&bridge, i));
+            tasks.push(tokio::spawn(ready::watch(Arc::downgrade(&bridge), i)));
         }
         *lock(&bridge.tasks) = tasks;
         (bridge, rx)
@@ -204,26 +255,53 @@ impl Bridge {
         self.out.room().await
     }
 
-    /// The `hello` object: the droids and the settings that bind a client.
+    /// The `hello` object: the droids and the settings that bind a client. Its
+    /// `telemetry_hz` is the most any droid offers ([`offered_hz`]).
     pub fn hello(&self) -> Out {
+        let droids: Vec<schema::DroidInfo> = (0..self.fleet.len())
+            .filter_map(|i| self.droid_info(i))
+            .collect();
         Out::Hello {
             droidctl: env!("CARGO_PKG_VERSION"),
-            droids: self
-                .fleet
-                .members()
+            telemetry_hz: droids
                 .iter()
-                .zip(&self.topics)
-                .map(|(m, topic)| schema::DroidInfo {
-                    droid: m.name.clone(),
-                    model: m.model.id(),
-                    robot: m.model.display_name(),
-                    origin: m.origin.clone(),
-                    topic: topic.clone(),
-                })
-                .collect(),
+                .map(|d| d.telemetry_hz)
+                .max()
+                .unwrap_or(self.settings.telemetry_hz)
+                .max(1),
+            droids,
             command_timeout_ms: self.settings.command_timeout.as_millis() as u64,
-            telemetry_hz: self.settings.telemetry_hz,
         }
+    }
+
+    /// Droid `i` as `hello` lists it.
+    pub fn droid_info(&self, i: usize) -> Option<schema::DroidInfo> {
+        let m = self.fleet.member(i)?;
+        let setup = lock(self.droids.get(i)?).setup;
+        Some(schema::DroidInfo {
+            droid: m.name.clone(),
+            model: m.model.id(),
+            robot: m.model.display_name(),
+            origin: m.origin.clone(),
+            topic: self.topics.get(i)?.clone(),
+            capabilities: capabilities(m.model),
+            telemetry_hz: offered_hz(m.model, &setup, self.settings.telemetry_hz),
+            top_speed_m_s: kinematics(m.model).top_speed_m_s,
+        })
+    }
+
+    /// The `info` object of droid `i` (its MQTT `info` topic, retained).
+    pub fn info(&self, i: usize) -> Option<Out> {
+        Some(Out::Info {
+            droidctl: env!("CARGO_PKG_VERSION"),
+            info: self.droid_info(i)?,
+            command_timeout_ms: self.settings.command_timeout.as_millis() as u64,
+        })
+    }
+
+    /// Whether droid `i` is ready: a drive sent now moves it.
+    pub fn is_ready(&self, i: usize) -> bool {
+        self.ready.get(i).is_some_and(|r| r.load(Ordering::SeqCst))
     }
 
     /// Send `o`, about droid `droid` (its index), to the transport: telemetry is dropped
@@ -349,6 +427,7 @@ impl Bridge {
                     Ok(w) => self.write_wheels(i, w),
                     Err(_) => return unsupported("reverse", "cannot roll backwards".into()),
                 }
+                return self.reply(&req, Some(i), self.not_ready_note(i));
             }
             Cmd::Twist { linear, angular } => {
                 let m = Motion::Twist {
@@ -365,10 +444,18 @@ impl Bridge {
                         );
                     }
                 }
+                let note = [
+                    self.not_ready_note(i),
+                    capped_note(model, *linear, *angular),
+                ]
+                .into_iter()
+                .flatten()
+                .collect::<Vec<_>>();
+                return self.reply(&req, Some(i), (!note.is_empty()).then(|| note.join("; ")));
             }
             Cmd::Stop => {
                 lock(&self.droids[i]).holder.stop();
-                let _ = self.fleet.command(i, crate::fleet::FleetCommand::Stop);
+                self.stop_here(i);
             }
             Cmd::Estop => {}
             Cmd::Head(a) => match family.head(*a).filter(|_| model.has_dome()) {
@@ -435,7 +522,8 @@ impl Bridge {
                     m.session
                         .set_setup(crate::family::setup::connect_setup(model, &setup));
                 }
-                return self.request(req, i, cmds, plan.note.clone());
+                let note = plan.note.clone();
+                return self.request(req, i, cmds, note);
             }
         }
         self.reply(&req, Some(i), None);
@@ -512,7 +600,15 @@ impl Bridge {
             }
             bridge.in_flight[i].fetch_sub(1, Ordering::Relaxed);
             match failed {
-                None => bridge.reply(&req, Some(i), note),
+                None => {
+                    bridge.reply(&req, Some(i), note);
+                    // Its telemetry rate may have changed: the info anew (retained on MQTT).
+                    if matches!(req.cmd, Cmd::Stream { .. })
+                        && let Some(info) = bridge.info(i)
+                    {
+                        bridge.emit(Some(i), info);
+                    }
+                }
                 Some(error) => bridge.emit(
                     Some(i),
                     Out::Error {
@@ -562,9 +658,9 @@ impl Bridge {
     /// stream or the broker is gone), saying why.
     pub fn release(&self, which: impl IntoIterator<Item = usize>, reason: &'static str) {
         for i in which {
-            let Some(m) = self.fleet.member(i) else {
+            if self.fleet.member(i).is_none() {
                 continue;
-            };
+            }
             let driving = {
                 let mut d = lock(&self.droids[i]);
                 let was = d.holder.is_driving();
@@ -572,7 +668,7 @@ impl Bridge {
                 was
             };
             if driving {
-                m.session.stop_now(m.family);
+                self.stop_here(i);
                 self.said_stopped(i, reason);
             }
         }
@@ -626,7 +722,7 @@ impl Bridge {
                 Tick::Send(w) => self.write_wheels(i, w),
                 Tick::TimedOut => {
                     if let Some(m) = self.fleet.member(i) {
-                        m.session.stop_now(m.family);
+                        self.stop_here(i);
                         self.emit(
                             Some(i),
                             Out::Stopped {
@@ -666,6 +762,28 @@ impl Bridge {
     }
 }
 
+/// What a reply says when a twist asked more than droid `model` does: it drives at its
+/// most instead.
+fn capped_note(model: Model, linear: f32, angular: f32) -> Option<String> {
+    let k = kinematics(model);
+    let mut said = Vec::new();
+    if linear.abs() > k.top_speed_m_s {
+        said.push(format!(
+            "linear {linear} m/s capped to {} m/s ({}'s top speed)",
+            k.top_speed_m_s.copysign(linear),
+            model.display_name()
+        ));
+    }
+    if k.steers && angular.abs() > k.full_lock_rad_s {
+        said.push(format!(
+            "angular {angular} rad/s capped to {} rad/s ({} steers no tighter)",
+            k.full_lock_rad_s.copysign(angular),
+            model.display_name()
+        ));
+    }
+    (!said.is_empty()).then(|| said.join("; "))
+}
+
 fn group_name(g: crate::script::LedGroup) -> &'static str {
     match g {
         crate::script::LedGroup::Front => "front",
@@ -688,6 +806,8 @@ async fn control(bridge: std::sync::Weak<Bridge>) {
     }
 }
 
+#[cfg(test)]
+mod integrator_tests;
 #[cfg(test)]
 mod safety_tests;
 #[cfg(test)]

@@ -123,6 +123,11 @@ impl Holder {
         Ok(w)
     }
 
+    /// The wheels of the motion held now, if one is.
+    pub fn current(&self) -> Option<Wheels> {
+        self.held.and(self.last_wheels)
+    }
+
     /// A stop (asked, an e-stop, or the link to the client lost): nothing is held.
     pub fn stop(&mut self) {
         self.held = None;

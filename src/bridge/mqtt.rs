@@ -9,11 +9,19 @@
 //! | `PREFIX/DROID/collision` | out | collisions |
 //! | `PREFIX/DROID/battery` | out | battery readings |
 //! | `PREFIX/DROID/state` | out, retained | the link's state; the last will says `offline` |
+//! | `PREFIX/DROID/info` | out, retained | the droid as `hello` says it on stdio (`info`) |
 //! | `PREFIX/DROID/reply` | out | replies, errors, and the bridge's own stops |
+//! | `PREFIX/bridge` | out, retained | the `hello` object: every droid of the bridge |
+//!
+//! The retained `info` and `bridge` topics are cleared when the bridge ends cleanly.
 //!
 //! When the broker goes, the droids driven through it are stopped and the connection is
 //! retried (backoff up to 5 s) while the droids' links stay up; back, the subscriptions and
-//! the retained state are made anew.
+//! the retained topics are made anew. Telemetry (samples, collisions, battery readings) that
+//! could not be delivered meanwhile is dropped, never replayed late (issue 31 point 1): the
+//! router drops it while the droid's connection is down, and what the client still held
+//! for the broker is taken out of its queue; `stopped`, `link` objects, replies and errors
+//! are kept and delivered after the reconnect.
 //!
 //! What arrives is handled by an [`Inbox`] (no connection in it: the fuzz target drives
 //! it): a retained command never drives (issue 26 point 5), a payload over the command
@@ -172,6 +180,25 @@ pub fn topic(prefix: &str, t: &str, leaf: &str) -> String {
     format!("{prefix}/{t}/{leaf}")
 }
 
+/// The topic of the bridge's `hello` object (retained).
+pub fn bridge_topic(prefix: &str) -> String {
+    format!("{prefix}/bridge")
+}
+
+/// The topic leaves of telemetry: dropped, never replayed, when the broker was away.
+pub const TELEMETRY_LEAVES: [&str; 3] = ["telemetry", "collision", "battery"];
+
+/// Whether a request the MQTT client still holds is telemetry (to be dropped when the
+/// connection was lost, not replayed late).
+fn is_telemetry(r: &rumqttc::Request) -> bool {
+    match r {
+        rumqttc::Request::Publish(p) => TELEMETRY_LEAVES
+            .iter()
+            .any(|l| p.topic.rsplit('/').next() == Some(*l)),
+        _ => false,
+    }
+}
+
 /// Where an object goes: topic leaf and whether it is retained.
 fn route(o: &Out) -> (&'static str, bool) {
     match o {
@@ -179,6 +206,7 @@ fn route(o: &Out) -> (&'static str, bool) {
         Out::Collision { .. } => ("collision", false),
         Out::Battery { .. } => ("battery", false),
         Out::Link { .. } => ("state", true),
+        Out::Info { .. } => ("info", true),
         Out::Hello { .. } | Out::Stopped { .. } | Out::Reply { .. } | Out::Error { .. } => {
             ("reply", false)
         }
@@ -463,6 +491,15 @@ pub async fn run(
         // By the droid's index: two droids may share a name, never a topic.
         while let Some(r) = rx.recv_routed().await {
             let (i, o) = (r.droid.unwrap_or(0), r.out);
+            // Telemetry nobody can receive now is dropped: kept, it would arrive after the
+            // reconnect as if the droid were doing it then.
+            if super::outbox::droppable(&o)
+                && states
+                    .get(i)
+                    .is_some_and(|s| *s.borrow() != BrokerState::Connected)
+            {
+                continue;
+            }
             let (leaf, retain) = route(&o);
             let q = if retain {
                 QoS::AtLeastOnce
@@ -486,8 +523,20 @@ pub async fn run(
         _ = stopped => {}
         Some(why) = fatal.recv() => result = Err(why),
     }
-    // A clean goodbye sends no will: say offline ourselves, then disconnect.
-    for ((name, t), client) in members.iter().zip(&clients) {
+    // A clean goodbye sends no will: say offline ourselves, clear what describes a running
+    // bridge, then disconnect.
+    for (i, ((name, t), client)) in members.iter().zip(&clients).enumerate() {
+        let mut gone: Vec<String> = discovery(&bridge, &settings.prefix, i)
+            .into_iter()
+            .map(|(t, _)| t)
+            .collect();
+        gone.push(topic(&settings.prefix, t, "info"));
+        if i == 0 {
+            gone.insert(0, bridge_topic(&settings.prefix));
+        }
+        for g in gone {
+            let _ = client.try_publish(g, QoS::AtLeastOnce, true, Vec::new());
+        }
         let _ = client.try_publish(
             topic(&settings.prefix, t, "state"),
             QoS::AtLeastOnce,
@@ -505,6 +554,26 @@ pub async fn run(
         l.abort();
     }
     result
+}
+
+/// Droid `i`'s Home Assistant discovery messages, when the bridge was asked for them.
+fn discovery(bridge: &Bridge, prefix: &str, i: usize) -> Vec<(String, String)> {
+    let (Some(ha), Some(m), Some(t)) = (
+        bridge.settings().homeassistant.as_deref(),
+        bridge.fleet().member(i),
+        bridge.topic(i),
+    ) else {
+        return Vec::new();
+    };
+    super::homeassistant::configs(
+        ha,
+        &super::homeassistant::Droid {
+            prefix,
+            topic: t,
+            name: &m.name,
+            model: m.model,
+        },
+    )
 }
 
 /// One droid's connection: subscribe on every connect, hand commands to the bridge, stop the
@@ -530,23 +599,44 @@ async fn connection(
     let mut backoff = Duration::from_millis(250);
     let mut up = false;
     let mut ever = false;
+    let mut closing = false;
     loop {
         match eventloop.poll().await {
             Ok(Event::Incoming(Packet::ConnAck(_))) => {
                 up = true;
+                let again = ever;
                 ever = true;
                 takeovers.connected(Instant::now());
                 backoff = Duration::from_millis(250);
+                // Telemetry held from before the loss goes, the rest is delivered.
+                eventloop.pending.retain(|r| !is_telemetry(r));
                 let _ = client.try_subscribe(cmd.clone(), qos(settings.qos));
-                // The retained state anew (the will may have replaced it).
-                if let Some(s) = bridge.fleet().link_state(i) {
-                    let now = link_out(&name, &s.borrow());
+                // The retained state anew (the will may have replaced it); at the first
+                // connection the droid's link feed says it (once).
+                if again && let Some(s) = bridge.fleet().link_state(i) {
+                    let now = link_out(&name, &s.borrow(), bridge.is_ready(i));
                     let _ = client.try_publish(
                         topic(&settings.prefix, &t, "state"),
                         QoS::AtLeastOnce,
                         true,
                         now.to_json(),
                     );
+                }
+                // What the droid and the bridge are, retained (a broker restarted without
+                // persistence forgot them).
+                let mut retained: Vec<(String, Out)> = bridge
+                    .info(i)
+                    .map(|o| (topic(&settings.prefix, &t, "info"), o))
+                    .into_iter()
+                    .collect();
+                if i == 0 {
+                    retained.push((bridge_topic(&settings.prefix), bridge.hello()));
+                }
+                for (topic, o) in retained {
+                    let _ = client.try_publish(topic, QoS::AtLeastOnce, true, o.to_json());
+                }
+                for (topic, payload) in discovery(&bridge, &settings.prefix, i) {
+                    let _ = client.try_publish(topic, QoS::AtLeastOnce, true, payload);
                 }
                 if *state.borrow() != BrokerState::Connecting {
                     eprintln!("droidctl: {name}: connected to the broker again");
@@ -558,10 +648,17 @@ async fn connection(
                     eprintln!("{said}");
                 }
             }
-            Ok(Event::Outgoing(rumqttc::Outgoing::Disconnect)) => return,
+            // Said goodbye: wait for the broker to close the connection, so it has read
+            // everything before (a process that ends with unread data on its socket resets
+            // the connection, and the broker may drop what it had not read yet: the
+            // retained clears of a clean end).
+            Ok(Event::Outgoing(rumqttc::Outgoing::Disconnect)) => closing = true,
             Ok(_) => {}
+            Err(_) if closing => return,
             Err(e) => {
                 let why = e.to_string();
+                // Telemetry that did not go out before the loss is not sent late.
+                eventloop.pending.retain(|r| !is_telemetry(r));
                 if up {
                     up = false;
                     bridge.release([i], "broker_lost");

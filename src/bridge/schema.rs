@@ -47,7 +47,8 @@ pub enum Cmd {
         speed: u8,
         heading: Heading,
     },
-    /// ROS's `cmd_vel`: forward m/s (negative backs up) and yaw rad/s (positive turns left).
+    /// ROS's `cmd_vel`: forward m/s (negative backs up) and yaw rad/s (positive turns left);
+    /// as flat numbers or as ROS's `geometry_msgs/Twist` (`linear.x`, `angular.z`).
     Twist {
         linear: f32,
         angular: f32,
@@ -298,8 +299,8 @@ fn parse_object(obj: &Map<String, Value>) -> Result<Request, Refusal> {
                 .ok_or_else(|| field_err("heading is 0..=359"))?,
         },
         "twist" => Cmd::Twist {
-            linear: f.number("linear", 5.0)?,
-            angular: f.number("angular", 20.0)?,
+            linear: f.vector("linear", 'x', 5.0)?,
+            angular: f.vector("angular", 'z', 20.0)?,
         },
         "stop" => Cmd::Stop,
         "estop" => Cmd::Estop,
@@ -361,6 +362,46 @@ impl Fields<'_> {
             .filter(|n| n.is_finite() && n.abs() <= limit)
             .map(|n| n as f32)
             .ok_or_else(|| field_err(format!("`{k}` is a number in -{limit}..={limit}, not {v}")))
+    }
+
+    /// A number within ±`limit`, or ROS's vector `{"x":…,"y":…,"z":…}` whose `axis` is
+    /// that number and whose other components are 0 (a droid rolls on the ground: it
+    /// cannot move sideways, climb, pitch or roll). Missing components are 0.
+    fn vector(&self, k: &str, axis: char, limit: f64) -> Result<f32, Refusal> {
+        let Value::Object(v) = self.get(k)? else {
+            return self.number(k, limit);
+        };
+        let mut out = 0.0;
+        for (c, x) in v {
+            let n = x.as_f64().filter(|n| n.is_finite());
+            match (c.as_str(), n) {
+                ("x" | "y" | "z", None) => {
+                    return Err(field_err(format!("`{k}.{c}` is a number, not {x}")));
+                }
+                (c1, Some(n)) if c1.len() == 1 && c1.starts_with(axis) => {
+                    if n.abs() > limit {
+                        return Err(field_err(format!(
+                            "`{k}.{c}` is a number in -{limit}..={limit}, not {x}"
+                        )));
+                    }
+                    out = n as f32;
+                }
+                ("x" | "y" | "z", Some(0.0)) => {}
+                ("x" | "y" | "z", Some(_)) => {
+                    return Err(field_err(format!(
+                        "`{k}.{c}` is {x}: droidctl's droids roll on the ground and move only \
+                         by linear.x (forward) and angular.z (turn left); the other components \
+                         must be 0"
+                    )));
+                }
+                _ => {
+                    return Err(field_err(format!(
+                        "`{k}` takes x, y and z (ROS geometry_msgs/Vector3), not `{c}`"
+                    )));
+                }
+            }
+        }
+        Ok(out)
     }
 
     fn word<'w>(&self, k: &str, words: &[&'w str]) -> Result<&'w str, Refusal> {
@@ -513,7 +554,7 @@ fn integer(v: &Value) -> Option<i64> {
     })
 }
 
-/// A droid as `hello` lists it.
+/// A droid as `hello` lists it (and its MQTT `info` topic says).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct DroidInfo {
     pub droid: String,
@@ -525,6 +566,47 @@ pub struct DroidInfo {
     pub origin: String,
     /// The MQTT topic level the droid's topics use.
     pub topic: String,
+    /// What it can do, in the words an `unsupported` error's `capability` uses (`dome`,
+    /// `legs`, `lights`, `animations`, `sounds`, `matrix`, `streaming`, `reverse`).
+    pub capabilities: Vec<&'static str>,
+    /// New telemetry samples a second this droid offers at most: the bridge's `--rate`, or
+    /// the droid's own streaming rate when that is slower (a sample goes out only when the
+    /// droid reported something new).
+    pub telemetry_hz: u16,
+    /// Its speed at 255 in m/s: a twist's `linear` beyond it is capped (the reply says so).
+    pub top_speed_m_s: f32,
+}
+
+/// Where a droid is, as a ROS user reads it (REP-103, REP-105 `odom`): metres and radians in
+/// a frame fixed where the droid's heading was last reset (its power-on or aim), x forward
+/// (heading 0, droidctl's +y), y left (droidctl's −x), yaw counter-clockwise from x.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Odom {
+    pub x_m: f32,
+    pub y_m: f32,
+    /// −π..=π; `null` before the droid reported a heading.
+    pub yaw_rad: Option<f32>,
+}
+
+impl Odom {
+    /// From droidctl's frame: `x_cm`, `y_cm` (heading 0 is +y) and the heading in degrees
+    /// clockwise.
+    pub fn from_droid(x_cm: f32, y_cm: f32, heading_deg: Option<f32>) -> Odom {
+        Odom {
+            x_m: y_cm / 100.0,
+            y_m: -x_cm / 100.0,
+            yaw_rad: heading_deg.map(|h| {
+                let ccw = (-h).to_radians();
+                // Wrapped to −π..=π.
+                let w = ccw.rem_euclid(std::f32::consts::TAU);
+                if w > std::f32::consts::PI {
+                    w - std::f32::consts::TAU
+                } else {
+                    w
+                }
+            }),
+        }
+    }
 }
 
 /// Everything the bridge sends.
@@ -538,11 +620,21 @@ pub enum Out {
         command_timeout_ms: u64,
         telemetry_hz: u16,
     },
-    /// A sample as `run --json` prints it, naming its droid.
+    /// A sample as `run --json` prints it, naming its droid, and the same position as a
+    /// ROS user reads it ([`Odom`]; `null` before the droid reported a position).
     Telemetry {
         droid: String,
         #[serde(flatten)]
         sample: Sample,
+        odom: Option<Odom>,
+    },
+    /// One droid (retained on its MQTT `info` topic): what `hello` says of it, and the
+    /// settings that bind a client.
+    Info {
+        droidctl: &'static str,
+        #[serde(flatten)]
+        info: DroidInfo,
+        command_timeout_ms: u64,
     },
     Collision {
         droid: String,
@@ -562,10 +654,12 @@ pub enum Out {
         volts: f32,
     },
     /// The droid's link: `connecting`, `connected`, `reconnecting`, `closed`; `offline` is
-    /// the MQTT last will (the bridge is gone).
+    /// the MQTT last will (the bridge is gone). `ready`: connected and its connect setup
+    /// done, so a drive sent now moves it (R2-D2 stands on three legs first).
     Link {
         droid: String,
         state: &'static str,
+        ready: bool,
         #[serde(skip_serializing_if = "Option::is_none")]
         attempt: Option<u32>,
         #[serde(skip_serializing_if = "Option::is_none")]
@@ -615,6 +709,7 @@ impl Out {
     pub fn droid(&self) -> Option<&str> {
         match self {
             Out::Hello { .. } => None,
+            Out::Info { info, .. } => Some(&info.droid),
             Out::Telemetry { droid, .. }
             | Out::Collision { droid, .. }
             | Out::Battery { droid, .. }

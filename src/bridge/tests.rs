@@ -38,6 +38,8 @@ pub(super) struct RigOptions {
     pub(super) backoff: Option<crate::link::backoff::Backoff>,
     /// Each droid's name (the simulator's when absent).
     pub(super) names: Vec<String>,
+    /// The bridge's telemetry rate (the default's when absent).
+    pub(super) telemetry_hz: Option<u16>,
 }
 
 pub(super) async fn rig(models: &[Model], timeout_ms: u64) -> Rig {
@@ -101,6 +103,7 @@ pub(super) async fn rig_with(models: &[Model], timeout_ms: u64, o: RigOptions) -
     }
     let settings = Settings {
         command_timeout: Duration::from_millis(timeout_ms),
+        telemetry_hz: o.telemetry_hz.unwrap_or(Settings::default().telemetry_hz),
         ..Settings::default()
     };
     let setups = vec![SetupOptions::default(); fleet.len()];

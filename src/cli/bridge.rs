@@ -69,6 +69,11 @@ pub struct BridgeArgs {
     /// drive your droids (use TLS and a password).
     #[arg(long)]
     pub allow_remote: bool,
+    /// MQTT: publish Home Assistant discovery (retained under PREFIX, homeassistant by
+    /// default) so each droid appears in Home Assistant with its battery, connection,
+    /// collisions, a stop button and its main light; removed when the bridge ends cleanly.
+    #[arg(long, value_name = "PREFIX", num_args = 0..=1, default_missing_value = "homeassistant")]
+    pub homeassistant: Option<String>,
 }
 
 fn parse_broker_listen(s: &str) -> Result<std::net::SocketAddr, String> {
@@ -150,6 +155,7 @@ fn settings(args: &BridgeArgs, config: &crate::config::Config) -> Settings {
         ),
         telemetry_hz: args.rate.unwrap_or(b.telemetry_hz),
         battery_poll: Duration::from_secs(b.battery_poll_s),
+        homeassistant: args.homeassistant.clone(),
     }
 }
 
@@ -164,6 +170,10 @@ fn mqtt_settings(
         .clone()
         .unwrap_or_else(|| b.topic_prefix.clone());
     crate::config::bridge::check_prefix(&prefix).map_err(CliError::usage)?;
+    if let Some(ha) = &args.homeassistant {
+        crate::config::bridge::check_prefix(ha)
+            .map_err(|e| CliError::usage(format!("--homeassistant: {e}")))?;
+    }
     let password = match &args.password_file {
         Some(p) => Some(password_file(p).map_err(CliError::usage)?),
         None => std::env::var("DROIDCTL_MQTT_PASSWORD").ok(),
@@ -236,6 +246,7 @@ fn mqtt_only(args: &BridgeArgs) -> Vec<&'static str> {
         ("--ca-file", args.ca_file.is_some()),
         ("--allow-remote", args.allow_remote),
         ("--listen", args.listen.is_some()),
+        ("--homeassistant", args.homeassistant.is_some()),
     ]
     .into_iter()
     .filter_map(|(name, given)| given.then_some(name))

@@ -144,7 +144,12 @@ pub fn resolve(
         .or_else(|| caps.rates.iter().copied().min())
         .unwrap_or(0);
     if rate != req.rate_hz {
-        notes.push(format!("{}/s is not offered: {rate}/s", req.rate_hz));
+        let offered: Vec<String> = caps.rates.iter().map(u16::to_string).collect();
+        notes.push(format!(
+            "{}/s is not offered (this droid offers {}/s): {rate}/s",
+            req.rate_hz,
+            offered.join(", ")
+        ));
     }
     let bytes = sample_bytes(sensors);
     let limit = max_rate(caps, bytes);

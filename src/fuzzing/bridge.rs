@@ -177,6 +177,7 @@ fn check(stream: &[u8], lines: &[String]) {
         assert!(
             [
                 "hello",
+                "info",
                 "telemetry",
                 "collision",
                 "battery",

@@ -1,0 +1,195 @@
+//! Home Assistant MQTT discovery (issue 31 point 6), with `--homeassistant` (off by
+//! default): each droid appears in Home Assistant by itself as a device with its battery,
+//! its connection, its collisions, a stop button and its main light where it has one.
+//!
+//! Sans-IO: [`configs`] makes the retained discovery messages, the MQTT transport publishes
+//! them at each connection to the broker and clears them (an empty retained message, which
+//! Home Assistant reads as "remove") when the bridge ends cleanly. Home Assistant's
+//! documented discovery topic is `<discovery_prefix>/<component>/[<node_id>/]<object_id>/config`
+//! (<https://www.home-assistant.io/integrations/mqtt/#mqtt-discovery>); the payload keys are
+//! those of the MQTT sensor, binary sensor, button and light (template schema) integrations.
+//! The entities read the bridge's own topics: nothing is published twice.
+
+use super::mqtt::topic;
+use crate::model::Model;
+use serde_json::{Value, json};
+
+/// Home Assistant's default discovery prefix.
+pub const DEFAULT_PREFIX: &str = "homeassistant";
+
+/// What a droid's entities are made of.
+pub struct Droid<'a> {
+    /// The bridge's first topic level (`droidctl`).
+    pub prefix: &'a str,
+    /// The droid's topic level.
+    pub topic: &'a str,
+    pub name: &'a str,
+    pub model: Model,
+}
+
+/// The light group Home Assistant switches: the first the droid lights in colour.
+fn main_light(model: Model) -> Option<&'static str> {
+    use crate::script::{Action, LedGroup};
+    let family = crate::family::for_model(model);
+    [
+        (LedGroup::Front, "front"),
+        (LedGroup::Back, "back"),
+        (LedGroup::Logic, "logic"),
+        (LedGroup::Holo, "holo"),
+    ]
+    .into_iter()
+    .find(|(g, _)| family.led(model, &Action::LedRgb(*g, [0, 0, 0])).is_some())
+    .map(|(_, n)| n)
+}
+
+/// A command as the bridge takes it, for a payload Home Assistant sends.
+fn command(cmd: Value) -> String {
+    let mut c = json!({"v": super::schema::VERSION});
+    if let (Some(c), Value::Object(m)) = (c.as_object_mut(), cmd) {
+        c.extend(m);
+    }
+    c.to_string()
+}
+
+/// The node id of droid `d`'s entities: the bridge's prefix and the droid's topic level
+/// (two bridges with different prefixes do not collide), as discovery allows
+/// (`[A-Za-z0-9_-]`).
+pub fn node_id(d: &Droid) -> String {
+    format!("{}_{}", super::topic_name(d.prefix), d.topic)
+}
+
+/// Droid `d`'s discovery messages under `ha` (the discovery prefix): (topic, payload).
+pub fn configs(ha: &str, d: &Droid) -> Vec<(String, String)> {
+    let node = node_id(d);
+    let state = topic(d.prefix, d.topic, "state");
+    let cmd = topic(d.prefix, d.topic, "cmd");
+    let device = json!({
+        "identifiers": [node.clone()],
+        "name": d.name,
+        "model": d.model.display_name(),
+        "sw_version": concat!("droidctl ", env!("CARGO_PKG_VERSION")),
+    });
+    // Unavailable unless the droid's link is up (the last will says offline).
+    let availability = json!([{
+        "topic": state,
+        "value_template": "{{ 'online' if value_json.state == 'connected' else 'offline' }}",
+    }]);
+    let family = crate::family::for_model(d.model);
+    let mut entities: Vec<(&str, &str, Value)> = Vec::new();
+    if family.battery_request_for(d.model).is_some() {
+        entities.push((
+            "sensor",
+            "battery",
+            json!({
+                "name": "Battery",
+                "state_topic": topic(d.prefix, d.topic, "battery"),
+                "value_template": "{{ value_json.volts }}",
+                "device_class": "voltage",
+                "unit_of_measurement": "V",
+                "state_class": "measurement",
+                "availability": availability,
+            }),
+        ));
+    }
+    entities.push((
+        "binary_sensor",
+        "connection",
+        json!({
+            "name": "Connection",
+            "state_topic": state,
+            "value_template": "{{ 'ON' if value_json.state == 'connected' else 'OFF' }}",
+            "device_class": "connectivity",
+        }),
+    ));
+    entities.push((
+        "sensor",
+        "collisions",
+        json!({
+            "name": "Collisions",
+            "state_topic": topic(d.prefix, d.topic, "collision"),
+            "value_template": "{{ value_json.collisions }}",
+            "state_class": "total_increasing",
+            "icon": "mdi:car-brake-alert",
+            "availability": availability,
+        }),
+    ));
+    entities.push((
+        "button",
+        "stop",
+        json!({
+            "name": "Stop",
+            "command_topic": cmd,
+            "payload_press": command(json!({"cmd": "stop"})),
+            "icon": "mdi:stop-circle",
+            "availability": availability,
+        }),
+    ));
+    if let Some(group) = main_light(d.model) {
+        entities.push((
+            "light",
+            "light",
+            json!({
+                "name": "Light",
+                "schema": "template",
+                "command_topic": cmd,
+                "command_on_template":
+                    command(json!({"cmd": "lights", "group": group, "rgb": [255, 255, 255]})),
+                "command_off_template":
+                    command(json!({"cmd": "lights", "group": group, "rgb": [0, 0, 0]})),
+                "optimistic": true,
+                "availability": availability,
+            }),
+        ));
+    }
+    entities
+        .into_iter()
+        .map(|(component, object, mut payload)| {
+            if let Some(p) = payload.as_object_mut() {
+                p.insert("unique_id".into(), json!(format!("{node}_{object}")));
+                p.insert("device".into(), device.clone());
+            }
+            (
+                format!("{ha}/{component}/{node}/{object}/config"),
+                payload.to_string(),
+            )
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn r2d2_has_every_entity_and_robi_no_battery_poll() {
+        let d = Droid {
+            prefix: "droidctl",
+            topic: "D2-0001",
+            name: "D2-0001",
+            model: Model::R2D2,
+        };
+        let topics: Vec<String> = configs("homeassistant", &d)
+            .into_iter()
+            .map(|(t, _)| t)
+            .collect();
+        assert_eq!(
+            topics,
+            [
+                "homeassistant/sensor/droidctl_D2-0001/battery/config",
+                "homeassistant/binary_sensor/droidctl_D2-0001/connection/config",
+                "homeassistant/sensor/droidctl_D2-0001/collisions/config",
+                "homeassistant/button/droidctl_D2-0001/stop/config",
+                "homeassistant/light/droidctl_D2-0001/light/config",
+            ]
+        );
+        for (_, p) in configs("homeassistant", &d) {
+            let v: Value = serde_json::from_str(&p).unwrap();
+            assert!(
+                v["unique_id"]
+                    .as_str()
+                    .unwrap()
+                    .starts_with("droidctl_D2-0001_")
+            );
+        }
+    }
+}
