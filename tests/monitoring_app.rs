@@ -136,7 +136,7 @@ async fn the_scope_shows_chosen_channels_and_its_keys_work() {
     let keys = vec![
         (3000, press(Key::ch('g'))),
         // The channel list: the first channel offered is pitch; switch it on.
-        (3100, press(Key::plain(KeyCode::Tab))),
+        (3100, press(Key::ch('C'))),
         (3200, press(Key::plain(KeyCode::Space))),
         (3300, press(Key::plain(KeyCode::Esc))),
         // Longer window, fixed axes, then pause: the plot stays at 6 s.

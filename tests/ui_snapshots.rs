@@ -34,6 +34,7 @@ fn with_help(s: &mut AppState) {
     let config = droidctl::config::Config::defaults();
     s.help = droidctl::app::help::live(&config);
     s.help_nav = droidctl::app::help::nav(&config.keymap);
+    s.footer = droidctl::app::help::footer(&config.keymap);
 }
 
 fn entry(at_ms: u64, dir: Direction, p: Packet) -> LogLine {
@@ -395,7 +396,22 @@ fn help_overlay_lists_every_binding_at_80x24() {
         pages[0].iter().any(|r| r.contains("page 1/")),
         "the footer says so"
     );
-    for section in &s.help {
+    // Help lists what applies to this droid (an R2-D2 alone): no BOLT, RVR or fleet keys.
+    let all: String = pages.iter().flatten().cloned().collect();
+    for absent in [
+        "type on the matrix",
+        "tank mode",
+        "fleet: drive",
+        "aim mode",
+    ] {
+        assert!(!all.contains(absent), "{absent} listed for R2-D2");
+    }
+    let r2: Vec<_> = s
+        .help
+        .iter()
+        .map(|sec| sec.applying(Model::R2D2, false))
+        .collect();
+    for section in &r2 {
         for h in &section.lines {
             assert!(
                 pages
@@ -411,7 +427,7 @@ fn help_overlay_lists_every_binding_at_80x24() {
     assert!(pages[0].iter().any(|r| r.contains("drive forward (hold)")));
     // At 160×48 everything is on one page.
     let big = rows(render(&s, 160, 48).backend().buffer());
-    for h in s.help.iter().flat_map(|sec| &sec.lines) {
+    for h in r2.iter().flat_map(|sec| &sec.lines) {
         assert!(
             big.iter().any(|r| r.contains(&h.action)),
             "missing {:?}",
@@ -845,7 +861,8 @@ fn find_after(text: &[String], anchor: &str, needle: &str) -> Option<(u16, u16)>
 
 #[test]
 fn robi_panels_light_pressed_buttons_and_lit_lamps_and_never_cut_the_lost_count() {
-    for (w, h) in [(60, 16), (80, 24), (100, 30), (160, 48)] {
+    // (31 rows: the context footer takes one, the panels keep the room 30 rows had)
+    for (w, h) in [(60, 16), (80, 24), (100, 31), (160, 48)] {
         let term = render(&robi_driving(), w, h);
         let buf = term.backend().buffer();
         let text = rows(buf);

@@ -105,6 +105,7 @@ pub(super) fn build(droids: Vec<Origin>, opts: AppOptions) -> App {
         GamepadStatus::Disabled
     };
     state.help_nav = super::help::nav(&keymap);
+    state.footer = super::help::footer(&keymap);
     state.help = if live {
         super::help::live(&config)
     } else {

@@ -11,6 +11,7 @@ mod collisions;
 mod compass;
 mod dome;
 mod drive;
+mod footer;
 pub mod layout;
 mod leds;
 mod log_pane;
@@ -45,6 +46,16 @@ pub fn draw(frame: &mut Frame, state: &AppState) {
         area.y += 1;
         area.height -= 1;
     }
+    // The context footer takes the bottom row once the screen has room for panels.
+    if area.height > MIN_HEIGHT {
+        area.height -= 1;
+        let row = ratatui::layout::Rect {
+            y: area.bottom(),
+            height: 1,
+            ..area
+        };
+        footer::render(frame, row, state);
+    }
     let p = layout::plan(area);
     // The newer robots' panels want a few more rows in the dome's place (BOLT's matrix 4
     // rows of half blocks, RVR two lines): taken from the panels around it.
@@ -59,10 +70,9 @@ pub fn draw(frame: &mut Frame, state: &AppState) {
     status::render(frame, p.status, state);
     if state.droid().scope.visible {
         // The scope takes everything below the status bar.
-        let area = frame.area();
         let body = ratatui::layout::Rect {
             y: p.status.bottom(),
-            height: area.height.saturating_sub(p.status.height),
+            height: area.bottom().saturating_sub(p.status.bottom()),
             ..area
         };
         scope::render(frame, body, state);

@@ -87,7 +87,7 @@ pub fn render(frame: &mut Frame, area: Rect, s: &AppState) {
     }
     if spans.is_empty() {
         spans.push(Span::styled(
-            "no channels chosen: the channels key (Tab) opens the list",
+            "no channels chosen: the channels key (C) opens the list",
             theme::dim(),
         ));
     }

@@ -14,7 +14,17 @@ pub fn render(frame: &mut Frame, s: &AppState) {
     let area = frame.area();
     match &s.overlay {
         Overlay::None => {}
-        Overlay::Help => help::render(frame, area, &s.help, &s.help_nav, s.help_page),
+        Overlay::Help => {
+            // Only what applies to the chosen droid (R2's help lists no BOLT keys).
+            let (model, fleet) = (s.droid().model, s.droids.len() > 1);
+            let shown: Vec<_> = s
+                .help
+                .iter()
+                .map(|h| h.applying(model, fleet))
+                .filter(|h| !h.lines.is_empty())
+                .collect();
+            help::render(frame, area, &shown, &s.help_nav, s.help_page)
+        }
         Overlay::Animations { selected } => {
             palette::render(frame, area, "Animations", &s.animations, *selected)
         }

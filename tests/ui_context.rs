@@ -1,0 +1,106 @@
+//! Issue 30: the context footer and contextual help (point 1), from the one key table. The
+//! footer shows the few keys that matter in the place on top and for the chosen droid, then
+//! `?` for the rest; help lists only what applies to the chosen droid.
+
+use droidctl::app::state::{AppState, Focus, Overlay};
+use droidctl::model::Model;
+use ratatui::Terminal;
+use ratatui::backend::TestBackend;
+
+fn state(models: &[Model]) -> AppState {
+    let droids = models
+        .iter()
+        .enumerate()
+        .map(|(i, m)| droidctl::app::state::DroidState::new(*m, format!("D-{i}")))
+        .collect();
+    let mut s = AppState::for_droids(droids);
+    let config = droidctl::config::Config::defaults();
+    s.help = droidctl::app::help::live(&config);
+    s.help_nav = droidctl::app::help::nav(&config.keymap);
+    s.footer = droidctl::app::help::footer(&config.keymap);
+    s
+}
+
+fn screen(s: &AppState, w: u16, h: u16) -> Vec<String> {
+    let mut term = Terminal::new(TestBackend::new(w, h)).expect("test backend");
+    term.draw(|f| droidctl::ui::draw(f, s)).expect("draw");
+    let buf = term.backend().buffer();
+    (0..h)
+        .map(|y| (0..w).map(|x| buf[(x, y)].symbol()).collect())
+        .collect()
+}
+
+fn footer(s: &AppState) -> String {
+    screen(s, 80, 24).pop().expect("a bottom row")
+}
+
+#[test]
+fn the_footer_follows_the_place_and_the_droid() {
+    let r2 = state(&[Model::R2D2]);
+    let f = footer(&r2);
+    assert!(f.contains("Space stop") && f.contains("1 tripod"), "{f}");
+    assert!(f.contains("? more keys") && f.contains("q quit"), "{f}");
+    assert!(!f.contains("matrix") && !f.contains("tank"), "{f}");
+    let f = footer(&state(&[Model::Bolt]));
+    assert!(f.contains("i matrix") && !f.contains("tripod"), "{f}");
+    let f = footer(&state(&[Model::Rvr]));
+    assert!(f.contains("v tank") && !f.contains("matrix"), "{f}");
+    let f = footer(&state(&[Model::Robi42]));
+    assert!(!f.contains("turbo") && f.contains("l log"), "{f}");
+    let f = footer(&state(&[Model::R2D2, Model::BB8]));
+    assert!(
+        f.contains("Tab next droid") && f.contains("y mirror"),
+        "{f}"
+    );
+    // Each place its own keys.
+    let mut log = r2.clone();
+    log.focus = Focus::Log;
+    let f = footer(&log);
+    assert!(f.contains("p pause") && f.contains("Esc back"), "{f}");
+    assert!(!f.contains("Space stop"), "{f}");
+    let mut scope = r2.clone();
+    scope.droid_mut().scope.visible = true;
+    let f = footer(&scope);
+    assert!(f.contains("C channels") && f.contains("g close"), "{f}");
+    let mut tuning = r2.clone();
+    tuning.overlay = Overlay::Channels { selected: 0 };
+    let f = footer(&tuning);
+    assert!(f.contains("Enter apply") && f.contains("Esc close"), "{f}");
+}
+
+#[test]
+fn the_footer_never_cuts_an_entry_and_keeps_help() {
+    let s = state(&[Model::R2D2, Model::BB8]);
+    for w in [60u16, 70, 80, 100, 200] {
+        let rows = screen(&s, w, 24);
+        let f = rows.last().expect("bottom row");
+        assert!(f.contains("? more keys"), "{w}: {f}");
+        assert!(!f.contains('…'), "{w}: {f}");
+    }
+}
+
+#[test]
+fn help_lists_what_applies_to_the_chosen_droid() {
+    let all = |s: &AppState| -> String {
+        let mut s = s.clone();
+        s.overlay = Overlay::Help;
+        let mut text = String::new();
+        for page in 0..4 {
+            s.help_page = page;
+            text.push_str(&screen(&s, 80, 24).join("\n"));
+        }
+        text
+    };
+    let r2 = all(&state(&[Model::R2D2]));
+    assert!(
+        r2.contains("dome left") && r2.contains("stance: bipod"),
+        "{r2}"
+    );
+    for absent in ["matrix", "tank mode", "fleet:", "calibrate", "aim mode"] {
+        assert!(!r2.contains(absent), "R2's help lists {absent}");
+    }
+    let bolt = all(&state(&[Model::Bolt]));
+    assert!(bolt.contains("type on the matrix") && !bolt.contains("dome left"));
+    let fleet = all(&state(&[Model::R2D2, Model::Rvr]));
+    assert!(fleet.contains("fleet: drive the next droid"));
+}
