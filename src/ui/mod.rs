@@ -101,7 +101,12 @@ pub fn draw(frame: &mut Frame, state: &AppState) {
     // RVR's rover panel or the lights; the sensors' place shows Sphero sensors or Robi's I/O
     // and link quality.
     let frames = state.droid().model.reports_state_frames();
-    let (dome_rect, sensors_rect, collisions_rect) = (p.dome, p.sensors, p.collisions);
+    let (dome_rect, mut sensors_rect, mut collisions_rect) = (p.dome, p.sensors, p.collisions);
+    // Robi reports no collisions: its I/O panel takes the collisions' place too.
+    if frames && let (Some(s), Some(c)) = (sensors_rect, collisions_rect) {
+        sensors_rect = Some(s.union(c));
+        collisions_rect = None;
+    }
     if let Some(r) = dome_rect {
         if state.droid().model.has_dome() {
             dome::render(frame, r, state);

@@ -102,13 +102,8 @@ pub fn num(v: f32, prec: usize) -> String {
     if v.abs() >= 1e5 {
         let _ = write!(s, "{v:.1e}");
     } else {
-        // Avoid "-0.0" flicker around zero.
-        let v = if v.abs() < 0.5 * 10f32.powi(-(prec as i32)) {
-            0.0
-        } else {
-            v
-        };
-        let _ = write!(s, "{v:.prec$}");
+        // No "-0.0" (and no flicker around zero).
+        s = crate::units::fixed(f64::from(v), prec);
     }
     s
 }
