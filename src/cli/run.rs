@@ -473,9 +473,11 @@ mod tests {
 
     #[test]
     fn sample_lines_show_no_negative_zero_and_only_what_the_droid_has() {
-        let mut t = crate::telemetry::Telemetry::default();
-        t.pitch = Some(-0.0);
-        t.x_cm = Some(-0.01);
+        let mut t = crate::telemetry::Telemetry {
+            pitch: Some(-0.0),
+            x_cm: Some(-0.01),
+            ..Default::default()
+        };
         let s = mission::sample_of(&t, 1000);
         let line = sample_line(&s);
         assert!(line.contains("pos (0.0, -)"), "{line}");
