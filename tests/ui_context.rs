@@ -104,3 +104,68 @@ fn help_lists_what_applies_to_the_chosen_droid() {
     let fleet = all(&state(&[Model::R2D2, Model::Rvr]));
     assert!(fleet.contains("fleet: drive the next droid"));
 }
+
+fn fleet4() -> AppState {
+    let mut s = state(&[Model::R2D2, Model::BB8, Model::Bolt, Model::Rvr]);
+    for (i, d) in s.droids.iter_mut().enumerate() {
+        d.droid_name = format!("A-rather-long-droid-name-{i}");
+        d.link = droidctl::session::LinkState::Connected;
+    }
+    s
+}
+
+/// Issue 30 point 5: the roster cuts names the same way every frame, and each entry starts
+/// at the same column whatever its state or rates say.
+#[test]
+fn the_roster_does_not_jitter() {
+    let mut a = fleet4();
+    a.mirror = true;
+    let mut b = a.clone();
+    b.droids[0].control.speed = 120;
+    b.droids[0].rate_in = 123.4;
+    b.droids[1].link = droidctl::session::LinkState::Connecting;
+    b.droids[2].telemetry.battery_v = Some(3.9);
+    for w in [80u16, 120, 200] {
+        let ra = screen(&a, w, 24).remove(0);
+        let rb = screen(&b, w, 24).remove(0);
+        for i in 2..=4 {
+            let at = |r: &str| r.find(&format!("»{i}")).map(|x| r[..x].chars().count());
+            assert!(at(&ra).is_some(), "{ra}");
+            assert_eq!(at(&ra), at(&rb), "entry {i} moved at {w}:\n{ra}\n{rb}");
+        }
+        let names = |r: &str| -> Vec<String> {
+            r.split_whitespace()
+                .filter(|t| t.contains("name-") || t.starts_with('…'))
+                .map(String::from)
+                .collect()
+        };
+        assert_eq!(names(&ra).len(), 4, "{ra}");
+        assert_eq!(names(&ra), names(&rb), "names cut differently at {w}");
+    }
+}
+
+/// Issue 30 point 5: the fleet log's header has a droid column over the droids' names.
+#[test]
+fn the_fleet_log_header_has_a_droid_column() {
+    let mut s = fleet4();
+    s.log
+        .push(droidctl::app::packet_log::LogLine::from_droid_entry(
+            &droidctl::session::LogEntry {
+                at: std::time::Duration::from_millis(1200),
+                dir: droidctl::session::Direction::Out,
+                item: droidctl::session::LogItem::packet(
+                    droidctl::protocol::v2::cmd::wake().to_packet(7),
+                ),
+            },
+            "D2-0001".into(),
+        ));
+    let rows = screen(&s, 80, 24);
+    let head = rows
+        .iter()
+        .find(|r| r.contains("time s"))
+        .expect("a header");
+    let line = rows.iter().find(|r| r.contains("D2-0001")).expect("a line");
+    let col = |r: &str, w: &str| r.find(w).map(|x| r[..x].chars().count());
+    assert_eq!(col(head, "droid"), col(line, "D2-0001"), "{head}\n{line}");
+    assert_eq!(col(head, "name"), col(line, "wake"), "{head}\n{line}");
+}
