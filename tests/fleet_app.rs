@@ -433,3 +433,32 @@ async fn a_fleet_capture_replays_every_droid_together() {
     app.await.unwrap();
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Issue 30 point 5: each droid's view is its own and kept when it is chosen again; `Tab`
+/// means "next droid" with the scope on screen too (the scope's channel list is `C`).
+#[tokio::test(start_paused = true)]
+async fn each_droid_keeps_its_view_and_tab_means_the_next_droid_everywhere() {
+    let h = start(None).await;
+    // The scope on droid 0, a longer window.
+    h.tap(Key::ch('g')).await;
+    h.tap(Key::ch('[')).await;
+    sleep(Duration::from_millis(300)).await;
+    let window = seen().droid().scope.window;
+    assert!(seen().droid().scope.visible);
+    // Tab with the scope on screen: the next droid (its own view: no scope), no channel list.
+    h.tap(Key::plain(KeyCode::Tab)).await;
+    sleep(Duration::from_millis(300)).await;
+    let s = seen();
+    assert_eq!(s.chosen, 1);
+    assert_eq!(s.overlay, droidctl::app::state::Overlay::None);
+    assert!(!s.droid().scope.visible);
+    // Back to droid 0 (` is the previous droid): its scope as it was left.
+    h.tap(Key::ch('`')).await;
+    sleep(Duration::from_millis(300)).await;
+    let s = seen();
+    assert_eq!(s.chosen, 0);
+    assert!(s.droid().scope.visible);
+    assert_eq!(s.droid().scope.window, window);
+    h.tap(Key::ch('q')).await;
+    h.app.await.unwrap();
+}
