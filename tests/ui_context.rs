@@ -169,3 +169,68 @@ fn the_fleet_log_header_has_a_droid_column() {
     assert_eq!(col(head, "droid"), col(line, "D2-0001"), "{head}\n{line}");
     assert_eq!(col(head, "name"), col(line, "wake"), "{head}\n{line}");
 }
+
+/// Issue 30 point 6: at 80×24 nothing is cut inside a word: the status row keeps the packet
+/// rates beside the battery (no errors is what goes), a long hint loses whole words, the
+/// settings list shows its whole title and its keys end with "Esc close".
+#[test]
+fn at_80x24_no_word_is_cut() {
+    let mut s = state(&[Model::R2D2]);
+    s.droid_mut().droid_name = "R2-D2 (simulated)".into();
+    s.droid_mut().link = droidctl::session::LinkState::Connected;
+    s.droid_mut().telemetry.battery_v = Some(3.92);
+    s.droid_mut().rate_in = 9.8;
+    s.droid_mut().rate_out = 10.0;
+    let hint = "10/s × 40 B exceeds the BLE budget (20 notifications/s): capped at 10/s — \
+                stream fewer sensors";
+    s.show_hint(hint, std::time::Duration::from_secs(4));
+    let rows = screen(&s, 80, 24);
+    assert!(
+        rows[0].contains("3.92V") && rows[0].contains("in 9.8/s out 10/s"),
+        "{}",
+        rows[0]
+    );
+    let shown = rows[1].trim_start().trim_start_matches("» ");
+    let shown = shown.split('…').next().expect("the hint");
+    assert!(hint.starts_with(shown.trim_end()), "{}", rows[1]);
+    let next = hint[shown.trim_end().len()..].chars().next();
+    assert!(
+        next.is_none_or(char::is_whitespace),
+        "a word cut: {}",
+        rows[1]
+    );
+    s.hint = None;
+    s.overlay = Overlay::Tuning {
+        selected: 0,
+        draft: droidctl::app::monitor::TuningDraft {
+            rate_hz: 10,
+            sensors: droidctl::family::stream::all_groups(Model::R2D2),
+            collision: Default::default(),
+        },
+    };
+    let rows = screen(&s, 80, 24);
+    let all = rows.join("\n");
+    assert!(
+        all.contains("Streaming and collision · now 10/s, measured - "),
+        "{all}"
+    );
+    assert!(all.contains("Enter send · Esc close "), "{all}");
+    insta::assert_snapshot!("context_tuning_80x24", all);
+}
+
+/// Issue 30 point 6: the scope plots channels of different units on their own y axes, and
+/// draws no axis title over the data.
+#[test]
+fn the_scope_gives_each_unit_its_own_axis() {
+    use droidctl::telemetry::history::Channel;
+    let mut s = state(&[Model::R2D2]);
+    s.droid_mut().scope.visible = true;
+    s.droid_mut().scope.channels = vec![Channel::Yaw, Channel::Speed];
+    let rows = screen(&s, 80, 24);
+    let all = rows.join("\n");
+    // Two y axes: two plots' vertical axis lines, one time axis with seconds.
+    let axes = rows.iter().filter(|r| r.contains('└')).count();
+    assert_eq!(axes, 1, "{all}");
+    assert!(!all.contains("deg,cm") && all.contains("0 s"), "{all}");
+    insta::assert_snapshot!("context_scope_two_units_80x24", all);
+}
