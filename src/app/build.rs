@@ -112,6 +112,7 @@ pub(super) fn build(droids: Vec<Origin>, opts: AppOptions) -> App {
         super::help::replay(&keymap)
     };
     App {
+        area: Default::default(),
         state,
         io,
         replayed: Vec::new(),

@@ -42,6 +42,8 @@ pub(super) struct App {
     /// What the input routing did so far, and where it is published.
     pub trace: InputTrace,
     pub trace_tx: Option<tokio::sync::watch::Sender<InputTrace>>,
+    /// The terminal's area at the last frame (where the mouse's clicks land).
+    pub area: ratatui::layout::Rect,
 }
 
 /// What the input routing did, published after every terminal or gamepad event: the tests

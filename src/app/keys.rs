@@ -47,6 +47,11 @@ impl App {
                 self.dirty = true;
                 None
             }
+            TermEvent::Mouse { kind, col, row } => {
+                self.dirty = true;
+                self.on_mouse(kind, col, row);
+                None
+            }
             TermEvent::Key {
                 key,
                 kind: KeyKind::Release,
@@ -159,7 +164,7 @@ impl App {
         self.state.overlay = Overlay::Help;
     }
 
-    fn palette_key(&mut self, key: Key, new_press: bool) {
+    pub(super) fn palette_key(&mut self, key: Key, new_press: bool) {
         let (selected, animations) = match self.state.overlay {
             Overlay::Animations { selected } => (selected, true),
             Overlay::Sounds { selected } => (selected, false),

@@ -11,6 +11,8 @@
 //! - [`battery`]: the battery poller;
 //! - `fleet`, [`roster`]: several droids (the parked ones, choosing, mirror) and the roster
 //!   strip's view of them.
+//! - [`layout`]: where each part of the screen goes (the UI draws there, the mouse hits
+//!   there); `mouse`: wheel and clicks;
 //! - [`matrix`]: BOLT's LED matrix as droidctl drew it, its prompt, colour and compass keys.
 
 mod actions;
@@ -23,8 +25,10 @@ mod fleet;
 pub mod help;
 pub mod input;
 mod keys;
+pub mod layout;
 pub mod matrix;
 pub mod monitor;
+mod mouse;
 pub mod pacing;
 pub mod packet_log;
 mod pad;

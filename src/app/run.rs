@@ -274,9 +274,10 @@ async fn run_droids<B: Backend>(
                 app.replay_frame();
                 if app.dirty {
                     app.state.now = app.clock();
-                    terminal
+                    app.area = terminal
                         .draw(|f| draw(f, &app.state))
-                        .map_err(|e| std::io::Error::other(e.to_string()))?;
+                        .map_err(|e| std::io::Error::other(e.to_string()))?
+                        .area;
                     app.dirty = false;
                 }
             }

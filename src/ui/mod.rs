@@ -12,7 +12,8 @@ mod compass;
 mod dome;
 mod drive;
 mod footer;
-pub mod layout;
+/// Where the panels go: in the app (the mouse finds what it points at with the same plan).
+pub use crate::app::layout;
 mod leds;
 mod log_pane;
 mod map;
@@ -36,27 +37,15 @@ use ratatui::widgets::Paragraph;
 /// Draw the whole screen for `state`.
 pub fn draw(frame: &mut Frame, state: &AppState) {
     // A fleet's roster strip takes the top row; the rest is the one-droid screen.
-    let mut area = frame.area();
     let fleet = state.roster();
-    if let Some(roster) = &fleet
-        && area.height > 1
-    {
-        let strip = ratatui::layout::Rect { height: 1, ..area };
+    let screen = layout::screen(frame.area(), fleet.is_some());
+    if let (Some(roster), Some(strip)) = (&fleet, screen.roster) {
         roster::render(frame, strip, roster);
-        area.y += 1;
-        area.height -= 1;
     }
-    // The context footer takes the bottom row once the screen has room for panels.
-    if area.height > MIN_HEIGHT {
-        area.height -= 1;
-        let row = ratatui::layout::Rect {
-            y: area.bottom(),
-            height: 1,
-            ..area
-        };
+    if let Some(row) = screen.footer {
         footer::render(frame, row, state);
     }
-    let p = layout::plan(area);
+    let p = screen.plan;
     // The newer robots' panels want a few more rows in the dome's place (BOLT's matrix 4
     // rows of half blocks, RVR two lines): taken from the panels around it.
     let want = if state.droid().model.has_matrix() {
@@ -72,8 +61,8 @@ pub fn draw(frame: &mut Frame, state: &AppState) {
         // The scope takes everything below the status bar.
         let body = ratatui::layout::Rect {
             y: p.status.bottom(),
-            height: area.bottom().saturating_sub(p.status.bottom()),
-            ..area
+            height: p.log.bottom().saturating_sub(p.status.bottom()),
+            ..p.status
         };
         scope::render(frame, body, state);
         overlay::render(frame, state);

@@ -77,9 +77,12 @@ fn entry(i: usize, e: &RosterEntry, chosen: bool, driven: bool, room: usize) -> 
 }
 
 pub fn render(frame: &mut Frame, area: Rect, roster: &Roster) {
-    let n = roster.droids.len().max(1);
-    let tag = if roster.mirror { "MIRROR " } else { "" };
-    let room = (area.width as usize).saturating_sub(tag.len()) / n;
+    let (_, room) = crate::app::layout::roster_room(area.width, roster.droids.len(), roster.mirror);
+    let tag = if roster.mirror {
+        crate::app::layout::ROSTER_MIRROR_TAG
+    } else {
+        ""
+    };
     let mut spans = Vec::new();
     if !tag.is_empty() {
         spans.push(Span::styled(tag, theme::attention()));

@@ -142,14 +142,7 @@ pub fn render(frame: &mut Frame, area: Rect, s: &AppState) {
 /// One chart: `group`'s channels (by their legend index) on one y axis; the time axis's
 /// labels only under the last chart. No axis titles: ratatui draws them inside the plot,
 /// over the data (the units are in the legend, the seconds in the labels).
-fn plot(
-    frame: &mut Frame,
-    rect: Rect,
-    autoscale: bool,
-    group: &[&Series],
-    secs: f64,
-    last: bool,
-) {
+fn plot(frame: &mut Frame, rect: Rect, autoscale: bool, group: &[&Series], secs: f64, last: bool) {
     let pairs: Vec<(Channel, Vec<(f64, f64)>)> =
         group.iter().map(|(_, c, p)| (*c, p.clone())).collect();
     let (lo, hi) = y_bounds(autoscale, &pairs);
