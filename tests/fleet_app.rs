@@ -83,6 +83,7 @@ fn opts(config: Config, tripod_on_connect: bool) -> AppOptions {
         log_path: None,
         release: ReleaseMode::Reported,
         samples: None,
+        remember: None,
         tripod_on_connect,
     }
 }

@@ -334,6 +334,7 @@ impl App {
             Action::Mirror => self.toggle_mirror(),
             Action::Scope => self.toggle_scope(),
             Action::Tuning => self.open_tuning(),
+            Action::ForgetSettings => self.forget_settings(),
             Action::Colour | Action::BackLight => {
                 if let Some(mut d) = self.droid(self.chosen()) {
                     if action == Action::Colour {

@@ -13,6 +13,7 @@
 //!   strip's view of them.
 //! - [`layout`]: where each part of the screen goes (the UI draws there, the mouse hits
 //!   there); `mouse`: wheel and clicks;
+//! - [`remember`]: settings remembered per droid model between launches;
 //! - [`matrix`]: BOLT's LED matrix as droidctl drew it, its prompt, colour and compass keys.
 
 mod actions;
@@ -36,6 +37,7 @@ pub mod picker;
 pub mod place;
 pub mod player;
 pub mod rates;
+pub mod remember;
 mod replay;
 pub mod roster;
 pub mod run;

@@ -34,6 +34,9 @@ pub struct AppOptions {
     pub tripod_on_connect: bool,
     /// Where every sample the droid streams is written (`drive --csv`, `--jsonl`).
     pub samples: Option<crate::mission::csv::SampleFiles>,
+    /// Where settings are remembered per droid model ([`super::remember`]); `None`: nothing
+    /// is remembered (replay, tests).
+    pub remember: Option<PathBuf>,
 }
 
 /// Everything from outside the app.
@@ -284,6 +287,7 @@ async fn run_droids<B: Backend>(
         }
     };
     app.flush_samples();
+    app.save_remembered();
     for f in forwarders {
         f.abort();
     }

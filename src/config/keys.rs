@@ -337,6 +337,7 @@ actions! {
         Log "log" false All "log" "the packet log has the keys (and back)";
         Scope "scope" false All "scope" "the scope: chosen channels against time (and back)";
         Tuning "tuning" false All "settings" "streaming (rate, sensors) and collision detection";
+        ForgetSettings "forget_settings" false All "" "forget this model's remembered settings (cruise, scope, rate, filter)";
         Help "help" false All "more keys" "this help";
         Quit "quit" false All "quit" "quit (stops the droid first)";
     }
