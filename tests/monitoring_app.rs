@@ -494,3 +494,40 @@ async fn settings_are_remembered_per_model_and_forgotten_with_r() {
     assert!(hint.contains("settings-r2d2.toml"), "{hint}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Issue 30 point 3: Enter in the packet log opens its newest line in full; `/` searches,
+/// `n` and `N` go through the matches; Esc closes. Nothing drives meanwhile.
+#[tokio::test(start_paused = true)]
+async fn enter_opens_a_packet_in_full_with_search() {
+    use droidctl::app::state::Overlay;
+    let mut keys = vec![
+        (3000, press(Key::ch('l'))),
+        (3100, press(Key::ch('p'))),
+        (3200, press(Key::plain(KeyCode::Enter))),
+        (3300, press(Key::ch('/'))),
+    ];
+    for (i, c) in "seq".chars().enumerate() {
+        keys.push((3400 + i as u64 * 10, press(Key::ch(c))));
+    }
+    keys.push((3500, press(Key::plain(KeyCode::Enter))));
+    keys.push((3600, press(Key::ch('n'))));
+    let (exit, _) = live(keys).await;
+    let Overlay::Packet {
+        line,
+        search,
+        typing,
+        scroll,
+        ..
+    } = &exit.state.overlay
+    else {
+        panic!("the packet in full: {:?}", exit.state.overlay)
+    };
+    assert_eq!((search.as_str(), *typing), ("seq", false));
+    let rows = droidctl::app::detail::rows(line);
+    assert!(
+        rows[*scroll].label.contains("seq") || rows[*scroll].value.contains("seq"),
+        "{:?}",
+        rows[*scroll]
+    );
+    assert!(rows.iter().any(|r| r.label == "hex" && !r.value.is_empty()));
+}

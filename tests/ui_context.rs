@@ -234,3 +234,78 @@ fn the_scope_gives_each_unit_its_own_axis() {
     assert!(!all.contains("deg,cm") && all.contains("0 s"), "{all}");
     insta::assert_snapshot!("context_scope_two_units_80x24", all);
 }
+
+fn collision_line() -> droidctl::app::packet_log::LogLine {
+    use droidctl::protocol::v2::notify::Collision;
+    use droidctl::protocol::v2::wire::{AccelRaw, CollisionAxis};
+    use droidctl::protocol::v2::{Device, Packet};
+    let c = Collision {
+        accel: [AccelRaw(5120), AccelRaw(-1230), AccelRaw(300)],
+        axis: CollisionAxis { x: true, y: false },
+        power: [180, -40, 0],
+        speed: 92,
+        time_ms: 123_456,
+    };
+    let sensor = Device::parse("sensor").expect("sensor device");
+    droidctl::app::packet_log::LogLine::from_droid_entry(
+        &droidctl::session::LogEntry {
+            at: std::time::Duration::from_millis(1125),
+            dir: droidctl::session::Direction::In,
+            item: droidctl::session::LogItem::packet(Packet::notification(
+                sensor,
+                0x12,
+                c.encode(),
+            )),
+        },
+        "D2-0001".into(),
+    )
+}
+
+/// Issue 30 point 3: a packet in full at 80×24: every field whole (not `accel_x=0.…`), the
+/// frame's parts named, the hex, time and droid; a search marks its matches.
+#[test]
+fn a_packet_in_full_at_80x24() {
+    let mut s = state(&[Model::R2D2]);
+    let line = collision_line();
+    assert!(line.fields.len() >= 6, "{:?}", line.fields);
+    s.overlay = Overlay::Packet {
+        line: Box::new(line.clone()),
+        search: "accel".into(),
+        typing: false,
+        matched: 1,
+        scroll: 0,
+    };
+    let rows = screen(&s, 80, 24);
+    let all = rows.join("\n");
+    for (name, value) in &line.fields {
+        assert!(all.contains(*name), "{name}\n{all}");
+        assert!(
+            all.contains(value.as_str()) || value.len() > 60,
+            "{value}\n{all}"
+        );
+    }
+    for part in [
+        "start", "flags", "device", "command", "seq", "data", "checksum", "end",
+    ] {
+        let found = droidctl::app::detail::rows(&line)
+            .iter()
+            .any(|r| r.label == part);
+        assert!(found, "no {part}");
+    }
+    assert!(all.contains("1.125 s") && all.contains("D2-0001"), "{all}");
+    assert!(all.contains("match 2/"), "{all}");
+    assert!(!all.contains('…'), "nothing cut:\n{all}");
+    insta::assert_snapshot!("context_packet_detail_80x24", all);
+}
+
+/// Issue 30 point 3: Home (to the oldest line) shows a full page, not one line.
+#[test]
+fn home_shows_a_full_page() {
+    let mut s = state(&[Model::R2D2]);
+    for _ in 0..30 {
+        s.log.push(collision_line());
+    }
+    s.log.scroll_up(usize::MAX / 2);
+    let page = s.log.visible(7);
+    assert_eq!(page.len(), 7);
+}

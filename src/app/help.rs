@@ -27,6 +27,7 @@ pub fn live(config: &Config) -> Vec<HelpSection> {
             Context::Settings,
             Context::Palette,
             Context::Filter,
+            Context::Detail,
             Context::Help,
         ]
         .into_iter()
@@ -147,6 +148,7 @@ pub fn footer(km: &KeyMap) -> Vec<(Context, Vec<FooterKey>)> {
         with(Context::Palette, &[]),
         with(Context::Filter, &[]),
         with(Context::Settings, &[]),
+        with(Context::Detail, &[]),
         (Context::Help, help),
     ]
 }
@@ -162,6 +164,7 @@ pub fn context_of(place: Place, scope: bool) -> Context {
         Place::Help => Context::Help,
         Place::Palette => Context::Palette,
         Place::Channels | Place::Tuning => Context::Settings,
+        Place::Packet => Context::Detail,
     }
 }
 
@@ -266,6 +269,7 @@ mod tests {
                 "Channels, streaming and collision",
                 "Palettes",
                 "Log filter",
+                "A packet in full",
                 "Help",
                 "Gamepad"
             ]

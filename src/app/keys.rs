@@ -151,6 +151,7 @@ impl App {
             Place::Matrix => self.matrix_key(key),
             Place::Channels => self.channels_key(key, new_press),
             Place::Tuning => self.tuning_key(key, new_press),
+            Place::Packet => self.detail_key(key, new_press),
             Place::Driving if scope_key => self.scope_key(key, new_press),
             Place::Log => return self.log_key(key, new_press),
             Place::Replay => return self.replay_key(key, new_press),
@@ -262,6 +263,7 @@ impl App {
                 }
             }
             Some(Action::LogClearFilter) => log.set_filter(Default::default()),
+            Some(Action::LogOpen) => self.open_detail(),
             Some(_) => {}
             None => match self.keymap.action(&key) {
                 Some(Action::EStop) => self.estop(),

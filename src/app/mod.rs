@@ -21,6 +21,7 @@ pub mod battery;
 mod build;
 pub mod catalog;
 mod core;
+pub mod detail;
 mod droid;
 mod fleet;
 pub mod help;

@@ -32,6 +32,11 @@ impl App {
             Place::Palette => self.palette_mouse(kind, at),
             Place::Driving | Place::Log | Place::Replay => self.screen_mouse(kind, at),
             // Typing places and the settings lists: keys only.
+            Place::Packet => match kind {
+                MouseKind::ScrollDown => self.detail_scroll(3, true),
+                MouseKind::ScrollUp => self.detail_scroll(3, false),
+                MouseKind::Click => {}
+            },
             Place::Filter | Place::Matrix | Place::Channels | Place::Tuning => {}
         }
         if (self.place(), self.chosen(), self.mirroring()) != before {

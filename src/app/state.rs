@@ -33,7 +33,7 @@ pub enum KeyboardMode {
 }
 
 /// What overlays the main screen.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq)]
 pub enum Overlay {
     None,
     Help,
@@ -56,6 +56,16 @@ pub enum Overlay {
     /// Choosing the scope's channels; `selected` indexes the channels the droid reports.
     Channels {
         selected: usize,
+    },
+    /// A packet in full: its fields, its frame's parts and hex, its time and droid; a search
+    /// through them (`typing`: the search is being typed), the view scrolled by `scroll` rows.
+    Packet {
+        line: Box<super::packet_log::LogLine>,
+        search: String,
+        typing: bool,
+        /// The match shown (an index into the matching rows).
+        matched: usize,
+        scroll: usize,
     },
     /// The streaming and collision settings being edited (sent on apply).
     Tuning {

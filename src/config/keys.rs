@@ -133,10 +133,12 @@ pub enum Context {
     Scope,
     /// A settings list is open: the scope's channels, streaming and collision detection.
     Settings,
+    /// A packet in full (`Enter` on a log line).
+    Detail,
 }
 
 impl Context {
-    pub const ALL: [Context; 9] = [
+    pub const ALL: [Context; 10] = [
         Context::Drive,
         Context::Log,
         Context::Palette,
@@ -146,6 +148,7 @@ impl Context {
         Context::Picker,
         Context::Scope,
         Context::Settings,
+        Context::Detail,
     ];
 
     /// The sub-table of `[keys]` (`None`: the `[keys]` table itself).
@@ -160,6 +163,7 @@ impl Context {
             Context::Picker => Some("picker"),
             Context::Scope => Some("scope_view"),
             Context::Settings => Some("settings"),
+            Context::Detail => Some("packet_detail"),
         }
     }
 
@@ -175,6 +179,7 @@ impl Context {
             Context::Picker => "Choosing a droid",
             Context::Scope => "Scope (other keys drive)",
             Context::Settings => "Channels, streaming and collision",
+            Context::Detail => "A packet in full",
         }
     }
 }
@@ -353,6 +358,7 @@ actions! {
         LogFilter "filter" false All "filter" "filter (in|out dev:NAME droid:NAME text)";
         LogClearFilter "clear_filter" false All "" "clear the filter";
         LogBack "back" false All "back" "back to driving";
+        LogOpen "open" false All "detail" "the newest line shown in full (fields, frame, hex)";
     }
     Palette {
         PaletteUp "up" false All "" "previous entry";
@@ -406,6 +412,14 @@ actions! {
         SettingsToggle "toggle" false All "on/off" "switch a channel, sensor or collision detection on/off";
         SettingsApply "apply" false All "apply" "apply to the droid and close (channels: switch)";
         SettingsClose "close" false All "close" "close (nothing sent)";
+    }
+    Detail {
+        DetailUp "up" false All "" "scroll up";
+        DetailDown "down" false All "" "scroll down";
+        DetailSearch "search" false All "search" "search (Enter: to the first match)";
+        DetailNext "next" false All "next" "next match";
+        DetailPrevious "previous" false All "previous" "previous match";
+        DetailClose "close" false All "close" "close";
     }
 }
 

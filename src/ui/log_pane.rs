@@ -76,7 +76,15 @@ pub fn render(frame: &mut Frame, area: Rect, s: &AppState) {
         };
         lines.push(Line::from(Span::styled(msg, theme::dim())));
     }
+    let any = !visible.is_empty();
     lines.extend(visible.into_iter().map(|l| row(l, &cols, log.decoded)));
+    // With the keys, the newest line shown is the one Enter opens in full: marked.
+    if focused
+        && any
+        && let Some(last) = lines.pop()
+    {
+        lines.push(last.style(theme::selected()));
+    }
     frame.render_widget(Paragraph::new(lines), inner);
 }
 

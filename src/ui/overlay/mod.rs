@@ -4,6 +4,7 @@
 
 mod filter;
 mod help;
+mod packet;
 mod palette;
 mod settings;
 
@@ -35,5 +36,22 @@ pub fn render(frame: &mut Frame, s: &AppState) {
         Overlay::Matrix { input } => filter::matrix(frame, area, input),
         Overlay::Channels { selected } => settings::channels(frame, area, s, *selected),
         Overlay::Tuning { selected, draft } => settings::tuning(frame, area, s, *selected, draft),
+        Overlay::Packet {
+            line,
+            search,
+            typing,
+            matched,
+            scroll,
+        } => packet::render(
+            frame,
+            area,
+            line,
+            packet::View {
+                search,
+                typing: *typing,
+                matched: *matched,
+                scroll: *scroll,
+            },
+        ),
     }
 }
