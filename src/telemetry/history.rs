@@ -134,6 +134,9 @@ pub struct History {
     rows: VecDeque<Row>,
 }
 
+/// Rows closer than this are one sample (the packets of one streaming period).
+const SAME_SAMPLE: Duration = Duration::from_millis(5);
+
 impl History {
     /// Record `t` as it is after a sample at `at`. A time before the last row (a new
     /// connection's clock, a replay played again) starts the history afresh.
@@ -152,6 +155,15 @@ impl History {
                 .is_some_and(|r| at.saturating_sub(r.at) > SPAN)
         {
             self.rows.pop_front();
+        }
+        // One period of RVR's streaming service arrives as a packet per token, a few ms
+        // apart: they are one sample, not four (issue 30 point 7: "measured 41.1/s" at 10/s).
+        // The row keeps the latest values (telemetry holds every token's).
+        if let Some(last) = self.rows.back_mut()
+            && at.saturating_sub(last.at) < SAME_SAMPLE
+        {
+            last.values = values;
+            return;
         }
         self.rows.push_back(Row { at, values });
     }
@@ -269,6 +281,18 @@ mod tests {
             pitch: Some(speed / 10.0),
             ..Telemetry::default()
         }
+    }
+
+    #[test]
+    fn a_period_sent_as_several_packets_is_one_sample() {
+        let mut h = History::default();
+        for period in 0..20u64 {
+            for token in 0..4u64 {
+                h.record(Duration::from_millis(period * 100 + token), &t_with(1.0));
+            }
+        }
+        let rate = h.measured_rate(Duration::from_millis(1_950)).unwrap();
+        assert!((rate - 10.0).abs() < 0.5, "{rate}");
     }
 
     #[test]
