@@ -18,6 +18,7 @@ pub mod link;
 pub mod logging;
 pub mod mission;
 pub mod model;
+pub mod output;
 pub mod plot;
 pub mod protocol;
 pub mod relay;

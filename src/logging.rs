@@ -11,9 +11,14 @@ const MAX_LOG_BYTES: u64 = 10 * 1024 * 1024;
 
 /// Where the log goes.
 pub fn log_path() -> PathBuf {
-    if let Some(p) = std::env::var_os("DROIDCTL_LOG_FILE") {
-        return PathBuf::from(p);
+    match std::env::var_os("DROIDCTL_LOG_FILE") {
+        Some(p) => PathBuf::from(p),
+        None => default_log_path(),
     }
+}
+
+/// Where the log goes on this system when `DROIDCTL_LOG_FILE` does not say.
+pub fn default_log_path() -> PathBuf {
     let dir = directories::ProjectDirs::from("", "", "droidctl")
         .map(|d| {
             d.state_dir()

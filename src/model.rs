@@ -85,7 +85,9 @@ impl Model {
         }
     }
 
-    /// Short lower-case id used on the command line (`--sim r2d2`).
+    /// Short lower-case id: what the command line takes (`--sim r2d2`), what every document
+    /// says, and what captures and JSON outputs name the model with. Robi 42's is `robi`
+    /// (earlier versions wrote `robi42`, which [`Model::from_id`] still reads).
     pub fn id(self) -> &'static str {
         match self {
             Model::R2D2 => "r2d2",
@@ -94,18 +96,20 @@ impl Model {
             Model::BB8 => "bb8",
             Model::SprkPlus => "sprk",
             Model::Ollie => "ollie",
-            Model::Robi42 => "robi42",
+            Model::Robi42 => "robi",
             Model::Bolt => "bolt",
             Model::Mini => "mini",
             Model::Rvr => "rvr",
         }
     }
 
+    /// The model an id names: its [`Model::id`], its display name in any case, with or
+    /// without `-`, `_` and spaces (`R2-D2`, `Robi 42`), or a short form people type.
     pub fn from_id(id: &str) -> Option<Model> {
         let id = id.trim().to_ascii_lowercase().replace(['-', '_', ' '], "");
         // Short forms people type.
         let id = match id.as_str() {
-            "robi" => "robi42".to_string(),
+            "robi42" => "robi".to_string(),
             "sprkplus" | "sprk+" => "sprk".to_string(),
             "boltplus" | "bolt+" | "spherobolt" => "bolt".to_string(),
             "spherorvr" | "rvr+" => "rvr".to_string(),
@@ -119,6 +123,18 @@ impl Model {
                     .replace(['-', ' '], "")
                     == id
         })
+    }
+
+    /// Every model's id, in the table's order, for messages: `r2d2, r2q5, …, rvr`.
+    pub fn ids_listed() -> String {
+        Model::ALL.map(Model::id).join(", ")
+    }
+
+    /// [`Model::from_id`], or the message that says what the command line takes:
+    /// `unknown model "c3po": use one of r2d2, r2q5, …, rvr`.
+    pub fn parse_id(id: &str) -> Result<Model, String> {
+        Model::from_id(id)
+            .ok_or_else(|| format!("unknown model {id:?}: use one of {}", Model::ids_listed()))
     }
 
     pub fn protocol(self) -> Protocol {
@@ -258,6 +274,19 @@ mod tests {
         assert_eq!(Model::from_id("bb9e"), Some(Model::BB9E));
         assert_eq!(Model::from_id("c3po"), None);
         assert_eq!(Model::from_id("robi"), Some(Model::Robi42));
+        assert_eq!(
+            Model::from_id("robi42"),
+            Some(Model::Robi42),
+            "older captures' id"
+        );
+        // Every id names its own model.
+        for m in Model::ALL {
+            assert_eq!(Model::from_id(m.id()), Some(m));
+        }
+        assert_eq!(
+            Model::parse_id("c3po"),
+            Err("unknown model \"c3po\": use one of r2d2, r2q5, bb9e, bb8, sprk, ollie, robi, bolt, mini, rvr".into())
+        );
         assert_eq!(Model::from_id("Robi 42"), Some(Model::Robi42));
         assert_eq!(Model::from_id("sprk+"), Some(Model::SprkPlus));
         assert_eq!(Model::R2D2.write_pacing(), Duration::from_millis(120));

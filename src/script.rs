@@ -177,6 +177,26 @@ fn arity(words: &[&str], n: usize, usage: &str) -> Result<(), String> {
     Ok(())
 }
 
+/// Every command a mission line may start with, for the message naming them (each is parsed
+/// below; a test keeps the two together).
+pub const COMMANDS: &[&str] = &[
+    "wake",
+    "sleep",
+    "stance",
+    "drive",
+    "stop",
+    "head",
+    "animation",
+    "sound",
+    "led",
+    "wait",
+    "matrix",
+    "tank",
+    "calibrate",
+    "stream",
+    "collision",
+];
+
 fn parse_line(content: &str) -> Result<Action, String> {
     let words: Vec<&str> = content.split_whitespace().collect();
     let keyword = words[0].to_ascii_lowercase();
@@ -308,7 +328,8 @@ fn parse_line(content: &str) -> Result<Action, String> {
             crate::tuning::CollisionConfig::parse_args(&words[1..])?,
         )),
         other => Err(format!(
-            "unknown command {other:?}; expected one of wake, sleep, stance, drive, stop, head, animation, sound, led, wait, stream, collision"
+            "unknown command {other:?}; expected one of {}",
+            COMMANDS.join(", ")
         )),
     }
 }
@@ -316,6 +337,21 @@ fn parse_line(content: &str) -> Result<Action, String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_unknown_command_message_names_every_command_there_is() {
+        let e = parse_line("fly 1 2").unwrap_err();
+        for c in COMMANDS {
+            assert!(e.contains(c), "{c} missing from: {e}");
+            // Each one named is a command: its line is read (maybe wrongly used), not unknown.
+            let e = parse_line(c).err().unwrap_or_default();
+            assert!(!e.starts_with("unknown command"), "{c}: {e}");
+        }
+        assert!(
+            e.contains("matrix") && e.contains("tank") && e.contains("calibrate"),
+            "{e}"
+        );
+    }
 
     #[test]
     fn parses_stream_and_collision_lines() {

@@ -15,6 +15,8 @@ const RANKS: &[(&str, u32)] = &[
     ("model", 0),
     ("gatt", 0),
     ("logging", 0),
+    // The overwrite rule of the files droidctl writes.
+    ("output", 0),
     // What a user tunes about monitoring: sensor groups, collision detection.
     ("tuning", 0),
     // The sans-IO protocol core.

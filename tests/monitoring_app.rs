@@ -288,7 +288,8 @@ async fn the_app_writes_every_streamed_sample_as_csv_and_json_lines() {
     let dir = std::env::temp_dir().join(format!("droidctl-monapp-csv-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let (csv, jsonl) = (dir.join("t.csv"), dir.join("t.jsonl"));
-    let files = droidctl::mission::csv::SampleFiles::create(Some(&csv), Some(&jsonl)).unwrap();
+    let files =
+        droidctl::mission::csv::SampleFiles::create(Some(&csv), Some(&jsonl), false).unwrap();
     let (exit, _) = live_writing(vec![(5000, press(Key::ch('?')))], Some(files)).await;
     let (csv, jsonl) = (
         std::fs::read_to_string(&csv).unwrap(),

@@ -18,7 +18,8 @@ fn hex(c: plotters::style::RGBColor) -> String {
 
 fn plot_svg(dir: &Scratch, input: &std::path::Path, extra: &[&str]) -> String {
     let svg = dir.0.join("out.svg");
-    let mut args = vec!["plot", path(input), "-o", path(&svg)];
+    // Each call draws over the last picture.
+    let mut args = vec!["plot", path(input), "-o", path(&svg), "--force"];
     args.extend(extra);
     let o = dir.run(&args);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));

@@ -408,7 +408,7 @@ fn scan_lists_a_droid_of_each_family() {
             v["model"].as_str().unwrap_or("?").to_string()
         })
         .collect();
-    assert_eq!(models, ["r2d2", "bb8", "robi42"]);
+    assert_eq!(models, ["r2d2", "bb8", "robi"]);
     // Ctrl-C: a clean stop.
     let lines = sim.stop_with("-INT");
     assert!(

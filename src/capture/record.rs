@@ -109,23 +109,7 @@ pub struct Recorder {
 impl Recorder {
     /// Create `path` for writing. An existing file is refused unless `force`.
     pub fn create(path: &Path, force: bool) -> Result<Recorder, String> {
-        let mut opts = std::fs::OpenOptions::new();
-        opts.write(true);
-        if force {
-            opts.create(true).truncate(true);
-        } else {
-            opts.create_new(true);
-        }
-        let file = opts.open(path).map_err(|e| {
-            if e.kind() == std::io::ErrorKind::AlreadyExists {
-                format!(
-                    "{} exists: droidctl does not overwrite a capture (--force replaces it)",
-                    path.display()
-                )
-            } else {
-                format!("cannot create {}: {e}", path.display())
-            }
-        })?;
+        let file = crate::output::create(path, force)?;
         let shared = Arc::new(Mutex::new(State {
             out: Some(BufWriter::with_capacity(64 * 1024, file)),
             start: None,

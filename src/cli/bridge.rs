@@ -33,9 +33,10 @@ pub struct BridgeArgs {
     /// password with --username and --password-file).
     #[arg(long, value_name = "ADDR:PORT", value_parser = parse_broker_listen)]
     pub listen: Option<std::net::SocketAddr>,
-    /// Bridge simulated droids: r2d2 (default), bb8, robi …; several share one room:
+    /// Bridge simulated droids (r2d2 without a MODEL); several share one room:
     /// --sim r2d2,bb8,robi.
-    #[arg(long, num_args = 0..=1, default_missing_value = "r2d2", value_name = "MODEL[,MODEL…]")]
+    #[arg(long, num_args = 0..=1, default_missing_value = "r2d2", value_name = "MODEL[,MODEL…]",
+          value_parser = super::models::ModelNames::list())]
     pub sim: Option<String>,
     #[command(flatten)]
     pub ble: super::connect::BleArgs,

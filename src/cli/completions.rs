@@ -1,5 +1,5 @@
-//! `droidctl completions SHELL` and `droidctl man`: shell completions and the man page, both
-//! generated from the one CLI definition ([`super::Cli`]), so they never fall behind it.
+//! `droidctl completions SHELL`: shell completions, generated from the one CLI definition
+//! ([`super::Cli`]), so they never fall behind it (the man pages: [`super::man`]).
 
 use super::{Cli, CliError};
 use clap::{Args, CommandFactory};
@@ -21,27 +21,10 @@ pub fn completion_script(shell: Shell) -> Vec<u8> {
     buf
 }
 
-/// The man page, in roff.
-pub fn man_page() -> Vec<u8> {
-    let mut buf = Vec::new();
-    clap_mangen::Man::new(Cli::command())
-        .render(&mut buf)
-        .expect("rendering into memory cannot fail");
-    buf
-}
-
 /// Run `droidctl completions SHELL`.
 pub fn completions(args: CompletionsArgs, out: &mut dyn Write) -> Result<i32, CliError> {
     // Rendered in memory first: the generators panic on a write error, such as a closed pipe.
     out.write_all(&completion_script(args.shell))
-        .and_then(|()| out.flush())
-        .map_err(CliError::output)?;
-    Ok(0)
-}
-
-/// Run `droidctl man`.
-pub fn man(out: &mut dyn Write) -> Result<i32, CliError> {
-    out.write_all(&man_page())
         .and_then(|()| out.flush())
         .map_err(CliError::output)?;
     Ok(0)
@@ -64,15 +47,5 @@ mod tests {
             assert!(script.contains("droidctl"), "{shell}");
             assert!(script.contains("completions"), "{shell}");
         }
-    }
-
-    #[test]
-    fn man_page_is_roff() {
-        let page = String::from_utf8(man_page()).unwrap();
-        assert!(
-            page.starts_with(".ie") || page.contains(".TH droidctl"),
-            "{page}"
-        );
-        assert!(page.contains(".SH NAME"), "{page}");
     }
 }

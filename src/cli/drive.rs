@@ -16,9 +16,10 @@ use tokio::sync::mpsc;
 
 #[derive(Debug, Clone, Default, Args)]
 pub struct DriveArgs {
-    /// Drive a simulated droid in-process: r2d2 (default), r2q5, bb9e, bb8, sprk, ollie or robi;
-    /// several at once, sharing one room: --sim r2d2,bb8,robi.
-    #[arg(long, num_args = 0..=1, default_missing_value = "r2d2", value_name = "MODEL[,MODEL…]")]
+    /// Drive a simulated droid in-process (r2d2 without a MODEL); several at once, sharing
+    /// one room: --sim r2d2,bb8,robi.
+    #[arg(long, num_args = 0..=1, default_missing_value = "r2d2", value_name = "MODEL[,MODEL…]",
+          value_parser = super::models::ModelNames::list())]
     pub sim: Option<String>,
     #[command(flatten)]
     pub ble: super::connect::BleArgs,
@@ -141,9 +142,9 @@ fn sample_files(
         return Ok(None);
     }
     let files = if fleet {
-        SampleFiles::create_for_fleet(csv, jsonl)
+        SampleFiles::create_for_fleet(csv, jsonl, args.record.force)
     } else {
-        SampleFiles::create(csv, jsonl)
+        SampleFiles::create(csv, jsonl, args.record.force)
     };
     files.map(Some).map_err(CliError::usage)
 }

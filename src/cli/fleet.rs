@@ -63,8 +63,8 @@ pub fn sim_models(list: &str) -> Result<Vec<Model>, CliError> {
         .map(|m| match Model::from_id(m) {
             Some(model) if crate::sim::simulates(model) => Ok(model),
             _ => Err(CliError::usage(format!(
-                "unknown simulated model {m:?}: use one of {} (several: --sim r2d2,bb8,robi)",
-                crate::sim::simulated_ids().join(", ")
+                "{} (several: --sim r2d2,bb8,robi)",
+                Model::parse_id(m).err().unwrap_or_default()
             ))),
         })
         .collect::<Result<_, _>>()?;

@@ -43,7 +43,7 @@ pub fn run(
     // `--csv FILE`: every droid's samples, the droid first on each row.
     let files = match &args.csv {
         Some(p) => Some(
-            crate::mission::csv::SampleFiles::create_for_fleet(Some(p), None)
+            crate::mission::csv::SampleFiles::create_for_fleet(Some(p), None, args.record.force)
                 .map_err(CliError::usage)?,
         ),
         None => None,

@@ -9,6 +9,8 @@ pub mod connect;
 pub mod drive;
 pub mod fleet;
 mod fleet_run;
+pub mod man;
+pub mod models;
 pub mod packet;
 pub mod plot;
 pub mod replay;
@@ -62,15 +64,16 @@ pub enum Command {
     /// droids, or simulated ones with `--sim`. Clients use `--remote HOST`.
     Serve(serve::ServeArgs),
     /// Let other programs drive droids through JSON: lines on stdin/stdout (`--stdio`) or
-    /// MQTT topics per droid (`--mqtt mqtt://HOST`); see README, "A bridge for other programs".
+    /// MQTT topics per droid (`--mqtt mqtt://HOST`); see docs/bridge.md.
     Bridge(bridge::BridgeArgs),
     /// Show or create the configuration file.
     #[command(subcommand)]
     Config(config_cmd::ConfigCmd),
-    /// Print shell completions (`droidctl completions bash > …`; see README, "Installing").
+    /// Print shell completions (`droidctl completions bash > …`).
     Completions(completions::CompletionsArgs),
-    /// Print the man page, in roff (`droidctl man > droidctl.1`).
-    Man,
+    /// Print a manual page, in roff: droidctl(1), or a subcommand's (`droidctl man packet
+    /// decode`); `--dir DIR` writes them all.
+    Man(man::ManArgs),
 }
 
 /// The runtime for talking to a real droid (or the simulator in real time): two workers,
@@ -83,6 +86,25 @@ pub(crate) fn realtime_runtime() -> Result<tokio::runtime::Runtime, CliError> {
         .map_err(|e| CliError::failure(format!("cannot start the runtime: {e}")))
 }
 
+/// The exit statuses, with what each means (droidctl(1)'s EXIT STATUS section).
+pub const EXIT_STATUSES: [(i32, &str); 3] = [
+    (
+        0,
+        "Success; also when the reader of the output went away (`droidctl … | head`).",
+    ),
+    (
+        1,
+        "A failure at run time: no usable Bluetooth, no droid found or connected, a mission \
+         step that failed, an output that could not be written.",
+    ),
+    (
+        2,
+        "Bad input: an unknown command or option, a value out of range, malformed hex, a \
+         malformed mission script or configuration file, an output file that exists (without \
+         --force).",
+    ),
+];
+
 /// A failure with the exit status it deserves.
 #[derive(Debug)]
 pub struct CliError {
@@ -94,7 +116,7 @@ impl CliError {
     /// Bad input from the user: status 2.
     pub fn usage(message: impl Into<String>) -> Self {
         CliError {
-            status: 2,
+            status: EXIT_STATUSES[2].0,
             message: message.into(),
         }
     }
@@ -113,7 +135,7 @@ impl CliError {
     /// A failure at run time: status 1.
     pub fn failure(message: impl Into<String>) -> Self {
         CliError {
-            status: 1,
+            status: EXIT_STATUSES[1].0,
             message: message.into(),
         }
     }
@@ -159,7 +181,7 @@ pub fn main() -> i32 {
         }
         Some(Command::Config(cmd)) => config_cmd::run(cmd),
         Some(Command::Completions(args)) => completions::completions(args, &mut out),
-        Some(Command::Man) => completions::man(&mut out),
+        Some(Command::Man(args)) => man::run(args, &mut out),
         Some(Command::Drive(args)) => {
             drop(out);
             drive::run(args)

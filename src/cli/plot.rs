@@ -16,7 +16,11 @@ pub struct PlotArgs {
     /// with `.png`.
     #[arg(short, long = "out", value_name = "PATH")]
     pub out: Vec<PathBuf>,
-    /// Channels plotted against time, comma separated (e.g. `speed,yaw,gyro_z`; see README
+    /// Replace the pictures when they exist (without it an existing file is kept and nothing
+    /// is drawn).
+    #[arg(long)]
+    pub force: bool,
+    /// Channels plotted against time, comma separated (e.g. `speed,yaw,gyro_z`; see docs/monitoring.md
     /// for the names). Default: speed and yaw, Robi's wheels on Robi 42.
     #[arg(long, value_delimiter = ',', value_name = "NAMES")]
     pub channels: Vec<String>,
@@ -27,7 +31,7 @@ pub struct PlotArgs {
     #[arg(long, default_value_t = 100, value_name = "MS", value_parser = clap::value_parser!(u64).range(1..=60_000))]
     pub interval: u64,
     /// For a capture that does not name its droid: the model.
-    #[arg(long, value_name = "MODEL")]
+    #[arg(long, value_name = "MODEL", value_parser = super::models::ModelNames::one())]
     pub model: Option<String>,
 }
 
@@ -64,10 +68,7 @@ pub fn tracks(
         return Ok(tracks);
     }
     let model = match &args.model {
-        Some(m) => Some(
-            crate::model::Model::from_id(m)
-                .ok_or_else(|| CliError::usage(format!("unknown model {m:?}")))?,
-        ),
+        Some(m) => Some(crate::model::Model::parse_id(m).map_err(CliError::usage)?),
         None => None,
     };
     let opts = read::Options {
@@ -85,6 +86,7 @@ pub fn tracks(
                 file: file.clone(),
                 json: false,
                 csv: None,
+                force: false,
                 interval: args.interval,
                 model: args.model.clone(),
                 handle: Vec::new(),
@@ -107,8 +109,8 @@ pub fn tracks(
             failed.map_or(Ok(()), |e| Err(ReadError::Bad(e)))
         }
         None => Err(ReadError::Bad(format!(
-            "{name} is neither a run's JSON output (`run --json`, `replay --json`) nor a \
-             capture (droidctl's or a btsnoop log)"
+            "{name} is neither a run's JSON output nor a capture: {}",
+            crate::plot::read::READS
         ))),
     };
     match r {
@@ -190,6 +192,7 @@ pub fn run(args: PlotArgs) -> Result<i32, CliError> {
                 o.display()
             )));
         }
+        crate::output::check(o, args.force).map_err(CliError::usage)?;
     }
     let tracks = tracks(&args, &channels)?;
     if tracks.samples() == 0 {
@@ -213,16 +216,16 @@ pub fn run(args: PlotArgs) -> Result<i32, CliError> {
     for o in &outs {
         let svg = o.extension().is_some_and(|e| e.eq_ignore_ascii_case("svg"));
         let written = if svg {
-            crate::plot::svg(&run, size)
-                .and_then(|t| std::fs::write(o, t).map_err(|e| e.to_string()))
+            crate::plot::svg(&run, size).and_then(|t| {
+                crate::output::create(o, args.force)
+                    .and_then(|mut f| f.write_all(t.as_bytes()).map_err(|e| e.to_string()))
+            })
         } else {
-            std::fs::File::create(o)
-                .map_err(|e| e.to_string())
-                .and_then(|f| {
-                    let mut w = std::io::BufWriter::new(f);
-                    crate::plot::png(&run, size, &mut w)?;
-                    w.flush().map_err(|e| e.to_string())
-                })
+            crate::output::create(o, args.force).and_then(|f| {
+                let mut w = std::io::BufWriter::new(f);
+                crate::plot::png(&run, size, &mut w)?;
+                w.flush().map_err(|e| e.to_string())
+            })
         };
         written.map_err(|e| CliError::failure(format!("cannot write {}: {e}", o.display())))?;
         let _ = writeln!(std::io::stderr(), "droidctl: wrote {}", o.display());

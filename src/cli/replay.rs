@@ -9,12 +9,13 @@ use std::path::PathBuf;
 /// `--record FILE [--force]`.
 #[derive(Debug, Clone, Default, Args)]
 pub struct RecordArgs {
-    /// Record everything over the link to FILE, in droidctl's capture format (see README,
-    /// "Captures"). An existing FILE is kept unless --force.
+    /// Record everything over the link to FILE, in droidctl's capture format (see
+    /// docs/captures.md). An existing FILE is kept unless --force.
     #[arg(long, value_name = "FILE")]
     pub record: Option<PathBuf>,
-    /// With --record: replace FILE if it exists.
-    #[arg(long, requires = "record")]
+    /// Replace the files written (--record, --csv, --jsonl) when they exist; without it an
+    /// existing file is kept and nothing starts.
+    #[arg(long)]
     pub force: bool,
 }
 
@@ -56,12 +57,15 @@ pub struct ReplayArgs {
     /// app (with --json, both).
     #[arg(long, value_name = "FILE")]
     pub csv: Option<PathBuf>,
+    /// With --csv: replace FILE when it exists (without it an existing file is kept).
+    #[arg(long, requires = "csv")]
+    pub force: bool,
     /// With --json or --csv: the sample interval in milliseconds.
     #[arg(long, default_value_t = 100, value_name = "MS", value_parser = clap::value_parser!(u64).range(1..=60_000))]
     pub interval: u64,
     /// The droid model, for a capture that does not name it (a btsnoop log names only the
-    /// protocol family): r2d2, r2q5, bb9e, bb8, sprk, ollie or robi.
-    #[arg(long, value_name = "MODEL")]
+    /// protocol family; without it R2-D2, BB-8 or Robi 42 by family).
+    #[arg(long, value_name = "MODEL", value_parser = super::models::ModelNames::one())]
     pub model: Option<String>,
     /// For a btsnoop log that starts after the GATT discovery: the ATT handle(s) of the
     /// droid's characteristics (decimal or 0x hex; repeat for several).
@@ -104,8 +108,7 @@ pub fn checked_model(
     crate::capture::replay::validate(capture)
         .map_err(|e| CliError::usage(format!("{name}: {e}")))?;
     let model = match model {
-        Some(m) => crate::model::Model::from_id(m)
-            .ok_or_else(|| CliError::usage(format!("unknown model {m:?}")))?,
+        Some(m) => crate::model::Model::parse_id(m).map_err(CliError::usage)?,
         None => match (capture.header.model, capture.family()) {
             (Some(m), _) => m,
             (None, Some(f)) => crate::family::for_protocol(f).representative(),
@@ -241,8 +244,9 @@ pub fn run(args: ReplayArgs) -> Result<i32, CliError> {
     }
     if args.json || args.csv.is_some() {
         use std::io::Write;
-        let mut files = crate::mission::csv::SampleFiles::create(args.csv.as_deref(), None)
-            .map_err(CliError::usage)?;
+        let mut files =
+            crate::mission::csv::SampleFiles::create(args.csv.as_deref(), None, args.force)
+                .map_err(CliError::usage)?;
         let mut out = std::io::BufWriter::new(std::io::stdout().lock());
         let file = args.file.display().to_string();
         let json = args.json;

@@ -16,13 +16,14 @@ use std::time::Duration;
 
 #[derive(Debug, Args)]
 pub struct RunArgs {
-    /// The mission script (see README, "Mission scripts"; `@NAME` lines and `together { }`
+    /// The mission script (see docs/missions.md; `@NAME` lines and `together { }`
     /// blocks for several droids).
     #[arg(value_name = "SCRIPT")]
     pub script: Option<PathBuf>,
-    /// Run against a simulated droid: r2d2 (default), r2q5, bb9e, bb8, sprk, ollie or robi. The mission runs in
-    /// simulated time. Several share one room: --sim r2d2,bb8,robi.
-    #[arg(long, num_args = 0..=1, default_missing_value = "r2d2", value_name = "MODEL[,MODEL…]")]
+    /// Run against a simulated droid (r2d2 without a MODEL); the mission runs in simulated
+    /// time. Several share one room: --sim r2d2,bb8,robi.
+    #[arg(long, num_args = 0..=1, default_missing_value = "r2d2", value_name = "MODEL[,MODEL…]",
+          value_parser = super::models::ModelNames::list_or_other())]
     pub sim: Option<String>,
     /// One JSON object per telemetry sample, then a summary object.
     #[arg(long)]
@@ -34,7 +35,7 @@ pub struct RunArgs {
     pub interval: u64,
     #[command(flatten)]
     pub record: super::replay::RecordArgs,
-    /// Also write every sample to FILE as CSV (columns named with units; see README; a fleet's
+    /// Also write every sample to FILE as CSV (columns named with units; see docs/monitoring.md; a fleet's
     /// rows start with the droid).
     #[arg(long, value_name = "FILE")]
     pub csv: Option<PathBuf>,
@@ -61,10 +62,9 @@ fn resolve(args: &RunArgs) -> Result<(PathBuf, Vec<Model>), CliError> {
                 vec![Model::R2D2]
             }
             None => {
-                return Err(CliError::usage(format!(
-                    "unknown simulated model {m:?}: use one of {}",
-                    crate::sim::simulated_ids().join(", ")
-                )));
+                return Err(CliError::usage(
+                    Model::parse_id(m).err().unwrap_or_default(),
+                ));
             }
         },
     };
@@ -96,9 +96,10 @@ pub fn run(args: RunArgs) -> Result<i32, CliError> {
     let recorder = args.record.open()?;
     let recorder = recorder.as_ref();
     let files = match &args.csv {
-        Some(p) => {
-            Some(crate::mission::csv::SampleFiles::create(Some(p), None).map_err(CliError::usage)?)
-        }
+        Some(p) => Some(
+            crate::mission::csv::SampleFiles::create(Some(p), None, args.record.force)
+                .map_err(CliError::usage)?,
+        ),
         None => None,
     };
     let out = Arc::new(RunOutput::new(files));

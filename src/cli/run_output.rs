@@ -137,7 +137,7 @@ mod tests {
 
     #[test]
     fn a_failed_csv_is_a_failure_of_the_run() {
-        let files = SampleFiles::create(Some(std::path::Path::new("/dev/full")), None);
+        let files = SampleFiles::create(Some(std::path::Path::new("/dev/full")), None, false);
         // The header fits the buffer: the failure comes with the rows or the flush.
         let Ok(files) = files else {
             return;

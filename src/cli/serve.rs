@@ -23,9 +23,8 @@ pub struct ServeArgs {
     /// authentication.
     #[arg(long, value_name = "ADDR:PORT", default_value = "127.0.0.1:50004", value_parser = parse_listen)]
     pub listen: SocketAddr,
-    /// Relay to simulated droids instead of Bluetooth: one per MODEL given (r2d2, r2q5, bb9e,
-    /// bb8, sprk, ollie, robi), one R2-D2 without.
-    #[arg(long, num_args = 0.., value_name = "MODEL")]
+    /// Relay to simulated droids instead of Bluetooth: one per MODEL given, one R2-D2 without.
+    #[arg(long, num_args = 0.., value_name = "MODEL", value_parser = super::models::ModelNames::one())]
     pub sim: Option<Vec<String>>,
     /// A fault for the simulated droids, as `droidctl sim --bluez` takes them
     /// (e.g. disconnect-after=5); repeatable.
@@ -42,7 +41,7 @@ pub struct ServeArgs {
     #[arg(long, value_name = "N", default_value_t = 16, value_parser = clap::value_parser!(u16).range(1..=1024))]
     pub max_clients: u16,
     /// Record every droid session in droidctl's capture format: FILE for the first, then
-    /// FILE-2, FILE-3 … (see README, "Captures"). Existing files are kept unless --force.
+    /// FILE-2, FILE-3 … (see docs/captures.md). Existing files are kept unless --force.
     #[command(flatten)]
     pub record: super::replay::RecordArgs,
 }
@@ -75,10 +74,9 @@ fn sim_models(ids: &[String]) -> Result<Vec<Model>, CliError> {
     ids.iter()
         .map(|m| match Model::from_id(m) {
             Some(model) if crate::sim::simulates(model) => Ok(model),
-            _ => Err(CliError::usage(format!(
-                "unknown simulated model {m:?}: use one of {}",
-                crate::sim::simulated_ids().join(", ")
-            ))),
+            _ => Err(CliError::usage(
+                Model::parse_id(m).err().unwrap_or_default(),
+            )),
         })
         .collect()
 }

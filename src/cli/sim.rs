@@ -17,14 +17,13 @@ pub struct SimArgs {
     /// Serve the droids on D-Bus as BlueZ does, for any BlueZ client (Linux).
     #[arg(long, required = true)]
     pub bluez: bool,
-    /// The droids: r2d2 (the default), r2q5, bb9e, bb8, sprk, ollie or robi; repeat a model
-    /// for several of it.
-    #[arg(value_name = "MODEL")]
+    /// The droids (one r2d2 without a MODEL); repeat a model for several of it.
+    #[arg(value_name = "MODEL", value_parser = super::models::ModelNames::one())]
     pub models: Vec<String>,
     /// Add a device of MODEL that BlueZ remembers but that is not in range: listed without
     /// a signal strength, never advertising; connecting to it fails after a few seconds.
     /// Repeatable.
-    #[arg(long, value_name = "MODEL")]
+    #[arg(long, value_name = "MODEL", value_parser = super::models::ModelNames::one())]
     pub remembered: Vec<String>,
     /// A droid that receives no command for SECS sends its will-sleep warning (v2 Power
     /// will-sleep, v1 the pre-sleep async message; Robi 42 has no sleep timer and ignores
@@ -80,10 +79,9 @@ fn models_of(names: &[String]) -> Result<Vec<Model>, CliError> {
         match Model::from_id(m) {
             Some(model) if crate::sim::simulates(model) => models.push(model),
             _ => {
-                return Err(CliError::usage(format!(
-                    "unknown simulated model {m:?}: use one of {}",
-                    crate::sim::simulated_ids().join(", ")
-                )));
+                return Err(CliError::usage(
+                    Model::parse_id(m).err().unwrap_or_default(),
+                ));
             }
         }
     }

@@ -176,9 +176,14 @@ impl std::fmt::Display for ConfigError {
 
 /// Where the user's config file lives.
 pub fn config_path() -> PathBuf {
-    if let Some(p) = std::env::var_os("DROIDCTL_CONFIG") {
-        return PathBuf::from(p);
+    match std::env::var_os("DROIDCTL_CONFIG") {
+        Some(p) => PathBuf::from(p),
+        None => default_config_path(),
     }
+}
+
+/// Where the config file lives on this system when `DROIDCTL_CONFIG` does not say.
+pub fn default_config_path() -> PathBuf {
     directories::ProjectDirs::from("", "", "droidctl")
         .map(|d| d.config_dir().to_path_buf())
         .unwrap_or_else(|| PathBuf::from("."))

@@ -16,6 +16,7 @@
 //!
 //! Everything here is sans-IO: no clocks, no tokio.
 
+pub mod listing;
 pub mod named;
 pub mod read;
 pub mod robi;
@@ -98,8 +99,9 @@ pub trait Family: Sync {
     fn gatt_profile(&self, model: Model) -> crate::gatt::GattProfile;
     /// `packet encode`: the wire bytes of the packet `name` with `--key value` parameters.
     fn encode_named(&self, name: &str, params: Vec<(String, String)>) -> Result<Vec<u8>, String>;
-    /// `packet list`: the catalogue, names containing `filter` only.
-    fn list(&self, filter: Option<&str>, out: &mut dyn std::io::Write) -> std::io::Result<()>;
+    /// `packet list`: the catalogue, names containing `filter` only; how many entries were
+    /// listed (a heading is printed only above entries: [`listing::Listing`]).
+    fn list(&self, filter: Option<&str>, out: &mut dyn std::io::Write) -> std::io::Result<usize>;
     fn codec(&self) -> Box<dyn Codec>;
     /// The codec for a connection to `model`: as [`Family::codec`], plus what the model
     /// needs of every packet (the v2 robots with two processors address each command).

@@ -98,9 +98,13 @@ fn quoted(v: String) -> String {
 
 impl SampleFiles {
     /// Create the files now (so a refusal comes before anything connects); the CSV gets its
-    /// header at once. An existing file is replaced.
-    pub fn create(csv: Option<&Path>, jsonl: Option<&Path>) -> Result<SampleFiles, String> {
-        SampleFiles::create_with(csv, jsonl, false)
+    /// header at once. An existing file is kept unless `force` ([`crate::output`]'s rule).
+    pub fn create(
+        csv: Option<&Path>,
+        jsonl: Option<&Path>,
+        force: bool,
+    ) -> Result<SampleFiles, String> {
+        SampleFiles::create_with(csv, jsonl, false, force)
     }
 
     /// [`SampleFiles::create`] for a fleet: the CSV's first column is `droid`, each JSON line's
@@ -108,20 +112,22 @@ impl SampleFiles {
     pub fn create_for_fleet(
         csv: Option<&Path>,
         jsonl: Option<&Path>,
+        force: bool,
     ) -> Result<SampleFiles, String> {
-        SampleFiles::create_with(csv, jsonl, true)
+        SampleFiles::create_with(csv, jsonl, true, force)
     }
 
     fn create_with(
         csv: Option<&Path>,
         jsonl: Option<&Path>,
         fleet: bool,
+        force: bool,
     ) -> Result<SampleFiles, String> {
-        let open = |p: &Path| {
-            File::create(p)
-                .map(BufWriter::new)
-                .map_err(|e| format!("cannot write {}: {e}", p.display()))
-        };
+        // Both refused before either is created.
+        for p in csv.iter().chain(jsonl.iter()) {
+            crate::output::check(p, force)?;
+        }
+        let open = |p: &Path| crate::output::create(p, force).map(BufWriter::new);
         let mut csv = csv.map(open).transpose()?;
         if let Some(w) = &mut csv {
             let droid = if fleet { "droid," } else { "" };

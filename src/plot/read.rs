@@ -17,6 +17,10 @@ use crate::model::Model;
 use std::io::{BufRead, Read};
 use std::time::Duration;
 
+/// What `droidctl plot` reads, for every message about an input it cannot read.
+pub const READS: &str = "plot reads the output of `droidctl run --json` or `replay --json`, or \
+                         a capture (`--record`, a btsnoop log)";
+
 /// The longest line read (a sample's JSON is under 1 KiB; a capture's line under 2.1 KiB).
 pub const MAX_LINE: usize = 64 * 1024;
 
@@ -138,7 +142,7 @@ pub fn json(reader: impl BufRead, name: &str, tracks: &mut Tracks) -> Result<(),
     while let Some((n, line, long)) = lines.next_line().map_err(|e| io(name, e))? {
         if long {
             return Err(ReadError::Bad(format!(
-                "{name}:{n}: a line longer than {} KiB: not a run's JSON output",
+                "{name}:{n}: a line longer than {} KiB; {READS}",
                 MAX_LINE / 1024
             )));
         }
@@ -147,12 +151,13 @@ pub fn json(reader: impl BufRead, name: &str, tracks: &mut Tracks) -> Result<(),
             continue;
         }
         let tag: Tag = serde_json::from_str(line)
-            .map_err(|e| ReadError::Bad(format!("{name}:{n}: not a JSON object: {e}")))?;
+            .map_err(|e| ReadError::Bad(format!("{name}:{n}: not a JSON object ({e}); {READS}")))?;
         if tag.done.is_some() {
             continue;
         }
-        let s: Sample = serde_json::from_str(line)
-            .map_err(|e| ReadError::Bad(format!("{name}:{n}: not a telemetry sample: {e}")))?;
+        let s: Sample = serde_json::from_str(line).map_err(|e| {
+            ReadError::Bad(format!("{name}:{n}: not a telemetry sample ({e}); {READS}"))
+        })?;
         tracks
             .push(tag.droid.as_deref(), &s)
             .map_err(|e| ReadError::Bad(format!("{name}:{n}: {e}")))?;

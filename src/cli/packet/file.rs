@@ -95,12 +95,36 @@ pub(super) fn decode_path(
     let mut input: Box<dyn Read> = if path == "-" {
         Box::new(std::io::stdin().lock())
     } else {
-        Box::new(
-            std::fs::File::open(path)
-                .map_err(|e| CliError::usage(format!("cannot read {path}: {e}")))?,
-        )
+        let mut file = std::fs::File::open(path)
+            .map_err(|e| CliError::usage(format!("cannot read {path}: {e}")))?;
+        let mut head = [0u8; 32];
+        let n = read_block(&mut file, &mut head, 0)?;
+        if let Some(what) = another_format(&head[..n]) {
+            return Err(CliError::usage(
+                format!("{path} is {what}").replace("FILE", path),
+            ));
+        }
+        Box::new(std::io::Read::chain(
+            std::io::Cursor::new(head[..n].to_vec()),
+            file,
+        ))
     };
     decode_reader(&mut input, args, json, summary_only, out).map(|_| 0)
+}
+
+/// What a file `--file` should not read as bytes is, and what reads it (`FILE` stands for
+/// its name): captures and btsnoop logs have their own readers.
+fn another_format(head: &[u8]) -> Option<&'static str> {
+    if head.starts_with(b"droidctl-capture ") {
+        Some(
+            "a droidctl capture (`--record`), not a byte stream: `droidctl replay FILE` shows \
+             its packets in the app, `droidctl replay FILE --json` prints its telemetry",
+        )
+    } else if head.starts_with(&crate::capture::btsnoop::MAGIC[..]) {
+        Some("a btsnoop log: decode it with `droidctl packet decode --btsnoop FILE`")
+    } else {
+        None
+    }
 }
 
 /// Decode everything `input` holds, printing each packet and error (unless `summary_only`)
@@ -119,6 +143,9 @@ pub fn decode_reader(
     let first = read_block(input, &mut block, 0)?;
     if first == 0 {
         return Err(CliError::usage("the input is empty: no bytes to decode"));
+    }
+    if let Some(what) = another_format(&block[..first]) {
+        return Err(CliError::usage(format!("the input is {what}")));
     }
     let is_hex = looks_like_hex(&block[..first]);
     let mut hex = HexText::default();

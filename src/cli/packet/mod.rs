@@ -350,14 +350,34 @@ fn list(
             ))
         })?],
     };
-    for (i, family) in families.iter().enumerate() {
+    let mut listed = 0;
+    for family in &families {
+        let mut section = Vec::new();
+        let n = family.list(filter, &mut section).map_err(io_err)?;
+        if n == 0 {
+            continue;
+        }
         if families.len() > 1 {
-            if i > 0 {
+            if listed > 0 {
                 writeln!(out).map_err(io_err)?;
             }
             writeln!(out, "== {} ==", family.name()).map_err(io_err)?;
         }
-        family.list(filter, out).map_err(io_err)?;
+        out.write_all(&section).map_err(io_err)?;
+        listed += n;
+    }
+    if listed == 0 {
+        let names: Vec<&str> = families.iter().map(|f| f.name()).collect();
+        let wider = if families.len() == 1 {
+            "; `--protocol all` searches every family"
+        } else {
+            ""
+        };
+        return Err(CliError::usage(format!(
+            "nothing in the {} catalogue matches {:?}: `droidctl packet list` lists it all{wider}",
+            names.join(", "),
+            filter.unwrap_or_default()
+        )));
     }
     Ok(0)
 }

@@ -191,13 +191,13 @@ fn payload(f: Feature) -> String {
 
 /// `packet list --protocol rsrcp`: the characteristics, the EFS features with their bits and
 /// payload sizes, and the remote-control bytes.
-pub fn list(filter: Option<&str>, out: &mut dyn Write) -> std::io::Result<()> {
+pub fn list(filter: Option<&str>, out: &mut dyn Write) -> std::io::Result<usize> {
     let keep = |n: &str| keep(filter, n);
-    writeln!(
-        out,
+    let mut l = crate::family::listing::Listing::new(out);
+    l.heading(format_args!(
         "Robot -> central (RSRC service {}; characteristic  name  bytes):",
         short(ROBI_RSRC_SERVICE)
-    )?;
+    ));
     let rows = [
         (
             ROBI_HANDSHAKE,
@@ -216,33 +216,29 @@ pub fn list(filter: Option<&str>, out: &mut dyn Write) -> std::io::Result<()> {
         ),
     ];
     for (uuid, name, what) in rows.iter().filter(|r| keep(r.1)) {
-        writeln!(out, "  {:<6}  {name:<9} {what}", short(*uuid))?;
+        l.entry(format_args!("  {:<6}  {name:<9} {what}", short(*uuid)))?;
     }
-    writeln!(
-        out,
+    l.heading(format_args!(
         "EFS features (bit  name  payload bytes  payload), payloads in this order:"
-    )?;
+    ));
     for f in Feature::ALL.into_iter().filter(|f| keep(f.name())) {
         let size = f.size().map_or_else(|| "-".to_string(), |n| n.to_string());
-        writeln!(
-            out,
+        l.entry(format_args!(
             "  0x{:04X}  {:<9} {size:<2} {}",
             f.flag().bits(),
             f.name(),
             payload(f)
-        )?;
+        ))?;
     }
     if keep("reserved") {
-        writeln!(
-            out,
+        l.entry(format_args!(
             "  0x001F  reserved  -  the frame's end is unknown: reported, not read past"
-        )?;
+        ))?;
     }
-    writeln!(
-        out,
+    l.heading(format_args!(
         "Central -> robot (remote-control service {}; characteristic  name  byte):",
         short(ROBI_RC_SERVICE)
-    )?;
+    ));
     let rows = [
         (
             ROBI_VELOCITY,
@@ -256,7 +252,7 @@ pub fn list(filter: Option<&str>, out: &mut dyn Write) -> std::io::Result<()> {
         ),
     ];
     for (uuid, name, what) in rows.iter().filter(|r| keep(r.1)) {
-        writeln!(out, "  {:<6}  {name:<9} {what}", short(*uuid))?;
+        l.entry(format_args!("  {:<6}  {name:<9} {what}", short(*uuid)))?;
     }
-    Ok(())
+    Ok(l.entries())
 }

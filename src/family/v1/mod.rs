@@ -257,7 +257,7 @@ impl Family for V1 {
         named::encode(name, params)
     }
 
-    fn list(&self, filter: Option<&str>, out: &mut dyn std::io::Write) -> std::io::Result<()> {
+    fn list(&self, filter: Option<&str>, out: &mut dyn std::io::Write) -> std::io::Result<usize> {
         named::list(filter, out)
     }
 

@@ -47,9 +47,10 @@ pub fn encode(name: &str, given: Vec<(String, String)>) -> Result<Vec<u8>, Strin
 
 /// `packet list --protocol v1`: commands with their parameters, async messages with their
 /// fields.
-pub fn list(filter: Option<&str>, out: &mut dyn Write) -> std::io::Result<()> {
+pub fn list(filter: Option<&str>, out: &mut dyn Write) -> std::io::Result<usize> {
     let keep = |n: &str| keep(filter, n);
-    writeln!(out, "Commands (DID/CID  name  parameters):")?;
+    let mut l = crate::family::listing::Listing::new(out);
+    l.heading("Commands (DID/CID  name  parameters):");
     for c in catalog::commands().iter().filter(|c| keep(&c.name)) {
         let line = format!(
             "  {:02X}/{:02X}  {:<30} {}",
@@ -58,9 +59,9 @@ pub fn list(filter: Option<&str>, out: &mut dyn Write) -> std::io::Result<()> {
             c.name,
             params_text(c.params)
         );
-        writeln!(out, "{}", line.trim_end())?;
+        l.entry(line.trim_end())?;
     }
-    writeln!(out, "Async messages (ID  name  fields):")?;
+    l.heading("Async messages (ID  name  fields):");
     for a in catalog::async_messages().iter().filter(|a| keep(a.name)) {
         let fields: Vec<_> = a.fields.iter().map(|f| f.name).collect();
         let line = format!(
@@ -69,7 +70,7 @@ pub fn list(filter: Option<&str>, out: &mut dyn Write) -> std::io::Result<()> {
             a.name,
             fields.join(" ")
         );
-        writeln!(out, "{}", line.trim_end())?;
+        l.entry(line.trim_end())?;
     }
-    Ok(())
+    Ok(l.entries())
 }

@@ -114,7 +114,8 @@ pub fn model_has(model: Model, did: u8, cid: u8) -> bool {
 /// `packet list` for v2: commands with their parameters, notifications with their fields.
 /// A model id as the filter (`bolt`) lists that model's commands, with the processor each
 /// is addressed to on robots with two.
-pub fn list(filter: Option<&str>, out: &mut dyn Write) -> std::io::Result<()> {
+pub fn list(filter: Option<&str>, out: &mut dyn Write) -> std::io::Result<usize> {
+    let mut l = crate::family::listing::Listing::new(out);
     let model = filter
         .and_then(Model::from_id)
         .filter(|m| m.protocol() == crate::model::Protocol::SpheroV2);
@@ -122,7 +123,7 @@ pub fn list(filter: Option<&str>, out: &mut dyn Write) -> std::io::Result<()> {
         Some(m) => model_has(m, did, cid),
         None => keep(filter, n),
     };
-    writeln!(out, "Commands (DID/CID  name  parameters):")?;
+    l.heading("Commands (DID/CID  name  parameters):");
     for c in catalog::commands()
         .iter()
         .filter(|c| keep(&c.name, c.did, c.cid))
@@ -132,29 +133,27 @@ pub fn list(filter: Option<&str>, out: &mut dyn Write) -> std::io::Result<()> {
             Some(Home::Both) => "  [either]".to_string(),
             _ => String::new(),
         };
-        writeln!(
-            out,
+        l.entry(format_args!(
             "  {:02X}/{:02X}  {:<44} {}{to}",
             c.did,
             c.cid,
             c.name,
             params_text(c.params)
-        )?;
+        ))?;
     }
-    writeln!(out, "Notifications (DID/CID  name  fields):")?;
+    l.heading("Notifications (DID/CID  name  fields):");
     for n in catalog::notifications()
         .iter()
         .filter(|n| keep(&n.name, n.device.id(), n.cid))
     {
         let fields: Vec<_> = n.fields.iter().map(|f| f.name).collect();
-        writeln!(
-            out,
+        l.entry(format_args!(
             "  {:02X}/{:02X}  {:<44} {}",
             n.device.id(),
             n.cid,
             n.name,
             fields.join(" ")
-        )?;
+        ))?;
     }
-    Ok(())
+    Ok(l.entries())
 }
