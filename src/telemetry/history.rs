@@ -134,9 +134,6 @@ pub struct History {
     rows: VecDeque<Row>,
 }
 
-/// Rows closer than this are one sample (the packets of one streaming period).
-const SAME_SAMPLE: Duration = Duration::from_millis(5);
-
 impl History {
     /// Record `t` as it is after a sample at `at`. A time before the last row (a new
     /// connection's clock, a replay played again) starts the history afresh.
@@ -156,16 +153,18 @@ impl History {
         {
             self.rows.pop_front();
         }
-        // One period of RVR's streaming service arrives as a packet per token, a few ms
-        // apart: they are one sample, not four (issue 30 point 7: "measured 41.1/s" at 10/s).
-        // The row keeps the latest values (telemetry holds every token's).
-        if let Some(last) = self.rows.back_mut()
-            && at.saturating_sub(last.at) < SAME_SAMPLE
-        {
-            last.values = values;
-            return;
-        }
         self.rows.push_back(Row { at, values });
+    }
+
+    /// More of the last sample arrived (another of RVR's tokens in the same period): the last
+    /// row takes every channel as it is now; no new row, so the measured rate counts samples,
+    /// not packets.
+    pub fn complete_last(&mut self, t: &Telemetry) {
+        if let Some(last) = self.rows.back_mut() {
+            for (i, c) in Channel::ALL.iter().enumerate() {
+                last.values[i] = c.value(t).filter(|v| v.is_finite()).unwrap_or(f32::NAN);
+            }
+        }
     }
 
     pub fn len(&self) -> usize {
@@ -281,18 +280,6 @@ mod tests {
             pitch: Some(speed / 10.0),
             ..Telemetry::default()
         }
-    }
-
-    #[test]
-    fn a_period_sent_as_several_packets_is_one_sample() {
-        let mut h = History::default();
-        for period in 0..20u64 {
-            for token in 0..4u64 {
-                h.record(Duration::from_millis(period * 100 + token), &t_with(1.0));
-            }
-        }
-        let rate = h.measured_rate(Duration::from_millis(1_950)).unwrap();
-        assert!((rate - 10.0).abs() < 0.5, "{rate}");
     }
 
     #[test]
