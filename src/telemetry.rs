@@ -542,7 +542,6 @@ mod period_tests {
     fn sample(names: &[&'static str]) -> Notification {
         Notification::Sensors(SensorSample {
             values: names.iter().map(|n| (*n, 1.0)).collect(),
-            ..Default::default()
         })
     }
 
