@@ -438,7 +438,8 @@ fn help_overlay_lists_every_binding_at_80x24() {
 
 #[test]
 fn alarms_are_styled() {
-    let term = render(&collision_flash(), 80, 24);
+    // (80×25: the context footer takes a row of the log at 24, and the error line with it)
+    let term = render(&collision_flash(), 80, 25);
     let buf = term.backend().buffer();
     let text = rows(buf);
     let (y, row) = text

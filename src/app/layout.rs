@@ -179,19 +179,33 @@ pub fn screen(mut area: Rect, fleet: bool) -> Screen {
         area.height -= 1;
         strip
     });
-    // The context footer takes the bottom row once the screen has room for panels.
-    let footer = (area.height > MIN_HEIGHT).then(|| {
-        area.height -= 1;
-        Rect {
-            y: area.bottom(),
-            height: 1,
+    // The context footer takes the bottom row once the screen has room for panels: from
+    // the log where the log is at the bottom (the panels keep their rows), else from all.
+    if area.height <= MIN_HEIGHT {
+        return Screen {
+            roster,
+            plan: plan(area),
+            footer: None,
+        };
+    }
+    let footer = Rect {
+        y: area.bottom() - 1,
+        height: 1,
+        ..area
+    };
+    let mut p = plan(area);
+    if p.class == SizeClass::Wide {
+        p = plan(Rect {
+            height: area.height - 1,
             ..area
-        }
-    });
+        });
+    } else {
+        p.log.height = p.log.height.saturating_sub(1);
+    }
     Screen {
         roster,
-        plan: plan(area),
-        footer,
+        plan: p,
+        footer: Some(footer),
     }
 }
 
