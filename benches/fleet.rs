@@ -161,6 +161,7 @@ mod linux {
             release: ReleaseMode::Reported,
             tripod_on_connect: true,
             samples: None,
+            remember: None,
         };
         let f = fleet.clone();
         let app = tokio::spawn(async move {

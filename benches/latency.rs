@@ -287,6 +287,7 @@ fn options(config: Config, model: Model) -> AppOptions {
         release: ReleaseMode::Reported,
         tripod_on_connect: true,
         samples: None,
+        remember: None,
     }
 }
 

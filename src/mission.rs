@@ -557,13 +557,16 @@ pub async fn await_connected(session: &SessionHandle, limit: Duration) -> Result
 
 /// The sample of `t` at `t_ms` since the mission started (replay makes them too).
 pub fn sample_of(t: &Telemetry, t_ms: u64) -> Sample {
+    // No negative zeros in the text or JSON the sample becomes.
+    let z = |v: Option<f32>| v.map(crate::units::signless32);
+    let z3 = |v: Option<[f32; 3]>| v.map(|a| a.map(crate::units::signless32));
     Sample {
         t_ms,
-        x_cm: t.x_cm,
-        y_cm: t.y_cm,
-        speed: t.speed_cm_s(),
+        x_cm: z(t.x_cm),
+        y_cm: z(t.y_cm),
+        speed: z(t.speed_cm_s()),
         heading: t.heading().map(Heading::degrees),
-        head_deg: t.head_deg,
+        head_deg: z(t.head_deg),
         stance: t.stance.label(),
         battery_v: t.battery_v,
         collisions: t.collisions,
@@ -575,13 +578,16 @@ pub fn sample_of(t: &Telemetry, t_ms: u64) -> Sample {
             .map(|m| m.right_rad_s),
         frames: t.robi.as_ref().map(|r| r.frames),
         lost_frames: t.robi.as_ref().map(|r| r.lost),
-        pitch_deg: t.pitch,
-        roll_deg: t.roll,
+        pitch_deg: z(t.pitch),
+        roll_deg: z(t.roll),
         // Robi's yaw is dead reckoning, already in the heading.
-        yaw_deg: t.yaw.filter(|_| t.robi.is_none()),
-        accel_g: t.accel,
-        gyro_deg_s: t.gyro,
-        velocity_cm_s: t.velocity_cm_s.filter(|_| t.robi.is_none()),
+        yaw_deg: z(t.yaw.filter(|_| t.robi.is_none())),
+        accel_g: z3(t.accel),
+        gyro_deg_s: z3(t.gyro),
+        velocity_cm_s: t
+            .velocity_cm_s
+            .filter(|_| t.robi.is_none())
+            .map(|a| a.map(crate::units::signless32)),
         poti: t.robi.as_ref().and_then(|r| r.poti),
     }
 }

@@ -202,6 +202,10 @@ pub struct Telemetry {
     pub robot: RobotReadings,
     /// Every channel at each sample of the last two minutes: the scope, the measured rate.
     pub history: history::History,
+    /// The sensors of the sample being gathered: one period of RVR's streaming service
+    /// arrives as a packet per token (and per processor); a sensor seen again starts the
+    /// next sample (issue 30 point 7: "measured 41.1/s" at 10/s).
+    pub period: Vec<&'static str>,
 }
 
 /// BOLT's compass and light, RVR's colour sensor and motors.
@@ -246,6 +250,7 @@ impl Default for Telemetry {
             robi: None,
             robot: RobotReadings::default(),
             history: history::History::default(),
+            period: Vec::new(),
         }
     }
 }
@@ -283,7 +288,18 @@ impl Telemetry {
                         s.get("color_confidence").unwrap_or(0.0).clamp(0.0, 1.0),
                     ));
                 }
-                self.record(at);
+                let names = s.values.iter().map(|(n, _)| *n);
+                let again = s.values.iter().any(|(n, _)| self.period.contains(n));
+                if again || self.period.is_empty() || self.period.len() > 64 {
+                    self.period.clear();
+                    self.period.extend(names);
+                    self.record(at);
+                } else {
+                    self.period.extend(names);
+                    let mut h = std::mem::take(&mut self.history);
+                    h.complete_last(self);
+                    self.history = h;
+                }
             }
             Notification::Robot(e) => self.robot.apply(e),
             Notification::Collision(c) => {
@@ -515,5 +531,43 @@ mod tests {
         assert_eq!(t.battery_voltage_state, Some(2));
         t.apply(&Notification::PowerState(1), Duration::ZERO);
         assert_eq!(t.battery_voltage_state, Some(2));
+    }
+}
+
+#[cfg(test)]
+mod period_tests {
+    use super::*;
+    use crate::protocol::notify::SensorSample;
+
+    fn sample(names: &[&'static str]) -> Notification {
+        Notification::Sensors(SensorSample {
+            values: names.iter().map(|n| (*n, 1.0)).collect(),
+        })
+    }
+
+    /// Issue 30 point 7: RVR sends a period as a packet per token and processor (here four,
+    /// 20 ms apart at most): the measured rate counts periods (10/s), not packets (40/s).
+    #[test]
+    fn the_packets_of_one_period_are_one_sample() {
+        let mut t = Telemetry::default();
+        for period in 0..20u64 {
+            let at = |ms: u64| Duration::from_millis(period * 100 + ms);
+            t.apply(&sample(&["pitch", "roll", "yaw"]), at(0));
+            t.apply(&sample(&["locator_x", "locator_y"]), at(1));
+            t.apply(&sample(&["color_red"]), at(20));
+            t.apply(&sample(&["ambient_light"]), at(21));
+        }
+        let rate = t
+            .history
+            .measured_rate(Duration::from_millis(1_990))
+            .unwrap();
+        assert!((rate - 10.0).abs() < 0.5, "{rate}");
+        // Mask streaming: every packet has the same sensors, every packet is a sample.
+        let mut t = Telemetry::default();
+        for i in 0..20u64 {
+            t.apply(&sample(&["pitch", "roll"]), Duration::from_millis(i * 50));
+        }
+        let rate = t.history.measured_rate(Duration::from_millis(990)).unwrap();
+        assert!((rate - 20.0).abs() < 0.5, "{rate}");
     }
 }

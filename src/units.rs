@@ -104,9 +104,41 @@ pub struct CmPerSec(pub f32);
 #[derive(Debug, Clone, Copy, PartialEq, PartialOrd, Default)]
 pub struct Volts(pub f32);
 
+/// `v` without the sign of a zero: -0.0 is 0.0. Text and JSON never show a negative zero
+/// (`pitch=-0.0`, `"pitch_deg":-0.0`: issue 30); values pass through this where they are
+/// formatted or serialized.
+pub fn signless(v: f64) -> f64 {
+    if v == 0.0 { 0.0 } else { v }
+}
+
+/// [`signless`] for f32 readings.
+pub fn signless32(v: f32) -> f32 {
+    if v == 0.0 { 0.0 } else { v }
+}
+
+/// `v` with `prec` decimals, never `-0` or `-0.00`: a value that rounds to zero prints as zero.
+pub fn fixed(v: f64, prec: usize) -> String {
+    let s = format!("{:.prec$}", signless(v));
+    match s.strip_prefix('-') {
+        Some(rest) if rest.bytes().all(|b| b == b'0' || b == b'.') => rest.to_string(),
+        _ => s,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn no_negative_zeros() {
+        assert_eq!(fixed(-0.3, 0), "0");
+        assert_eq!(fixed(-0.004, 2), "0.00");
+        assert_eq!(fixed(-0.0, 1), "0.0");
+        assert_eq!(fixed(-0.6, 0), "-1");
+        assert_eq!(fixed(-1.25, 1), "-1.2");
+        assert_eq!(signless(-0.0).to_string(), "0");
+        assert_eq!(signless32(-0.0).to_string(), "0");
+    }
 
     #[test]
     fn heading_range_and_wrap() {

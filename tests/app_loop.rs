@@ -98,6 +98,7 @@ async fn start_with(
         release,
         tripod_on_connect,
         samples: None,
+        remember: None,
     };
     let s = session.clone();
     let app = tokio::spawn(async move {

@@ -73,6 +73,7 @@ async fn start(model: Model) -> Harness {
         release: ReleaseMode::Reported,
         tripod_on_connect: false,
         samples: None,
+        remember: None,
     };
     let app = tokio::spawn(async move {
         let mut terminal = Terminal::new(TestBackend::new(80, 24)).unwrap();

@@ -148,6 +148,7 @@ async fn replay_with(
         release: ReleaseMode::Reported,
         tripod_on_connect: false,
         samples: None,
+        remember: None,
     };
     let inputs = AppInputs {
         term: term_rx,

@@ -70,6 +70,8 @@ impl Tui {
         cmd.env("TERM", "xterm-256color");
         cmd.env("DROIDCTL_LOG_FILE", dir.0.join("droidctl.log"));
         cmd.env("DROIDCTL_CONFIG", "/dev/null");
+        // Remembered settings stay in the test's directory (each run starts from defaults).
+        cmd.env("DROIDCTL_STATE_DIR", dir.0.join("state"));
         for (k, v) in env {
             cmd.env(k, v);
         }

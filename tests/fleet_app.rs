@@ -83,6 +83,7 @@ fn opts(config: Config, tripod_on_connect: bool) -> AppOptions {
         log_path: None,
         release: ReleaseMode::Reported,
         samples: None,
+        remember: None,
         tripod_on_connect,
     }
 }
@@ -432,4 +433,129 @@ async fn a_fleet_capture_replays_every_droid_together() {
     .unwrap();
     app.await.unwrap();
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Issue 30 point 5: each droid's view is its own and kept when it is chosen again; `Tab`
+/// means "next droid" with the scope on screen too (the scope's channel list is `C`).
+#[tokio::test(start_paused = true)]
+async fn each_droid_keeps_its_view_and_tab_means_the_next_droid_everywhere() {
+    let h = start(None).await;
+    // The scope on droid 0, a longer window.
+    h.tap(Key::ch('g')).await;
+    h.tap(Key::ch('[')).await;
+    sleep(Duration::from_millis(300)).await;
+    let window = seen().droid().scope.window;
+    assert!(seen().droid().scope.visible);
+    // Tab with the scope on screen: the next droid (its own view: no scope), no channel list.
+    h.tap(Key::plain(KeyCode::Tab)).await;
+    sleep(Duration::from_millis(300)).await;
+    let s = seen();
+    assert_eq!(s.chosen, 1);
+    assert_eq!(s.overlay, droidctl::app::state::Overlay::None);
+    assert!(!s.droid().scope.visible);
+    // Back to droid 0 (` is the previous droid): its scope as it was left.
+    h.tap(Key::ch('`')).await;
+    sleep(Duration::from_millis(300)).await;
+    let s = seen();
+    assert_eq!(s.chosen, 0);
+    assert!(s.droid().scope.visible);
+    assert_eq!(s.droid().scope.window, window);
+    h.tap(Key::ch('q')).await;
+    h.app.await.unwrap();
+}
+
+impl Harness {
+    async fn mouse(&self, kind: droidctl::app::input::MouseKind, col: u16, row: u16) {
+        self.term
+            .send(TermEvent::Mouse { kind, col, row })
+            .await
+            .unwrap();
+        sleep(Duration::from_millis(100)).await;
+    }
+}
+
+/// Issue 30 point 2: the mouse, with synthetic events on the 120×40 test terminal. A click
+/// on the roster chooses that droid (and lets go of held keys: it stops driving); the wheel
+/// scrolls the log; a click gives the keys to the log or back to driving; the wheel pages
+/// help and a click closes it; a click on a palette entry plays it. Nothing drives.
+#[tokio::test(start_paused = true)]
+async fn the_mouse_chooses_droids_scrolls_focuses_and_picks() {
+    use droidctl::app::input::MouseKind::{Click, ScrollDown, ScrollUp};
+    use droidctl::app::state::{Focus, Overlay};
+    let h = start(None).await;
+    let screen = droidctl::app::layout::screen(ratatui::layout::Rect::new(0, 0, 120, 40), true);
+    let strip = screen.roster.expect("a roster strip");
+    let (_, room) = droidctl::app::layout::roster_room(strip.width, 4, false);
+    // w held drives droid 0; a click on droid 2's entry chooses it and stops droid 0.
+    h.key(Key::ch('w'), KeyKind::Press).await;
+    sleep(Duration::from_secs(1)).await;
+    assert!(h.speeds()[0] > 1.0);
+    h.mouse(Click, (2 * room + 3) as u16, strip.y).await;
+    assert_eq!(seen().chosen, 2);
+    sleep(Duration::from_secs(1)).await;
+    assert!(h.speeds().iter().all(|v| *v == 0.0), "{:?}", h.speeds());
+    h.key(Key::ch('w'), KeyKind::Release).await;
+    // The wheel over the log scrolls it; over the panels it does nothing.
+    let log = screen.plan.log;
+    let drive = screen.plan.drive.expect("the drive panel");
+    h.mouse(ScrollUp, drive.x + 2, drive.y + 2).await;
+    assert_eq!(seen().log.scroll, 0);
+    h.mouse(ScrollUp, log.x + 5, log.y + 2).await;
+    // (Lines that arrive while scrolled back keep the view: the count grows with them.)
+    assert!(seen().log.scroll >= 3, "{}", seen().log.scroll);
+    for _ in 0..40 {
+        let e = TermEvent::Mouse {
+            kind: ScrollDown,
+            col: log.x + 5,
+            row: log.y + 2,
+        };
+        h.term.send(e).await.unwrap();
+    }
+    sleep(Duration::from_millis(300)).await;
+    assert_eq!(seen().log.scroll, 0, "back to following");
+    // A click on the log: the log has the keys; on the panels: driving again.
+    h.mouse(Click, log.x + 5, log.y + 2).await;
+    assert_eq!(seen().focus, Focus::Log);
+    h.mouse(Click, drive.x + 2, drive.y + 2).await;
+    assert_eq!(seen().focus, Focus::Drive);
+    // Help: the wheel pages, a click closes.
+    h.tap(Key::ch('?')).await;
+    sleep(Duration::from_millis(100)).await;
+    h.mouse(ScrollDown, 60, 20).await;
+    assert_eq!(seen().help_page, 1);
+    h.mouse(Click, 60, 20).await;
+    assert_eq!(seen().overlay, Overlay::None);
+    // Back to R2 (droid 0): its animation palette; a click on the third entry plays it.
+    h.mouse(Click, 3, strip.y).await;
+    assert_eq!(seen().chosen, 0);
+    h.tap(Key::ch('n')).await;
+    sleep(Duration::from_millis(100)).await;
+    let s = seen();
+    let rect = droidctl::app::layout::palette_rect(
+        ratatui::layout::Rect::new(0, 0, 120, 40),
+        s.animations
+            .iter()
+            .map(|e| ratatui::text::Span::raw(e.name.as_str()).width()),
+        s.animations.len(),
+    );
+    h.mouse(Click, rect.x + 4, rect.y + 3).await;
+    let s = seen();
+    assert_eq!(s.overlay, Overlay::None, "played and closed");
+    let wanted = &s.animations[2].name;
+    assert!(
+        s.current_hint()
+            .is_some_and(|t| t.contains(wanted.as_str()))
+            || s.log
+                .visible(50)
+                .iter()
+                .any(|l| l.name.contains("animation")),
+        "{:?}",
+        s.current_hint()
+    );
+    assert!(
+        h.speeds().iter().all(|v| *v == 0.0),
+        "the mouse never drives"
+    );
+    h.tap(Key::ch('q')).await;
+    h.app.await.unwrap();
 }

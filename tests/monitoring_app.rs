@@ -44,6 +44,7 @@ fn opts(model: Model) -> AppOptions {
         release: ReleaseMode::Reported,
         tripod_on_connect: true,
         samples: None,
+        remember: None,
     }
 }
 
@@ -73,6 +74,13 @@ async fn live_writing(
     keys: Vec<(u64, TermEvent)>,
     samples: Option<droidctl::mission::csv::SampleFiles>,
 ) -> (Exit, Vec<(Duration, String)>) {
+    let mut o = opts(Model::R2D2);
+    o.samples = samples;
+    live_opts(keys, o).await
+}
+
+/// [`live`] with `o` (R2-D2's).
+async fn live_opts(keys: Vec<(u64, TermEvent)>, o: AppOptions) -> (Exit, Vec<(Duration, String)>) {
     let model = Model::R2D2;
     let link = SimLink::new(model, SimConfig::default(), Faults::none());
     let session = session::start(
@@ -114,8 +122,6 @@ async fn live_writing(
         term_tx.send(press(Key::ch('q'))).await.unwrap();
     };
     let mut terminal = Terminal::new(TestBackend::new(80, 24)).unwrap();
-    let mut o = opts(model);
-    o.samples = samples;
     let (exit, ()) = tokio::join!(
         run::run(
             &mut terminal,
@@ -136,7 +142,7 @@ async fn the_scope_shows_chosen_channels_and_its_keys_work() {
     let keys = vec![
         (3000, press(Key::ch('g'))),
         // The channel list: the first channel offered is pitch; switch it on.
-        (3100, press(Key::plain(KeyCode::Tab))),
+        (3100, press(Key::ch('C'))),
         (3200, press(Key::plain(KeyCode::Space))),
         (3300, press(Key::plain(KeyCode::Esc))),
         // Longer window, fixed axes, then pause: the plot stays at 6 s.
@@ -405,4 +411,124 @@ async fn replay_until(
         driver
     );
     (exit.unwrap(), ())
+}
+
+/// Issue 30 point 4: cruise speed, the scope's channels and window, the streaming rate, the
+/// log filter are remembered per model in the state directory and restored at the next
+/// launch; R forgets them; a hostile file is a visible warning, never a panic.
+#[tokio::test(start_paused = true)]
+async fn settings_are_remembered_per_model_and_forgotten_with_r() {
+    let dir = std::env::temp_dir().join(format!("droidctl-remember-app-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let with_dir = || {
+        let mut o = opts(Model::R2D2);
+        o.remember = Some(dir.clone());
+        o
+    };
+    // First launch: cruise up twice, the scope with a longer window, pitch on, 20/s.
+    let keys = vec![
+        (3000, press(Key::ch('+'))),
+        (3100, press(Key::ch('+'))),
+        (3200, press(Key::ch('g'))),
+        (3300, press(Key::ch('['))),
+        (3400, press(Key::ch('C'))),
+        (3500, press(Key::plain(KeyCode::Space))),
+        (3600, press(Key::plain(KeyCode::Esc))),
+        (3700, press(Key::ch('g'))),
+        (3800, press(Key::ch('u'))),
+        (3900, press(Key::plain(KeyCode::Right))),
+        (4000, press(Key::plain(KeyCode::Enter))),
+        (4100, press(Key::ch('l'))),
+        (4200, press(Key::ch('f'))),
+        (4300, press(Key::ch('i'))),
+        (4400, press(Key::ch('n'))),
+        (4500, press(Key::plain(KeyCode::Enter))),
+        (4600, press(Key::plain(KeyCode::Esc))),
+    ];
+    let (first, _) = live_opts(keys, with_dir()).await;
+    let d = first.state.droid();
+    let (cruise, window, channels, rate) = (
+        d.control.cruise,
+        d.scope.window,
+        d.scope.channels.clone(),
+        d.monitor.request.rate_hz,
+    );
+    assert!(cruise > 100, "{cruise}");
+    assert_ne!(rate, 10, "the rate changed");
+    let file = std::fs::read_to_string(dir.join("settings-r2d2.toml")).expect("remembered");
+    assert!(file.contains(&format!("cruise = {cruise}")), "{file}");
+    // The next launch starts where the first ended (the rate is asked for once connected).
+    let esc = || press(Key::plain(KeyCode::Esc));
+    let (second, sent) = live_opts(vec![(2000, esc())], with_dir()).await;
+    let d = second.state.droid();
+    assert_eq!(d.control.cruise, cruise);
+    assert_eq!(
+        (d.scope.window, d.scope.channels.clone()),
+        (window, channels)
+    );
+    assert_eq!(d.monitor.request.rate_hz, rate);
+    assert!(
+        sent.iter().any(|(_, n)| n.contains("streaming")),
+        "{sent:?}"
+    );
+    assert_eq!(second.state.log.filter_input(), "in");
+    // R: back to the configuration's, the file gone.
+    let (third, _) = live_opts(vec![(3000, press(Key::ch('R')))], with_dir()).await;
+    let d = third.state.droid();
+    assert_eq!(d.control.cruise, 100);
+    assert_eq!(d.monitor.request.rate_hz, 10);
+    assert_eq!(third.state.log.filter_input(), "");
+    // (At exit the defaults are remembered again: the file says the configuration's.)
+    let file = std::fs::read_to_string(dir.join("settings-r2d2.toml")).expect("rewritten");
+    assert!(file.contains("cruise = 100"), "{file}");
+    // A hostile file: a warning on screen, the defaults, no panic.
+    std::fs::write(dir.join("settings-r2d2.toml"), "cruise = [[[\u{0}").unwrap();
+    let (fourth, _) = live_opts(vec![], with_dir()).await;
+    let d = fourth.state.droid();
+    assert_eq!(d.control.cruise, 100);
+    let hint = fourth
+        .state
+        .hint
+        .as_ref()
+        .map(|h| h.text.clone())
+        .unwrap_or_default();
+    assert!(hint.contains("settings-r2d2.toml"), "{hint}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Issue 30 point 3: Enter in the packet log opens its newest line in full; `/` searches,
+/// `n` and `N` go through the matches; Esc closes. Nothing drives meanwhile.
+#[tokio::test(start_paused = true)]
+async fn enter_opens_a_packet_in_full_with_search() {
+    use droidctl::app::state::Overlay;
+    let mut keys = vec![
+        (3000, press(Key::ch('l'))),
+        (3100, press(Key::ch('p'))),
+        (3200, press(Key::plain(KeyCode::Enter))),
+        (3300, press(Key::ch('/'))),
+    ];
+    for (i, c) in "seq".chars().enumerate() {
+        keys.push((3400 + i as u64 * 10, press(Key::ch(c))));
+    }
+    keys.push((3500, press(Key::plain(KeyCode::Enter))));
+    keys.push((3600, press(Key::ch('n'))));
+    let (exit, _) = live(keys).await;
+    let Overlay::Packet {
+        line,
+        search,
+        typing,
+        scroll,
+        ..
+    } = &exit.state.overlay
+    else {
+        panic!("the packet in full: {:?}", exit.state.overlay)
+    };
+    assert_eq!((search.as_str(), *typing), ("seq", false));
+    let rows = droidctl::app::detail::rows(line);
+    assert!(
+        rows[*scroll].label.contains("seq") || rows[*scroll].value.contains("seq"),
+        "{:?}",
+        rows[*scroll]
+    );
+    assert!(rows.iter().any(|r| r.label == "hex" && !r.value.is_empty()));
 }

@@ -42,11 +42,11 @@ fn keys_typed_in_an_overlay_never_drive_when_it_closes() {
     let cases: Vec<Vec<Step>> = vec![
         // `?`, `↓`, `Esc`: help, a page down, closed.
         vec![tap(k('?')), ms(50), tap(DOWN), ms(100), tap(ESC), ms(1000)],
-        // `g`, `Tab`, `↑`, `Esc`, `g`: the scope's channel list, up, closed, scope off.
+        // `g`, `C`, `↑`, `Esc`, `g`: the scope's channel list, up, closed, scope off.
         vec![
             tap(k('g')),
             ms(50),
-            tap(TAB),
+            tap(k('C')),
             ms(50),
             tap(UP),
             ms(50),

@@ -6,6 +6,7 @@ use super::droid::DroidIo;
 use super::pacing::FramePacer;
 use super::player::Player;
 use super::rates::Rates;
+use super::remember::Remembered;
 use super::run::AppOptions;
 use super::state::{AppState, DroidState, GamepadStatus, KeyboardMode};
 use crate::capture::replay::Replay;
@@ -43,6 +44,10 @@ pub(super) fn build(droids: Vec<Origin>, opts: AppOptions) -> App {
     let start = Instant::now();
     let live = droids.iter().any(|d| matches!(d, Origin::Live { .. }));
     let mut views = Vec::with_capacity(droids.len());
+    let mut remembered: std::collections::HashMap<Model, Remembered> = Default::default();
+    let mut warnings: Vec<String> = Vec::new();
+    // The first droid's model's log filter and mirror mode (the log and mirror are the app's).
+    let mut first: Option<Remembered> = None;
     let mut io = Vec::with_capacity(droids.len());
     for origin in droids {
         let (model, name, family, session, player) = match origin {
@@ -62,7 +67,34 @@ pub(super) fn build(droids: Vec<Origin>, opts: AppOptions) -> App {
         let mut view = DroidState::new(model, name.clone());
         view.monitor =
             super::monitor::MonitorView::new(model, config.stream_request(), config.collision);
-        let mut controller = Controller::with_family(config.control.clone(), family);
+        // What this model's droids were left with last time (live only: a replay is the
+        // capture's).
+        let kept = match (&opts.remember, &session) {
+            (Some(dir), Some(_)) => remembered
+                .entry(model)
+                .or_insert_with(|| {
+                    let (r, warning) = Remembered::load(dir, model);
+                    warnings.extend(warning);
+                    r
+                })
+                .clone(),
+            _ => Remembered::default(),
+        };
+        let mut control = config.control.clone();
+        if let Some(c) = kept.cruise {
+            control.cruise_speed = c;
+        }
+        if let Some(ch) = kept.channels() {
+            view.scope.channels = ch;
+        }
+        if let Some(w) = kept.scope_window {
+            view.scope.window = w;
+        }
+        let pending_rate = kept
+            .stream_rate_hz
+            .filter(|r| *r != view.monitor.request.rate_hz);
+        first.get_or_insert(kept);
+        let mut controller = Controller::with_family(control, family);
         controller.set_tracks(model.has_tracks());
         view.control = controller.view().clone();
         if let Some(s) = &session {
@@ -90,10 +122,20 @@ pub(super) fn build(droids: Vec<Origin>, opts: AppOptions) -> App {
             name: Arc::from(name.as_str()),
             rates: Rates::new(stats, Duration::ZERO),
             last_tick: start,
+            pending_rate,
         });
         views.push(view);
     }
     let mut state = AppState::for_droids(views);
+    if let Some(first) = first {
+        if let Some(f) = &first.log_filter {
+            state.log.set_filter(super::packet_log::LogFilter::parse(f));
+        }
+        state.mirror = first.mirror.unwrap_or(false) && state.droids.len() > 1;
+    }
+    if !warnings.is_empty() {
+        state.show_hint(warnings.join(" · "), super::core::HINT_TIME * 3);
+    }
     state.log_path = opts.log_path;
     state.keyboard = match opts.release {
         ReleaseMode::Reported => KeyboardMode::ReleaseEvents,
@@ -105,12 +147,14 @@ pub(super) fn build(droids: Vec<Origin>, opts: AppOptions) -> App {
         GamepadStatus::Disabled
     };
     state.help_nav = super::help::nav(&keymap);
+    state.footer = super::help::footer(&keymap);
     state.help = if live {
         super::help::live(&config)
     } else {
         super::help::replay(&keymap)
     };
     App {
+        area: Default::default(),
         state,
         io,
         replayed: Vec::new(),
@@ -120,6 +164,9 @@ pub(super) fn build(droids: Vec<Origin>, opts: AppOptions) -> App {
         keymap,
         turbo_speed: config.control.turbo_speed,
         tripod_on_connect: opts.tripod_on_connect,
+        remember: opts.remember,
+        default_cruise: config.control.cruise_speed,
+        default_rate: config.stream_request().rate_hz,
         samples: opts.samples,
         start,
         dirty: true,

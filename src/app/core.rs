@@ -42,6 +42,13 @@ pub(super) struct App {
     /// What the input routing did so far, and where it is published.
     pub trace: InputTrace,
     pub trace_tx: Option<tokio::sync::watch::Sender<InputTrace>>,
+    /// Where settings are remembered per model (`None`: nothing is).
+    pub remember: Option<std::path::PathBuf>,
+    /// The configuration's cruise speed and streaming rate (what forgetting goes back to).
+    pub default_cruise: u8,
+    pub default_rate: u16,
+    /// The terminal's area at the last frame (where the mouse's clicks land).
+    pub area: ratatui::layout::Rect,
 }
 
 /// What the input routing did, published after every terminal or gamepad event: the tests

@@ -31,6 +31,8 @@ pub(super) struct DroidIo {
     pub rates: Rates,
     /// When its control loop last ticked.
     pub last_tick: Instant,
+    /// A remembered streaming rate to ask for once connected.
+    pub pending_rate: Option<u16>,
 }
 
 /// A droid and what its handlers share with the app.
@@ -120,15 +122,24 @@ impl DroidMut<'_> {
     /// Its link changed: a lost link forgets what was sent; a (re)connect that asks for
     /// tripod shows the stance as requested.
     pub fn on_link(&mut self, s: LinkState) {
+        let connected = s == LinkState::Connected && self.view.link != LinkState::Connected;
         if s != LinkState::Connected {
             self.io.controller.link_lost();
-        } else if self.view.link != LinkState::Connected
-            && self.tripod_on_connect
-            && self.view.model.has_legs()
-        {
+        } else if connected && self.tripod_on_connect && self.view.model.has_legs() {
             self.view.telemetry.stance_requested(LegAction::Tripod);
         }
         self.view.link = s;
+        // The streaming rate remembered for this model, asked for once (and made the setup
+        // of every reconnect).
+        if connected && let Some(rate_hz) = self.io.pending_rate.take() {
+            let m = &self.view.monitor;
+            let draft = super::monitor::TuningDraft {
+                rate_hz,
+                sensors: m.request.sensors,
+                collision: m.collision,
+            };
+            self.apply_tuning(draft);
+        }
         *self.dirty = true;
     }
 

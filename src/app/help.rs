@@ -1,10 +1,14 @@
-//! The help overlay's text, generated from the bindings as configured: one section per place
-//! keys are read (driving, the packet log, palettes, the filter prompt, help itself, replay),
-//! then the gamepad. A rebound key shows in help because help is built from the same
-//! [`KeyMap`] the key dispatch reads.
+//! The help overlay's text and the context footer, generated from the bindings as configured
+//! and the one table of key definitions ([`crate::config::KEY_TABLE`]): help has one section
+//! per place keys are read (driving, the packet log, palettes, the filter prompt, help itself,
+//! replay), then the gamepad; the footer has the few keys that matter in the place on top,
+//! then `?` for the rest. Both leave out what does not apply to the chosen droid (its
+//! [`Needs`]). A rebound key shows in both because they are built from the same [`KeyMap`] the
+//! key dispatch reads.
 
-use super::state::{HelpLine, HelpSection};
-use crate::config::{Action, Config, Context, KeyMap};
+use super::place::Place;
+use super::state::{AppState, FooterKey, HelpLine, HelpSection};
+use crate::config::{Action, Config, Context, KeyMap, Needs};
 
 /// Help for a live session: every context a live app reads keys in, then the gamepad.
 pub fn live(config: &Config) -> Vec<HelpSection> {
@@ -13,6 +17,7 @@ pub fn live(config: &Config) -> Vec<HelpSection> {
     drive.lines.push(HelpLine {
         keys: "Ctrl+c".into(),
         action: "quit (stops the droid first), whatever the bindings".into(),
+        needs: Needs::All,
     });
     let mut sections = vec![drive];
     sections.extend(
@@ -22,6 +27,7 @@ pub fn live(config: &Config) -> Vec<HelpSection> {
             Context::Settings,
             Context::Palette,
             Context::Filter,
+            Context::Detail,
             Context::Help,
         ]
         .into_iter()
@@ -40,6 +46,7 @@ pub fn replay(km: &KeyMap) -> Vec<HelpSection> {
             replay.lines.push(HelpLine {
                 keys,
                 action: a.description().into(),
+                needs: a.needs(),
             });
         }
     }
@@ -62,15 +69,132 @@ pub fn nav(km: &KeyMap) -> String {
     }
 }
 
+/// The context footer's keys for every place keys are read: the keys the table gives a
+/// footer word, the first key bound to each, then (kept however narrow the row) the keys that
+/// leave the place or show the rest. A drive-specific key comes before the general ones, so
+/// on a narrow row what this droid can do stays and the general keys go first.
+pub fn footer(km: &KeyMap) -> Vec<(Context, Vec<FooterKey>)> {
+    let first = |a: Action| km.keys(a).first().map(ToString::to_string);
+    let entry = |a: Action, word: &str, keep: bool| {
+        first(a).map(|key| FooterKey {
+            key,
+            word: word.into(),
+            needs: a.needs(),
+            keep,
+        })
+    };
+    let words = |ctx: Context| -> Vec<FooterKey> {
+        let own: Vec<Action> = Action::ALL
+            .iter()
+            .copied()
+            .filter(|a| a.context() == ctx && !a.short().is_empty())
+            .filter(|a| !matches!(a, Action::Help | Action::Quit))
+            .collect();
+        // EStop first, then the fleet's keys, what this droid alone can do, then the rest,
+        // each in table order.
+        let (stop, rest): (Vec<Action>, Vec<Action>) =
+            own.into_iter().partition(|a| *a == Action::EStop);
+        let (fleet, rest): (Vec<Action>, Vec<Action>) =
+            rest.into_iter().partition(|a| a.needs() == Needs::Fleet);
+        let (special, general): (Vec<Action>, Vec<Action>) =
+            rest.into_iter().partition(|a| a.needs() != Needs::All);
+        stop.into_iter()
+            .chain(fleet)
+            .chain(special)
+            .chain(general)
+            .filter_map(|a| entry(a, a.short(), false))
+            .collect()
+    };
+    let tail = |extra: &[(Action, &str)]| -> Vec<FooterKey> {
+        extra
+            .iter()
+            .filter_map(|(a, w)| entry(*a, w, true))
+            .collect()
+    };
+    let more = Action::Help.short();
+    let with = |ctx: Context, extra: &[(Action, &str)]| {
+        let mut v = words(ctx);
+        v.extend(tail(extra));
+        (ctx, v)
+    };
+    let mut help = words(Context::Help);
+    help.push(FooterKey {
+        key: "other keys".into(),
+        word: "close".into(),
+        needs: Needs::All,
+        keep: true,
+    });
+    vec![
+        with(
+            Context::Drive,
+            &[(Action::Help, more), (Action::Quit, "quit")],
+        ),
+        with(
+            Context::Log,
+            &[(Action::Help, more), (Action::Quit, "quit")],
+        ),
+        with(
+            Context::Scope,
+            &[(Action::Scope, "close"), (Action::Help, more)],
+        ),
+        with(
+            Context::Replay,
+            &[
+                (Action::Log, "log"),
+                (Action::Help, more),
+                (Action::Quit, "quit"),
+            ],
+        ),
+        with(Context::Palette, &[]),
+        with(Context::Filter, &[]),
+        with(Context::Settings, &[]),
+        with(Context::Detail, &[]),
+        (Context::Help, help),
+    ]
+}
+
+/// The table of keys read in `place` (the scope's own while it is on screen in driving).
+pub fn context_of(place: Place, scope: bool) -> Context {
+    match place {
+        Place::Driving if scope => Context::Scope,
+        Place::Driving => Context::Drive,
+        Place::Replay => Context::Replay,
+        Place::Log => Context::Log,
+        Place::Filter | Place::Matrix => Context::Filter,
+        Place::Help => Context::Help,
+        Place::Palette => Context::Palette,
+        Place::Channels | Place::Tuning => Context::Settings,
+        Place::Packet => Context::Detail,
+    }
+}
+
+/// The footer's keys now: for the place on top and the chosen droid.
+pub fn footer_now(state: &AppState) -> Vec<&FooterKey> {
+    let replay = state.droid().replay.is_some();
+    let ctx = context_of(Place::of(state, replay), state.droid().scope.visible);
+    let (model, fleet) = (state.droid().model, state.droids.len() > 1);
+    state
+        .footer
+        .iter()
+        .find(|(c, _)| *c == ctx)
+        .map(|(_, keys)| {
+            keys.iter()
+                .filter(|k| k.needs.applies(model, fleet))
+                .collect()
+        })
+        .unwrap_or_default()
+}
+
 fn section(km: &KeyMap, ctx: Context) -> HelpSection {
     HelpSection {
         title: ctx.title().into(),
         lines: km
             .help(ctx)
             .into_iter()
-            .map(|(keys, action)| HelpLine {
+            .map(|(keys, a)| HelpLine {
                 keys,
-                action: action.into(),
+                action: a.description().into(),
+                needs: a.needs(),
             })
             .collect(),
     }
@@ -78,20 +202,25 @@ fn section(km: &KeyMap, ctx: Context) -> HelpSection {
 
 fn gamepad(config: &Config) -> HelpSection {
     let g = &config.gamepad;
-    let line = |keys: &str, action: &str| HelpLine {
+    let line = |keys: &str, action: &str, needs| HelpLine {
         keys: keys.into(),
         action: action.into(),
+        needs,
     };
     let mut lines = vec![
-        line("left stick", "heading and speed (polar)"),
-        line("right stick X", "turn the dome"),
-        line("sticks Y", "tank mode: left and right track (RVR)"),
-        line("right trigger", "more speed, up to turbo"),
+        line("left stick", "heading and speed (polar)", Needs::All),
+        line("right stick X", "turn the dome", Needs::Dome),
+        line(
+            "sticks Y",
+            "tank mode: left and right track (RVR)",
+            Needs::Tracks,
+        ),
+        line("right trigger", "more speed, up to turbo", Needs::Turbo),
     ];
     lines.extend(
         g.buttons
             .iter()
-            .map(|(b, a)| line(b.name(), a.description())),
+            .map(|(b, a)| line(b.name(), a.description(), a.needs())),
     );
     lines.push(line(
         "D-pad",
@@ -99,6 +228,7 @@ fn gamepad(config: &Config) -> HelpSection {
             "sounds {} / {} / {} / {}",
             g.sound_up, g.sound_down, g.sound_left, g.sound_right
         ),
+        Needs::Animations,
     ));
     HelpSection {
         title: "Gamepad".into(),
@@ -139,6 +269,7 @@ mod tests {
                 "Channels, streaming and collision",
                 "Palettes",
                 "Log filter",
+                "A packet in full",
                 "Help",
                 "Gamepad"
             ]
@@ -148,7 +279,7 @@ mod tests {
         assert_eq!(keys_of(find(&h, "Keyboard"), "the scope"), ["g"]);
         assert_eq!(
             keys_of(find(&h, "Scope (other keys drive)"), "choose the channels"),
-            ["Tab"]
+            ["C"]
         );
         assert_eq!(keys_of(find(&h, "Gamepad"), "aim mode"), ["RightBumper"]);
         let r = replay(&c.keymap);

@@ -2,7 +2,9 @@
 //! can be driven by synthetic events in tests.
 
 use crate::config::{Key, KeyCode};
-use crossterm::event::{Event, KeyCode as CtCode, KeyEvent, KeyEventKind, KeyModifiers};
+use crossterm::event::{
+    Event, KeyCode as CtCode, KeyEvent, KeyEventKind, KeyModifiers, MouseButton, MouseEventKind,
+};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum KeyKind {
@@ -11,10 +13,27 @@ pub enum KeyKind {
     Release,
 }
 
+/// What the mouse did (the wheel, or a left click); it never drives.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MouseKind {
+    ScrollUp,
+    ScrollDown,
+    Click,
+}
+
 /// An input event from the terminal.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum TermEvent {
-    Key { key: Key, kind: KeyKind },
+    Key {
+        key: Key,
+        kind: KeyKind,
+    },
+    /// At column `col`, row `row` of the terminal.
+    Mouse {
+        kind: MouseKind,
+        col: u16,
+        row: u16,
+    },
     FocusLost,
     FocusGained,
     Resize,
@@ -63,6 +82,19 @@ pub fn from_crossterm(e: &Event) -> Option<TermEvent> {
         Event::FocusLost => Some(TermEvent::FocusLost),
         Event::FocusGained => Some(TermEvent::FocusGained),
         Event::Resize(..) => Some(TermEvent::Resize),
+        Event::Mouse(m) => {
+            let kind = match m.kind {
+                MouseEventKind::ScrollUp => MouseKind::ScrollUp,
+                MouseEventKind::ScrollDown => MouseKind::ScrollDown,
+                MouseEventKind::Down(MouseButton::Left) => MouseKind::Click,
+                _ => return None,
+            };
+            Some(TermEvent::Mouse {
+                kind,
+                col: m.column,
+                row: m.row,
+            })
+        }
         _ => None,
     }
 }
@@ -118,5 +150,32 @@ mod tests {
             from_crossterm(&Event::FocusLost),
             Some(TermEvent::FocusLost)
         );
+        let mouse = |kind| {
+            from_crossterm(&Event::Mouse(crossterm::event::MouseEvent {
+                kind,
+                column: 7,
+                row: 3,
+                modifiers: KeyModifiers::NONE,
+            }))
+        };
+        assert_eq!(
+            mouse(MouseEventKind::ScrollDown),
+            Some(TermEvent::Mouse {
+                kind: MouseKind::ScrollDown,
+                col: 7,
+                row: 3
+            })
+        );
+        assert_eq!(
+            mouse(MouseEventKind::Down(MouseButton::Left)).map(|e| matches!(
+                e,
+                TermEvent::Mouse {
+                    kind: MouseKind::Click,
+                    ..
+                }
+            )),
+            Some(true)
+        );
+        assert_eq!(mouse(MouseEventKind::Moved), None);
     }
 }

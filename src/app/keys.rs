@@ -47,6 +47,11 @@ impl App {
                 self.dirty = true;
                 None
             }
+            TermEvent::Mouse { kind, col, row } => {
+                self.dirty = true;
+                self.on_mouse(kind, col, row);
+                None
+            }
             TermEvent::Key {
                 key,
                 kind: KeyKind::Release,
@@ -146,6 +151,7 @@ impl App {
             Place::Matrix => self.matrix_key(key),
             Place::Channels => self.channels_key(key, new_press),
             Place::Tuning => self.tuning_key(key, new_press),
+            Place::Packet => self.detail_key(key, new_press),
             Place::Driving if scope_key => self.scope_key(key, new_press),
             Place::Log => return self.log_key(key, new_press),
             Place::Replay => return self.replay_key(key, new_press),
@@ -159,7 +165,7 @@ impl App {
         self.state.overlay = Overlay::Help;
     }
 
-    fn palette_key(&mut self, key: Key, new_press: bool) {
+    pub(super) fn palette_key(&mut self, key: Key, new_press: bool) {
         let (selected, animations) = match self.state.overlay {
             Overlay::Animations { selected } => (selected, true),
             Overlay::Sounds { selected } => (selected, false),
@@ -257,6 +263,7 @@ impl App {
                 }
             }
             Some(Action::LogClearFilter) => log.set_filter(Default::default()),
+            Some(Action::LogOpen) => self.open_detail(),
             Some(_) => {}
             None => match self.keymap.action(&key) {
                 Some(Action::EStop) => self.estop(),
@@ -329,6 +336,7 @@ impl App {
             Action::Mirror => self.toggle_mirror(),
             Action::Scope => self.toggle_scope(),
             Action::Tuning => self.open_tuning(),
+            Action::ForgetSettings => self.forget_settings(),
             Action::Colour | Action::BackLight => {
                 if let Some(mut d) = self.droid(self.chosen()) {
                     if action == Action::Colour {

@@ -11,6 +11,9 @@
 //! - [`battery`]: the battery poller;
 //! - `fleet`, [`roster`]: several droids (the parked ones, choosing, mirror) and the roster
 //!   strip's view of them.
+//! - [`layout`]: where each part of the screen goes (the UI draws there, the mouse hits
+//!   there); `mouse`: wheel and clicks;
+//! - [`remember`]: settings remembered per droid model between launches;
 //! - [`matrix`]: BOLT's LED matrix as droidctl drew it, its prompt, colour and compass keys.
 
 mod actions;
@@ -18,13 +21,16 @@ pub mod battery;
 mod build;
 pub mod catalog;
 mod core;
+pub mod detail;
 mod droid;
 mod fleet;
 pub mod help;
 pub mod input;
 mod keys;
+pub mod layout;
 pub mod matrix;
 pub mod monitor;
+mod mouse;
 pub mod pacing;
 pub mod packet_log;
 mod pad;
@@ -32,6 +38,7 @@ pub mod picker;
 pub mod place;
 pub mod player;
 pub mod rates;
+pub mod remember;
 mod replay;
 pub mod roster;
 pub mod run;

@@ -33,6 +33,62 @@ pub struct LogLine {
     search: String,
     /// The droid the line is about, in a fleet (`None` with one droid).
     pub droid: Option<std::sync::Arc<str>>,
+    /// Every decoded field, name and value, for the detail view.
+    pub fields: Vec<(&'static str, String)>,
+    /// The frame's parts in wire order (`start 8D`, `flags 0A`, …, `data …`, `checksum`),
+    /// for the detail view; one `bytes` part where the family's frame is not taken apart.
+    pub parts: Vec<(&'static str, String)>,
+}
+
+/// The parts of `p`'s frame, unescaped, in wire order.
+pub fn frame_parts(p: &crate::family::Packet) -> Vec<(&'static str, String)> {
+    use crate::protocol::v2::packet as v2;
+    let b = |x: u8| format!("{x:02X}");
+    match p {
+        crate::family::Packet::V2(p) => {
+            let mut parts = vec![("start", b(v2::SOP)), ("flags", b(p.flags.bits()))];
+            parts.extend(p.ext_flags.map(|x| ("ext flags", b(x))));
+            parts.extend(p.tid.map(|x| ("target", b(x))));
+            parts.extend(p.sid.map(|x| ("source", b(x))));
+            parts.extend([
+                ("device", b(p.did)),
+                ("command", b(p.cid)),
+                ("seq", b(p.seq)),
+            ]);
+            parts.extend(p.err.map(|e| ("error", b(e.to_byte()))));
+            if !p.data.is_empty() {
+                parts.push(("data", hex::spaced(&p.data)));
+            }
+            let mut body = Vec::new();
+            p.encode_into(&mut body);
+            // The checksum is the last byte before EOP, unescaped.
+            let inner = &body[1..body.len().saturating_sub(1)];
+            let chk = v2::checksum(&unescaped_body(inner));
+            parts.extend([("checksum", b(chk)), ("end", b(v2::EOP))]);
+            parts
+        }
+        other => vec![("bytes", hex::spaced(&other.encode()))],
+    }
+}
+
+/// The body of an escaped v2 frame without its checksum (for the detail view).
+fn unescaped_body(escaped: &[u8]) -> Vec<u8> {
+    use crate::protocol::v2::packet as v2;
+    let mut out = Vec::with_capacity(escaped.len());
+    let mut it = escaped.iter();
+    while let Some(&x) = it.next() {
+        out.push(if x == v2::ESC {
+            match it.next() {
+                Some(&v2::ESC_SOP) => v2::SOP,
+                Some(&v2::ESC_EOP) => v2::EOP,
+                _ => v2::ESC,
+            }
+        } else {
+            x
+        });
+    }
+    out.pop();
+    out
 }
 
 impl LogLine {
@@ -66,6 +122,12 @@ impl LogLine {
                 };
                 let is_error = err.is_some()
                     || (d.fields.is_none() && d.kind != PacketKind::Command && d.known);
+                let fields = d
+                    .fields
+                    .iter()
+                    .flatten()
+                    .map(|(n, v)| (*n, v.to_string()))
+                    .collect();
                 LogLine {
                     at: e.at,
                     dir: e.dir,
@@ -78,6 +140,8 @@ impl LogLine {
                     decoded,
                     search: String::new(),
                     droid: None,
+                    fields,
+                    parts: frame_parts(packet),
                 }
             }
             LogItem::DecodeError(de) => LogLine {
@@ -92,6 +156,8 @@ impl LogLine {
                 decoded: de.detail.clone(),
                 search: String::new(),
                 droid: None,
+                fields: Vec::new(),
+                parts: Vec::new(),
             },
         }
     }
@@ -249,12 +315,11 @@ impl PacketLog {
 
     /// The `height` lines to show, oldest first, honouring scroll.
     pub fn visible(&self, height: usize) -> Vec<&LogLine> {
-        let mut v: Vec<&LogLine> = self
-            .filtered()
-            .rev()
-            .skip(self.scroll)
-            .take(height)
-            .collect();
+        // Scrolled back to the oldest line: a full page of the oldest, not one line.
+        let skip = self
+            .scroll
+            .min(self.filtered().count().saturating_sub(height));
+        let mut v: Vec<&LogLine> = self.filtered().rev().skip(skip).take(height).collect();
         v.reverse();
         v
     }

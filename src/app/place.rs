@@ -34,6 +34,8 @@ pub enum Place {
     Channels,
     /// The streaming and collision settings.
     Tuning,
+    /// A packet in full.
+    Packet,
 }
 
 impl Place {
@@ -46,6 +48,7 @@ impl Place {
             Overlay::Matrix { .. } => Place::Matrix,
             Overlay::Channels { .. } => Place::Channels,
             Overlay::Tuning { .. } => Place::Tuning,
+            Overlay::Packet { .. } => Place::Packet,
             Overlay::None if state.focus == Focus::Log => Place::Log,
             Overlay::None if replay => Place::Replay,
             Overlay::None => Place::Driving,
@@ -69,6 +72,7 @@ impl Place {
             Place::Palette => "palette",
             Place::Channels => "channels",
             Place::Tuning => "settings",
+            Place::Packet => "packet",
         }
     }
 }

@@ -34,6 +34,9 @@ pub struct AppOptions {
     pub tripod_on_connect: bool,
     /// Where every sample the droid streams is written (`drive --csv`, `--jsonl`).
     pub samples: Option<crate::mission::csv::SampleFiles>,
+    /// Where settings are remembered per droid model ([`super::remember`]); `None`: nothing
+    /// is remembered (replay, tests).
+    pub remember: Option<PathBuf>,
 }
 
 /// Everything from outside the app.
@@ -274,15 +277,17 @@ async fn run_droids<B: Backend>(
                 app.replay_frame();
                 if app.dirty {
                     app.state.now = app.clock();
-                    terminal
+                    app.area = terminal
                         .draw(|f| draw(f, &app.state))
-                        .map_err(|e| std::io::Error::other(e.to_string()))?;
+                        .map_err(|e| std::io::Error::other(e.to_string()))?
+                        .area;
                     app.dirty = false;
                 }
             }
         }
     };
     app.flush_samples();
+    app.save_remembered();
     for f in forwarders {
         f.abort();
     }

@@ -3,6 +3,7 @@
 
 use super::catalog::{self, Entry};
 use super::packet_log::PacketLog;
+use crate::config::{Context, Needs};
 use crate::model::Model;
 use crate::session::{LinkState, SessionStats};
 use crate::telemetry::Telemetry;
@@ -32,7 +33,7 @@ pub enum KeyboardMode {
 }
 
 /// What overlays the main screen.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq)]
 pub enum Overlay {
     None,
     Help,
@@ -55,6 +56,16 @@ pub enum Overlay {
     /// Choosing the scope's channels; `selected` indexes the channels the droid reports.
     Channels {
         selected: usize,
+    },
+    /// A packet in full: its fields, its frame's parts and hex, its time and droid; a search
+    /// through them (`typing`: the search is being typed), the view scrolled by `scroll` rows.
+    Packet {
+        line: Box<super::packet_log::LogLine>,
+        search: String,
+        typing: bool,
+        /// The match shown (an index into the matching rows).
+        matched: usize,
+        scroll: usize,
     },
     /// The streaming and collision settings being edited (sent on apply).
     Tuning {
@@ -84,6 +95,33 @@ pub struct HelpSection {
 pub struct HelpLine {
     pub keys: String,
     pub action: String,
+    /// Listed only where it applies (R2's help lists no BOLT keys).
+    pub needs: Needs,
+}
+
+impl HelpSection {
+    /// The lines that apply to `model` (`fleet`: several droids).
+    pub fn applying(&self, model: Model, fleet: bool) -> HelpSection {
+        HelpSection {
+            title: self.title.clone(),
+            lines: self
+                .lines
+                .iter()
+                .filter(|l| l.needs.applies(model, fleet))
+                .cloned()
+                .collect(),
+        }
+    }
+}
+
+/// One key of the context footer: the key as bound, the footer's word for it, what it needs.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct FooterKey {
+    pub key: String,
+    pub word: String,
+    pub needs: Needs,
+    /// Kept when the row is too narrow (the help and quit keys: `?` shows the rest).
+    pub keep: bool,
 }
 
 /// A message shown for a while (e.g. "R2 can't roll on two legs — switching to tripod").
@@ -121,6 +159,8 @@ pub struct AppState {
     /// Page of the help overlay shown when the bindings do not fit the terminal at once.
     /// The UI clamps it to the last page.
     pub help_page: usize,
+    /// The context footer's keys, per place keys are read ([`crate::app::help::footer`]).
+    pub footer: Vec<(Context, Vec<FooterKey>)>,
     pub animations: Vec<Entry>,
     pub sounds: Vec<Entry>,
     /// A collision flashes this long.
@@ -239,6 +279,7 @@ impl AppState {
             help: Vec::new(),
             help_nav: String::new(),
             help_page: 0,
+            footer: Vec::new(),
             animations: catalog::animations(),
             sounds: catalog::sounds(),
             collision_flash: Duration::from_millis(1500),

@@ -322,6 +322,7 @@ async fn drive(
         release,
         tripod_on_connect: setup_tripod,
         samples,
+        remember: crate::app::remember::default_dir(),
     };
     let inputs = AppInputs {
         term: term_rx,

@@ -341,6 +341,7 @@ fn play(played: Played, file: String) -> Result<i32, CliError> {
             release,
             tripod_on_connect: false,
             samples: None,
+            remember: None,
         };
         let inputs = AppInputs {
             term: term_rx,

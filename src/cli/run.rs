@@ -449,7 +449,7 @@ pub async fn report_link_of(mut state: tokio::sync::watch::Receiver<LinkState>, 
 }
 
 fn opt(v: Option<f32>, prec: usize) -> String {
-    v.map(|v| format!("{v:.prec$}"))
+    v.map(|v| crate::units::fixed(f64::from(v), prec))
         .unwrap_or_else(|| "-".into())
 }
 
@@ -469,8 +469,19 @@ pub fn sample_line(s: &mission::Sample) -> String {
             s.lost_frames.unwrap_or(0),
         );
     }
+    // The dome and the stance only where the droid reports them (R2): not `head -°  stance
+    // unknown` for BB-8 or BOLT.
+    let head = s
+        .head_deg
+        .map(|h| format!("  head {}°", opt(Some(h), 0)))
+        .unwrap_or_default();
+    let stance = if s.stance == crate::telemetry::Stance::Unknown.label() {
+        String::new()
+    } else {
+        format!("  stance {}", s.stance)
+    };
     format!(
-        "[{:>8.2}s] pos ({}, {}) cm  speed {} cm/s  heading {}  head {}°  stance {}  battery {} V  collisions {}",
+        "[{:>8.2}s] pos ({}, {}) cm  speed {} cm/s  heading {}{head}{stance}  battery {} V  collisions {}",
         s.t_ms as f64 / 1000.0,
         opt(s.x_cm, 1),
         opt(s.y_cm, 1),
@@ -478,8 +489,6 @@ pub fn sample_line(s: &mission::Sample) -> String {
         s.heading
             .map(|h| format!("{h}°"))
             .unwrap_or_else(|| "-".into()),
-        opt(s.head_deg, 0),
-        s.stance,
         opt(s.battery_v, 2),
         s.collisions
     )
@@ -502,5 +511,32 @@ pub fn summary_line(s: &Summary, json: bool) -> String {
             opt(s.x_cm, 1),
             opt(s.y_cm, 1)
         )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sample_lines_show_no_negative_zero_and_only_what_the_droid_has() {
+        let mut t = crate::telemetry::Telemetry {
+            pitch: Some(-0.0),
+            x_cm: Some(-0.01),
+            ..Default::default()
+        };
+        let s = mission::sample_of(&t, 1000);
+        let line = sample_line(&s);
+        assert!(line.contains("pos (0.0, -)"), "{line}");
+        assert!(
+            !line.contains("  head ") && !line.contains("stance"),
+            "{line}"
+        );
+        let json = serde_json::to_string(&s).unwrap();
+        assert!(json.contains("\"pitch_deg\":0.0"), "{json}");
+        t.head_deg = Some(-0.3);
+        t.stance = crate::telemetry::Stance::Tripod;
+        let line = sample_line(&mission::sample_of(&t, 1000));
+        assert!(line.contains("head 0°  stance tripod"), "{line}");
     }
 }

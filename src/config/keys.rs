@@ -133,10 +133,12 @@ pub enum Context {
     Scope,
     /// A settings list is open: the scope's channels, streaming and collision detection.
     Settings,
+    /// A packet in full (`Enter` on a log line).
+    Detail,
 }
 
 impl Context {
-    pub const ALL: [Context; 9] = [
+    pub const ALL: [Context; 10] = [
         Context::Drive,
         Context::Log,
         Context::Palette,
@@ -146,6 +148,7 @@ impl Context {
         Context::Picker,
         Context::Scope,
         Context::Settings,
+        Context::Detail,
     ];
 
     /// The sub-table of `[keys]` (`None`: the `[keys]` table itself).
@@ -160,6 +163,7 @@ impl Context {
             Context::Picker => Some("picker"),
             Context::Scope => Some("scope_view"),
             Context::Settings => Some("settings"),
+            Context::Detail => Some("packet_detail"),
         }
     }
 
@@ -175,140 +179,247 @@ impl Context {
             Context::Picker => "Choosing a droid",
             Context::Scope => "Scope (other keys drive)",
             Context::Settings => "Channels, streaming and collision",
+            Context::Detail => "A packet in full",
         }
     }
 }
 
+/// What a droid must have (or the session must be) for a key to apply: help and the footer
+/// leave out what does not apply to the chosen droid (R2's help lists no BOLT keys).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Needs {
+    /// Every droid.
+    All,
+    /// Several droids are driven (a fleet).
+    Fleet,
+    /// R2's rotating dome.
+    Dome,
+    /// R2's legs (stances).
+    Legs,
+    /// A turbo (every Sphero droid; Robi has none).
+    Turbo,
+    /// An aim mode (rolling droids).
+    Aim,
+    /// Lights droidctl can set (the Sphero droids).
+    Lights,
+    /// Animations and sounds (the Star Wars droids).
+    Animations,
+    /// Two tracks (RVR).
+    Tracks,
+    /// An LED matrix (BOLT).
+    Matrix,
+    /// A compass (BOLT).
+    Compass,
+}
+
+impl Needs {
+    /// Whether a key needing this applies to `model` (`fleet`: several droids are driven).
+    pub fn applies(self, model: crate::model::Model, fleet: bool) -> bool {
+        use crate::model::Protocol;
+        match self {
+            Needs::All => true,
+            Needs::Fleet => fleet,
+            Needs::Dome => model.has_dome(),
+            Needs::Legs => model.has_legs(),
+            Needs::Turbo | Needs::Lights => model.protocol() != Protocol::Rsrcp,
+            Needs::Aim => model.can_aim(),
+            Needs::Animations => model.plays_animations(),
+            Needs::Tracks => model.has_tracks(),
+            Needs::Matrix => model.has_matrix(),
+            Needs::Compass => model.has_compass(),
+        }
+    }
+}
+
+/// One key definition: the single table the key map, the help overlay, the context footer and
+/// the man page's KEYS section are built from ([`KEY_TABLE`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct KeyDef {
+    pub action: Action,
+    /// Where the key is read.
+    pub context: Context,
+    /// The name in its table of the config (`forward`, `packet_log.pause` is `pause` here).
+    pub name: &'static str,
+    /// Lasts while the key is held (the rest fire once per press).
+    pub held: bool,
+    /// What must apply for the key to be listed (help, footer).
+    pub needs: Needs,
+    /// The footer's word for it; empty: help only.
+    pub short: &'static str,
+    /// For help and the man page.
+    pub description: &'static str,
+}
+
 macro_rules! actions {
-    ($( $ctx:ident { $( $v:ident $name:literal $held:literal $desc:literal; )* } )*) => {
+    ($( $ctx:ident { $( $v:ident $name:literal $held:literal $needs:ident $short:literal $desc:literal; )* } )*) => {
         /// What a key does, in its context.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
         pub enum Action { $( $( $v, )* )* }
 
+        /// Every key definition, context by context, in help's order. The default keys are in
+        /// `assets/default-config.toml` (`Config::defaults().keymap.shown(action)`).
+        pub const KEY_TABLE: &[KeyDef] = &[ $( $( KeyDef {
+            action: Action::$v,
+            context: Context::$ctx,
+            name: $name,
+            held: $held,
+            needs: Needs::$needs,
+            short: $short,
+            description: $desc,
+        }, )* )* ];
+
         impl Action {
             pub const ALL: &'static [Action] = &[ $( $( Action::$v, )* )* ];
-
-            pub fn context(self) -> Context {
-                match self { $( $( Action::$v => Context::$ctx, )* )* }
-            }
-
-            /// The name in its table of the config.
-            pub fn config_name(self) -> &'static str {
-                match self { $( $( Action::$v => $name, )* )* }
-            }
-
-            /// For the help overlay.
-            pub fn description(self) -> &'static str {
-                match self { $( $( Action::$v => $desc, )* )* }
-            }
-
-            /// Actions that last while the key is held (the rest fire once per press).
-            pub fn is_held(self) -> bool {
-                match self { $( $( Action::$v => $held, )* )* }
-            }
         }
     };
 }
 
+impl Action {
+    /// Its row of [`KEY_TABLE`].
+    pub fn def(self) -> &'static KeyDef {
+        // The table lists the actions in declaration order.
+        &KEY_TABLE[self as usize]
+    }
+
+    pub fn context(self) -> Context {
+        self.def().context
+    }
+
+    /// The name in its table of the config.
+    pub fn config_name(self) -> &'static str {
+        self.def().name
+    }
+
+    /// For the help overlay.
+    pub fn description(self) -> &'static str {
+        self.def().description
+    }
+
+    /// Actions that last while the key is held (the rest fire once per press).
+    pub fn is_held(self) -> bool {
+        self.def().held
+    }
+
+    /// What must apply for the key to be listed.
+    pub fn needs(self) -> Needs {
+        self.def().needs
+    }
+
+    /// The footer's word for it (empty: help only).
+    pub fn short(self) -> &'static str {
+        self.def().short
+    }
+}
+
 actions! {
     Drive {
-        Forward "forward" true "drive forward (hold)";
-        Backward "backward" true "reverse (hold)";
-        Left "left" true "turn left (hold; also aims while stopped)";
-        Right "right" true "turn right (hold; also aims while stopped)";
-        Faster "faster" false "cruise speed up";
-        Slower "slower" false "cruise speed down";
-        DomeLeft "dome_left" true "dome left (hold)";
-        DomeRight "dome_right" true "dome right (hold)";
-        Tripod "tripod" false "stance: tripod (3 legs, can roll)";
-        Bipod "bipod" false "stance: bipod (2 legs)";
-        Waddle "waddle" false "stance: waddle";
-        StanceStop "stance_stop" false "stance: stop";
-        EStop "estop" true "EMERGENCY STOP (latched while held)";
-        Turbo "turbo" false "turbo on/off";
-        Aim "aim" false "aim mode (rolling droids)";
-        Colour "colour" false "main LED colour";
-        BackLight "back_light" false "back light";
-        Animations "animations" false "animation palette";
-        Sounds "sounds" false "sound palette";
-        NextDroid "next_droid" false "fleet: drive the next droid";
-        PreviousDroid "previous_droid" false "fleet: drive the previous droid";
-        Mirror "mirror" false "fleet: mirror mode (the same control to every droid)";
-        Tank "tank" false "tank mode: a track per stick (RVR)";
-        Matrix "matrix" false "type on the matrix (BOLT)";
-        MatrixColour "matrix_colour" false "next matrix colour (BOLT)";
-        Calibrate "calibrate" false "calibrate the compass (BOLT)";
-        Log "log" false "the packet log has the keys (and back)";
-        Scope "scope" false "the scope: chosen channels against time (and back)";
-        Tuning "tuning" false "streaming (rate, sensors) and collision detection";
-        Help "help" false "this help";
-        Quit "quit" false "quit (stops the droid first)";
+        Forward "forward" true All "" "drive forward (hold)";
+        Backward "backward" true All "" "reverse (hold)";
+        Left "left" true All "" "turn left (hold; also aims while stopped)";
+        Right "right" true All "" "turn right (hold; also aims while stopped)";
+        Faster "faster" false All "faster" "cruise speed up";
+        Slower "slower" false All "slower" "cruise speed down";
+        DomeLeft "dome_left" true Dome "" "dome left (hold)";
+        DomeRight "dome_right" true Dome "" "dome right (hold)";
+        Tripod "tripod" false Legs "tripod" "stance: tripod (3 legs, can roll)";
+        Bipod "bipod" false Legs "" "stance: bipod (2 legs)";
+        Waddle "waddle" false Legs "" "stance: waddle";
+        StanceStop "stance_stop" false Legs "" "stance: stop";
+        EStop "estop" true All "stop" "EMERGENCY STOP (latched while held)";
+        Turbo "turbo" false Turbo "turbo" "turbo on/off";
+        Aim "aim" false Aim "aim" "aim mode (rolling droids)";
+        Colour "colour" false Lights "" "main LED colour";
+        BackLight "back_light" false Lights "" "back light";
+        Animations "animations" false Animations "animations" "animation palette";
+        Sounds "sounds" false Animations "" "sound palette";
+        NextDroid "next_droid" false Fleet "next droid" "fleet: drive the next droid";
+        PreviousDroid "previous_droid" false Fleet "" "fleet: drive the previous droid";
+        Mirror "mirror" false Fleet "mirror" "fleet: mirror mode (the same control to every droid)";
+        Tank "tank" false Tracks "tank" "tank mode: a track per stick (RVR)";
+        Matrix "matrix" false Matrix "matrix" "type on the matrix (BOLT)";
+        MatrixColour "matrix_colour" false Matrix "" "next matrix colour (BOLT)";
+        Calibrate "calibrate" false Compass "calibrate" "calibrate the compass (BOLT)";
+        Log "log" false All "log" "the packet log has the keys (and back)";
+        Scope "scope" false All "scope" "the scope: chosen channels against time (and back)";
+        Tuning "tuning" false All "settings" "streaming (rate, sensors) and collision detection";
+        ForgetSettings "forget_settings" false All "" "forget this model's remembered settings (cruise, scope, rate, filter)";
+        Help "help" false All "more keys" "this help";
+        Quit "quit" false All "quit" "quit (stops the droid first)";
     }
     Log {
-        LogUp "up" false "scroll up";
-        LogDown "down" false "scroll down";
-        LogPageUp "page_up" false "scroll up a page";
-        LogPageDown "page_down" false "scroll down a page";
-        LogTop "top" false "to the oldest line";
-        LogBottom "bottom" false "to the newest line (follow)";
-        LogPause "pause" false "pause / resume";
-        LogDecoded "decoded" false "decoded / hex";
-        LogFilter "filter" false "filter (in|out dev:NAME droid:NAME text)";
-        LogClearFilter "clear_filter" false "clear the filter";
-        LogBack "back" false "back to driving";
+        LogUp "up" false All "" "scroll up";
+        LogDown "down" false All "" "scroll down";
+        LogPageUp "page_up" false All "" "scroll up a page";
+        LogPageDown "page_down" false All "" "scroll down a page";
+        LogTop "top" false All "" "to the oldest line";
+        LogBottom "bottom" false All "" "to the newest line (follow)";
+        LogPause "pause" false All "pause" "pause / resume";
+        LogDecoded "decoded" false All "hex" "decoded / hex";
+        LogFilter "filter" false All "filter" "filter (in|out dev:NAME droid:NAME text)";
+        LogClearFilter "clear_filter" false All "" "clear the filter";
+        LogBack "back" false All "back" "back to driving";
+        LogOpen "open" false All "detail" "the newest line shown in full (fields, frame, hex)";
     }
     Palette {
-        PaletteUp "up" false "previous entry";
-        PaletteDown "down" false "next entry";
-        PalettePageUp "page_up" false "ten entries back";
-        PalettePageDown "page_down" false "ten entries on";
-        PalettePlay "play" false "play it and close";
-        PaletteClose "close" false "close";
+        PaletteUp "up" false All "" "previous entry";
+        PaletteDown "down" false All "" "next entry";
+        PalettePageUp "page_up" false All "" "ten entries back";
+        PalettePageDown "page_down" false All "" "ten entries on";
+        PalettePlay "play" false All "play" "play it and close";
+        PaletteClose "close" false All "close" "close";
     }
     Help {
-        HelpNext "next_page" false "next page";
-        HelpPrevious "previous_page" false "previous page (any other key closes)";
+        HelpNext "next_page" false All "next page" "next page";
+        HelpPrevious "previous_page" false All "previous page" "previous page (any other key closes)";
     }
     Filter {
-        FilterApply "apply" false "apply the filter";
-        FilterCancel "cancel" false "leave it as it was";
+        FilterApply "apply" false All "apply" "apply the filter";
+        FilterCancel "cancel" false All "cancel" "leave it as it was";
     }
     Replay {
-        ReplayPause "pause" false "pause / play";
-        ReplayFaster "faster" false "faster (up to 16×)";
-        ReplaySlower "slower" false "slower (down to 0.25×)";
-        ReplayForward "forward" false "seek forward 5 s";
-        ReplayBack "back" false "seek back 5 s";
-        ReplayForwardLong "forward_long" false "seek forward 60 s";
-        ReplayBackLong "back_long" false "seek back 60 s";
-        ReplayStart "start" false "to the start";
-        ReplayEnd "end" false "to the end";
-        ReplayStep "step" false "single step: pause, then the next event";
+        ReplayPause "pause" false All "pause" "pause / play";
+        ReplayFaster "faster" false All "faster" "faster (up to 16×)";
+        ReplaySlower "slower" false All "slower" "slower (down to 0.25×)";
+        ReplayForward "forward" false All "+5 s" "seek forward 5 s";
+        ReplayBack "back" false All "-5 s" "seek back 5 s";
+        ReplayForwardLong "forward_long" false All "" "seek forward 60 s";
+        ReplayBackLong "back_long" false All "" "seek back 60 s";
+        ReplayStart "start" false All "" "to the start";
+        ReplayEnd "end" false All "" "to the end";
+        ReplayStep "step" false All "step" "single step: pause, then the next event";
     }
     Picker {
-        PickerUp "up" false "previous droid";
-        PickerDown "down" false "next droid";
-        PickerFirst "first" false "the first droid";
-        PickerLast "last" false "the last droid";
-        PickerChoose "choose" false "connect to it (to the marked ones, if any)";
-        PickerMark "mark" false "mark / unmark it (several marked: drive them all at once)";
-        PickerCancel "cancel" false "cancel";
+        PickerUp "up" false All "" "previous droid";
+        PickerDown "down" false All "" "next droid";
+        PickerFirst "first" false All "" "the first droid";
+        PickerLast "last" false All "" "the last droid";
+        PickerChoose "choose" false All "connect" "connect to it (to the marked ones, if any)";
+        PickerMark "mark" false All "mark" "mark / unmark it (several marked: drive them all at once)";
+        PickerCancel "cancel" false All "cancel" "cancel";
     }
     Scope {
-        ScopePause "pause" false "pause / follow (the droid still streams)";
-        ScopeZoomIn "zoom_in" false "shorter window (down to 10 s)";
-        ScopeZoomOut "zoom_out" false "longer window (up to 2 min)";
-        ScopeAutoscale "autoscale" false "autoscaled / fixed axes";
-        ScopeChannels "channels" false "choose the channels";
+        ScopePause "pause" false All "pause" "pause / follow (the droid still streams)";
+        ScopeZoomIn "zoom_in" false All "zoom in" "shorter window (down to 10 s)";
+        ScopeZoomOut "zoom_out" false All "zoom out" "longer window (up to 2 min)";
+        ScopeAutoscale "autoscale" false All "" "autoscaled / fixed axes";
+        ScopeChannels "channels" false All "channels" "choose the channels";
     }
     Settings {
-        SettingsUp "up" false "previous row";
-        SettingsDown "down" false "next row";
-        SettingsLess "less" false "value down / previous rate";
-        SettingsMore "more" false "value up / next rate";
-        SettingsToggle "toggle" false "switch a channel, sensor or collision detection on/off";
-        SettingsApply "apply" false "apply to the droid and close (channels: switch)";
-        SettingsClose "close" false "close (nothing sent)";
+        SettingsUp "up" false All "" "previous row";
+        SettingsDown "down" false All "" "next row";
+        SettingsLess "less" false All "" "value down / previous rate";
+        SettingsMore "more" false All "" "value up / next rate";
+        SettingsToggle "toggle" false All "on/off" "switch a channel, sensor or collision detection on/off";
+        SettingsApply "apply" false All "apply" "apply to the droid and close (channels: switch)";
+        SettingsClose "close" false All "close" "close (nothing sent)";
+    }
+    Detail {
+        DetailUp "up" false All "" "scroll up";
+        DetailDown "down" false All "" "scroll down";
+        DetailSearch "search" false All "search" "search (Enter: to the first match)";
+        DetailNext "next" false All "next" "next match";
+        DetailPrevious "previous" false All "previous" "previous match";
+        DetailClose "close" false All "close" "close";
     }
 }
 
@@ -388,6 +499,28 @@ impl KeyMap {
                 return Err((a.config_key(), "must have at least one key".into()));
             }
         }
+        // The scope is on screen while driving: a key means one thing there, so a scope key
+        // may not be a drive key too (Tab was "next droid" and "channels" at once).
+        let mut scope: Vec<(&Key, &Action)> = km
+            .map
+            .iter()
+            .filter(|((c, _), _)| *c == Context::Scope)
+            .map(|((_, k), a)| (k, a))
+            .collect();
+        scope.sort();
+        for (k, a) in scope {
+            if let Some(d) = km.action(k) {
+                return Err((
+                    a.config_key(),
+                    format!(
+                        "key \"{k}\" is bound to both {} and {} (the scope is on screen while \
+                         driving: a key means one thing there)",
+                        d.config_key(),
+                        a.config_key()
+                    ),
+                ));
+            }
+        }
         // Esc closes overlays and gives the log's keys back: pressed once too many, it would
         // end the session and stop the droid abruptly.
         if km.keys(Action::Quit).contains(&Key::plain(KeyCode::Esc)) {
@@ -463,12 +596,12 @@ impl KeyMap {
         (!keys.is_empty()).then(|| keys.join(" / "))
     }
 
-    /// Help lines of a context, in the table's order: (keys, description).
-    pub fn help(&self, ctx: Context) -> Vec<(String, &'static str)> {
+    /// Help lines of a context, in the table's order: (keys, the action).
+    pub fn help(&self, ctx: Context) -> Vec<(String, Action)> {
         Action::ALL
             .iter()
             .filter(|a| a.context() == ctx)
-            .filter_map(|a| self.shown(*a).map(|k| (k, a.description())))
+            .filter_map(|a| self.shown(*a).map(|k| (k, *a)))
             .collect()
     }
 }
@@ -508,6 +641,28 @@ mod tests {
         assert_eq!(Key::parse("F13"), None);
         assert_eq!(Key::parse("ww"), None);
         assert_eq!(Key::parse(""), None);
+    }
+
+    #[test]
+    fn the_table_is_in_declaration_order_and_has_footer_words() {
+        for (i, d) in KEY_TABLE.iter().enumerate() {
+            assert_eq!(d.action as usize, i);
+            assert_eq!(d.action.context(), d.context);
+        }
+        assert_eq!(Action::Tank.needs(), Needs::Tracks);
+        assert!(!Needs::Tracks.applies(crate::model::Model::R2D2, false));
+        assert!(Needs::Fleet.applies(crate::model::Model::R2D2, true));
+        assert_eq!(Action::EStop.short(), "stop");
+    }
+
+    #[test]
+    fn a_scope_key_cannot_be_a_drive_key() {
+        let mut scope = BTreeMap::new();
+        scope.insert("channels".to_string(), list(&["Tab"]));
+        let keys = with(&[("scope_view", KeyEntry::Table(scope))]);
+        let (k, msg) = KeyMap::from_config(&keys).unwrap_err();
+        assert_eq!(k, "scope_view.channels");
+        assert!(msg.contains("next_droid"), "{msg}");
     }
 
     #[test]

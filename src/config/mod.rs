@@ -11,7 +11,7 @@ pub mod keys;
 pub mod monitor;
 pub mod pad;
 
-pub use keys::{Action, Context, Key, KeyCode, KeyEntry, KeyMap};
+pub use keys::{Action, Context, KEY_TABLE, Key, KeyCode, KeyDef, KeyEntry, KeyMap, Needs};
 pub use pad::{Button, PadAction, PadBindings};
 
 use serde::Deserialize;

@@ -98,6 +98,17 @@ impl PadAction {
         }
     }
 
+    /// What must apply for the button to be listed in help.
+    pub fn needs(self) -> super::keys::Needs {
+        use super::keys::Needs;
+        match self {
+            PadAction::Tripod | PadAction::Bipod => Needs::Legs,
+            PadAction::Aim => Needs::Aim,
+            PadAction::Animation => Needs::Animations,
+            PadAction::EStop | PadAction::Help => Needs::All,
+        }
+    }
+
     /// For the help overlay.
     pub fn description(self) -> &'static str {
         match self {

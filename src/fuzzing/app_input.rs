@@ -233,6 +233,7 @@ async fn rig(
         release,
         tripod_on_connect: true,
         samples: None,
+        remember: None,
     };
     let f = fleet.clone();
     let app = tokio::spawn(async move {

@@ -118,6 +118,7 @@ fn drive(config: Config, model: Model) {
             log_path: None,
             tripod_on_connect: true,
             samples: None,
+            remember: None,
         };
         let (term, term_rx) = mpsc::channel(64);
         let (pad, pad_rx) = mpsc::channel(64);

@@ -50,9 +50,10 @@ impl fmt::Display for Value {
             Value::Int(i) => write!(f, "{i}"),
             Value::Float(x) => {
                 if x.fract() == 0.0 && x.abs() < 1e9 {
-                    write!(f, "{x:.1}")
+                    write!(f, "{}", crate::units::fixed(*x, 1))
                 } else {
-                    write!(f, "{}", (x * 1e4).round() / 1e4)
+                    // Rounded: -0.00001 would print as -0.
+                    write!(f, "{}", crate::units::signless((x * 1e4).round() / 1e4))
                 }
             }
             Value::Hex { value, width } => write!(f, "0x{:0w$X}", value, w = *width as usize * 2),
@@ -88,9 +89,9 @@ impl Serialize for Value {
             // (`-125.6943`, not `-125.69429779052734`: noise, and most of the cost of JSON
             // output; issue 27 point 10). A value f32 cannot hold exactly keeps f64's.
             Value::Float(x) if x.is_finite() && (*x as f32) as f64 == *x => {
-                s.serialize_f32(*x as f32)
+                s.serialize_f32(crate::units::signless32(*x as f32))
             }
-            Value::Float(x) if x.is_finite() => s.serialize_f64(*x),
+            Value::Float(x) if x.is_finite() => s.serialize_f64(crate::units::signless(*x)),
             Value::Float(_) => s.serialize_none(),
             Value::Hex { value, .. } => s.serialize_u64(*value),
             Value::Enum { name: Some(n), .. } => s.serialize_str(n),
@@ -178,6 +179,16 @@ pub fn fields_line(fields: &Fields) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn no_negative_zeros_in_text_or_json() {
+        let json = |v: Value| serde_json::to_string(&v).unwrap();
+        assert_eq!(Value::Float(-0.0).to_string(), "0.0");
+        assert_eq!(Value::Float(-0.000_01).to_string(), "0");
+        assert_eq!(json(Value::Float(-0.0)), "0.0");
+        assert_eq!(json(Value::Float(-0.0_f32 as f64)), "0.0");
+        assert_eq!(Value::Float(-1.5).to_string(), "-1.5");
+    }
 
     #[test]
     fn floats_print_at_their_own_precision() {

@@ -156,6 +156,17 @@ impl History {
         self.rows.push_back(Row { at, values });
     }
 
+    /// More of the last sample arrived (another of RVR's tokens in the same period): the last
+    /// row takes every channel as it is now; no new row, so the measured rate counts samples,
+    /// not packets.
+    pub fn complete_last(&mut self, t: &Telemetry) {
+        if let Some(last) = self.rows.back_mut() {
+            for (i, c) in Channel::ALL.iter().enumerate() {
+                last.values[i] = c.value(t).filter(|v| v.is_finite()).unwrap_or(f32::NAN);
+            }
+        }
+    }
+
     pub fn len(&self) -> usize {
         self.rows.len()
     }

@@ -193,6 +193,12 @@ impl Controller {
         self.aiming
     }
 
+    /// Set the cruise speed (remembered settings forgotten).
+    pub fn set_cruise(&mut self, cruise: u8) {
+        self.cruise = cruise;
+        self.view.cruise = cruise;
+    }
+
     /// The robot has tracks (RVR): tank mode is offered.
     pub fn set_tracks(&mut self, has: bool) {
         self.tank.available = has;

@@ -135,11 +135,16 @@ fn text(s: &AppState) -> Vec<Line<'static>> {
             Span::raw(c.cruise.to_string()),
             Span::styled(format!(" {}", c.mode), theme::dim()),
         ]),
-        Line::from(vec![
-            flag(c.turbo, "TURBO"),
-            Span::raw(" "),
-            flag(c.reverse, "REVERSE"),
-        ]),
+        // Robi has no turbo: only what applies is shown.
+        if crate::config::Needs::Turbo.applies(s.droid().model, false) {
+            Line::from(vec![
+                flag(c.turbo, "TURBO"),
+                Span::raw(" "),
+                flag(c.reverse, "REVERSE"),
+            ])
+        } else {
+            Line::from(flag(c.reverse, "REVERSE"))
+        },
     ];
     if s.droid().model.has_legs() {
         let style = match t.stance {

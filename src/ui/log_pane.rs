@@ -16,6 +16,8 @@ use ratatui::widgets::{BorderType, Paragraph};
 /// Column widths for one pane width; `err` is 0 when the pane is too narrow for it.
 struct Cols {
     time: usize,
+    /// A fleet's droid column (0: one droid).
+    droid: usize,
     name: usize,
     err: usize,
     rest: usize,
@@ -25,8 +27,12 @@ impl Cols {
     const DIR: usize = 2;
     const SEQ: usize = 3;
 
-    fn for_width(w: usize) -> Cols {
+    fn for_width(w: usize, fleet: bool) -> Cols {
         let time = 8;
+        let droid = if fleet { DROID_COL } else { 0 };
+        // The droid column and its gap come off the rest, so every column keeps its place
+        // under its heading.
+        let w = w.saturating_sub(if fleet { DROID_COL + 1 } else { 0 });
         let (name, err) = if w >= 50 {
             ((w * 28 / 100).clamp(10, 30), (w * 15 / 100).clamp(6, 19))
         } else {
@@ -36,6 +42,7 @@ impl Cols {
         let used = time + Self::DIR + name + Self::SEQ + err + gaps;
         Cols {
             time,
+            droid,
             name,
             err,
             rest: w.saturating_sub(used),
@@ -57,7 +64,7 @@ pub fn render(frame: &mut Frame, area: Rect, s: &AppState) {
     if inner.height == 0 || inner.width == 0 {
         return;
     }
-    let cols = Cols::for_width(inner.width as usize);
+    let cols = Cols::for_width(inner.width as usize, s.droids.len() > 1);
     let mut lines = vec![header(&cols, log.decoded)];
     let rows = inner.height.saturating_sub(1) as usize;
     let visible = log.visible(rows);
@@ -69,7 +76,15 @@ pub fn render(frame: &mut Frame, area: Rect, s: &AppState) {
         };
         lines.push(Line::from(Span::styled(msg, theme::dim())));
     }
+    let any = !visible.is_empty();
     lines.extend(visible.into_iter().map(|l| row(l, &cols, log.decoded)));
+    // With the keys, the newest line shown is the one Enter opens in full: marked.
+    if focused
+        && any
+        && let Some(last) = lines.pop()
+    {
+        lines.push(last.style(theme::selected()));
+    }
     frame.render_widget(Paragraph::new(lines), inner);
 }
 
@@ -114,8 +129,13 @@ fn title(log: &PacketLog, focused: bool) -> Line<'static> {
 }
 
 fn header(c: &Cols, decoded: bool) -> Line<'static> {
+    let droid = if c.droid > 0 {
+        format!("{} ", fit("droid", c.droid))
+    } else {
+        String::new()
+    };
     let mut s = format!(
-        "{} {} {} {}",
+        "{} {droid}{} {} {}",
         fit_right("time s", c.time),
         fit("", Cols::DIR),
         fit("name", c.name),
@@ -157,8 +177,9 @@ fn row(l: &LogLine, c: &Cols, decoded: bool) -> Line<'static> {
         Span::raw(" "),
     ];
     // In a fleet, which droid the line is about.
-    if let Some(d) = &l.droid {
-        spans.push(Span::styled(fit(&clean(d), DROID_COL), theme::label()));
+    if c.droid > 0 {
+        let d = l.droid.as_deref().unwrap_or("");
+        spans.push(Span::styled(fit(&clean(d), c.droid), theme::label()));
         spans.push(Span::raw(" "));
     }
     spans.extend([

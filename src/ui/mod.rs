@@ -11,7 +11,9 @@ mod collisions;
 mod compass;
 mod dome;
 mod drive;
-pub mod layout;
+mod footer;
+/// Where the panels go: in the app (the mouse finds what it points at with the same plan).
+pub use crate::app::layout;
 mod leds;
 mod log_pane;
 mod map;
@@ -35,17 +37,15 @@ use ratatui::widgets::Paragraph;
 /// Draw the whole screen for `state`.
 pub fn draw(frame: &mut Frame, state: &AppState) {
     // A fleet's roster strip takes the top row; the rest is the one-droid screen.
-    let mut area = frame.area();
     let fleet = state.roster();
-    if let Some(roster) = &fleet
-        && area.height > 1
-    {
-        let strip = ratatui::layout::Rect { height: 1, ..area };
+    let screen = layout::screen(frame.area(), fleet.is_some());
+    if let (Some(roster), Some(strip)) = (&fleet, screen.roster) {
         roster::render(frame, strip, roster);
-        area.y += 1;
-        area.height -= 1;
     }
-    let p = layout::plan(area);
+    if let Some(row) = screen.footer {
+        footer::render(frame, row, state);
+    }
+    let p = screen.plan;
     // The newer robots' panels want a few more rows in the dome's place (BOLT's matrix 4
     // rows of half blocks, RVR two lines): taken from the panels around it.
     let want = if state.droid().model.has_matrix() {
@@ -59,11 +59,10 @@ pub fn draw(frame: &mut Frame, state: &AppState) {
     status::render(frame, p.status, state);
     if state.droid().scope.visible {
         // The scope takes everything below the status bar.
-        let area = frame.area();
         let body = ratatui::layout::Rect {
             y: p.status.bottom(),
-            height: area.height.saturating_sub(p.status.height),
-            ..area
+            height: p.log.bottom().saturating_sub(p.status.bottom()),
+            ..p.status
         };
         scope::render(frame, body, state);
         overlay::render(frame, state);
@@ -91,7 +90,12 @@ pub fn draw(frame: &mut Frame, state: &AppState) {
     // RVR's rover panel or the lights; the sensors' place shows Sphero sensors or Robi's I/O
     // and link quality.
     let frames = state.droid().model.reports_state_frames();
-    let (dome_rect, sensors_rect, collisions_rect) = (p.dome, p.sensors, p.collisions);
+    let (dome_rect, mut sensors_rect, mut collisions_rect) = (p.dome, p.sensors, p.collisions);
+    // Robi reports no collisions: its I/O panel takes the collisions' place too.
+    if frames && let (Some(s), Some(c)) = (sensors_rect, collisions_rect) {
+        sensors_rect = Some(s.union(c));
+        collisions_rect = None;
+    }
     if let Some(r) = dome_rect {
         if state.droid().model.has_dome() {
             dome::render(frame, r, state);

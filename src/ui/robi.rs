@@ -251,7 +251,8 @@ pub fn io(frame: &mut Frame, area: Rect, s: &AppState) {
         link_quality(r, inner.width as usize),
     ];
     let h = inner.height as usize;
-    if lines.len() > h && h >= 5 {
+    // "buttons [left][top][ok][bot][right]" wide.
+    if lines.len() > h && h >= 5 && inner.width >= 35 {
         // Fix: a panel a row or two short of the full layout (100×30 gives 6 rows) fell back
         // to the 3-row one and left half of it empty. The buttons go on one row instead.
         lines = vec![

@@ -87,7 +87,7 @@ pub fn render(frame: &mut Frame, area: Rect, s: &AppState) {
     }
     if spans.is_empty() {
         spans.push(Span::styled(
-            "no channels chosen: the channels key (Tab) opens the list",
+            "no channels chosen: the channels key (C) opens the list",
             theme::dim(),
         ));
     }
@@ -97,7 +97,7 @@ pub fn render(frame: &mut Frame, area: Rect, s: &AppState) {
     let from = end.saturating_sub(window);
     // A bucket per cell column: its lowest and highest point fill the cell top to bottom.
     let columns = chart.width.saturating_sub(8).max(1) as usize;
-    let series: Vec<(Channel, Vec<(f64, f64)>)> = v
+    let series: Vec<Series> = v
         .channels
         .iter()
         .copied()
@@ -107,58 +107,89 @@ pub fn render(frame: &mut Frame, area: Rect, s: &AppState) {
                 .history
                 .series_of(&v.channels, from, end, columns),
         )
-        .collect();
-    let (lo, hi) = y_bounds(v.autoscale, &series);
-    let datasets: Vec<Dataset> = series
-        .iter()
         .enumerate()
-        .map(|(i, (_, pts))| {
+        .map(|(i, (c, pts))| (i, c, pts))
+        .collect();
+    // One chart per unit, stacked: yaw (deg) and speed (cm/s) never share a y axis. Charts
+    // too short to read (under 4 rows) share the last one's rows instead.
+    let mut units: Vec<&str> = Vec::new();
+    for (_, c, _) in &series {
+        if !units.contains(&c.unit()) {
+            units.push(c.unit());
+        }
+    }
+    let n = units.len().clamp(1, (chart.height as usize / 4).max(1)) as u16;
+    let secs = window.as_secs_f64();
+    for g in 0..n {
+        let h = chart.height / n;
+        let rect = Rect {
+            y: chart.y + g * h,
+            height: if g + 1 == n { chart.height - g * h } else { h },
+            ..chart
+        };
+        let last = g + 1 == n;
+        let group: Vec<&Series> = series
+            .iter()
+            .filter(|(_, c, _)| {
+                let k = units.iter().position(|u| *u == c.unit()).unwrap_or(0) as u16;
+                k == g || (last && k > g)
+            })
+            .collect();
+        plot(frame, rect, v.autoscale, &group, secs, last);
+    }
+}
+
+/// One chart: `group`'s channels (by their legend index) on one y axis; the time axis's
+/// labels only under the last chart. No axis titles: ratatui draws them inside the plot,
+/// over the data (the units are in the legend, the seconds in the labels).
+fn plot(frame: &mut Frame, rect: Rect, autoscale: bool, group: &[&Series], secs: f64, last: bool) {
+    let pairs: Vec<(Channel, Vec<(f64, f64)>)> =
+        group.iter().map(|(_, c, p)| (*c, p.clone())).collect();
+    let (lo, hi) = y_bounds(autoscale, &pairs);
+    let datasets: Vec<Dataset> = group
+        .iter()
+        .map(|(i, _, pts)| {
             Dataset::default()
                 .marker(Marker::Braille)
                 .graph_type(GraphType::Line)
-                .style(Style::new().fg(colour(i)))
+                .style(Style::new().fg(colour(*i)))
                 .data(pts)
         })
         .collect();
-    let secs = window.as_secs_f64();
-    let mut units: Vec<&str> = v
-        .channels
-        .iter()
-        .map(|c| c.unit())
-        .filter(|u| !u.is_empty())
-        .collect();
-    units.dedup();
-    let x = Axis::default()
-        .title(Span::styled("s", theme::dim()))
-        .style(theme::dim())
-        .bounds([-secs, 0.0])
-        .labels([
-            Span::raw(format!("-{}", secs as u64)),
-            Span::raw(format!("-{}", (secs / 2.0) as u64)),
-            Span::raw("0"),
+    let mut x = Axis::default().style(theme::dim()).bounds([-secs, 0.0]);
+    if last {
+        x = x.labels([
+            Span::raw(format!("-{} s", secs as u64)),
+            Span::raw(format!("-{} s", (secs / 2.0) as u64)),
+            Span::raw("0 s"),
         ]);
+    }
     let y = Axis::default()
-        .title(Span::styled(units.join(","), theme::dim()))
         .style(theme::dim())
         .bounds([lo, hi])
+        // Padded to one width: the stacked charts' time axes line up.
         .labels([
-            Span::raw(short(lo)),
-            Span::raw(short((lo + hi) / 2.0)),
-            Span::raw(short(hi)),
+            Span::raw(format!("{:>6}", short(lo))),
+            Span::raw(format!("{:>6}", short((lo + hi) / 2.0))),
+            Span::raw(format!("{:>6}", short(hi))),
         ]);
-    frame.render_widget(Chart::new(datasets).x_axis(x).y_axis(y), chart);
+    frame.render_widget(Chart::new(datasets).x_axis(x).y_axis(y), rect);
 }
+
+/// A channel's points, with its index in the legend (its colour).
+type Series = (usize, Channel, Vec<(f64, f64)>);
 
 /// A number for an axis label, at most 6 cells.
 fn short(v: f64) -> String {
     let a = v.abs();
-    if a >= 1000.0 {
-        format!("{:.0}", v)
+    let prec = if a >= 1000.0 {
+        0
     } else if a >= 10.0 {
-        format!("{:.1}", v)
+        1
     } else {
-        format!("{:.2}", v)
-    }
+        2
+    };
+    crate::units::fixed(v, prec)
 }
 
 /// The y range: the data's (with a margin) when autoscaled, else the channels' sensor spans.

@@ -3,7 +3,7 @@
 //! file). Segments carry a priority and the least important ones are dropped whole when the
 //! row is too narrow, so 80 columns shows fewer facts rather than half-cut ones.
 
-use super::text::{clean, num, truncate, truncate_left, width};
+use super::text::{clean, num, truncate, truncate_left, truncate_words, width};
 use super::theme;
 use crate::app::state::{AppState, GamepadStatus, KeyboardMode};
 use crate::session::LinkState;
@@ -67,7 +67,7 @@ fn join(segs: Vec<Seg>) -> Line<'static> {
 pub fn render(frame: &mut Frame, area: Rect, state: &AppState) {
     let w = (area.width as usize).saturating_sub(1);
     let row1 = join(fit(first_row(state), w));
-    let mut segs = fit(second_row(state), w);
+    let mut segs = fit(second_row(state, w), w);
     // The log path takes whatever is left, cut from the left so the file name stays.
     let used = total(&segs) + if segs.is_empty() { 0 } else { width(SEP) };
     let room = w.saturating_sub(used);
@@ -115,9 +115,10 @@ fn first_row(s: &AppState) -> Vec<Seg> {
     .flatten()
     .chain([
         Seg::new(1, battery(&s.droid().telemetry)),
-        Seg::new(2, vec![errors]),
+        // No errors is the least news; errors are kept before the rates.
+        Seg::new(if s.droid().stats.errors > 0 { 1 } else { 3 }, vec![errors]),
         Seg::new(
-            3,
+            2,
             vec![
                 Span::styled("in ", theme::label()),
                 Span::raw(format!("{}/s", rate(s.droid().rate_in))),
@@ -221,12 +222,17 @@ fn battery(t: &Telemetry) -> Vec<Span<'static>> {
     spans
 }
 
-fn second_row(s: &AppState) -> Vec<Seg> {
+fn second_row(s: &AppState, width: usize) -> Vec<Seg> {
     let mut segs = Vec::new();
     if let Some(h) = s.current_hint() {
+        // Too long for the row: cut between words, never inside one (issue 30).
+        let room = width.saturating_sub(2);
         segs.push(Seg::new(
             0,
-            vec![Span::styled(format!("» {}", clean(h)), theme::commanded())],
+            vec![Span::styled(
+                format!("» {}", truncate_words(&clean(h), room)),
+                theme::commanded(),
+            )],
         ));
     }
     let pad = match &s.gamepad {

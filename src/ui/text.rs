@@ -48,6 +48,25 @@ pub fn truncate(s: &str, max: usize) -> String {
     out
 }
 
+/// Keep the start of `s` within `max` cells, cut between words (ending with `…`): a message
+/// too long for its row loses its last words, never half of one.
+pub fn truncate_words(s: &str, max: usize) -> String {
+    if width(s) <= max {
+        return s.to_string();
+    }
+    let cut = truncate(s, max);
+    let body = cut.trim_end_matches('…');
+    // The next character of `s` after the cut: a space means the cut fell between words.
+    let next = s[body.len()..].chars().next();
+    if next.is_some_and(char::is_whitespace) {
+        return format!("{}…", body.trim_end());
+    }
+    match body.rfind(char::is_whitespace) {
+        Some(i) if i > 0 => format!("{}…", body[..i].trim_end()),
+        _ => cut,
+    }
+}
+
 /// Keep the end of `s` within `max` cells, starting with `…` when cut (paths: the file name
 /// matters more than the home directory).
 pub fn truncate_left(s: &str, max: usize) -> String {
@@ -102,13 +121,8 @@ pub fn num(v: f32, prec: usize) -> String {
     if v.abs() >= 1e5 {
         let _ = write!(s, "{v:.1e}");
     } else {
-        // Avoid "-0.0" flicker around zero.
-        let v = if v.abs() < 0.5 * 10f32.powi(-(prec as i32)) {
-            0.0
-        } else {
-            v
-        };
-        let _ = write!(s, "{v:.prec$}");
+        // No "-0.0" (and no flicker around zero).
+        s = crate::units::fixed(f64::from(v), prec);
     }
     s
 }
@@ -188,6 +202,17 @@ pub fn runs(cells: impl IntoIterator<Item = (char, Style)>) -> Vec<Span<'static>
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn words_are_cut_whole() {
+        assert_eq!(
+            truncate_words("capped at 10/s — stream less", 18),
+            "capped at 10/s —…"
+        );
+        assert_eq!(truncate_words("capped at 10/s", 20), "capped at 10/s");
+        assert_eq!(truncate_words("one two three", 8), "one two…");
+        assert_eq!(truncate_words("abcdefghij", 5), "abcd…");
+    }
 
     #[test]
     fn truncation_keeps_width() {

@@ -184,11 +184,32 @@ impl Codec for V2Codec {
     fn explain(&self, p: &Packet, _request: Option<&Command>) -> Explained {
         match p {
             // Without masks, sensor data is shown as its raw values (as v1 does).
-            Packet::V2(p) => explain(
-                p,
-                (self.streaming.mask != 0 || self.streaming.ext_mask != 0)
-                    .then_some(&self.streaming),
-            ),
+            Packet::V2(p) => {
+                let mut e = explain(
+                    p,
+                    (self.streaming.mask != 0 || self.streaming.ext_mask != 0)
+                        .then_some(&self.streaming),
+                );
+                // RVR's streaming-service data, named by what this connection configured
+                // (issue 30 point 7: not `token=1 data=[80 00 …]`).
+                if e.kind == PacketKind::Notification
+                    && (p.did, p.cid) == (0x18, 0x3D)
+                    && !self.service.slots.is_empty()
+                {
+                    let processor = p.sid.and_then(targets::Processor::of_id);
+                    match v2::stream::decode(&self.service, processor, &p.data) {
+                        Ok(s) => {
+                            e.fields = Some(s.fields());
+                            e.problem = None;
+                        }
+                        Err(err) => {
+                            e.fields = None;
+                            e.problem = Some(err.to_string());
+                        }
+                    }
+                }
+                e
+            }
             other => super::explain_foreign(other),
         }
     }
@@ -577,4 +598,46 @@ fn stream_config(sensors: SensorSet, interval_ms: u16) -> StreamingConfig {
         }
     }
     s
+}
+
+#[cfg(test)]
+mod service_tests {
+    use super::*;
+    use crate::family::Codec;
+    use crate::protocol::v2::stream::{self, ServiceConfig};
+    use crate::protocol::v2::types::{StreamSlots, StreamWidth};
+    use targets::Processor;
+
+    /// Issue 30 point 7: RVR's streaming-service data in the log are named by what this
+    /// connection configured, not `token=1 data=[…]`.
+    #[test]
+    fn streaming_service_data_are_explained_by_what_was_configured() {
+        let mut codec = V2Codec::for_model(Model::Rvr);
+        let configure = cmd::configure_streaming_service(
+            2,
+            StreamSlots(vec![(6, StreamWidth::Bits32), (7, StreamWidth::Bits32)]),
+        )
+        .to(Processor::Secondary);
+        let sensor = v2::Device::parse("sensor").expect("sensor device");
+        let mut cfg = ServiceConfig::default();
+        cfg.snoop(&configure);
+        let slot = cfg
+            .slot(Some(Processor::Secondary), 2)
+            .expect("slot")
+            .clone();
+        let data = stream::encode(&slot, &[("locator_x", 120.0), ("velocity_y", -30.0)]);
+        let mut p = v2::Packet::notification(sensor, 0x3D, data);
+        p.sid = Some(Processor::Secondary.target_id());
+        p.flags.insert(Flags::HAS_SOURCE_ID);
+        let packet = Packet::V2(p);
+        let before = codec.explain(&packet, None);
+        let _ = codec.encode(&Command::V2(configure), 1, true);
+        let after = codec.explain(&packet, None);
+        let names = |e: &Explained| -> Vec<&'static str> {
+            e.fields.iter().flatten().map(|(n, _)| *n).collect()
+        };
+        assert!(!names(&before).contains(&"locator_x"), "{before:?}");
+        assert!(names(&after).contains(&"locator_x"), "{after:?}");
+        assert!(names(&after).contains(&"velocity_y"), "{after:?}");
+    }
 }

@@ -180,6 +180,7 @@ mod tests {
             .map(|i| HelpLine {
                 keys: format!("k{i}"),
                 action: format!("action number {i}"),
+                needs: crate::config::Needs::All,
             })
             .collect()
     }

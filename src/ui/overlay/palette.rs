@@ -2,7 +2,7 @@
 //! kept in view. The scroll offset is derived from the selection alone (selection near the
 //! middle), so the palette needs no view state of its own.
 
-use super::super::layout::centered;
+use super::super::layout::palette_rect;
 use super::super::text::{clean, truncate, width};
 use super::super::theme;
 use crate::app::catalog::Entry;
@@ -11,31 +11,10 @@ use ratatui::layout::Rect;
 use ratatui::text::{Line, Span};
 use ratatui::widgets::{Clear, Paragraph};
 
-/// First row shown so that `selected` is visible, near the middle when the list scrolls.
-pub fn offset(selected: usize, len: usize, rows: usize) -> usize {
-    if rows == 0 || len <= rows {
-        return 0;
-    }
-    selected
-        .min(len - 1)
-        .saturating_sub(rows / 2)
-        .min(len - rows)
-}
+pub use crate::app::layout::list_offset as offset;
 
 pub fn render(frame: &mut Frame, area: Rect, title: &str, entries: &[Entry], selected: usize) {
-    let name_w = entries
-        .iter()
-        .map(|e| width(&e.name))
-        .max()
-        .unwrap_or(0)
-        .min(48);
-    let w = (name_w + 14).max(40) as u16;
-    let h = (entries.len() as u16).saturating_add(2).max(3);
-    let rect = centered(
-        area,
-        w.min(area.width.saturating_sub(2).max(1)),
-        h.min(area.height.saturating_sub(2).max(1)),
-    );
+    let rect = palette_rect(area, entries.iter().map(|e| width(&e.name)), entries.len());
     let sel = selected.min(entries.len().saturating_sub(1));
     let mut block = theme::panel(Line::from(vec![
         Span::styled(format!(" {title} "), theme::bold()),

@@ -2,6 +2,7 @@
 //! selected row highlighted and kept in view, the keys in the bottom edge.
 
 use super::super::layout::centered;
+use super::super::text::width;
 use super::super::theme;
 use super::palette::offset;
 use crate::app::monitor::{TuningDraft, TuningRow, tuning_rows};
@@ -14,7 +15,9 @@ use ratatui::widgets::{Clear, Paragraph};
 
 /// A list box of `rows` with `selected` highlighted.
 fn list(frame: &mut Frame, area: Rect, title: &str, keys: &str, rows: Vec<Line>, selected: usize) {
-    let w = 52u16.min(area.width.saturating_sub(2).max(1));
+    // As wide as its title and keys (never cut where the screen has the room: issue 30).
+    let want = 52.max(width(title) + 4).max(width(keys) + 4) as u16;
+    let w = want.min(area.width.saturating_sub(2).max(1));
     let h = (rows.len() as u16 + 2).min(area.height.saturating_sub(2).max(1));
     let rect = centered(area, w, h);
     let block = theme::panel(Span::styled(format!(" {title} "), theme::bold()))
@@ -107,7 +110,7 @@ pub fn tuning(frame: &mut Frame, area: Rect, s: &AppState, selected: usize, d: &
         frame,
         area,
         &title,
-        "↑↓ ←→ value · Space on/off · Enter send · Esc",
+        "↑↓ ←→ value · Space on/off · Enter send · Esc close",
         rows,
         selected,
     );

@@ -162,6 +162,93 @@ fn wide(body: Rect, p: Plan) -> Plan {
     }
 }
 
+/// The whole screen of `state` in `area`: the roster strip (a fleet), the panels' plan and
+/// the context footer's row. [`crate::ui::draw`] draws there and the mouse's hit test reads
+/// the same, so a click lands on what is drawn.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Screen {
+    pub roster: Option<Rect>,
+    pub plan: Plan,
+    pub footer: Option<Rect>,
+}
+
+pub fn screen(mut area: Rect, fleet: bool) -> Screen {
+    let roster = (fleet && area.height > 1).then(|| {
+        let strip = Rect { height: 1, ..area };
+        area.y += 1;
+        area.height -= 1;
+        strip
+    });
+    // The context footer takes the bottom row once the screen has room for panels: from
+    // the log where the log is at the bottom (the panels keep their rows), else from all.
+    if area.height <= MIN_HEIGHT {
+        return Screen {
+            roster,
+            plan: plan(area),
+            footer: None,
+        };
+    }
+    let footer = Rect {
+        y: area.bottom() - 1,
+        height: 1,
+        ..area
+    };
+    let mut p = plan(area);
+    if p.class == SizeClass::Wide {
+        p = plan(Rect {
+            height: area.height - 1,
+            ..area
+        });
+    } else {
+        p.log.height = p.log.height.saturating_sub(1);
+    }
+    Screen {
+        roster,
+        plan: p,
+        footer: Some(footer),
+    }
+}
+
+/// The roster strip's room per droid (`mirror`: the MIRROR tag takes its place first).
+pub fn roster_room(width: u16, droids: usize, mirror: bool) -> (usize, usize) {
+    let tag = if mirror { ROSTER_MIRROR_TAG.len() } else { 0 };
+    (tag, (width as usize).saturating_sub(tag) / droids.max(1))
+}
+
+/// The roster's mirror tag.
+pub const ROSTER_MIRROR_TAG: &str = "MIRROR ";
+
+/// The droid whose roster entry is at column `x` of the strip.
+pub fn roster_entry_at(width: u16, droids: usize, mirror: bool, x: u16) -> Option<usize> {
+    let (tag, room) = roster_room(width, droids, mirror);
+    let x = (x as usize).checked_sub(tag)?;
+    let i = x / room.max(1);
+    (room > 0 && i < droids).then_some(i)
+}
+
+/// The animation or sound palette's box for `names` (display widths) in `area`.
+pub fn palette_rect(area: Rect, name_widths: impl Iterator<Item = usize>, len: usize) -> Rect {
+    let name_w = name_widths.max().unwrap_or(0).min(48);
+    let w = (name_w + 14).max(40) as u16;
+    let h = (len as u16).saturating_add(2).max(3);
+    centered(
+        area,
+        w.min(area.width.saturating_sub(2).max(1)),
+        h.min(area.height.saturating_sub(2).max(1)),
+    )
+}
+
+/// First row shown so that `selected` is visible, near the middle when the list scrolls.
+pub fn list_offset(selected: usize, len: usize, rows: usize) -> usize {
+    if rows == 0 || len <= rows {
+        return 0;
+    }
+    selected
+        .min(len - 1)
+        .saturating_sub(rows / 2)
+        .min(len - rows)
+}
+
 /// A rect of at most `w`×`h` centred in `area` (overlays).
 pub fn centered(area: Rect, w: u16, h: u16) -> Rect {
     let w = w.min(area.width);
