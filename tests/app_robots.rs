@@ -249,3 +249,51 @@ async fn mini_drives_by_heading_like_bb8() {
     assert!(h.probe.state().y_cm > 20.0, "{:?}", h.probe.state());
     h.quit().await;
 }
+
+/// RVR's raw motors in the log: each command once and before its response (a report had
+/// `set-raw-motors` and its response twice and out of order in the app's packet log, which
+/// is this session log, seen through the app).
+#[tokio::test(start_paused = true)]
+async fn rvr_raw_motors_are_logged_once_each_and_before_their_response() {
+    let h = start(Model::Rvr).await;
+    h.key(Key::ch('v')).await;
+    let up = |kind| TermEvent::Key {
+        key: Key::plain(KeyCode::Up),
+        kind,
+    };
+    h.term.send(up(KeyKind::Press)).await.unwrap();
+    sleep(Duration::from_millis(800)).await;
+    h.term.send(up(KeyKind::Release)).await.unwrap();
+    sleep(Duration::from_millis(500)).await;
+    h.key(Key::ch(' ')).await;
+    sleep(Duration::from_millis(500)).await;
+    let packets = h.packets.lock().unwrap().clone();
+    let raw: Vec<(Direction, u8)> = packets
+        .iter()
+        .filter(|(_, p)| (p.did, p.cid) == (0x16, 0x01))
+        .map(|(d, p)| (*d, p.seq))
+        .collect();
+    let outs: Vec<u8> = raw
+        .iter()
+        .filter(|(d, _)| *d == Direction::Out)
+        .map(|(_, s)| *s)
+        .collect();
+    assert!(outs.len() >= 3, "tank mode drove: {raw:?}");
+    for seq in &outs {
+        let at = |dir: Direction| {
+            raw.iter()
+                .enumerate()
+                .filter(|(_, (d, s))| *d == dir && s == seq)
+                .map(|(i, _)| i)
+                .collect::<Vec<_>>()
+        };
+        let (sent, answered) = (at(Direction::Out), at(Direction::In));
+        assert_eq!(sent.len(), 1, "seq {seq} sent once: {raw:?}");
+        assert_eq!(answered.len(), 1, "seq {seq} answered once: {raw:?}");
+        assert!(
+            sent[0] < answered[0],
+            "seq {seq} before its answer: {raw:?}"
+        );
+    }
+    h.quit().await;
+}
