@@ -665,3 +665,37 @@ $ droidctl --sim < keys.txt\n\
         ]
     );
 }
+
+/// Every relative link in README and docs/ names a file of the checkout (a chapter renamed or
+/// a file moved would otherwise send the reader nowhere).
+#[test]
+fn every_relative_link_in_the_documents_names_a_file() {
+    let mut broken = Vec::new();
+    for (name, text) in documents() {
+        let dir = repo().join(&name).parent().unwrap().to_path_buf();
+        let mut rest = text.as_str();
+        while let Some(at) = rest.find("](") {
+            rest = &rest[at + 2..];
+            let Some(end) = rest.find(')') else { break };
+            let target = &rest[..end];
+            rest = &rest[end..];
+            let file = target.split('#').next().unwrap_or("");
+            if file.is_empty()
+                || file.contains(char::is_whitespace)
+                || file.starts_with("http://")
+                || file.starts_with("https://")
+                || file.starts_with("mailto:")
+            {
+                continue;
+            }
+            if !dir.join(file).exists() {
+                broken.push(format!("{name}: {target}"));
+            }
+        }
+    }
+    assert!(
+        broken.is_empty(),
+        "links to nothing:\n{}",
+        broken.join("\n")
+    );
+}
