@@ -11,7 +11,7 @@ use super::run::{
 use super::run_output::{OUTPUT_GONE, RunOutput, note};
 use crate::fleet::Fleet;
 use crate::fleet::mission::{self as fleet_mission, FleetEmit};
-use crate::mission::{MissionEvent, MissionOptions};
+use crate::mission::{MissionEvent, MissionOptions, Summary};
 use crate::model::Model;
 use crate::script::{Item, ScriptError};
 use serde::Serialize;
@@ -129,6 +129,18 @@ pub fn run(
         ))
     });
     let (summaries, kept) = summaries?;
+    finish_fleet(summaries, kept, json, &out)
+}
+
+/// How a run on several droids ends once they are stopped (a mission and a program alike):
+/// a summary per droid (tagged with its name in JSON), or the error after what the output
+/// said; then whether the recording was kept. Status 1 when any droid's step failed.
+pub(super) fn finish_fleet(
+    summaries: Result<Vec<(String, Summary)>, CliError>,
+    kept: Result<(), CliError>,
+    json: bool,
+    out: &RunOutput,
+) -> Result<i32, CliError> {
     let summaries = match summaries {
         Ok(s) => s,
         Err(e) => {

@@ -4,9 +4,9 @@
 //! anything is sent; an uncaught exception stops the droid and is exit 1 naming the line.
 
 use super::CliError;
-use super::fleet_run::{Tagged, printer};
+use super::fleet_run::{finish_fleet, printer};
 use super::run::{
-    RunArgs, finish_recording, mission_session, report_link_of, run_session, summary_line,
+    RunArgs, finish_recording, finish_run, mission_session, report_link_of, run_session,
 };
 use super::run_output::{OUTPUT_GONE, RunOutput};
 use crate::edu::{Program, ProgramOptions};
@@ -99,17 +99,7 @@ pub fn run(args: &RunArgs, sims: Vec<Model>, text: String, shown: &str) -> Resul
     // An engine still spinning in a program that never yields is not waited for.
     rt.shutdown_background();
     let (result, kept) = r;
-    let summary = match result {
-        Ok(s) => s,
-        Err(e) => {
-            out.result()?;
-            return Err(e);
-        }
-    };
-    out.stdout(|w| writeln!(w, "{}", summary_line(&summary, json)));
-    out.result()?;
-    kept?;
-    Ok(if summary.failed_steps > 0 { 1 } else { 0 })
+    finish_run(result, kept, json, &out)
 }
 
 fn paused_runtime() -> Result<tokio::runtime::Runtime, CliError> {
@@ -207,30 +197,6 @@ fn fleet(
     });
     rt.shutdown_background();
     let (summaries, kept) = r?;
-    let summaries = match summaries {
-        Ok(s) => s,
-        Err(e) => {
-            out.result()?;
-            return Err(CliError::failure(e.to_string()));
-        }
-    };
-    let mut failed = 0;
-    for (name, s) in &summaries {
-        failed += s.failed_steps;
-        if json {
-            let t = Tagged {
-                droid: name,
-                inner: s,
-            };
-            out.stdout(|w| {
-                serde_json::to_writer(&mut *w, &t).map_err(std::io::Error::other)?;
-                writeln!(w)
-            });
-        } else {
-            out.stdout(|w| writeln!(w, "{name}: {}", summary_line(s, false)));
-        }
-    }
-    out.result()?;
-    kept?;
-    Ok(if failed > 0 { 1 } else { 0 })
+    let summaries = summaries.map_err(|e| CliError::failure(e.to_string()));
+    finish_fleet(summaries, kept, json, &out)
 }

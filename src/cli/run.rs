@@ -169,6 +169,18 @@ pub fn run(args: RunArgs) -> Result<i32, CliError> {
         }
     };
     let (result, kept) = result;
+    finish_run(result, kept, json, &out)
+}
+
+/// How a run on one droid ends once the droid is stopped (a mission and a program alike):
+/// the summary line, or the error after what the output said; then whether the recording was
+/// kept. Status 1 when a step failed.
+pub(super) fn finish_run(
+    result: Result<Summary, CliError>,
+    kept: Result<(), CliError>,
+    json: bool,
+    out: &RunOutput,
+) -> Result<i32, CliError> {
     let summary = match result {
         Ok(s) => s,
         Err(e) => {
