@@ -4,7 +4,7 @@ spherov2.py's own SpheroEduAPI against `droidctl serve --sim bolt` (tests/edu_sp
 compares where the droid went, its lights and its matrix with droidctl's runs of the
 JavaScript).
 
-Usage: edu_judge.py PORT NAME PROGRAM    (PROGRAM: square, pong, spin, matrix)
+Usage: edu_judge.py PORT NAME PROGRAM    (PROGRAM: square, pong, spin, matrix, animation)
 Prints one JSON object: the location spherov2 read at the end of the program.
 """
 
@@ -71,6 +71,40 @@ def matrix(api):
     api.set_front_led(Color(255, 0, 255))
     api.set_back_led(Color(0, 255, 255))
     time.sleep(1)
+
+
+ARROW = [
+    [1, 1, 1, 0, 0, 0, 0, 0],
+    [1, 1, 0, 0, 0, 0, 0, 0],
+    [1, 0, 1, 0, 0, 0, 0, 0],
+    [0, 0, 0, 1, 0, 0, 0, 0],
+    [0, 0, 0, 0, 1, 0, 0, 0],
+    [0, 0, 0, 0, 0, 1, 0, 0],
+    [0, 0, 0, 0, 0, 0, 1, 0],
+    [0, 0, 0, 0, 0, 0, 0, 2],
+]
+STRIPES = [
+    [0, 1, 2, 3, 4, 5, 6, 7],
+    [8, 9, 10, 11, 12, 13, 14, 15],
+    [15, 14, 13, 12, 11, 10, 9, 8],
+    [7, 6, 5, 4, 3, 2, 1, 0],
+    [0, 0, 0, 0, 15, 15, 15, 15],
+    [9, 0, 9, 0, 9, 0, 9, 0],
+    [0, 0, 0, 0, 0, 0, 0, 0],
+    [3, 3, 3, 3, 3, 3, 3, 12],
+]
+
+
+def animation(api):
+    palette = [Color(i * 16, 255 - i * 16, (i * 37) % 256) for i in range(16)]
+    api.register_matrix_animation([ARROW], [Color(0, 0, 0), Color(255, 0, 0), Color(0, 0, 255)], 5, False)
+    api.register_matrix_animation([ARROW, STRIPES, ARROW, STRIPES], palette, 4, False)
+    api.play_matrix_animation(0, True)
+    time.sleep(1)
+    api.play_matrix_animation(1, False)
+    time.sleep(2)
+    api.set_front_led(Color(255, 0, 255))
+    time.sleep(0.5)
 
 
 def main():

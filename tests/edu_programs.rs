@@ -310,3 +310,35 @@ fn a_runaway_loop_of_calls_is_an_error_not_unbounded_memory() {
         stderr(&out)
     );
 }
+
+#[test]
+fn a_bad_matrix_animation_is_an_error_naming_its_line_and_what_is_wrong() {
+    let dir = Scratch::new("edu", "bad-animation");
+    let p = dir.file(
+        "a.js",
+        "const F = [];\nfor (let y = 0; y < 8; y++) F.push([0, 0, 0, 0, 0, 0, 0, 0]);\nF[2][5] = 3;\n\
+         registerMatrixAnimation({ frames: [F], palette: [{ r: 0, g: 0, b: 0 }, { r: 9, g: 9, b: 9 }], fps: 5 });\n\
+         async function startProgram() {\n  playMatrixAnimation(0);\n  await delay(1);\n}\n",
+    );
+    let out = dir.run(&["run", path(&p), "--sim", "bolt"]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = stderr(&out);
+    assert!(
+        err.contains("a.js:4: RangeError: registerMatrixAnimation: frame 0 row 2 column 5 is 3, not a palette index 0 to 1"),
+        "{err}"
+    );
+    // Playing what was never registered is an error too.
+    let q = dir.file(
+        "b.js",
+        "async function startProgram() {\n  await delay(0.1);\n  playMatrixAnimation(0, false);\n}\n",
+    );
+    let out = dir.run(&["run", path(&q), "--sim", "bolt"]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(
+        stderr(&out).contains(
+            "b.js:3: RangeError: playMatrixAnimation(0): no such animation (0 registered)"
+        ),
+        "{}",
+        stderr(&out)
+    );
+}

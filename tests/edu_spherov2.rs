@@ -225,12 +225,12 @@ fn shows(cap: &str) -> Shows {
     last.expect("the droid was awake")
 }
 
-fn judge(program: &str, tolerance_cm: f64) {
+fn judge(program: &str, tolerance_cm: f64) -> Option<Shows> {
     let py = match python() {
         Ok(py) => py,
         Err(why) => {
             println!("SKIPPED edu_spherov2 {program}: {why}");
-            return;
+            return None;
         }
     };
     let dir = Dir::new(program);
@@ -242,11 +242,9 @@ fn judge(program: &str, tolerance_cm: f64) {
         d <= tolerance_cm,
         "{program}: droidctl ends at {js_xy:?}, spherov2 at {py_xy:?} ({d:.1} cm apart)"
     );
-    assert_eq!(
-        shows(&js_cap),
-        shows(&py_cap),
-        "{program}: lights and matrix"
-    );
+    let js = shows(&js_cap);
+    assert_eq!(js, shows(&py_cap), "{program}: lights and matrix");
+    Some(js)
 }
 
 #[test]
@@ -269,4 +267,26 @@ fn a_spin_moves_the_heading_as_spherov2_does() {
 #[test]
 fn the_matrix_shows_what_spherov2_draws() {
     judge("matrix", 5.0);
+}
+
+#[test]
+fn a_matrix_animation_ends_on_the_frame_spherov2_ends_on() {
+    let Some(shown) = judge("animation", 5.0) else {
+        return;
+    };
+    // Both ran the one-shot animation to its last frame: STRIPES in the 16-colour palette
+    // (tests/fixtures/edu/animation.js), row 0 at the top, column 0 at the left.
+    const STRIPES: [[u8; 8]; 8] = [
+        [0, 1, 2, 3, 4, 5, 6, 7],
+        [8, 9, 10, 11, 12, 13, 14, 15],
+        [15, 14, 13, 12, 11, 10, 9, 8],
+        [7, 6, 5, 4, 3, 2, 1, 0],
+        [0, 0, 0, 0, 15, 15, 15, 15],
+        [9, 0, 9, 0, 9, 0, 9, 0],
+        [0, 0, 0, 0, 0, 0, 0, 0],
+        [3, 3, 3, 3, 3, 3, 3, 12],
+    ];
+    let colour = |i: u8| [i * 16, 255 - i * 16, ((i as u16 * 37) % 256) as u8];
+    let want = STRIPES.map(|row| row.map(colour));
+    assert_eq!(shown.pixels, want);
 }

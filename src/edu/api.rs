@@ -26,13 +26,40 @@ pub enum Arg {
 #[derive(Debug, Clone, PartialEq)]
 pub enum Matrix {
     Char(char, [u8; 3]),
-    Text { text: String, rgb: [u8; 3], fps: u8 },
+    Text {
+        text: String,
+        rgb: [u8; 3],
+        fps: u8,
+    },
     Pixel(u8, u8, [u8; 3]),
     Line([u8; 4], [u8; 3]),
     Fill([u8; 4], [u8; 3]),
     Clear,
     Rotate(u16),
+    /// A frame to keep: its index and palette indexes `[y][x]` (spherov2's
+    /// `save_compressed_frame_player64_bit_frame`).
+    SaveFrame(u16, [[u8; 8]; 8]),
+    /// An animation to keep (spherov2's `save_compressed_frame_player_animation`).
+    SaveAnimation {
+        id: u8,
+        fps: u8,
+        fade: bool,
+        palette: Vec<[u8; 3]>,
+        frames: Vec<u16>,
+    },
+    /// Play a kept animation, once or in a loop.
+    Play(u8, bool),
+    Pause,
+    Resume,
+    /// End the animation (spherov2's `clear_matrix` sends only this).
+    Reset,
 }
+
+/// Frames one program may register on BOLT (all its animations together), and colours a
+/// palette holds (Sphero's docs: "up to 16 colors"). The robot's own frame limit is not
+/// published; the simulator keeps as many (src/sim/animation.rs).
+pub const MAX_FRAMES: usize = crate::sim::animation::SAVED_MAX;
+pub const MAX_COLOURS: usize = 16;
 
 /// One thing the robot is asked to do.
 #[derive(Debug, Clone, PartialEq)]
@@ -108,6 +135,9 @@ pub struct Driver {
     pub main: [u8; 3],
     pub front: [u8; 3],
     pub back: [u8; 3],
+    /// Matrix animations and frames registered so far (the next ids, as spherov2 counts).
+    pub animations: u8,
+    pub frames: u16,
 }
 
 fn secs(v: f64) -> Duration {
@@ -140,6 +170,8 @@ impl Driver {
             main: [0; 3],
             front: [0; 3],
             back: [0; 3],
+            animations: 0,
+            frames: 0,
         }
     }
 
@@ -397,7 +429,25 @@ impl Driver {
                     Matrix::Fill(r, rgb(0))
                 }));
             }
-            "clearMatrix" => e.now.push(Act::Matrix(Matrix::Clear)),
+            // Ends an animation too (Sphero's docs: a loop plays "until interrupted by …
+            // clearMatrix()"), as spherov2's `clear_matrix` does.
+            "clearMatrix" => {
+                e.now.push(Act::Matrix(Matrix::Reset));
+                e.now.push(Act::Matrix(Matrix::Clear));
+            }
+            "registerMatrixAnimation" => e.now = self.register_animation(args)?,
+            "playMatrixAnimation" => {
+                let id = n(0);
+                if !(0.0..f64::from(self.animations)).contains(&id) || id.fract() != 0.0 {
+                    return Err(format!(
+                        "playMatrixAnimation({id}): no such animation ({} registered)",
+                        self.animations
+                    ));
+                }
+                e.now.push(Act::Matrix(Matrix::Play(id as u8, n(1) != 0.0)));
+            }
+            "pauseMatrixAnimation" => e.now.push(Act::Matrix(Matrix::Pause)),
+            "resumeMatrixAnimation" => e.now.push(Act::Matrix(Matrix::Resume)),
             "setMatrixRotation" => {
                 let d = (n(0).round() as i64).rem_euclid(360);
                 if d % 90 != 0 {
@@ -446,6 +496,88 @@ impl Driver {
             other => return Err(format!("{other}() is not a Sphero Edu call droidctl knows")),
         }
         Ok(e)
+    }
+}
+
+impl Driver {
+    /// `registerMatrixAnimation`, as the prelude flattens it: fps, fade (0/1), the palette's
+    /// size and its colours, the frames' count and 64 palette indexes a frame (row by row).
+    /// Each frame is saved, then the animation, as spherov2's `register_matrix_animation`.
+    fn register_animation(&mut self, args: &[Arg]) -> Result<Vec<Act>, String> {
+        let mut it = args.iter().map(|a| match a {
+            Arg::Num(v) => *v,
+            Arg::Text(_) => f64::NAN,
+        });
+        let mut next = |what: &str| {
+            it.next()
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| format!("registerMatrixAnimation: {what} is missing"))
+        };
+        let fps = next("fps")?;
+        if !(1.0..=30.0).contains(&fps.round()) {
+            return Err(format!(
+                "registerMatrixAnimation: fps is 1 to 30, not {fps}"
+            ));
+        }
+        let fade = next("transition")? != 0.0;
+        let colours = next("palette")? as usize;
+        if !(1..=MAX_COLOURS).contains(&colours) {
+            return Err(format!(
+                "registerMatrixAnimation: a palette has 1 to {MAX_COLOURS} colours, not {colours}"
+            ));
+        }
+        let mut palette = Vec::with_capacity(colours);
+        for _ in 0..colours {
+            palette.push([
+                byte(next("a colour")?),
+                byte(next("a colour")?),
+                byte(next("a colour")?),
+            ]);
+        }
+        let count = next("frames")? as usize;
+        let room = MAX_FRAMES - (self.frames as usize).min(MAX_FRAMES);
+        if count == 0 || count > room {
+            return Err(format!(
+                "registerMatrixAnimation: {count} frames; a program registers 1 to {MAX_FRAMES} \
+                 in all ({room} left)"
+            ));
+        }
+        if self.animations == u8::MAX {
+            return Err("registerMatrixAnimation: too many animations".into());
+        }
+        let mut acts = Vec::with_capacity(count + 1);
+        let mut ids = Vec::with_capacity(count);
+        for f in 0..count {
+            let mut frame = [[0u8; 8]; 8];
+            for (y, row) in frame.iter_mut().enumerate() {
+                for (x, px) in row.iter_mut().enumerate() {
+                    let i = next("a pixel")?;
+                    if i.fract() != 0.0 || !(0.0..colours as f64).contains(&i) {
+                        return Err(format!(
+                            "registerMatrixAnimation: frame {f} row {y} column {x} is {i}, \
+                             not a palette index 0 to {}",
+                            colours - 1
+                        ));
+                    }
+                    *px = i as u8;
+                }
+            }
+            ids.push(self.frames + f as u16);
+            acts.push(Act::Matrix(Matrix::SaveFrame(
+                self.frames + f as u16,
+                frame,
+            )));
+        }
+        self.frames += count as u16;
+        acts.push(Act::Matrix(Matrix::SaveAnimation {
+            id: self.animations,
+            fps: fps.round() as u8,
+            fade,
+            palette,
+            frames: ids,
+        }));
+        self.animations += 1;
+        Ok(acts)
     }
 }
 
@@ -501,6 +633,53 @@ mod tests {
         assert_eq!(steps.len(), 20);
         // Halfway: 180° on.
         assert_eq!(steps[9].1, vec![Driver::drive(190, 0)]);
+    }
+
+    #[test]
+    fn an_animation_registers_its_frames_then_itself_and_plays_only_once_registered() {
+        let mut d = Driver::new(Model::Bolt);
+        assert!(d.call("playMatrixAnimation", &num(&[0.0, 1.0])).is_err());
+        let mut a = vec![2.0, 0.0, 2.0, 255.0, 0.0, 0.0, 0.0, 0.0, 255.0, 2.0];
+        a.extend(std::iter::repeat_n(0.0, 64));
+        a.extend(std::iter::repeat_n(1.0, 64));
+        let e = d.call("registerMatrixAnimation", &num(&a)).unwrap();
+        assert_eq!(e.now.len(), 3);
+        assert_eq!(e.now[1], Act::Matrix(Matrix::SaveFrame(1, [[1; 8]; 8])));
+        assert_eq!(
+            e.now[2],
+            Act::Matrix(Matrix::SaveAnimation {
+                id: 0,
+                fps: 2,
+                fade: false,
+                palette: vec![[255, 0, 0], [0, 0, 255]],
+                frames: vec![0, 1],
+            })
+        );
+        let e = d.call("playMatrixAnimation", &num(&[0.0, 0.0])).unwrap();
+        assert_eq!(e.now, vec![Act::Matrix(Matrix::Play(0, false))]);
+        // A second animation's frames follow the first's.
+        a[9] = 1.0;
+        a.truncate(10 + 64);
+        let e = d.call("registerMatrixAnimation", &num(&a)).unwrap();
+        assert_eq!(e.now[0], Act::Matrix(Matrix::SaveFrame(2, [[0; 8]; 8])));
+        // A pixel past the palette, a missing pixel, 17 colours: errors, nothing registered.
+        let mut bad = a.clone();
+        bad[12] = 2.0;
+        assert!(
+            d.call("registerMatrixAnimation", &num(&bad))
+                .unwrap_err()
+                .contains("row 0 column 2")
+        );
+        let mut bad = a.clone();
+        bad.truncate(20);
+        assert!(
+            d.call("registerMatrixAnimation", &num(&bad))
+                .unwrap_err()
+                .contains("missing")
+        );
+        bad[2] = 17.0;
+        assert!(d.call("registerMatrixAnimation", &num(&bad)).is_err());
+        assert_eq!((d.animations, d.frames), (2, 3));
     }
 
     #[test]

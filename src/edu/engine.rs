@@ -574,6 +574,16 @@ fn args_of(args: &[JsValue], ctx: &mut Context) -> JsResult<Vec<Arg>> {
 }
 
 fn shown(name: &str, args: &[Arg]) -> String {
+    if name == "registerMatrixAnimation" {
+        // Its arguments are every pixel of every frame: say what they amount to.
+        let n = |i: usize| match args.get(i) {
+            Some(Arg::Num(v)) => *v,
+            _ => 0.0,
+        };
+        let colours = n(2);
+        let frames = n(3 + 3 * colours.clamp(0.0, 16.0) as usize);
+        return format!("{name}({frames} frames, {colours} colours, {} fps)", n(0));
+    }
     let parts: Vec<String> = args
         .iter()
         .map(|a| match a {

@@ -9,6 +9,7 @@ const EventType = Object.freeze({
 });
 const Stance = Object.freeze({ Bipod: "twolegs", Tripod: "threelegs" });
 const MatrixRotation = Object.freeze({ Deg0: 0, Deg90: 90, Deg180: 180, Deg270: 270 });
+const MatrixAnimationTransition = Object.freeze({ None: "none", Fade: "fade" });
 function __num(v, what) {
   const n = Number(v);
   if (!Number.isFinite(n)) throw new TypeError(what + " must be a number, not " + String(v));
@@ -53,6 +54,30 @@ function drawMatrixLine(color, a, b) { return __call("drawMatrixLine", ...__rgb(
 function drawMatrixFill(color, a, b) { return __call("drawMatrixFill", ...__rgb(color), ...__xy(a, "start"), ...__xy(b, "end")); }
 function clearMatrix() { return __call("clearMatrix"); }
 function setMatrixRotation(degrees) { return __call("setMatrixRotation", __num(degrees, "degrees")); }
+let __animations = 0;
+function registerMatrixAnimation(a) {
+  const what = "registerMatrixAnimation";
+  if (a === null || typeof a !== "object") throw new TypeError(what + " takes { frames, palette, fps, transition }");
+  const frames = a.frames, palette = a.palette;
+  if (!Array.isArray(frames) || frames.length < 1 || frames.length > 64) throw new RangeError(what + ": frames must be an array of 1 to 64 frames");
+  if (!Array.isArray(palette) || palette.length < 1 || palette.length > 16) throw new RangeError(what + ": palette must be an array of 1 to 16 colors");
+  const flat = [];
+  frames.forEach((f, i) => {
+    if (!Array.isArray(f) || f.length !== 8) throw new TypeError(what + ": frame " + i + " must be 8 rows");
+    f.forEach((row, y) => {
+      if (!Array.isArray(row) || row.length !== 8) throw new TypeError(what + ": frame " + i + " row " + y + " must be 8 palette indexes");
+      row.forEach((v) => flat.push(__num(v, "a pixel")));
+    });
+  });
+  const colours = [];
+  palette.forEach((c) => colours.push(...__rgb(c, "a palette color")));
+  const fade = a.transition === MatrixAnimationTransition.Fade ? 1 : 0;
+  __call(what, a.fps === undefined ? 10 : __num(a.fps, "fps"), fade, palette.length, ...colours, frames.length, ...flat);
+  return __animations++;
+}
+function playMatrixAnimation(index, loop) { return __call("playMatrixAnimation", __num(index, "index"), loop === false ? 0 : 1); }
+function pauseMatrixAnimation() { return __call("pauseMatrixAnimation"); }
+function resumeMatrixAnimation() { return __call("resumeMatrixAnimation"); }
 function speak(text, wait) { return __call("speak", String(text), wait ? 1 : 0); }
 function playSound(sound, wait) { return __call("playSound", String(sound), wait ? 1 : 0); }
 function playAnimation(animation) { return __call("playAnimation", __num(animation, "animation")); }

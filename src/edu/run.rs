@@ -12,7 +12,8 @@ use crate::mission::{DroidMission, Emit, MissionError, MissionEvent, MissionOpti
 use crate::model::Model;
 use crate::protocol::notify::{Notification, RobotEvent};
 use crate::protocol::v2::cmd;
-use crate::protocol::v2::types::ScrollText;
+use crate::protocol::v2::types::{FrameList, Palette, ScrollText};
+use crate::protocol::v2::wire::Bytes;
 use crate::protocol::wire::LegAction;
 use crate::script::{Action, LedGroup, MatrixAction, Step};
 use crate::session::{SessionEvent, SessionHandle, Slot};
@@ -660,6 +661,36 @@ impl Player {
             Matrix::Fill([x1, y1, x2, y2], [r, g, b]) => {
                 Some(cmd::draw_compressed_frame_player_fill(*x1, *y1, *x2, *y2, *r, *g, *b).into())
             }
+            Matrix::SaveFrame(i, frame) => Some(
+                cmd::save_compressed_frame_player_64_bit_frame(
+                    *i,
+                    Bytes(crate::sim::animation::pack(frame).to_vec()),
+                )
+                .into(),
+            ),
+            Matrix::SaveAnimation {
+                id,
+                fps,
+                fade,
+                palette,
+                frames,
+            } => Some(
+                // spherov2 sends `fps % 31`; fps is 1..=30 here.
+                cmd::save_compressed_frame_player_animation(
+                    *id,
+                    *fps,
+                    *fade,
+                    Palette(palette.clone()),
+                    FrameList(frames.clone()),
+                )
+                .into(),
+            ),
+            Matrix::Play(id, looping) => Some(
+                cmd::play_compressed_frame_player_animation_with_loop_option(*id, *looping).into(),
+            ),
+            Matrix::Pause => Some(cmd::pause_compressed_frame_player_animation().into()),
+            Matrix::Resume => Some(cmd::resume_compressed_frame_player_animation().into()),
+            Matrix::Reset => Some(cmd::reset_compressed_frame_player_animation().into()),
         };
         self.send(line, c, "matrix");
     }

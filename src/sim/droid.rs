@@ -122,6 +122,9 @@ impl SimDroid {
         if self.robot.text_done(now) {
             self.notify(0x1A, 0x3C, vec![0]);
         }
+        if let Some(id) = self.robot.animate(now) {
+            self.notify(0x1A, 0x3F, vec![id]);
+        }
         if !self.robot.service.running.is_empty() && self.body.state.awake {
             let values = self.body.sample_values();
             for (p, data) in self.robot.stream_due(now, &values) {

@@ -5,6 +5,7 @@
 //! by explicit time. [`link::SimLink`] runs either behind the [`crate::link::Link`] trait with
 //! fault injection, so the session, UI and scripts cannot tell it from a droid.
 
+pub mod animation;
 pub mod body;
 // The virtual BlueZ of `droidctl sim --bluez`: D-Bus exists only on Linux.
 #[cfg(target_os = "linux")]

@@ -3,6 +3,7 @@
 //! streaming service (tokens per processor, a period, the configuration rules), and the
 //! processor each command is answered by. Sans-IO, part of the v2 simulator front.
 
+use super::animation::{Player, Refused};
 use crate::model::Model;
 use crate::protocol::v2::ErrorCode;
 use crate::protocol::v2::catalog::targets::{self, Processor};
@@ -12,8 +13,6 @@ use std::time::Duration;
 
 /// The matrix is 8×8.
 pub const MATRIX: usize = 8;
-/// Saved frames and animations a BOLT keeps here (bounded; the real limit is unpublished).
-pub const SAVED_MAX: usize = 64;
 /// Columns one scrolled character takes: a cell of the 8×8 font (the simulator's glyphs are
 /// 8 columns wide; the real font is not public).
 const SCROLL_CHAR_COLUMNS: u32 = MATRIX as u32;
@@ -40,9 +39,8 @@ pub struct Matrix {
     pub scrolling: Option<(String, [u8; 3], Option<Duration>)>,
     /// The single character shown, if the last drawing was one.
     pub character: Option<char>,
-    pub saved_frames: Vec<u16>,
-    pub saved_animations: Vec<u8>,
-    pub playing: Option<u8>,
+    /// Saved frames and animations, and the one playing ([`super::animation`]).
+    pub player: Player,
 }
 
 impl Matrix {
@@ -87,6 +85,15 @@ impl Matrix {
             }
         }
         true
+    }
+
+    /// Show an animation's frame (`None`: nothing new).
+    fn show(&mut self, pixels: Option<[[[u8; 3]; MATRIX]; MATRIX]>) {
+        if let Some(px) = pixels {
+            self.pixels = px;
+            self.character = None;
+            self.scrolling = None;
+        }
     }
 
     /// One line of text for the trace: what the matrix shows.
@@ -188,6 +195,11 @@ impl RobotParts {
         let ok = Ok(Vec::new());
         let bad = Err(ErrorCode::BadParameterValue);
         let rgb = |i: usize| [d[i], d[i + 1], d[i + 2]];
+        if matches!(cid, 0x2D | 0x2F | 0x3B | 0x3D | 0x3E | 0x42) {
+            // Drawing ends an animation, or its next frame would draw over the drawing
+            // (unverified on a real BOLT; the firmware's rule is not published).
+            m.player.reset();
+        }
         Some(match cid {
             0x2D => {
                 let (x, y) = (d[0] as usize, d[1] as usize);
@@ -252,44 +264,57 @@ impl RobotParts {
                 m.character = Some(c as char);
                 ok
             }
-            0x30 => {
-                let i = u16::from_be_bytes([d[0], d[1]]);
-                if !m.saved_frames.contains(&i) {
-                    if m.saved_frames.len() >= SAVED_MAX {
-                        return Some(Err(ErrorCode::CommandFailed));
-                    }
-                    m.saved_frames.push(i);
+            0x30 | 0x31 => {
+                let r = if cid == 0x30 {
+                    m.player.save_frame(d)
+                } else {
+                    m.player.save_animation(d)
+                };
+                match r {
+                    Ok(()) => ok,
+                    Err(Refused::BadParameter) => bad,
+                    Err(Refused::Full) => Err(ErrorCode::CommandFailed),
                 }
-                ok
             }
-            0x31 | 0x41 => {
-                if !m.saved_animations.contains(&d[0]) {
-                    if m.saved_animations.len() >= SAVED_MAX {
-                        return Some(Err(ErrorCode::CommandFailed));
-                    }
-                    m.saved_animations.push(d[0]);
-                }
-                ok
-            }
-            // Playing what was never saved shows nothing (no published error for it).
+            // Saved without frames: spherov2 cannot name its fields; accepted, nothing to play.
+            0x41 => ok,
+            // 0x32 has no loop flag: it loops (unverified; Sphero Edu's default is a loop).
             0x32 | 0x43 => {
-                m.playing = m.saved_animations.contains(&d[0]).then_some(d[0]);
+                let looping = cid == 0x32 || d.get(1).is_none_or(|v| *v != 0);
+                let t = m.player.play(d[0], looping, now);
+                m.show(t.show);
                 ok
             }
             0x33 => ok,
             0x34 => Ok(m
-                .saved_frames
+                .player
+                .frames
                 .iter()
-                .flat_map(|f| f.to_be_bytes())
+                .flat_map(|f| f.0.to_be_bytes())
                 .collect()),
             0x35 => {
-                m.saved_frames.clear();
-                m.saved_animations.clear();
-                m.playing = None;
+                m.player.delete_all();
                 ok
             }
-            0x36 | 0x38 => {
-                m.playing = None;
+            0x36 => {
+                m.player.pause(now);
+                ok
+            }
+            0x37 => {
+                m.player.resume(now);
+                ok
+            }
+            // Reset: the animation ends and the matrix goes dark (spherov2's `clear_matrix`
+            // sends only this).
+            0x38 => {
+                m.player.reset();
+                m.pixels = [[[0; 3]; MATRIX]; MATRIX];
+                m.character = None;
+                m.scrolling = None;
+                ok
+            }
+            0x39 => {
+                m.player.fps_override = d[0];
                 ok
             }
             0x4C => Ok(vec![3]),
@@ -308,17 +333,22 @@ impl RobotParts {
         }
     }
 
-    /// When the scrolling text ends or streamed data are next due.
+    /// The animation playing moves on to `now`: the id of a one-shot animation that ended.
+    pub fn animate(&mut self, now: Duration) -> Option<u8> {
+        let t = self.matrix.player.advance(now);
+        self.matrix.show(t.show);
+        t.complete
+    }
+
+    /// When the scrolling text ends, the animation's next frame or streamed data are due.
     pub fn next_due(&self) -> Option<Duration> {
         let text = match &self.matrix.scrolling {
             Some((_, _, Some(done))) => Some(*done),
             _ => None,
         };
+        let frame = self.matrix.player.next_due();
         let data = self.service.running.iter().map(|(_, _, at)| *at).min();
-        match (text, data) {
-            (Some(a), Some(b)) => Some(a.min(b)),
-            (a, b) => a.or(b),
-        }
+        [text, frame, data].into_iter().flatten().min()
     }
 
     /// A streaming-service command (Sensor 0x39..=0x3C) sent to processor `p` (on a robot
