@@ -342,3 +342,34 @@ fn a_bad_matrix_animation_is_an_error_naming_its_line_and_what_is_wrong() {
         stderr(&out)
     );
 }
+
+/// `rawMotor` on the API v1 robots goes out as their Set Raw Motors (spherov2's `raw_motor`
+/// drives them too): the simulated BB-8, SPRK+ and Ollie roll forward on equal power and
+/// stop when the duration is over; opposite power turns them in place.
+#[test]
+fn raw_motors_drive_the_api_v1_robots() {
+    let dir = Scratch::new("edu", "raw-v1");
+    let p = dir.file(
+        "raw.js",
+        "function check(ok, what) { if (!ok) throw new Error(what); }\n\
+         async function startProgram() {\n\
+         \x20 await rawMotor(150, 150, 1);\n\
+         \x20 await delay(0.5);\n\
+         \x20 const a = getLocation();\n\
+         \x20 check(Math.hypot(a.x, a.y) > 20, \"rolled: \" + JSON.stringify(a));\n\
+         \x20 await delay(2);\n\
+         \x20 const b = getLocation();\n\
+         \x20 check(Math.hypot(b.x - a.x, b.y - a.y) < 1, \"stopped: \" + JSON.stringify(b));\n\
+         \x20 const yaw = getOrientation().yaw;\n\
+         \x20 await rawMotor(120, -120, 0.5);\n\
+         \x20 await delay(0.5);\n\
+         \x20 const c = getLocation();\n\
+         \x20 check(Math.hypot(c.x - b.x, c.y - b.y) < 5, \"in place: \" + JSON.stringify(c));\n\
+         \x20 check(Math.abs(getOrientation().yaw - yaw) > 20, \"turned: \" + getOrientation().yaw);\n\
+         }\n",
+    );
+    for model in ["bb8", "sprk", "ollie"] {
+        let out = dir.run(&["run", path(&p), "--sim", model]);
+        assert_eq!(out.status.code(), Some(0), "{model}: {}", stderr(&out));
+    }
+}

@@ -32,8 +32,8 @@ pub enum Robots {
     Light,
     /// RVR's colour sensor.
     ColorSensor,
-    /// Robots whose two motors droidctl drives raw: BOLT, Mini, RVR (spherov2's `raw_motor`
-    /// drives the API v1 robots' too; droidctl's v1 family has no raw motor command yet).
+    /// Robots whose two motors droidctl drives raw (spherov2's `raw_motor`): BOLT, Mini,
+    /// RVR, and the API v1 robots (BB-8, SPRK+, Ollie) through their Set Raw Motors.
     RawMotors,
 }
 
@@ -53,7 +53,10 @@ impl Robots {
             Robots::Compass => m.has_compass(),
             Robots::Light => matches!(m, Model::Bolt | Model::Rvr),
             Robots::ColorSensor => m.has_color_sensor(),
-            Robots::RawMotors => matches!(m, Model::Bolt | Model::Mini | Model::Rvr),
+            Robots::RawMotors => {
+                matches!(m, Model::Bolt | Model::Mini | Model::Rvr)
+                    || m.protocol() == crate::model::Protocol::SpheroV1
+            }
         }
     }
 

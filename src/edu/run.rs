@@ -549,16 +549,23 @@ impl Player {
                 self.send(line, c, "rawMotor");
             }
             Act::Stabilization(on) => {
-                let c = (self.model.protocol() == crate::model::Protocol::SpheroV2).then(|| {
-                    use crate::protocol::wire::StabilizationIndex;
-                    let i = if *on {
-                        StabilizationIndex::Full
-                    } else {
-                        StabilizationIndex::None
-                    };
-                    cmd::set_stabilization(i).into()
-                });
-                if self.model.protocol() == crate::model::Protocol::SpheroV2 {
+                use crate::model::Protocol;
+                use crate::protocol::wire::StabilizationIndex;
+                let c: Option<Command> = match self.model.protocol() {
+                    Protocol::SpheroV2 => Some(
+                        cmd::set_stabilization(if *on {
+                            StabilizationIndex::Full
+                        } else {
+                            StabilizationIndex::None
+                        })
+                        .into(),
+                    ),
+                    Protocol::SpheroV1 => {
+                        Some(crate::protocol::v1::cmd::set_stabilization(*on).into())
+                    }
+                    _ => None,
+                };
+                if c.is_some() {
                     self.send(line, c, "setStabilization");
                 }
             }

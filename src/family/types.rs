@@ -70,7 +70,12 @@ impl Command {
                 (0x16, 0x01) => c.data.get(1) == Some(&0) && c.data.get(3) == Some(&0),
                 _ => false,
             },
-            Command::V1(c) => (c.did, c.cid) == (0x02, 0x30) && c.data.first() == Some(&0),
+            Command::V1(c) => match (c.did, c.cid) {
+                (0x02, 0x30) => c.data.first() == Some(&0),
+                // Set Raw Motors with both powers 0.
+                (0x02, 0x33) => c.data.get(1) == Some(&0) && c.data.get(3) == Some(&0),
+                _ => false,
+            },
             Command::Robi(c) => c.velocity == 0,
         }
     }

@@ -282,18 +282,31 @@ impl Family for V1 {
         Some(cmd::sleep(0, 0, 0).into())
     }
 
+    /// Set Raw Motors (0x02/0x33), as spherov2's `raw_motor` drives the API v1 robots.
+    fn tank(&self, left: i16, right: i16) -> Option<Command> {
+        Some(raw_motors(left, right))
+    }
+
     /// Roll has no reverse flag: backing up is rolling toward the opposite heading.
     fn drive(&self, speed: u8, heading: Heading, reverse: bool) -> Command {
         let heading = if reverse { heading.reversed() } else { heading };
         cmd::roll(speed, heading, v1::RollState::Go).into()
     }
 
+    /// Roll, and Set Raw Motors (Sphero Edu's `rawMotor`, a mission's `tank`).
     fn is_drive(&self, c: &Command) -> bool {
-        matches!(c, Command::V1(c) if (c.did, c.cid) == (0x02, 0x30))
+        matches!(c, Command::V1(c) if matches!((c.did, c.cid), (0x02, 0x30) | (0x02, 0x33)))
     }
 
-    /// Roll state 0 is the API's stop; the heading is kept so the droid does not turn.
+    /// Roll state 0 is the API's stop; the heading is kept so the droid does not turn. After
+    /// raw motors, both motors off (the control system let go of them; a Roll alone would
+    /// ask a control system that is off).
     fn stop_after(&self, last: Option<&Command>) -> Command {
+        if let Some(Command::V1(c)) = last
+            && (c.did, c.cid) == (0x02, 0x33)
+        {
+            return raw_motors(0, 0);
+        }
         let heading = match last {
             Some(Command::V1(c)) if (c.did, c.cid) == (0x02, 0x30) && c.data.len() >= 3 => {
                 u16::from_be_bytes([c.data[1], c.data[2]])
@@ -476,4 +489,16 @@ fn stream_config(sensors: SensorSet, n: u16) -> StreamingConfig {
         }
     }
     s
+}
+
+/// Set Raw Motors for sides at `left`/`right` in −255..=255: forward, reverse or off
+/// (spherov2's `RawMotorModes`).
+fn raw_motors(left: i16, right: i16) -> Command {
+    let side = |v: i16| match v {
+        0 => (v1::MotorMode::Off, 0),
+        v if v > 0 => (v1::MotorMode::Forward, v.min(255) as u8),
+        v => (v1::MotorMode::Reverse, v.unsigned_abs().min(255) as u8),
+    };
+    let ((lm, lp), (rm, rp)) = (side(left), side(right));
+    cmd::set_raw_motors(lm, lp, rm, rp).into()
 }
