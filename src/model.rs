@@ -30,6 +30,14 @@ pub enum Protocol {
 }
 
 impl Model {
+    /// Sphero's rolling robots that raw motor power can throw off the floor (the balls and
+    /// Ollie; not RVR, the Star Wars droids' legs or Robi 42).
+    pub fn hops(self) -> bool {
+        matches!(
+            self,
+            Model::Bolt | Model::Mini | Model::BB8 | Model::SprkPlus | Model::Ollie
+        )
+    }
     pub const ALL: [Model; 10] = [
         Model::R2D2,
         Model::R2Q5,

@@ -373,3 +373,42 @@ fn raw_motors_drive_the_api_v1_robots() {
         assert_eq!(out.status.code(), Some(0), "{model}: {}", stderr(&out));
     }
 }
+
+/// Full power on both raw motors throws a rolling robot off the floor (Sphero's docs for
+/// `rawMotor`); the simulated one hops, and a program's `onFreefall` and `onLanding` fire, in
+/// that order, once each.
+#[test]
+fn a_hop_at_full_raw_power_fires_freefall_then_landing() {
+    let dir = Scratch::new("edu", "hop");
+    let p = dir.file(
+        "hop.js",
+        "const seen = [];\n\
+         function check(ok, what) { if (!ok) throw new Error(what); }\n\
+         registerEvent(EventType.onFreefall, async () => { seen.push(\"fall\"); });\n\
+         registerEvent(EventType.onLanding, async () => { seen.push(\"land\"); });\n\
+         async function startProgram() {\n\
+         \x20 await delay(1);\n\
+         \x20 check(seen.length === 0, \"nothing before: \" + seen);\n\
+         \x20 await rawMotor(255, 255, 1);\n\
+         \x20 await delay(1);\n\
+         \x20 check(seen.join() === \"fall,land\", \"fall then land: \" + seen);\n\
+         \x20 await roll(0, 200, 1);\n\
+         \x20 await rawMotor(150, 150, 1);\n\
+         \x20 await delay(1);\n\
+         \x20 check(seen.length === 2, \"rolling and half power do not hop: \" + seen);\n\
+         \x20 exitProgram();\n\
+         }\n",
+    );
+    for model in ["bolt", "mini", "bb8"] {
+        let out = dir.run(&["run", path(&p), "--sim", model]);
+        assert_eq!(out.status.code(), Some(0), "{model}: {}", stderr(&out));
+    }
+    // RVR drives on treads: full power does not lift it.
+    let q = dir.file(
+        "rvr.js",
+        "let fell = false;\nregisterEvent(EventType.onFreefall, () => { fell = true; });\n\
+         async function startProgram() {\n  await rawMotor(255, 255, 1);\n  await delay(1);\n  if (fell) throw new Error(\"RVR fell\");\n  exitProgram();\n}\n",
+    );
+    let out = dir.run(&["run", path(&q), "--sim", "rvr"]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+}

@@ -113,7 +113,24 @@ pub struct Body {
     accel_fwd: f32,
     yaw_rate: f32,
     events: Vec<SimEvent>,
+    /// A hop off the floor at full raw power: lift-off and touch-down ([`HOP_AIR`]).
+    hop: Option<(Duration, Duration)>,
 }
+
+/// How long a rolling robot is off the floor when both raw motors go to full power from
+/// rest: Sphero's own docs for `rawMotor` say full power on both motors makes the robot
+/// jump, stabilization being off (Sphero Edu JavaScript, "Movement", Raw Motor; spherov2.py's
+/// `raw_motor` docstring repeats it). How high is not published: 0.45 s in the air (a hop of
+/// about 25 cm) is *unverified*, chosen so that the free-fall tests of both Sphero's docs
+/// ("< 0.1 g for ≥ 0.1 s") and spherov2's `SpheroEduAPI` (0.2 s) see it at a 100 ms sample
+/// interval, and a program's `onFreefall` and `onLanding` can be tried in the simulator.
+pub const HOP_AIR: Duration = Duration::from_millis(450);
+/// The landing's jolt lasts this long in the accelerometer's readings (long enough for one
+/// sample at 100 ms), at this many g.
+const LANDING: Duration = Duration::from_millis(100);
+const LANDING_G: f32 = 2.5;
+/// Full power: this share of it or more on both motors, the same way.
+const HOP_POWER: f32 = 0.95;
 
 impl Body {
     pub fn new(model: Model, cfg: SimConfig) -> Self {
@@ -167,6 +184,7 @@ impl Body {
             accel_fwd: 0.0,
             yaw_rate: 0.0,
             events: Vec::new(),
+            hop: None,
         }
     }
 
@@ -308,9 +326,22 @@ impl Body {
                 0.0
             }
         };
+        let (l, r) = (c(left), c(right));
+        let from_rest = self.state.velocity_cm_s.abs() < 0.2 * self.cfg.top_speed_cm_s;
+        let full = l.abs() >= HOP_POWER && r.abs() >= HOP_POWER && l.signum() == r.signum();
+        let down = self.hop.is_none_or(|(_, land)| self.now >= land + LANDING);
+        if self.model.hops() && full && from_rest && down && self.state.awake {
+            self.hop = Some((self.now, self.now + HOP_AIR));
+        }
         self.drive = None;
-        self.wheels = Some((c(left), c(right)));
+        self.wheels = Some((l, r));
         self.tracks_at = Some(self.now);
+    }
+
+    /// In the air now (a hop, [`HOP_AIR`]).
+    pub fn airborne(&self) -> bool {
+        self.hop
+            .is_some_and(|(up, down)| self.now >= up && self.now < down)
     }
 
     /// Each wheel's commanded speed in rad/s (Robi's motor report).
@@ -701,6 +732,15 @@ impl Body {
             s.yaw_deg
         };
         let half = s.yaw_deg.to_radians() / 2.0;
+        // Gravity holds 1 g up on the floor; in the air nothing is felt (free fall); the
+        // landing is a jolt.
+        let (ax, ay, az) = match self.hop {
+            Some((up, down)) if self.now >= up && self.now < down => (0.0, 0.0, 0.0),
+            Some((_, down)) if self.now >= down && self.now < down + LANDING => {
+                (lateral / 981.0, self.accel_fwd / 981.0, LANDING_G)
+            }
+            _ => (lateral / 981.0, self.accel_fwd / 981.0, 1.0),
+        };
         vec![
             ("quaternion_w", half.cos()),
             ("quaternion_x", 0.0),
@@ -710,9 +750,9 @@ impl Body {
             ("pitch", (-self.accel_fwd / 981.0 * 30.0).clamp(-20.0, 20.0)),
             ("roll", (lateral / 981.0 * 30.0).clamp(-20.0, 20.0)),
             ("yaw", yaw),
-            ("accel_x", lateral / 981.0),
-            ("accel_y", self.accel_fwd / 981.0),
-            ("accel_z", 1.0),
+            ("accel_x", ax),
+            ("accel_y", ay),
+            ("accel_z", az),
             ("accel_one", 1000.0),
             ("locator_x", s.x_cm),
             ("locator_y", s.y_cm),
