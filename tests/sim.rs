@@ -292,7 +292,12 @@ fn answers_every_catalogue_command() {
                     r.data
                 );
             } else {
-                assert_eq!(r.err, Some(unknown_error(model, def.did)), "{model:?} {}", def.name);
+                assert_eq!(
+                    r.err,
+                    Some(unknown_error(model, def.did)),
+                    "{model:?} {}",
+                    def.name
+                );
             }
             // A payload of the wrong length is refused before anything else.
             if let Some(bad) = wrong_length(def.params) {

@@ -549,12 +549,7 @@ mod tests {
         let end = gap(&room);
         assert!(end < FOLLOW_STOP_CM + 5.0, "{start} cm, then {end} cm");
         assert!(end > 0.0, "stopped short of it: {end}");
-        assert_eq!(
-            d[1].state().velocity_cm_s.abs() < 1.0,
-            true,
-            "{:?}",
-            d[1].state()
-        );
+        assert!(d[1].state().velocity_cm_s.abs() < 1.0, "{:?}", d[1].state());
         // Another pair of codes is not followed: the follower searches, turning in place.
         ir(&mut d[1], 0x28, &[2, 3], S * 11);
         let before = (room.positions()[1], d[1].state().yaw_deg);
