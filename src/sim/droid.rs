@@ -74,7 +74,7 @@ impl SimDroid {
         let body = self.body.next_due()?;
         let due = self.robot.next_due().map_or(body, |r| r.min(body));
         // One that listens in a shared room looks for messages every few steps.
-        let listens = self.ir.listening != 0 && self.body.cfg.place.is_some();
+        let listens = self.ir.listens() != 0 && self.body.cfg.place.is_some();
         Some(if listens {
             due.min(self.body.now() + infrared::LISTEN_POLL)
         } else {
@@ -180,12 +180,14 @@ impl SimDroid {
     /// The infrared messages that reached this robot, notified when it listens for them
     /// (Sensor 0x2C, the code).
     fn infrared_heard(&mut self) {
-        let Some(place) = &self.body.cfg.place else {
+        if self.ir.listens() == 0 {
+            return;
+        }
+        let Some(place) = self.body.cfg.place.clone() else {
             return;
         };
         for code in place.take_ir() {
-            if self.ir.hears(code) {
-                self.ir.heard += 1;
+            if self.ir.hear(code, Some(&place)) {
                 self.notify(0x18, 0x2C, vec![code]);
             }
         }
