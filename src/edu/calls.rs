@@ -35,6 +35,8 @@ pub enum Robots {
     /// Robots whose two motors droidctl drives raw: BOLT, Mini, RVR (spherov2's `raw_motor`
     /// drives the API v1 robots' too; droidctl's v1 family has no raw motor command yet).
     RawMotors,
+    /// Robot-to-robot infrared: BOLT and RVR (Sphero Edu's "Communications").
+    Infrared,
 }
 
 impl Robots {
@@ -54,6 +56,7 @@ impl Robots {
             Robots::Light => matches!(m, Model::Bolt | Model::Rvr),
             Robots::ColorSensor => m.has_color_sensor(),
             Robots::RawMotors => matches!(m, Model::Bolt | Model::Mini | Model::Rvr),
+            Robots::Infrared => matches!(m, Model::Bolt | Model::Rvr),
         }
     }
 
@@ -381,8 +384,59 @@ pub const CALLS: &[Call] = &[
         "getLastIRMessage",
         "",
         false,
-        Compass,
-        "the last infrared message's channel",
+        Infrared,
+        "the channel of the last infrared message heard",
+    ),
+    // Communications: robot-to-robot infrared.
+    call(
+        "startIRBroadcast",
+        "near, far",
+        false,
+        Infrared,
+        "broadcast on channels near (under 1 m) and far (1 to 3 m), 0..7, to be followed or evaded",
+    ),
+    call("stopIRBroadcast", "", false, Infrared, "stop broadcasting"),
+    call(
+        "startIRFollow",
+        "near, far",
+        false,
+        Infrared,
+        "roll after the nearest robot broadcasting on near and far; spin in place to search when none",
+    ),
+    call(
+        "stopIRFollow",
+        "",
+        false,
+        Infrared,
+        "stop following (the robot stops)",
+    ),
+    call(
+        "startIREvade",
+        "near, far",
+        false,
+        Infrared,
+        "roll away from the nearest robot broadcasting on near and far; spin in place to search when none",
+    ),
+    call(
+        "stopIREvade",
+        "",
+        false,
+        Infrared,
+        "stop evading (the robot stops)",
+    ),
+    call(
+        "sendIRMessage",
+        "channel, intensity",
+        false,
+        Infrared,
+        "send a message on channel 0..7; intensity 1..64 is its reach (64: about 3 m)",
+    ),
+    call(
+        "listenForIRMessage",
+        "channels",
+        false,
+        Infrared,
+        "hear the next message on these channels (a channel or a list): onIRMessage fires",
     ),
     // Events.
     call(
@@ -412,8 +466,8 @@ pub const EVENTS: &[(&str, Robots, &str)] = &[
     ),
     (
         "onIRMessage",
-        Compass,
-        "an infrared message arrived (its channel is the argument)",
+        Infrared,
+        "an infrared message listened for arrived (its channel is the argument)",
     ),
     (
         "onColor",

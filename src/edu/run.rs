@@ -5,7 +5,7 @@
 //! become the droid's commands here, timed waits (`roll`'s duration, `spin`'s steps, `fade`,
 //! `delay`) run on tokio's clock, and the droid's notifications become the program's events.
 
-use super::api::{Act, Matrix, Wait};
+use super::api::{Act, Ir, Matrix, Wait};
 use super::engine::{Engine, Event, Failure, Op, Readings, Status};
 use crate::family::{Command, Family};
 use crate::mission::{DroidMission, Emit, MissionError, MissionEvent, MissionOptions, Summary};
@@ -104,6 +104,10 @@ struct Player {
     last_location: Option<[f32; 2]>,
     falling: Falling,
     stance_done: bool,
+    /// The channel of the last infrared message heard (`getLastIRMessage`).
+    last_ir: Option<u8>,
+    /// The infrared behaviours running, as the stops that end them when the program does.
+    ir_running: Vec<Ir>,
     mission: DroidMission,
 }
 
@@ -156,6 +160,8 @@ pub async fn run(
             gyro_max: false,
         },
         stance_done: false,
+        last_ir: None,
+        ir_running: Vec::new(),
         mission,
     };
     let r = p.play(program, &opts, events).await;
@@ -288,7 +294,7 @@ impl Player {
             color: t.robot.color.map(|c| c.0),
             compass: t.robot.compass_north,
             battery_v: t.battery_v,
-            ir_message: None,
+            ir_message: self.last_ir,
         }
     }
 
@@ -423,6 +429,10 @@ impl Player {
             Notification::Robot(RobotEvent::Color {
                 rgb, confidence, ..
             }) if *confidence as f32 / 255.0 >= 0.71 => seen.push(Event::Color(*rgb)),
+            Notification::Robot(RobotEvent::IrMessage(code)) => {
+                self.last_ir = Some(*code);
+                seen.push(Event::IrMessage(*code));
+            }
             Notification::Sensors(_) => {
                 let t = lock(&self.telemetry).clone();
                 if let Some(a) = t.accel {
@@ -617,6 +627,54 @@ impl Player {
                 let c = self.family.calibrate_compass();
                 self.send(line, c, "calibrateCompass");
             }
+            Act::Ir(ir) => self.infrared(line, ir),
+        }
+    }
+
+    /// Robot-to-robot infrared, as BOLT and RVR each take it (src/sim/infrared.rs says which
+    /// commands each has, and why): the behaviours alike; a message is BOLT's robot-to-robot
+    /// send (0x2A) and listen (0x2B, once per channel: 0xFF, without end), RVR's send infrared
+    /// message (0x3F) and message notify (0x3E), each emitter at the intensity.
+    fn infrared(&mut self, line: u32, ir: &Ir) {
+        let rvr = self.model == Model::Rvr;
+        let cmds = match ir {
+            Ir::Broadcast { far, near } => {
+                vec![cmd::start_robot_to_robot_ir_broadcasting(*far, *near)]
+            }
+            Ir::StopBroadcast => vec![cmd::stop_robot_to_robot_ir_broadcasting()],
+            Ir::Follow { far, near } => vec![cmd::start_robot_to_robot_ir_following(*far, *near)],
+            Ir::StopFollow => vec![cmd::stop_robot_to_robot_ir_following()],
+            Ir::Evade { far, near } => vec![cmd::start_robot_to_robot_ir_evading(*far, *near)],
+            Ir::StopEvade => vec![cmd::stop_robot_to_robot_ir_evading()],
+            Ir::Send { channel, intensity } => {
+                let data = [*channel, *intensity, *intensity, *intensity, *intensity];
+                vec![if rvr {
+                    cmd::send_infrared_message(data)
+                } else {
+                    cmd::send_robot_to_robot_ir_message(data)
+                }]
+            }
+            Ir::Listen(_) if rvr => vec![cmd::enable_robot_ir_message_notify(true)],
+            Ir::Listen(channels) => channels
+                .iter()
+                .map(|c| cmd::listen_for_robot_to_robot_ir_message([*c, 0xFF]))
+                .collect(),
+        };
+        // What ends each behaviour when the program ends.
+        let (stop, running) = match ir {
+            Ir::Broadcast { .. } | Ir::StopBroadcast => {
+                (Ir::StopBroadcast, matches!(ir, Ir::Broadcast { .. }))
+            }
+            Ir::Follow { .. } | Ir::StopFollow => (Ir::StopFollow, matches!(ir, Ir::Follow { .. })),
+            Ir::Evade { .. } | Ir::StopEvade => (Ir::StopEvade, matches!(ir, Ir::Evade { .. })),
+            Ir::Send { .. } | Ir::Listen(_) => (Ir::Listen(Vec::new()), false),
+        };
+        self.ir_running.retain(|r| *r != stop);
+        if running {
+            self.ir_running.push(stop);
+        }
+        for c in cmds {
+            self.send(line, Some(c.into()), "infrared");
         }
     }
 
@@ -664,8 +722,12 @@ impl Player {
         self.send(line, c, "matrix");
     }
 
-    /// Stop rolling and the motors (the run ends, or the program failed).
+    /// Stop rolling and the motors (the run ends, or the program failed), and the infrared
+    /// behaviours the program started (a follower or evader rolls by itself).
     fn stop_motion(&mut self) {
+        for stop in std::mem::take(&mut self.ir_running) {
+            self.infrared(0, &stop);
+        }
         self.drive = None;
         let stop = crate::mission::drive_command(
             self.family,
