@@ -220,3 +220,32 @@ async fn an_evader_rolls_away_and_stops_when_told_or_when_the_program_ends() {
         "{end:?} then {later:?}"
     );
 }
+
+#[test]
+fn channels_and_intensity_are_bounded_as_spherov2_bounds_them() {
+    use droidctl::edu::api::{Act, Arg, Driver, Ir};
+    let mut d = Driver::new(Model::Bolt);
+    let n = |v: &[f64]| v.iter().map(|x| Arg::Num(*x)).collect::<Vec<_>>();
+    let e = d.call("sendIRMessage", &n(&[9.0, 100.0])).unwrap();
+    assert_eq!(
+        e.now,
+        vec![Act::Ir(Ir::Send {
+            channel: 7,
+            intensity: 64
+        })]
+    );
+    let e = d.call("sendIRMessage", &n(&[-1.0, 0.0])).unwrap();
+    assert_eq!(
+        e.now,
+        vec![Act::Ir(Ir::Send {
+            channel: 0,
+            intensity: 1
+        })]
+    );
+    // Sphero Edu's order is (near, far); the wire's is [far, near].
+    let e = d.call("startIRFollow", &n(&[0.0, 1.0])).unwrap();
+    assert_eq!(e.now, vec![Act::Ir(Ir::Follow { far: 1, near: 0 })]);
+    let e = d.call("listenForIRMessage", &n(&[4.0, 2.0, 4.0])).unwrap();
+    assert_eq!(e.now, vec![Act::Ir(Ir::Listen(vec![2, 4]))]);
+    assert!(d.call("listenForIRMessage", &[]).unwrap().now.is_empty());
+}
