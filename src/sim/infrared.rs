@@ -218,14 +218,15 @@ impl Infrared {
             }
             0x2A | 0x3F => {
                 let c = code(0)?;
-                let strengths = [d[1], d[2], d[3], d[4]];
+                let at = |i: usize| d.get(i).copied().unwrap_or(0);
+                let strengths = [at(1), at(2), at(3), at(4)];
                 self.sent += 1;
                 if let Some(p) = place {
                     p.send_ir(c, strengths, facing_deg);
                 }
             }
             0x2B => self.listening |= 1 << code(0)?,
-            0x3E => self.notify = d[0] != 0,
+            0x3E => self.notify = d.first().is_some_and(|b| *b != 0),
             _ => return Err(ErrorCode::BadCommandId),
         }
         self.show(place);
