@@ -106,8 +106,8 @@ struct Player {
     stance_done: bool,
     /// The channel of the last infrared message heard (`getLastIRMessage`).
     last_ir: Option<u8>,
-    /// The infrared behaviours running, as the stops that end them when the program does.
-    ir_running: Vec<Ir>,
+    /// The infrared behaviours running, stopped when the program ends.
+    ir_running: super::infrared::Running,
     mission: DroidMission,
 }
 
@@ -161,7 +161,7 @@ pub async fn run(
         },
         stance_done: false,
         last_ir: None,
-        ir_running: Vec::new(),
+        ir_running: Default::default(),
         mission,
     };
     let r = p.play(program, &opts, events).await;
@@ -631,49 +631,10 @@ impl Player {
         }
     }
 
-    /// Robot-to-robot infrared, as BOLT and RVR each take it (src/sim/infrared.rs says which
-    /// commands each has, and why): the behaviours alike; a message is BOLT's robot-to-robot
-    /// send (0x2A) and listen (0x2B, once per channel: 0xFF, without end), RVR's send infrared
-    /// message (0x3F) and message notify (0x3E), each emitter at the intensity.
+    /// Robot-to-robot infrared: the robot's own commands ([`super::infrared`]).
     fn infrared(&mut self, line: u32, ir: &Ir) {
-        let rvr = self.model == Model::Rvr;
-        let cmds = match ir {
-            Ir::Broadcast { far, near } => {
-                vec![cmd::start_robot_to_robot_ir_broadcasting(*far, *near)]
-            }
-            Ir::StopBroadcast => vec![cmd::stop_robot_to_robot_ir_broadcasting()],
-            Ir::Follow { far, near } => vec![cmd::start_robot_to_robot_ir_following(*far, *near)],
-            Ir::StopFollow => vec![cmd::stop_robot_to_robot_ir_following()],
-            Ir::Evade { far, near } => vec![cmd::start_robot_to_robot_ir_evading(*far, *near)],
-            Ir::StopEvade => vec![cmd::stop_robot_to_robot_ir_evading()],
-            Ir::Send { channel, intensity } => {
-                let data = [*channel, *intensity, *intensity, *intensity, *intensity];
-                vec![if rvr {
-                    cmd::send_infrared_message(data)
-                } else {
-                    cmd::send_robot_to_robot_ir_message(data)
-                }]
-            }
-            Ir::Listen(_) if rvr => vec![cmd::enable_robot_ir_message_notify(true)],
-            Ir::Listen(channels) => channels
-                .iter()
-                .map(|c| cmd::listen_for_robot_to_robot_ir_message([*c, 0xFF]))
-                .collect(),
-        };
-        // What ends each behaviour when the program ends.
-        let (stop, running) = match ir {
-            Ir::Broadcast { .. } | Ir::StopBroadcast => {
-                (Ir::StopBroadcast, matches!(ir, Ir::Broadcast { .. }))
-            }
-            Ir::Follow { .. } | Ir::StopFollow => (Ir::StopFollow, matches!(ir, Ir::Follow { .. })),
-            Ir::Evade { .. } | Ir::StopEvade => (Ir::StopEvade, matches!(ir, Ir::Evade { .. })),
-            Ir::Send { .. } | Ir::Listen(_) => (Ir::Listen(Vec::new()), false),
-        };
-        self.ir_running.retain(|r| *r != stop);
-        if running {
-            self.ir_running.push(stop);
-        }
-        for c in cmds {
+        self.ir_running.note(ir);
+        for c in super::infrared::commands(self.model, ir) {
             self.send(line, Some(c.into()), "infrared");
         }
     }
@@ -725,7 +686,7 @@ impl Player {
     /// Stop rolling and the motors (the run ends, or the program failed), and the infrared
     /// behaviours the program started (a follower or evader rolls by itself).
     fn stop_motion(&mut self) {
-        for stop in std::mem::take(&mut self.ir_running) {
+        for stop in self.ir_running.stops() {
             self.infrared(0, &stop);
         }
         self.drive = None;
