@@ -4,8 +4,8 @@
 //! tests/edu_programs.rs checks the two agree).
 //!
 //! Names, arguments and units are Sphero Edu's JavaScript ones (its public docs, "Movement",
-//! "Lights", "Sensors", "Events"); where spherov2.py's `SpheroEduAPI` (`sphero_edu.py`)
-//! implements a call, [`super::api`] behaves as it does.
+//! "Lights", "Sensors", "Communications", "Events"); where spherov2.py's `SpheroEduAPI`
+//! (`sphero_edu.py`) implements a call, [`super::api`] behaves as it does.
 
 use crate::model::Model;
 
