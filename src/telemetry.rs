@@ -146,6 +146,7 @@ impl RobotReadings {
     fn apply(&mut self, e: &RobotEvent) {
         match *e {
             RobotEvent::CompassHeading(yaw) => self.compass_north = Some(yaw % 360),
+            RobotEvent::IrMessage(code) => self.ir_message = Some(code),
             RobotEvent::Color {
                 rgb,
                 index,
@@ -217,6 +218,8 @@ pub struct RobotReadings {
     pub ambient_lux: Option<f32>,
     /// The colour under the robot, its palette index and confidence 0..=1 (RVR).
     pub color: Option<([u8; 3], u8, f32)>,
+    /// The code (channel) of the last robot-to-robot infrared message heard (BOLT, RVR).
+    pub ir_message: Option<u8>,
     /// A motor stalled: left, right (RVR's motor stall notifications).
     pub stalled: [bool; 2],
     /// The motors report a fault (RVR).

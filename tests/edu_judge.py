@@ -6,6 +6,11 @@ JavaScript).
 
 Usage: edu_judge.py PORT NAME PROGRAM    (PROGRAM: square, pong, spin, matrix, animation)
 Prints one JSON object: the location spherov2 read at the end of the program.
+
+       edu_judge.py PORT infrared SENDER LISTENER BEACON
+Infrared between three robots of one `droidctl serve --sim rvr rvr bolt` room, driven by
+spherov2's own API: the sender's message reaches the listener's on_ir_message; then the
+listener follows the beacon. Prints what the listener heard and where it went.
 """
 
 import json
@@ -107,7 +112,36 @@ def animation(api):
     time.sleep(0.5)
 
 
+def infrared(port, names):
+    sender, listener, beacon = (find_toy(["tcp", port, n]) for n in names)
+    heard = []
+    got = threading.Event()
+    with SpheroEduAPI(sender) as tx, SpheroEduAPI(listener) as rx, SpheroEduAPI(beacon) as bc:
+
+        def on_ir_message(api, channel):
+            heard.append([channel, api.get_last_ir_message()])
+            got.set()
+
+        rx.register_event(EventType.on_ir_message, on_ir_message)
+        rx.listen_for_ir_message(3)
+        time.sleep(0.5)
+        tx.send_ir_message(3, 64)
+        got.wait(5)
+        start = rx.get_location()
+        bc.start_ir_broadcast(0, 1)
+        rx.start_ir_follow(0, 1)
+        time.sleep(3)
+        rx.stop_ir_follow()
+        bc.stop_ir_broadcast()
+        time.sleep(0.5)
+        end = rx.get_location()
+    print(json.dumps({"heard": heard, "start": start, "end": end}))
+
+
 def main():
+    if sys.argv[2] == "infrared":
+        infrared(sys.argv[1], sys.argv[3:6])
+        return
     port, name, program = sys.argv[1:4]
     toy = find_toy(["tcp", port, name])
     with SpheroEduAPI(toy) as api:

@@ -115,43 +115,60 @@ fn run_js(program: &str, dir: &Dir) -> ([f64; 2], String) {
     (xy, cap)
 }
 
-/// spherov2's run of the Python: the final position it read, and serve's capture.
-fn run_py(py: &str, program: &str, dir: &Dir) -> ([f64; 2], String) {
-    let cap = dir.path(&format!("{program}-py.cap"));
-    let mut serve = Command::new(env!("CARGO_BIN_EXE_droidctl"))
-        .args([
-            "serve",
-            "--listen",
-            "127.0.0.1:0",
-            "--json",
-            "--sim",
-            "bolt",
-            "--record",
-            &cap,
-        ])
-        .env("DROIDCTL_LOG_FILE", dir.path("serve.log"))
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::null())
-        .spawn()
-        .unwrap();
-    let events = Arc::new(Mutex::new(Vec::<Value>::new()));
-    {
-        let events = events.clone();
-        let out = serve.stdout.take().unwrap();
-        std::thread::spawn(move || {
-            for line in BufReader::new(out).lines() {
-                let Ok(line) = line else { break };
-                if let Ok(v) = serde_json::from_str(&line) {
-                    events.lock().unwrap().push(v);
+/// `droidctl serve --sim MODELS…` on a free port, recording to `cap`: the child, its port,
+/// and the events it printed so far (read on a thread).
+struct Serve {
+    child: Child,
+    port: String,
+    events: Arc<Mutex<Vec<Value>>>,
+}
+
+impl Serve {
+    fn start(models: &[&str], cap: &str, dir: &Dir) -> Serve {
+        let mut args = vec!["serve", "--listen", "127.0.0.1:0", "--json", "--sim"];
+        args.extend(models);
+        args.extend(["--record", cap]);
+        let mut child = Command::new(env!("CARGO_BIN_EXE_droidctl"))
+            .args(&args)
+            .env("DROIDCTL_LOG_FILE", dir.path("serve.log"))
+            .stdin(Stdio::null())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::null())
+            .spawn()
+            .unwrap();
+        let events = Arc::new(Mutex::new(Vec::<Value>::new()));
+        {
+            let events = events.clone();
+            let out = child.stdout.take().unwrap();
+            std::thread::spawn(move || {
+                for line in BufReader::new(out).lines() {
+                    let Ok(line) = line else { break };
+                    if let Ok(v) = serde_json::from_str(&line) {
+                        events.lock().unwrap().push(v);
+                    }
                 }
-            }
-        });
+            });
+        }
+        let mut serve = Serve {
+            child,
+            port: String::new(),
+            events,
+        };
+        let listening = serve.wait(&|e| e["event"] == "listening", "listening");
+        serve.port = listening["address"]
+            .as_str()
+            .unwrap()
+            .rsplit(':')
+            .next()
+            .unwrap()
+            .to_string();
+        serve
     }
-    let wait = |f: &dyn Fn(&Value) -> bool, what: &str| -> Value {
+
+    fn wait(&self, f: &dyn Fn(&Value) -> bool, what: &str) -> Value {
         let start = Instant::now();
         loop {
-            if let Some(e) = events.lock().unwrap().iter().find(|e| f(e)) {
+            if let Some(e) = self.events.lock().unwrap().iter().find(|e| f(e)) {
                 return e.clone();
             }
             assert!(
@@ -160,36 +177,42 @@ fn run_py(py: &str, program: &str, dir: &Dir) -> ([f64; 2], String) {
             );
             std::thread::sleep(Duration::from_millis(20));
         }
-    };
-    let listening = wait(&|e| e["event"] == "listening", "listening");
-    let port = listening["address"]
-        .as_str()
-        .unwrap()
-        .rsplit(':')
-        .next()
-        .unwrap()
-        .to_string();
-    let script = format!("{}/tests/edu_judge.py", root());
-    let child = Command::new(py)
-        .args([&script, &port, "SB-0001", program])
-        .current_dir(format!("{}/tests", root()))
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let out = finish(child, Duration::from_secs(120), "spherov2");
-    assert!(
-        out.status.success(),
-        "{program}.py: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    wait(&|e| e["event"] == "droid_released", "droid_released");
-    let _ = Command::new("kill")
-        .args(["-TERM", &serve.id().to_string()])
-        .status();
-    let _ = finish(serve, Duration::from_secs(20), "serve");
-    let seen: Value = serde_json::from_str(String::from_utf8_lossy(&out.stdout).trim()).unwrap();
+    }
+
+    /// The judge script with `args` after the port: its output, once it succeeded; then
+    /// serve is stopped once it released the droids.
+    fn judge(self, py: &str, args: &[&str], what: &str) -> Value {
+        let script = format!("{}/tests/edu_judge.py", root());
+        let child = Command::new(py)
+            .arg(&script)
+            .arg(&self.port)
+            .args(args)
+            .current_dir(format!("{}/tests", root()))
+            .stdin(Stdio::null())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        let out = finish(child, Duration::from_secs(120), "spherov2");
+        assert!(
+            out.status.success(),
+            "{what}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        self.wait(&|e| e["event"] == "droid_released", "droid_released");
+        let _ = Command::new("kill")
+            .args(["-TERM", &self.child.id().to_string()])
+            .status();
+        let _ = finish(self.child, Duration::from_secs(20), "serve");
+        serde_json::from_str(String::from_utf8_lossy(&out.stdout).trim()).unwrap()
+    }
+}
+
+/// spherov2's run of the Python: the final position it read, and serve's capture.
+fn run_py(py: &str, program: &str, dir: &Dir) -> ([f64; 2], String) {
+    let cap = dir.path(&format!("{program}-py.cap"));
+    let serve = Serve::start(&["bolt"], &cap, dir);
+    let seen = serve.judge(py, &["SB-0001", program], &format!("{program}.py"));
     let xy = [
         seen["location"]["x"].as_f64().unwrap(),
         seen["location"]["y"].as_f64().unwrap(),
@@ -289,4 +312,41 @@ fn a_matrix_animation_ends_on_the_frame_spherov2_ends_on() {
     let colour = |i: u8| [i * 16, 255 - i * 16, ((i as u16 * 37) % 256) as u8];
     let want = STRIPES.map(|row| row.map(colour));
     assert_eq!(shown.pixels, want);
+}
+
+/// Infrared judged by spherov2's own API on three robots of one `serve --sim rvr rvr bolt`
+/// room: an RVR's `send_ir_message` (0x3F) reaches the other RVR, which listens
+/// (`listen_for_ir_message`: 0x3E), and its `on_ir_message` fires with the channel, which
+/// `get_last_ir_message` returns; then that RVR follows the BOLT's broadcast (0x27, 0x28)
+/// and rolls up to it. spherov2 sends nothing for BOLT's messages (its `send_ir_message` and
+/// `listen_for_ir_message` are "TODO: BOLT"), so BOLT's are judged by droidctl's own tests
+/// (tests/edu_infrared.rs).
+#[test]
+fn infrared_between_robots_as_spherov2_drives_it() {
+    let py = match python() {
+        Ok(py) => py,
+        Err(why) => {
+            println!("SKIPPED edu_spherov2 infrared: {why}");
+            return;
+        }
+    };
+    let dir = Dir::new("infrared");
+    let serve = Serve::start(&["rvr", "rvr", "bolt"], &dir.path("ir.cap"), &dir);
+    let seen = serve.judge(
+        &py,
+        &["infrared", "RV-0001", "RV-0002", "SB-0003"],
+        "infrared",
+    );
+    eprintln!("infrared: {seen}");
+    assert_eq!(seen["heard"], serde_json::json!([[3, 3]]), "{seen}");
+    let at = |k: &str| {
+        (
+            seen[k]["x"].as_f64().unwrap(),
+            seen[k]["y"].as_f64().unwrap(),
+        )
+    };
+    let ((x0, y0), (x1, y1)) = (at("start"), at("end"));
+    let moved = (x1 - x0).hypot(y1 - y0);
+    // 45.4 cm apart edge to edge; a follower stops 15 cm short.
+    assert!(moved > 15.0 && moved < 45.0, "{seen}");
 }

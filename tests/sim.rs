@@ -218,8 +218,13 @@ fn wrong_length(schema: Schema) -> Option<Vec<u8>> {
 }
 
 /// Which commands a model rejects as unknown: BB-9E has no legs or dome; BOLT, Mini and
-/// RVR no animatronic device at all.
+/// RVR no animatronic device at all; only BOLT and RVR have infrared, each its own commands.
 fn model_knows(model: Model, did: u8, cid: u8) -> bool {
+    if did == 0x18
+        && let Some(has) = droidctl::sim::infrared::has(model, cid)
+    {
+        return has;
+    }
     if matches!(model, Model::Bolt | Model::Mini | Model::Rvr) {
         return Device::from_id(did) != Some(Device::Animatronic);
     }
@@ -229,8 +234,8 @@ fn model_knows(model: Model, did: u8, cid: u8) -> bool {
 }
 
 /// What a model answers a command it lacks.
-fn unknown_error(model: Model) -> ErrorCode {
-    if matches!(model, Model::Bolt | Model::Mini | Model::Rvr) {
+fn unknown_error(model: Model, did: u8) -> ErrorCode {
+    if matches!(model, Model::Bolt | Model::Mini | Model::Rvr) && did == 0x17 {
         ErrorCode::BadDeviceId
     } else {
         ErrorCode::BadCommandId
@@ -287,7 +292,12 @@ fn answers_every_catalogue_command() {
                     r.data
                 );
             } else {
-                assert_eq!(r.err, Some(unknown_error(model)), "{model:?} {}", def.name);
+                assert_eq!(
+                    r.err,
+                    Some(unknown_error(model, def.did)),
+                    "{model:?} {}",
+                    def.name
+                );
             }
             // A payload of the wrong length is refused before anything else.
             if let Some(bad) = wrong_length(def.params) {
@@ -299,7 +309,7 @@ fn answers_every_catalogue_command() {
                 let want = if model_knows(model, def.did, def.cid) {
                     ErrorCode::BadDataLength
                 } else {
-                    unknown_error(model)
+                    unknown_error(model, def.did)
                 };
                 assert_eq!(
                     r.err,

@@ -88,6 +88,35 @@ pub enum Act {
     Sound(String),
     Say(String),
     CalibrateCompass,
+    /// Robot-to-robot infrared (BOLT, RVR): one wire command each ([`Ir`]).
+    Ir(Ir),
+}
+
+/// What a robot is asked to do in infrared; channels 0..=7 and intensity 1..=64, bounded as
+/// spherov2's `SpheroEduAPI` bounds them (`bound_value`).
+#[derive(Debug, Clone, PartialEq)]
+pub enum Ir {
+    Broadcast {
+        far: u8,
+        near: u8,
+    },
+    StopBroadcast,
+    Follow {
+        far: u8,
+        near: u8,
+    },
+    StopFollow,
+    Evade {
+        far: u8,
+        near: u8,
+    },
+    StopEvade,
+    Send {
+        channel: u8,
+        intensity: u8,
+    },
+    /// Hear the next message on each of these channels (none: nothing is sent, as spherov2).
+    Listen(Vec<u8>),
 }
 
 /// What the program waits for after the call's immediate actions.
@@ -489,6 +518,29 @@ impl Driver {
                 };
                 e.now.push(Act::Stance(a));
             }
+            "startIRBroadcast" | "startIRFollow" | "startIREvade" => {
+                let (near, far) = (channel(n(0)), channel(n(1)));
+                e.now.push(Act::Ir(match name {
+                    "startIRBroadcast" => Ir::Broadcast { far, near },
+                    "startIRFollow" => Ir::Follow { far, near },
+                    _ => Ir::Evade { far, near },
+                }));
+            }
+            "stopIRBroadcast" => e.now.push(Act::Ir(Ir::StopBroadcast)),
+            "stopIRFollow" => e.now.push(Act::Ir(Ir::StopFollow)),
+            "stopIREvade" => e.now.push(Act::Ir(Ir::StopEvade)),
+            "sendIRMessage" => e.now.push(Act::Ir(Ir::Send {
+                channel: channel(n(0)),
+                intensity: n(1).round().clamp(1.0, 64.0) as u8,
+            })),
+            "listenForIRMessage" => {
+                let mut channels: Vec<u8> = (0..args.len()).map(|i| channel(n(i))).collect();
+                channels.sort_unstable();
+                channels.dedup();
+                if !channels.is_empty() {
+                    e.now.push(Act::Ir(Ir::Listen(channels)));
+                }
+            }
             "calibrateCompass" => {
                 e.now.push(Act::CalibrateCompass);
                 e.wait = Some(Wait::Compass);
@@ -578,6 +630,15 @@ impl Driver {
         }));
         self.animations += 1;
         Ok(acts)
+    }
+}
+
+/// An infrared channel 0..=7 (spherov2 bounds it; not a number is 0).
+fn channel(v: f64) -> u8 {
+    if v.is_finite() {
+        v.round().clamp(0.0, 7.0) as u8
+    } else {
+        0
     }
 }
 

@@ -4,8 +4,8 @@
 //! tests/edu_programs.rs checks the two agree).
 //!
 //! Names, arguments and units are Sphero Edu's JavaScript ones (its public docs, "Movement",
-//! "Lights", "Sensors", "Events"); where spherov2.py's `SpheroEduAPI` (`sphero_edu.py`)
-//! implements a call, [`super::api`] behaves as it does.
+//! "Lights", "Sensors", "Communications", "Events"); where spherov2.py's `SpheroEduAPI`
+//! (`sphero_edu.py`) implements a call, [`super::api`] behaves as it does.
 
 use crate::model::Model;
 
@@ -35,6 +35,8 @@ pub enum Robots {
     /// Robots whose two motors droidctl drives raw (spherov2's `raw_motor`): BOLT, Mini,
     /// RVR, and the API v1 robots (BB-8, SPRK+, Ollie) through their Set Raw Motors.
     RawMotors,
+    /// Robot-to-robot infrared: BOLT and RVR (Sphero Edu's "Communications").
+    Infrared,
 }
 
 impl Robots {
@@ -57,6 +59,7 @@ impl Robots {
                 matches!(m, Model::Bolt | Model::Mini | Model::Rvr)
                     || m.protocol() == crate::model::Protocol::SpheroV1
             }
+            Robots::Infrared => matches!(m, Model::Bolt | Model::Rvr),
         }
     }
 
@@ -419,8 +422,59 @@ pub const CALLS: &[Call] = &[
         "getLastIRMessage",
         "",
         false,
-        Compass,
-        "the last infrared message's channel",
+        Infrared,
+        "the channel of the last infrared message heard",
+    ),
+    // Communications: robot-to-robot infrared.
+    call(
+        "startIRBroadcast",
+        "near, far",
+        false,
+        Infrared,
+        "broadcast on channels near (under 1 m) and far (1 to 3 m), 0..7, to be followed or evaded",
+    ),
+    call("stopIRBroadcast", "", false, Infrared, "stop broadcasting"),
+    call(
+        "startIRFollow",
+        "near, far",
+        false,
+        Infrared,
+        "roll after the nearest robot broadcasting on near and far; spin in place to search when none",
+    ),
+    call(
+        "stopIRFollow",
+        "",
+        false,
+        Infrared,
+        "stop following (the robot stops)",
+    ),
+    call(
+        "startIREvade",
+        "near, far",
+        false,
+        Infrared,
+        "roll away from the nearest robot broadcasting on near and far; spin in place to search when none",
+    ),
+    call(
+        "stopIREvade",
+        "",
+        false,
+        Infrared,
+        "stop evading (the robot stops)",
+    ),
+    call(
+        "sendIRMessage",
+        "channel, intensity",
+        false,
+        Infrared,
+        "send a message on channel 0..7; intensity 1..64 is its reach (64: about 3 m)",
+    ),
+    call(
+        "listenForIRMessage",
+        "channels",
+        false,
+        Infrared,
+        "hear the next message on these channels (a channel or a list): onIRMessage fires",
     ),
     // Events.
     call(
@@ -450,8 +504,8 @@ pub const EVENTS: &[(&str, Robots, &str)] = &[
     ),
     (
         "onIRMessage",
-        Compass,
-        "an infrared message arrived (its channel is the argument)",
+        Infrared,
+        "an infrared message listened for arrived (its channel is the argument)",
     ),
     (
         "onColor",

@@ -6,6 +6,7 @@
 //!   on this robot" errors and the docs' list come from it);
 //! - [`api`]: what each call does, sans-IO, as spherov2.py's `SpheroEduAPI` does it;
 //! - [`engine`]: the JavaScript engine, on a thread of its own, driven in turns;
+//! - [`infrared`]: the infrared calls as BOLT and RVR each take them on the wire;
 //! - [`run`]: a program on one droid, on droidctl's clock.
 //!
 //! The engine is Boa (`boa_engine`), not QuickJS (`rquickjs`): Boa is pure Rust, so the
@@ -23,6 +24,7 @@
 pub mod api;
 pub mod calls;
 pub mod engine;
+pub mod infrared;
 pub mod run;
 
 pub use run::{Program, ProgramOptions, run};

@@ -85,6 +85,17 @@ function setDomePosition(degrees) { return __call("setDomePosition", __num(degre
 function setStance(stance) { return __call("setStance", stance === Stance.Bipod || stance === "bipod" ? 2 : 3); }
 function setWaddle(on) { return __call("setWaddle", on ? 1 : 0); }
 function calibrateCompass() { return __call("calibrateCompass"); }
+function startIRBroadcast(near, far) { return __call("startIRBroadcast", __num(near, "near"), __num(far, "far")); }
+function stopIRBroadcast() { return __call("stopIRBroadcast"); }
+function startIRFollow(near, far) { return __call("startIRFollow", __num(near, "near"), __num(far, "far")); }
+function stopIRFollow() { return __call("stopIRFollow"); }
+function startIREvade(near, far) { return __call("startIREvade", __num(near, "near"), __num(far, "far")); }
+function stopIREvade() { return __call("stopIREvade"); }
+function sendIRMessage(channel, intensity) { return __call("sendIRMessage", __num(channel, "channel"), __num(intensity, "intensity")); }
+function listenForIRMessage(channels) {
+  const list = Array.isArray(channels) ? channels : [channels];
+  return __call("listenForIRMessage", ...list.map((c) => __num(c, "channel")));
+}
 function getLocation() { return __obj(["x", "y"], __read("getLocation")); }
 function getVelocity() { return __obj(["x", "y"], __read("getVelocity")); }
 function getSpeed() { return __read("getSpeed"); }

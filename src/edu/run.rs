@@ -5,7 +5,7 @@
 //! become the droid's commands here, timed waits (`roll`'s duration, `spin`'s steps, `fade`,
 //! `delay`) run on tokio's clock, and the droid's notifications become the program's events.
 
-use super::api::{Act, Matrix, Wait};
+use super::api::{Act, Ir, Matrix, Wait};
 use super::engine::{Engine, Event, Failure, Op, Readings, Status};
 use crate::family::{Command, Family};
 use crate::mission::{DroidMission, Emit, MissionError, MissionEvent, MissionOptions, Summary};
@@ -105,6 +105,10 @@ struct Player {
     last_location: Option<[f32; 2]>,
     falling: Falling,
     stance_done: bool,
+    /// The channel of the last infrared message heard (`getLastIRMessage`).
+    last_ir: Option<u8>,
+    /// The infrared behaviours running, stopped when the program ends.
+    ir_running: super::infrared::Running,
     mission: DroidMission,
 }
 
@@ -157,6 +161,8 @@ pub async fn run(
             gyro_max: false,
         },
         stance_done: false,
+        last_ir: None,
+        ir_running: Default::default(),
         mission,
     };
     let r = p.play(program, &opts, events).await;
@@ -289,7 +295,7 @@ impl Player {
             color: t.robot.color.map(|c| c.0),
             compass: t.robot.compass_north,
             battery_v: t.battery_v,
-            ir_message: None,
+            ir_message: self.last_ir,
         }
     }
 
@@ -424,6 +430,10 @@ impl Player {
             Notification::Robot(RobotEvent::Color {
                 rgb, confidence, ..
             }) if *confidence as f32 / 255.0 >= 0.71 => seen.push(Event::Color(*rgb)),
+            Notification::Robot(RobotEvent::IrMessage(code)) => {
+                self.last_ir = Some(*code);
+                seen.push(Event::IrMessage(*code));
+            }
             Notification::Sensors(_) => {
                 let t = lock(&self.telemetry).clone();
                 if let Some(a) = t.accel {
@@ -625,6 +635,15 @@ impl Player {
                 let c = self.family.calibrate_compass();
                 self.send(line, c, "calibrateCompass");
             }
+            Act::Ir(ir) => self.infrared(line, ir),
+        }
+    }
+
+    /// Robot-to-robot infrared: the robot's own commands ([`super::infrared`]).
+    fn infrared(&mut self, line: u32, ir: &Ir) {
+        self.ir_running.note(ir);
+        for c in super::infrared::commands(self.model, ir) {
+            self.send(line, Some(c.into()), "infrared");
         }
     }
 
@@ -702,8 +721,12 @@ impl Player {
         self.send(line, c, "matrix");
     }
 
-    /// Stop rolling and the motors (the run ends, or the program failed).
+    /// Stop rolling and the motors (the run ends, or the program failed), and the infrared
+    /// behaviours the program started (a follower or evader rolls by itself).
     fn stop_motion(&mut self) {
+        for stop in self.ir_running.stops() {
+            self.infrared(0, &stop);
+        }
         self.drive = None;
         let stop = crate::mission::drive_command(
             self.family,

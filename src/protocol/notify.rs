@@ -99,6 +99,8 @@ pub enum RobotEvent {
     MotorFault(bool),
     /// Sensor 0x26: compass calibration done; the yaw of north (BOLT).
     CompassHeading(u16),
+    /// Sensor 0x2C: a robot-to-robot infrared message arrived; its code, 0..=7 (BOLT, RVR).
+    IrMessage(u8),
     /// Sensor 0x36: the colour under the robot, its palette index and confidence (RVR).
     Color {
         rgb: [u8; 3],
@@ -115,6 +117,7 @@ impl RobotEvent {
             RobotEvent::MotorStall { .. } => "motor-stall",
             RobotEvent::MotorFault(_) => "motor-fault",
             RobotEvent::CompassHeading(_) => "magnetometer-north-yaw",
+            RobotEvent::IrMessage(_) => "robot-to-robot-ir-message",
             RobotEvent::Color { .. } => "color-detection",
             RobotEvent::MatrixTextDone => "text-scrolling",
         }

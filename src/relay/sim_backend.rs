@@ -54,21 +54,24 @@ pub fn sim_address(i: usize) -> String {
 }
 
 impl SimBackend {
-    /// One simulated droid per model, in order. Create it inside the runtime that serves.
+    /// One simulated droid per model, in order, all in one room (as a `--sim` fleet's: they
+    /// see the same walls, collide, and reach each other in infrared). Create it inside the
+    /// runtime that serves.
     pub fn new(models: &[Model], faults: GattFaults) -> Self {
+        let room = crate::sim::room::SharedRoom::new();
+        let origins = crate::sim::room::SharedRoom::origins(models.len());
         let slots = models
             .iter()
+            .zip(origins)
             .enumerate()
-            .map(|(i, &model)| {
+            .map(|(i, (&model, origin))| {
+                let mut cfg = SimConfig::for_model(model);
+                cfg.place = Some(room.place(origin, cfg.radius_cm));
                 Arc::new(SimSlot {
                     name: sim_name(model, i),
                     address: sim_address(i),
                     model,
-                    droid: Mutex::new(GattDroid::new(
-                        model,
-                        SimConfig::for_model(model),
-                        faults.clone(),
-                    )),
+                    droid: Mutex::new(GattDroid::new(model, cfg, faults.clone())),
                 })
             })
             .collect();

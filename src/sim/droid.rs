@@ -5,6 +5,7 @@
 use super::SimConfig;
 pub use super::body::SimState;
 use super::body::{Body, SimEvent};
+use super::infrared::{self, Infrared};
 use super::robots::{self, RobotParts};
 use crate::model::Model;
 use crate::protocol::v2::catalog;
@@ -24,6 +25,8 @@ pub struct SimDroid {
     voltage_state_notify: bool,
     /// BOLT's matrix, RVR's LEDs and streaming service.
     robot: RobotParts,
+    /// BOLT's and RVR's robot-to-robot infrared.
+    ir: Infrared,
     out: Vec<Packet>,
 }
 
@@ -53,6 +56,7 @@ impl SimDroid {
             battery_state_notify: false,
             voltage_state_notify: false,
             robot: RobotParts::new(model),
+            ir: Infrared::default(),
             out: Vec::new(),
         }
     }
@@ -63,8 +67,24 @@ impl SimDroid {
 
     /// When the droid next has something to send ([`super::body::Body::next_due`]).
     pub fn next_due(&self) -> Option<Duration> {
+        // A robot that follows or evades steers itself at every step.
+        if self.ir.behaviour.is_some() {
+            return None;
+        }
         let body = self.body.next_due()?;
-        Some(self.robot.next_due().map_or(body, |r| r.min(body)))
+        let due = self.robot.next_due().map_or(body, |r| r.min(body));
+        // One that listens in a shared room looks for messages every few steps.
+        let listens = self.ir.listens() != 0 && self.body.cfg.place.is_some();
+        Some(if listens {
+            due.min(self.body.now() + infrared::LISTEN_POLL)
+        } else {
+            due
+        })
+    }
+
+    /// BOLT's and RVR's infrared: what they broadcast, follow or evade, listen for.
+    pub fn infrared(&self) -> &Infrared {
+        &self.ir
     }
 
     /// BOLT's matrix, RVR's LEDs and streaming service, as the trace shows them.
@@ -117,8 +137,9 @@ impl SimDroid {
     }
 
     fn advance_to(&mut self, now: Duration) {
-        self.body.advance_to(now);
+        self.advance_body(now);
         self.flush_events();
+        self.infrared_heard();
         if self.robot.text_done(now) {
             self.notify(0x1A, 0x3C, vec![0]);
         }
@@ -139,6 +160,42 @@ impl SimDroid {
         }
     }
 
+    /// The body's physics up to `now`, a step at a time while it follows or evades (it
+    /// steers itself before each step).
+    fn advance_body(&mut self, now: Duration) {
+        if self.ir.behaviour.is_none() {
+            self.body.advance_to(now);
+            return;
+        }
+        let step = self.body.cfg.step.max(Duration::from_millis(1));
+        while self.body.now() + step <= now {
+            let seen = self.ir.sighting(self.body.cfg.place.as_ref());
+            let (yaw, at) = (self.body.state.yaw_deg, self.body.now());
+            if let Some((speed, facing)) = self.ir.steer(seen, yaw, at, step)
+                && self.body.state.awake
+            {
+                self.body.drive(speed, facing, false);
+            }
+            self.body.advance_to(at + step);
+        }
+    }
+
+    /// The infrared messages that reached this robot, notified when it listens for them
+    /// (Sensor 0x2C, the code).
+    fn infrared_heard(&mut self) {
+        if self.ir.listens() == 0 {
+            return;
+        }
+        let Some(place) = self.body.cfg.place.clone() else {
+            return;
+        };
+        for code in place.take_ir() {
+            if self.ir.hear(code, Some(&place)) {
+                self.notify(0x18, 0x2C, vec![code]);
+            }
+        }
+    }
+
     /// The body's events as v2 notifications.
     fn flush_events(&mut self) {
         for e in self.body.take_events() {
@@ -149,6 +206,11 @@ impl SimDroid {
                 SimEvent::DidSleep => {
                     self.streaming = StreamingConfig::default();
                     self.robot.service.running.clear();
+                    // Asleep, a robot neither broadcasts, listens nor steers.
+                    self.ir = Infrared::default();
+                    if let Some(place) = &self.body.cfg.place {
+                        place.show_ir(None, 0);
+                    }
                     self.notify(0x13, 0x1A, vec![]);
                 }
                 SimEvent::VoltageState(s) => {
@@ -219,6 +281,10 @@ impl SimDroid {
         }
         if let Err(e) = robots::route(self.body.model(), p.did, p.cid, p.tid) {
             return (e, vec![]);
+        }
+        if device == Device::Sensor && infrared::has(self.body.model(), p.cid) == Some(false) {
+            // Robot-to-robot infrared: BOLT's and RVR's own commands only (src/sim/infrared.rs).
+            return (ErrorCode::BadCommandId, vec![]);
         }
         if !catalog::length_ok(def.params, p.data.len()) {
             return (ErrorCode::BadDataLength, vec![]);
@@ -444,6 +510,16 @@ impl SimDroid {
                 ok
             }
             (Device::Sensor, 0x30) => (ErrorCode::Success, 320.0f32.to_be_bytes().to_vec()),
+            (Device::Sensor, 0x27..=0x2B | 0x32..=0x34 | 0x3E | 0x3F) => {
+                let steering = self.ir.behaviour.is_some();
+                let place = self.body.cfg.place.as_ref();
+                let r = self.ir.command(p.cid, d, place, self.body.state.yaw_deg);
+                if steering && self.ir.behaviour.is_none() {
+                    // The behaviour ended: the robot stops where it is.
+                    self.body.stop_motion();
+                }
+                answer(r.map(|()| Vec::new()))
+            }
             (Device::Sensor, 0x23) => (
                 ErrorCode::Success,
                 [128u16, 128, 128, 384]

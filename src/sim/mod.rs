@@ -15,6 +15,7 @@ pub mod faults;
 pub mod figures;
 pub mod gatt;
 pub mod impact;
+pub mod infrared;
 pub mod link;
 mod physics;
 pub mod robi;

@@ -17,13 +17,15 @@ pub const SPACING_CM: f32 = 60.0;
 /// A fleet's droids start at least this far from the walls (centre to wall).
 pub const EDGE_CM: f32 = 40.0;
 
-#[derive(Debug, Clone, Copy)]
-struct Occupant {
-    x: f32,
-    y: f32,
-    radius: f32,
+#[derive(Debug, Clone)]
+pub(super) struct Occupant {
+    pub(super) x: f32,
+    pub(super) y: f32,
+    pub(super) radius: f32,
     /// A hit by another droid not yet reported.
     hit: Option<Hit>,
+    /// What it shows the others in infrared (BOLT, RVR; [`super::infrared`]).
+    pub(super) ir: super::infrared::Station,
 }
 
 /// A hit taken from another droid: the direction it came from (a unit vector from this
@@ -52,8 +54,8 @@ pub struct SharedRoom(Arc<Mutex<Vec<Occupant>>>);
 /// One droid's place in a [`SharedRoom`].
 #[derive(Debug, Clone)]
 pub struct Place {
-    room: SharedRoom,
-    id: usize,
+    pub(super) room: SharedRoom,
+    pub(super) id: usize,
     /// Where the droid starts, in room coordinates (its locator's origin).
     pub origin: (f32, f32),
 }
@@ -63,7 +65,7 @@ impl SharedRoom {
         SharedRoom::default()
     }
 
-    fn lock(&self) -> std::sync::MutexGuard<'_, Vec<Occupant>> {
+    pub(super) fn lock(&self) -> std::sync::MutexGuard<'_, Vec<Occupant>> {
         self.0.lock().unwrap_or_else(|e| e.into_inner())
     }
 
@@ -75,6 +77,7 @@ impl SharedRoom {
             y: origin.1,
             radius,
             hit: None,
+            ir: Default::default(),
         });
         Place {
             room: self.clone(),
@@ -126,7 +129,7 @@ impl Place {
     /// droid is told it was hit.
     pub fn moved(&self, x: f32, y: f32, vx: f32, vy: f32) -> Option<Contact> {
         let mut all = self.room.lock();
-        let me = *all.get(self.id)?;
+        let my_radius = all.get(self.id)?.radius;
         let mut pos = (x, y);
         let mut contact = None;
         for (i, o) in all.iter_mut().enumerate() {
@@ -135,7 +138,7 @@ impl Place {
             }
             let (dx, dy) = (o.x - pos.0, o.y - pos.1);
             let dist = (dx * dx + dy * dy).sqrt();
-            let touch = me.radius + o.radius;
+            let touch = my_radius + o.radius;
             // Only moving toward the other counts (two droids apart may drive off).
             if dist >= touch || dx * vx + dy * vy <= 0.0 {
                 continue;

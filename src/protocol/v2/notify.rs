@@ -96,6 +96,8 @@ impl Notification {
                     format!("expected 2 bytes, got {}", p.data.len()),
                 )),
             },
+            (Some(Device::Sensor), 0x2C) => byte("robot-to-robot-ir-message")
+                .map(|code| Notification::Robot(RobotEvent::IrMessage(code))),
             (Some(Device::Sensor), 0x36) => match p.data[..] {
                 [r, g, b, index, confidence] => Ok(Notification::Robot(RobotEvent::Color {
                     rgb: [r, g, b],
