@@ -104,14 +104,18 @@ pub enum Refused {
 }
 
 impl Player {
-    /// 0x30: keep a frame (a saved index again replaces it).
+    /// 0x30: keep a frame (a saved index again replaces it). A frame shorter than 32 bytes
+    /// is padded with zeros (what the firmware answers to one is not published; the
+    /// simulator accepts it, as it accepts every command of its catalogue).
     pub fn save_frame(&mut self, d: &[u8]) -> Result<(), Refused> {
-        let (Some(i), Some(bits)) = (d.get(..2), d.get(2..34)) else {
+        let Some(i) = d.get(..2) else {
             return Err(Refused::BadParameter);
         };
         let index = u16::from_be_bytes([i[0], i[1]]);
         let mut raw = [0u8; 32];
-        raw.copy_from_slice(bits);
+        for (r, b) in raw.iter_mut().zip(&d[2..]) {
+            *r = *b;
+        }
         let frame = unpack(&raw);
         if let Some(f) = self.frames.iter_mut().find(|f| f.0 == index) {
             f.1 = frame;
@@ -131,7 +135,7 @@ impl Player {
             _ => return Err(bad),
         };
         let colours = d.get(4..4 + 3 * n as usize).ok_or(bad)?;
-        if n == 0 || n > 16 || fade > 1 {
+        if n > 16 || fade > 1 {
             return Err(bad);
         }
         let palette: Vec<[u8; 3]> = colours.chunks(3).map(|c| [c[0], c[1], c[2]]).collect();
@@ -139,7 +143,7 @@ impl Player {
         let count = rest.get(..2).ok_or(bad)?;
         let count = u16::from_be_bytes([count[0], count[1]]) as usize;
         let list = rest.get(2..2 + 2 * count).ok_or(bad)?;
-        if count == 0 || rest.len() != 2 + 2 * count || count > SAVED_MAX {
+        if rest.len() != 2 + 2 * count || count > SAVED_MAX {
             return Err(bad);
         }
         let frames: Vec<u16> = list
@@ -236,6 +240,18 @@ impl Player {
             return Tick::default();
         };
         let n = a.frames.len() as u64;
+        if n == 0 {
+            // Saved without frames: nothing to show, and done at once when played once.
+            let (id, looping) = (p.id, p.looping);
+            if looping {
+                return Tick::default();
+            }
+            self.playing = None;
+            return Tick {
+                show: None,
+                complete: Some(id),
+            };
+        }
         let (k, ended) = if p.looping {
             (step % n, false)
         } else {
@@ -265,7 +281,7 @@ impl Player {
     /// When the next frame is due (`None`: nothing is playing or it is paused).
     pub fn next_due(&self) -> Option<Duration> {
         let (p, a) = self.animation()?;
-        if p.paused.is_some() {
+        if p.paused.is_some() || a.frames.is_empty() {
             return None;
         }
         let fps = self.fps(a) as u64;
