@@ -1,9 +1,10 @@
 //! Sphero Edu's infrared between robots, end to end: programs on simulated BOLTs (and RVR)
 //! sharing one room send and hear messages (`sendIRMessage`, `listenForIRMessage`,
 //! `onIRMessage`, `getLastIRMessage`), and follow or evade a broadcaster
-//! (`startIRBroadcast`, `startIRFollow`, `startIREvade`). The fleet form of `droidctl run`
-//! runs one program on every droid; follow and evade need a program per droid, so they run
-//! here in process, each droid's session and program as `run` starts them, in simulated time.
+//! (`startIRBroadcast`, `startIRFollow`, `startIREvade`). Follow and evade need a program per
+//! droid: `droidctl run beacon.js follow.js --sim bolt,bolt` gives each its own (tested
+//! below), and the behaviours' finer points run here in process, each droid's session and
+//! program as `run` starts them, in simulated time.
 
 use droidctl::edu::{Program, ProgramOptions};
 use droidctl::mission::{Emit, MissionEvent, MissionOptions, Summary};
@@ -248,4 +249,68 @@ fn channels_and_intensity_are_bounded_as_spherov2_bounds_them() {
     let e = d.call("listenForIRMessage", &n(&[4.0, 2.0, 4.0])).unwrap();
     assert_eq!(e.now, vec![Act::Ir(Ir::Listen(vec![2, 4]))]);
     assert!(d.call("listenForIRMessage", &[]).unwrap().now.is_empty());
+}
+
+/// `run A.js B.js --sim bolt,bolt`: each droid its own program, in order: the second BOLT
+/// follows the first's broadcast (examples/edu/beacon.js and follow.js, as docs/edu-programs.md
+/// shows them). A count that does not match the fleet, or a mission given programs, is a
+/// usage error before anything is sent.
+#[test]
+fn each_droid_of_a_fleet_runs_its_own_program() {
+    let dir = Scratch::new("edu-ir", "one-each");
+    let (beacon, follow) = (example("beacon.js"), example("follow.js"));
+    let out = dir.run(&["run", &beacon, &follow, "--sim", "bolt,bolt"]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let text = stdout(&out);
+    // The follower says how far it went; the beacon says nothing.
+    let said: Vec<&str> = text
+        .lines()
+        .filter(|l| l.contains("says \"followed "))
+        .collect();
+    assert_eq!(said.len(), 1, "{text}");
+    assert!(
+        said[0].contains("SB-0002"),
+        "the second droid follows: {text}"
+    );
+    let cm: f64 = said[0]
+        .split("followed ")
+        .nth(1)
+        .and_then(|r| r.split(' ').next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or(0.0);
+    assert!(
+        cm > 20.0 && cm < 53.0,
+        "rolled up to the beacon: {cm} cm in {text}"
+    );
+    // Three programs for two droids; two for one; a mission with a program.
+    let out = dir.run(&["run", &beacon, &follow, &follow, "--sim", "bolt,bolt"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        stderr(&out).contains("3 programs for 2 droids"),
+        "{}",
+        stderr(&out)
+    );
+    let out = dir.run(&["run", &beacon, &follow, "--sim", "bolt"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        stderr(&out).contains("2 programs for one droid"),
+        "{}",
+        stderr(&out)
+    );
+    let m = dir.file("m.txt", "drive 0 50 for 1s\n");
+    let out = dir.run(&["run", path(&m), &follow, "--sim", "bolt,bolt"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        stderr(&out).contains("is a mission script"),
+        "{}",
+        stderr(&out)
+    );
+    // A syntax error in the second program: exit 2 naming it, before anything is sent.
+    let bad = dir.file(
+        "bad.js",
+        "async function startProgram() {\n  roll(0, 50, 1\n}\n",
+    );
+    let out = dir.run(&["run", &beacon, path(&bad), "--sim", "bolt,bolt"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(stderr(&out).contains("bad.js:3:"), "{}", stderr(&out));
 }

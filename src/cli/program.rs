@@ -17,13 +17,49 @@ use crate::sim::{Faults, SimConfig, SimLink};
 use std::sync::Arc;
 use std::time::Duration;
 
-pub fn run(args: &RunArgs, sims: Vec<Model>, text: String, shown: &str) -> Result<i32, CliError> {
-    let program = Program::new(text, shown.to_string()).map_err(|e| {
+/// A program's text as a [`Program`]; a syntax error is a usage error (exit 2) naming where.
+fn parse(text: String, shown: &str) -> Result<Program, CliError> {
+    Program::new(text, shown.to_string()).map_err(|e| {
         CliError::usage(format!(
             "{shown}:{}:{}: {}\nthe program has an error; nothing was sent",
             e.line, e.column, e.message
         ))
-    })?;
+    })
+}
+
+/// The programs after the first (`run a.js b.js …`): each read, bounded, and checked before
+/// anything is sent.
+fn more_programs(args: &RunArgs) -> Result<Vec<Program>, CliError> {
+    /// A program file larger than this is refused (a classroom's programs are a few KiB).
+    const MAX_BYTES: u64 = 4 * 1024 * 1024;
+    args.more
+        .iter()
+        .map(|path| {
+            let shown = path.display().to_string();
+            let too_big = std::fs::metadata(path).is_ok_and(|m| m.len() > MAX_BYTES);
+            if too_big {
+                return Err(CliError::usage(format!(
+                    "{shown} is larger than 4 MiB: not a Sphero Edu program"
+                )));
+            }
+            let text = std::fs::read_to_string(path)
+                .map_err(|e| CliError::usage(format!("cannot read program {shown}: {e}")))?;
+            if !crate::edu::is_program(path, &text) {
+                return Err(CliError::usage(format!(
+                    "{shown} is not a Sphero Edu program (a .js file, or one with \
+                     `function startProgram`)"
+                )));
+            }
+            parse(text, &shown)
+        })
+        .collect()
+}
+
+pub fn run(args: &RunArgs, sims: Vec<Model>, text: String, shown: &str) -> Result<i32, CliError> {
+    let program = parse(text, shown)?;
+    let mut programs = vec![program];
+    programs.extend(more_programs(args)?);
+    let program = &programs[0];
     let mission = MissionOptions {
         interval: Duration::from_millis(args.interval),
         ..MissionOptions::default()
@@ -37,7 +73,14 @@ pub fn run(args: &RunArgs, sims: Vec<Model>, text: String, shown: &str) -> Resul
         opts.no_yield = Duration::from_secs_f64(t.min(opts.no_yield.as_secs_f64()));
     }
     if super::fleet::is_fleet(sims.len(), &args.ble) {
-        return fleet(args, sims, &program, opts);
+        return fleet(args, sims, &programs, opts);
+    }
+    if programs.len() > 1 {
+        return Err(CliError::usage(format!(
+            "{} programs for one droid: give a fleet, one droid a program \
+             (--sim bolt,bolt, or --name twice)",
+            programs.len()
+        )));
     }
     let recorder = args.record.open()?;
     let recorder = recorder.as_ref();
@@ -75,7 +118,7 @@ pub fn run(args: &RunArgs, sims: Vec<Model>, text: String, shown: &str) -> Resul
             }
             None => link,
         };
-        let p = &program;
+        let p = program;
         let r = run_session(
             link,
             model,
@@ -111,13 +154,29 @@ fn paused_runtime() -> Result<tokio::runtime::Runtime, CliError> {
         .map_err(|e| CliError::failure(format!("cannot start the runtime: {e}")))
 }
 
-/// The program on every droid of a fleet at once, each its own run from one start.
+/// The number of programs does not match the fleet (several programs are one per droid).
+fn one_each(programs: usize, droids: usize) -> Result<(), CliError> {
+    if programs > 1 && programs != droids {
+        return Err(CliError::usage(format!(
+            "{programs} programs for {droids} droids: give one program for every droid, or \
+             one for all"
+        )));
+    }
+    Ok(())
+}
+
+/// The program on every droid of a fleet at once (or each droid its own, in order), each its
+/// own run from one start.
 fn fleet(
     args: &RunArgs,
     sims: Vec<Model>,
-    program: &Program,
+    programs: &[Program],
     opts: ProgramOptions,
 ) -> Result<i32, CliError> {
+    let only_sims = args.ble.name.is_empty() && args.ble.remote.is_empty();
+    if only_sims {
+        one_each(programs.len(), sims.len())?;
+    }
     let recorder = args.record.open()?;
     let config = crate::config::Config::load(&crate::config::config_path())
         .map_err(|e| CliError::usage(e.to_string()))?;
@@ -131,7 +190,6 @@ fn fleet(
     let out = Arc::new(RunOutput::new(files));
     let json = args.json;
     let _ = crate::logging::init();
-    let only_sims = args.ble.name.is_empty() && args.ble.remote.is_empty();
     let rt = if only_sims {
         paused_runtime()?
     } else {
@@ -139,6 +197,7 @@ fn fleet(
     };
     let r = rt.block_on(async {
         let mut found = super::fleet::find_all(&sims, &args.ble, &config).await?;
+        one_each(programs.len(), found.len())?;
         super::fleet::record_all(recorder.as_ref(), &mut found);
         let mut per_droid = Vec::with_capacity(found.len());
         let specs = found
@@ -170,6 +229,7 @@ fn fleet(
                 ..opts.clone()
             };
             let name = m.name.clone();
+            let program = programs.get(i).unwrap_or(&programs[0]);
             async move {
                 crate::edu::run(&m.session, m.model, program, o, one, start)
                     .await

@@ -21,6 +21,12 @@ pub struct RunArgs {
     /// docs/edu-programs.md).
     #[arg(value_name = "SCRIPT")]
     pub script: Option<PathBuf>,
+    /// Sphero Edu programs for the other droids of a fleet, one each in order: the first
+    /// droid runs SCRIPT, the second the first PROGRAM, and so on (a broadcaster and its
+    /// follower: `run beacon.js follow.js --sim bolt,bolt`). Without them every droid runs
+    /// SCRIPT.
+    #[arg(value_name = "PROGRAM")]
+    pub more: Vec<PathBuf>,
     /// Run against a simulated droid (r2d2 without a MODEL); the mission runs in simulated
     /// time. Several share one room: --sim r2d2,bb8,robi.
     #[arg(long, num_args = 0..=1, default_missing_value = "r2d2", value_name = "MODEL[,MODEL…]",
@@ -104,6 +110,12 @@ pub fn run(args: RunArgs) -> Result<i32, CliError> {
     };
     if crate::edu::is_program(&path, &text) {
         return super::program::run(&args, sims, text, &shown);
+    }
+    if !args.more.is_empty() {
+        return Err(CliError::usage(format!(
+            "{shown} is a mission script: only Sphero Edu programs (.js) run one per droid; \
+             a mission gives each droid its own lines with `@NAME` (docs/missions.md)"
+        )));
     }
     let items = crate::script::parse_fleet(&text).map_err(script_errors)?;
     if super::fleet::is_fleet(sims.len(), &args.ble) || crate::script::is_fleet(&items) {
