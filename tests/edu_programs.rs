@@ -412,3 +412,53 @@ fn a_hop_at_full_raw_power_fires_freefall_then_landing() {
     let out = dir.run(&["run", path(&q), "--sim", "rvr"]);
     assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
 }
+
+/// Opposite full power spins a ball like a top, past the ±2000°/s its gyroscope measures:
+/// `onGyroMax` fires once for the spin (Sphero's docs: "spinning the robot around like a top").
+/// A spin at the control system's pace does not fire it.
+#[test]
+fn a_top_spin_fires_gyro_max_once() {
+    let dir = Scratch::new("edu", "gyro-max");
+    let p = dir.file(
+        "top.js",
+        "let maxed = 0;\n\
+         registerEvent(EventType.onGyroMax, () => { maxed += 1; });\n\
+         function check(ok, what) { if (!ok) throw new Error(what); }\n\
+         async function startProgram() {\n\
+         \x20 await spin(720, 1);\n\
+         \x20 await delay(0.5);\n\
+         \x20 check(maxed === 0, \"a spin at the control system's pace: \" + maxed);\n\
+         \x20 await rawMotor(255, -255, 1);\n\
+         \x20 await delay(1);\n\
+         \x20 check(maxed === 1, \"one top spin: \" + maxed);\n\
+         \x20 exitProgram();\n\
+         }\n",
+    );
+    for model in ["bolt", "sprk"] {
+        let out = dir.run(&["run", path(&p), "--sim", model]);
+        assert_eq!(out.status.code(), Some(0), "{model}: {}", stderr(&out));
+    }
+}
+
+/// `onColor` fires as spherov2's does: when RVR's colour sensor sees a new colour (its
+/// palette index changes) with enough confidence, not at every reading: the simulated floor
+/// is one grey, so it fires once, with that grey.
+#[test]
+fn on_color_fires_once_per_colour_seen() {
+    let dir = Scratch::new("edu", "on-color");
+    let p = dir.file(
+        "colour.js",
+        "const seen = [];\n\
+         registerEvent(EventType.onColor, (c) => { seen.push(c.r + \",\" + c.g + \",\" + c.b); });\n\
+         async function startProgram() {\n\
+         \x20 await roll(0, 60, 2);\n\
+         \x20 await delay(2);\n\
+         \x20 if (seen.join(\" \") !== \"128,128,128\") throw new Error(\"seen: \" + seen.join(\" \"));\n\
+         \x20 const c = getColor();\n\
+         \x20 if (c.r !== 128) throw new Error(\"getColor: \" + JSON.stringify(c));\n\
+         \x20 exitProgram();\n\
+         }\n",
+    );
+    let out = dir.run(&["run", path(&p), "--sim", "rvr"]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+}

@@ -119,6 +119,10 @@ struct Falling {
     free: bool,
     should_land: bool,
     gyro_max: bool,
+    /// The colour sensor's palette index last fired on (`onColor`).
+    colour: Option<u8>,
+    /// On the charger, as the droid last said.
+    charging: Option<bool>,
 }
 
 fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
@@ -159,6 +163,8 @@ pub async fn run(
             free: false,
             should_land: false,
             gyro_max: false,
+            colour: None,
+            charging: None,
         },
         stance_done: false,
         last_ir: None,
@@ -419,17 +425,14 @@ impl Player {
         match n {
             Notification::Collision(_) => seen.push(Event::Collision),
             Notification::LegActionComplete => self.stance_done = true,
+            // spherov2: charging or charged is "charging", anything else "not charging"; v1's
+            // power state 1 is charging. Fired when that changes (a low battery's
+            // notification is not "taken off the charger").
             Notification::ChargerStateChanged(s) | Notification::BatteryStateChanged(s) => {
-                // spherov2: charging or charged is "charging", anything else "not charging".
-                seen.push(if matches!(s, 1 | 2) {
-                    Event::Charging
-                } else {
-                    Event::NotCharging
-                });
+                seen.extend(self.charging(matches!(s, 1 | 2)));
             }
-            Notification::Robot(RobotEvent::Color {
-                rgb, confidence, ..
-            }) if *confidence as f32 / 255.0 >= 0.71 => seen.push(Event::Color(*rgb)),
+            Notification::PowerState(s) => seen.extend(self.charging(*s == 1)),
+            Notification::Robot(RobotEvent::Color { .. }) => seen.extend(self.colour()),
             Notification::Robot(RobotEvent::IrMessage(code)) => {
                 self.last_ir = Some(*code);
                 seen.push(Event::IrMessage(*code));
@@ -446,6 +449,7 @@ impl Player {
                     }
                     self.falling.gyro_max = max;
                 }
+                seen.extend(self.colour());
                 self.check_until().await;
             }
             _ => {}
@@ -455,6 +459,29 @@ impl Player {
         if matches!(n, Notification::LegActionComplete) {
             self.check_until().await;
         }
+    }
+
+    /// `onCharging` when the droid says it is on its charger, `onNotCharging` when it is taken
+    /// off (not when the first report says it is off).
+    fn charging(&mut self, now: bool) -> Option<Event> {
+        let was = self.falling.charging.replace(now);
+        match (was, now) {
+            (Some(a), b) if a == b => None,
+            (None, false) => None,
+            (_, true) => Some(Event::Charging),
+            (_, false) => Some(Event::NotCharging),
+        }
+    }
+
+    /// `onColor` as spherov2 fires it: when the colour sensor's palette index changes (streamed
+    /// or notified), is a colour (not 255) and is seen with confidence 0.71 or more.
+    fn colour(&mut self) -> Option<Event> {
+        let (rgb, index, confidence) = lock(&self.telemetry).robot.color?;
+        if Some(index) == self.falling.colour || index == 255 || confidence < 0.71 {
+            return None;
+        }
+        self.falling.colour = Some(index);
+        Some(Event::Color(rgb))
     }
 
     /// spherov2's free fall and landing, on the acceleration's size (1 g at rest, 0 falling).

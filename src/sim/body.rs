@@ -55,6 +55,8 @@ pub enum SimEvent {
     VoltageState(u8),
     /// A collision, when collision detection is on.
     Collision(Collision),
+    /// Put on its charger (`true`) or taken off it.
+    Charger(bool),
     /// A sensor sample is due (streaming on): values by name, in the units of
     /// `droid-facts.md` (degrees, g, °/s, cm, cm/s).
     Sample(Vec<(&'static str, f32)>),
@@ -115,7 +117,14 @@ pub struct Body {
     events: Vec<SimEvent>,
     /// A hop off the floor at full raw power: lift-off and touch-down ([`HOP_AIR`]).
     hop: Option<(Duration, Duration)>,
+    /// On its charger ([`Body::set_on_charger`]).
+    on_charger: bool,
 }
+
+/// How fast the battery fills on the charger, V/s (*unverified*: about an hour from empty).
+const CHARGE_V_S: f32 = 0.0003;
+/// Full.
+const FULL_V: f32 = 4.2;
 
 /// How long a rolling robot is off the floor when both raw motors go to full power from
 /// rest: Sphero's own docs for `rawMotor` say full power on both motors makes the robot
@@ -129,6 +138,8 @@ pub const HOP_AIR: Duration = Duration::from_millis(450);
 /// sample at 100 ms), at this many g.
 const LANDING: Duration = Duration::from_millis(100);
 const LANDING_G: f32 = 2.5;
+/// The most the gyroscope measures, °/s (a faster spin reads this).
+const GYRO_MAX: f32 = 2000.0;
 /// Full power: this share of it or more on both motors, the same way.
 const HOP_POWER: f32 = 0.95;
 
@@ -185,6 +196,7 @@ impl Body {
             yaw_rate: 0.0,
             events: Vec::new(),
             hop: None,
+            on_charger: false,
         }
     }
 
@@ -492,16 +504,36 @@ impl Body {
         }
     }
 
-    /// Battery state for Get Battery State / the state-changed notification: 3 ok, 4 low,
-    /// 5 critical.
+    /// Battery state for Get Battery State / the state-changed notification, as spherov2's
+    /// `BatteryVoltageAndStateStates`: 1 charged and 2 charging (on the charger), 3 ok
+    /// (not charging), 4 low, 5 critical.
     pub fn battery_state(&self) -> u8 {
-        self.voltage_state_now() + 2
+        match (self.on_charger, self.state.battery_v >= FULL_V) {
+            (true, true) => 1,
+            (true, false) => 2,
+            _ => self.voltage_state_now() + 2,
+        }
+    }
+
+    /// On its charger or off it (a person puts it there: tests and the simulator's hosts
+    /// call this). The droid says so (its battery-state or power notification), its battery
+    /// fills, and it does not roll while it sits there.
+    pub fn set_on_charger(&mut self, on: bool) {
+        if self.on_charger != on {
+            self.on_charger = on;
+            self.events.push(SimEvent::Charger(on));
+        }
+    }
+
+    pub fn on_charger(&self) -> bool {
+        self.on_charger
     }
 
     /// Can the droid roll now? R2 only in tripod, not mid-transition.
     fn can_roll(&self) -> bool {
-        !self.model.has_legs()
-            || (self.state.stance == LegState::Tripod && self.transition.is_none())
+        !self.on_charger
+            && (!self.model.has_legs()
+                || (self.state.stance == LegState::Tripod && self.transition.is_none()))
     }
 
     fn step(&mut self, dt: f32) {
@@ -570,8 +602,16 @@ impl Body {
         };
         // Turn toward the commanded facing at the model's rate. Both are unwrapped, so the
         // body goes the way the commands went (fix, issue 32 point 1: with wrapped angles a
-        // body that fell more than half a turn behind a spin's target turned back).
-        let max = self.cfg.turn_rate_deg_s * dt;
+        // body that fell more than half a turn behind a spin's target turned back). Raw
+        // motor power on a ball or Ollie is open-loop: nothing holds the spin to the control
+        // system's rate, so opposite full power spins it like a top, past what its gyroscope
+        // measures (Sphero's docs for `onGyroMax`: "spinning the robot around like a top").
+        let open_loop = self.wheels.is_some() && self.model.hops();
+        let max = if open_loop {
+            f32::MAX
+        } else {
+            self.cfg.turn_rate_deg_s * dt
+        };
         let turn = (target_facing - self.yaw).clamp(-max, max);
         self.yaw += turn;
         if self.yaw.abs() > 36_000.0 {
@@ -698,9 +738,13 @@ impl Body {
             return;
         }
         let before_state = self.voltage_state_now();
-        let load = (self.state.velocity_cm_s.abs() / self.cfg.top_speed_cm_s).min(1.0);
-        let drain = (self.cfg.drain_idle_v_s + self.cfg.drain_drive_v_s * load) * dt;
-        self.state.battery_v = (self.state.battery_v - drain).max(3.0);
+        if self.on_charger {
+            self.state.battery_v = (self.state.battery_v + CHARGE_V_S * dt).min(FULL_V);
+        } else {
+            let load = (self.state.velocity_cm_s.abs() / self.cfg.top_speed_cm_s).min(1.0);
+            let drain = (self.cfg.drain_idle_v_s + self.cfg.drain_drive_v_s * load) * dt;
+            self.state.battery_v = (self.state.battery_v - drain).max(3.0);
+        }
         let after = self.voltage_state_now();
         if after != before_state || after != self.voltage_state {
             self.voltage_state = after;
@@ -763,7 +807,8 @@ impl Body {
             ("head_angle", s.head_deg),
             ("gyro_x", 0.0),
             ("gyro_y", 0.0),
-            ("gyro_z", self.yaw_rate),
+            // The gyroscope measures ±2000°/s at most (droid-facts' streaming range).
+            ("gyro_z", self.yaw_rate.clamp(-GYRO_MAX, GYRO_MAX)),
             // BOLT's ambient light and RVR's colour sensor see a lit, grey floor.
             ("ambient_light", 320.0),
             ("color_red", 128.0),

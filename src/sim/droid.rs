@@ -65,6 +65,11 @@ impl SimDroid {
         self.body.model()
     }
 
+    /// A person puts the droid on its charger or takes it off ([`Body::set_on_charger`]).
+    pub fn set_on_charger(&mut self, on: bool) {
+        self.body.set_on_charger(on);
+    }
+
     /// When the droid next has something to send ([`super::body::Body::next_due`]).
     pub fn next_due(&self) -> Option<Duration> {
         // A robot that follows or evades steers itself at every step.
@@ -217,6 +222,12 @@ impl SimDroid {
                     if self.voltage_state_notify {
                         self.notify(0x13, 0x1C, vec![s]);
                     }
+                    if self.battery_state_notify {
+                        let b = self.body.battery_state();
+                        self.notify(0x13, 0x06, vec![b]);
+                    }
+                }
+                SimEvent::Charger(_) => {
                     if self.battery_state_notify {
                         let b = self.body.battery_state();
                         self.notify(0x13, 0x06, vec![b]);

@@ -50,6 +50,17 @@ impl SimProbe {
         lock(&self.shared).connected
     }
 
+    /// Put the droid on its charger or take it off, now (what a person does; the droid
+    /// reports it at its next step).
+    pub fn set_on_charger(&self, on: bool) {
+        let mut s = lock(&self.shared);
+        let now = Instant::now().duration_since(self.epoch);
+        if !s.connected {
+            let _ = s.droid.advance(now);
+        }
+        s.droid.set_on_charger(on);
+    }
+
     pub fn opens(&self) -> u32 {
         lock(&self.shared).opens
     }

@@ -54,6 +54,9 @@ pub trait WireDroid: Send {
     }
     fn advance(&mut self, now: Duration) -> Vec<Vec<u8>>;
     fn state(&self) -> &SimState;
+    /// A person puts the droid on its charger, or takes it off (the rolling robots; Robi 42
+    /// has no charger the protocol reports).
+    fn set_on_charger(&mut self, _on: bool) {}
     /// The packet that warns of sleep, as the family sends it; `None` for a droid that never
     /// sleeps (Robi 42).
     fn will_sleep(&self) -> Option<Vec<u8>>;
@@ -91,6 +94,9 @@ impl WireDroid for SimDroid {
     fn state(&self) -> &SimState {
         SimDroid::state(self)
     }
+    fn set_on_charger(&mut self, on: bool) {
+        SimDroid::set_on_charger(self, on);
+    }
     /// Power / Will Sleep (13h/19h).
     fn will_sleep(&self) -> Option<Vec<u8>> {
         Some(crate::protocol::v2::Packet::notification(0x13, 0x19, Vec::new()).encode())
@@ -126,6 +132,9 @@ impl WireDroid for SimDroidV1 {
     }
     fn state(&self) -> &SimState {
         SimDroidV1::state(self)
+    }
+    fn set_on_charger(&mut self, on: bool) {
+        SimDroidV1::set_on_charger(self, on);
     }
     /// The pre-sleep warning (async ID 05h).
     fn will_sleep(&self) -> Option<Vec<u8>> {

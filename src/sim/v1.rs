@@ -70,6 +70,11 @@ impl SimDroidV1 {
         self.body.model()
     }
 
+    /// A person puts the droid on its charger or takes it off ([`Body::set_on_charger`]).
+    pub fn set_on_charger(&mut self, on: bool) {
+        self.body.set_on_charger(on);
+    }
+
     /// When the droid next has something to send ([`super::body::Body::next_due`]).
     pub fn next_due(&self) -> Option<Duration> {
         self.body.next_due()
@@ -147,11 +152,21 @@ impl SimDroidV1 {
                     // Body: 1 ok, 2 low, 3 critical; v1: 2 OK, 3 low, 4 critical.
                     self.send_async(ID_POWER, vec![s.saturating_add(1).min(4)]);
                 }
+                // v1 power states: 1 charging, 2 OK (droid-facts' Get Power State).
+                SimEvent::Charger(on) if self.power_notify => {
+                    let state = if on {
+                        1
+                    } else {
+                        self.body.voltage_state_now().saturating_add(1).min(4)
+                    };
+                    self.send_async(ID_POWER, vec![state]);
+                }
                 SimEvent::Collision(c) => {
                     self.send_async(ID_COLLISION, v1::encode_collision(&c));
                 }
                 SimEvent::Sample(values) => self.sample(values),
                 SimEvent::VoltageState(_)
+                | SimEvent::Charger(_)
                 | SimEvent::LegActionComplete
                 | SimEvent::AnimationComplete => {}
             }
