@@ -462,3 +462,25 @@ fn on_color_fires_once_per_colour_seen() {
     let out = dir.run(&["run", path(&p), "--sim", "rvr"]);
     assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
 }
+
+/// A program that waits for something that never comes (a promise nothing resolves, with no
+/// event to run) ends at once with the droid stopped and says why, rather than running on
+/// forever in simulated time.
+#[test]
+fn a_program_waiting_for_nothing_ends_and_says_why() {
+    let dir = Scratch::new("edu", "stuck");
+    let p = dir.file(
+        "stuck.js",
+        "async function startProgram() {\n  setSpeed(80);\n  await delay(0.5);\n  await new Promise(() => {});\n}\n",
+    );
+    let (out, wall) = dir.run_timed(&["run", path(&p), "--sim", "bolt", "--json"]);
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains(
+            "the program can go no further: it waits for a promise that nothing resolves"
+        ),
+        "{}",
+        stderr(&out)
+    );
+    assert!(wall < Duration::from_secs(20), "{wall:?}");
+}

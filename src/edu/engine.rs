@@ -474,17 +474,35 @@ fn status(ctx: &mut Context) -> Status {
             PromiseState::Fulfilled(_) => {}
         }
     }
-    let (exit, main_done, listening) = with_js(|js| {
+    let (exit, main_done, listening, waiting) = with_js(|js| {
         js.watched = keep;
         let done = js
             .main
             .as_ref()
             .is_some_and(|m| matches!(m.state(), PromiseState::Fulfilled(_)));
-        (js.exit, done, !js.handlers.is_empty())
+        (
+            js.exit,
+            done,
+            !js.handlers.is_empty(),
+            !js.pending.is_empty(),
+        )
     })
-    .unwrap_or((true, true, false));
+    .unwrap_or((true, true, false, false));
     if exit || (main_done && !listening) {
         Status::Finished
+    } else if !main_done && !listening && !waiting {
+        // Nothing droidctl does can resolve what `startProgram` waits for, and no event can
+        // run: the program can never go on. Either it awaits a promise nothing resolves, or
+        // the engine's loop limit ended a loop after an `await` (Boa drops that error when it
+        // resumes an async function, leaving its promise pending). Without this, a run in
+        // simulated time would go on forever.
+        Status::Failed(Failure {
+            line: None,
+            message: format!(
+                "the program can go no further: it waits for a promise that nothing resolves, \
+                 or a loop turned {LOOP_LIMIT} times without an `await` and was ended"
+            ),
+        })
     } else {
         Status::Running
     }
