@@ -500,7 +500,7 @@ fn status(ctx: &mut Context) -> Status {
             line: None,
             message: format!(
                 "the program can go no further: it waits for a promise that nothing resolves, \
-                 or a loop turned {LOOP_LIMIT} times without an `await` and was ended"
+                 or the engine stopped a loop that ran {LOOP_LIMIT} times without an `await`"
             ),
         })
     } else {
