@@ -143,7 +143,7 @@ async fn the_scope_shows_chosen_channels_and_its_keys_work() {
         (3000, press(Key::ch('g'))),
         // The channel list: the first channel offered is pitch; switch it on.
         (3100, press(Key::ch('C'))),
-        (3200, press(Key::plain(KeyCode::Space))),
+        (3200, press(Key::ch('x'))),
         (3300, press(Key::plain(KeyCode::Esc))),
         // Longer window, fixed axes, then pause: the plot stays at 6 s.
         (3400, press(Key::ch('['))),
@@ -191,10 +191,10 @@ async fn the_scope_shows_chosen_channels_and_its_keys_work() {
 async fn the_palette_sets_rate_sensors_and_collision_and_collisions_keep_coming() {
     let right = Key::plain(KeyCode::Right);
     let down = Key::plain(KeyCode::Down);
-    let space = Key::plain(KeyCode::Space);
+    let toggle = Key::ch('x');
     let mut keys = vec![(3000, press(Key::ch('u')))];
     let mut t = 3000;
-    // Each key pressed and let go (Space and the arrows are held keys while driving).
+    // Each key pressed and let go (the arrows are held keys while driving).
     let mut taps = Vec::new();
     let mut at = |k: Key| {
         t += 50;
@@ -208,7 +208,7 @@ async fn the_palette_sets_rate_sensors_and_collision_and_collisions_keep_coming(
     keys.push(at(down));
     for _ in 0..5 {
         keys.push(at(down));
-        keys.push(at(space));
+        keys.push(at(toggle));
     }
     keys.push(at(down));
     keys.push(at(down));
@@ -432,7 +432,7 @@ async fn settings_are_remembered_per_model_and_forgotten_with_r() {
         (3200, press(Key::ch('g'))),
         (3300, press(Key::ch('['))),
         (3400, press(Key::ch('C'))),
-        (3500, press(Key::plain(KeyCode::Space))),
+        (3500, press(Key::ch('x'))),
         (3600, press(Key::plain(KeyCode::Esc))),
         (3700, press(Key::ch('g'))),
         (3800, press(Key::ch('u'))),

@@ -107,9 +107,21 @@ fn the_emergency_stop_reaches_every_droid_idle_or_not() {
             ms(200),
         ],
     );
-    // From the packet log, the help overlay and a palette too.
-    for open in ['l', '?', 'n'] {
-        holds(EMULATED, &[tap(Key::ch(open)), ms(50), tap(SPACE), ms(300)]);
+    // From the packet log, the help overlay, a palette, the settings and the scope's
+    // channel list too: Space is the emergency stop there (the lists switch a row with `x`),
+    // and it is one.
+    let places: [&[Step]; 5] = [
+        &[tap(Key::ch('l'))],
+        &[tap(Key::ch('?'))],
+        &[tap(Key::ch('n'))],
+        &[tap(Key::ch('u'))],
+        &[tap(Key::ch('g')), ms(50), tap(Key::ch('C'))],
+    ];
+    for open in places {
+        let mut steps = open.to_vec();
+        steps.extend([ms(50), tap(SPACE), ms(300)]);
+        let out = run(EMULATED, &steps).unwrap_or_else(|e| panic!("{e}\nsteps: {steps:?}"));
+        assert_eq!(out.estops, 1, "Space over {open:?} is the emergency stop");
     }
 }
 

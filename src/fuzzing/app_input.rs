@@ -154,6 +154,8 @@ pub struct Outcome {
     pub state: Option<AppState>,
     /// The app ended before the sequence did (a quit key).
     pub quit: bool,
+    /// Emergency stops the app made (each reaches every droid: the promises check that).
+    pub estops: usize,
 }
 
 /// [`check`], keeping what the run left for a test's own assertions.
@@ -294,6 +296,7 @@ async fn rig(
     let _ = app.await;
     fleet.shutdown_all(|_| Vec::new()).await;
     let w = writes.lock().unwrap_or_else(|e| e.into_inner()).clone();
+    let estops = oracle.estops.len();
     if promises {
         oracle.verify(&w, if quit { None } else { Some(end) })?;
     }
@@ -313,6 +316,7 @@ async fn rig(
         steps_at,
         state: SEEN.with(|s| s.borrow_mut().take()),
         quit,
+        estops,
     })
 }
 
