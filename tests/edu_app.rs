@@ -77,3 +77,39 @@ fn the_emergency_stop_ends_the_program_and_the_motion() {
     assert!(status.success(), "{status:?}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The Matrix panel shows what a program put on BOLT's matrix (the panel follows the matrix
+/// commands that go out, whoever sends them): here the program's animations.
+#[test]
+fn the_matrix_panel_shows_what_the_program_draws() {
+    let dir = std::env::temp_dir().join(format!("droidctl-edu-app-m-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let log = dir.join("droidctl.log");
+    let program = format!(
+        "{}/tests/fixtures/edu/animation.js",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let mut tui = pty::Tui::start(
+        &["--sim", "bolt", "--program", &program],
+        &[
+            ("DROIDCTL_LOG_FILE", log.to_str().unwrap()),
+            ("DROIDCTL_CONFIG", "/dev/null"),
+        ],
+    );
+    let start = Instant::now();
+    for want in ["animation 0", "animation 1"] {
+        while !tui.text().contains(want) {
+            assert!(
+                start.elapsed() < Duration::from_secs(30),
+                "no {want:?} on the screen:\n{}",
+                tui.text()
+            );
+            std::thread::sleep(Duration::from_millis(50));
+        }
+    }
+    tui.send(b"q");
+    let status = tui.wait_exit(Duration::from_secs(15));
+    assert!(status.success(), "{status:?}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

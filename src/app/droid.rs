@@ -105,6 +105,14 @@ impl DroidMut<'_> {
 
     /// A packet-log entry, from the session or the replay.
     pub fn on_log(&mut self, entry: &LogEntry) {
+        if entry.dir == crate::session::Direction::Out
+            && let crate::session::LogItem::Packet {
+                packet: crate::family::Packet::V2(p),
+                ..
+            } = &entry.item
+        {
+            self.view.matrix.sent(p.did, p.cid, &p.data);
+        }
         let line = if self.fleet {
             LogLine::from_droid_entry(entry, self.io.name.clone())
         } else {

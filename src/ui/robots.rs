@@ -37,6 +37,14 @@ fn matrix_rows(s: &AppState) -> Vec<Line<'static>> {
     match &m.shows {
         MatrixShows::Unknown => (0..4).map(|_| row("· · · · ".into(), off)).collect(),
         MatrixShows::Fill => (0..4).map(|_| row("▀".repeat(8), lit)).collect(),
+        // What was drawn is not kept pixel by pixel here: a pattern in its colour says so.
+        MatrixShows::Drawing | MatrixShows::Animation(_) => {
+            let pattern = Style::new().fg(rgb(m.colour));
+            ["▚ ▚ ▚ ▚ ", " ▞ ▞ ▞ ▞", "▚ ▚ ▚ ▚ ", " ▞ ▞ ▞ ▞"]
+                .iter()
+                .map(|r| row((*r).into(), pattern))
+                .collect()
+        }
         MatrixShows::Char(c) => {
             let glyph = Style::new().fg(rgb(m.colour)).add_modifier(Modifier::BOLD);
             vec![
@@ -69,6 +77,8 @@ fn what_it_shows(s: &AppState) -> String {
         MatrixShows::Fill => "filled".to_string(),
         MatrixShows::Char(c) => format!("{c:?}"),
         MatrixShows::Text(t) => format!("scrolling {:?}", truncate(t, 12)),
+        MatrixShows::Drawing => "pixels drawn".to_string(),
+        MatrixShows::Animation(n) => format!("animation {n}"),
     };
     format!("{what} #{r:02x}{g:02x}{b:02x}")
 }
