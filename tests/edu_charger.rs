@@ -4,12 +4,13 @@
 //! notification), and the program's handlers fire, once each, in that order. In simulated
 //! time, the session and program started as `droidctl run` starts them.
 
-use droidctl::edu::{Program, ProgramOptions};
-use droidctl::mission::{Emit, MissionEvent, MissionOptions};
 use droidctl::model::Model;
 use droidctl::sim::{Faults, SimConfig, SimLink};
-use std::sync::{Arc, Mutex};
 use std::time::Duration;
+
+#[path = "common/edu_run.rs"]
+mod edu_run;
+use edu_run::run_program;
 
 const PROGRAM: &str = "const seen = [];\n\
     registerEvent(EventType.onCharging, () => { seen.push(\"on\"); });\n\
@@ -26,22 +27,6 @@ const PROGRAM: &str = "const seen = [];\n\
 async fn run(model: Model, on_at: f32, off_at: f32) -> (Vec<String>, f32) {
     let link = SimLink::new(model, SimConfig::for_model(model), Faults::none());
     let probe = link.probe();
-    let (cfg, mission) = droidctl::cli::run::mission_session(model, MissionOptions::default());
-    let session = droidctl::session::start(Box::new(link), cfg);
-    let program = Program::new(PROGRAM.to_string(), "charger.js".into()).unwrap();
-    let opts = ProgramOptions {
-        mission,
-        ..ProgramOptions::default()
-    };
-    let said = Arc::new(Mutex::new(Vec::new()));
-    let emit: Emit = {
-        let said = said.clone();
-        Arc::new(move |e: MissionEvent| {
-            if let MissionEvent::Step { text, .. } = e {
-                said.lock().unwrap().push(text);
-            }
-        })
-    };
     let person = async {
         tokio::time::sleep(Duration::from_secs_f32(on_at)).await;
         probe.set_on_charger(true);
@@ -49,13 +34,10 @@ async fn run(model: Model, on_at: f32, off_at: f32) -> (Vec<String>, f32) {
         probe.set_on_charger(false);
     };
     let start = tokio::time::Instant::now();
-    let (r, ()) = tokio::join!(
-        droidctl::edu::run(&session, model, &program, opts, emit, start),
+    let ((summary, said), ()) = tokio::join!(
+        run_program(link, model, PROGRAM, "charger.js", start),
         person
     );
-    session.shutdown(Vec::new()).await;
-    let said = said.lock().unwrap().clone();
-    let summary = r.unwrap_or_else(|e| panic!("{e}: {said:?}"));
     let rolled = summary
         .x_cm
         .unwrap_or(0.0)

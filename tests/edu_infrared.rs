@@ -6,17 +6,18 @@
 //! below), and the behaviours' finer points run here in process, each droid's session and
 //! program as `run` starts them, in simulated time.
 
-use droidctl::edu::{Program, ProgramOptions};
-use droidctl::mission::{Emit, MissionEvent, MissionOptions, Summary};
+use droidctl::mission::Summary;
 use droidctl::model::Model;
 use droidctl::sim::link::SimProbe;
 use droidctl::sim::room::SharedRoom;
 use droidctl::sim::{Faults, SimConfig, SimLink};
-use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
+#[path = "common/edu_run.rs"]
+mod edu_run;
 #[path = "common/scratch.rs"]
 mod scratch;
+use edu_run::run_program;
 use scratch::{Scratch, path, stderr, stdout};
 
 fn example(name: &str) -> String {
@@ -117,27 +118,8 @@ async fn fleet(models: &[Model], programs: &[&str]) -> Vec<Run> {
             let link = SimLink::new(*m, cfg, Faults::none());
             let probe = link.probe();
             async move {
-                let (cfg, mission) =
-                    droidctl::cli::run::mission_session(*m, MissionOptions::default());
-                let session = droidctl::session::start(Box::new(link), cfg);
-                let program = Program::new(text.to_string(), format!("droid{i}.js")).unwrap();
-                let opts = ProgramOptions {
-                    mission,
-                    ..ProgramOptions::default()
-                };
-                let seen = Arc::new(Mutex::new(Vec::new()));
-                let emit: Emit = {
-                    let seen = seen.clone();
-                    Arc::new(move |e: MissionEvent| {
-                        if let MissionEvent::Step { text, .. } = e {
-                            seen.lock().unwrap().push(text);
-                        }
-                    })
-                };
-                let r = droidctl::edu::run(&session, *m, &program, opts, emit, start).await;
-                session.shutdown(Vec::new()).await;
-                let said = seen.lock().unwrap().clone();
-                let summary = r.unwrap_or_else(|e| panic!("droid {i}: {e}: {said:?}"));
+                let name = format!("droid{i}.js");
+                let (summary, said) = run_program(link, *m, text, &name, start).await;
                 Run {
                     summary,
                     said,
