@@ -29,6 +29,7 @@ pub mod session;
 pub mod sim;
 pub mod telemetry;
 pub mod teleop;
+pub mod text_file;
 pub mod tuning;
 pub mod ui;
 pub mod units;

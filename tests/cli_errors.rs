@@ -159,3 +159,32 @@ fn packet_list_prints_no_empty_heading_and_refuses_a_filter_matching_nothing() {
     assert!(!out.contains("Notifications"), "{out}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Scripts, programs and the configuration are read whole, so they are read bounded: an
+/// endless file (`/dev/zero`) is one line and exit 2 at once, never unbounded memory.
+#[cfg(unix)]
+#[test]
+fn an_endless_script_program_or_configuration_is_one_line_not_unbounded_memory() {
+    let dir = scratch("endless");
+    let program = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/edu/beacon.js");
+    for args in [
+        vec!["run", "/dev/zero", "--sim", "bolt"],
+        vec!["run", program, "/dev/zero", "--sim", "bolt,bolt"],
+        vec!["--sim", "bolt", "--program", "/dev/zero"],
+    ] {
+        let out = droidctl_in(&dir, &args, b"");
+        let err = text(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains("larger than 4096 KiB"), "{args:?}: {err}");
+        assert_eq!(err.lines().count(), 1, "{args:?}: {err}");
+    }
+    let out = Command::new(env!("CARGO_BIN_EXE_droidctl"))
+        .args(["config", "check"])
+        .env("DROIDCTL_CONFIG", "/dev/zero")
+        .env("DROIDCTL_LOG_FILE", dir.join("droidctl.log"))
+        .output()
+        .unwrap();
+    let err = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("larger than 1024 KiB"), "{err}");
+}

@@ -17,6 +17,8 @@ const RANKS: &[(&str, u32)] = &[
     ("logging", 0),
     // The overwrite rule of the files droidctl writes.
     ("output", 0),
+    // The bound on the text files droidctl reads whole.
+    ("text_file", 0),
     // What a user tunes about monitoring: sensor groups, collision detection.
     ("tuning", 0),
     // The sans-IO protocol core.

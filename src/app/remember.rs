@@ -71,7 +71,7 @@ impl Remembered {
             }
             Ok(_) => {}
         }
-        let text = match std::fs::read_to_string(&p) {
+        let text = match crate::text_file::read(&p, MAX_BYTES) {
             Ok(t) => t,
             Err(e) => return (Remembered::default(), warn(e.to_string())),
         };

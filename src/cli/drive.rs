@@ -44,7 +44,7 @@ fn program(args: &DriveArgs) -> Result<Option<crate::edu::Program>, CliError> {
         return Ok(None);
     };
     let shown = path.display().to_string();
-    let text = std::fs::read_to_string(path)
+    let text = crate::text_file::read(path, crate::text_file::MAX_SCRIPT_BYTES)
         .map_err(|e| CliError::usage(format!("cannot read program {shown}: {e}")))?;
     crate::edu::Program::new(text, shown.clone())
         .map(Some)

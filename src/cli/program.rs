@@ -27,22 +27,14 @@ fn parse(text: String, shown: &str) -> Result<Program, CliError> {
     })
 }
 
-/// The programs after the first (`run a.js b.js …`): each read, bounded, and checked before
+/// The programs after the first (`run a.js b.js …`): each read (bounded) and checked before
 /// anything is sent.
 fn more_programs(args: &RunArgs) -> Result<Vec<Program>, CliError> {
-    /// A program file larger than this is refused (a classroom's programs are a few KiB).
-    const MAX_BYTES: u64 = 4 * 1024 * 1024;
     args.more
         .iter()
         .map(|path| {
             let shown = path.display().to_string();
-            let too_big = std::fs::metadata(path).is_ok_and(|m| m.len() > MAX_BYTES);
-            if too_big {
-                return Err(CliError::usage(format!(
-                    "{shown} is larger than 4 MiB: not a Sphero Edu program"
-                )));
-            }
-            let text = std::fs::read_to_string(path)
+            let text = crate::text_file::read(path, crate::text_file::MAX_SCRIPT_BYTES)
                 .map_err(|e| CliError::usage(format!("cannot read program {shown}: {e}")))?;
             if !crate::edu::is_program(path, &text) {
                 return Err(CliError::usage(format!(

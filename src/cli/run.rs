@@ -95,7 +95,7 @@ pub(super) fn resolve(args: &RunArgs) -> Result<(PathBuf, Vec<Model>), CliError>
 
 pub fn run(args: RunArgs) -> Result<i32, CliError> {
     let (path, sims) = resolve(&args)?;
-    let text = std::fs::read_to_string(&path)
+    let text = crate::text_file::read(&path, crate::text_file::MAX_SCRIPT_BYTES)
         .map_err(|e| CliError::usage(format!("cannot read script {}: {e}", path.display())))?;
     let shown = path.display().to_string();
     let script_errors = |errs: Vec<crate::script::ScriptError>| {

@@ -355,7 +355,7 @@ impl Config {
 
     /// Load the user's file if it exists, merged over the defaults.
     pub fn load(path: &Path) -> Result<Config, ConfigError> {
-        match std::fs::read_to_string(path) {
+        match crate::text_file::read(path, crate::text_file::MAX_CONFIG_BYTES) {
             Ok(text) => Config::parse_merged(Some(path), &text),
             // A file named on purpose (DROIDCTL_CONFIG) that is not there is a mistake, not
             // a wish for the defaults (`/dev/null` asks for them).
