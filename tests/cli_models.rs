@@ -3,19 +3,13 @@
 //! man pages and the error for an unknown name, which offers `robi` as every document says.
 
 use droidctl::model::Model;
-use std::process::{Command, Output, Stdio};
+use std::process::Output;
+
+#[path = "common/cli.rs"]
+mod cli;
 
 fn droidctl(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_droidctl"))
-        .args(args)
-        .env("DROIDCTL_CONFIG", "/dev/null")
-        .env(
-            "DROIDCTL_LOG_FILE",
-            std::env::temp_dir().join("droidctl-cli-models.log"),
-        )
-        .stdin(Stdio::null())
-        .output()
-        .unwrap()
+    cli::droidctl_isolated(args, "droidctl-cli-models.log")
 }
 
 fn stdout(args: &[&str]) -> String {

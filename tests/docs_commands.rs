@@ -27,7 +27,9 @@
 // commands get SIGTERM.
 #![cfg(unix)]
 
-use std::io::{Read, Write};
+#[path = "common/pty.rs"]
+mod pty;
+
 use std::path::PathBuf;
 use std::process::{Child, Command, Stdio};
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -439,82 +441,46 @@ fn run_one(scratch: &Scratch, mode: Mode, c: &DocCommand) -> Result<(), String> 
 
 /// The app in an 80×24 pseudo-terminal: once it has drawn, `q` must end it with status 0.
 fn run_in_a_terminal(scratch: &Scratch, c: &DocCommand) -> Result<(), String> {
-    use portable_pty::{CommandBuilder, PtySize, native_pty_system};
-    let pty = native_pty_system()
-        .openpty(PtySize {
-            rows: 24,
-            cols: 80,
-            pixel_width: 0,
-            pixel_height: 0,
-        })
-        .map_err(|e| e.to_string())?;
-    let mut cmd = CommandBuilder::new(env!("CARGO_BIN_EXE_droidctl"));
     let plain = scratch.command(c);
-    cmd.args(plain.get_args());
-    cmd.cwd(&scratch.0);
-    cmd.env("TERM", "xterm-256color");
-    for (k, v) in scratch.env() {
-        cmd.env(k, v);
-    }
-    let mut child = pty.slave.spawn_command(cmd).map_err(|e| e.to_string())?;
-    drop(pty.slave);
-    let mut reader = pty.master.try_clone_reader().map_err(|e| e.to_string())?;
-    let writer = Arc::new(Mutex::new(
-        pty.master.take_writer().map_err(|e| e.to_string())?,
-    ));
-    let screen = Arc::new(Mutex::new(vt100::Parser::new(
-        24u16.try_into().unwrap(),
-        80u16.try_into().unwrap(),
-        0,
-    )));
-    let (screen2, answer) = (screen.clone(), writer.clone());
-    std::thread::spawn(move || {
-        let _keep_master = pty.master;
-        let mut buf = [0u8; 8192];
-        while let Ok(n) = reader.read(&mut buf) {
-            if n == 0 {
-                break;
-            }
-            screen2.lock().unwrap().process(&buf[..n]);
-            // Answer crossterm's capability probe as a legacy terminal.
-            if buf[..n].windows(4).any(|w| w == b"\x1b[?u") {
-                let mut w = answer.lock().unwrap();
-                let _ = w.write_all(b"\x1b[?62;c");
-                let _ = w.flush();
-            }
-        }
-    });
-    let text = || screen.lock().unwrap().screen().contents();
+    let args: Vec<String> = plain
+        .get_args()
+        .map(|a| a.to_string_lossy().into_owned())
+        .collect();
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    let env: Vec<(String, String)> = scratch
+        .env()
+        .into_iter()
+        .map(|(k, v)| (k, v.to_string_lossy().into_owned()))
+        .collect();
+    let env: Vec<(&str, &str)> = env.iter().map(|(k, v)| (k.as_str(), v.as_str())).collect();
+    let mut tui = pty::Tui::spawn(&args, &env, (80, 24), Some(&scratch.0))?;
     let start = Instant::now();
     // Drawn: a few lines of the app are on screen.
-    let drawn = || text().lines().filter(|l| !l.trim().is_empty()).count() >= 3;
-    while !drawn() {
-        if let Some(status) = child.try_wait().map_err(|e| e.to_string())? {
-            return Err(format!("exited ({status:?}) before drawing:\n{}", text()));
+    let drawn = |t: &pty::Tui| t.text().lines().filter(|l| !l.trim().is_empty()).count() >= 3;
+    while !drawn(&tui) {
+        if let Some(status) = tui.try_wait() {
+            return Err(format!(
+                "exited ({status:?}) before drawing:\n{}",
+                tui.text()
+            ));
         }
         if start.elapsed() > LIMIT {
-            let _ = child.kill();
-            return Err(format!("drew nothing in {LIMIT:?}:\n{}", text()));
+            return Err(format!("drew nothing in {LIMIT:?}:\n{}", tui.text()));
         }
         std::thread::sleep(Duration::from_millis(50));
     }
-    {
-        let mut w = writer.lock().unwrap();
-        w.write_all(b"q").map_err(|e| e.to_string())?;
-        w.flush().map_err(|e| e.to_string())?;
-    }
+    tui.send(b"q");
     let start = Instant::now();
     loop {
-        if let Some(status) = child.try_wait().map_err(|e| e.to_string())? {
+        if let Some(status) = tui.try_wait() {
             return if status.success() {
                 Ok(())
             } else {
-                Err(format!("`q` ended it with {status:?}:\n{}", text()))
+                Err(format!("`q` ended it with {status:?}:\n{}", tui.text()))
             };
         }
         if start.elapsed() > Duration::from_secs(20) {
-            let _ = child.kill();
-            return Err(format!("`q` did not end it:\n{}", text()));
+            return Err(format!("`q` did not end it:\n{}", tui.text()));
         }
         std::thread::sleep(Duration::from_millis(50));
     }

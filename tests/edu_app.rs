@@ -7,7 +7,6 @@
 use serde_json::Value;
 use std::time::{Duration, Instant};
 
-#[allow(dead_code)]
 #[path = "common/pty.rs"]
 mod pty;
 

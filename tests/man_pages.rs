@@ -8,19 +8,13 @@
 use droidctl::cli::man::key_sections;
 use std::collections::BTreeSet;
 use std::path::PathBuf;
-use std::process::{Command, Output, Stdio};
+use std::process::Output;
+
+#[path = "common/cli.rs"]
+mod cli;
 
 fn droidctl(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_droidctl"))
-        .args(args)
-        .env("DROIDCTL_CONFIG", "/dev/null")
-        .env(
-            "DROIDCTL_LOG_FILE",
-            std::env::temp_dir().join("droidctl-man-pages.log"),
-        )
-        .stdin(Stdio::null())
-        .output()
-        .unwrap()
+    cli::droidctl_isolated(args, "droidctl-man-pages.log")
 }
 
 fn page(args: &[&str]) -> String {

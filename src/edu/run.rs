@@ -103,7 +103,7 @@ struct Player {
     /// Distance covered, cm (spherov2 sums the locator's steps).
     distance: f32,
     last_location: Option<[f32; 2]>,
-    falling: Falling,
+    sensed: Sensed,
     stance_done: bool,
     /// The channel of the last infrared message heard (`getLastIRMessage`).
     last_ir: Option<u8>,
@@ -112,8 +112,10 @@ struct Player {
     mission: DroidMission,
 }
 
-/// spherov2's fall detector (`__process_falling`), on the acceleration's size.
-struct Falling {
+/// What the events told from the droid's reports last saw: spherov2's fall detector
+/// (`__process_falling`, on the acceleration's size), the gyroscope at its limit, the colour
+/// sensor's index and the charger.
+struct Sensed {
     v: f32,
     since: Option<Instant>,
     free: bool,
@@ -157,7 +159,7 @@ pub async fn run(
         raw: false,
         distance: 0.0,
         last_location: None,
-        falling: Falling {
+        sensed: Sensed {
             v: 1.0,
             since: None,
             free: false,
@@ -432,24 +434,30 @@ impl Player {
                 seen.extend(self.charging(matches!(s, 1 | 2)));
             }
             Notification::PowerState(s) => seen.extend(self.charging(*s == 1)),
-            Notification::Robot(RobotEvent::Color { .. }) => seen.extend(self.colour()),
+            Notification::Robot(RobotEvent::Color { .. }) => {
+                let colour = lock(&self.telemetry).robot.color;
+                seen.extend(self.colour(colour));
+            }
             Notification::Robot(RobotEvent::IrMessage(code)) => {
                 self.last_ir = Some(*code);
                 seen.push(Event::IrMessage(*code));
             }
             Notification::Sensors(_) => {
-                let t = lock(&self.telemetry).clone();
-                if let Some(a) = t.accel {
+                let (accel, gyro, colour) = {
+                    let t = lock(&self.telemetry);
+                    (t.accel, t.gyro, t.robot.color)
+                };
+                if let Some(a) = accel {
                     seen.extend(self.fall(a));
                 }
-                if let Some(g) = t.gyro {
+                if let Some(g) = gyro {
                     let max = g.iter().any(|v| v.abs() >= 2000.0);
-                    if max && !self.falling.gyro_max {
+                    if max && !self.sensed.gyro_max {
                         seen.push(Event::GyroMax);
                     }
-                    self.falling.gyro_max = max;
+                    self.sensed.gyro_max = max;
                 }
-                seen.extend(self.colour());
+                seen.extend(self.colour(colour));
                 self.check_until().await;
             }
             _ => {}
@@ -464,7 +472,7 @@ impl Player {
     /// `onCharging` when the droid says it is on its charger, `onNotCharging` when it is taken
     /// off (not when the first report says it is off).
     fn charging(&mut self, now: bool) -> Option<Event> {
-        let was = self.falling.charging.replace(now);
+        let was = self.sensed.charging.replace(now);
         match (was, now) {
             (Some(a), b) if a == b => None,
             (None, false) => None,
@@ -475,19 +483,19 @@ impl Player {
 
     /// `onColor` as spherov2 fires it: when the colour sensor's palette index changes (streamed
     /// or notified), is a colour (not 255) and is seen with confidence 0.71 or more.
-    fn colour(&mut self) -> Option<Event> {
-        let (rgb, index, confidence) = lock(&self.telemetry).robot.color?;
-        if Some(index) == self.falling.colour || index == 255 || confidence < 0.71 {
+    fn colour(&mut self, reading: Option<([u8; 3], u8, f32)>) -> Option<Event> {
+        let (rgb, index, confidence) = reading?;
+        if Some(index) == self.sensed.colour || index == 255 || confidence < 0.71 {
             return None;
         }
-        self.falling.colour = Some(index);
+        self.sensed.colour = Some(index);
         Some(Event::Color(rgb))
     }
 
     /// spherov2's free fall and landing, on the acceleration's size (1 g at rest, 0 falling).
     fn fall(&mut self, a: [f32; 3]) -> Vec<Event> {
         let size = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
-        let f = &mut self.falling;
+        let f = &mut self.sensed;
         f.v = (f.v + size * 3.0) / 4.0;
         let now = Instant::now();
         let mut out = Vec::new();
@@ -717,7 +725,7 @@ impl Player {
             Matrix::SaveFrame(i, frame) => Some(
                 cmd::save_compressed_frame_player_64_bit_frame(
                     *i,
-                    Bytes(crate::sim::animation::pack(frame).to_vec()),
+                    Bytes(crate::protocol::v2::frame::pack(frame).to_vec()),
                 )
                 .into(),
             ),

@@ -6,9 +6,8 @@
 //! The wire is spherov2.py's (`commands/io.py`, `sphero_edu.py`
 //! `register_matrix_animation`); droid-facts.md names only the command range ("saved frames
 //! and animations 0x30–0x38, 0x43"):
-//! - 0x30 save frame: `[index u16 BE, 32 bytes]`, the 32 bytes four bit planes (bit 0 of
-//!   each pixel's palette index first), each plane eight rows *bottom row first*, each row a
-//!   byte with column 0 in the top bit (spherov2 packs `for row_idx in range(7, -1, -1)`).
+//! - 0x30 save frame: `[index u16 BE, 32 bytes]`, the 32 bytes packed as
+//!   [`crate::protocol::v2::frame`] says.
 //! - 0x31 save animation: `[id, fps, fade, n, n × RGB, count u16 BE, count × frame u16 BE]`.
 //! - 0x32 play, 0x43 play with a loop flag, 0x36 pause, 0x37 resume, 0x38 reset, 0x39
 //!   override fps (0: the animation's own) and fade; 0x35 deletes everything.
@@ -21,6 +20,7 @@
 //! frames is not drawn (each frame is shown whole for its time), so what the matrix shows at
 //! a frame's time is exact and the fade's in-between colours are not simulated.
 
+use crate::protocol::v2::frame::unpack;
 use std::time::Duration;
 
 /// Frames and animations kept (bounded; the real limits are unpublished).
@@ -67,33 +67,6 @@ pub struct Tick {
     pub show: Option<[[[u8; 3]; 8]; 8]>,
     /// A one-shot animation ended (its id).
     pub complete: Option<u8>,
-}
-
-/// Decode spherov2's 32-byte packing into palette indexes `[y][x]`.
-pub fn unpack(bytes: &[u8; 32]) -> [[u8; 8]; 8] {
-    let mut out = [[0u8; 8]; 8];
-    for (k, b) in bytes.iter().enumerate() {
-        let (plane, y) = (k / 8, 7 - k % 8);
-        for (x, px) in out[y].iter_mut().enumerate() {
-            *px |= ((b >> (7 - x)) & 1) << plane;
-        }
-    }
-    out
-}
-
-/// Pack palette indexes `[y][x]` (0..=15) as spherov2 does (the inverse of [`unpack`]).
-pub fn pack(frame: &[[u8; 8]; 8]) -> [u8; 32] {
-    let mut out = [0u8; 32];
-    for plane in 0..4 {
-        for (y, row) in frame.iter().enumerate() {
-            let mut b = 0u8;
-            for (x, px) in row.iter().enumerate() {
-                b |= ((px >> plane) & 1) << (7 - x);
-            }
-            out[plane * 8 + (7 - y)] = b;
-        }
-    }
-    out
 }
 
 /// Why a command was refused (the simulator answers Bad Parameter Value or Command Failed).
@@ -293,24 +266,10 @@ impl Player {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::protocol::v2::frame::pack;
 
     fn ms(v: u64) -> Duration {
         Duration::from_millis(v)
-    }
-
-    #[test]
-    fn frames_unpack_as_spherov2_packs_them() {
-        // spherov2's own packing of a frame whose top-left pixel is index 1, bottom-right 15.
-        let mut f = [[0u8; 8]; 8];
-        f[0][0] = 1;
-        f[7][7] = 15;
-        f[3][4] = 6;
-        let packed = pack(&f);
-        // Plane 0, bottom row first: row 7 is byte 0, its column 7 the lowest bit.
-        assert_eq!(packed[0], 0b0000_0001);
-        // Plane 0, row 0 (byte 7): column 0 is the top bit.
-        assert_eq!(packed[7], 0b1000_0000);
-        assert_eq!(unpack(&packed), f);
     }
 
     fn saved() -> Player {

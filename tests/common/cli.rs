@@ -1,9 +1,9 @@
 //! The built binary run with arguments, and the one-line usage-error contract, shared by the
-//! `packet` CLI tests through `#[path]`.
+//! CLI tests through `#[path]`.
 
 #![allow(dead_code)]
 
-use std::process::{Command, Output};
+use std::process::{Command, Output, Stdio};
 
 pub fn droidctl(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_droidctl"))
@@ -11,6 +11,18 @@ pub fn droidctl(args: &[&str]) -> Output {
         // A panic would print a backtrace note: make sure it would show up.
         .env("RUST_BACKTRACE", "1")
         .env_remove("RUST_LOG")
+        .output()
+        .expect("run droidctl")
+}
+
+/// The binary run apart from the user's setup: the default configuration, its log in the
+/// temporary directory as `log`, no standard input.
+pub fn droidctl_isolated(args: &[&str], log: &str) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_droidctl"))
+        .args(args)
+        .env("DROIDCTL_CONFIG", "/dev/null")
+        .env("DROIDCTL_LOG_FILE", std::env::temp_dir().join(log))
+        .stdin(Stdio::null())
         .output()
         .expect("run droidctl")
 }

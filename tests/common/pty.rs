@@ -1,5 +1,8 @@
 //! The app in a pseudo-terminal for end-to-end tests that drive `droidctl` as a person
-//! would (shared by `relay_e2e.rs` and `sim_bluez.rs` through `#[path]`).
+//! would (shared by `relay_e2e.rs`, `sim_bluez.rs`, `edu_app.rs` and `docs_commands.rs`
+//! through `#[path]`).
+
+#![allow(dead_code)]
 
 use portable_pty::{CommandBuilder, PtySize, native_pty_system};
 use std::io::{Read, Write};
@@ -14,7 +17,16 @@ pub struct Tui {
 
 impl Tui {
     pub fn start(args: &[&str], env: &[(&str, &str)]) -> Tui {
-        let (cols, rows) = (100u16, 30u16);
+        Tui::spawn(args, env, (100, 30), None).unwrap()
+    }
+
+    /// The app in a `cols`×`rows` terminal, started in `cwd` when given.
+    pub fn spawn(
+        args: &[&str],
+        env: &[(&str, &str)],
+        (cols, rows): (u16, u16),
+        cwd: Option<&std::path::Path>,
+    ) -> Result<Tui, String> {
         let pty = native_pty_system()
             .openpty(PtySize {
                 rows,
@@ -22,22 +34,27 @@ impl Tui {
                 pixel_width: 0,
                 pixel_height: 0,
             })
-            .unwrap();
+            .map_err(|e| e.to_string())?;
         let mut cmd = CommandBuilder::new(env!("CARGO_BIN_EXE_droidctl"));
         cmd.args(args);
+        if let Some(dir) = cwd {
+            cmd.cwd(dir);
+        }
         cmd.env("TERM", "xterm-256color");
         for (k, v) in env {
             cmd.env(k, v);
         }
-        let child = pty.slave.spawn_command(cmd).unwrap();
+        let child = pty.slave.spawn_command(cmd).map_err(|e| e.to_string())?;
         drop(pty.slave);
-        let mut reader = pty.master.try_clone_reader().unwrap();
-        let writer = Arc::new(Mutex::new(pty.master.take_writer().unwrap()));
-        let screen = Arc::new(Mutex::new(vt100::Parser::new(
-            rows.try_into().unwrap(),
-            cols.try_into().unwrap(),
-            0,
-        )));
+        let mut reader = pty.master.try_clone_reader().map_err(|e| e.to_string())?;
+        let writer = Arc::new(Mutex::new(
+            pty.master.take_writer().map_err(|e| e.to_string())?,
+        ));
+        let size = |v: u16| {
+            v.try_into()
+                .map_err(|_| "a terminal has rows and columns".to_string())
+        };
+        let screen = Arc::new(Mutex::new(vt100::Parser::new(size(rows)?, size(cols)?, 0)));
         let (screen2, answer) = (screen.clone(), writer.clone());
         std::thread::spawn(move || {
             let _keep_master = pty.master;
@@ -56,11 +73,16 @@ impl Tui {
                 }
             }
         });
-        Tui {
+        Ok(Tui {
             screen,
             writer,
             child,
-        }
+        })
+    }
+
+    /// Its exit status, if it has ended.
+    pub fn try_wait(&mut self) -> Option<portable_pty::ExitStatus> {
+        self.child.try_wait().ok().flatten()
     }
 
     pub fn text(&self) -> String {

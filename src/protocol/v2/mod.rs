@@ -7,6 +7,7 @@ pub mod describe;
 pub mod device;
 pub mod error;
 pub mod flags;
+pub mod frame;
 pub mod notify;
 pub mod packet;
 pub mod sensor;
