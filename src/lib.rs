@@ -19,6 +19,7 @@ pub mod link;
 pub mod logging;
 pub mod mission;
 pub mod model;
+pub mod net;
 pub mod output;
 pub mod plot;
 pub mod protocol;

@@ -21,6 +21,8 @@ const RANKS: &[(&str, u32)] = &[
     ("text_file", 0),
     // What a user tunes about monitoring: sensor groups, collision detection.
     ("tuning", 0),
+    // Which addresses are loopback.
+    ("net", 0),
     // The sans-IO protocol core.
     ("protocol", 10),
     // Links, and the plain data built on the protocol (scripts, telemetry, configuration).

@@ -136,17 +136,18 @@ impl std::fmt::Display for BrokerUrl {
     }
 }
 
-/// Whether every address `host` names is a loopback address (`localhost`, 127.0.0.1, ::1):
+/// Whether every address `host` names is a loopback address (`localhost`, 127.0.0.1, ::1,
+/// ::ffff:127.0.0.1: [`crate::net::is_loopback`]):
 /// only then does nobody but this machine reach the droids through the broker.
 pub async fn is_loopback(host: &str, port: u16) -> Result<bool, String> {
     if let Ok(ip) = host.parse::<std::net::IpAddr>() {
-        return Ok(ip.is_loopback());
+        return Ok(crate::net::is_loopback(ip));
     }
     let addrs: Vec<_> = tokio::net::lookup_host((host, port))
         .await
         .map_err(|e| format!("cannot resolve {host}: {e}"))?
         .collect();
-    Ok(!addrs.is_empty() && addrs.iter().all(|a| a.ip().is_loopback()))
+    Ok(!addrs.is_empty() && addrs.iter().all(crate::net::is_loopback_addr))
 }
 
 /// What the MQTT transport needs.

@@ -88,7 +88,7 @@ pub const EMBEDDED_LISTEN: std::net::SocketAddr = std::net::SocketAddr::new(
 
 /// The warning for an embedded broker other machines can reach (as `serve`'s).
 pub fn listen_warning(addr: &std::net::SocketAddr, password: bool) -> Option<String> {
-    (!addr.ip().is_loopback()).then(|| {
+    (!crate::net::is_loopback_addr(addr)).then(|| {
         format!(
             "droidctl: warning: MQTT broker listening on {addr}: it has no encryption{} — \
              anyone who can reach this port can publish to droidctl/…/cmd and drive your \
@@ -103,8 +103,14 @@ pub fn listen_warning(addr: &std::net::SocketAddr, password: bool) -> Option<Str
 }
 
 /// The URL the bridge reaches its own broker at: loopback, whatever address it listens on.
+/// An IPv4 address written as IPv6 (`[::ffff:127.0.0.1]`) takes IPv4 connections only:
+/// reached at 127.0.0.1, not ::1.
 fn embedded_url(listen: std::net::SocketAddr) -> BrokerUrl {
-    let host = if listen.is_ipv6() { "::1" } else { "127.0.0.1" };
+    let host = if listen.ip().to_canonical().is_ipv6() {
+        "::1"
+    } else {
+        "127.0.0.1"
+    };
     BrokerUrl {
         host: host.into(),
         port: listen.port(),
@@ -478,6 +484,10 @@ mod tests {
             embedded_url("[::]:1999".parse().unwrap()).to_string(),
             "mqtt://[::1]:1999"
         );
+        assert_eq!(
+            embedded_url("[::ffff:127.0.0.1]:1999".parse().unwrap()).to_string(),
+            "mqtt://127.0.0.1:1999"
+        );
         let w = listen_warning(&"0.0.0.0:1883".parse().unwrap(), false).unwrap();
         assert!(w.contains("no password") && w.contains("drive"), "{w}");
         assert!(listen_warning(&EMBEDDED_LISTEN, false).is_none());
@@ -515,5 +525,14 @@ mod tests {
         assert!(is_loopback("localhost", 1883).await.unwrap());
         assert!(!is_loopback("192.168.1.10", 1883).await.unwrap());
         assert!(!is_loopback("0.0.0.0", 1883).await.unwrap());
+        // IPv4 loopback written as IPv6 (issue 37 point 15), as a broker host and as the
+        // embedded broker's --listen.
+        assert!(is_loopback("::ffff:127.0.0.1", 1883).await.unwrap());
+        assert!(!is_loopback("::ffff:10.0.0.1", 1883).await.unwrap());
+        assert!(!is_loopback("::", 1883).await.unwrap());
+        let listen = parse_broker_listen("[::ffff:127.0.0.1]:1883").unwrap();
+        assert_eq!(listen_warning(&listen, false), None);
+        let listen = parse_broker_listen("[::ffff:10.0.0.1]:1883").unwrap();
+        assert!(listen_warning(&listen, true).is_some());
     }
 }

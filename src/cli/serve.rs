@@ -83,7 +83,7 @@ fn sim_models(ids: &[String]) -> Result<Vec<Model>, CliError> {
 
 /// The warning for a listener other machines can reach.
 pub fn exposure_warning(addr: &SocketAddr) -> Option<String> {
-    (!addr.ip().is_loopback()).then(|| {
+    (!crate::net::is_loopback_addr(addr)).then(|| {
         format!(
             "droidctl: warning: listening on {addr}: the relay protocol has no authentication or \
              encryption — anyone who can reach this port can drive your droids. Listen on a \
@@ -174,6 +174,13 @@ mod tests {
         assert!(exposure_warning(&"0.0.0.0:50004".parse().unwrap()).is_some());
         assert!(exposure_warning(&"127.0.0.1:50004".parse().unwrap()).is_none());
         assert!(exposure_warning(&"[::1]:50004".parse().unwrap()).is_none());
+        // IPv4 loopback written as IPv6 is loopback (issue 37 point 15); other mapped
+        // addresses are not.
+        let mapped = parse_listen("[::ffff:127.0.0.1]:50004").unwrap();
+        assert!(exposure_warning(&mapped).is_none());
+        assert!(exposure_warning(&parse_listen("::ffff:127.5.5.5").unwrap()).is_none());
+        assert!(exposure_warning(&parse_listen("::ffff:10.0.0.1").unwrap()).is_some());
+        assert!(exposure_warning(&parse_listen("::").unwrap()).is_some());
     }
 
     #[test]
