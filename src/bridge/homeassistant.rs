@@ -51,11 +51,39 @@ fn command(cmd: Value) -> String {
     c.to_string()
 }
 
-/// The node id of droid `d`'s entities: the bridge's prefix and the droid's topic level
-/// (two bridges with different prefixes do not collide), as discovery allows
-/// (`[A-Za-z0-9_-]`).
+/// The node id of droid `d`'s entities: the bridge's prefix and the droid's topic level, as
+/// discovery allows (`[A-Za-z0-9_-]+`), and injective (issue 37 point 12): two bridges with
+/// different prefixes never share discovery topics, so one's clean exit (which clears its
+/// own) never removes the other's entities. Replacing what discovery does not allow by `-`
+/// made `lab/a` and `lab-a` one node.
+///
+/// When both are made of `[A-Za-z0-9-]` only (the usual `droidctl` and `D2-0001`) the id is
+/// `PREFIX_TOPIC`, as before: the one `_` splits it back. Otherwise each byte outside
+/// `[A-Za-z0-9-]` (`_` included) is `_` and two lowercase hex digits, and the two parts are
+/// joined by `__`, which no escape starts with: `lab/a` and `D2-0001` give
+/// `lab_2fa__D2-0001`. Both forms read back one way only, and a plain id holds one `_` where
+/// an escaped one holds `__`, so no two (prefix, topic) pairs share an id.
 pub fn node_id(d: &Droid) -> String {
-    format!("{}_{}", super::topic_name(d.prefix), d.topic)
+    let plain =
+        |s: &str| !s.is_empty() && s.bytes().all(|b| b.is_ascii_alphanumeric() || b == b'-');
+    if plain(d.prefix) && plain(d.topic) {
+        format!("{}_{}", d.prefix, d.topic)
+    } else {
+        format!("{}__{}", escaped(d.prefix), escaped(d.topic))
+    }
+}
+
+/// `s` with each byte outside `[A-Za-z0-9-]` as `_XX` (lowercase hex).
+fn escaped(s: &str) -> String {
+    let mut out = String::with_capacity(s.len());
+    for b in s.bytes() {
+        if b.is_ascii_alphanumeric() || b == b'-' {
+            out.push(char::from(b));
+        } else {
+            out.push_str(&format!("_{b:02x}"));
+        }
+    }
+    out
 }
 
 /// Droid `d`'s discovery messages under `ha` (the discovery prefix): (topic, payload).
@@ -159,6 +187,67 @@ pub fn configs(ha: &str, d: &Droid) -> Vec<(String, String)> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use proptest::prelude::*;
+
+    fn node(prefix: &str, topic: &str) -> String {
+        node_id(&Droid {
+            prefix,
+            topic,
+            name: topic,
+            model: Model::R2D2,
+        })
+    }
+
+    /// What Home Assistant takes as a node id.
+    fn valid(id: &str) -> bool {
+        !id.is_empty()
+            && id
+                .bytes()
+                .all(|b| b.is_ascii_alphanumeric() || b == b'_' || b == b'-')
+    }
+
+    #[test]
+    fn prefixes_that_looked_alike_are_distinct_nodes() {
+        assert_ne!(node("lab/a", "SB-0001"), node("lab-a", "SB-0001"));
+        assert_eq!(node("lab-a", "SB-0001"), "lab-a_SB-0001");
+        assert_eq!(node("lab/a", "SB-0001"), "lab_2fa__SB-0001");
+        // The split between prefix and topic is not ambiguous either.
+        assert_ne!(node("droidctl_a", "b"), node("droidctl", "a_b"));
+        assert_ne!(node("a", "b_c"), node("a_b", "c"));
+        // The usual ids are the ones Home Assistant already knows.
+        assert_eq!(node("droidctl", "D2-0001"), "droidctl_D2-0001");
+        for (p, t) in [("", ""), ("", "x"), ("é/#+", "Robi 42"), ("a__b", "_")] {
+            assert!(valid(&node(p, t)), "{p:?} {t:?}: {}", node(p, t));
+        }
+    }
+
+    proptest! {
+        /// Many pairs from a small alphabet: near misses (`/` for `-`, `_` at the join,
+        /// an escape spelt out) are bound to meet.
+        #[test]
+        fn distinct_prefixes_and_topics_never_share_a_node(
+            pairs in proptest::collection::vec(("[a2f_/-]{0,3}", "[a2f_/ -]{0,3}"), 1..80),
+        ) {
+            let mut seen = std::collections::HashMap::new();
+            for (p, t) in &pairs {
+                let n = node(p, t);
+                prop_assert!(valid(&n), "{p:?} {t:?}: {n}");
+                if let Some(other) = seen.insert(n.clone(), (p, t)) {
+                    prop_assert_eq!(other, (p, t), "both are {}", n);
+                }
+            }
+        }
+
+        #[test]
+        fn any_text_gives_a_valid_node_that_no_other_shares(
+            a in ("\\PC{0,8}", "\\PC{0,8}"),
+            b in ("\\PC{0,8}", "\\PC{0,8}"),
+        ) {
+            let (na, nb) = (node(&a.0, &a.1), node(&b.0, &b.1));
+            prop_assert!(valid(&na) && valid(&nb), "{na} {nb}");
+            prop_assert_eq!(a == b, na == nb, "{:?} {:?}: {} {}", a, b, na, nb);
+        }
+    }
 
     #[test]
     fn r2d2_has_every_entity_and_robi_no_battery_poll() {
