@@ -272,30 +272,65 @@ impl Embedded {
     }
 }
 
-/// A fresh directory only we may use.
+/// Names [`make_dir_in`] tries before giving up: a random one is taken only if someone
+/// made it already, so a second try is near certain to do.
+const DIR_TRIES: u32 = 16;
+
+/// A fresh directory only we may use, in the temporary directory.
 fn make_dir() -> Result<PathBuf, String> {
-    use std::os::unix::fs::DirBuilderExt;
-    let base = std::env::temp_dir();
-    let pid = std::process::id();
+    make_dir_in(&std::env::temp_dir(), random_name)
+}
+
+/// `droidctl-bluez-` and 64 random bits from the kernel: a name another local user cannot
+/// make first (issue 37 point 14: `droidctl-bluez-PID-N` could be, and `sim --bluez` then
+/// failed). Not [`crate::rng`], which is seeded to be repeatable, not unguessable.
+fn random_name() -> Result<String, String> {
+    let mut bits = [0u8; 8];
+    fs::File::open("/dev/urandom")
+        .and_then(|mut f| f.read_exact(&mut bits))
+        .map_err(|e| format!("cannot read /dev/urandom: {e}"))?;
+    Ok(format!("droidctl-bluez-{:016x}", u64::from_ne_bytes(bits)))
+}
+
+/// A directory of `name()`'s in `base`, created by us now (never one that was there, which
+/// someone else may own or watch), mode 0700 whatever the umask, checked to be ours.
+fn make_dir_in(
+    base: &Path,
+    mut name: impl FnMut() -> Result<String, String>,
+) -> Result<PathBuf, String> {
+    use std::os::unix::fs::{DirBuilderExt, MetadataExt, PermissionsExt};
+    let cannot =
+        |e: &dyn std::fmt::Display| format!("cannot create a directory in {}: {e}", base.display());
     let mut last = None;
-    for n in 0..100u32 {
-        let dir = base.join(format!("droidctl-bluez-{pid}-{n}"));
+    for _ in 0..DIR_TRIES {
+        let dir = base.join(name()?);
         match fs::DirBuilder::new().mode(0o700).create(&dir) {
-            Ok(()) => return Ok(dir),
-            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => last = Some(e),
-            Err(e) => {
-                return Err(format!(
-                    "cannot create a directory in {}: {e}",
-                    base.display()
-                ));
+            Ok(()) => {}
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
+                last = Some(e);
+                continue;
             }
+            Err(e) => return Err(cannot(&e)),
         }
+        // Made just now by this mkdir: ours. The umask may have taken bits away; none more
+        // are given than 0700.
+        let checked = fs::set_permissions(&dir, fs::Permissions::from_mode(0o700))
+            .and_then(|()| fs::symlink_metadata(&dir));
+        // SAFETY: geteuid has no preconditions and cannot fail.
+        let me = unsafe { libc::geteuid() };
+        return match checked {
+            Ok(m) if m.is_dir() && m.uid() == me && m.mode() & 0o777 == 0o700 => Ok(dir),
+            Ok(_) => {
+                let _ = fs::remove_dir(&dir);
+                Err(cannot(&format!("{} is not ours alone", dir.display())))
+            }
+            Err(e) => {
+                let _ = fs::remove_dir(&dir);
+                Err(cannot(&e))
+            }
+        };
     }
-    Err(format!(
-        "cannot create a directory in {}: {}",
-        base.display(),
-        last.map(|e| e.to_string()).unwrap_or_default()
-    ))
+    Err(cannot(&last.map(|e| e.to_string()).unwrap_or_default()))
 }
 
 /// A minimal session-like configuration: one unix socket, anyone on it may own any name and
@@ -354,5 +389,70 @@ mod tests {
             "{xml}"
         );
         assert!(config_xml("/tmp/<b>").contains("unix:path=/tmp/%3cb%3e<"));
+    }
+
+    fn scratch(name: &str) -> PathBuf {
+        let d = std::env::temp_dir().join(format!("droidctl-daemon-{name}-{}", std::process::id()));
+        let _ = fs::remove_dir_all(&d);
+        fs::create_dir_all(&d).unwrap();
+        d
+    }
+
+    fn ours_alone(dir: &Path) {
+        use std::os::unix::fs::MetadataExt;
+        let m = fs::symlink_metadata(dir).unwrap();
+        assert!(m.is_dir());
+        assert_eq!(m.mode() & 0o777, 0o700, "{}", dir.display());
+        // SAFETY: no preconditions.
+        assert_eq!(m.uid(), unsafe { libc::geteuid() });
+    }
+
+    /// Issue 37 point 14: the names the old scheme would take, made first by someone else,
+    /// do not stop the bus's directory being made.
+    #[test]
+    fn the_old_predictable_names_taken_first_do_not_stop_it() {
+        let base = std::env::temp_dir();
+        let pid = std::process::id();
+        let taken: Vec<PathBuf> = (0..100)
+            .map(|n| base.join(format!("droidctl-bluez-{pid}-{n}")))
+            .collect();
+        for d in &taken {
+            let _ = fs::create_dir(d);
+        }
+        let made = make_dir();
+        for d in &taken {
+            let _ = fs::remove_dir(d);
+        }
+        let dir = made.unwrap();
+        assert!(!taken.contains(&dir));
+        let name = dir.file_name().unwrap().to_string_lossy().into_owned();
+        let suffix = name.strip_prefix("droidctl-bluez-").unwrap();
+        assert_eq!(suffix.len(), 16, "{name}");
+        assert!(suffix.bytes().all(|b| b.is_ascii_hexdigit()), "{name}");
+        ours_alone(&dir);
+        assert_ne!(make_dir().unwrap(), dir, "a new name each time");
+        let _ = fs::remove_dir(&dir);
+    }
+
+    #[test]
+    fn an_existing_directory_is_never_reused_and_tries_are_bounded() {
+        let base = scratch("reuse");
+        let theirs = base.join("droidctl-bluez-taken");
+        fs::create_dir(&theirs).unwrap();
+        fs::write(theirs.join("bus"), "theirs").unwrap();
+        let mut names = ["droidctl-bluez-taken", "droidctl-bluez-fresh"].into_iter();
+        let dir = make_dir_in(&base, || Ok(names.next().unwrap_or("x").into())).unwrap();
+        assert_eq!(dir, base.join("droidctl-bluez-fresh"));
+        ours_alone(&dir);
+        assert_eq!(fs::read_to_string(theirs.join("bus")).unwrap(), "theirs");
+        let mut asked = 0;
+        let e = make_dir_in(&base, || {
+            asked += 1;
+            Ok("droidctl-bluez-taken".into())
+        })
+        .unwrap_err();
+        assert_eq!(asked, DIR_TRIES);
+        assert!(e.contains("cannot create a directory"), "{e}");
+        let _ = fs::remove_dir_all(&base);
     }
 }
