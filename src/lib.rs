@@ -21,6 +21,7 @@ pub mod mission;
 pub mod model;
 pub mod net;
 pub mod output;
+pub mod own_file;
 pub mod plot;
 pub mod protocol;
 pub mod relay;

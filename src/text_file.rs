@@ -13,10 +13,13 @@ pub const MAX_CONFIG_BYTES: u64 = 1024 * 1024;
 /// The text of `path`, if it holds at most `max` bytes of UTF-8. A larger file is an
 /// `InvalidData` error that says the limit.
 pub fn read(path: &Path, max: u64) -> std::io::Result<String> {
+    read_from(std::fs::File::open(path)?, max)
+}
+
+/// [`read`] of what is already open (a file opened as [`crate::own_file`] opens it).
+pub fn read_from(from: impl Read, max: u64) -> std::io::Result<String> {
     let mut text = String::new();
-    std::fs::File::open(path)?
-        .take(max + 1)
-        .read_to_string(&mut text)?;
+    from.take(max + 1).read_to_string(&mut text)?;
     if text.len() as u64 > max {
         return Err(std::io::Error::new(
             std::io::ErrorKind::InvalidData,

@@ -14,9 +14,12 @@ const RANKS: &[(&str, u32)] = &[
     ("rng", 0),
     ("model", 0),
     ("gatt", 0),
-    ("logging", 0),
+    // The log file is one of droidctl's own (own_file).
+    ("logging", 1),
     // The overwrite rule of the files droidctl writes.
     ("output", 0),
+    // droidctl's own files at fixed paths: no FIFO, no symbolic link written through.
+    ("own_file", 0),
     // The bound on the text files droidctl reads whole.
     ("text_file", 0),
     // What a user tunes about monitoring: sensor groups, collision detection.

@@ -6,7 +6,9 @@
 //!
 //! The file is read as untrusted input: one that cannot be read, is too big, is not TOML
 //! or holds values out of range is a visible warning (a hint) and the defaults, never a
-//! panic; what is valid in it is still used.
+//! panic; what is valid in it is still used. What is not a regular file (a FIFO, a symbolic
+//! link) is not opened as one ([`crate::own_file`]): a warning too, and never a hang; at
+//! exit the file is written anew in its place.
 
 use crate::model::Model;
 use crate::telemetry::history::Channel;
@@ -58,20 +60,28 @@ impl Remembered {
                 p.display()
             ))
         };
-        match std::fs::metadata(&p) {
+        // Not a FIFO (the app would hang before drawing) nor through a symbolic link.
+        let file = match crate::own_file::open(
+            &p,
+            std::fs::OpenOptions::new().read(true),
+            crate::own_file::Links::Refuse,
+        ) {
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
                 return (Remembered::default(), None);
             }
             Err(e) => return (Remembered::default(), warn(e.to_string())),
+            Ok(f) => f,
+        };
+        match file.metadata() {
             Ok(m) if m.len() > MAX_BYTES => {
                 return (
                     Remembered::default(),
                     warn(format!("{} bytes, more than {MAX_BYTES}", m.len())),
                 );
             }
-            Ok(_) => {}
+            _ => {}
         }
-        let text = match crate::text_file::read(&p, MAX_BYTES) {
+        let text = match crate::text_file::read_from(file, MAX_BYTES) {
             Ok(t) => t,
             Err(e) => return (Remembered::default(), warn(e.to_string())),
         };
@@ -128,7 +138,8 @@ impl Remembered {
         })
     }
 
-    /// Write `model`'s settings to `dir` (created when missing).
+    /// Write `model`'s settings to `dir` (created when missing), whole or not at all, and
+    /// over whatever is at the file's path (a symbolic link is replaced, its target kept).
     pub fn save(&self, dir: &Path, model: Model) -> std::io::Result<()> {
         std::fs::create_dir_all(dir)?;
         let mut text = String::from(
@@ -136,7 +147,7 @@ impl Remembered {
              # configuration). Delete this file, or press R in the app, to forget it.\n",
         );
         text.push_str(&toml::to_string(self).map_err(std::io::Error::other)?);
-        std::fs::write(path(dir, model), text)
+        crate::own_file::write_atomic(&path(dir, model), text.as_bytes())
     }
 
     /// Forget `model`'s settings (no file is fine).
@@ -280,6 +291,66 @@ mod tests {
         }
         std::fs::write(&p, vec![b'#'; 100_000]).unwrap();
         assert!(Remembered::load(&d, Model::R2D2).1.is_some());
+        let _ = std::fs::remove_dir_all(&d);
+    }
+
+    /// Issue 37 point 13: a FIFO in the file's place gave a start that never drew.
+    #[cfg(unix)]
+    #[test]
+    fn a_fifo_in_place_is_a_warning_at_once_and_saving_replaces_it() {
+        let d = dir("fifo");
+        std::fs::create_dir_all(&d).unwrap();
+        let p = path(&d, Model::R2D2);
+        let status = std::process::Command::new("mkfifo")
+            .arg(&p)
+            .status()
+            .unwrap();
+        assert!(status.success());
+        let (tx, rx) = std::sync::mpsc::channel();
+        let at = d.clone();
+        std::thread::spawn(move || {
+            let _ = tx.send(Remembered::load(&at, Model::R2D2));
+        });
+        let (r, warning) = rx
+            .recv_timeout(std::time::Duration::from_secs(5))
+            .expect("loading blocked on the FIFO");
+        assert_eq!(r, Remembered::default());
+        let w = warning.expect("a warning");
+        assert!(
+            w.contains("settings-r2d2.toml") && w.contains("FIFO"),
+            "{w}"
+        );
+        let mine = Remembered {
+            cruise: Some(90),
+            ..Default::default()
+        };
+        mine.save(&d, Model::R2D2).unwrap();
+        assert_eq!(Remembered::load(&d, Model::R2D2), (mine, None));
+        let _ = std::fs::remove_dir_all(&d);
+    }
+
+    /// Issue 37 point 13: a symbolic link in the file's place had its target overwritten.
+    #[cfg(unix)]
+    #[test]
+    fn a_link_in_place_is_not_followed_and_its_target_is_kept() {
+        let d = dir("link");
+        std::fs::create_dir_all(&d).unwrap();
+        let target = d.join("precious.toml");
+        std::fs::write(&target, "cruise = 10\n").unwrap();
+        let p = path(&d, Model::R2D2);
+        std::os::unix::fs::symlink(&target, &p).unwrap();
+        let (r, warning) = Remembered::load(&d, Model::R2D2);
+        assert_eq!(r, Remembered::default(), "not read through the link");
+        let w = warning.expect("a warning");
+        assert!(w.contains("symbolic link"), "{w}");
+        let mine = Remembered {
+            cruise: Some(90),
+            ..Default::default()
+        };
+        mine.save(&d, Model::R2D2).unwrap();
+        assert_eq!(std::fs::read_to_string(&target).unwrap(), "cruise = 10\n");
+        assert!(std::fs::symlink_metadata(&p).unwrap().is_file());
+        assert_eq!(Remembered::load(&d, Model::R2D2), (mine, None));
         let _ = std::fs::remove_dir_all(&d);
     }
 }

@@ -26,7 +26,8 @@ pub fn run(cmd: ConfigCmd) -> Result<i32, CliError> {
             Ok(0)
         }
         ConfigCmd::Init { force } => {
-            if path.exists() && !force {
+            // Whatever is there (a dangling link too) is kept unless --force.
+            if std::fs::symlink_metadata(&path).is_ok() && !force {
                 return Err(CliError::failure(format!(
                     "{} already exists; use --force to overwrite it",
                     path.display()
@@ -37,7 +38,9 @@ pub fn run(cmd: ConfigCmd) -> Result<i32, CliError> {
                     CliError::failure(format!("cannot create {}: {e}", dir.display()))
                 })?;
             }
-            std::fs::write(&path, DEFAULT_TOML)
+            // Written anew in its place: a FIFO there does not hang `init`, and a link is
+            // replaced rather than written through.
+            crate::own_file::write_atomic(&path, DEFAULT_TOML.as_bytes())
                 .map_err(|e| CliError::failure(format!("cannot write {}: {e}", path.display())))?;
             println!("wrote {}", path.display());
             Ok(0)

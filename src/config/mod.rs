@@ -353,9 +353,22 @@ impl Config {
             .unwrap_or_else(|e| panic!("shipped defaults are invalid: {e}"))
     }
 
-    /// Load the user's file if it exists, merged over the defaults.
+    /// Load the user's file if it exists, merged over the defaults. At the usual place only
+    /// a regular file is read (a symbolic link to one too): a FIFO left there is an error,
+    /// not a start that hangs. A file DROIDCTL_CONFIG names is read as it is (`/dev/null`,
+    /// a shell's `<(…)`).
     pub fn load(path: &Path) -> Result<Config, ConfigError> {
-        match crate::text_file::read(path, crate::text_file::MAX_CONFIG_BYTES) {
+        let read = if explicit(path) {
+            crate::text_file::read(path, crate::text_file::MAX_CONFIG_BYTES)
+        } else {
+            crate::own_file::open(
+                path,
+                std::fs::OpenOptions::new().read(true),
+                crate::own_file::Links::Follow,
+            )
+            .and_then(|f| crate::text_file::read_from(f, crate::text_file::MAX_CONFIG_BYTES))
+        };
+        match read {
             Ok(text) => Config::parse_merged(Some(path), &text),
             // A file named on purpose (DROIDCTL_CONFIG) that is not there is a mistake, not
             // a wish for the defaults (`/dev/null` asks for them).
@@ -770,5 +783,37 @@ mod tests {
     fn missing_file_means_defaults() {
         let c = Config::load(Path::new("/nonexistent/droidctl/config.toml")).unwrap();
         assert_eq!(c, Config::defaults());
+    }
+
+    /// Issue 37 point 13: a FIFO at the usual place is an error at once, not a hang; a
+    /// symbolic link to a file (a dotfile manager's) is read.
+    #[cfg(unix)]
+    #[test]
+    fn a_fifo_at_the_usual_place_is_refused_and_a_link_followed() {
+        let dir = std::env::temp_dir().join(format!("droidctl-config-fifo-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let fifo = dir.join("config.toml");
+        let made = std::process::Command::new("mkfifo")
+            .arg(&fifo)
+            .status()
+            .unwrap();
+        assert!(made.success());
+        let (tx, rx) = std::sync::mpsc::channel();
+        let at = fifo.clone();
+        std::thread::spawn(move || {
+            let _ = tx.send(Config::load(&at).map_err(|e| e.to_string()));
+        });
+        let e = rx
+            .recv_timeout(std::time::Duration::from_secs(5))
+            .expect("loading blocked on the FIFO")
+            .unwrap_err();
+        assert!(e.contains("FIFO"), "{e}");
+        let real = dir.join("dotfiles.toml");
+        std::fs::write(&real, "[control]\ncruise_speed = 77\n").unwrap();
+        let link = dir.join("linked.toml");
+        std::os::unix::fs::symlink(&real, &link).unwrap();
+        assert_eq!(Config::load(&link).unwrap().control.cruise_speed, 77);
+        let _ = std::fs::remove_dir_all(&dir);
     }
 }
