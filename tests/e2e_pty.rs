@@ -532,3 +532,29 @@ fn without_libudev_the_status_line_says_so_and_the_keyboard_drives() {
     let status = tui.wait_exit(Duration::from_secs(10));
     assert!(status.success(), "{status:?}");
 }
+
+/// Issue 37 point 13: a FIFO where the remembered settings are hung the app before it drew
+/// (nothing shown, `q` unanswered). Now the app starts with a warning, quits on `q`, and
+/// the settings it remembers at exit replace the FIFO.
+#[test]
+fn a_fifo_for_remembered_settings_is_a_warning_not_a_hang() {
+    let dir = TempDir::new("fifo-state");
+    let state = dir.0.join("state");
+    std::fs::create_dir_all(&state).unwrap();
+    let settings = state.join("settings-r2d2.toml");
+    let made = std::process::Command::new("mkfifo")
+        .arg(&settings)
+        .status()
+        .unwrap();
+    assert!(made.success());
+    let state_env = state.to_str().unwrap();
+    let mut tui = Tui::start_with(200, 30, false, &[("DROIDCTL_STATE_DIR", state_env)]);
+    let screen = tui.wait_for("a FIFO, not a regular file", Duration::from_secs(20));
+    assert!(screen.contains("settings-r2d2.toml"), "{screen}");
+    tui.wait_for("connected", Duration::from_secs(20));
+    tui.send(b"q");
+    let status = tui.wait_exit(Duration::from_secs(10));
+    assert!(status.success(), "{status:?}");
+    let saved = std::fs::symlink_metadata(&settings).unwrap();
+    assert!(saved.is_file(), "the FIFO was replaced: {saved:?}");
+}
