@@ -231,3 +231,93 @@ fn strobe_starts_dark() {
     assert_eq!(t.end, Duration::from_millis(400));
     assert_eq!(d.main, [255, 0, 0]);
 }
+
+/// Hostile numbers and texts as the natives pass them on.
+fn hostile() -> Vec<Arg> {
+    let mut v: Vec<Arg> = [
+        f64::NAN,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        1e308,
+        -1e308,
+        -0.0,
+        0.0,
+        0.5,
+        1.0,
+        -1.0,
+        7.0,
+        255.0,
+        256.0,
+        1e19,
+        9.007_199_254_740_993e15,
+        f64::MIN_POSITIVE,
+        86_401.0,
+    ]
+    .into_iter()
+    .map(Arg::Num)
+    .collect();
+    v.extend(
+        ["", "HI", "A", "\u{e9}", "twolegs"]
+            .into_iter()
+            .map(|t| Arg::Text(t.into())),
+    );
+    v.push(Arg::Text("x".repeat(MAX_TEXT + 1)));
+    v
+}
+
+/// Every call's effect is within bounds, or its error names it (and then changed nothing).
+fn call_checked(d: &mut Driver, name: &str, args: &[Arg]) {
+    let before = format!("{d:?}");
+    match d.call(name, args) {
+        Ok(e) => crate::fuzzing::edu::check_effect(name, &e.now, e.wait.as_ref()),
+        Err(m) => {
+            assert!(m.contains(name), "{name}{args:?}: {m}");
+            assert_eq!(format!("{d:?}"), before, "{name}{args:?}: {m}");
+        }
+    }
+}
+
+/// Every call of the table (and `setBackLedBrightness`, as the prelude names it), on every
+/// model, with each hostile value in every place.
+#[test]
+fn every_call_with_each_hostile_value_on_every_model_is_an_effect_in_bounds_or_an_error() {
+    let values = hostile();
+    for model in Model::ALL {
+        let mut d = Driver::new(model);
+        let names = crate::edu::calls::CALLS
+            .iter()
+            .map(|c| c.name)
+            .chain(["setBackLedBrightness"]);
+        for name in names {
+            for v in &values {
+                for n in 0..8 {
+                    call_checked(&mut d, name, &vec![v.clone(); n]);
+                }
+            }
+        }
+    }
+}
+
+fn arg() -> impl proptest::strategy::Strategy<Value = Arg> {
+    use proptest::prelude::*;
+    prop_oneof![
+        prop::sample::select(hostile()),
+        any::<f64>().prop_map(Arg::Num),
+        (-400.0..400.0f64).prop_map(Arg::Num),
+        "[ -~]{0,30}".prop_map(Arg::Text),
+    ]
+}
+
+proptest::proptest! {
+    /// Random arguments of any kind, any count, to every call.
+    #[test]
+    fn any_arguments_to_any_call_are_an_effect_in_bounds_or_an_error_naming_it(
+        model in proptest::sample::select(Model::ALL.to_vec()),
+        call in proptest::sample::select(crate::edu::calls::CALLS.to_vec()),
+        args in proptest::collection::vec(arg(), 0..12),
+    ) {
+        let mut d = Driver::new(model);
+        call_checked(&mut d, call.name, &args);
+        call_checked(&mut d, call.name, &args);
+    }
+}

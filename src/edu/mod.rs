@@ -26,6 +26,8 @@
 pub mod api;
 pub mod calls;
 pub mod engine;
+#[cfg(test)]
+mod hostile;
 pub mod infrared;
 pub mod run;
 pub mod schedule;
