@@ -269,7 +269,7 @@ fn hostile() -> Vec<Arg> {
 fn call_checked(d: &mut Driver, name: &str, args: &[Arg]) {
     let before = format!("{d:?}");
     match d.call(name, args) {
-        Ok(e) => crate::fuzzing::edu::check_effect(name, &e.now, e.wait.as_ref()),
+        Ok(e) => crate::edu::probe::check_effect(name, &e.now, e.wait.as_ref()),
         Err(m) => {
             assert!(m.contains(name), "{name}{args:?}: {m}");
             assert_eq!(format!("{d:?}"), before, "{name}{args:?}: {m}");

@@ -4,7 +4,7 @@
 
 use crate::edu::api::{Act, Matrix};
 use crate::edu::engine::{Op, Status};
-use crate::fuzzing::edu::run;
+use crate::edu::probe::run;
 use crate::model::Model;
 
 fn run_program(model: Model, body: &str) -> (Vec<Op>, Status) {
