@@ -484,3 +484,44 @@ fn a_program_waiting_for_nothing_ends_and_says_why() {
     );
     assert!(wall < Duration::from_secs(20), "{wall:?}");
 }
+
+/// Issue 37: 990 pending long spins, or strobes, are a few numbers each (they were 7 GB and
+/// 2.7 GB of listed steps), and `--timeout 2` ends the run on the simulated clock at once; a
+/// call past 24 h is an error naming its line. (A `delay(0)` every 100 calls: the engine of a
+/// debug build on a busy machine may take more than the 2 s it is given to make 990 calls.)
+#[test]
+fn hundreds_of_long_timed_calls_pending_end_at_the_timeout_promptly() {
+    let dir = Scratch::new("edu", "long");
+    for (name, call) in [
+        ("spins.js", "spin(360 * 8000, 1)"),
+        ("strobes.js", "strobe({ r: 255, g: 0, b: 0 }, 0.05, 10000)"),
+    ] {
+        let p = dir.file(
+            name,
+            &format!(
+                "async function startProgram() {{\n  for (let i = 0; i < 990; i++) {{\n    {call};\n    \
+                 if (i % 100 === 99) await delay(0);\n  }}\n  await delay(3600);\n}}\n"
+            ),
+        );
+        let (out, wall) = dir.run_timed(&["run", path(&p), "--sim", "bolt", "--timeout", "2"]);
+        assert_eq!(out.status.code(), Some(1), "{name}: {}", stderr(&out));
+        assert!(
+            stderr(&out).contains("--timeout"),
+            "{name}: {}",
+            stderr(&out)
+        );
+        assert!(wall < Duration::from_secs(30), "{name}: {wall:?}");
+        eprintln!("{name}: {wall:?}");
+    }
+    let p = dir.file(
+        "forever.js",
+        "async function startProgram() {\n  setSpeed(50);\n  await spin(1e12, 1);\n}\n",
+    );
+    let out = dir.run(&["run", path(&p), "--sim", "bolt"]);
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("forever.js:3: RangeError: spin: turning 1250000000 s is past"),
+        "{}",
+        stderr(&out)
+    );
+}

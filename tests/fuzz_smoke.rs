@@ -118,6 +118,12 @@ fn app_input() {
     smoke("app_input", 40);
 }
 
+/// Each input starts a JavaScript engine: fewer inputs.
+#[test]
+fn edu() {
+    smoke("edu", 60);
+}
+
 #[cfg(target_os = "linux")]
 #[test]
 fn bluez() {

@@ -11,6 +11,7 @@
 //! the model's time for a turn (0.45 s per revolution, 0.5 on Mini, 0.7 on R2, 0.6 on
 //! Ollie, 1.5 on RVR); `fade` steps the main light; `strobe` starts dark.
 
+use super::timeline::{Steps, Timeline};
 use crate::model::Model;
 use crate::protocol::wire::LegAction;
 use std::time::Duration;
@@ -60,6 +61,11 @@ pub enum Matrix {
 /// published; the simulator keeps as many (src/sim/animation.rs).
 pub const MAX_FRAMES: usize = crate::sim::animation::SAVED_MAX;
 pub const MAX_COLOURS: usize = 16;
+/// The most arguments a call takes: `registerMatrixAnimation`'s fps, transition, palette
+/// size, colours, frame count and 64 pixels a frame.
+pub const MAX_ARGS: usize = 4 + 3 * MAX_COLOURS + 64 * MAX_FRAMES;
+/// The longest text a call takes, in bytes (`speak`, `playSound`; the matrix takes 25).
+pub const MAX_TEXT: usize = 1_000;
 
 /// One thing the robot is asked to do.
 #[derive(Debug, Clone, PartialEq)]
@@ -122,11 +128,8 @@ pub enum Ir {
 /// What the program waits for after the call's immediate actions.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Wait {
-    /// Each step's actions at its time since the call; the promise resolves at `end`.
-    Timeline {
-        steps: Vec<(Duration, Vec<Act>)>,
-        end: Duration,
-    },
+    /// Steps at their times since the call, made when due; the promise resolves at its end.
+    Timeline(Timeline),
     /// Until the robot has covered `cm` more, then `then` (roll by distance).
     Distance { cm: f32, then: Vec<Act> },
     /// A stance change, until the droid says it is done (bounded).
@@ -169,12 +172,37 @@ pub struct Driver {
     pub frames: u16,
 }
 
-fn secs(v: f64) -> Duration {
-    Duration::from_secs_f64(if v.is_finite() {
-        v.clamp(0.0, 86_400.0)
-    } else {
-        0.0
-    })
+/// The longest a call may last, in seconds (24 h, as a mission script's `wait`).
+///
+/// A longer one (or one not finite) is refused with an error naming the call, and so the
+/// program's line, rather than clamped: a clamped `roll` or `spin` would quietly do something
+/// else than the program says (stop early, end on another heading), and a call lasting more
+/// than a day is a slip (`delay(3600000)` for an hour in ms). spherov2 bounds nothing
+/// (`time.sleep(duration)`, `for i in range(count * 2)`): its calls block for as long as
+/// asked. A negative duration is 0, as droidctl always took it (spherov2's `time.sleep`
+/// raises on one; its `fade` would never end).
+pub const MAX_SECONDS: f64 = 86_400.0;
+/// The most blinks a `strobe` takes (its time is bounded by [`MAX_SECONDS`] too; this bounds
+/// one of period 0).
+pub const MAX_STROBES: f64 = 1_000_000.0;
+
+/// A call's duration: NaN, infinite or past [`MAX_SECONDS`] is refused, negative is 0.
+fn secs(call: &str, what: &str, v: f64) -> Result<Duration, String> {
+    if !v.is_finite() || v > MAX_SECONDS {
+        return Err(format!(
+            "{call}: {what} {v} s is past droidctl's limit of {MAX_SECONDS} s (24 h)"
+        ));
+    }
+    Ok(Duration::from_secs_f64(v.max(0.0)))
+}
+
+/// A heading in degrees, 0..360 (spherov2: `heading % 360`); not finite is refused.
+fn degrees(call: &str, v: f64) -> Result<i64, String> {
+    if !v.is_finite() {
+        return Err(format!("{call}: a heading is a number of degrees, not {v}"));
+    }
+    // In f64: a huge heading keeps its remainder instead of saturating as an integer.
+    Ok((v.round().rem_euclid(360.0) as i64).rem_euclid(360))
 }
 
 fn byte(v: f64) -> u8 {
@@ -182,10 +210,7 @@ fn byte(v: f64) -> u8 {
 }
 
 fn wait_for(d: Duration) -> Option<Wait> {
-    Some(Wait::Timeline {
-        steps: Vec::new(),
-        end: d,
-    })
+    Some(Wait::Timeline(Timeline::wait(d)))
 }
 
 impl Driver {
@@ -204,19 +229,26 @@ impl Driver {
         }
     }
 
-    /// Mini's speed scale, as spherov2 maps it.
-    fn mapped(&self, speed: f64) -> i64 {
-        let s = speed.round() as i64;
-        let s = if self.model == Model::Mini && s != 0 {
-            if s > 0 {
-                ((s + 126) as f64 * 2.0 / 3.0).round() as i64
-            } else {
-                ((s - 126) as f64 * 2.0 / 3.0).round() as i64
-            }
+    /// A speed −255..=255, Mini's mapped as spherov2 maps it (`set_speed`, `roll`): on Mini
+    /// `round((speed ± 126) · 2/3)` for a speed not 0, then `bound_value(-255, speed, 255)`.
+    /// All in f64, which does not wrap, so a huge speed is full speed its way (it once
+    /// saturated to i64 and the offset wrapped: `setSpeed(1e19)` on Mini was full speed
+    /// backward). The clamp comes after Mini's mapping, as in spherov2: there 255 maps to
+    /// 254 and only 256 and more reach 255 (clamping first would cap Mini at 254).
+    /// ±Infinity is full speed its way (spherov2's `bound_value` on every model but Mini,
+    /// where Python's `round` raises); NaN is refused (spherov2's `bound_value` makes it
+    /// −255, by accident of `max`, and Mini's `round` raises).
+    fn mapped(&self, call: &str, speed: f64) -> Result<i64, String> {
+        if speed.is_nan() {
+            return Err(format!("{call}: speed is a number −255 to 255, not NaN"));
+        }
+        let s = if self.model == Model::Mini && speed != 0.0 {
+            let offset = if speed > 0.0 { 126.0 } else { -126.0 };
+            ((speed + offset) * 2.0 / 3.0).round()
         } else {
-            s
+            speed.round()
         };
-        s.clamp(-255, 255)
+        Ok(s.clamp(-255.0, 255.0) as i64)
     }
 
     /// The drive command for `heading` and `speed` (spherov2's `roll_start`).
@@ -264,8 +296,40 @@ impl Driver {
         }
     }
 
-    /// Run call `name` with `args` (as the prelude passes them).
+    /// Run call `name` with `args` (as the prelude passes them). Any arguments at all come
+    /// to an effect or to an error naming the call, and an error changes nothing: NaN, too
+    /// many arguments or too long a text are refused here whatever the prelude checked.
     pub fn call(&mut self, name: &str, args: &[Arg]) -> Result<Effect, String> {
+        self.effect(name, args).map_err(|m| {
+            if m.contains(name) {
+                m
+            } else {
+                format!("{name}: {m}")
+            }
+        })
+    }
+
+    fn effect(&mut self, name: &str, args: &[Arg]) -> Result<Effect, String> {
+        if args.len() > MAX_ARGS {
+            return Err(format!(
+                "{name}: {} arguments; a call takes at most {MAX_ARGS}",
+                args.len()
+            ));
+        }
+        for (i, a) in args.iter().enumerate() {
+            match a {
+                Arg::Num(v) if v.is_nan() => {
+                    return Err(format!("{name}: argument {} is NaN, not a number", i + 1));
+                }
+                Arg::Text(t) if t.len() > MAX_TEXT => {
+                    return Err(format!(
+                        "{name}: a text of {} bytes; droidctl takes at most {MAX_TEXT}",
+                        t.len()
+                    ));
+                }
+                _ => {}
+            }
+        }
         let n = |i: usize| match args.get(i) {
             Some(Arg::Num(v)) => *v,
             _ => 0.0,
@@ -279,65 +343,79 @@ impl Driver {
         let mut e = Effect::default();
         match name {
             "roll" | "rollDistance" => {
-                let speed = self.mapped(n(1));
-                self.speed = speed;
-                self.heading = (n(0).round() as i64).rem_euclid(360);
+                let speed = self.mapped(name, n(1))?;
+                let mut heading = degrees(name, n(0))?;
+                let wait = if name == "roll" {
+                    None
+                } else if n(2).is_finite() {
+                    Some(n(2).clamp(0.0, 100_000.0) as f32)
+                } else {
+                    return Err(format!("rollDistance: a distance is in cm, not {}", n(2)));
+                };
+                let d = match wait {
+                    None => secs(name, "duration", n(2))?,
+                    Some(_) => Duration::ZERO,
+                };
                 if speed < 0 {
-                    self.heading = (self.heading + 180).rem_euclid(360);
+                    heading = (heading + 180).rem_euclid(360);
                 }
+                (self.speed, self.heading) = (speed, heading);
                 e.now.push(self.rolling());
                 e.stops = true;
                 let stop = vec![Driver::drive(self.heading, 0)];
-                e.wait = Some(if name == "roll" {
-                    Wait::Timeline {
-                        steps: vec![(secs(n(2)), stop)],
-                        end: secs(n(2)),
-                    }
-                } else {
-                    Wait::Distance {
-                        cm: n(2).clamp(0.0, 100_000.0) as f32,
-                        then: stop,
-                    }
+                e.wait = Some(match wait {
+                    None => Wait::Timeline(Timeline {
+                        steps: Steps::Once(d, stop),
+                        end: d,
+                    }),
+                    Some(cm) => Wait::Distance { cm, then: stop },
                 });
             }
             "setSpeed" => {
-                self.speed = self.mapped(n(0));
+                self.speed = self.mapped(name, n(0))?;
                 e.now.push(self.rolling());
             }
             "setHeading" => {
-                self.heading = (n(0).round() as i64).rem_euclid(360);
+                self.heading = degrees(name, n(0))?;
                 e.now.push(self.rolling());
             }
             "stopRoll" => {
                 if !args.is_empty() {
-                    self.heading = (n(0).round() as i64).rem_euclid(360);
+                    self.heading = degrees(name, n(0))?;
                 }
                 self.speed = 0;
                 e.now.push(Driver::drive(self.heading, 0));
             }
+            // spherov2's `spin`: at least the model's time for the turn, its heading stepped
+            // toward `round(elapsed / duration · |angle|)`; here in [`STEP`]s, made when due.
             "spin" => {
-                let angle = n(0).round() as i64;
-                if angle == 0 {
+                if !n(0).is_finite() {
+                    return Err(format!("spin: degrees is a number, not {}", n(0)));
+                }
+                let total = n(0).round().abs();
+                if total == 0.0 {
                     return Ok(e);
                 }
-                let total = angle.unsigned_abs() as f64;
-                let d = n(1).max(self.turn_time() * total / 360.0).min(86_400.0);
-                let count = ((d / STEP.as_secs_f64()).ceil() as u64).max(1);
-                let mut steps = Vec::with_capacity(count.min(100_000) as usize);
-                let mut gone = 0i64;
-                for k in 1..=count.min(100_000) {
-                    let frac = (k as f64 / count as f64).min(1.0);
-                    let delta = (frac * total).round() as i64 - gone;
-                    gone += delta;
-                    self.heading = (self.heading + angle.signum() * delta).rem_euclid(360);
-                    steps.push((STEP * k as u32, vec![self.rolling()]));
-                }
-                e.wait = Some(Wait::Timeline {
-                    steps,
-                    end: secs(d),
-                });
+                let d = n(1).max(self.turn_time() * total / 360.0);
+                let d = secs(name, "turning", d)?;
+                // Bounded by MAX_SECONDS: at most 6.9e7 degrees, 1.7e6 steps.
+                let angle = n(0).round() as i64;
+                let count = ((d.as_secs_f64() / STEP.as_secs_f64()).ceil() as u64).max(1);
+                let from = self.heading;
+                self.heading = (from + angle).rem_euclid(360);
+                e.wait = Some(Wait::Timeline(Timeline {
+                    steps: Steps::Spin {
+                        from,
+                        angle,
+                        speed: self.speed,
+                        count,
+                    },
+                    end: d,
+                }));
             }
             "rawMotor" => {
+                // Negative: no duration (the prelude's `undefined`), the motors keep going.
+                let d = secs(name, "duration", n(2))?;
                 let v = |x: f64| x.round().clamp(-255.0, 255.0) as i16;
                 self.raw = (v(n(0)), v(n(1)));
                 let was = self.stabilization;
@@ -350,10 +428,10 @@ impl Driver {
                     if was {
                         then.push(Act::Stabilization(true));
                     }
-                    e.wait = Some(Wait::Timeline {
-                        steps: vec![(secs(n(2)), then)],
-                        end: secs(n(2)),
-                    });
+                    e.wait = Some(Wait::Timeline(Timeline {
+                        steps: Steps::Once(d, then),
+                        end: d,
+                    }));
                     self.raw = (0, 0);
                 } else {
                     self.stabilization = false;
@@ -364,7 +442,7 @@ impl Driver {
                 e.now.push(Act::Stabilization(self.stabilization));
             }
             "resetAim" => e.now.push(Act::ResetAim),
-            "delay" => e.wait = wait_for(secs(n(0))),
+            "delay" => e.wait = wait_for(secs(name, "delay", n(0))?),
             "exitProgram" => e.exit = true,
             "setMainLed" => {
                 let a = self.main_led(rgb(0));
@@ -384,36 +462,46 @@ impl Driver {
             }
             "fade" => {
                 let (from, to) = (rgb(0), rgb(3));
-                let d = secs(n(6));
-                let count = (d.as_secs_f64() / STEP.as_secs_f64()).ceil().min(100_000.0) as u32;
-                let mut steps = Vec::new();
+                let d = secs(name, "duration", n(6))?;
+                // At most 1.7e6 steps (MAX_SECONDS).
+                let count = (d.as_secs_f64() / STEP.as_secs_f64()).ceil() as u64;
                 e.now.push(self.main_led(from));
-                for k in 1..count {
-                    let f = (STEP * k).as_secs_f64() / d.as_secs_f64();
-                    let mix = |a: u8, b: u8| byte(a as f64 * (1.0 - f) + b as f64 * f);
-                    let c = [
-                        mix(from[0], to[0]),
-                        mix(from[1], to[1]),
-                        mix(from[2], to[2]),
-                    ];
-                    steps.push((STEP * k, vec![Act::Main(c)]));
-                }
-                steps.push((d, vec![self.main_led(to)]));
-                e.wait = Some(Wait::Timeline { steps, end: d });
+                self.main_led(to);
+                e.wait = Some(Wait::Timeline(Timeline {
+                    steps: Steps::Fade { from, to, d, count },
+                    end: d,
+                }));
             }
+            // spherov2's `strobe`: `for i in range(count * 2)`, dark on even `i`, each held
+            // `period`; a negative count blinks none (its empty range).
             "strobe" => {
                 let c = rgb(0);
-                let period = secs(n(3));
-                let count = n(4).round().clamp(0.0, 10_000.0) as u32;
-                let mut steps = Vec::new();
-                for i in 0..count * 2 {
-                    let colour = if i & 1 == 1 { c } else { [0, 0, 0] };
-                    steps.push((period * i, vec![self.main_led(colour)]));
+                let (period, count) = (n(3), n(4).round());
+                if !count.is_finite() || count > MAX_STROBES {
+                    return Err(format!(
+                        "strobe: {count} blinks; droidctl takes at most {MAX_STROBES}"
+                    ));
                 }
-                e.wait = Some(Wait::Timeline {
-                    steps,
-                    end: period * (count * 2),
-                });
+                let count = count.max(0.0);
+                if !period.is_finite() || period.max(0.0) * 2.0 * count > MAX_SECONDS {
+                    return Err(format!(
+                        "strobe: {count} blinks of {period} s is past droidctl's limit of \
+                         {MAX_SECONDS} s (24 h)"
+                    ));
+                }
+                let period = secs(name, "period", period)?;
+                let count = count as u64;
+                if count > 0 {
+                    self.main_led(c);
+                }
+                e.wait = Some(Wait::Timeline(Timeline {
+                    steps: Steps::Strobe {
+                        rgb: c,
+                        period,
+                        count,
+                    },
+                    end: period.mul_f64(2.0 * count as f64),
+                }));
             }
             "setHoloProjectorLed" => e.now.push(Act::Holo(byte(n(0)))),
             "setLogicDisplayLeds" => e.now.push(Act::Logic(byte(n(0)))),
@@ -434,10 +522,12 @@ impl Driver {
                 if t.is_empty() || t.chars().count() > 25 || !t.is_ascii() {
                     return Err("scrollMatrixText takes 1 to 25 ASCII characters".into());
                 }
+                // NaN is refused above; a clamp keeps ±Infinity in range (it once made fps 0,
+                // a division by zero and a panic of the engine thread).
                 let fps = n(4).round().clamp(1.0, 30.0) as u8;
                 // Each character is 8 columns wide, scrolled one column a frame (the
                 // simulator's figures, src/sim/figures.rs): the text is done after that.
-                let done = Duration::from_secs_f64((t.len() * 8) as f64 / fps as f64);
+                let done = Duration::from_secs_f64((t.len() * 8) as f64 / f64::from(fps.max(1)));
                 e.now.push(Act::Matrix(Matrix::Text {
                     text: t,
                     rgb: rgb(1),
@@ -478,7 +568,7 @@ impl Driver {
             "pauseMatrixAnimation" => e.now.push(Act::Matrix(Matrix::Pause)),
             "resumeMatrixAnimation" => e.now.push(Act::Matrix(Matrix::Resume)),
             "setMatrixRotation" => {
-                let d = (n(0).round() as i64).rem_euclid(360);
+                let d = degrees(name, n(0))?;
                 if d % 90 != 0 {
                     return Err(format!(
                         "setMatrixRotation takes 0, 90, 180 or 270, not {d}"
@@ -652,109 +742,5 @@ fn cell(v: f64) -> Result<u8, String> {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn num(v: &[f64]) -> Vec<Arg> {
-        v.iter().map(|x| Arg::Num(*x)).collect()
-    }
-
-    #[test]
-    fn roll_backward_turns_the_heading_and_drives_backward_as_spherov2_does() {
-        let mut d = Driver::new(Model::Bolt);
-        let e = d.call("roll", &num(&[90.0, -100.0, 1.0])).unwrap();
-        assert_eq!(d.heading, 270);
-        assert_eq!(
-            e.now,
-            vec![Act::Drive {
-                speed: 100,
-                heading: 90,
-                reverse: true
-            }]
-        );
-    }
-
-    #[test]
-    fn mini_speeds_are_mapped() {
-        let mut d = Driver::new(Model::Mini);
-        d.call("setSpeed", &num(&[100.0])).unwrap();
-        assert_eq!(d.speed, 151);
-    }
-
-    #[test]
-    fn spin_ends_a_whole_turn_later_in_steps() {
-        let mut d = Driver::new(Model::Bolt);
-        d.heading = 10;
-        let e = d.call("spin", &num(&[360.0, 1.0])).unwrap();
-        assert_eq!(d.heading, 10);
-        let Some(Wait::Timeline { steps, end }) = e.wait else {
-            panic!("a timeline")
-        };
-        assert_eq!(end, Duration::from_secs(1));
-        assert_eq!(steps.len(), 20);
-        // Halfway: 180° on.
-        assert_eq!(steps[9].1, vec![Driver::drive(190, 0)]);
-    }
-
-    #[test]
-    fn an_animation_registers_its_frames_then_itself_and_plays_only_once_registered() {
-        let mut d = Driver::new(Model::Bolt);
-        assert!(d.call("playMatrixAnimation", &num(&[0.0, 1.0])).is_err());
-        let mut a = vec![2.0, 0.0, 2.0, 255.0, 0.0, 0.0, 0.0, 0.0, 255.0, 2.0];
-        a.extend(std::iter::repeat_n(0.0, 64));
-        a.extend(std::iter::repeat_n(1.0, 64));
-        let e = d.call("registerMatrixAnimation", &num(&a)).unwrap();
-        assert_eq!(e.now.len(), 3);
-        assert_eq!(e.now[1], Act::Matrix(Matrix::SaveFrame(1, [[1; 8]; 8])));
-        assert_eq!(
-            e.now[2],
-            Act::Matrix(Matrix::SaveAnimation {
-                id: 0,
-                fps: 2,
-                fade: false,
-                palette: vec![[255, 0, 0], [0, 0, 255]],
-                frames: vec![0, 1],
-            })
-        );
-        let e = d.call("playMatrixAnimation", &num(&[0.0, 0.0])).unwrap();
-        assert_eq!(e.now, vec![Act::Matrix(Matrix::Play(0, false))]);
-        // A second animation's frames follow the first's.
-        a[9] = 1.0;
-        a.truncate(10 + 64);
-        let e = d.call("registerMatrixAnimation", &num(&a)).unwrap();
-        assert_eq!(e.now[0], Act::Matrix(Matrix::SaveFrame(2, [[0; 8]; 8])));
-        // A pixel past the palette, a missing pixel, 17 colours: errors, nothing registered.
-        let mut bad = a.clone();
-        bad[12] = 2.0;
-        assert!(
-            d.call("registerMatrixAnimation", &num(&bad))
-                .unwrap_err()
-                .contains("row 0 column 2")
-        );
-        let mut bad = a.clone();
-        bad.truncate(20);
-        assert!(
-            d.call("registerMatrixAnimation", &num(&bad))
-                .unwrap_err()
-                .contains("missing")
-        );
-        bad[2] = 17.0;
-        assert!(d.call("registerMatrixAnimation", &num(&bad)).is_err());
-        assert_eq!((d.animations, d.frames), (2, 3));
-    }
-
-    #[test]
-    fn strobe_starts_dark() {
-        let mut d = Driver::new(Model::Bolt);
-        let e = d
-            .call("strobe", &num(&[255.0, 0.0, 0.0, 0.1, 2.0]))
-            .unwrap();
-        let Some(Wait::Timeline { steps, end }) = e.wait else {
-            panic!("a timeline")
-        };
-        assert_eq!(steps.len(), 4);
-        assert_eq!(steps[0].1, vec![Act::Main([0, 0, 0])]);
-        assert_eq!(steps[1].1, vec![Act::Main([255, 0, 0])]);
-        assert_eq!(end, Duration::from_millis(400));
-    }
-}
+#[path = "api_tests.rs"]
+mod tests;

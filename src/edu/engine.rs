@@ -12,9 +12,10 @@
 //! while the program computes: under `--sim` a turn takes no simulated time at all, exactly as
 //! if the program ran between two packets, and a 60 s program runs in well under a second.
 
-use super::api::{Arg, Driver, Effect};
+use super::api::{Arg, Driver, Effect, MAX_ARGS, MAX_TEXT};
 use super::calls;
 use crate::model::Model;
+use boa_engine::object::FunctionObjectBuilder;
 use boa_engine::object::builtins::{JsArray, JsFunction, JsPromise};
 use boa_engine::{
     Context, JsError, JsNativeError, JsResult, JsValue, NativeFunction, Source, js_string,
@@ -34,6 +35,8 @@ const LOOP_LIMIT: u64 = 50_000_000;
 /// waiting at once: a runaway loop of calls is an error, not unbounded memory.
 const MAX_CALLS_PER_TURN: usize = 1_000;
 const MAX_PENDING: usize = 1_000;
+
+type NativeFnPtr = fn(&JsValue, &[JsValue], &mut Context) -> JsResult<JsValue>;
 
 /// A syntax error: where, and what.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -371,23 +374,28 @@ fn js_thread(
 }
 
 fn start(ctx: &mut Context, source: &str, path: &str) -> JsResult<()> {
-    ctx.register_global_builtin_callable(
-        js_string!("__call"),
-        1,
-        NativeFunction::from_fn_ptr(native_call),
-    )?;
-    ctx.register_global_builtin_callable(
-        js_string!("__read"),
-        1,
-        NativeFunction::from_fn_ptr(native_read),
-    )?;
-    ctx.register_global_builtin_callable(
-        js_string!("__on"),
-        2,
-        NativeFunction::from_fn_ptr(native_on),
-    )?;
+    // The prelude is a function of the natives: they are its arguments, never globals, so a
+    // program cannot call them past the prelude's checks.
     let prelude = Source::from_bytes(PRELUDE).with_path(std::path::Path::new(PRELUDE_PATH));
-    ctx.eval(prelude)?;
+    let install = ctx.eval(prelude)?;
+    let Some(install) = install.as_function() else {
+        return Err(JsNativeError::error()
+            .with_message("droidctl's prelude is not a function")
+            .into());
+    };
+    let natives: [JsValue; 3] = [
+        (js_string!("call"), 1, native_call as NativeFnPtr),
+        (js_string!("read"), 1, native_read),
+        (js_string!("on"), 2, native_on),
+    ]
+    .map(|(name, length, f)| {
+        FunctionObjectBuilder::new(ctx.realm(), NativeFunction::from_fn_ptr(f))
+            .name(name)
+            .length(length)
+            .build()
+            .into()
+    });
+    install.call(&JsValue::undefined(), &natives, ctx)?;
     let program = Source::from_bytes(source).with_path(std::path::Path::new(path));
     ctx.eval(program)?;
     ctx.run_jobs()?;
@@ -580,13 +588,52 @@ fn user_line(ctx: &Context, path: &str) -> u32 {
         .unwrap_or(0)
 }
 
-fn args_of(args: &[JsValue], ctx: &mut Context) -> JsResult<Vec<Arg>> {
+/// A native's first argument, the name of what is asked: a short string, or `""` (which no
+/// call, reading or event has).
+fn name_of(args: &[JsValue]) -> String {
+    args.first()
+        .and_then(JsValue::as_string)
+        .filter(|s| s.len() <= 64)
+        .map(|s| s.to_std_string_escaped())
+        .unwrap_or_default()
+}
+
+/// Call `name`'s arguments as the prelude passes them: numbers and texts (a boolean is 1 or
+/// 0). Anything else is a TypeError naming the call (a program that replaces `String` or an
+/// array's iterator can make the prelude pass an object, `undefined` or a symbol; no user
+/// code runs to convert it), and so are more than [`MAX_ARGS`] arguments or a text longer
+/// than [`MAX_TEXT`], refused before they are copied. The numbers are checked again by
+/// [`Driver::call`].
+fn args_of(name: &str, args: &[JsValue]) -> JsResult<Vec<Arg>> {
+    let refuse = |m: String| JsError::from(JsNativeError::typ().with_message(m));
+    if args.len() > MAX_ARGS {
+        return Err(refuse(format!(
+            "{name}: {} arguments; a call takes at most {MAX_ARGS}",
+            args.len()
+        )));
+    }
     args.iter()
-        .map(|v| {
-            Ok(match v.as_string() {
-                Some(s) => Arg::Text(s.to_std_string_escaped()),
-                None => Arg::Num(v.to_number(ctx)?),
-            })
+        .enumerate()
+        .map(|(i, v)| {
+            if let Some(s) = v.as_string() {
+                if s.len() > MAX_TEXT {
+                    return Err(refuse(format!(
+                        "{name}: a text of {} characters; droidctl takes at most {MAX_TEXT}",
+                        s.len()
+                    )));
+                }
+                Ok(Arg::Text(s.to_std_string_escaped()))
+            } else if let Some(n) = v.as_number() {
+                Ok(Arg::Num(n))
+            } else if let Some(b) = v.as_boolean() {
+                Ok(Arg::Num(if b { 1.0 } else { 0.0 }))
+            } else {
+                Err(refuse(format!(
+                    "{name}: argument {} is {}, not a number or a text",
+                    i + 1,
+                    if v.is_null() { "null" } else { v.type_of() }
+                )))
+            }
         })
         .collect()
 }
@@ -609,16 +656,18 @@ fn shown(name: &str, args: &[Arg]) -> String {
             Arg::Text(t) => format!("{t:?}"),
         })
         .collect();
-    format!("{name}({})", parts.join(", "))
+    let text = format!("{name}({})", parts.join(", "));
+    // Bounded: 4000 numbers of 309 digits each (1e308) would be a megabyte a call.
+    const MAX_SHOWN: usize = 200;
+    match text.char_indices().nth(MAX_SHOWN) {
+        Some((at, _)) => format!("{}…)", &text[..at]),
+        None => text,
+    }
 }
 
 fn native_call(_this: &JsValue, args: &[JsValue], ctx: &mut Context) -> JsResult<JsValue> {
-    let name = args
-        .first()
-        .and_then(JsValue::as_string)
-        .map(|s| s.to_std_string_escaped())
-        .unwrap_or_default();
-    let rest = args_of(args.get(1..).unwrap_or(&[]), ctx)?;
+    let name = name_of(args);
+    let rest = args_of(&name, args.get(1..).unwrap_or(&[]))?;
     let (model, path) = with_js(|js| (js.driver.model, js.path.clone()))
         .ok_or_else(|| JsNativeError::error().with_message("no program"))?;
     // The table's name (`setBackLed(255)` arrives as `setBackLedBrightness`).
@@ -669,11 +718,7 @@ fn native_call(_this: &JsValue, args: &[JsValue], ctx: &mut Context) -> JsResult
 }
 
 fn native_read(_this: &JsValue, args: &[JsValue], ctx: &mut Context) -> JsResult<JsValue> {
-    let name = args
-        .first()
-        .and_then(JsValue::as_string)
-        .map(|s| s.to_std_string_escaped())
-        .unwrap_or_default();
+    let name = name_of(args);
     let model = with_js(|js| js.driver.model).unwrap_or(Model::R2D2);
     if let Some(why) = calls::not_on(&name, model) {
         return Err(JsNativeError::typ().with_message(why).into());
@@ -713,23 +758,20 @@ fn native_read(_this: &JsValue, args: &[JsValue], ctx: &mut Context) -> JsResult
     })
 }
 
-fn native_on(_this: &JsValue, args: &[JsValue], ctx: &mut Context) -> JsResult<JsValue> {
-    let name = args
-        .first()
-        .map(|v| v.to_string(ctx))
-        .transpose()?
-        .map(|s| s.to_std_string_escaped())
-        .unwrap_or_default();
+fn native_on(_this: &JsValue, args: &[JsValue], _ctx: &mut Context) -> JsResult<JsValue> {
+    let name = name_of(args);
     let Some(event) = calls::EVENTS.iter().find(|e| e.0 == name) else {
         return Err(JsNativeError::typ()
-            .with_message(format!("{name} is not an EventType droidctl knows"))
+            .with_message(format!(
+                "registerEvent: {name} is not an EventType droidctl knows"
+            ))
             .into());
     };
     let model = with_js(|js| js.driver.model).unwrap_or(Model::R2D2);
     if !event.1.applies(model) {
         return Err(JsNativeError::typ()
             .with_message(format!(
-                "{name} is not on {} (it is on {})",
+                "registerEvent: {name} is not on {} (it is on {})",
                 model.display_name(),
                 event.1.names()
             ))
@@ -737,7 +779,7 @@ fn native_on(_this: &JsValue, args: &[JsValue], ctx: &mut Context) -> JsResult<J
     }
     let Some(f) = args.get(1).and_then(JsValue::as_function) else {
         return Err(JsNativeError::typ()
-            .with_message("registerEvent needs a function to call")
+            .with_message("registerEvent: needs a function to call")
             .into());
     };
     with_js(|js| js.handlers.push((event.0, f)));

@@ -7,7 +7,11 @@
 //! - [`api`]: what each call does, sans-IO, as spherov2.py's `SpheroEduAPI` does it;
 //! - [`engine`]: the JavaScript engine, on a thread of its own, driven in turns;
 //! - [`infrared`]: the infrared calls as BOLT and RVR each take them on the wire;
-//! - [`run`]: a program on one droid, on droidctl's clock.
+//! - [`run`]: a program on one droid, on droidctl's clock;
+//! - [`timeline`]: a timed call's steps, made when due (a few numbers however long);
+//! - [`schedule`]: the timed calls pending, by when each is next due;
+//! - [`probe`]: a program run for its calls alone, and the bounds each call's effect keeps
+//!   (for tests and the fuzz target `edu`).
 //!
 //! The engine is Boa (`boa_engine`), not QuickJS (`rquickjs`): Boa is pure Rust, so the
 //! Windows and macOS cross checks build it with no C compiler (rquickjs-sys compiles QuickJS's
@@ -24,8 +28,13 @@
 pub mod api;
 pub mod calls;
 pub mod engine;
+#[cfg(test)]
+mod hostile;
 pub mod infrared;
+pub mod probe;
 pub mod run;
+pub mod schedule;
+pub mod timeline;
 
 pub use run::{Program, ProgramOptions, run};
 

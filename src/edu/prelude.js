@@ -1,6 +1,11 @@
 // The Sphero Edu JavaScript API as programs see it: names, arguments and return shapes as
-// Sphero documents them. Each call hands plain numbers and strings to droidctl (`__call`,
-// `__read`, `__on`), which does the work on its own clock (src/edu/api.rs).
+// Sphero documents them. Each call hands plain numbers and strings to droidctl's natives
+// (`__call`, `__read`, `__on`), which do the work on its own clock (src/edu/api.rs).
+//
+// This script is one function expression: droidctl calls it with the natives, and it puts
+// the API on the global object. The natives stay in its closure, so a program cannot name
+// them and skip the checks here (issue 37); they check their arguments again all the same.
+(function (__call, __read, __on) {
 "use strict";
 const EventType = Object.freeze({
   onCollision: "onCollision", onFreefall: "onFreefall", onLanding: "onLanding",
@@ -10,14 +15,16 @@ const EventType = Object.freeze({
 const Stance = Object.freeze({ Bipod: "twolegs", Tripod: "threelegs" });
 const MatrixRotation = Object.freeze({ Deg0: 0, Deg90: 90, Deg180: 180, Deg270: 270 });
 const MatrixAnimationTransition = Object.freeze({ None: "none", Fade: "fade" });
+// A number, or NaN (a symbol too, which `Number` would throw on without naming the call).
+function __number(v) { return typeof v === "symbol" ? NaN : Number(v); }
 function __num(v, what) {
-  const n = Number(v);
-  if (!Number.isFinite(n)) throw new TypeError(what + " must be a number, not " + String(v));
+  const n = __number(v);
+  if (!Number.isFinite(n)) throw new TypeError(what + " must be a number, not " + String(v).slice(0, 40));
   return n;
 }
 function __rgb(c, what) {
-  if (c === null || typeof c !== "object") throw new TypeError((what || "color") + " must be a color like { r: 255, g: 0, b: 0 }");
-  const ch = (v) => Math.max(0, Math.min(255, Math.round(Number(v) || 0)));
+  if (c === null || typeof c !== "object") throw new TypeError(what + " must be a color like { r: 255, g: 0, b: 0 }");
+  const ch = (v) => Math.max(0, Math.min(255, Math.round(__number(v) || 0)));
   return [ch(c.r), ch(c.g), ch(c.b)];
 }
 function __xy(p, what) {
@@ -25,35 +32,35 @@ function __xy(p, what) {
   return [__num(p.x, what + ".x"), __num(p.y, what + ".y")];
 }
 function __obj(keys, a) { if (!a) return null; const o = {}; keys.forEach((k, i) => { o[k] = a[i]; }); return o; }
-function roll(heading, speed, duration) { return __call("roll", __num(heading, "heading"), __num(speed, "speed"), __num(duration, "duration")); }
-function rollDistance(heading, speed, distance) { return __call("rollDistance", __num(heading, "heading"), __num(speed, "speed"), __num(distance, "distance")); }
-function setSpeed(speed) { return __call("setSpeed", __num(speed, "speed")); }
-function setHeading(heading) { return __call("setHeading", __num(heading, "heading")); }
-function stopRoll(heading) { return heading === undefined ? __call("stopRoll") : __call("stopRoll", __num(heading, "heading")); }
-function spin(degrees, duration) { return __call("spin", __num(degrees, "degrees"), __num(duration, "duration")); }
-function rawMotor(left, right, duration) { return __call("rawMotor", __num(left, "left"), __num(right, "right"), duration === undefined ? -1 : __num(duration, "duration")); }
+function roll(heading, speed, duration) { return __call("roll", __num(heading, "roll: heading"), __num(speed, "roll: speed"), __num(duration, "roll: duration")); }
+function rollDistance(heading, speed, distance) { return __call("rollDistance", __num(heading, "rollDistance: heading"), __num(speed, "rollDistance: speed"), __num(distance, "rollDistance: distance")); }
+function setSpeed(speed) { return __call("setSpeed", __num(speed, "setSpeed: speed")); }
+function setHeading(heading) { return __call("setHeading", __num(heading, "setHeading: heading")); }
+function stopRoll(heading) { return heading === undefined ? __call("stopRoll") : __call("stopRoll", __num(heading, "stopRoll: heading")); }
+function spin(degrees, duration) { return __call("spin", __num(degrees, "spin: degrees"), __num(duration, "spin: duration")); }
+function rawMotor(left, right, duration) { return __call("rawMotor", __num(left, "rawMotor: left"), __num(right, "rawMotor: right"), duration === undefined ? -1 : __num(duration, "rawMotor: duration")); }
 function setStabilization(on) { return __call("setStabilization", on ? 1 : 0); }
 function resetAim() { return __call("resetAim"); }
-function delay(seconds) { return __call("delay", __num(seconds, "seconds")); }
+function delay(seconds) { return __call("delay", __num(seconds, "delay: seconds")); }
 function exitProgram() { return __call("exitProgram"); }
-function setMainLed(color) { return __call("setMainLed", ...__rgb(color)); }
-function setFrontLed(color) { return __call("setFrontLed", ...__rgb(color)); }
+function setMainLed(color) { return __call("setMainLed", ...__rgb(color, "setMainLed: color")); }
+function setFrontLed(color) { return __call("setFrontLed", ...__rgb(color, "setFrontLed: color")); }
 function setBackLed(color) {
-  if (typeof color === "number") return __call("setBackLedBrightness", __num(color, "brightness"));
-  return __call("setBackLed", ...__rgb(color));
+  if (typeof color === "number") return __call("setBackLedBrightness", __num(color, "setBackLed: brightness"));
+  return __call("setBackLed", ...__rgb(color, "setBackLed: color"));
 }
-function fade(from, to, duration) { return __call("fade", ...__rgb(from, "fromColor"), ...__rgb(to, "toColor"), __num(duration, "duration")); }
-function strobe(color, period, count) { return __call("strobe", ...__rgb(color), __num(period, "period"), __num(count, "count")); }
-function setHoloProjectorLed(b) { return __call("setHoloProjectorLed", __num(b, "brightness")); }
-function setLogicDisplayLeds(b) { return __call("setLogicDisplayLeds", __num(b, "brightness")); }
-function setDomeLeds(b) { return __call("setDomeLeds", __num(b, "brightness")); }
-function setMatrixCharacter(character, color) { return __call("setMatrixCharacter", String(character), ...__rgb(color)); }
-function scrollMatrixText(text, color, fps, wait) { return __call("scrollMatrixText", String(text), ...__rgb(color), fps === undefined ? 10 : __num(fps, "fps"), wait === false ? 0 : 1); }
-function drawMatrixPixel(color, p) { return __call("drawMatrixPixel", ...__rgb(color), ...__xy(p, "point")); }
-function drawMatrixLine(color, a, b) { return __call("drawMatrixLine", ...__rgb(color), ...__xy(a, "start"), ...__xy(b, "end")); }
-function drawMatrixFill(color, a, b) { return __call("drawMatrixFill", ...__rgb(color), ...__xy(a, "start"), ...__xy(b, "end")); }
+function fade(from, to, duration) { return __call("fade", ...__rgb(from, "fade: fromColor"), ...__rgb(to, "fade: toColor"), __num(duration, "fade: duration")); }
+function strobe(color, period, count) { return __call("strobe", ...__rgb(color, "strobe: color"), __num(period, "strobe: period"), __num(count, "strobe: count")); }
+function setHoloProjectorLed(b) { return __call("setHoloProjectorLed", __num(b, "setHoloProjectorLed: brightness")); }
+function setLogicDisplayLeds(b) { return __call("setLogicDisplayLeds", __num(b, "setLogicDisplayLeds: brightness")); }
+function setDomeLeds(b) { return __call("setDomeLeds", __num(b, "setDomeLeds: brightness")); }
+function setMatrixCharacter(character, color) { return __call("setMatrixCharacter", String(character), ...__rgb(color, "setMatrixCharacter: color")); }
+function scrollMatrixText(text, color, fps, wait) { return __call("scrollMatrixText", String(text), ...__rgb(color, "scrollMatrixText: color"), fps === undefined ? 10 : __num(fps, "scrollMatrixText: fps"), wait === false ? 0 : 1); }
+function drawMatrixPixel(color, p) { return __call("drawMatrixPixel", ...__rgb(color, "drawMatrixPixel: color"), ...__xy(p, "drawMatrixPixel: point")); }
+function drawMatrixLine(color, a, b) { return __call("drawMatrixLine", ...__rgb(color, "drawMatrixLine: color"), ...__xy(a, "drawMatrixLine: start"), ...__xy(b, "drawMatrixLine: end")); }
+function drawMatrixFill(color, a, b) { return __call("drawMatrixFill", ...__rgb(color, "drawMatrixFill: color"), ...__xy(a, "drawMatrixFill: start"), ...__xy(b, "drawMatrixFill: end")); }
 function clearMatrix() { return __call("clearMatrix"); }
-function setMatrixRotation(degrees) { return __call("setMatrixRotation", __num(degrees, "degrees")); }
+function setMatrixRotation(degrees) { return __call("setMatrixRotation", __num(degrees, "setMatrixRotation: degrees")); }
 let __animations = 0;
 function registerMatrixAnimation(a) {
   const what = "registerMatrixAnimation";
@@ -66,35 +73,36 @@ function registerMatrixAnimation(a) {
     if (!Array.isArray(f) || f.length !== 8) throw new TypeError(what + ": frame " + i + " must be 8 rows");
     f.forEach((row, y) => {
       if (!Array.isArray(row) || row.length !== 8) throw new TypeError(what + ": frame " + i + " row " + y + " must be 8 palette indexes");
-      row.forEach((v) => flat.push(__num(v, "a pixel")));
+      row.forEach((v) => flat.push(__num(v, what + ": a pixel")));
     });
   });
   const colours = [];
-  palette.forEach((c) => colours.push(...__rgb(c, "a palette color")));
+  palette.forEach((c) => colours.push(...__rgb(c, what + ": a palette color")));
   const fade = a.transition === MatrixAnimationTransition.Fade ? 1 : 0;
-  __call(what, a.fps === undefined ? 10 : __num(a.fps, "fps"), fade, palette.length, ...colours, frames.length, ...flat);
+  __call(what, a.fps === undefined ? 10 : __num(a.fps, what + ": fps"), fade, palette.length, ...colours, frames.length, ...flat);
   return __animations++;
 }
-function playMatrixAnimation(index, loop) { return __call("playMatrixAnimation", __num(index, "index"), loop === false ? 0 : 1); }
+function playMatrixAnimation(index, loop) { return __call("playMatrixAnimation", __num(index, "playMatrixAnimation: index"), loop === false ? 0 : 1); }
 function pauseMatrixAnimation() { return __call("pauseMatrixAnimation"); }
 function resumeMatrixAnimation() { return __call("resumeMatrixAnimation"); }
 function speak(text, wait) { return __call("speak", String(text), wait ? 1 : 0); }
 function playSound(sound, wait) { return __call("playSound", String(sound), wait ? 1 : 0); }
-function playAnimation(animation) { return __call("playAnimation", __num(animation, "animation")); }
-function setDomePosition(degrees) { return __call("setDomePosition", __num(degrees, "degrees")); }
+function playAnimation(animation) { return __call("playAnimation", __num(animation, "playAnimation: animation")); }
+function setDomePosition(degrees) { return __call("setDomePosition", __num(degrees, "setDomePosition: degrees")); }
 function setStance(stance) { return __call("setStance", stance === Stance.Bipod || stance === "bipod" ? 2 : 3); }
 function setWaddle(on) { return __call("setWaddle", on ? 1 : 0); }
 function calibrateCompass() { return __call("calibrateCompass"); }
-function startIRBroadcast(near, far) { return __call("startIRBroadcast", __num(near, "near"), __num(far, "far")); }
+function startIRBroadcast(near, far) { return __call("startIRBroadcast", __num(near, "startIRBroadcast: near"), __num(far, "startIRBroadcast: far")); }
 function stopIRBroadcast() { return __call("stopIRBroadcast"); }
-function startIRFollow(near, far) { return __call("startIRFollow", __num(near, "near"), __num(far, "far")); }
+function startIRFollow(near, far) { return __call("startIRFollow", __num(near, "startIRFollow: near"), __num(far, "startIRFollow: far")); }
 function stopIRFollow() { return __call("stopIRFollow"); }
-function startIREvade(near, far) { return __call("startIREvade", __num(near, "near"), __num(far, "far")); }
+function startIREvade(near, far) { return __call("startIREvade", __num(near, "startIREvade: near"), __num(far, "startIREvade: far")); }
 function stopIREvade() { return __call("stopIREvade"); }
-function sendIRMessage(channel, intensity) { return __call("sendIRMessage", __num(channel, "channel"), __num(intensity, "intensity")); }
+function sendIRMessage(channel, intensity) { return __call("sendIRMessage", __num(channel, "sendIRMessage: channel"), __num(intensity, "sendIRMessage: intensity")); }
 function listenForIRMessage(channels) {
   const list = Array.isArray(channels) ? channels : [channels];
-  return __call("listenForIRMessage", ...list.map((c) => __num(c, "channel")));
+  if (list.length > 64) throw new RangeError("listenForIRMessage: at most 64 channels, not " + list.length);
+  return __call("listenForIRMessage", ...list.map((c) => __num(c, "listenForIRMessage: channel")));
 }
 function getLocation() { return __obj(["x", "y"], __read("getLocation")); }
 function getVelocity() { return __obj(["x", "y"], __read("getVelocity")); }
@@ -115,6 +123,80 @@ function getLastIRMessage() { return __read("getLastIRMessage"); }
 function getRandomInt(min, max) { return Math.floor(Math.random() * (max - min + 1)) + min; }
 function getRandomColor() { return { r: getRandomInt(0, 255), g: getRandomInt(0, 255), b: getRandomInt(0, 255) }; }
 function registerEvent(type, fn) {
-  if (typeof fn !== "function") throw new TypeError("registerEvent needs a function to call");
+  if (typeof fn !== "function") throw new TypeError("registerEvent: needs a function to call");
   return __on(String(type), fn);
 }
+const __api = {
+  EventType,
+  Stance,
+  MatrixRotation,
+  MatrixAnimationTransition,
+  roll,
+  rollDistance,
+  setSpeed,
+  setHeading,
+  stopRoll,
+  spin,
+  rawMotor,
+  setStabilization,
+  resetAim,
+  delay,
+  exitProgram,
+  setMainLed,
+  setFrontLed,
+  setBackLed,
+  fade,
+  strobe,
+  setHoloProjectorLed,
+  setLogicDisplayLeds,
+  setDomeLeds,
+  setMatrixCharacter,
+  scrollMatrixText,
+  drawMatrixPixel,
+  drawMatrixLine,
+  drawMatrixFill,
+  clearMatrix,
+  setMatrixRotation,
+  registerMatrixAnimation,
+  playMatrixAnimation,
+  pauseMatrixAnimation,
+  resumeMatrixAnimation,
+  speak,
+  playSound,
+  playAnimation,
+  setDomePosition,
+  setStance,
+  setWaddle,
+  calibrateCompass,
+  startIRBroadcast,
+  stopIRBroadcast,
+  startIRFollow,
+  stopIRFollow,
+  startIREvade,
+  stopIREvade,
+  sendIRMessage,
+  listenForIRMessage,
+  getLocation,
+  getVelocity,
+  getSpeed,
+  getHeading,
+  getOrientation,
+  getAcceleration,
+  getVerticalAcceleration,
+  getGyroscope,
+  getDistance,
+  getElapsedTime,
+  getLuminosity,
+  getColor,
+  getCompassDirection,
+  getBatteryVoltage,
+  getMainLed,
+  getLastIRMessage,
+  getRandomInt,
+  getRandomColor,
+  registerEvent,
+};
+for (const name of Object.keys(__api)) {
+  Object.defineProperty(globalThis, name, { value: __api[name], writable: true, configurable: true, enumerable: false });
+}
+})

@@ -7,6 +7,7 @@
 
 use super::api::{Act, Ir, Matrix, Wait};
 use super::engine::{Engine, Event, Failure, Op, Readings, Status};
+use super::schedule::{Due, Schedule};
 use crate::family::{Command, Family};
 use crate::mission::{DroidMission, Emit, MissionError, MissionEvent, MissionOptions, Summary};
 use crate::model::Model;
@@ -60,13 +61,6 @@ impl Default for ProgramOptions {
     }
 }
 
-/// A timed action of a call: its acts at `at`, then its promise resolved (when the last).
-struct Timed {
-    at: Instant,
-    acts: Vec<Act>,
-    fire: Option<u64>,
-}
-
 /// A wait on the droid rather than the clock.
 enum Until {
     Distance {
@@ -92,7 +86,8 @@ struct Player {
     emit: Emit,
     start: Instant,
     telemetry: Arc<Mutex<Telemetry>>,
-    timed: Vec<Timed>,
+    /// Timed calls pending (`roll`'s duration, `spin`, `fade`, `strobe`, `delay`).
+    timed: Schedule,
     until: Vec<Until>,
     fired: Vec<u64>,
     events: Vec<Event>,
@@ -150,7 +145,7 @@ pub async fn run(
         emit,
         start,
         telemetry: mission.telemetry(),
-        timed: Vec::new(),
+        timed: Schedule::default(),
         until: Vec::new(),
         fired: Vec::new(),
         events: Vec::new(),
@@ -238,7 +233,7 @@ impl Player {
                     continue;
                 }
             }
-            let next = self.timed.iter().map(|t| t.at).min().unwrap_or(far);
+            let next = self.timed.next().unwrap_or(far);
             let by = deadline.unwrap_or(far);
             tokio::select! {
                 _ = sleep_until(next) => self.due().await,
@@ -331,20 +326,7 @@ impl Player {
         match (op.effect.wait, op.promise) {
             (None, Some(id)) => self.fired.push(id),
             (None, None) => {}
-            (Some(Wait::Timeline { steps, end }), id) => {
-                for (at, acts) in steps {
-                    self.timed.push(Timed {
-                        at: now + at,
-                        acts,
-                        fire: None,
-                    });
-                }
-                self.timed.push(Timed {
-                    at: now + end,
-                    acts: Vec::new(),
-                    fire: id,
-                });
-            }
+            (Some(Wait::Timeline(t)), id) => self.timed.add(now, t, id),
             (Some(Wait::Distance { cm, then }), Some(fire)) => {
                 self.readings();
                 self.until.push(Until::Distance {
@@ -371,23 +353,14 @@ impl Player {
 
     /// The timed actions that are due, in order.
     async fn due(&mut self) {
-        let now = Instant::now();
-        let mut due: Vec<Timed> = Vec::new();
-        let mut i = 0;
-        while i < self.timed.len() {
-            if self.timed[i].at <= now {
-                due.push(self.timed.remove(i));
-            } else {
-                i += 1;
-            }
-        }
-        due.sort_by_key(|t| t.at);
-        for t in due {
-            for a in &t.acts {
-                self.act(0, a).await;
-            }
-            if let Some(id) = t.fire {
-                self.fired.push(id);
+        for due in self.timed.due(Instant::now()) {
+            match due {
+                Due::Acts(acts) => {
+                    for a in &acts {
+                        self.act(0, a).await;
+                    }
+                }
+                Due::Fire(id) => self.fired.push(id),
             }
         }
     }

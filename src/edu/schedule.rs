@@ -1,0 +1,212 @@
+//! The timed calls waiting to play, by when each is next due: a priority queue of one entry
+//! per pending call ([`Timeline`]s make their steps when due), so a wake costs a heap pop per
+//! call due, not a scan of every step of every call (issue 37: 990 pending `strobe`s once kept
+//! 20 million steps in a list and took each out with `Vec::remove`, and `--timeout` waited
+//! behind them). Sans-IO: [`super::run`] sleeps until [`Schedule::next`] and plays what
+//! [`Schedule::due`] returns.
+
+use super::api::Act;
+use super::timeline::Timeline;
+use std::cmp::{Ordering, Reverse};
+use std::collections::BinaryHeap;
+use tokio::time::Instant;
+
+/// What is due, in time order.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Due {
+    /// A step's actions.
+    Acts(Vec<Act>),
+    /// A call is over: resolve its promise.
+    Fire(u64),
+}
+
+/// One pending call: its timeline from `start`, the next step to play and when it is due.
+#[derive(Debug)]
+struct Entry {
+    at: Instant,
+    /// The order calls were made in: of two due at once, the earlier call plays first.
+    seq: u64,
+    start: Instant,
+    next: u64,
+    timeline: Timeline,
+    fire: Option<u64>,
+}
+
+impl PartialEq for Entry {
+    fn eq(&self, other: &Self) -> bool {
+        self.cmp(other) == Ordering::Equal
+    }
+}
+
+impl Eq for Entry {}
+
+impl PartialOrd for Entry {
+    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
+        Some(self.cmp(other))
+    }
+}
+
+impl Ord for Entry {
+    fn cmp(&self, other: &Self) -> Ordering {
+        (self.at, self.seq).cmp(&(other.at, other.seq))
+    }
+}
+
+/// The pending timed calls.
+#[derive(Debug, Default)]
+pub struct Schedule {
+    heap: BinaryHeap<Reverse<Entry>>,
+    seq: u64,
+}
+
+impl Schedule {
+    /// A call made at `start`: its steps, then `fire` (its promise) at its end.
+    pub fn add(&mut self, start: Instant, timeline: Timeline, fire: Option<u64>) {
+        let at = if timeline.is_empty() {
+            start + timeline.end
+        } else {
+            start + timeline.at(0)
+        };
+        self.seq += 1;
+        self.heap.push(Reverse(Entry {
+            at,
+            seq: self.seq,
+            start,
+            next: 0,
+            timeline,
+            fire,
+        }));
+    }
+
+    /// When the next step or end is due (`None`: nothing pending).
+    pub fn next(&self) -> Option<Instant> {
+        self.heap.peek().map(|e| e.0.at)
+    }
+
+    /// How many calls are pending (one entry each, however many steps they have left).
+    pub fn len(&self) -> usize {
+        self.heap.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.heap.is_empty()
+    }
+
+    /// What is due by `now`, in time order. A call late by several steps plays only the
+    /// last of them (each step sets the whole state: [`super::timeline`]), so a wake plays
+    /// at most one step and one end per pending call, however late it is.
+    pub fn due(&mut self, now: Instant) -> Vec<Due> {
+        let mut out = Vec::new();
+        while self.heap.peek().is_some_and(|e| e.0.at <= now) {
+            let Some(Reverse(mut e)) = self.heap.pop() else {
+                break;
+            };
+            let len = e.timeline.len();
+            if e.next >= len {
+                if let Some(id) = e.fire {
+                    out.push(Due::Fire(id));
+                }
+                continue;
+            }
+            let elapsed = now.saturating_duration_since(e.start);
+            let step = e.timeline.last_due(e.next, elapsed).unwrap_or(e.next);
+            out.push(Due::Acts(e.timeline.acts(step)));
+            e.next = step.saturating_add(1);
+            e.at = e.start
+                + if e.next < len {
+                    e.timeline.at(e.next)
+                } else {
+                    e.timeline.end
+                };
+            self.heap.push(Reverse(e));
+        }
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::edu::api::{Arg, Driver, Wait};
+    use crate::model::Model;
+    use std::time::Duration;
+
+    fn timeline(d: &mut Driver, call: &str, args: &[f64]) -> Timeline {
+        let args: Vec<Arg> = args.iter().map(|v| Arg::Num(*v)).collect();
+        match d.call(call, &args).unwrap().wait {
+            Some(Wait::Timeline(t)) => t,
+            w => panic!("{call}: {w:?}"),
+        }
+    }
+
+    #[tokio::test(start_paused = true)]
+    async fn steps_play_in_time_order_and_each_call_ends_after_its_last_step() {
+        let mut d = Driver::new(Model::Bolt);
+        let mut s = Schedule::default();
+        let t0 = Instant::now();
+        s.add(
+            t0,
+            timeline(&mut d, "strobe", &[9.0, 0.0, 0.0, 0.1, 1.0]),
+            Some(1),
+        );
+        s.add(t0, timeline(&mut d, "delay", &[0.1]), Some(2));
+        let mut seen = Vec::new();
+        while let Some(at) = s.next() {
+            tokio::time::sleep_until(at).await;
+            for due in s.due(Instant::now()) {
+                seen.push((at - t0, due));
+            }
+        }
+        let ms = Duration::from_millis;
+        assert_eq!(
+            seen,
+            vec![
+                (ms(0), Due::Acts(vec![Act::Main([0, 0, 0])])),
+                // Both due at 100 ms: the strobe's step first (it was called first).
+                (ms(100), Due::Acts(vec![Act::Main([9, 0, 0])])),
+                (ms(100), Due::Fire(2)),
+                (ms(200), Due::Fire(1)),
+            ]
+        );
+        assert!(s.is_empty());
+    }
+
+    /// Issue 37: 990 pending hour-long spins and strobes are 1980 entries, not millions of
+    /// steps, and a wake an hour late plays one step per call.
+    #[tokio::test(start_paused = true)]
+    async fn many_long_calls_pending_are_one_entry_each_and_a_late_wake_is_one_step_each() {
+        let mut d = Driver::new(Model::Bolt);
+        let mut s = Schedule::default();
+        let t0 = Instant::now();
+        for i in 0..990 {
+            s.add(
+                t0,
+                timeline(&mut d, "spin", &[360.0 * 8_000.0, 1.0]),
+                Some(i),
+            );
+            s.add(
+                t0,
+                timeline(&mut d, "strobe", &[255.0, 0.0, 0.0, 0.05, 36_000.0]),
+                Some(1_000 + i),
+            );
+        }
+        assert_eq!(s.len(), 1_980);
+        // Ten simulated seconds in steps: at most one step per call each time.
+        for _ in 0..200 {
+            tokio::time::advance(Duration::from_millis(50)).await;
+            let due = s.due(Instant::now());
+            assert!(due.len() <= 1_980, "{}", due.len());
+            assert_eq!(s.len(), 1_980);
+        }
+        // An hour late: one step per call, nothing over (the spins take 3600 s, the
+        // strobes 3600 s).
+        tokio::time::advance(Duration::from_secs(3_000)).await;
+        let due = s.due(Instant::now());
+        assert_eq!(due.len(), 1_980);
+        assert_eq!(s.len(), 1_980);
+        tokio::time::advance(Duration::from_secs(600)).await;
+        let due = s.due(Instant::now());
+        let fired = due.iter().filter(|d| matches!(d, Due::Fire(_))).count();
+        assert_eq!((fired, s.len()), (1_980, 0));
+    }
+}
