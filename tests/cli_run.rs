@@ -140,7 +140,7 @@ fn json_prints_one_sample_per_interval_then_a_summary() {
     assert!(
         samples
             .iter()
-            .any(|s| s["stance"].is_null() && s["stance_to"] == Value::from("tripod")),
+            .any(|s| s["stance"].is_null() && s["stance_to"] == "tripod"),
         "{samples:?}"
     );
     assert!(

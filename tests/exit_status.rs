@@ -49,7 +49,12 @@ fn status(dir: &Path, args: &[&str], out: Out, config: Option<&Path>) -> (Option
         .stderr(Stdio::piped());
     match out {
         Out::Read | Out::Closed => cmd.stdout(Stdio::piped()),
-        Out::Full => cmd.stdout(std::fs::OpenOptions::new().write(true).open("/dev/full").unwrap()),
+        Out::Full => cmd.stdout(
+            std::fs::OpenOptions::new()
+                .write(true)
+                .open("/dev/full")
+                .unwrap(),
+        ),
     };
     let mut child = cmd.spawn().unwrap();
     if out == Out::Closed {
@@ -114,7 +119,12 @@ fn every_subcommand_keeps_the_contract() {
         (&["scan", "--scan-timeout", "0"], Out::Read, None, 2),
         (&["sim", "--bluez", "nosuch"], Out::Read, None, 2),
         (&["serve", "--sim", "nosuch"], Out::Read, None, 2),
-        (&["bridge", "--stdio", "--sim", "nosuch"], Out::Read, None, 2),
+        (
+            &["bridge", "--stdio", "--sim", "nosuch"],
+            Out::Read,
+            None,
+            2,
+        ),
         (&["config", "init"], Out::Read, Some(&exists), 2),
         (&["config", "check"], Out::Read, Some(&bad), 2),
         (&["config", "show"], Out::Read, Some(&bad), 2),
@@ -123,7 +133,12 @@ fn every_subcommand_keeps_the_contract() {
         // A failure at run time: 1 (no Bluetooth here; a full disk).
         (&["scan"], Out::Read, None, 1),
         (&["packet", "list"], Out::Full, None, 1),
-        (&["run", MISSION, "--sim", "r2d2", "--json"], Out::Full, None, 1),
+        (
+            &["run", MISSION, "--sim", "r2d2", "--json"],
+            Out::Full,
+            None,
+            1,
+        ),
         (&["replay", "cap.drc", "--json"], Out::Full, None, 1),
         (&["plot", "run.json", "-o", "full.png"], Out::Read, None, 1),
         (&["bridge", "--stdio", "--sim", "r2d2"], Out::Full, None, 1),
@@ -133,9 +148,19 @@ fn every_subcommand_keeps_the_contract() {
         (&["man"], Out::Full, None, 1),
         // The reader went away: 0.
         (&["packet", "list"], Out::Closed, None, 0),
-        (&["run", MISSION, "--sim", "r2d2", "--json"], Out::Closed, None, 0),
+        (
+            &["run", MISSION, "--sim", "r2d2", "--json"],
+            Out::Closed,
+            None,
+            0,
+        ),
         (&["replay", "cap.drc", "--json"], Out::Closed, None, 0),
-        (&["bridge", "--stdio", "--sim", "r2d2"], Out::Closed, None, 0),
+        (
+            &["bridge", "--stdio", "--sim", "r2d2"],
+            Out::Closed,
+            None,
+            0,
+        ),
         (&["config", "path"], Out::Closed, None, 0),
         (&["config", "show"], Out::Closed, None, 0),
         (&["completions", "bash"], Out::Closed, None, 0),
@@ -179,7 +204,10 @@ fn ctrl_c_during_run_is_130_after_the_stop() {
         .unwrap();
     // The mission's `drive` line is printed once it is under way (signals are watched by then).
     let mut lines = BufReader::new(child.stdout.take().unwrap()).lines();
-    let started = lines.by_ref().map_while(Result::ok).any(|l| l.contains("drive 50 90"));
+    let started = lines
+        .by_ref()
+        .map_while(Result::ok)
+        .any(|l| l.contains("drive 50 90"));
     assert!(started, "the mission never drove");
     let _ = Command::new("kill")
         .args(["-INT", &child.id().to_string()])
@@ -195,11 +223,8 @@ fn ctrl_c_during_run_is_130_after_the_stop() {
 /// docs/exit-status.md's table is `EXIT_STATUSES`, row for row.
 #[test]
 fn the_documented_table_is_the_one_droidctl_uses() {
-    let page = std::fs::read_to_string(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/docs/exit-status.md"
-    ))
-    .unwrap();
+    let page = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/docs/exit-status.md"))
+        .unwrap();
     let start = page.find("| status | meaning |").expect("the table");
     let rows: Vec<&str> = page[start..]
         .lines()

@@ -101,9 +101,10 @@ fn every_page_named_is_written_and_each_subcommand_has_one() {
     // droidctl's own pages (of any version: here an older one) are brought up to date
     // without --force, as after an upgrade.
     let run = dir.join("droidctl-run.1");
-    let old = std::fs::read_to_string(&run)
-        .unwrap()
-        .replacen(env!("CARGO_PKG_VERSION"), "0.0.1", 1);
+    let old =
+        std::fs::read_to_string(&run)
+            .unwrap()
+            .replacen(env!("CARGO_PKG_VERSION"), "0.0.1", 1);
     std::fs::write(&run, &old).unwrap();
     let again = droidctl(&["man", "--dir", d]);
     assert_eq!(

@@ -94,12 +94,11 @@ impl Source {
 /// error `config check` gives), then the settings remembered per model in `state`.
 fn show(path: &Path, state: Option<&Path>, out: &mut dyn Write) -> Result<(), CliError> {
     Config::load(path).map_err(|e| CliError::usage(e.to_string()))?;
-    let user: toml::Table =
-        match crate::text_file::read(path, crate::text_file::MAX_CONFIG_BYTES) {
-            // Already parsed by `load` above; an error here cannot happen but is not a panic.
-            Ok(text) => toml::from_str(&text).map_err(|e| CliError::usage(e.to_string()))?,
-            Err(_) => toml::Table::new(),
-        };
+    let user: toml::Table = match crate::text_file::read(path, crate::text_file::MAX_CONFIG_BYTES) {
+        // Already parsed by `load` above; an error here cannot happen but is not a panic.
+        Ok(text) => toml::from_str(&text).map_err(|e| CliError::usage(e.to_string()))?,
+        Err(_) => toml::Table::new(),
+    };
     let defaults: toml::Table = toml::from_str(DEFAULT_TOML)
         .map_err(|e| CliError::failure(format!("shipped defaults: {e}")))?;
     let w = |out: &mut dyn Write, s: String| writeln!(out, "{s}").map_err(CliError::output);
@@ -108,7 +107,11 @@ fn show(path: &Path, state: Option<&Path>, out: &mut dyn Write) -> Result<(), Cl
         format!(
             "# the configuration in effect: {} ({})",
             path.display(),
-            if path.exists() { "read" } else { "no file: defaults" }
+            if path.exists() {
+                "read"
+            } else {
+                "no file: defaults"
+            }
         ),
     )?;
     for line in lines(&defaults, &user) {
@@ -236,10 +239,7 @@ mod tests {
     #[test]
     fn a_value_from_the_file_says_file_and_the_rest_say_default() {
         let l = shown("[control]\ncruise_speed = 60\n");
-        assert!(
-            l.iter().any(|l| l == "cruise_speed = 60  # file"),
-            "{l:#?}"
-        );
+        assert!(l.iter().any(|l| l == "cruise_speed = 60  # file"), "{l:#?}");
         assert!(
             l.iter()
                 .any(|l| l.starts_with("speed_step = ") && l.ends_with("# default")),
