@@ -323,3 +323,31 @@ fn home_shows_a_full_page() {
     let page = s.log.visible(7);
     assert_eq!(page.len(), 7);
 }
+
+/// Issue 39, item 2: an overlay covers the status bar, so the E-STOP badge is drawn over it
+/// while a droid is stopped (and only then).
+#[test]
+fn the_estop_badge_shows_over_every_overlay() {
+    let overlays = [
+        Overlay::Help,
+        Overlay::Filter {
+            input: String::new(),
+        },
+        Overlay::Channels { selected: 0 },
+        Overlay::Animations { selected: 0 },
+    ];
+    for overlay in overlays {
+        let mut s = state(&[Model::R2D2, Model::BB8]);
+        s.overlay = overlay.clone();
+        let calm = screen(&s, 80, 24).join("\n");
+        assert!(!calm.contains("E-STOP"), "{overlay:?}\n{calm}");
+        // The other droid of the fleet is the one stopped: the badge still shows.
+        s.droids[1].control.estop = true;
+        let stopped = screen(&s, 80, 24);
+        assert!(
+            stopped[0].trim_end().ends_with("E-STOP"),
+            "{overlay:?}\n{}",
+            stopped.join("\n")
+        );
+    }
+}
