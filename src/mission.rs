@@ -63,7 +63,12 @@ pub struct Sample {
     /// Measured heading, degrees 0..=359.
     pub heading: Option<u16>,
     pub head_deg: Option<f32>,
-    pub stance: String,
+    /// `tripod`, `bipod` or `waddle`; null for a droid without legs, while unknown, and
+    /// while a change is in progress (then `stance_to` says where to).
+    pub stance: Option<String>,
+    /// The stance a change in progress goes to (null when none is).
+    #[serde(default)]
+    pub stance_to: Option<String>,
     pub battery_v: Option<f32>,
     pub collisions: u32,
     /// Robi 42's wheel speeds, rad/s (absent for other droids).
@@ -567,7 +572,8 @@ pub fn sample_of(t: &Telemetry, t_ms: u64) -> Sample {
         speed: z(t.speed_cm_s()),
         heading: t.heading().map(Heading::degrees),
         head_deg: z(t.head_deg),
-        stance: t.stance.label(),
+        stance: t.stance.settled().map(str::to_string),
+        stance_to: t.stance.changing_to().map(str::to_string),
         battery_v: t.battery_v,
         collisions: t.collisions,
         motor_left_rad_s: t.robi.as_ref().and_then(|r| r.motors).map(|m| m.left_rad_s),

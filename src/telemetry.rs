@@ -44,6 +44,26 @@ impl Stance {
         }
     }
 
+    /// The stance as machine outputs (`--json`, `--csv`) carry it: a plain name, `None`
+    /// when it is unknown (a droid without legs) or changing ([`Stance::changing_to`]).
+    pub fn settled(self) -> Option<&'static str> {
+        match self {
+            Stance::Tripod => Some("tripod"),
+            Stance::Bipod => Some("bipod"),
+            Stance::Waddle => Some("waddle"),
+            Stance::Unknown | Stance::Transitioning(_) => None,
+        }
+    }
+
+    /// The stance a change in progress goes to, for machine outputs (`"unknown"` while the
+    /// droid says it is changing without saying to what).
+    pub fn changing_to(self) -> Option<&'static str> {
+        match self {
+            Stance::Transitioning(to) => Some(to.label()),
+            _ => None,
+        }
+    }
+
     pub fn from_state(s: LegState) -> Stance {
         match s {
             LegState::Tripod => Stance::Tripod,

@@ -261,7 +261,8 @@ fn replay_refuses_what_is_not_a_capture_and_reads_a_damaged_one() {
     let junk = dir.join("junk");
     std::fs::write(&junk, "hello\n").unwrap();
     let o = droidctl(&["replay", junk.to_str().unwrap(), "--json"]);
-    assert_eq!(o.status.code(), Some(1));
+    // Not a capture: bad input (docs/exit-status.md).
+    assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("neither a droidctl capture"));
 
     // Cut in the middle of a line, as a crash leaves it after a flush.

@@ -22,6 +22,24 @@ fn tmp(tag: &str) -> std::path::PathBuf {
 #[test]
 fn path_init_check() {
     let d = tmp("init");
+    // No file yet in the usual place: check says the defaults are in use, not `ok`.
+    let out = Command::new(env!("CARGO_BIN_EXE_droidctl"))
+        .args(["config", "check"])
+        .env_remove("DROIDCTL_CONFIG")
+        .env("XDG_CONFIG_HOME", &d)
+        .env("HOME", &d)
+        .env("DROIDCTL_LOG_FILE", d.join("log"))
+        .stdin(Stdio::null())
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let said = String::from_utf8_lossy(&out.stdout).into_owned();
+    assert!(said.contains("no file; the defaults are in use"), "{said}");
+    assert!(!said.contains(": ok"), "{said}");
     let out = droidctl(&d, &["config", "path"]);
     assert!(out.status.success());
     assert_eq!(
@@ -38,8 +56,9 @@ fn path_init_check() {
     let written = std::fs::read_to_string(d.join("droidctl/config.toml")).unwrap();
     assert_eq!(written, droidctl::config::DEFAULT_TOML);
 
+    // An existing file without --force is bad input, as for every file droidctl writes.
     let out = droidctl(&d, &["config", "init"]);
-    assert_eq!(out.status.code(), Some(1));
+    assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("--force"));
     assert!(
         droidctl(&d, &["config", "init", "--force"])
@@ -143,4 +162,48 @@ fn droidctl_config_naming_a_missing_file_is_an_error() {
         .output()
         .unwrap();
     assert!(out.status.success());
+}
+
+/// `config show`: every value in effect with where it came from, then what the app
+/// remembers per model (it wins over both).
+#[test]
+fn show_says_where_each_value_comes_from() {
+    let d = tmp("show");
+    std::fs::create_dir_all(d.join("droidctl")).unwrap();
+    std::fs::write(
+        d.join("droidctl/config.toml"),
+        "[control]\ncruise_speed = 60\n",
+    )
+    .unwrap();
+    let state = d.join("state");
+    std::fs::create_dir_all(&state).unwrap();
+    std::fs::write(state.join("settings-r2d2.toml"), "cruise = 145\n").unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_droidctl"))
+        .args(["config", "show"])
+        .env("DROIDCTL_CONFIG", d.join("droidctl/config.toml"))
+        .env("DROIDCTL_LOG_FILE", d.join("log"))
+        .env("DROIDCTL_STATE_DIR", &state)
+        .stdin(Stdio::null())
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout).into_owned();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(text.contains("cruise_speed = 60  # file"), "{text}");
+    assert!(
+        text.lines()
+            .any(|l| l.starts_with("speed_step = ") && l.ends_with("# default")),
+        "{text}"
+    );
+    assert!(text.contains("[remembered.r2d2]"), "{text}");
+    assert!(text.contains("cruise = 145  # remembered"), "{text}");
+    // The configuration part is the configuration: it reads back as the same one.
+    let config_part = text.split("\n# remembered").next().unwrap();
+    let back = droidctl::config::Config::parse_merged(None, config_part).unwrap();
+    let direct =
+        droidctl::config::Config::parse_merged(None, "[control]\ncruise_speed = 60\n").unwrap();
+    assert_eq!(back, direct);
 }

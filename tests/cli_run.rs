@@ -95,6 +95,7 @@ fn json_prints_one_sample_per_interval_then_a_summary() {
         "heading",
         "head_deg",
         "stance",
+        "stance_to",
         "battery_v",
         "collisions",
         "pitch_deg",
@@ -123,6 +124,25 @@ fn json_prints_one_sample_per_interval_then_a_summary() {
     let late = &samples[samples.len() - 2];
     assert!(late["x_cm"].as_f64().unwrap() > 50.0, "{late:?}");
     assert_eq!(late["stance"], Value::from("tripod"));
+    // Plain values only: a stance's name or null, never display text ("→ tripod").
+    let plain = |v: &Value, extra: &[&str]| {
+        v.is_null()
+            || ["tripod", "bipod", "waddle"]
+                .iter()
+                .chain(extra)
+                .any(|n| v == &Value::from(*n))
+    };
+    for s in samples {
+        assert!(plain(&s["stance"], &[]), "{s:?}");
+        assert!(plain(&s["stance_to"], &["unknown"]), "{s:?}");
+    }
+    // The stand-up at the start is seen as a change under way, then as the stance.
+    assert!(
+        samples
+            .iter()
+            .any(|s| s["stance"].is_null() && s["stance_to"] == "tripod"),
+        "{samples:?}"
+    );
     assert!(
         (late["head_deg"].as_f64().unwrap() - 30.0).abs() < 0.5,
         "{late:?}"
@@ -204,10 +224,18 @@ fn bb9e_rejects_a_stance_line() {
         "{err}"
     );
     assert_eq!(stdout(&o), "");
-    // The same script without the stance runs on BB-9E.
+    // The same script without the stance runs on BB-9E, whose samples have no stance
+    // (null, not "unknown").
     let ok = dir.file("ok.txt", "wake\ndrive 100 0 for 1s\n");
-    let (o, _) = dir.run_timed(&["run", path(&ok), "--sim", "bb9e"]);
+    let (o, _) = dir.run_timed(&["run", path(&ok), "--sim", "bb9e", "--json"]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let lines = json_lines(&stdout(&o));
+    let samples: Vec<_> = lines.iter().filter(|s| s.get("done").is_none()).collect();
+    assert!(!samples.is_empty());
+    for s in samples {
+        assert_eq!(s.get("stance"), Some(&Value::Null), "{s:?}");
+        assert_eq!(s.get("stance_to"), Some(&Value::Null), "{s:?}");
+    }
     // A model droidctl does not know is a usage error.
     let (o, _) = dir.run_timed(&["run", path(&ok), "--sim", "c3po"]);
     assert_eq!(o.status.code(), Some(2));

@@ -98,10 +98,32 @@ fn every_page_named_is_written_and_each_subcommand_has_one() {
         std::fs::read_to_string(dir.join("droidctl-packet-decode.1")).unwrap()
     );
     assert!(decode.contains(".TH droidctl-packet-decode 1"), "{decode}");
-    // Pages that exist are kept unless --force, as every output droidctl writes.
+    // droidctl's own pages (of any version: here an older one) are brought up to date
+    // without --force, as after an upgrade.
+    let run = dir.join("droidctl-run.1");
+    let old =
+        std::fs::read_to_string(&run)
+            .unwrap()
+            .replacen(env!("CARGO_PKG_VERSION"), "0.0.1", 1);
+    std::fs::write(&run, &old).unwrap();
+    let again = droidctl(&["man", "--dir", d]);
+    assert_eq!(
+        again.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&again.stderr)
+    );
+    assert_eq!(
+        std::fs::read_to_string(&run).unwrap(),
+        page(&["man", "run"]),
+        "the old page was replaced"
+    );
+    // Another file of a page's name is kept unless --force, as every output droidctl writes.
+    std::fs::write(&run, "my own notes\n").unwrap();
     let again = droidctl(&["man", "--dir", d]);
     assert_eq!(again.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&again.stderr).contains("--force"));
+    assert_eq!(std::fs::read_to_string(&run).unwrap(), "my own notes\n");
     page(&["man", "--dir", d, "--force"]);
     let _ = std::fs::remove_dir_all(&dir);
 }

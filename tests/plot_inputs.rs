@@ -106,11 +106,13 @@ fn plot_never_writes_over_its_input() {
 }
 
 #[test]
-fn an_empty_file_is_exit_1_and_bad_input_exit_2() {
+fn an_empty_file_and_bad_input_are_both_exit_2() {
     let dir = Scratch::new("plot", "exit");
+    // An input with nothing to plot is bad input, as every command says of its inputs
+    // (docs/exit-status.md).
     for (text, code) in [
-        ("", 1),
-        ("\n\n", 1),
+        ("", 2),
+        ("\n\n", 2),
         ("hello\n", 2),
         ("{\"t_ms\": \n", 2),
         ("{\"x\": 1}\n", 2),

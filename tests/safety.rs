@@ -125,6 +125,56 @@ fn the_emergency_stop_reaches_every_droid_idle_or_not() {
     }
 }
 
+/// Issue 39, item 1: in a text prompt Space is typed, so Ctrl+Space (a terminal's NUL) is the
+/// stop there, and in every other place too.
+#[test]
+fn ctrl_space_stops_in_every_place_prompts_included() {
+    const CTRL_SPACE: Key = Key::CTRL_SPACE;
+    // The log's filter prompt and the packet detail's search prompt (BOLT's matrix text is
+    // the filter's place, Place::Matrix, read with the same table).
+    let prompts: [&[Step]; 2] = [
+        &[tap(Key::ch('l')), ms(50), tap(Key::ch('/'))],
+        &[
+            tap(Key::ch('l')),
+            ms(50),
+            tap(ENTER),
+            ms(50),
+            tap(Key::ch('/')),
+        ],
+    ];
+    for open in prompts {
+        // Space is text there: no stop.
+        let mut steps = open.to_vec();
+        steps.extend([ms(50), tap(SPACE), ms(300)]);
+        let out = run(EMULATED, &steps).unwrap_or_else(|e| panic!("{e}\nsteps: {steps:?}"));
+        assert_eq!(out.estops, 0, "Space is typed in {open:?}");
+        let mut steps = open.to_vec();
+        steps.extend([ms(50), tap(CTRL_SPACE), ms(300)]);
+        let out = run(EMULATED, &steps).unwrap_or_else(|e| panic!("{e}\nsteps: {steps:?}"));
+        assert_eq!(
+            out.estops, 1,
+            "Ctrl+Space in {open:?} is the emergency stop"
+        );
+    }
+    let places: [&[Step]; 6] = [
+        &[],
+        &[tap(Key::ch('l'))],
+        &[tap(Key::ch('?'))],
+        &[tap(Key::ch('n'))],
+        &[tap(Key::ch('u'))],
+        &[tap(Key::ch('g')), ms(50), tap(Key::ch('C'))],
+    ];
+    for open in places {
+        let mut steps = open.to_vec();
+        steps.extend([ms(50), tap(CTRL_SPACE), ms(300)]);
+        let out = run(EMULATED, &steps).unwrap_or_else(|e| panic!("{e}\nsteps: {steps:?}"));
+        assert_eq!(
+            out.estops, 1,
+            "Ctrl+Space over {open:?} is the emergency stop"
+        );
+    }
+}
+
 /// Quick double taps of toggles count twice in every place (none is mistaken for a held
 /// drive key): turbo on and off again; a filter typed with `d`, then `d` in the log.
 #[test]

@@ -16,8 +16,8 @@ fn state(models: &[Model]) -> AppState {
     let mut s = AppState::for_droids(droids);
     let config = droidctl::config::Config::defaults();
     s.help = droidctl::app::help::live(&config);
-    s.help_nav = droidctl::app::help::nav(&config.keymap);
-    s.footer = droidctl::app::help::footer(&config.keymap);
+    s.help_nav = droidctl::app::help::nav(&config.keymap, true);
+    s.footer = droidctl::app::help::footer(&config.keymap, true);
     s
 }
 
@@ -57,7 +57,8 @@ fn the_footer_follows_the_place_and_the_droid() {
     log.focus = Focus::Log;
     let f = footer(&log);
     assert!(f.contains("p pause") && f.contains("Esc back"), "{f}");
-    assert!(!f.contains("Space stop"), "{f}");
+    // Every footer shows the stop (issue 39, item 1): Space is the stop in the log too.
+    assert!(f.starts_with(" Space stop"), "{f}");
     let mut scope = r2.clone();
     scope.droid_mut().scope.visible = true;
     let f = footer(&scope);
@@ -66,6 +67,19 @@ fn the_footer_follows_the_place_and_the_droid() {
     tuning.overlay = Overlay::Channels { selected: 0 };
     let f = footer(&tuning);
     assert!(f.contains("Enter apply") && f.contains("Esc close"), "{f}");
+    assert!(f.starts_with(" Space stop"), "{f}");
+    // In a text prompt Space is typed: the footer names the stop that works there.
+    let mut prompt = r2.clone();
+    prompt.overlay = Overlay::Filter {
+        input: String::new(),
+    };
+    let f = footer(&prompt);
+    assert!(f.starts_with(" Ctrl+Space stop"), "{f}");
+    assert!(f.contains("Esc cancel"), "{f}");
+    let mut help = r2.clone();
+    help.overlay = Overlay::Help;
+    let f = footer(&help);
+    assert!(f.contains("Space stop"), "{f}");
 }
 
 #[test]
@@ -85,7 +99,7 @@ fn help_lists_what_applies_to_the_chosen_droid() {
         let mut s = s.clone();
         s.overlay = Overlay::Help;
         let mut text = String::new();
-        for page in 0..4 {
+        for page in 0..8 {
             s.help_page = page;
             text.push_str(&screen(&s, 80, 24).join("\n"));
         }
@@ -102,7 +116,7 @@ fn help_lists_what_applies_to_the_chosen_droid() {
     let bolt = all(&state(&[Model::Bolt]));
     assert!(bolt.contains("type on the matrix") && !bolt.contains("dome left"));
     let fleet = all(&state(&[Model::R2D2, Model::Rvr]));
-    assert!(fleet.contains("fleet: drive the next droid"));
+    assert!(fleet.contains("fleet: drive the next droid"), "{fleet}");
 }
 
 fn fleet4() -> AppState {
@@ -308,4 +322,32 @@ fn home_shows_a_full_page() {
     s.log.scroll_up(usize::MAX / 2);
     let page = s.log.visible(7);
     assert_eq!(page.len(), 7);
+}
+
+/// Issue 39, item 2: an overlay covers the status bar, so the E-STOP badge is drawn over it
+/// while a droid is stopped (and only then).
+#[test]
+fn the_estop_badge_shows_over_every_overlay() {
+    let overlays = [
+        Overlay::Help,
+        Overlay::Filter {
+            input: String::new(),
+        },
+        Overlay::Channels { selected: 0 },
+        Overlay::Animations { selected: 0 },
+    ];
+    for overlay in overlays {
+        let mut s = state(&[Model::R2D2, Model::BB8]);
+        s.overlay = overlay.clone();
+        let calm = screen(&s, 80, 24).join("\n");
+        assert!(!calm.contains("E-STOP"), "{overlay:?}\n{calm}");
+        // The other droid of the fleet is the one stopped: the badge still shows.
+        s.droids[1].control.estop = true;
+        let stopped = screen(&s, 80, 24);
+        assert!(
+            stopped[0].trim_end().ends_with("E-STOP"),
+            "{overlay:?}\n{}",
+            stopped.join("\n")
+        );
+    }
 }

@@ -33,8 +33,8 @@ fn ms(v: u64) -> Duration {
 fn with_help(s: &mut AppState) {
     let config = droidctl::config::Config::defaults();
     s.help = droidctl::app::help::live(&config);
-    s.help_nav = droidctl::app::help::nav(&config.keymap);
-    s.footer = droidctl::app::help::footer(&config.keymap);
+    s.help_nav = droidctl::app::help::nav(&config.keymap, true);
+    s.footer = droidctl::app::help::footer(&config.keymap, true);
 }
 
 fn entry(at_ms: u64, dir: Direction, p: Packet) -> LogLine {

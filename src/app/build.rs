@@ -146,8 +146,9 @@ pub(super) fn build(droids: Vec<Origin>, opts: AppOptions) -> App {
     } else {
         GamepadStatus::Disabled
     };
-    state.help_nav = super::help::nav(&keymap);
-    state.footer = super::help::footer(&keymap);
+    // A replay drives nothing (Space pauses it): its help names no stop.
+    state.help_nav = super::help::nav(&keymap, live);
+    state.footer = super::help::footer(&keymap, live);
     state.help = if live {
         super::help::live(&config)
     } else {

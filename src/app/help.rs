@@ -13,13 +13,7 @@ use crate::config::{Action, Config, Context, KeyMap, Needs};
 /// Help for a live session: every context a live app reads keys in, then the gamepad.
 pub fn live(config: &Config) -> Vec<HelpSection> {
     let km = &config.keymap;
-    let mut drive = section(km, Context::Drive);
-    drive.lines.push(HelpLine {
-        keys: "Ctrl+c".into(),
-        action: "quit (stops the droid first), whatever the bindings".into(),
-        needs: Needs::All,
-    });
-    let mut sections = vec![drive];
+    let mut sections = vec![section(km, Context::Drive), everywhere()];
     sections.extend(
         [
             Context::Log,
@@ -35,6 +29,25 @@ pub fn live(config: &Config) -> Vec<HelpSection> {
     );
     sections.push(gamepad(config));
     sections
+}
+
+/// The keys no binding changes, read in every place.
+fn everywhere() -> HelpSection {
+    HelpSection {
+        title: "Everywhere".into(),
+        lines: vec![
+            HelpLine {
+                keys: crate::config::Key::CTRL_SPACE.to_string(),
+                action: "emergency stop, text prompts included".into(),
+                needs: Needs::All,
+            },
+            HelpLine {
+                keys: "Ctrl+c".into(),
+                action: "quit (stops the droid first)".into(),
+                needs: Needs::All,
+            },
+        ],
+    }
 }
 
 /// Help for a replay: the replay keys and the drive table's quit, help and log keys (nothing
@@ -59,13 +72,19 @@ pub fn replay(km: &KeyMap) -> Vec<HelpSection> {
     ]
 }
 
-/// The help overlay's page keys, for its footer (`PgDn/PgUp`).
-pub fn nav(km: &KeyMap) -> String {
+/// The help overlay's page keys, for its footer (`PgDn/PgUp`), after the stop when `live`.
+pub fn nav(km: &KeyMap, live: bool) -> String {
     let first = |a| km.keys(a).first().map(ToString::to_string);
-    match (first(Action::HelpNext), first(Action::HelpPrevious)) {
+    let pages = match (first(Action::HelpNext), first(Action::HelpPrevious)) {
         (Some(n), Some(p)) => format!("{n}/{p}"),
         (Some(k), None) | (None, Some(k)) => k,
         (None, None) => String::new(),
+    };
+    // Help covers the footer: its border names the stop, which works over it.
+    match first(Action::EStop).filter(|_| live) {
+        Some(stop) if pages.is_empty() => format!("{stop} stop"),
+        Some(stop) => format!("{stop} stop · {pages}"),
+        None => pages,
     }
 }
 
@@ -73,7 +92,7 @@ pub fn nav(km: &KeyMap) -> String {
 /// footer word, the first key bound to each, then (kept however narrow the row) the keys that
 /// leave the place or show the rest. A drive-specific key comes before the general ones, so
 /// on a narrow row what this droid can do stays and the general keys go first.
-pub fn footer(km: &KeyMap) -> Vec<(Context, Vec<FooterKey>)> {
+pub fn footer(km: &KeyMap, live: bool) -> Vec<(Context, Vec<FooterKey>)> {
     let first = |a: Action| km.keys(a).first().map(ToString::to_string);
     let entry = |a: Action, word: &str, keep: bool| {
         first(a).map(|key| FooterKey {
@@ -112,12 +131,40 @@ pub fn footer(km: &KeyMap) -> Vec<(Context, Vec<FooterKey>)> {
             .collect()
     };
     let more = Action::Help.short();
+    // Every footer shows the stop first: the driving table's own stop entry, elsewhere the
+    // stop's key that works there (in a text prompt the one held with Ctrl, as Space is
+    // typed), kept however narrow the row.
+    // A replay drives nothing: no stop to show (Space pauses it).
+    let stop = |text: bool| {
+        if !live {
+            return None;
+        }
+        let key = match text {
+            true => Some(crate::config::Key::CTRL_SPACE),
+            false => km.keys(Action::EStop).first().copied(),
+        };
+        key.map(|k| FooterKey {
+            key: k.to_string(),
+            word: Action::EStop.short().into(),
+            needs: Needs::All,
+            keep: true,
+        })
+    };
     let with = |ctx: Context, extra: &[(Action, &str)]| {
-        let mut v = words(ctx);
+        let mut v: Vec<FooterKey> = match ctx {
+            Context::Drive | Context::Replay => Vec::new(),
+            // The packet detail has a search prompt of its own: the stop that works while
+            // typing there works outside it too.
+            _ => stop(matches!(ctx, Context::Filter | Context::Detail))
+                .into_iter()
+                .collect(),
+        };
+        v.extend(words(ctx));
         v.extend(tail(extra));
         (ctx, v)
     };
-    let mut help = words(Context::Help);
+    let mut help: Vec<FooterKey> = stop(false).into_iter().collect();
+    help.extend(words(Context::Help));
     help.push(FooterKey {
         key: "other keys".into(),
         word: "close".into(),
@@ -264,6 +311,7 @@ mod tests {
             titles,
             [
                 "Keyboard",
+                "Everywhere",
                 "Packet log",
                 "Scope (other keys drive)",
                 "Channels, streaming and collision",
@@ -275,6 +323,10 @@ mod tests {
             ]
         );
         assert_eq!(keys_of(find(&h, "Keyboard"), "drive forward"), ["↑ / w"]);
+        assert_eq!(
+            keys_of(find(&h, "Everywhere"), "emergency stop"),
+            ["Ctrl+Space"]
+        );
         assert_eq!(keys_of(find(&h, "Packet log"), "pause"), ["p"]);
         assert_eq!(keys_of(find(&h, "Keyboard"), "the scope"), ["g"]);
         assert_eq!(
@@ -285,7 +337,8 @@ mod tests {
         let r = replay(&c.keymap);
         assert_eq!(keys_of(find(&r, "Replay"), "pause / play"), ["Space / p"]);
         assert_eq!(keys_of(find(&r, "Replay"), "quit"), ["q"]);
-        assert_eq!(nav(&c.keymap), "PgDn/PgUp");
+        assert_eq!(nav(&c.keymap, true), "Space stop · PgDn/PgUp");
+        assert_eq!(nav(&c.keymap, false), "PgDn/PgUp");
     }
 
     #[test]

@@ -126,9 +126,17 @@ impl App {
         key: Key,
         new_press: bool,
     ) -> Option<ExitReason> {
+        // Ctrl+Space stops in every place: no place takes a Ctrl key as text, so it works in
+        // the prompts too, where Space is typed.
+        if key == Key::CTRL_SPACE {
+            if new_press {
+                self.estop();
+            }
+            return None;
+        }
         // The emergency stop works over every overlay whose own table leaves its key free
-        // (typing places take every printable key, so there it is the gamepad's or Esc
-        // first).
+        // (typing places take every printable key: there it is the Ctrl one above, or the
+        // gamepad's).
         let overlay_table = match place {
             Place::Palette => Some(Context::Palette),
             Place::Help => Some(Context::Help),

@@ -305,14 +305,18 @@ fn parse_object(obj: &Map<String, Value>) -> Result<Request, Refusal> {
         "stop" => Cmd::Stop,
         "estop" => Cmd::Estop,
         "head" => {
-            let a = f.number("angle", 180.0)?;
-            Cmd::Head(HeadAngle::new(a).ok_or_else(|| {
+            // One range in every refusal: the dome's own (a number past ±180 was once
+            // refused with the generic ±180 and one inside it with the dome's).
+            let v = f.get("angle")?;
+            let range = || {
                 field_err(format!(
-                    "angle {a} is out of range {}..={} degrees",
+                    "`angle` is a number in {}..={} degrees, not {v}",
                     crate::units::HEAD_MIN_DEG,
                     crate::units::HEAD_MAX_DEG
                 ))
-            })?)
+            };
+            let a = v.as_f64().filter(|n| n.is_finite()).ok_or_else(range)?;
+            Cmd::Head(HeadAngle::new(a as f32).ok_or_else(range)?)
         }
         "stance" => Cmd::Stance(
             match f.word("stance", &["tripod", "bipod", "waddle", "stop"])? {

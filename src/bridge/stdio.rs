@@ -29,8 +29,10 @@ pub const DRAIN_STALL: Duration = Duration::from_secs(10);
 pub enum End {
     /// The input ended.
     InputClosed,
-    /// The output cannot be written (the reader went away).
+    /// The output ended: the reader went away (a closed pipe).
     OutputClosed(String),
+    /// The output could not be written for another reason (a full disk): a failure.
+    OutputFailed(String),
     /// Told to stop (a signal).
     Stopped,
 }
@@ -158,13 +160,16 @@ where
     let end = tokio::select! {
         end = reader => end,
         r = &mut writer => {
-            let why = match &r {
-                Ok(Ok(())) => "the output ended".to_string(),
-                Ok(Err(e)) => e.to_string(),
-                Err(e) => e.to_string(),
+            let end = match &r {
+                Ok(Ok(())) => End::OutputClosed("the output ended".to_string()),
+                Ok(Err(e)) if e.kind() == std::io::ErrorKind::BrokenPipe => {
+                    End::OutputClosed(e.to_string())
+                }
+                Ok(Err(e)) => End::OutputFailed(e.to_string()),
+                Err(e) => End::OutputFailed(e.to_string()),
             };
             writer_done = Some(r);
-            End::OutputClosed(why)
+            end
         }
         _ = stopped => End::Stopped,
     };
@@ -176,17 +181,26 @@ where
         let _ = finish.send(());
         // Everything is written while the reader takes it, however slowly.
         let mut seen = written.load(Ordering::Relaxed);
-        while tokio::time::timeout(DRAIN_STALL, &mut writer)
-            .await
-            .is_err()
-        {
-            let now = written.load(Ordering::Relaxed);
-            if now == seen {
-                tracing::warn!("bridge: the reader took nothing for {DRAIN_STALL:?}: not waiting");
-                writer.abort();
-                break;
+        loop {
+            match tokio::time::timeout(DRAIN_STALL, &mut writer).await {
+                // The output failed while the input was read to its end: a full disk is a
+                // failure whenever it is met (a closed pipe is the reader's choice).
+                Ok(Ok(Err(e))) if e.kind() != std::io::ErrorKind::BrokenPipe => {
+                    return End::OutputFailed(e.to_string());
+                }
+                Ok(_) => break,
+                Err(_) => {
+                    let now = written.load(Ordering::Relaxed);
+                    if now == seen {
+                        tracing::warn!(
+                            "bridge: the reader took nothing for {DRAIN_STALL:?}: not waiting"
+                        );
+                        writer.abort();
+                        break;
+                    }
+                    seen = now;
+                }
             }
-            seen = now;
         }
     }
     end

@@ -581,3 +581,15 @@ proptest! {
         prop_assert_eq!(r.id.is_some(), line.contains("\"id\""));
     }
 }
+
+/// Every refusal of a dome angle names the dome's own range, whatever side it is past.
+#[test]
+fn a_dome_angle_out_of_range_names_one_range() {
+    for angle in ["-170", "-190", "200", "1e300", "\"x\""] {
+        let line = format!(r#"{{"v":1,"cmd":"head","angle":{angle}}}"#);
+        let e = schema::parse(line.as_bytes()).expect_err(&line);
+        assert!(e.message.contains("-160..=180"), "{line}: {}", e.message);
+        assert!(!e.message.contains("-180"), "{line}: {}", e.message);
+    }
+    assert!(schema::parse(br#"{"v":1,"cmd":"head","angle":-160}"#).is_ok());
+}

@@ -359,6 +359,13 @@ pub fn run(args: BridgeArgs) -> Result<i32, CliError> {
                 if let bridge::stdio::End::OutputClosed(why) = &end {
                     eprintln!("droidctl: bridge: stdout closed ({why}): every droid stopped");
                 }
+                // A reader that went away is the usual end (status 0); an output that cannot
+                // be written (a full disk) is a failure (status 1).
+                if let bridge::stdio::End::OutputFailed(why) = &end {
+                    return Err(CliError::failure(format!(
+                        "bridge: cannot write the output ({why}): every droid was stopped"
+                    )));
+                }
                 let dropped = bridge.dropped();
                 if dropped > 0 {
                     eprintln!(

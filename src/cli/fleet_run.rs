@@ -158,7 +158,7 @@ pub(super) fn finish_fleet(
                 inner: s,
             };
             out.stdout(|w| {
-                serde_json::to_writer(&mut *w, &t).map_err(std::io::Error::other)?;
+                serde_json::to_writer(&mut *w, &t).map_err(std::io::Error::from)?;
                 writeln!(w)
             });
         } else {
@@ -218,7 +218,7 @@ pub(super) fn printer(
                     inner: &s,
                 };
                 out.stdout(|w| {
-                    serde_json::to_writer(&mut *w, &t).map_err(std::io::Error::other)?;
+                    serde_json::to_writer(&mut *w, &t).map_err(std::io::Error::from)?;
                     writeln!(w)
                 });
             }

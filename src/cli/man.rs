@@ -274,6 +274,28 @@ pub fn page(path: &[String]) -> Result<Vec<u8>, CliError> {
         })
 }
 
+/// Whether the file at `path` is droidctl's own page `name` (its title line within the first
+/// lines, as [`pages`] writes it, naming droidctl as its source), from whichever version.
+fn ours(path: &std::path::Path, name: &str) -> bool {
+    use std::io::Read;
+    // Only a regular file is read (opening a FIFO would wait for a writer).
+    if !std::fs::metadata(path).is_ok_and(|m| m.is_file()) {
+        return false;
+    }
+    let Ok(f) = std::fs::File::open(path) else {
+        return false;
+    };
+    let mut head = Vec::new();
+    if f.take(512).read_to_end(&mut head).is_err() {
+        return false;
+    }
+    let title = format!(".TH {name} 1 ");
+    String::from_utf8_lossy(&head)
+        .lines()
+        .take(4)
+        .any(|l| l.starts_with(&title) && l.contains("\"droidctl "))
+}
+
 /// Run `droidctl man`.
 pub fn run(args: ManArgs, out: &mut dyn Write) -> Result<i32, CliError> {
     let Some(dir) = args.dir else {
@@ -285,14 +307,15 @@ pub fn run(args: ManArgs, out: &mut dyn Write) -> Result<i32, CliError> {
     std::fs::create_dir_all(&dir)
         .map_err(|e| CliError::failure(format!("cannot create {}: {e}", dir.display())))?;
     let pages = pages();
-    // All refused before any is written.
+    // All refused before any is written. A page droidctl wrote itself (of any version) is
+    // replaced without --force: `man --dir` after an upgrade brings the pages up to date.
     for (name, _) in &pages {
-        crate::output::check(&dir.join(format!("{name}.1")), args.force)
-            .map_err(CliError::usage)?;
+        let path = dir.join(format!("{name}.1"));
+        crate::output::check(&path, args.force || ours(&path, name)).map_err(CliError::usage)?;
     }
     for (name, page) in &pages {
         let path = dir.join(format!("{name}.1"));
-        crate::output::create(&path, args.force)
+        crate::output::create(&path, args.force || ours(&path, name))
             .and_then(|mut f| f.write_all(page).map_err(|e| e.to_string()))
             .map_err(|e| CliError::failure(format!("cannot write {}: {e}", path.display())))?;
     }

@@ -88,8 +88,9 @@ pub(crate) fn realtime_runtime() -> Result<tokio::runtime::Runtime, CliError> {
         .map_err(|e| CliError::failure(format!("cannot start the runtime: {e}")))
 }
 
-/// The exit statuses, with what each means (droidctl(1)'s EXIT STATUS section).
-pub const EXIT_STATUSES: [(i32, &str); 3] = [
+/// The exit statuses, with what each means (droidctl(1)'s EXIT STATUS section, and the
+/// table in docs/exit-status.md, which a test keeps equal to this).
+pub const EXIT_STATUSES: [(i32, &str); 4] = [
     (
         0,
         "Success; also when the reader of the output went away (`droidctl … | head`).",
@@ -104,6 +105,12 @@ pub const EXIT_STATUSES: [(i32, &str); 3] = [
         "Bad input: an unknown command or option, a value out of range, malformed hex, a \
          malformed mission script or configuration file, an output file that exists (without \
          --force).",
+    ),
+    (
+        130,
+        "Interrupted: Ctrl+c ended `run` after every droid was stopped; \
+         SIGTERM gives 143 and SIGHUP 129 (128 + the signal's number). `serve`, `bridge`, \
+         `sim` and the app end normally on them (0): that is how they are stopped.",
     ),
 ];
 
@@ -181,7 +188,7 @@ pub fn main() -> i32 {
             drop(out);
             sim::run(args)
         }
-        Some(Command::Config(cmd)) => config_cmd::run(cmd),
+        Some(Command::Config(cmd)) => config_cmd::run(cmd, &mut out),
         Some(Command::Completions(args)) => completions::completions(args, &mut out),
         Some(Command::Man(args)) => man::run(args, &mut out),
         Some(Command::Drive(args)) => {
@@ -199,7 +206,12 @@ pub fn main() -> i32 {
         Err(e) if e.status == 0 => 0,
         Err(e) => {
             eprintln!("droidctl: error: {}", e.message);
-            e.status
+            // A run ended by Ctrl+c (or SIGTERM, SIGHUP) has stopped its droids by now; its
+            // status says what ended it (130 after Ctrl+c), as shells expect.
+            match signals::interrupted_status() {
+                Some(s) if e.status == EXIT_STATUSES[1].0 => s,
+                _ => e.status,
+            }
         }
     }
 }

@@ -64,7 +64,7 @@ pub fn tracks(
     let mut tracks = crate::plot::track::Tracks::new(channels);
     let whole = std::fs::metadata(file).is_ok_and(|m| m.len() <= first.len() as u64);
     if whole && first.iter().all(u8::is_ascii_whitespace) {
-        // Empty: nothing to plot (exit 1 below), not bad input.
+        // Empty: nothing to plot (said below, status 2 as for any input without samples).
         return Ok(tracks);
     }
     let model = match &args.model {
@@ -196,7 +196,7 @@ pub fn run(args: PlotArgs) -> Result<i32, CliError> {
     }
     let tracks = tracks(&args, &channels)?;
     if tracks.samples() == 0 {
-        return Err(CliError::failure(format!(
+        return Err(CliError::usage(format!(
             "{}: no telemetry samples to plot",
             args.file.display()
         )));

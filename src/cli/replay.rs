@@ -13,8 +13,9 @@ pub struct RecordArgs {
     /// docs/captures.md). An existing FILE is kept unless --force.
     #[arg(long, value_name = "FILE")]
     pub record: Option<PathBuf>,
-    /// Replace the files written (--record, --csv, --jsonl) when they exist; without it an
-    /// existing file is kept and nothing starts.
+    /// Replace the files this command writes (--record, and --csv or --jsonl where the
+    /// command has them) when they exist; without it an existing file is kept and nothing
+    /// starts.
     #[arg(long)]
     pub force: bool,
 }
@@ -89,7 +90,9 @@ fn handles(args: &ReplayArgs) -> Result<Vec<u16>, CliError> {
 pub fn load(args: &ReplayArgs) -> Result<(crate::capture::Capture, crate::model::Model), CliError> {
     let handles = handles(args)?;
     let capture =
-        crate::capture::Capture::load_with(&args.file, &handles).map_err(CliError::failure)?;
+        // A file that is missing, unreadable or not a capture is bad input (status 2), as `run`
+    // and `plot` say of theirs.
+        crate::capture::Capture::load_with(&args.file, &handles).map_err(CliError::usage)?;
     let model = checked_model(
         &capture,
         args.model.as_deref(),
@@ -113,7 +116,7 @@ pub fn checked_model(
             (Some(m), _) => m,
             (None, Some(f)) => crate::family::for_protocol(f).representative(),
             (None, None) => {
-                return Err(CliError::failure(format!(
+                return Err(CliError::usage(format!(
                     "{name}: no droid traffic found in this {}",
                     capture.kind
                 )));
@@ -139,7 +142,7 @@ type FleetCaptures = Vec<(crate::capture::Capture, crate::model::Model, String)>
 /// Load a capture of several droids, if `args.file` is one.
 fn load_fleet(args: &ReplayArgs) -> Result<Option<FleetCaptures>, CliError> {
     let bytes = std::fs::read(&args.file)
-        .map_err(|e| CliError::failure(format!("cannot read {}: {e}", args.file.display())))?;
+        .map_err(|e| CliError::usage(format!("cannot read {}: {e}", args.file.display())))?;
     let shown = args.file.display();
     let droids = if crate::capture::fleet::sniff(&bytes) {
         let split = crate::capture::fleet::read(&String::from_utf8_lossy(&bytes))
@@ -199,7 +202,7 @@ fn fleet_json(args: &ReplayArgs, droids: &FleetCaptures) -> Result<i32, CliError
                     droid: name,
                     inner: s,
                 };
-                serde_json::to_writer(&mut out, &t).map_err(std::io::Error::other)?;
+                serde_json::to_writer(&mut out, &t).map_err(std::io::Error::from)?;
                 writeln!(out)
             },
             &mut |from, to| {
@@ -260,7 +263,7 @@ pub fn run(args: ReplayArgs) -> Result<i32, CliError> {
                 if !json {
                     return Ok(());
                 }
-                serde_json::to_writer(&mut out, s).map_err(std::io::Error::other)?;
+                serde_json::to_writer(&mut out, s).map_err(std::io::Error::from)?;
                 writeln!(out)
             },
             &mut |from, to| {

@@ -310,7 +310,7 @@ where
         }
         match e {
             MissionEvent::Sample(s) if json => printer.stdout(|w| {
-                serde_json::to_writer(&mut *w, &s).map_err(std::io::Error::other)?;
+                serde_json::to_writer(&mut *w, &s).map_err(std::io::Error::from)?;
                 writeln!(w)
             }),
             MissionEvent::Sample(s) => {
@@ -499,10 +499,10 @@ pub fn sample_line(s: &mission::Sample) -> String {
         .head_deg
         .map(|h| format!("  head {}°", opt(Some(h), 0)))
         .unwrap_or_default();
-    let stance = if s.stance == crate::telemetry::Stance::Unknown.label() {
-        String::new()
-    } else {
-        format!("  stance {}", s.stance)
+    let stance = match (&s.stance, &s.stance_to) {
+        (Some(st), _) => format!("  stance {st}"),
+        (None, Some(to)) => format!("  stance → {to}"),
+        (None, None) => String::new(),
     };
     format!(
         "[{:>8.2}s] pos ({}, {}) cm  speed {} cm/s  heading {}{head}{stance}  battery {} V  collisions {}",

@@ -17,8 +17,15 @@ use std::time::Duration;
 
 #[derive(Debug, Clone, Args)]
 pub struct ScanArgs {
-    /// How long to listen, in seconds (fractions allowed).
-    #[arg(long, value_name = "SECS", default_value = "5", value_parser = parse_secs)]
+    /// How long to listen, in seconds (fractions allowed). `--scan-timeout` is the same, as
+    /// every other command spells it.
+    #[arg(
+        long,
+        visible_alias = "scan-timeout",
+        value_name = "SECS",
+        default_value = "5",
+        value_parser = parse_secs
+    )]
     pub timeout: Duration,
     /// One JSON object per line: name, model, model_name, address, rssi, heard.
     #[arg(long)]

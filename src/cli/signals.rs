@@ -3,6 +3,26 @@
 //! Ctrl-Break and the console window closing on Windows. Whoever waits stops the droid first,
 //! then exits.
 
+use std::sync::atomic::{AtomicI32, Ordering};
+
+/// The exit status a signal that ended a command asks for (128 + its number on Unix, the
+/// shells' convention: Ctrl+c 130), or 0 while none has come. Set by [`terminated`] when it
+/// returns, read by [`interrupted_status`].
+static INTERRUPTED: AtomicI32 = AtomicI32::new(0);
+
+/// The status a command that failed because it was interrupted exits with (`Some(130)` after
+/// Ctrl+c), once the droids are stopped; `None` when no signal ended it.
+pub fn interrupted_status() -> Option<i32> {
+    match INTERRUPTED.load(Ordering::SeqCst) {
+        0 => None,
+        s => Some(s),
+    }
+}
+
+fn record(status: i32) {
+    INTERRUPTED.store(status, Ordering::SeqCst);
+}
+
 /// Wait until the process is asked to end; returns what asked, for the message
 /// (`SIGTERM: stopped the droid and exited`). Never returns when the signals cannot be watched.
 ///
@@ -18,9 +38,9 @@ pub async fn terminated() -> &'static str {
             signal(SignalKind::hangup()),
         ) {
             (Ok(mut int), Ok(mut term), Ok(mut hup)) => tokio::select! {
-                _ = int.recv() => "SIGINT",
-                _ = term.recv() => "SIGTERM",
-                _ = hup.recv() => "SIGHUP",
+                _ = int.recv() => { record(128 + 2); "SIGINT" },
+                _ = term.recv() => { record(128 + 15); "SIGTERM" },
+                _ = hup.recv() => { record(128 + 1); "SIGHUP" },
             },
             _ => std::future::pending().await,
         }
@@ -30,9 +50,10 @@ pub async fn terminated() -> &'static str {
         use tokio::signal::windows::{ctrl_break, ctrl_c, ctrl_close};
         match (ctrl_c(), ctrl_break(), ctrl_close()) {
             (Ok(mut int), Ok(mut brk), Ok(mut close)) => tokio::select! {
-                _ = int.recv() => "Ctrl-C",
-                _ = brk.recv() => "Ctrl-Break",
-                _ = close.recv() => "console closed",
+                // Windows has no signal numbers: 130 for each, as for Ctrl+c elsewhere.
+                _ = int.recv() => { record(130); "Ctrl-C" },
+                _ = brk.recv() => { record(130); "Ctrl-Break" },
+                _ = close.recv() => { record(130); "console closed" },
             },
             _ => std::future::pending().await,
         }
@@ -40,7 +61,10 @@ pub async fn terminated() -> &'static str {
     #[cfg(not(any(unix, windows)))]
     {
         match tokio::signal::ctrl_c().await {
-            Ok(()) => "Ctrl-C",
+            Ok(()) => {
+                record(130);
+                "Ctrl-C"
+            }
             Err(_) => std::future::pending().await,
         }
     }

@@ -54,6 +54,14 @@ impl Key {
         ctrl: true,
     };
 
+    /// Ctrl+Space (a terminal sends it as NUL): always the emergency stop, in every place,
+    /// text prompts included (no place takes a Ctrl key as text, while Space is typed there),
+    /// whatever the bindings say.
+    pub const CTRL_SPACE: Key = Key {
+        code: KeyCode::Space,
+        ctrl: true,
+    };
+
     /// Parse a config name: "Up", "Space", "F1", "w", "+", "Ctrl+c".
     pub fn parse(name: &str) -> Option<Key> {
         let (ctrl, rest) = match name
@@ -554,6 +562,12 @@ impl KeyMap {
                 return Err((
                     key.to_string(),
                     "Ctrl+c always quits; bind another key".into(),
+                ));
+            }
+            if k == Key::CTRL_SPACE {
+                return Err((
+                    key.to_string(),
+                    "Ctrl+Space is always the emergency stop; bind another key".into(),
                 ));
             }
             if let Some(other) = self.map.insert((ctx, k), a)

@@ -54,7 +54,7 @@ pub const TARGET: Target = Target {
 };
 
 /// The keys a sequence is made of: every place's way in and out, typing, and the drive keys.
-pub const KEYS: [Key; 32] = [
+pub const KEYS: [Key; 33] = [
     Key::plain(KeyCode::Up),
     Key::plain(KeyCode::Down),
     Key::plain(KeyCode::Left),
@@ -87,6 +87,8 @@ pub const KEYS: [Key; 32] = [
     Key::ch('c'),
     Key::ch('f'),
     Key::ch('x'),
+    // The stop that works in every place, the text prompts included.
+    Key::CTRL_SPACE,
 ];
 
 /// One step of a sequence.

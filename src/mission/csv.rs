@@ -30,7 +30,8 @@ pub const COLUMNS: &[(&str, Cell)] = &[
     ("speed_cm_s", |s| f(s.speed, 2)),
     ("heading_deg", |s| i(s.heading)),
     ("head_deg", |s| f(s.head_deg, 1)),
-    ("stance", |s| s.stance.clone()),
+    ("stance", |s| s.stance.clone().unwrap_or_default()),
+    ("stance_to", |s| s.stance_to.clone().unwrap_or_default()),
     ("battery_v", |s| f(s.battery_v, 2)),
     ("collisions", |s| s.collisions.to_string()),
     ("pitch_deg", |s| f(s.pitch_deg, 2)),
@@ -60,14 +61,18 @@ pub fn header() -> String {
         .join(",")
 }
 
-/// One sample as a CSV line (no newline). Only the stance is text, and it never holds a
-/// comma or a quote; it is quoted anyway should that change.
+/// One sample as a CSV line (no newline). Only the stance columns are text, and they never
+/// hold a comma or a quote; a name is quoted anyway should that change (empty: no value).
 pub fn row(s: &Sample) -> String {
     COLUMNS
         .iter()
         .map(|(name, cell)| {
             let v = cell(s);
-            if *name == "stance" { quoted(v) } else { v }
+            if name.starts_with("stance") && !v.is_empty() {
+                quoted(v)
+            } else {
+                v
+            }
         })
         .collect::<Vec<_>>()
         .join(",")
@@ -148,7 +153,7 @@ impl SampleFiles {
             writeln!(w, "{}", row(s))?;
         }
         if let Some(w) = &mut self.jsonl {
-            serde_json::to_writer(&mut *w, s).map_err(std::io::Error::other)?;
+            serde_json::to_writer(&mut *w, s).map_err(std::io::Error::from)?;
             writeln!(w)?;
         }
         Ok(())
@@ -161,7 +166,7 @@ impl SampleFiles {
         }
         if let Some(w) = &mut self.jsonl {
             let t = Tagged { droid, sample: s };
-            serde_json::to_writer(&mut *w, &t).map_err(std::io::Error::other)?;
+            serde_json::to_writer(&mut *w, &t).map_err(std::io::Error::from)?;
             writeln!(w)?;
         }
         Ok(())
@@ -191,7 +196,8 @@ mod tests {
             speed: Some(3.5),
             heading: Some(90),
             head_deg: None,
-            stance: "tripod".into(),
+            stance: Some("tripod".into()),
+            stance_to: None,
             battery_v: Some(3.9),
             collisions: 2,
             motor_left_rad_s: None,
@@ -218,6 +224,7 @@ mod tests {
         assert_eq!(cell("y_cm"), "");
         assert_eq!(cell("accel_y_g"), "0.5000");
         assert_eq!(cell("stance"), "tripod");
+        assert_eq!(cell("stance_to"), "");
         assert!(h.starts_with("t_s,x_cm,y_cm,speed_cm_s,heading_deg"));
     }
 }

@@ -116,7 +116,7 @@ impl Printer<'_> {
                         problem: explained.problem.as_deref(),
                         wire: HexJson(&wire),
                     };
-                    serde_json::to_writer(&mut *self.out, &line).map_err(std::io::Error::other)?;
+                    serde_json::to_writer(&mut *self.out, &line).map_err(std::io::Error::from)?;
                 }
                 LogItem::DecodeError(de) => {
                     let line = ErrorLine {
@@ -127,7 +127,7 @@ impl Printer<'_> {
                         offset: de.offset,
                         detail: &de.detail,
                     };
-                    serde_json::to_writer(&mut *self.out, &line).map_err(std::io::Error::other)?;
+                    serde_json::to_writer(&mut *self.out, &line).map_err(std::io::Error::from)?;
                 }
             }
             return writeln!(self.out);

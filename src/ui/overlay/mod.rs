@@ -13,6 +13,31 @@ use ratatui::Frame;
 
 pub fn render(frame: &mut Frame, s: &AppState) {
     let area = frame.area();
+    draw(frame, s, area);
+    // An overlay covers the status bar's E-STOP badge: the badge is drawn over it too, in
+    // the top right corner, while any droid is stopped.
+    if !matches!(s.overlay, Overlay::None) && s.droids.iter().any(|d| d.control.estop) {
+        let badge = " E-STOP ";
+        let w = badge.len() as u16;
+        if area.width >= w && area.height > 0 {
+            let at = ratatui::layout::Rect {
+                x: area.right() - w,
+                y: area.y,
+                width: w,
+                height: 1,
+            };
+            frame.render_widget(
+                ratatui::widgets::Paragraph::new(ratatui::text::Span::styled(
+                    badge,
+                    super::theme::alarm(),
+                )),
+                at,
+            );
+        }
+    }
+}
+
+fn draw(frame: &mut Frame, s: &AppState, area: ratatui::layout::Rect) {
     match &s.overlay {
         Overlay::None => {}
         Overlay::Help => {
