@@ -21,6 +21,7 @@ pub mod btsnoop;
 pub mod capture;
 pub mod config;
 pub mod decoder;
+pub mod edu_wire;
 pub mod fleet_capture;
 pub mod hci;
 pub mod mutate;
@@ -56,6 +57,7 @@ pub fn targets() -> Vec<&'static Target> {
         &bridge::TARGET,
         &bridge_mqtt::TARGET,
         &app_input::TARGET,
+        &edu_wire::TARGET,
     ];
     #[cfg(target_os = "linux")]
     let v = [v, vec![&bluez::TARGET]].concat();
