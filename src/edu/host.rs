@@ -84,16 +84,21 @@ pub fn check(source: &str, path: &str, opts: &EngineOptions) -> Result<(), Check
         path: path.to_string(),
     });
     let got = proc.receive(CHECK_LIMIT);
+    let r = checked(&proc, got, opts);
+    // Ended (or killed now) and reaped: no zombie left behind.
+    proc.kill();
+    r
+}
+
+/// What a check's child answered, as droidctl says it.
+fn checked(proc: &Proc, got: Got, opts: &EngineOptions) -> Result<(), CheckError> {
     match got {
         Got::Message(FromChild::Checked(None)) => Ok(()),
         Got::Message(FromChild::Checked(Some(e))) => Err(CheckError::Syntax(e)),
-        Got::Late => {
-            proc.kill();
-            Err(CheckError::Unparsable(format!(
-                "the program could not be parsed in {} s",
-                CHECK_LIMIT.as_secs()
-            )))
-        }
+        Got::Late => Err(CheckError::Unparsable(format!(
+            "the program could not be parsed in {} s",
+            CHECK_LIMIT.as_secs()
+        ))),
         Got::Message(_) | Got::Gone(_) => {
             let (status, said) = proc.ended();
             match why(&said, opts.memory_mib) {
