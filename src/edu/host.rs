@@ -375,7 +375,8 @@ impl Proc {
             return Err("cannot talk to the program's engine".into());
         };
         let (to, to_rx) = mpsc::channel::<ToChild>();
-        let (from_tx, from) = mpsc::channel();
+        // Bounded: a child sending frames faster than turns take them waits for droidctl.
+        let (from_tx, from) = mpsc::sync_channel(2);
         let (gone_tx, gone) = tokio::sync::watch::channel(false);
         let tail = Arc::new(Mutex::new((Vec::new(), false)));
         let threads = [
