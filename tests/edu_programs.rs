@@ -475,12 +475,11 @@ fn a_program_waiting_for_nothing_ends_and_says_why() {
     );
     let (out, wall) = dir.run_timed(&["run", path(&p), "--sim", "bolt", "--json"]);
     assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    let err = stderr(&out);
     assert!(
-        stderr(&out).contains(
-            "the program can go no further: it waits for a promise that nothing resolves"
-        ),
-        "{}",
-        stderr(&out)
+        err.contains("stuck.js:3: the program can go no further")
+            && err.contains("it waits for a promise that nothing resolves"),
+        "{err}"
     );
     assert!(wall < Duration::from_secs(20), "{wall:?}");
 }

@@ -88,6 +88,11 @@ fn script() {
 }
 
 #[test]
+fn edu_wire() {
+    smoke("edu_wire", 4000);
+}
+
+#[test]
 fn config() {
     smoke("config", 2000);
 }

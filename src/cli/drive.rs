@@ -36,6 +36,11 @@ pub struct DriveArgs {
     /// screen live; the emergency stop ends it and the motion (see docs/edu-programs.md).
     #[arg(long, value_name = "PROGRAM.js")]
     pub program: Option<std::path::PathBuf>,
+    /// The memory the program's engine may use, MiB (bounded on Linux; see
+    /// docs/edu-programs.md).
+    #[arg(long, value_name = "MIB", default_value_t = crate::edu::child::DEFAULT_MEMORY_MIB,
+          value_parser = clap::value_parser!(u64).range(16..=65_536))]
+    pub program_memory: u64,
 }
 
 /// `--program FILE`, read and checked before anything connects (a syntax error is exit 2).
@@ -46,15 +51,13 @@ fn program(args: &DriveArgs) -> Result<Option<crate::edu::Program>, CliError> {
     let shown = path.display().to_string();
     let text = crate::text_file::read(path, crate::text_file::MAX_SCRIPT_BYTES)
         .map_err(|e| CliError::usage(format!("cannot read program {shown}: {e}")))?;
-    crate::edu::Program::new(text, shown.clone())
-        .map(Some)
-        .map_err(|e| {
-            CliError::usage(format!(
-                "{shown}:{}:{}: {}\nthe program has an error; nothing was sent",
-                e.line, e.column, e.message
-            ))
-        })
+    let engine = super::program::engine_options(args.program_memory);
+    super::program::parse(text, &shown, &engine).map(Some)
 }
+
+/// A program's lines in the log: this many at once, then this many a second.
+const PROGRAM_LINES_BURST: u32 = 500;
+const PROGRAM_LINES_PER_S: u32 = 50;
 
 /// The program on every droid of the fleet, as tasks beside the app: its calls and warnings
 /// go to the log file (the screen is the app's); each ends with its droid's result.
@@ -74,14 +77,31 @@ fn start_programs(
             let program = program.clone();
             tokio::spawn(async move {
                 let who = name.clone();
-                let emit: crate::mission::Emit = std::sync::Arc::new(move |e| match e {
-                    crate::mission::MissionEvent::Step { t_ms, line, text } => {
-                        tracing::info!(droid = %who, t_ms, line, %text, "program")
+                // A program that calls in a tight loop must not fill the log: a burst, then a
+                // few lines a second, and how many were left out.
+                let budget = std::sync::Mutex::new(crate::logging::LineBudget::new(
+                    PROGRAM_LINES_PER_S,
+                    PROGRAM_LINES_BURST,
+                ));
+                let emit: crate::mission::Emit = std::sync::Arc::new(move |e| {
+                    if matches!(e, crate::mission::MissionEvent::Sample(_)) {
+                        return;
                     }
-                    crate::mission::MissionEvent::Warning { line, message, .. } => {
-                        tracing::warn!(droid = %who, ?line, %message, "program")
+                    let now = tokio::time::Instant::now();
+                    let held = budget.lock().map(|mut b| b.take(now)).unwrap_or(Some(0));
+                    let Some(held) = held else { return };
+                    if held > 0 {
+                        tracing::info!(droid = %who, held, "program: lines not logged (too many)");
                     }
-                    crate::mission::MissionEvent::Sample(_) => {}
+                    match e {
+                        crate::mission::MissionEvent::Step { t_ms, line, text } => {
+                            tracing::info!(droid = %who, t_ms, line, %text, "program")
+                        }
+                        crate::mission::MissionEvent::Warning { line, message, .. } => {
+                            tracing::warn!(droid = %who, ?line, %message, "program")
+                        }
+                        crate::mission::MissionEvent::Sample(_) => {}
+                    }
                 });
                 let opts = crate::edu::ProgramOptions::default();
                 let start = tokio::time::Instant::now();

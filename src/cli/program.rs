@@ -17,19 +17,47 @@ use crate::sim::{Faults, SimConfig, SimLink};
 use std::sync::Arc;
 use std::time::Duration;
 
-/// A program's text as a [`Program`]; a syntax error is a usage error (exit 2) naming where.
-fn parse(text: String, shown: &str) -> Result<Program, CliError> {
-    Program::new(text, shown.to_string()).map_err(|e| {
-        CliError::usage(format!(
+/// A program's text as a [`Program`], checked in the engine's child: a syntax error, or a
+/// program too deeply nested to parse, is a usage error (exit 2) naming where; an engine that
+/// cannot start is a failure (exit 1).
+pub(super) fn parse(
+    text: String,
+    shown: &str,
+    engine: &crate::edu::EngineOptions,
+) -> Result<Program, CliError> {
+    use crate::edu::CheckError;
+    Program::new_with(text, shown.to_string(), engine).map_err(|e| match e {
+        CheckError::Syntax(e) => CliError::usage(format!(
             "{shown}:{}:{}: {}\nthe program has an error; nothing was sent",
             e.line, e.column, e.message
-        ))
+        )),
+        CheckError::Unparsable(m) => CliError::usage(format!(
+            "{shown}: {m}\nthe program has an error; nothing was sent"
+        )),
+        CheckError::Engine(m) => CliError::failure(format!("{shown}: {m}; nothing was sent")),
     })
+}
+
+/// `--program-memory`: how the engine's child is started.
+pub(super) fn engine_options(memory_mib: u64) -> crate::edu::EngineOptions {
+    let default = crate::edu::EngineOptions::default();
+    crate::edu::EngineOptions {
+        // 0: arguments made in code (`DriveArgs::default()`), not by clap.
+        memory_mib: if memory_mib == 0 {
+            default.memory_mib
+        } else {
+            memory_mib
+        },
+        ..default
+    }
 }
 
 /// The programs after the first (`run a.js b.js …`): each read (bounded) and checked before
 /// anything is sent.
-fn more_programs(args: &RunArgs) -> Result<Vec<Program>, CliError> {
+fn more_programs(
+    args: &RunArgs,
+    engine: &crate::edu::EngineOptions,
+) -> Result<Vec<Program>, CliError> {
     args.more
         .iter()
         .map(|path| {
@@ -42,28 +70,28 @@ fn more_programs(args: &RunArgs) -> Result<Vec<Program>, CliError> {
                      `function startProgram`)"
                 )));
             }
-            parse(text, &shown)
+            parse(text, &shown, engine)
         })
         .collect()
 }
 
 pub fn run(args: &RunArgs, sims: Vec<Model>, text: String, shown: &str) -> Result<i32, CliError> {
-    let program = parse(text, shown)?;
+    let engine = engine_options(args.program_memory);
+    let program = parse(text, shown, &engine)?;
     let mut programs = vec![program];
-    programs.extend(more_programs(args)?);
+    programs.extend(more_programs(args, &engine)?);
     let program = &programs[0];
     let mission = MissionOptions {
         interval: Duration::from_millis(args.interval),
         ..MissionOptions::default()
     };
-    let mut opts = ProgramOptions {
+    // The timeout is the program's, on droidctl's clock; how long it may compute without
+    // waiting is another bound (a tiny timeout ends the program at its timeout).
+    let opts = ProgramOptions {
         mission,
+        timeout: args.timeout.map(Duration::from_secs_f64),
         ..ProgramOptions::default()
     };
-    if let Some(t) = args.timeout {
-        opts.timeout = Some(Duration::from_secs_f64(t));
-        opts.no_yield = Duration::from_secs_f64(t.min(opts.no_yield.as_secs_f64()));
-    }
     if super::fleet::is_fleet(sims.len(), &args.ble) {
         return fleet(args, sims, &programs, opts);
     }

@@ -43,9 +43,14 @@ pub struct RunArgs {
     #[command(flatten)]
     pub record: super::replay::RecordArgs,
     /// A Sphero Edu program (`PROGRAM.js`): end it after SECONDS on droidctl's clock
-    /// (simulated with --sim), and after SECONDS of computing without waiting (default 5).
+    /// (simulated with --sim). Apart from it, a program computing 5 s without waiting ends.
     #[arg(long, value_name = "SECONDS", value_parser = parse_seconds)]
     pub timeout: Option<f64>,
+    /// A Sphero Edu program: the memory its engine may use, MiB (bounded on Linux; see
+    /// docs/edu-programs.md).
+    #[arg(long, value_name = "MIB", default_value_t = crate::edu::child::DEFAULT_MEMORY_MIB,
+          value_parser = clap::value_parser!(u64).range(16..=65_536))]
+    pub program_memory: u64,
     /// Also write every sample to FILE as CSV (columns named with units; see docs/monitoring.md; a fleet's
     /// rows start with the droid).
     #[arg(long, value_name = "FILE")]

@@ -1,9 +1,11 @@
 //! The JavaScript engine: Boa on a thread of its own, driven in turns.
 //!
 //! Why a thread: a program that never yields (`while (true) {}`) must not hang droidctl. Boa
-//! cannot be interrupted from outside, so it runs where it can spin without stopping anyone:
-//! droidctl's runtime keeps serving Ctrl+c, the emergency stop and `--timeout` (they stop the
-//! droid and end the run; the engine is abandoned and its loop limit ends it soon after).
+//! cannot be interrupted from outside, so it runs where it can spin without stopping anyone.
+//! The thread runs in a child process of its own ([`super::child`]): droidctl's side
+//! ([`super::host`]) keeps serving Ctrl+c, the emergency stop and `--timeout`, kills the child
+//! when a turn is late, and stops the droid whatever happens to the child (a stack overflow,
+//! running out of memory, a kill).
 //!
 //! Why turns: the program's promises are droidctl's clock. A turn hands the engine what
 //! happened (promises due, events, the latest readings), the engine runs every job that
@@ -11,6 +13,10 @@
 //! droidctl waits for a turn in `spawn_blocking`, which holds tokio's paused clock still
 //! while the program computes: under `--sim` a turn takes no simulated time at all, exactly as
 //! if the program ran between two packets, and a 60 s program runs in well under a second.
+//!
+//! A turn hands back the calls as made ([`Call`]: name, arguments, line), not their effects:
+//! droidctl's side plays each through its own [`Driver`], so what reaches the droid is what
+//! the API does with the call, whatever bytes come from the child.
 
 use super::api::{Arg, Driver, Effect, MAX_ARGS, MAX_TEXT};
 use super::calls;
@@ -20,17 +26,20 @@ use boa_engine::object::builtins::{JsArray, JsFunction, JsPromise};
 use boa_engine::{
     Context, JsError, JsNativeError, JsResult, JsValue, NativeFunction, Source, js_string,
 };
+use serde::{Deserialize, Serialize};
 use std::cell::RefCell;
 use std::collections::HashMap;
 use std::sync::mpsc;
-use std::time::Duration;
 
 /// The JS API as programs see it (Sphero Edu's names and shapes).
 const PRELUDE: &str = include_str!("prelude.js");
 const PRELUDE_PATH: &str = "droidctl-edu-prelude.js";
 /// A program's loops may turn this often in one function call before it throws: the
 /// engine thread of a run that was abandoned (Ctrl+c on `while (true) {}`) ends by itself.
-const LOOP_LIMIT: u64 = 50_000_000;
+pub(super) const LOOP_LIMIT: u64 = 50_000_000;
+/// JavaScript calls deep (Boa's own bound, past which it stops the program): the engine's
+/// thread has a large stack ([`super::child`]), so deep but legal recursion fits.
+pub(super) const RECURSION_LIMIT: usize = 10_000;
 /// Calls a program may make in one turn (between two waits), and promises it may leave
 /// waiting at once: a runaway loop of calls is an error, not unbounded memory.
 const MAX_CALLS_PER_TURN: usize = 1_000;
@@ -39,7 +48,7 @@ const MAX_PENDING: usize = 1_000;
 type NativeFnPtr = fn(&JsValue, &[JsValue], &mut Context) -> JsResult<JsValue>;
 
 /// A syntax error: where, and what.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
 pub struct SyntaxError {
     pub line: u32,
     pub column: u32,
@@ -47,7 +56,7 @@ pub struct SyntaxError {
 }
 
 /// Why a program stopped before its end.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Failure {
     /// The program's line, when known.
     pub line: Option<u32>,
@@ -55,7 +64,7 @@ pub struct Failure {
 }
 
 /// What the robot measures, as the program reads it (a snapshot per turn).
-#[derive(Debug, Clone, Default, PartialEq)]
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct Readings {
     pub location: Option<[f32; 2]>,
     pub velocity: Option<[f32; 2]>,
@@ -73,7 +82,7 @@ pub struct Readings {
 }
 
 /// An event a program can register for.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub enum Event {
     Collision,
     Freefall,
@@ -113,7 +122,7 @@ pub struct Op {
 }
 
 /// Where the program stands after a turn.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub enum Status {
     Running,
     /// `startProgram` returned and no event is registered, or `exitProgram()` was called.
@@ -121,7 +130,7 @@ pub enum Status {
     Failed(Failure),
 }
 
-/// A turn's result.
+/// A turn's result, as droidctl plays it.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TurnOut {
     pub ops: Vec<Op>,
@@ -130,8 +139,55 @@ pub struct TurnOut {
     pub listening: Vec<&'static str>,
 }
 
-/// Parse `source` without running it: a syntax error with its line and column.
-pub fn check(source: &str, path: &str) -> Result<(), SyntaxError> {
+/// One call the program made, as the engine saw it: what droidctl's side needs to play it
+/// through its own [`Driver`] (the same calls in the same order give the same effects).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Call {
+    pub line: u32,
+    pub name: String,
+    pub args: Vec<CallArg>,
+    /// The promise the call returned, when it waits.
+    pub promise: Option<u64>,
+}
+
+/// An argument of a [`Call`]; a number travels as its bits, so NaN and infinities arrive as
+/// they left (JSON has no spelling for them).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub enum CallArg {
+    Num(u64),
+    Text(String),
+}
+
+impl From<&Arg> for CallArg {
+    fn from(a: &Arg) -> CallArg {
+        match a {
+            Arg::Num(n) => CallArg::Num(n.to_bits()),
+            Arg::Text(t) => CallArg::Text(t.clone()),
+        }
+    }
+}
+
+impl From<&CallArg> for Arg {
+    fn from(a: &CallArg) -> Arg {
+        match a {
+            CallArg::Num(bits) => Arg::Num(f64::from_bits(*bits)),
+            CallArg::Text(t) => Arg::Text(t.clone()),
+        }
+    }
+}
+
+/// A turn's result as the engine hands it back.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Reply {
+    pub calls: Vec<Call>,
+    pub status: Status,
+    pub listening: Vec<String>,
+}
+
+/// Parse `source` without running it: a syntax error with its line and column. The parser
+/// recurses on the program's nesting: this runs in the engine's child
+/// ([`super::host::check`]), where a stack overflow ends only the child.
+pub(super) fn check(source: &str, path: &str) -> Result<(), SyntaxError> {
     let mut ctx = Context::default();
     let src = Source::from_bytes(source).with_path(std::path::Path::new(path));
     match boa_engine::Script::parse(src, None, &mut ctx) {
@@ -195,7 +251,8 @@ fn line_in(text: &str, path: &str) -> Option<u32> {
         .ok()
 }
 
-enum ToJs {
+/// What the engine thread is handed: a turn.
+pub(super) enum ToJs {
     Turn {
         fired: Vec<u64>,
         events: Vec<Event>,
@@ -203,100 +260,22 @@ enum ToJs {
     },
 }
 
-enum FromJs {
-    Done(TurnOut),
-    /// The run was abandoned while waiting for a turn.
-    Cancelled,
-}
-
-/// The engine, seen from droidctl's side.
-pub struct Engine {
-    tx: mpsc::Sender<ToJs>,
-    rx: Option<mpsc::Receiver<FromJs>>,
-    /// Wakes a turn being waited for when the engine is dropped.
-    back: mpsc::Sender<FromJs>,
-}
-
-impl Engine {
-    /// Start the engine thread for `source` on `model`. Nothing runs until the first turn.
-    pub fn start(source: String, path: String, model: Model) -> Result<Engine, String> {
-        let (tx, to_js) = mpsc::channel::<ToJs>();
-        let (back, rx) = mpsc::channel::<FromJs>();
-        let reply = back.clone();
-        std::thread::Builder::new()
-            .name("edu-program".into())
-            // Boa's parser and interpreter recurse: a roomy stack for nested programs.
-            .stack_size(16 << 20)
-            .spawn(move || js_thread(source, path, model, to_js, reply))
-            .map_err(|e| format!("cannot start the JavaScript engine: {e}"))?;
-        Ok(Engine {
-            tx,
-            rx: Some(rx),
-            back,
-        })
-    }
-
-    /// Run one turn. `limit` bounds how long the program may compute without waiting: past
-    /// it the run fails (the engine goes on spinning until its loop limit; it is abandoned).
-    pub async fn turn(
-        &mut self,
-        fired: Vec<u64>,
-        events: Vec<Event>,
-        readings: Readings,
-        limit: Duration,
-    ) -> Result<TurnOut, Failure> {
-        let gone = || Failure {
-            line: None,
-            message: "the JavaScript engine stopped".into(),
-        };
-        let rx = self.rx.take().ok_or_else(gone)?;
-        self.tx
-            .send(ToJs::Turn {
-                fired,
-                events,
-                readings,
-            })
-            .map_err(|_| gone())?;
-        // In `spawn_blocking`: tokio's paused clock stands still while the program computes.
-        let waited = tokio::task::spawn_blocking(move || {
-            let r = rx.recv_timeout(limit);
-            (rx, r)
-        })
-        .await;
-        let (rx, r) = waited.map_err(|_| gone())?;
-        match r {
-            Ok(FromJs::Done(out)) => {
-                self.rx = Some(rx);
-                Ok(out)
-            }
-            Ok(FromJs::Cancelled) | Err(mpsc::RecvTimeoutError::Disconnected) => Err(gone()),
-            Err(mpsc::RecvTimeoutError::Timeout) => Err(Failure {
-                line: None,
-                message: format!(
-                    "the program computed for {} s without waiting: a loop without `await` \
-                     (e.g. `await delay(0.1)`) never lets the robot move",
-                    limit.as_secs_f64()
-                ),
-            }),
-        }
-    }
-}
-
-impl Drop for Engine {
-    fn drop(&mut self) {
-        // A turn being waited for returns; the engine thread ends when its channel closes
-        // (or, spinning, at its loop limit).
-        let _ = self.back.send(FromJs::Cancelled);
-    }
+/// What the engine thread hands back.
+pub(super) enum FromJs {
+    Done(Reply),
 }
 
 /// The engine thread's state, reached by the native functions.
 struct Js {
     driver: Driver,
     path: String,
-    ops: Vec<Op>,
+    ops: Vec<Call>,
     next_promise: u64,
-    pending: HashMap<u64, (JsFunction, bool)>,
+    /// Each promise waiting: its resolver, whether the target speed is 0 once it resolves,
+    /// and the line of the call that made it.
+    pending: HashMap<u64, (JsFunction, bool, u32)>,
+    /// The line of the last call whose promise resolved: where the program went on from.
+    resumed: Option<u32>,
     readings: Readings,
     handlers: Vec<(&'static str, JsFunction)>,
     /// Promises of `startProgram` and of event handlers: a rejection fails the program.
@@ -315,7 +294,9 @@ fn with_js<T>(f: impl FnOnce(&mut Js) -> T) -> Option<T> {
     JS.with(|j| j.borrow_mut().as_mut().map(f))
 }
 
-fn js_thread(
+/// The engine: `source` on `model`, one turn per [`ToJs`], until the program ends or the
+/// channel closes. It runs on a thread of the engine's child process ([`super::child`]).
+pub(super) fn js_thread(
     source: String,
     path: String,
     model: Model,
@@ -326,6 +307,8 @@ fn js_thread(
     let mut ctx = Context::default();
     ctx.runtime_limits_mut()
         .set_loop_iteration_limit(LOOP_LIMIT);
+    ctx.runtime_limits_mut()
+        .set_recursion_limit(RECURSION_LIMIT);
     JS.with(|j| {
         *j.borrow_mut() = Some(Js {
             driver: Driver::new(model),
@@ -333,6 +316,7 @@ fn js_thread(
             ops: Vec::new(),
             next_promise: 0,
             pending: HashMap::new(),
+            resumed: None,
             readings: Readings::default(),
             handlers: Vec::new(),
             watched: Vec::new(),
@@ -358,10 +342,10 @@ fn js_thread(
             Ok(()) => status(&mut ctx),
             Err(e) => Status::Failed(failure(&e, &path, &mut ctx)),
         };
-        let out = with_js(|js| TurnOut {
-            ops: std::mem::take(&mut js.ops),
+        let out = with_js(|js| Reply {
+            calls: std::mem::take(&mut js.ops),
             status,
-            listening: js.handlers.iter().map(|h| h.0).collect(),
+            listening: js.handlers.iter().map(|h| h.0.to_string()).collect(),
         });
         let Some(out) = out else { break };
         let end = out.status != Status::Running;
@@ -422,10 +406,11 @@ fn start(ctx: &mut Context, source: &str, path: &str) -> JsResult<()> {
 fn turn(ctx: &mut Context, fired: Vec<u64>, events: Vec<Event>) -> JsResult<()> {
     for id in fired {
         let resolve = with_js(|js| {
-            let (f, stops) = js.pending.remove(&id)?;
+            let (f, stops, line) = js.pending.remove(&id)?;
             if stops {
                 js.driver.stopped();
             }
+            js.resumed = Some(line);
             Some(f)
         })
         .flatten();
@@ -482,7 +467,7 @@ fn status(ctx: &mut Context) -> Status {
             PromiseState::Fulfilled(_) => {}
         }
     }
-    let (exit, main_done, listening, waiting) = with_js(|js| {
+    let (exit, main_done, listening, waiting, resumed) = with_js(|js| {
         js.watched = keep;
         let done = js
             .main
@@ -493,22 +478,32 @@ fn status(ctx: &mut Context) -> Status {
             done,
             !js.handlers.is_empty(),
             !js.pending.is_empty(),
+            js.resumed,
         )
     })
-    .unwrap_or((true, true, false, false));
+    .unwrap_or((true, true, false, false, None));
     if exit || (main_done && !listening) {
         Status::Finished
     } else if !main_done && !listening && !waiting {
         // Nothing droidctl does can resolve what `startProgram` waits for, and no event can
         // run: the program can never go on. Either it awaits a promise nothing resolves, or
-        // the engine's loop limit ended a loop after an `await` (Boa drops that error when it
-        // resumes an async function, leaving its promise pending). Without this, a run in
-        // simulated time would go on forever.
+        // the engine's recursion or loop limit ended it after an `await`: Boa drops that
+        // error when it resumes an async function (its `await` closures discard the
+        // completion), leaving the promise pending, so which one and where is not known
+        // here; the line is that of the `await` the program last went on from. Without this,
+        // a run in simulated time would go on forever.
         Status::Failed(Failure {
-            line: None,
+            line: resumed,
             message: format!(
-                "the program can go no further: it waits for a promise that nothing resolves, \
-                 or the engine stopped a loop that ran {LOOP_LIMIT} times without an `await`"
+                "the program can go no further{}: it waits for a promise that nothing \
+                 resolves, or the engine ended too much recursion (more than \
+                 {RECURSION_LIMIT} calls deep) or a loop that ran {LOOP_LIMIT} times without \
+                 an `await`",
+                if resumed.is_some() {
+                    " (after the `await` on this line)"
+                } else {
+                    ""
+                }
             ),
         })
     } else {
@@ -518,7 +513,27 @@ fn status(ctx: &mut Context) -> Status {
 
 /// An uncaught exception as the user sees it: its message and the program's line.
 fn failure(e: &JsError, path: &str, ctx: &mut Context) -> Failure {
+    use boa_engine::error::{EngineError, RuntimeLimitError};
     let text = e.to_string();
+    if let Some(EngineError::RuntimeLimit(limit)) = e.as_engine() {
+        // The engine's own limits, said as the program's mistake (their text names Boa's
+        // internals); the line, when the backtrace has one.
+        let message = match limit {
+            RuntimeLimitError::Recursion => {
+                format!("too much recursion: more than {RECURSION_LIMIT} calls deep")
+            }
+            RuntimeLimitError::LoopIteration => {
+                format!("a loop ran {LOOP_LIMIT} times without an `await`")
+            }
+            RuntimeLimitError::StackSize => {
+                "too much recursion: the engine's value stack is full".to_string()
+            }
+        };
+        return Failure {
+            line: line_in(&text, path).or_else(|| with_js(|js| js.resumed).flatten()),
+            message,
+        };
+    }
     // `throw new Error("x")`: the message is the error object's; the line its stack's.
     let mut message = text.lines().next().unwrap_or("").trim().to_string();
     if let Ok(v) = e.clone().into_opaque(ctx)
@@ -638,7 +653,8 @@ fn args_of(name: &str, args: &[JsValue]) -> JsResult<Vec<Arg>> {
         .collect()
 }
 
-fn shown(name: &str, args: &[Arg]) -> String {
+/// A call as the output shows it (`roll(90, 100, 2)`).
+pub(super) fn shown(name: &str, args: &[Arg]) -> String {
     if name == "registerMatrixAnimation" {
         // Its arguments are every pixel of every frame: say what they amount to.
         let n = |i: usize| match args.get(i) {
@@ -688,17 +704,17 @@ fn native_call(_this: &JsValue, args: &[JsValue], ctx: &mut Context) -> JsResult
     let effect = with_js(|js| js.driver.call(&name, &rest))
         .unwrap_or_else(|| Err("no program".into()))
         .map_err(|m| JsNativeError::range().with_message(m))?;
-    let text = shown(public, &rest);
+    let call = |promise| Call {
+        line,
+        name: name.clone(),
+        args: rest.iter().map(CallArg::from).collect(),
+        promise,
+    };
     if effect.wait.is_none() {
         let exit = effect.exit;
         with_js(|js| {
             js.exit |= exit;
-            js.ops.push(Op {
-                line,
-                text,
-                effect,
-                promise: None,
-            })
+            js.ops.push(call(None))
         });
         return Ok(JsValue::undefined());
     }
@@ -706,13 +722,9 @@ fn native_call(_this: &JsValue, args: &[JsValue], ctx: &mut Context) -> JsResult
     with_js(|js| {
         let id = js.next_promise;
         js.next_promise += 1;
-        js.pending.insert(id, (resolvers.resolve, effect.stops));
-        js.ops.push(Op {
-            line,
-            text,
-            effect,
-            promise: Some(id),
-        });
+        js.pending
+            .insert(id, (resolvers.resolve, effect.stops, line));
+        js.ops.push(call(Some(id)));
     });
     Ok(promise.into())
 }

@@ -6,6 +6,9 @@
 //!   on this robot" errors and the docs' list come from it);
 //! - [`api`]: what each call does, sans-IO, as spherov2.py's `SpheroEduAPI` does it;
 //! - [`engine`]: the JavaScript engine, on a thread of its own, driven in turns;
+//! - [`child`]: the engine's own process (droidctl started again), bounded in stack, memory
+//!   and time; [`wire`]: the turns across its pipe; [`host`]: droidctl's side of it, which
+//!   stops the droid whatever happens to the child;
 //! - [`infrared`]: the infrared calls as BOLT and RVR each take them on the wire;
 //! - [`run`]: a program on one droid, on droidctl's clock;
 //! - [`timeline`]: a timed call's steps, made when due (a few numbers however long);
@@ -27,15 +30,19 @@
 
 pub mod api;
 pub mod calls;
+pub mod child;
 pub mod engine;
 #[cfg(test)]
 mod hostile;
+pub mod host;
 pub mod infrared;
 pub mod probe;
 pub mod run;
 pub mod schedule;
 pub mod timeline;
+pub mod wire;
 
+pub use host::{CheckError, EngineOptions};
 pub use run::{Program, ProgramOptions, run};
 
 /// Whether the file at `path` holding `text` is a Sphero Edu program rather than a mission

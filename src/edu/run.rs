@@ -6,7 +6,8 @@
 //! `delay`) run on tokio's clock, and the droid's notifications become the program's events.
 
 use super::api::{Act, Ir, Matrix, Wait};
-use super::engine::{Engine, Event, Failure, Op, Readings, Status};
+use super::engine::{Event, Failure, Op, Readings, Status};
+use super::host::{CheckError, Engine, EngineOptions, TurnError};
 use super::schedule::{Due, Schedule};
 use crate::family::{Command, Family};
 use crate::mission::{DroidMission, Emit, MissionError, MissionEvent, MissionOptions, Summary};
@@ -31,13 +32,29 @@ pub struct Program {
     pub source: String,
     /// The name errors give (`square.js:3: …`).
     pub path: String,
+    /// The engine it was checked with, and runs with.
+    pub engine: EngineOptions,
 }
 
 impl Program {
-    /// Read and check `source`: a syntax error names its line and column.
-    pub fn new(source: String, path: String) -> Result<Program, super::engine::SyntaxError> {
-        super::engine::check(&source, &path)?;
-        Ok(Program { source, path })
+    /// Read and check `source` (in the engine's child, [`super::host::check`]): a syntax
+    /// error names its line and column.
+    pub fn new(source: String, path: String) -> Result<Program, CheckError> {
+        Program::new_with(source, path, &EngineOptions::default())
+    }
+
+    /// [`Program::new`] with the engine started as `engine` says.
+    pub fn new_with(
+        source: String,
+        path: String,
+        engine: &EngineOptions,
+    ) -> Result<Program, CheckError> {
+        super::host::check(&source, &path, engine)?;
+        Ok(Program {
+            source,
+            path,
+            engine: engine.clone(),
+        })
     }
 }
 
@@ -47,7 +64,8 @@ pub struct ProgramOptions {
     pub mission: MissionOptions,
     /// End the program after this long on droidctl's clock (simulated under `--sim`).
     pub timeout: Option<Duration>,
-    /// The longest the program may compute without waiting (wall-clock time).
+    /// The longest the program may compute without waiting (wall-clock time), apart from
+    /// `timeout`: past it the engine's child is killed.
     pub no_yield: Duration,
 }
 
@@ -194,13 +212,25 @@ impl Player {
         opts: &ProgramOptions,
         mut rx: broadcast::Receiver<SessionEvent>,
     ) -> Result<(), Failure> {
-        let mut engine = Engine::start(program.source.clone(), program.path.clone(), self.model)
-            .map_err(|message| Failure {
-                line: None,
-                message,
-            })?;
+        let mut engine = Engine::start(
+            program.source.clone(),
+            program.path.clone(),
+            self.model,
+            &program.engine,
+        )
+        .map_err(|message| Failure {
+            line: None,
+            message,
+        })?;
         let deadline = opts.timeout.map(|t| Instant::now() + t);
         let far = Instant::now() + Duration::from_secs(86_400 * 365);
+        let timed_out = || Failure {
+            line: None,
+            message: format!(
+                "--timeout: the program ran {} s",
+                opts.timeout.unwrap_or_default().as_secs_f64()
+            ),
+        };
         let mut heartbeat = tokio::time::interval(opts.mission.heartbeat);
         heartbeat.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
         let mut estops = self.session.watch_estops();
@@ -213,12 +243,25 @@ impl Player {
                 let fired = std::mem::take(&mut self.fired);
                 let events = std::mem::take(&mut self.events);
                 let readings = self.readings();
-                // The emergency stop ends a program even while it computes.
+                // The emergency stop and the timeout end a program even while it computes
+                // (under `--sim` a turn takes no time on the clock the timeout is on).
                 let out = tokio::select! {
-                    out = engine.turn(fired, events, readings, opts.no_yield) => out?,
+                    out = engine.turn(fired, events, readings, opts.no_yield) => match out {
+                        Ok(out) => out,
+                        Err(e) => {
+                            // The engine failed or died: the droid stops first, ahead of
+                            // pacing; what happened is said after.
+                            self.session.stop_now(self.family);
+                            return Err(match e {
+                                TurnError::Failed(f) => f,
+                                TurnError::Died => engine.failure().await,
+                            });
+                        }
+                    },
                     _ = estops.changed() => {
                         return Err(Failure { line: None, message: "emergency stop".into() });
                     }
+                    _ = sleep_until(deadline.unwrap_or(far)) => return Err(timed_out()),
                 };
                 listening = out.listening;
                 for op in out.ops {
@@ -237,14 +280,12 @@ impl Player {
             let by = deadline.unwrap_or(far);
             tokio::select! {
                 _ = sleep_until(next) => self.due().await,
-                _ = sleep_until(by) => {
-                    return Err(Failure {
-                        line: None,
-                        message: format!(
-                            "--timeout: the program ran {} s",
-                            opts.timeout.unwrap_or_default().as_secs_f64()
-                        ),
-                    });
+                _ = sleep_until(by) => return Err(timed_out()),
+                // The engine's child died while the program waited (killed, out of memory):
+                // the droid stops now, not at the next turn.
+                _ = engine.gone() => {
+                    self.session.stop_now(self.family);
+                    return Err(engine.failure().await);
                 }
                 _ = estops.changed() => {
                     return Err(Failure {

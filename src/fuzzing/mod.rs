@@ -22,6 +22,7 @@ pub mod capture;
 pub mod config;
 pub mod decoder;
 pub mod edu;
+pub mod edu_wire;
 pub mod fleet_capture;
 pub mod hci;
 pub mod mutate;
@@ -58,6 +59,7 @@ pub fn targets() -> Vec<&'static Target> {
         &bridge_mqtt::TARGET,
         &app_input::TARGET,
         &edu::TARGET,
+        &edu_wire::TARGET,
     ];
     #[cfg(target_os = "linux")]
     let v = [v, vec![&bluez::TARGET]].concat();

@@ -4,11 +4,19 @@
 
 #![allow(dead_code)]
 
-use droidctl::edu::{Program, ProgramOptions};
+use droidctl::edu::{EngineOptions, Program, ProgramOptions};
 use droidctl::mission::{Emit, MissionEvent, MissionOptions, Summary};
 use droidctl::model::Model;
 use droidctl::sim::SimLink;
 use std::sync::{Arc, Mutex};
+
+/// The engine as these tests start it: this test binary is not droidctl.
+pub fn engine() -> EngineOptions {
+    EngineOptions {
+        exe: Some(env!("CARGO_BIN_EXE_droidctl").into()),
+        ..EngineOptions::default()
+    }
+}
 
 /// Run `text` (shown as `name`) on `link`, a simulated `model`, from `start` (a fleet's
 /// droids share one). Panics naming the program if it fails.
@@ -21,7 +29,7 @@ pub async fn run_program(
 ) -> (Summary, Vec<String>) {
     let (cfg, mission) = droidctl::cli::run::mission_session(model, MissionOptions::default());
     let session = droidctl::session::start(Box::new(link), cfg);
-    let program = Program::new(text.to_string(), name.to_string()).unwrap();
+    let program = Program::new_with(text.to_string(), name.to_string(), &engine()).unwrap();
     let opts = ProgramOptions {
         mission,
         ..ProgramOptions::default()

@@ -85,6 +85,16 @@ impl Tui {
         self.child.try_wait().ok().flatten()
     }
 
+    /// The app's process id.
+    pub fn pid(&self) -> Option<u32> {
+        self.child.process_id()
+    }
+
+    /// Whether the terminal shows the alternate screen (the app's) rather than the normal one.
+    pub fn alternate_screen(&self) -> bool {
+        self.screen.lock().unwrap().screen().alternate_screen()
+    }
+
     pub fn text(&self) -> String {
         self.screen.lock().unwrap().screen().contents()
     }
