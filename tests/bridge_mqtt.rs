@@ -215,6 +215,7 @@ fn a_broker_with_a_password(kind: Kind) {
             mosquitto::free_port(),
             droidctl::bridge::broker::Access {
                 login: Some(("pupil".into(), "r2-d2".into())),
+                ..Default::default()
             },
             false,
         ),

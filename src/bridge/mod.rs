@@ -21,6 +21,7 @@ pub mod outbox;
 pub mod ready;
 pub mod schema;
 pub mod stdio;
+pub mod thread;
 
 use crate::fleet::Fleet;
 use crate::model::Model;
