@@ -520,6 +520,46 @@ async fn start_fleet(
 mod tests {
     use super::*;
 
+    /// Issue 37 point 1: droidctl's broker and the bridge's MQTT connections run where they
+    /// cannot hold up the droids' runtime. Each is kept busy here by as many blocking tasks
+    /// as the main runtime has workers (as a lock held across work that grew with input did:
+    /// both workers blocked, the command timeout never fired); a timer on the main runtime
+    /// fires on time all the same. The one place a test needs real threads blocked.
+    #[test]
+    fn a_blocked_broker_or_mqtt_thread_does_not_delay_the_droids_runtime() {
+        let rts = Runtimes::start(true, true).unwrap();
+        let broker = start_broker(
+            rts.broker.as_ref().unwrap(),
+            "127.0.0.1:0".parse().unwrap(),
+            None,
+            None,
+        )
+        .unwrap();
+        let net = rts.net.as_ref().unwrap().handle().clone();
+        let (started, blocked) = std::sync::mpsc::channel();
+        for h in [broker.handle().clone(), net] {
+            for _ in 0..2 {
+                let started = started.clone();
+                h.spawn(async move {
+                    let _ = started.send(());
+                    std::thread::sleep(Duration::from_millis(500));
+                });
+            }
+        }
+        blocked.recv().unwrap();
+        blocked.recv().unwrap();
+        let late = rts
+            .main
+            .block_on(rts.main.spawn(async {
+                let t0 = tokio::time::Instant::now();
+                tokio::time::sleep(Duration::from_millis(50)).await;
+                t0.elapsed()
+            }))
+            .unwrap();
+        assert!(late < Duration::from_millis(350), "{late:?}");
+        drop(broker);
+    }
+
     #[test]
     fn a_broker_beyond_loopback_needs_allow_remote() {
         let url: BrokerUrl = "mqtt://broker.lan".parse().unwrap();

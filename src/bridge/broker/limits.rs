@@ -106,41 +106,117 @@ fn key(ip: IpAddr) -> IpAddr {
     }
 }
 
-/// The connections held, in all and per address (sans-IO).
+/// A connection silent this long may lose its slot to a newcomer when every slot is taken:
+/// idle connections cannot lock others out (issue 37 point 6), while a client that talks
+/// (a keep-alive ping counts) keeps its slot.
+pub const EVICT_SILENT: Duration = Duration::from_secs(10);
+
+/// One connection holding a slot.
+#[derive(Debug)]
+struct Held {
+    ip: IpAddr,
+    /// When it last sent something.
+    last: tokio::time::Instant,
+    /// droidctl's own bridge: never evicted.
+    own: bool,
+    kick: Arc<tokio::sync::Notify>,
+}
+
+/// The connections held, in all and per address; a newcomer finding every slot taken
+/// evicts the longest-silent connection (silent at least [`EVICT_SILENT`], not the
+/// bridge's own; a peer beyond loopback only one beyond loopback).
 #[derive(Debug, Default)]
 pub struct Admission {
     total: usize,
     by_key: HashMap<IpAddr, usize>,
+    held: HashMap<u64, Held>,
+    next: u64,
+    evicted: u64,
 }
 
 impl Admission {
-    /// A slot for a connection from `ip`, or why not.
-    pub fn admit(&mut self, ip: IpAddr) -> Result<(), Refusal> {
-        if self.total >= MAX_CONNECTIONS {
-            return Err(Refusal::Full);
-        }
-        if !is_loopback(ip) {
-            if self.total >= MAX_CONNECTIONS - LOOPBACK_SLOTS {
-                return Err(Refusal::OnlyLoopbackLeft);
-            }
-            if self.by_key.get(&key(ip)).copied().unwrap_or(0) >= MAX_PER_ADDRESS {
+    /// A slot for a connection from `ip`, or why not: its key and the signal that evicts it.
+    fn admit_at(
+        &mut self,
+        ip: IpAddr,
+        now: tokio::time::Instant,
+    ) -> Result<(u64, Arc<tokio::sync::Notify>), Refusal> {
+        let remote = !is_loopback(ip);
+        if remote {
+            if self.by_key.get(&key(ip)).copied().unwrap_or(0) >= MAX_PER_ADDRESS
+                && !self.evict(now, Some(key(ip)))
+            {
                 return Err(Refusal::PerAddress);
             }
+            if self.total >= MAX_CONNECTIONS - LOOPBACK_SLOTS && !self.evict_remote(now) {
+                return Err(if self.total >= MAX_CONNECTIONS {
+                    Refusal::Full
+                } else {
+                    Refusal::OnlyLoopbackLeft
+                });
+            }
+        } else if self.total >= MAX_CONNECTIONS && !self.evict(now, None) {
+            return Err(Refusal::Full);
+        }
+        if remote {
             *self.by_key.entry(key(ip)).or_insert(0) += 1;
         }
         self.total += 1;
-        Ok(())
+        self.next += 1;
+        let kick = Arc::new(tokio::sync::Notify::new());
+        self.held.insert(
+            self.next,
+            Held {
+                ip,
+                last: now,
+                own: false,
+                kick: kick.clone(),
+            },
+        );
+        Ok((self.next, kick))
     }
 
-    /// The slot of a connection from `ip` is free again.
-    pub fn release(&mut self, ip: IpAddr) {
+    /// Evict the longest-silent connection that may go (from the peers of key `only` when
+    /// given): true if one went.
+    fn evict(&mut self, now: tokio::time::Instant, only: Option<IpAddr>) -> bool {
+        self.evict_where(now, |h| {
+            only.is_none_or(|k| !is_loopback(h.ip) && key(h.ip) == k)
+        })
+    }
+
+    /// Evict the longest-silent connection from beyond loopback: true if one went.
+    fn evict_remote(&mut self, now: tokio::time::Instant) -> bool {
+        self.evict_where(now, |h| !is_loopback(h.ip))
+    }
+
+    fn evict_where(&mut self, now: tokio::time::Instant, may: impl Fn(&Held) -> bool) -> bool {
+        let victim = self
+            .held
+            .iter()
+            .filter(|(_, h)| !h.own && now.duration_since(h.last) >= EVICT_SILENT && may(h))
+            .min_by_key(|(_, h)| h.last)
+            .map(|(k, _)| *k);
+        let Some(k) = victim else {
+            return false;
+        };
+        self.release_key(k);
+        self.evicted += 1;
+        true
+    }
+
+    /// The slot `k` is free again (once: an evicted connection's own release finds it gone).
+    fn release_key(&mut self, k: u64) {
+        let Some(h) = self.held.remove(&k) else {
+            return;
+        };
+        h.kick.notify_one();
         self.total = self.total.saturating_sub(1);
-        if !is_loopback(ip)
-            && let Some(n) = self.by_key.get_mut(&key(ip))
+        if !is_loopback(h.ip)
+            && let Some(n) = self.by_key.get_mut(&key(h.ip))
         {
             *n -= 1;
             if *n == 0 {
-                self.by_key.remove(&key(ip));
+                self.by_key.remove(&key(h.ip));
             }
         }
     }
@@ -149,28 +225,55 @@ impl Admission {
     pub fn total(&self) -> usize {
         self.total
     }
+
+    /// Connections evicted so far.
+    pub fn evicted(&self) -> u64 {
+        self.evicted
+    }
 }
 
 /// A connection's slot: given back when dropped.
 pub struct Slot {
     admission: Arc<Mutex<Admission>>,
-    ip: IpAddr,
+    key: u64,
+    kick: Arc<tokio::sync::Notify>,
 }
 
 impl Slot {
     /// Take a slot for `ip` from `admission`.
     pub fn take(admission: &Arc<Mutex<Admission>>, ip: IpAddr) -> Result<Slot, Refusal> {
-        super::lock(admission).admit(ip)?;
+        let now = tokio::time::Instant::now();
+        let (key, kick) = super::lock(admission).admit_at(ip, now)?;
         Ok(Slot {
             admission: admission.clone(),
-            ip,
+            key,
+            kick,
         })
+    }
+
+    /// The connection sent something now.
+    pub fn heard(&self) {
+        if let Some(h) = super::lock(&self.admission).held.get_mut(&self.key) {
+            h.last = tokio::time::Instant::now();
+        }
+    }
+
+    /// The connection is droidctl's own bridge's: never evicted.
+    pub fn own(&self) {
+        if let Some(h) = super::lock(&self.admission).held.get_mut(&self.key) {
+            h.own = true;
+        }
+    }
+
+    /// Completes when a newcomer took this slot: the connection must close.
+    pub async fn evicted(&self) {
+        self.kick.notified().await
     }
 }
 
 impl Drop for Slot {
     fn drop(&mut self) {
-        super::lock(&self.admission).release(self.ip);
+        super::lock(&self.admission).release_key(self.key);
     }
 }
 
@@ -234,35 +337,72 @@ mod tests {
 
     #[test]
     fn other_machines_never_take_the_loopback_slots_nor_more_than_their_share() {
+        let t0 = tokio::time::Instant::now();
         let mut a = Admission::default();
+        let admit = |a: &mut Admission, s: &str| a.admit_at(ip(s), t0).map(|(k, _)| k);
         // One address: its share, then refused.
+        let mut first = None;
         for _ in 0..MAX_PER_ADDRESS {
-            a.admit(ip("192.0.2.1")).unwrap();
+            first = first.or(Some(admit(&mut a, "192.0.2.1").unwrap()));
         }
-        assert_eq!(a.admit(ip("192.0.2.1")), Err(Refusal::PerAddress));
+        assert_eq!(admit(&mut a, "192.0.2.1"), Err(Refusal::PerAddress));
         // An IPv6 host picking addresses from its /64 is one address.
         for n in 0..MAX_PER_ADDRESS {
-            a.admit(ip(&format!("2001:db8::{n:x}"))).unwrap();
+            admit(&mut a, &format!("2001:db8::{n:x}")).unwrap();
         }
-        assert_eq!(a.admit(ip("2001:db8::ffff")), Err(Refusal::PerAddress));
+        assert_eq!(admit(&mut a, "2001:db8::ffff"), Err(Refusal::PerAddress));
         // Many addresses: everything but the loopback slots.
         let mut n = 0u32;
-        while a
-            .admit(IpAddr::from([198, 51, (n >> 8) as u8, n as u8]))
-            .is_ok()
-        {
+        while admit(&mut a, &format!("198.51.{}.{}", n >> 8, n & 0xFF)).is_ok() {
             n += 1;
         }
         assert_eq!(a.total(), MAX_CONNECTIONS - LOOPBACK_SLOTS);
-        assert_eq!(a.admit(ip("203.0.113.9")), Err(Refusal::OnlyLoopbackLeft));
+        assert_eq!(admit(&mut a, "203.0.113.9"), Err(Refusal::OnlyLoopbackLeft));
         // This machine's clients still get in, as ::ffff:127.0.0.1 too.
-        a.admit(ip("127.0.0.1")).unwrap();
-        a.admit(ip("::ffff:127.0.0.1")).unwrap();
-        a.admit(ip("::1")).unwrap();
-        // A slot given back is free again.
-        a.release(ip("192.0.2.1"));
-        a.admit(ip("192.0.2.1")).unwrap_err();
+        admit(&mut a, "127.0.0.1").unwrap();
+        admit(&mut a, "::ffff:127.0.0.1").unwrap();
+        admit(&mut a, "::1").unwrap();
+        // A slot given back is free again (for this machine: the rest is full).
+        a.release_key(first.unwrap());
+        admit(&mut a, "192.0.2.1").unwrap_err();
         assert_eq!(a.total(), MAX_CONNECTIONS - LOOPBACK_SLOTS + 2);
+        assert_eq!(a.evicted(), 0, "nobody silent long enough to lose a slot");
+    }
+
+    #[test]
+    fn a_newcomer_finding_every_slot_taken_evicts_the_longest_silent() {
+        let t0 = tokio::time::Instant::now();
+        let mut a = Admission::default();
+        let mut kicks = Vec::new();
+        for n in 0..MAX_CONNECTIONS {
+            let (k, kick) = a.admit_at(ip("127.0.0.1"), t0).unwrap();
+            kicks.push((k, kick));
+            if n == 0 {
+                a.held.get_mut(&k).unwrap().own = true;
+            }
+        }
+        // Nobody silent long enough: refused.
+        assert_eq!(
+            a.admit_at(ip("127.0.0.1"), t0).map(|_| ()),
+            Err(Refusal::Full)
+        );
+        // One spoke since; the bridge's own never goes.
+        let later = t0 + EVICT_SILENT;
+        for (k, _) in &kicks[1..] {
+            a.held.get_mut(k).unwrap().last = later;
+        }
+        a.held.get_mut(&kicks[5].0).unwrap().last = t0 + Duration::from_secs(1);
+        let now = t0 + EVICT_SILENT + Duration::from_secs(2);
+        a.admit_at(ip("127.0.0.1"), now).unwrap();
+        assert_eq!(a.evicted(), 1);
+        assert!(
+            !a.held.contains_key(&kicks[5].0),
+            "the longest silent but the bridge's"
+        );
+        assert!(a.held.contains_key(&kicks[0].0));
+        assert_eq!(a.total(), MAX_CONNECTIONS);
+        // Other machines evict only among themselves: none of them here.
+        assert!(a.admit_at(ip("192.0.2.1"), now + EVICT_SILENT).is_err());
     }
 
     #[test]

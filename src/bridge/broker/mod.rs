@@ -147,6 +147,11 @@ impl Broker {
         self.addr
     }
 
+    /// The runtime it runs on (the CLI's: a thread of its own).
+    pub fn handle(&self) -> &Handle {
+        &self.handle
+    }
+
     /// A broker that does not listen: connections are handed to it
     /// ([`Broker::connect_stream`]), for tests and the fuzz harness. Runs on the current
     /// runtime.
@@ -300,6 +305,8 @@ enum Why {
     NoConnect,
     Idle(Duration),
     Refused(&'static str),
+    /// Silent while a newcomer needed its slot.
+    Evicted,
     /// The broker was dropped.
     Shutdown,
 }
@@ -311,6 +318,11 @@ impl std::fmt::Display for Why {
             Why::NoConnect => write!(f, "no CONNECT within {} s", CONNECT_TIMEOUT.as_secs()),
             Why::Idle(d) => write!(f, "nothing received for {} s", d.as_secs()),
             Why::Refused(why) => write!(f, "refused: {why}"),
+            Why::Evicted => write!(
+                f,
+                "silent for {} s while every slot was taken: its slot went to a newcomer",
+                limits::EVICT_SILENT.as_secs()
+            ),
             Why::Shutdown => write!(f, "the broker stopped"),
         }
     }
@@ -339,10 +351,10 @@ async fn connection(shared: Arc<Shared>, conn: Conn, peer: SocketAddr, slot: Slo
         (Conn::Tcp(tcp), None) => Box::new(tcp),
         (Conn::Stream(s), _) => s,
     };
-    if let Err(why) = serve(stream, &shared).await {
+    if let Err(why) = serve(stream, &shared, &slot).await {
         let mut st = lock(&shared.state);
         match &why {
-            Why::Idle(_) => st.counters.idle += 1,
+            Why::Idle(_) | Why::Evicted => st.counters.idle += 1,
             Why::Wire(WireError::WriteTimeout) => st.counters.stalled += 1,
             Why::Wire(WireError::Io(_)) | Why::Shutdown => {}
             _ => st.counters.closed += 1,
@@ -391,7 +403,7 @@ fn check_connect(c: &Connect, access: &Access) -> Result<(), (ConnectReturnCode,
 
 /// One client's connection, from CONNECT to close. `Ok`: DISCONNECT, the peer closing, or
 /// taken over.
-async fn serve(mut s: Box<dyn Stream>, shared: &Shared) -> Result<(), Why> {
+async fn serve(mut s: Box<dyn Stream>, shared: &Shared, slot: &Slot) -> Result<(), Why> {
     let mut shutdown = shared.shutdown.clone();
     let mut buf = BytesMut::with_capacity(256);
     let first = tokio::time::timeout(CONNECT_TIMEOUT, wire::read(&mut s, &mut buf, true)).await;
@@ -425,6 +437,14 @@ async fn serve(mut s: Box<dyn Stream>, shared: &Shared) -> Result<(), Why> {
         wire::write(&mut s, &Packet::ConnAck(ConnAck::new(code, false))).await?;
         return Err(Why::Refused(why));
     }
+    if shared
+        .access
+        .own
+        .as_ref()
+        .is_some_and(|o| o.logs_in(&connect))
+    {
+        slot.own();
+    }
     let (tx, mut rx) = mpsc::channel::<Queued>(state::queue_capacity());
     let (client_id, me, budget) = {
         let mut st = lock(&shared.state);
@@ -453,6 +473,7 @@ async fn serve(mut s: Box<dyn Stream>, shared: &Shared) -> Result<(), Why> {
                     Ok(Some(Packet::Disconnect)) => break Ok(()),
                     Ok(Some(p)) => {
                         deadline = tokio::time::Instant::now() + idle;
+                        slot.heard();
                         let retained = match on_packet(&mut s, shared, &client_id, me, p).await {
                             Ok(r) => r,
                             Err(e) => break Err(e),
@@ -490,6 +511,7 @@ async fn serve(mut s: Box<dyn Stream>, shared: &Shared) -> Result<(), Why> {
                 },
                 _ = tokio::time::sleep_until(deadline) => break Err(Why::Idle(idle)),
                 _ = shutdown.changed() => break Err(Why::Shutdown),
+                _ = slot.evicted() => break Err(Why::Evicted),
             }
         },
     };
