@@ -808,6 +808,8 @@ async fn control(bridge: std::sync::Weak<Bridge>) {
 }
 
 #[cfg(test)]
+mod hostile_tests;
+#[cfg(test)]
 mod integrator_tests;
 #[cfg(test)]
 mod safety_tests;
