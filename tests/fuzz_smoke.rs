@@ -117,6 +117,11 @@ fn bridge_mqtt() {
     smoke("bridge_mqtt", 200);
 }
 
+#[test]
+fn broker() {
+    smoke("broker", 300);
+}
+
 /// Each input runs the whole app on three simulated droids: fewer inputs.
 #[test]
 fn app_input() {

@@ -21,6 +21,7 @@ pub mod outbox;
 pub mod ready;
 pub mod schema;
 pub mod stdio;
+pub mod thread;
 
 use crate::fleet::Fleet;
 use crate::model::Model;
@@ -806,6 +807,8 @@ async fn control(bridge: std::sync::Weak<Bridge>) {
     }
 }
 
+#[cfg(test)]
+mod hostile_tests;
 #[cfg(test)]
 mod integrator_tests;
 #[cfg(test)]

@@ -28,7 +28,8 @@
 //! limit is a `bad_json` error (the client takes payloads far larger than that, so one
 //! large message does not end the connection: point 6), and a connection the broker ends
 //! right after making it, again and again, is another client with the same client id
-//! ([`Takeovers`], point 7).
+//! ([`Takeovers`], point 7): said, and tried again after [`TAKEOVER_BACKOFF`], never the end
+//! of the bridge (issue 37 point 7: whoever took the id over would end it at will).
 
 use super::Bridge;
 use super::feeds::{link_out, offline};
@@ -37,7 +38,7 @@ use super::schema::{ErrorCode, Out};
 use rumqttc::{AsyncClient, Event, EventLoop, LastWill, MqttOptions, Packet, QoS};
 use std::sync::Arc;
 use std::time::Duration;
-use tokio::sync::{mpsc, watch};
+use tokio::sync::watch;
 use tokio::time::Instant;
 
 /// MQTT's default ports.
@@ -319,6 +320,9 @@ pub const TAKEOVERS: u32 = 3;
 /// A connection the broker ends sooner than this after accepting it counts as taken over.
 pub const TAKEOVER_WINDOW: Duration = Duration::from_secs(2);
 
+/// How long a droid's connection waits after [`TAKEOVERS`] quick ends before it tries again.
+pub const TAKEOVER_BACKOFF: Duration = Duration::from_secs(30);
+
 /// Two clients with the same client id knock each other off for ever: the broker ends the
 /// older connection whenever the other one connects (MQTT 3.1.1, 3.1.4-2). Seen from one of
 /// them: connections accepted, then ended within moments, again and again. (sans-IO: the
@@ -335,7 +339,8 @@ impl Takeovers {
         self.since = Some(now);
     }
 
-    /// The connection ended at `now`: true when that makes [`TAKEOVERS`] quick ends in a row.
+    /// The connection ended at `now`: true when that makes [`TAKEOVERS`] quick ends in a row
+    /// (counted afresh after that, so each such run is said once).
     pub fn lost(&mut self, now: Instant) -> bool {
         match self.since.take() {
             Some(t) if now.duration_since(t) < TAKEOVER_WINDOW => self.quick += 1,
@@ -343,7 +348,11 @@ impl Takeovers {
             // Not connected: a failed attempt says nothing either way.
             None => {}
         }
-        self.quick >= TAKEOVERS
+        let taken = self.quick >= TAKEOVERS;
+        if taken {
+            self.quick = 0;
+        }
+        taken
     }
 }
 
@@ -441,7 +450,6 @@ pub async fn run(
             (m.name.clone(), t)
         })
         .collect();
-    let (fatal_tx, mut fatal) = mpsc::channel::<String>(members.len().max(1));
     let mut clients = Vec::new();
     let mut states = Vec::new();
     let mut loops = Vec::new();
@@ -460,7 +468,6 @@ pub async fn run(
             eventloop,
             settings.clone(),
             tx,
-            fatal_tx.clone(),
         )));
         clients.push(client);
         states.push(st);
@@ -518,11 +525,9 @@ pub async fn run(
             }
         }
     };
-    let mut result = Ok(());
     tokio::select! {
         _ = router => {}
         _ = stopped => {}
-        Some(why) = fatal.recv() => result = Err(why),
     }
     // A clean goodbye sends no will: say offline ourselves, clear what describes a running
     // bridge, then disconnect.
@@ -554,7 +559,7 @@ pub async fn run(
     for l in &loops {
         l.abort();
     }
-    result
+    Ok(())
 }
 
 /// Droid `i`'s Home Assistant discovery messages, when the bridge was asked for them.
@@ -586,7 +591,6 @@ async fn connection(
     mut eventloop: EventLoop,
     settings: MqttSettings,
     state: watch::Sender<BrokerState>,
-    fatal: mpsc::Sender<String>,
 ) {
     let t = bridge.topic(i).unwrap_or("droid").to_string();
     let mut inbox = Inbox::new(bridge.clone(), i, &settings.prefix);
@@ -668,17 +672,23 @@ async fn connection(
                     );
                 }
                 if takeovers.lost(Instant::now()) {
+                    // Not the end of the bridge (issue 37 point 7): whoever takes the id
+                    // over would end it at will. Said, then retried slowly, so two bridges
+                    // given the same id do not knock each other off every second.
                     let message = format!(
                         "{name}: the broker ended the connection right after accepting it, \
                          {TAKEOVERS} times in a row: most likely another client is connected \
                          with the same client id ({}-{i}-{t}); give each bridge its own \
-                         --client-id (or leave it out: the default is unique)",
-                        settings.client_id
+                         --client-id (or leave it out: the default is unique). Trying again \
+                         in {} s; the droid stays stopped meanwhile",
+                        settings.client_id,
+                        TAKEOVER_BACKOFF.as_secs()
                     );
                     tracing::error!("bridge: {message}");
-                    state.send_replace(BrokerState::Lost(message.clone()));
-                    let _ = fatal.try_send(message);
-                    return;
+                    eprintln!("droidctl: {message}");
+                    state.send_replace(BrokerState::Lost(message));
+                    tokio::time::sleep(TAKEOVER_BACKOFF).await;
+                    continue;
                 }
                 // A refusal or an untrusted certificate will not mend by itself.
                 if !ever
@@ -715,10 +725,14 @@ mod tests {
         assert!(!t.lost(at(62_000)));
         // Another client with the same id: ended within moments each time.
         let mut now = 70_000;
-        for n in 1..=TAKEOVERS {
+        for n in 1..=TAKEOVERS * 2 {
             t.connected(at(now));
             now += 300;
-            assert_eq!(t.lost(at(now)), n == TAKEOVERS, "takeover {n}");
+            assert_eq!(
+                t.lost(at(now)),
+                n % TAKEOVERS == 0,
+                "takeover {n}: said once a run"
+            );
             now += 250;
         }
         // Two quick ends and a long connection between: no takeover.

@@ -310,11 +310,31 @@ pub fn run(args: BridgeArgs) -> Result<i32, CliError> {
         None => None,
     };
     let _ = crate::logging::init();
-    let rt = super::realtime_runtime()?;
+    let rts = Runtimes::start(embedded.is_some(), mqtt.is_some())?;
+    // The bridge's own client ids on its own broker: nobody else may take them (issue 37
+    // point 7); its connections log in with the secret that says so.
+    let own = match (&embedded, &mqtt) {
+        (Some(_), Some(m)) => Some(bridge::broker::OwnIds::new(&format!("{}-", m.client_id))),
+        _ => None,
+    };
+    let login = mqtt.as_ref().and_then(|m| {
+        m.username
+            .clone()
+            .map(|u| (u, m.password.clone().unwrap_or_default()))
+    });
+    let mqtt = match (mqtt, &own) {
+        (Some(mut m), Some(o)) => {
+            m.username = Some(o.user.clone());
+            m.password = Some(o.password.clone());
+            Some(m)
+        }
+        (m, _) => m,
+    };
+    let rt = &rts.main;
     let result = rt.block_on(async {
         // Kept until the bridge is done: the droids' last states go through it.
-        let _broker = match (embedded, &mqtt) {
-            (Some(listen), Some(m)) => Some(start_broker(listen, m).await?),
+        let _broker = match (embedded, &rts.broker) {
+            (Some(listen), Some(on)) => Some(start_broker(on, listen, login, own)?),
             _ => None,
         };
         if let Some(m) = &mqtt {
@@ -382,41 +402,88 @@ pub fn run(args: BridgeArgs) -> Result<i32, CliError> {
                     m.prefix,
                     bridge.settings().command_timeout.as_millis()
                 );
-                let r = bridge::mqtt::run(bridge.clone(), rx, m, Duration::from_secs(10), stopped)
-                    .await;
+                // On the network's own thread: however busy the broker's traffic keeps it,
+                // the droids' sessions and command timeouts run here undisturbed.
+                let (stop_tx, stop_rx) = tokio::sync::oneshot::channel::<()>();
+                let net = rts
+                    .net
+                    .as_ref()
+                    .map_or_else(tokio::runtime::Handle::current, |n| n.handle().clone());
+                let mut job = net.spawn(bridge::mqtt::run(
+                    bridge.clone(),
+                    rx,
+                    m,
+                    Duration::from_secs(10),
+                    async move {
+                        let _ = stop_rx.await;
+                    },
+                ));
+                let r = tokio::select! {
+                    r = &mut job => r,
+                    _ = stopped => {
+                        let _ = stop_tx.send(());
+                        job.await
+                    }
+                };
+                let r = r.unwrap_or_else(|e| Err(format!("the MQTT connections ended: {e}")));
                 bridge.shutdown().await;
                 r.map(|()| 0).map_err(CliError::failure)
             }
         }
     });
     // Stdin's reader thread may still wait for a line: do not wait for it.
-    rt.shutdown_timeout(Duration::from_millis(200));
+    let Runtimes { main, broker, net } = rts;
+    main.shutdown_timeout(Duration::from_millis(200));
+    drop((net, broker));
     result
 }
 
-/// droidctl's own broker on `listen`, taking the bridge's login when one is given.
-async fn start_broker(
+/// Where the bridge runs (issue 37 point 1): the droids' sessions, their command timeouts,
+/// heartbeats and pacing on the main runtime; droidctl's own broker and the bridge's MQTT
+/// connections each on a runtime of its own thread, so nothing read from the network can
+/// starve the stop.
+pub struct Runtimes {
+    pub main: tokio::runtime::Runtime,
+    pub broker: Option<bridge::thread::RuntimeThread>,
+    pub net: Option<bridge::thread::RuntimeThread>,
+}
+
+impl Runtimes {
+    /// The main runtime, and the broker's and the MQTT connections' when asked for.
+    pub fn start(broker: bool, net: bool) -> Result<Runtimes, CliError> {
+        let thread = |name: &str| {
+            bridge::thread::RuntimeThread::start(name)
+                .map_err(|e| CliError::failure(format!("cannot start the {name} thread: {e}")))
+        };
+        Ok(Runtimes {
+            main: super::realtime_runtime()?,
+            broker: broker.then(|| thread("droidctl-broker")).transpose()?,
+            net: net.then(|| thread("droidctl-mqtt")).transpose()?,
+        })
+    }
+}
+
+/// droidctl's own broker on `listen`, on the runtime thread `on`, taking `login` when one is
+/// given and keeping the bridge's `own` client ids.
+fn start_broker(
+    on: &bridge::thread::RuntimeThread,
     listen: std::net::SocketAddr,
-    m: &MqttSettings,
+    login: Option<(String, String)>,
+    own: Option<bridge::broker::OwnIds>,
 ) -> Result<bridge::broker::Broker, CliError> {
-    let login = m
-        .username
-        .clone()
-        .map(|u| (u, m.password.clone().unwrap_or_default()));
     let password = login.is_some();
-    let broker = bridge::broker::start(listen, bridge::broker::Access { login })
-        .await
-        .map_err(|e| {
-            CliError::failure(if e.kind() == std::io::ErrorKind::AddrInUse {
-                format!(
-                    "cannot listen on {listen}: {e}. Is a broker already running there? Use it \
-                     with --mqtt mqtt://{listen}, or put droidctl's on another port with \
-                     --listen ADDR:PORT"
-                )
-            } else {
-                format!("cannot listen on {listen}: {e}")
-            })
-        })?;
+    let access = bridge::broker::Access { login, own };
+    let broker = bridge::broker::start_on(on.handle(), listen, access, None).map_err(|e| {
+        CliError::failure(if e.kind() == std::io::ErrorKind::AddrInUse {
+            format!(
+                "cannot listen on {listen}: {e}. Is a broker already running there? Use it \
+                 with --mqtt mqtt://{listen}, or put droidctl's on another port with \
+                 --listen ADDR:PORT"
+            )
+        } else {
+            format!("cannot listen on {listen}: {e}")
+        })
+    })?;
     eprintln!(
         "droidctl: bridge: MQTT broker (droidctl's own) on {}",
         broker.addr()
@@ -465,6 +532,46 @@ async fn start_fleet(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Issue 37 point 1: droidctl's broker and the bridge's MQTT connections run where they
+    /// cannot hold up the droids' runtime. Each is kept busy here by as many blocking tasks
+    /// as the main runtime has workers (as a lock held across work that grew with input did:
+    /// both workers blocked, the command timeout never fired); a timer on the main runtime
+    /// fires on time all the same. The one place a test needs real threads blocked.
+    #[test]
+    fn a_blocked_broker_or_mqtt_thread_does_not_delay_the_droids_runtime() {
+        let rts = Runtimes::start(true, true).unwrap();
+        let broker = start_broker(
+            rts.broker.as_ref().unwrap(),
+            "127.0.0.1:0".parse().unwrap(),
+            None,
+            None,
+        )
+        .unwrap();
+        let net = rts.net.as_ref().unwrap().handle().clone();
+        let (started, blocked) = std::sync::mpsc::channel();
+        for h in [broker.handle().clone(), net] {
+            for _ in 0..2 {
+                let started = started.clone();
+                h.spawn(async move {
+                    let _ = started.send(());
+                    std::thread::sleep(Duration::from_millis(500));
+                });
+            }
+        }
+        blocked.recv().unwrap();
+        blocked.recv().unwrap();
+        let late = rts
+            .main
+            .block_on(rts.main.spawn(async {
+                let t0 = tokio::time::Instant::now();
+                tokio::time::sleep(Duration::from_millis(50)).await;
+                t0.elapsed()
+            }))
+            .unwrap();
+        assert!(late < Duration::from_millis(350), "{late:?}");
+        drop(broker);
+    }
 
     #[test]
     fn a_broker_beyond_loopback_needs_allow_remote() {

@@ -17,6 +17,7 @@ pub mod app_input;
 pub mod bluez;
 pub mod bridge;
 pub mod bridge_mqtt;
+pub mod broker;
 pub mod btsnoop;
 pub mod capture;
 pub mod config;
@@ -57,6 +58,7 @@ pub fn targets() -> Vec<&'static Target> {
         &relay_server::TARGET,
         &bridge::TARGET,
         &bridge_mqtt::TARGET,
+        &broker::TARGET,
         &app_input::TARGET,
         &edu::TARGET,
         &edu_wire::TARGET,

@@ -28,10 +28,16 @@ pub struct BridgeProc {
 
 impl BridgeProc {
     pub fn start(dir: &std::path::Path, args: &[&str]) -> BridgeProc {
+        BridgeProc::start_bin(dir, env!("CARGO_BIN_EXE_droidctl"), args)
+    }
+
+    /// As [`BridgeProc::start`], with the droidctl binary at `bin` (a release build, to
+    /// measure it).
+    pub fn start_bin(dir: &std::path::Path, bin: &str, args: &[&str]) -> BridgeProc {
         static N: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
         let n = N.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         let stderr = dir.join(format!("bridge-{n}.stderr"));
-        let child = Command::new(env!("CARGO_BIN_EXE_droidctl"))
+        let child = Command::new(bin)
             .arg("bridge")
             .args(args)
             .env("DROIDCTL_CONFIG", "/dev/null")

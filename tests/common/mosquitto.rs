@@ -163,7 +163,7 @@ pub fn mosquitto_tls_config() -> String {
 
 enum Process {
     Mosquitto(Child),
-    Embedded(Embedded),
+    Embedded(Box<Embedded>),
 }
 
 pub struct Broker {
@@ -200,7 +200,7 @@ impl Broker {
     pub fn embedded(dir: &Path, port: u16, access: broker::Access, tls: bool) -> Broker {
         std::fs::create_dir_all(dir).unwrap();
         Broker {
-            process: Process::Embedded(Embedded::start(port, access, tls)),
+            process: Process::Embedded(Box::new(Embedded::start(port, access, tls))),
             port,
             dir: dir.to_path_buf(),
             extra: String::new(),
@@ -268,9 +268,11 @@ impl Broker {
                 let mut again = Broker::start_with(&self.dir, self.port, &self.extra.clone());
                 std::mem::replace(&mut again.process, Process::Mosquitto(dead()))
             }
-            Process::Embedded(e) => {
-                Process::Embedded(Embedded::start(self.port, e.access.clone(), e.tls))
-            }
+            Process::Embedded(e) => Process::Embedded(Box::new(Embedded::start(
+                self.port,
+                e.access.clone(),
+                e.tls,
+            ))),
         };
         self.process = again;
     }

@@ -1,0 +1,6 @@
+//! libFuzzer on `droidctl::fuzzing::broker`: what it checks and the input's layout are
+//! documented there (the same harness runs on stable in `tests/fuzz_smoke.rs`).
+
+#![no_main]
+
+libfuzzer_sys::fuzz_target!(|data: &[u8]| droidctl::fuzzing::broker::run_input(data));
