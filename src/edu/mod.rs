@@ -32,9 +32,9 @@ pub mod api;
 pub mod calls;
 pub mod child;
 pub mod engine;
+pub mod host;
 #[cfg(test)]
 mod hostile;
-pub mod host;
 pub mod infrared;
 pub mod probe;
 pub mod run;
