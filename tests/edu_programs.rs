@@ -71,6 +71,34 @@ fn a_minute_long_program_takes_well_under_a_minute() {
     assert!(wall < Duration::from_secs(20), "simulated time: {wall:?}");
 }
 
+/// A program's recording replays: its calls are marked as steps (`step 2 roll(0, 80, 2)`),
+/// which are not mission lines and must not make replay refuse the capture.
+#[test]
+fn a_programs_recording_replays() {
+    let dir = Scratch::new("edu", "replay");
+    let p = dir.file(
+        "rec.js",
+        "async function startProgram() {\n  await roll(0, 80, 2);\n  setMainLed({ r: 0, g: 0, b: 255 });\n  await delay(1);\n}\n",
+    );
+    let out = dir.run(&["run", path(&p), "--sim", "bolt", "--record", "rec.drc"]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let capture = dir.0.join("rec.drc");
+    let text = std::fs::read_to_string(&capture).unwrap();
+    assert!(text.contains("step 2 roll(0, 80, 2)"), "{text}");
+    let out = dir.run(&["replay", capture.to_str().unwrap(), "--json"]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let samples = json_lines(&stdout(&out));
+    let last = samples
+        .iter()
+        .rev()
+        .find(|s| s.get("x_cm").is_some())
+        .unwrap();
+    assert!(
+        last["y_cm"].as_f64().unwrap_or(0.0).abs() > 10.0,
+        "{last:?}"
+    );
+}
+
 #[test]
 fn a_syntax_error_is_exit_2_with_line_and_column_and_nothing_is_sent() {
     let dir = Scratch::new("edu", "syntax");

@@ -168,10 +168,14 @@ pub fn validate(c: &Capture) -> Result<(), String> {
     plan.check(c.kind)
 }
 
-/// The script line of a mission's `step LINE TEXT` mark.
+/// The script line of a mission's `step LINE TEXT` mark. A Sphero Edu program's run marks
+/// its calls the same way (`step 3 roll(90, 100, 2)`): those are not script lines, and are
+/// neither read as one nor refused (a mission command's first word never holds `(`).
 fn step_text(mark: &str) -> Option<&str> {
     let rest = mark.strip_prefix("step ")?;
-    rest.split_once(' ').map(|(_, text)| text)
+    let (_, text) = rest.split_once(' ')?;
+    let first = text.split_whitespace().next().unwrap_or("");
+    (!first.contains('(')).then_some(text)
 }
 
 /// What sampling a capture needs to know before its first event: where the mission starts
