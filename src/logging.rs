@@ -233,18 +233,10 @@ mod tests {
         assert!(open(&link, MAX_LOG_BYTES, true).is_err());
         assert_eq!(fs::read_to_string(&target).unwrap(), "precious");
         let fifo = dir.join("fifo.log");
-        let made = std::process::Command::new("mkfifo")
-            .arg(&fifo)
-            .status()
-            .unwrap();
-        assert!(made.success());
-        let (tx, rx) = std::sync::mpsc::channel();
-        std::thread::spawn(move || {
-            let _ = tx.send(open(&fifo, MAX_LOG_BYTES, true).map(|_| ()));
+        let at = fifo.clone();
+        let opened = crate::own_file::testing::with_fifo(&fifo, "opening", move || {
+            open(&at, MAX_LOG_BYTES, true).map(|_| ())
         });
-        let opened = rx
-            .recv_timeout(std::time::Duration::from_secs(5))
-            .expect("opening blocked on the FIFO");
         assert!(opened.is_err());
         let plain = dir.join("plain.log");
         open(&plain, MAX_LOG_BYTES, true).unwrap();

@@ -168,6 +168,33 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> io::Result<()> {
     Err(last.unwrap_or_else(|| io::Error::other("no temporary file name was free")))
 }
 
+/// Test support shared by the tests of droidctl's own files (config, log, remembered
+/// settings): a FIFO in a file's place, and what is done with it, bounded in time.
+#[cfg(all(test, unix))]
+pub(crate) mod testing {
+    use std::path::Path;
+
+    /// Make a FIFO at `path`, then run `f` on a thread of its own: its result, or a panic
+    /// naming `what` when it blocked (on the FIFO) for 5 s.
+    pub fn with_fifo<T: Send + 'static>(
+        path: &Path,
+        what: &str,
+        f: impl FnOnce() -> T + Send + 'static,
+    ) -> T {
+        let made = std::process::Command::new("mkfifo")
+            .arg(path)
+            .status()
+            .unwrap();
+        assert!(made.success());
+        let (tx, rx) = std::sync::mpsc::channel();
+        std::thread::spawn(move || {
+            let _ = tx.send(f());
+        });
+        rx.recv_timeout(std::time::Duration::from_secs(5))
+            .unwrap_or_else(|_| panic!("{what} blocked on the FIFO"))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -301,19 +301,10 @@ mod tests {
         let d = dir("fifo");
         std::fs::create_dir_all(&d).unwrap();
         let p = path(&d, Model::R2D2);
-        let status = std::process::Command::new("mkfifo")
-            .arg(&p)
-            .status()
-            .unwrap();
-        assert!(status.success());
-        let (tx, rx) = std::sync::mpsc::channel();
         let at = d.clone();
-        std::thread::spawn(move || {
-            let _ = tx.send(Remembered::load(&at, Model::R2D2));
+        let (r, warning) = crate::own_file::testing::with_fifo(&p, "loading", move || {
+            Remembered::load(&at, Model::R2D2)
         });
-        let (r, warning) = rx
-            .recv_timeout(std::time::Duration::from_secs(5))
-            .expect("loading blocked on the FIFO");
         assert_eq!(r, Remembered::default());
         let w = warning.expect("a warning");
         assert!(

@@ -794,20 +794,11 @@ mod tests {
         let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(&dir).unwrap();
         let fifo = dir.join("config.toml");
-        let made = std::process::Command::new("mkfifo")
-            .arg(&fifo)
-            .status()
-            .unwrap();
-        assert!(made.success());
-        let (tx, rx) = std::sync::mpsc::channel();
         let at = fifo.clone();
-        std::thread::spawn(move || {
-            let _ = tx.send(Config::load(&at).map_err(|e| e.to_string()));
-        });
-        let e = rx
-            .recv_timeout(std::time::Duration::from_secs(5))
-            .expect("loading blocked on the FIFO")
-            .unwrap_err();
+        let e = crate::own_file::testing::with_fifo(&fifo, "loading", move || {
+            Config::load(&at).map_err(|e| e.to_string())
+        })
+        .unwrap_err();
         assert!(e.contains("FIFO"), "{e}");
         let real = dir.join("dotfiles.toml");
         std::fs::write(&real, "[control]\ncruise_speed = 77\n").unwrap();
