@@ -118,11 +118,21 @@ fn the_emergency_stop_reaches_every_droid_idle_or_not() {
         &[tap(Key::ch('g')), ms(50), tap(Key::ch('C'))],
     ];
     for open in places {
-        let mut steps = open.to_vec();
-        steps.extend([ms(50), tap(SPACE), ms(300)]);
-        let out = run(EMULATED, &steps).unwrap_or_else(|e| panic!("{e}\nsteps: {steps:?}"));
-        assert_eq!(out.estops, 1, "Space over {open:?} is the emergency stop");
+        assert_eq!(
+            estops_after(open, SPACE),
+            1,
+            "Space over {open:?} is the emergency stop"
+        );
     }
+}
+
+/// The emergency stops made when `key` is tapped in the place `open` leads to.
+fn estops_after(open: &[Step], key: Key) -> usize {
+    let mut steps = open.to_vec();
+    steps.extend([ms(50), tap(key), ms(300)]);
+    run(EMULATED, &steps)
+        .unwrap_or_else(|e| panic!("{e}\nsteps: {steps:?}"))
+        .estops
 }
 
 /// Issue 39, item 1: in a text prompt Space is typed, so Ctrl+Space (a terminal's NUL) is the
@@ -144,15 +154,10 @@ fn ctrl_space_stops_in_every_place_prompts_included() {
     ];
     for open in prompts {
         // Space is text there: no stop.
-        let mut steps = open.to_vec();
-        steps.extend([ms(50), tap(SPACE), ms(300)]);
-        let out = run(EMULATED, &steps).unwrap_or_else(|e| panic!("{e}\nsteps: {steps:?}"));
-        assert_eq!(out.estops, 0, "Space is typed in {open:?}");
-        let mut steps = open.to_vec();
-        steps.extend([ms(50), tap(CTRL_SPACE), ms(300)]);
-        let out = run(EMULATED, &steps).unwrap_or_else(|e| panic!("{e}\nsteps: {steps:?}"));
+        assert_eq!(estops_after(open, SPACE), 0, "Space is typed in {open:?}");
         assert_eq!(
-            out.estops, 1,
+            estops_after(open, CTRL_SPACE),
+            1,
             "Ctrl+Space in {open:?} is the emergency stop"
         );
     }
@@ -165,11 +170,9 @@ fn ctrl_space_stops_in_every_place_prompts_included() {
         &[tap(Key::ch('g')), ms(50), tap(Key::ch('C'))],
     ];
     for open in places {
-        let mut steps = open.to_vec();
-        steps.extend([ms(50), tap(CTRL_SPACE), ms(300)]);
-        let out = run(EMULATED, &steps).unwrap_or_else(|e| panic!("{e}\nsteps: {steps:?}"));
         assert_eq!(
-            out.estops, 1,
+            estops_after(open, CTRL_SPACE),
+            1,
             "Ctrl+Space over {open:?} is the emergency stop"
         );
     }
