@@ -119,31 +119,29 @@ struct DroidState {
     setup: crate::family::setup::SetupOptions,
 }
 
-/// What droid `model` can do, in the words of an `unsupported` error's `capability`.
-pub fn capabilities(model: Model) -> Vec<&'static str> {
-    use crate::script::{Action, LedGroup};
-    let family = crate::family::for_model(model);
-    let lights = [
-        LedGroup::Front,
-        LedGroup::Back,
-        LedGroup::Logic,
-        LedGroup::Holo,
-    ]
-    .iter()
-    .any(|g| family.led(model, &Action::LedRgb(*g, [0, 0, 0])).is_some());
+/// The bridge's capability words, each with the flags of the model table it stands for
+/// (an `unsupported` error's `capability` is one of these words).
+pub const CAPABILITY_WORDS: [(&str, crate::model::Caps); 8] = {
+    use crate::model::Caps;
     [
-        ("dome", model.has_dome()),
-        ("legs", model.has_legs()),
-        ("lights", lights),
-        ("animations", family.animation(model, 0).is_some()),
-        ("sounds", family.sound(model, 0).is_some()),
-        ("matrix", model.has_matrix()),
-        ("streaming", family.stream_caps(model).is_some()),
-        ("reverse", family.can_reverse()),
+        ("dome", Caps::DOME),
+        ("legs", Caps::LEGS),
+        ("lights", Caps::LIGHTS),
+        ("animations", Caps::ANIMATIONS),
+        ("sounds", Caps::ANIMATIONS),
+        ("matrix", Caps::MATRIX),
+        ("streaming", Caps::STREAMING),
+        ("reverse", Caps::HEADING),
     ]
-    .into_iter()
-    .filter_map(|(c, has)| has.then_some(c))
-    .collect()
+};
+
+/// What droid `model` can do, in the words of an `unsupported` error's `capability`: read
+/// from the model table, not probed from the family.
+pub fn capabilities(model: Model) -> Vec<&'static str> {
+    CAPABILITY_WORDS
+        .into_iter()
+        .filter_map(|(word, caps)| model.has(caps).then_some(word))
+        .collect()
 }
 
 /// New samples a second droid `model` offers with `setup`: the bridge's rate `hz`, or its
