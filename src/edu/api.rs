@@ -23,43 +23,14 @@ pub enum Arg {
     Text(String),
 }
 
-/// What BOLT's matrix draws.
-#[derive(Debug, Clone, PartialEq)]
-pub enum Matrix {
-    Char(char, [u8; 3]),
-    Text {
-        text: String,
-        rgb: [u8; 3],
-        fps: u8,
-    },
-    Pixel(u8, u8, [u8; 3]),
-    Line([u8; 4], [u8; 3]),
-    Fill([u8; 4], [u8; 3]),
-    Clear,
-    Rotate(u16),
-    /// A frame to keep: its index and palette indexes `[y][x]` (spherov2's
-    /// `save_compressed_frame_player64_bit_frame`).
-    SaveFrame(u16, [[u8; 8]; 8]),
-    /// An animation to keep (spherov2's `save_compressed_frame_player_animation`).
-    SaveAnimation {
-        id: u8,
-        fps: u8,
-        fade: bool,
-        palette: Vec<[u8; 3]>,
-        frames: Vec<u16>,
-    },
-    /// Play a kept animation, once or in a loop.
-    Play(u8, bool),
-    Pause,
-    Resume,
-    /// End the animation (spherov2's `clear_matrix` sends only this).
-    Reset,
-}
+/// What BOLT's matrix draws, and what a robot is asked to do in infrared: the family's
+/// vocabulary ([`crate::family::intent`]), which lowers them to each robot's commands.
+pub use crate::family::intent::{Ir, Matrix};
 
 /// Frames one program may register on BOLT (all its animations together), and colours a
 /// palette holds (Sphero's docs: "up to 16 colors"). The robot's own frame limit is not
-/// published; the simulator keeps as many (src/sim/animation.rs).
-pub const MAX_FRAMES: usize = crate::sim::animation::SAVED_MAX;
+/// published; the family says how many droidctl keeps (and the simulator keeps as many).
+pub const MAX_FRAMES: usize = crate::family::v2::robots::MATRIX_SAVED_MAX;
 pub const MAX_COLOURS: usize = 16;
 /// The most arguments a call takes: `registerMatrixAnimation`'s fps, transition, palette
 /// size, colours, frame count and 64 pixels a frame.
@@ -96,33 +67,6 @@ pub enum Act {
     CalibrateCompass,
     /// Robot-to-robot infrared (BOLT, RVR): one wire command each ([`Ir`]).
     Ir(Ir),
-}
-
-/// What a robot is asked to do in infrared; channels 0..=7 and intensity 1..=64, bounded as
-/// spherov2's `SpheroEduAPI` bounds them (`bound_value`).
-#[derive(Debug, Clone, PartialEq)]
-pub enum Ir {
-    Broadcast {
-        far: u8,
-        near: u8,
-    },
-    StopBroadcast,
-    Follow {
-        far: u8,
-        near: u8,
-    },
-    StopFollow,
-    Evade {
-        far: u8,
-        near: u8,
-    },
-    StopEvade,
-    Send {
-        channel: u8,
-        intensity: u8,
-    },
-    /// Hear the next message on each of these channels (none: nothing is sent, as spherov2).
-    Listen(Vec<u8>),
 }
 
 /// What the program waits for after the call's immediate actions.

@@ -287,6 +287,20 @@ impl Family for V1 {
         Some(raw_motors(left, right))
     }
 
+    /// v1's own: stabilisation is Set Stabilization on or off.
+    fn lower(
+        &self,
+        model: Model,
+        intent: &super::intent::Intent,
+    ) -> Result<Vec<Command>, super::intent::Unsupported> {
+        match intent {
+            super::intent::Intent::Stabilization(on) => {
+                Ok(vec![cmd::set_stabilization(*on).into()])
+            }
+            _ => super::intent::lower_common(self, model, intent),
+        }
+    }
+
     /// Roll has no reverse flag: backing up is rolling toward the opposite heading.
     fn drive(&self, speed: u8, heading: Heading, reverse: bool) -> Command {
         let heading = if reverse { heading.reversed() } else { heading };

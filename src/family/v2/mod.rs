@@ -9,12 +9,13 @@ use super::{
     Codec, Command, DroidError, Explained, Family, Incoming, Key, Packet, PacketKind, ReadOption,
     ReadOptions, Reader,
 };
+use crate::family::intent::{self, Intent, Matrix, Unsupported};
 use crate::family::setup::SetupOptions;
 use crate::family::stream::{
     BLE_SENSOR_NOTIFICATIONS_PER_S, STANDARD_RATES, SensorGroup, SensorSet, StreamCaps, StreamPlan,
 };
 use crate::family::{RecordedDrive, RecordedLeds};
-use crate::model::{Model, Protocol};
+use crate::model::{Caps, Model, Protocol};
 use crate::protocol::decode::ErrorKind;
 use crate::protocol::v2::catalog::targets;
 use crate::protocol::v2::sensor::StreamingConfig;
@@ -442,7 +443,34 @@ impl Family for V2 {
     }
 
     fn matrix(&self, action: &crate::script::MatrixAction) -> Option<Command> {
-        Some(robots::matrix(action))
+        Some(robots::matrix(&Matrix::from(action)))
+    }
+
+    /// v2's own: stabilisation, BOLT's matrix (and its main light), BOLT's and RVR's infrared.
+    fn lower(&self, model: Model, intent: &Intent) -> Result<Vec<Command>, Unsupported> {
+        match intent {
+            Intent::Stabilization(on) => Ok(vec![
+                cmd::set_stabilization(if *on {
+                    StabilizationIndex::Full
+                } else {
+                    StabilizationIndex::None
+                })
+                .into(),
+            ]),
+            Intent::Matrix(m) if model.has_matrix() => Ok(vec![robots::matrix(m)]),
+            Intent::Ir(ir) if model.has(Caps::IR) => Ok(robots::infrared(model, ir)
+                .into_iter()
+                .map(Command::from)
+                .collect()),
+            Intent::MainLight(rgb) => {
+                let mut out = Vec::new();
+                for i in robots::main_light(model, *rgb) {
+                    out.extend(self.lower(model, &i)?);
+                }
+                Ok(out)
+            }
+            _ => intent::lower_common(self, model, intent),
+        }
     }
 
     fn tank(&self, left: i16, right: i16) -> Option<Command> {
