@@ -608,11 +608,7 @@ impl Player {
                     self.tripod(line).await;
                 }
                 let h = Heading::wrapped(*heading as f64);
-                let c = if *reverse && self.family.can_reverse() {
-                    self.family.drive(*speed, h, true)
-                } else {
-                    crate::mission::drive_command(self.family, *speed, h)
-                };
+                let c = crate::family::intent::drive(self.family, *speed, h, *reverse);
                 self.last_heading = *heading;
                 self.session.set(Slot::Drive, c.clone());
                 self.drive = (*speed > 0).then_some(c);

@@ -6,7 +6,7 @@
 //! the capability gets [`Unsupported`] rather than another family's bytes.
 
 use super::{Command, Family};
-use crate::model::Model;
+use crate::model::{Caps, Model};
 use crate::protocol::wire::LegAction;
 use crate::script::{Action, LedGroup, MatrixAction};
 use crate::units::{HeadAngle, Heading};
@@ -215,20 +215,42 @@ pub fn lower_common<F: Family + ?Sized>(
             speed,
             heading,
             reverse,
-        } => Some(vec![f.drive(*speed, *heading, *reverse)]),
+        } => Some(vec![drive(f, *speed, *heading, *reverse)]),
+        Intent::RawMotors { .. } if !model.has(Caps::RAW_MOTORS) => None,
         Intent::RawMotors { left, right } => one(f.tank(*left, *right)),
         Intent::ResetAim => Some(f.aim_end(model)).filter(|c| !c.is_empty()),
         Intent::MainLight(rgb) => one(f.led(model, &Action::LedRgb(LedGroup::Front, *rgb))),
         Intent::LedRgb(g, rgb) => one(f.led(model, &Action::LedRgb(*g, *rgb))),
         Intent::LedBrightness(g, b) => one(f.led(model, &Action::LedBrightness(*g, *b))),
+        // The table says which droids have legs and a dome; the family builds the command.
+        Intent::Head(_) if !model.has(Caps::DOME) => None,
         Intent::Head(a) => one(f.head(*a)),
+        Intent::Stance(_) if !model.has(Caps::LEGS) => None,
         Intent::Stance(a) => one(f.stance(*a)),
         Intent::Animation(id) => one(f.animation(model, *id)),
         Intent::Sound(id) => one(f.sound(model, *id)),
+        Intent::CalibrateCompass if !model.has(Caps::COMPASS) => None,
         Intent::CalibrateCompass => one(f.calibrate_compass()),
         Intent::Stabilization(_) | Intent::Matrix(_) | Intent::Ir(_) => None,
     };
     out.ok_or_else(|| Unsupported::of(model, intent))
+}
+
+/// The drive command of `f` at `speed` toward `heading`. A steering robot (Robi 42) reads
+/// the heading as a turn relative to straight ahead: 0 straight, 1..=180 to the right (90 or
+/// more is full lock), 359..=180 to the left; `reverse` backs up only a droid that can.
+pub fn drive<F: Family + ?Sized>(f: &F, speed: u8, heading: Heading, reverse: bool) -> Command {
+    if reverse && f.can_reverse() {
+        return f.drive(speed, heading, true);
+    }
+    if f.steers() {
+        let d = heading.degrees() as f32;
+        let signed = if d > 180.0 { d - 360.0 } else { d };
+        if let Some(c) = f.steer(speed, (signed / 90.0).clamp(-1.0, 1.0)) {
+            return c;
+        }
+    }
+    f.drive(speed, heading, false)
 }
 
 /// The commands of `intent` on `model`, from the model's family.
