@@ -82,9 +82,20 @@ impl Caps {
     pub const TARGETED: Caps = Caps(1 << 17);
     /// Sensors through the streaming service (tokens, periods) rather than masks (RVR).
     pub const STREAM_SERVICE: Caps = Caps(1 << 18);
+    /// The main light is front and back at once (spherov2's `LedManager` on R2-D2, R2-Q5 and
+    /// BOLT: what Sphero Edu's front and back lights read after `setMainLed`).
+    pub const MAIN_FRONT_BACK: Caps = Caps(1 << 19);
+    /// Sphero Edu's speeds are scaled onto its range (spherov2's Mini: (speed ± 126) × 2⁄3).
+    pub const SCALED_SPEED: Caps = Caps(1 << 20);
+    /// Streams its locator and velocity a quarter turn from the other v1 droids' axes
+    /// (spherov2.py's Ollie: `protocol::v1::sensor::rotated_axes` has the sources).
+    pub const ROTATED_AXES: Caps = Caps(1 << 21);
+    /// Takes commands without the v2 anti-DoS unlock (RVR: spherov2.py's `toy/rvr.py`
+    /// writes none; `droid-facts.md` §6).
+    pub const NO_UNLOCK: Caps = Caps(1 << 22);
 
     /// Every flag with its name, for `Debug` and documents.
-    pub const NAMED: [(Caps, &'static str); 19] = [
+    pub const NAMED: [(Caps, &'static str); 23] = [
         (Caps::LEGS, "legs"),
         (Caps::DOME, "dome"),
         (Caps::ANIMATIONS, "animations"),
@@ -104,6 +115,10 @@ impl Caps {
         (Caps::HOPS, "hops"),
         (Caps::TARGETED, "targeted"),
         (Caps::STREAM_SERVICE, "stream service"),
+        (Caps::MAIN_FRONT_BACK, "main is front and back"),
+        (Caps::SCALED_SPEED, "scaled speed"),
+        (Caps::ROTATED_AXES, "rotated axes"),
+        (Caps::NO_UNLOCK, "no unlock"),
     ];
 
     /// Both sets' flags (usable in the `const` table).
@@ -160,6 +175,9 @@ pub struct ModelSpec {
     pub pacing_ms: u64,
     /// How many processors take commands ([`Model::processors`]).
     pub processors: u8,
+    /// The least time a full turn in place takes, ms (spherov2's `spin`, which Sphero Edu's
+    /// `spin` follows).
+    pub full_turn_ms: u16,
     pub caps: Caps,
 }
 
@@ -167,6 +185,7 @@ pub struct ModelSpec {
 const SPHERO: Caps = Caps::LIGHTS.with(Caps::HEADING).with(Caps::STREAMING);
 /// R2-D2 and R2-Q5.
 const R2: Caps = SPHERO
+    .with(Caps::MAIN_FRONT_BACK)
     .with(Caps::LEGS)
     .with(Caps::DOME)
     .with(Caps::ANIMATIONS)
@@ -190,6 +209,7 @@ pub const MODELS: [ModelSpec; 10] = [
         protocol: Protocol::SpheroV2,
         pacing_ms: 120,
         processors: 1,
+        full_turn_ms: 700,
         caps: R2,
     },
     ModelSpec {
@@ -201,6 +221,7 @@ pub const MODELS: [ModelSpec; 10] = [
         protocol: Protocol::SpheroV2,
         pacing_ms: 120,
         processors: 1,
+        full_turn_ms: 700,
         caps: R2,
     },
     ModelSpec {
@@ -212,6 +233,7 @@ pub const MODELS: [ModelSpec; 10] = [
         protocol: Protocol::SpheroV2,
         pacing_ms: 120,
         processors: 1,
+        full_turn_ms: 450,
         caps: SPHERO
             .with(Caps::ANIMATIONS)
             .with(Caps::AIM)
@@ -226,6 +248,7 @@ pub const MODELS: [ModelSpec; 10] = [
         protocol: Protocol::SpheroV1,
         pacing_ms: 60,
         processors: 1,
+        full_turn_ms: 450,
         caps: V1_BALL,
     },
     ModelSpec {
@@ -237,6 +260,7 @@ pub const MODELS: [ModelSpec; 10] = [
         protocol: Protocol::SpheroV1,
         pacing_ms: 60,
         processors: 1,
+        full_turn_ms: 450,
         caps: V1_BALL,
     },
     ModelSpec {
@@ -248,7 +272,8 @@ pub const MODELS: [ModelSpec; 10] = [
         protocol: Protocol::SpheroV1,
         pacing_ms: 60,
         processors: 1,
-        caps: V1_BALL,
+        full_turn_ms: 600,
+        caps: V1_BALL.with(Caps::ROTATED_AXES),
     },
     ModelSpec {
         model: Model::Robi42,
@@ -260,6 +285,7 @@ pub const MODELS: [ModelSpec; 10] = [
         protocol: Protocol::Rsrcp,
         pacing_ms: 20,
         processors: 1,
+        full_turn_ms: 450,
         caps: Caps::NONE,
     },
     ModelSpec {
@@ -272,9 +298,11 @@ pub const MODELS: [ModelSpec; 10] = [
         pacing_ms: 75,
         // A primary (0x11: power, lights) and a secondary (0x12: drive, sensors, matrix).
         processors: 2,
+        full_turn_ms: 450,
         caps: SPHERO
             .with(Caps::AIM)
             .with(Caps::FRONT_LED)
+            .with(Caps::MAIN_FRONT_BACK)
             .with(Caps::MATRIX)
             .with(Caps::COMPASS)
             .with(Caps::LIGHT_SENSOR)
@@ -291,9 +319,11 @@ pub const MODELS: [ModelSpec; 10] = [
         protocol: Protocol::SpheroV2,
         pacing_ms: 120,
         processors: 1,
+        full_turn_ms: 500,
         caps: SPHERO
             .with(Caps::AIM)
             .with(Caps::FRONT_LED)
+            .with(Caps::SCALED_SPEED)
             .with(Caps::RAW_MOTORS)
             .with(Caps::HOPS),
     },
@@ -307,6 +337,7 @@ pub const MODELS: [ModelSpec; 10] = [
         pacing_ms: 75,
         // A primary (0x11: power, lights, colour sensor) and a secondary (0x12: drive, sensors).
         processors: 2,
+        full_turn_ms: 1500,
         caps: SPHERO
             .with(Caps::AIM)
             .with(Caps::FRONT_LED)
@@ -316,7 +347,8 @@ pub const MODELS: [ModelSpec; 10] = [
             .with(Caps::IR)
             .with(Caps::RAW_MOTORS)
             .with(Caps::TARGETED)
-            .with(Caps::STREAM_SERVICE),
+            .with(Caps::STREAM_SERVICE)
+            .with(Caps::NO_UNLOCK),
     },
 ];
 
@@ -333,6 +365,19 @@ impl Model {
         Model::Mini,
         Model::Rvr,
     ];
+
+    /// The model droidctl assumes when none is named (a simulator without a model, a
+    /// placeholder droid before one is chosen).
+    pub const DEFAULT: Model = Model::R2D2;
+
+    /// The first model of the table that speaks `protocol`: its family's representative, for
+    /// a capture that names only the family.
+    pub fn first_speaking(protocol: Protocol) -> Model {
+        MODELS
+            .iter()
+            .find(|s| s.protocol == protocol)
+            .map_or(Model::DEFAULT, |s| s.model)
+    }
 
     /// This model's row of [`MODELS`].
     pub const fn spec(self) -> &'static ModelSpec {
@@ -440,6 +485,11 @@ impl Model {
     /// A rolling droid with an aim mode (back light, turn in place, set heading 0).
     pub fn can_aim(self) -> bool {
         self.has(Caps::AIM)
+    }
+
+    /// The least time a full turn in place takes (spherov2's `spin`).
+    pub fn full_turn(self) -> Duration {
+        Duration::from_millis(self.spec().full_turn_ms.into())
     }
 
     /// How many processors take commands: BOLT and RVR have a primary (0x11: power, lights,

@@ -12,7 +12,7 @@
 //! Ollie, 1.5 on RVR); `fade` steps the main light; `strobe` starts dark.
 
 use super::timeline::{Steps, Timeline};
-use crate::model::Model;
+use crate::model::{Caps, Model};
 use crate::protocol::wire::LegAction;
 use std::time::Duration;
 
@@ -186,7 +186,7 @@ impl Driver {
         if speed.is_nan() {
             return Err(format!("{call}: speed is a number −255 to 255, not NaN"));
         }
-        let s = if self.model == Model::Mini && speed != 0.0 {
+        let s = if self.model.has(Caps::SCALED_SPEED) && speed != 0.0 {
             let offset = if speed > 0.0 { 126.0 } else { -126.0 };
             ((speed + offset) * 2.0 / 3.0).round()
         } else {
@@ -222,7 +222,7 @@ impl Driver {
     fn main_led(&mut self, rgb: [u8; 3]) -> Act {
         self.main = rgb;
         // R2-D2, R2-Q5 and BOLT: front and back (spherov2's `LedManager` maps main to both).
-        if matches!(self.model, Model::R2D2 | Model::R2Q5 | Model::Bolt) {
+        if self.model.has(Caps::MAIN_FRONT_BACK) {
             self.front = rgb;
             self.back = rgb;
         }
@@ -231,13 +231,7 @@ impl Driver {
 
     /// Seconds a full turn takes at the least (spherov2's `spin`).
     fn turn_time(&self) -> f64 {
-        match self.model {
-            Model::Rvr => 1.5,
-            Model::R2D2 | Model::R2Q5 => 0.7,
-            Model::Mini => 0.5,
-            Model::Ollie => 0.6,
-            _ => 0.45,
-        }
+        self.model.full_turn().as_secs_f64()
     }
 
     /// Run call `name` with `args` (as the prelude passes them). Any arguments at all come

@@ -224,7 +224,7 @@ impl Family for V1 {
     }
 
     fn representative(&self) -> Model {
-        Model::BB8
+        Model::first_speaking(self.protocol())
     }
 
     fn error_kinds(&self) -> &'static [ErrorKind] {

@@ -93,8 +93,7 @@ impl V2Codec {
         let Some(model) = self.model else {
             return c;
         };
-        if matches!(model, Model::Bolt | Model::Mini | Model::Rvr) && (c.did, c.cid) == (0x00, 0x01)
-        {
+        if robots::has_no_core(model) && (c.did, c.cid) == (0x00, 0x01) {
             c = cmd::echo(Bytes(Vec::new()));
         }
         if c.target.is_none() {
@@ -234,7 +233,7 @@ impl Family for V2 {
     }
 
     fn representative(&self) -> Model {
-        Model::R2D2
+        Model::first_speaking(self.protocol())
     }
 
     fn error_kinds(&self) -> &'static [ErrorKind] {

@@ -56,6 +56,33 @@ pub fn led(model: Model, action: &Action) -> Option<Option<Command>> {
     Some(Some(c.into()))
 }
 
+/// Whether `model` has the command `did`/`cid`: R2's dome and legs, BOLT's matrix and
+/// RVR's palettes and streaming service are theirs alone (spherov2.py's `toy/*.py`).
+pub fn model_has(model: Model, did: u8, cid: u8) -> bool {
+    match (did, cid) {
+        (0x17, 0x05 | 0x11 | 0x2B | 0x2C) => {
+            matches!(model, Model::R2D2 | Model::R2Q5 | Model::BB9E)
+        }
+        (0x17, _) => model.has_legs(),
+        (0x1A, 0x07..=0x0A) => matches!(model, Model::R2D2 | Model::R2Q5 | Model::BB9E),
+        (0x1A, 0x0E) => !matches!(model, Model::Bolt | Model::Rvr),
+        (0x1A, 0x1A) => model == Model::Rvr,
+        (0x1A, 0x1C) => model == Model::Bolt,
+        (0x1A, 0x2D..=0x4E) => model.has_matrix() || model == Model::Rvr,
+        (0x18, 0x39..=0x3D) | (0x18, 0x35..=0x38) | (0x16, 0x25..=0x29) => {
+            model.streams_by_service()
+        }
+        (0x18, 0x25 | 0x26 | 0x30) => model.has_compass() || model == Model::Rvr,
+        _ => true,
+    }
+}
+
+/// The newer robots have no Core device: Core's Ping goes as API and Shell's Echo
+/// (spherov2.py pings them with 0x10/0x00).
+pub fn has_no_core(model: Model) -> bool {
+    matches!(model, Model::Bolt | Model::Mini | Model::Rvr)
+}
+
 /// The aiming light on or off: BOLT's back LED blue, Mini's aiming LED, RVR's brake lights.
 fn aim_light(model: Model, on: bool) -> Option<v2::Command> {
     let v = if on { 255 } else { 0 };
@@ -186,6 +213,22 @@ pub fn infrared(model: Model, ir: &Ir) -> Vec<v2::Command> {
             .map(|c| cmd::listen_for_robot_to_robot_ir_message([*c, 0xFF]))
             .collect(),
     }
+}
+
+/// Whether `model` has infrared Sensor command `cid` (BOLT the behaviours and its
+/// robot-to-robot messages, RVR the behaviours and its own messages); `None` when `cid` is no infrared command.
+pub fn infrared_has(model: Model, cid: u8) -> Option<bool> {
+    let behaviours = matches!(cid, 0x27..=0x29 | 0x32..=0x34);
+    let robot_to_robot = matches!(cid, 0x2A | 0x2B);
+    let newer = matches!(cid, 0x3E | 0x3F);
+    if !(behaviours || robot_to_robot || newer) {
+        return None;
+    }
+    Some(match model {
+        Model::Bolt => behaviours || robot_to_robot,
+        Model::Rvr => behaviours || newer,
+        _ => false,
+    })
 }
 
 /// Raw motors for tracks at `left`/`right` in −255..=255.
