@@ -196,84 +196,77 @@ const V1_BALL: Caps = SPHERO
     .with(Caps::RAW_MOTORS)
     .with(Caps::HOPS);
 
+/// R2-D2's row, which the other API v2 rows change.
+const R2D2_ROW: ModelSpec = ModelSpec {
+    model: Model::R2D2,
+    id: "r2d2",
+    aliases: &[],
+    advertised: Advertised::Prefix("D2-"),
+    name: "R2-D2",
+    protocol: Protocol::SpheroV2,
+    pacing_ms: 120,
+    processors: 1,
+    full_turn_ms: 700,
+    caps: R2,
+};
+
+/// BB-8's row, which the other API v1 rows change.
+const BB8_ROW: ModelSpec = ModelSpec {
+    model: Model::BB8,
+    id: "bb8",
+    aliases: &[],
+    advertised: Advertised::Prefix("BB-"),
+    name: "BB-8",
+    protocol: Protocol::SpheroV1,
+    pacing_ms: 60,
+    processors: 1,
+    full_turn_ms: 450,
+    caps: V1_BALL,
+};
+
 /// The model table, in [`Model::ALL`]'s order (a test holds the two together). Pacing is
 /// the reference clients' minimum write interval (`droid-facts.md` §1; spherov2.py's
-/// `cmd_safe_interval` for BOLT, RVR and Mini, §6): only a default, configurable.
+/// `cmd_safe_interval` for BOLT, RVR and Mini, §6): only a default, configurable. BOLT and
+/// RVR have a primary processor (0x11: power, lights, RVR's colour sensor) and a secondary
+/// (0x12: drive, sensors, BOLT's matrix).
 pub const MODELS: [ModelSpec; 10] = [
-    ModelSpec {
-        model: Model::R2D2,
-        id: "r2d2",
-        aliases: &[],
-        advertised: Advertised::Prefix("D2-"),
-        name: "R2-D2",
-        protocol: Protocol::SpheroV2,
-        pacing_ms: 120,
-        processors: 1,
-        full_turn_ms: 700,
-        caps: R2,
-    },
+    R2D2_ROW,
     ModelSpec {
         model: Model::R2Q5,
         id: "r2q5",
-        aliases: &[],
         advertised: Advertised::Prefix("Q5-"),
         name: "R2-Q5",
-        protocol: Protocol::SpheroV2,
-        pacing_ms: 120,
-        processors: 1,
-        full_turn_ms: 700,
-        caps: R2,
+        ..R2D2_ROW
     },
     ModelSpec {
         model: Model::BB9E,
         id: "bb9e",
-        aliases: &[],
         advertised: Advertised::Prefix("GB-"),
         name: "BB-9E",
-        protocol: Protocol::SpheroV2,
-        pacing_ms: 120,
-        processors: 1,
         full_turn_ms: 450,
         caps: SPHERO
             .with(Caps::ANIMATIONS)
             .with(Caps::AIM)
             .with(Caps::DOME_LIGHTS),
+        ..R2D2_ROW
     },
-    ModelSpec {
-        model: Model::BB8,
-        id: "bb8",
-        aliases: &[],
-        advertised: Advertised::Prefix("BB-"),
-        name: "BB-8",
-        protocol: Protocol::SpheroV1,
-        pacing_ms: 60,
-        processors: 1,
-        full_turn_ms: 450,
-        caps: V1_BALL,
-    },
+    BB8_ROW,
     ModelSpec {
         model: Model::SprkPlus,
         id: "sprk",
         aliases: &["sprkplus", "sprk+"],
         advertised: Advertised::Prefix("SK-"),
         name: "SPRK+",
-        protocol: Protocol::SpheroV1,
-        pacing_ms: 60,
-        processors: 1,
-        full_turn_ms: 450,
-        caps: V1_BALL,
+        ..BB8_ROW
     },
     ModelSpec {
         model: Model::Ollie,
         id: "ollie",
-        aliases: &[],
         advertised: Advertised::Prefix("2B-"),
         name: "Ollie",
-        protocol: Protocol::SpheroV1,
-        pacing_ms: 60,
-        processors: 1,
         full_turn_ms: 600,
         caps: V1_BALL.with(Caps::ROTATED_AXES),
+        ..BB8_ROW
     },
     ModelSpec {
         model: Model::Robi42,
@@ -294,9 +287,7 @@ pub const MODELS: [ModelSpec; 10] = [
         aliases: &["boltplus", "bolt+", "spherobolt"],
         advertised: Advertised::Prefix("SB-"),
         name: "Sphero BOLT",
-        protocol: Protocol::SpheroV2,
         pacing_ms: 75,
-        // A primary (0x11: power, lights) and a secondary (0x12: drive, sensors, matrix).
         processors: 2,
         full_turn_ms: 450,
         caps: SPHERO
@@ -309,6 +300,7 @@ pub const MODELS: [ModelSpec; 10] = [
             .with(Caps::IR)
             .with(Caps::RAW_MOTORS)
             .with(Caps::HOPS),
+        ..R2D2_ROW
     },
     ModelSpec {
         model: Model::Mini,
@@ -316,9 +308,6 @@ pub const MODELS: [ModelSpec; 10] = [
         aliases: &["spheromini"],
         advertised: Advertised::Prefix("SM-"),
         name: "Sphero Mini",
-        protocol: Protocol::SpheroV2,
-        pacing_ms: 120,
-        processors: 1,
         full_turn_ms: 500,
         caps: SPHERO
             .with(Caps::AIM)
@@ -326,6 +315,7 @@ pub const MODELS: [ModelSpec; 10] = [
             .with(Caps::SCALED_SPEED)
             .with(Caps::RAW_MOTORS)
             .with(Caps::HOPS),
+        ..R2D2_ROW
     },
     ModelSpec {
         model: Model::Rvr,
@@ -333,9 +323,7 @@ pub const MODELS: [ModelSpec; 10] = [
         aliases: &["spherorvr", "rvr+"],
         advertised: Advertised::Prefix("RV-"),
         name: "Sphero RVR",
-        protocol: Protocol::SpheroV2,
         pacing_ms: 75,
-        // A primary (0x11: power, lights, colour sensor) and a secondary (0x12: drive, sensors).
         processors: 2,
         full_turn_ms: 1500,
         caps: SPHERO
@@ -349,6 +337,7 @@ pub const MODELS: [ModelSpec; 10] = [
             .with(Caps::TARGETED)
             .with(Caps::STREAM_SERVICE)
             .with(Caps::NO_UNLOCK),
+        ..R2D2_ROW
     },
 ];
 
