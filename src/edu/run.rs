@@ -642,10 +642,14 @@ impl Player {
             ),
             Act::Matrix(m) => self.intend(line, Intent::Matrix(m.clone()), "matrix"),
             Act::Dome(deg) => {
-                let c = self.family.head(crate::units::HeadAngle::clamped(*deg));
-                match c {
-                    Some(c) => self.session.set(Slot::Head, c),
-                    None => self.warn(line, "setDomePosition: no dome".into()),
+                let head = Intent::Head(crate::units::HeadAngle::clamped(*deg));
+                match self.family.lower(self.model, &head) {
+                    Ok(cmds) => {
+                        for c in cmds {
+                            self.session.set(Slot::Head, c);
+                        }
+                    }
+                    Err(_) => self.warn(line, "setDomePosition: no dome".into()),
                 }
             }
             Act::Stance(s) => {

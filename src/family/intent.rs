@@ -202,8 +202,8 @@ pub enum Ir {
 }
 
 /// The commands of `intent` on `model` through the family's capability methods: what every
-/// family shares. A family lowers what is its own (v2's matrix and infrared, each family's
-/// stabilisation) and hands the rest here.
+/// family shares. A family lowers what is its own (v2's matrix, compass and infrared, each
+/// family's stabilisation) and hands the rest here.
 pub fn lower_common<F: Family + ?Sized>(
     f: &F,
     model: Model,
@@ -229,9 +229,9 @@ pub fn lower_common<F: Family + ?Sized>(
         Intent::Stance(a) => one(f.stance(*a)),
         Intent::Animation(id) => one(f.animation(model, *id)),
         Intent::Sound(id) => one(f.sound(model, *id)),
-        Intent::CalibrateCompass if !model.has(Caps::COMPASS) => None,
-        Intent::CalibrateCompass => one(f.calibrate_compass()),
-        Intent::Stabilization(_) | Intent::Matrix(_) | Intent::Ir(_) => None,
+        Intent::Stabilization(_) | Intent::Matrix(_) | Intent::Ir(_) | Intent::CalibrateCompass => {
+            None
+        }
     };
     out.ok_or_else(|| Unsupported::of(model, intent))
 }

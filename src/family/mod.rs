@@ -203,10 +203,6 @@ pub trait Family: Sync {
     fn aim_end(&self, _model: Model) -> Vec<Command> {
         Vec::new()
     }
-    /// What a `matrix` line draws (BOLT's LED matrix).
-    fn matrix(&self, _action: &crate::script::MatrixAction) -> Option<Command> {
-        None
-    }
     /// The commands of `intent` on `model` ([`intent`]); a family lowers what is its own and
     /// leaves the rest to [`intent::lower_common`], which builds from the methods above.
     fn lower(
@@ -218,10 +214,6 @@ pub trait Family: Sync {
     }
     /// Drive each track at `left`/`right` in −255..=255 (RVR's raw motors).
     fn tank(&self, _left: i16, _right: i16) -> Option<Command> {
-        None
-    }
-    /// Calibrate the compass to north; the droid answers with north's yaw (BOLT).
-    fn calibrate_compass(&self) -> Option<Command> {
         None
     }
     /// What `model` can stream and how fast ([`stream`]); `None` when the droid streams by

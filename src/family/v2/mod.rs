@@ -9,7 +9,7 @@ use super::{
     Codec, Command, DroidError, Explained, Family, Incoming, Key, Packet, PacketKind, ReadOption,
     ReadOptions, Reader,
 };
-use crate::family::intent::{self, Intent, Matrix, Unsupported};
+use crate::family::intent::{self, Intent, Unsupported};
 use crate::family::setup::SetupOptions;
 use crate::family::stream::{
     BLE_SENSOR_NOTIFICATIONS_PER_S, STANDARD_RATES, SensorGroup, SensorSet, StreamCaps, StreamPlan,
@@ -441,11 +441,8 @@ impl Family for V2 {
         ]
     }
 
-    fn matrix(&self, action: &crate::script::MatrixAction) -> Option<Command> {
-        Some(robots::matrix(&Matrix::from(action)))
-    }
-
-    /// v2's own: stabilisation, BOLT's matrix (and its main light), BOLT's and RVR's infrared.
+    /// v2's own: stabilisation, BOLT's matrix (and its main light) and compass, BOLT's and
+    /// RVR's infrared.
     fn lower(&self, model: Model, intent: &Intent) -> Result<Vec<Command>, Unsupported> {
         match intent {
             Intent::Stabilization(on) => Ok(vec![
@@ -457,6 +454,10 @@ impl Family for V2 {
                 .into(),
             ]),
             Intent::Matrix(m) if model.has_matrix() => Ok(vec![robots::matrix(m)]),
+            // The droid answers with north's yaw.
+            Intent::CalibrateCompass if model.has_compass() => {
+                Ok(vec![cmd::magnetometer_calibrate_to_north().into()])
+            }
             Intent::Ir(ir) if model.has(Caps::IR) => Ok(robots::infrared(model, ir)
                 .into_iter()
                 .map(Command::from)
@@ -474,10 +475,6 @@ impl Family for V2 {
 
     fn tank(&self, left: i16, right: i16) -> Option<Command> {
         Some(robots::tank(left, right))
-    }
-
-    fn calibrate_compass(&self) -> Option<Command> {
-        Some(cmd::magnetometer_calibrate_to_north().into())
     }
 
     fn stream_caps(&self, model: Model) -> Option<StreamCaps> {
