@@ -4,8 +4,9 @@
 
 pub mod csv;
 
+use crate::family::intent::Intent;
 use crate::family::{Command, Family};
-use crate::model::Model;
+use crate::model::{Caps, Model};
 use crate::protocol::notify::Notification;
 use crate::protocol::wire::{LegAction, LegState};
 use crate::script::{Action, Step};
@@ -166,20 +167,20 @@ pub fn validate(model: Model, steps: &[Step]) -> Result<(), Vec<crate::script::S
                     Some(format!("{name} has no compass"))
                 }
                 Action::Head(_) if !model.has_dome() => Some(format!("{name} has no dome to turn")),
-                Action::Animation(_) if family.animation(model, 0).is_none() => {
+                Action::Animation(_) if !model.has(Caps::ANIMATIONS) => {
                     Some(format!("{name} has no animations"))
                 }
-                Action::Sound(_) if family.sound(model, 0).is_none() => {
+                Action::Sound(_) if !model.has(Caps::ANIMATIONS) => {
                     Some(format!("{name} cannot play sounds"))
                 }
-                Action::Stream { .. } if family.stream_caps(model).is_none() => Some(format!(
+                Action::Stream { .. } if !model.has(Caps::STREAMING) => Some(format!(
                     "{name} streams by itself: its rate and sensors cannot be chosen"
                 )),
                 Action::Collision(c) if family.collision_detection(c).is_empty() => {
                     Some(format!("{name} has no collision detection to configure"))
                 }
                 a @ (Action::LedRgb(..) | Action::LedBrightness(..))
-                    if family.led(model, a).is_none() =>
+                    if Intent::of_action(a).is_none_or(|i| family.lower(model, &i).is_err()) =>
                 {
                     Some(format!("{name} has no such LED"))
                 }
@@ -206,18 +207,10 @@ pub fn led_command(model: Model, action: &Action) -> Option<Command> {
 /// Where a mission's steps, samples and warnings go.
 pub type Emit = Arc<dyn Fn(MissionEvent) + Send + Sync>;
 
-/// The command that drives `family`'s droid at `speed` toward `heading`. A steering robot
-/// (Robi 42) reads the heading as a turn relative to straight ahead: 0 straight, 1..=180 to
-/// the right (90 or more is full lock), 359..=180 to the left.
+/// The command that drives `family`'s droid at `speed` toward `heading` (a steering robot
+/// reads the heading as a turn: [`crate::family::intent::drive`]).
 pub fn drive_command(family: &dyn Family, speed: u8, heading: Heading) -> Command {
-    if family.steers() {
-        let d = heading.degrees() as f32;
-        let signed = if d > 180.0 { d - 360.0 } else { d };
-        if let Some(c) = family.steer(speed, (signed / 90.0).clamp(-1.0, 1.0)) {
-            return c;
-        }
-    }
-    family.drive(speed, heading, false)
+    crate::family::intent::drive(family, speed, heading, false)
 }
 
 struct Runner {
@@ -378,6 +371,20 @@ impl Runner {
         }
     }
 
+    /// A line that is an [`Intent`]: lowered by the droid's family and each command requested
+    /// in order. `false` when the model has no such thing (nothing is sent).
+    async fn lowered(&mut self, line: usize, a: &Action) -> bool {
+        let Some(Ok(cmds)) = Intent::of_action(a).map(|i| self.family.lower(self.model, &i)) else {
+            return false;
+        };
+        for c in cmds {
+            if !self.request(line, c).await {
+                break;
+            }
+        }
+        true
+    }
+
     async fn step(&mut self, s: &Step) {
         (self.emit)(MissionEvent::Step {
             t_ms: self.t_ms(),
@@ -438,37 +445,20 @@ impl Runner {
                     self.session.set(Slot::Head, c);
                 }
             }
-            Action::Animation(id) => {
-                if let Some(c) = self.family.animation(self.model, *id) {
-                    self.request(s.line, c).await;
-                }
-            }
-            Action::Sound(id) => {
-                if let Some(c) = self.family.sound(self.model, *id) {
-                    self.request(s.line, c).await;
-                }
+            a @ (Action::Animation(_) | Action::Sound(_)) => {
+                self.lowered(s.line, a).await;
             }
             a @ (Action::LedRgb(..) | Action::LedBrightness(..)) => {
-                match led_command(self.model, a) {
-                    Some(c) => {
-                        self.request(s.line, c).await;
-                    }
-                    None => self.warn(
+                if !self.lowered(s.line, a).await {
+                    self.warn(
                         Some(s.line),
                         format!("{} has no such LED", self.model.display_name()),
-                    ),
+                    );
                 }
             }
             Action::Wait(d) => self.hold(*d).await,
-            Action::Matrix(m) => {
-                if let Some(c) = self.family.matrix(m) {
-                    self.request(s.line, c).await;
-                }
-            }
-            Action::CalibrateCompass => {
-                if let Some(c) = self.family.calibrate_compass() {
-                    self.request(s.line, c).await;
-                }
+            a @ (Action::Matrix(_) | Action::CalibrateCompass) => {
+                self.lowered(s.line, a).await;
             }
             Action::Tank {
                 left,

@@ -1,5 +1,8 @@
-//! The droids droidctl knows (`droid-facts.md` §1): how to recognise them by advertised name,
-//! which protocol they speak, and how fast they may be written to.
+//! The droids droidctl knows (`droid-facts.md` §1): one row per model in [`MODELS`] — how to
+//! recognise it by advertised name, which protocol it speaks, how fast it may be written to,
+//! and what it can do ([`Caps`]). Everything that asks "can this droid …" (the key table's
+//! `Needs`, the Edu calls table, the bridge's capabilities, the families) reads the row, so
+//! adding a robot is adding its row here, not another arm in each of those places.
 
 use std::time::Duration;
 
@@ -29,15 +32,316 @@ pub enum Protocol {
     Rsrcp,
 }
 
-impl Model {
-    /// Sphero's rolling robots that raw motor power can throw off the floor (the balls and
-    /// Ollie; not RVR, the Star Wars droids' legs or Robi 42).
-    pub fn hops(self) -> bool {
-        matches!(
-            self,
-            Model::Bolt | Model::Mini | Model::BB8 | Model::SprkPlus | Model::Ollie
-        )
+/// What a model can do, as flags: a small hand-written bit set (no crate needed for a
+/// `u32`). A capability is a flag here and nowhere else; consumers ask [`Model::has`].
+#[derive(Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub struct Caps(u32);
+
+impl Caps {
+    pub const NONE: Caps = Caps(0);
+    /// R2's legs (stances, waddle).
+    pub const LEGS: Caps = Caps(1 << 0);
+    /// R2's rotating dome.
+    pub const DOME: Caps = Caps(1 << 1);
+    /// The Star Wars droids' animations and sounds (IO 0x17 `play_animation`,
+    /// `play_audio_file`); spherov2 binds neither to BOLT, Mini or RVR, which have no speaker.
+    pub const ANIMATIONS: Caps = Caps(1 << 2);
+    /// BOLT's 8×8 LED matrix.
+    pub const MATRIX: Caps = Caps(1 << 3);
+    /// A magnetometer to calibrate to north, and an ambient light sensor (BOLT).
+    pub const COMPASS: Caps = Caps(1 << 4);
+    /// Driven by its two tracks as well as by heading (RVR's raw motors).
+    pub const TRACKS: Caps = Caps(1 << 5);
+    /// A colour sensor underneath (RVR).
+    pub const COLOR_SENSOR: Caps = Caps(1 << 6);
+    /// Robot-to-robot infrared (BOLT, RVR; Sphero Edu's "Communications").
+    pub const IR: Caps = Caps(1 << 7);
+    /// A luminosity reading (BOLT, RVR).
+    pub const LIGHT_SENSOR: Caps = Caps(1 << 8);
+    /// An aim mode: back light, turn in place, set heading 0 (the rolling droids, BB-9E's
+    /// aiming LED, `droid-facts.md` §2).
+    pub const AIM: Caps = Caps(1 << 9);
+    /// Lights droidctl can set (the Sphero droids).
+    pub const LIGHTS: Caps = Caps(1 << 10);
+    /// A front light of its own (R2-D2, R2-Q5, BOLT, RVR, Mini).
+    pub const FRONT_LED: Caps = Caps(1 << 11);
+    /// BB-9E's dome lights.
+    pub const DOME_LIGHTS: Caps = Caps(1 << 12);
+    /// Rolls toward a heading, with a turbo, and can back up (the Sphero robots; Robi 42
+    /// only steers forward).
+    pub const HEADING: Caps = Caps(1 << 13);
+    /// Sensors streamed at a rate droidctl chooses (not Robi 42's own state frames).
+    pub const STREAMING: Caps = Caps(1 << 14);
+    /// Two motors droidctl drives raw (spherov2's `raw_motor`): BOLT, Mini, RVR and the API
+    /// v1 robots through their Set Raw Motors.
+    pub const RAW_MOTORS: Caps = Caps(1 << 15);
+    /// Raw motor power can throw it off the floor (the balls and Ollie; not RVR, the Star
+    /// Wars droids' legs or Robi 42).
+    pub const HOPS: Caps = Caps(1 << 16);
+    /// Every command must name its processor (RVR; spherov2's `_require_target`).
+    pub const TARGETED: Caps = Caps(1 << 17);
+    /// Sensors through the streaming service (tokens, periods) rather than masks (RVR).
+    pub const STREAM_SERVICE: Caps = Caps(1 << 18);
+    /// The main light is front and back at once (spherov2's `LedManager` on R2-D2, R2-Q5 and
+    /// BOLT: what Sphero Edu's front and back lights read after `setMainLed`).
+    pub const MAIN_FRONT_BACK: Caps = Caps(1 << 19);
+    /// Sphero Edu's speeds are scaled onto its range (spherov2's Mini: (speed ± 126) × 2⁄3).
+    pub const SCALED_SPEED: Caps = Caps(1 << 20);
+    /// Streams its locator and velocity a quarter turn from the other v1 droids' axes
+    /// (spherov2.py's Ollie: `protocol::v1::sensor::rotated_axes` has the sources).
+    pub const ROTATED_AXES: Caps = Caps(1 << 21);
+    /// Takes commands without the v2 anti-DoS unlock (RVR: spherov2.py's `toy/rvr.py`
+    /// writes none; `droid-facts.md` §6).
+    pub const NO_UNLOCK: Caps = Caps(1 << 22);
+
+    /// Every flag with its name, for `Debug` and documents.
+    pub const NAMED: [(Caps, &'static str); 23] = [
+        (Caps::LEGS, "legs"),
+        (Caps::DOME, "dome"),
+        (Caps::ANIMATIONS, "animations"),
+        (Caps::MATRIX, "matrix"),
+        (Caps::COMPASS, "compass"),
+        (Caps::TRACKS, "tracks"),
+        (Caps::COLOR_SENSOR, "color sensor"),
+        (Caps::IR, "infrared"),
+        (Caps::LIGHT_SENSOR, "light sensor"),
+        (Caps::AIM, "aim"),
+        (Caps::LIGHTS, "lights"),
+        (Caps::FRONT_LED, "front led"),
+        (Caps::DOME_LIGHTS, "dome lights"),
+        (Caps::HEADING, "heading"),
+        (Caps::STREAMING, "streaming"),
+        (Caps::RAW_MOTORS, "raw motors"),
+        (Caps::HOPS, "hops"),
+        (Caps::TARGETED, "targeted"),
+        (Caps::STREAM_SERVICE, "stream service"),
+        (Caps::MAIN_FRONT_BACK, "main is front and back"),
+        (Caps::SCALED_SPEED, "scaled speed"),
+        (Caps::ROTATED_AXES, "rotated axes"),
+        (Caps::NO_UNLOCK, "no unlock"),
+    ];
+
+    /// Both sets' flags (usable in the `const` table).
+    pub const fn with(self, other: Caps) -> Caps {
+        Caps(self.0 | other.0)
     }
+
+    /// Whether every flag of `other` is set.
+    pub const fn contains(self, other: Caps) -> bool {
+        self.0 & other.0 == other.0
+    }
+}
+
+impl std::ops::BitOr for Caps {
+    type Output = Caps;
+    fn bitor(self, rhs: Caps) -> Caps {
+        self.with(rhs)
+    }
+}
+
+impl std::fmt::Debug for Caps {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let names: Vec<&str> = Caps::NAMED
+            .iter()
+            .filter(|(c, _)| self.contains(*c))
+            .map(|(_, n)| *n)
+            .collect();
+        write!(f, "Caps({})", names.join(" | "))
+    }
+}
+
+/// How a model shows itself in a scan.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Advertised {
+    /// Its advertised name starts with this (`D2-1234`).
+    Prefix(&'static str),
+    /// Its advertised name is exactly this (Robi 42's full local name).
+    Name(&'static str),
+}
+
+/// One row of the model table.
+#[derive(Debug, Clone, Copy)]
+pub struct ModelSpec {
+    pub model: Model,
+    /// Short lower-case id ([`Model::id`]).
+    pub id: &'static str,
+    /// Other spellings people type for it, lower case without `-`, `_` and spaces.
+    pub aliases: &'static [&'static str],
+    pub advertised: Advertised,
+    /// The name for people.
+    pub name: &'static str,
+    pub protocol: Protocol,
+    /// Minimum interval between writes, ms ([`Model::write_pacing`]).
+    pub pacing_ms: u64,
+    /// How many processors take commands ([`Model::processors`]).
+    pub processors: u8,
+    /// The least time a full turn in place takes, ms (spherov2's `spin`, which Sphero Edu's
+    /// `spin` follows).
+    pub full_turn_ms: u16,
+    pub caps: Caps,
+}
+
+/// What every Sphero robot has (not Robi 42).
+const SPHERO: Caps = Caps::LIGHTS.with(Caps::HEADING).with(Caps::STREAMING);
+/// R2-D2 and R2-Q5.
+const R2: Caps = SPHERO
+    .with(Caps::MAIN_FRONT_BACK)
+    .with(Caps::LEGS)
+    .with(Caps::DOME)
+    .with(Caps::ANIMATIONS)
+    .with(Caps::FRONT_LED);
+/// The API v1 balls and Ollie.
+const V1_BALL: Caps = SPHERO
+    .with(Caps::AIM)
+    .with(Caps::RAW_MOTORS)
+    .with(Caps::HOPS);
+
+/// R2-D2's row, which the other API v2 rows change.
+const R2D2_ROW: ModelSpec = ModelSpec {
+    model: Model::R2D2,
+    id: "r2d2",
+    aliases: &[],
+    advertised: Advertised::Prefix("D2-"),
+    name: "R2-D2",
+    protocol: Protocol::SpheroV2,
+    pacing_ms: 120,
+    processors: 1,
+    full_turn_ms: 700,
+    caps: R2,
+};
+
+/// BB-8's row, which the other API v1 rows change.
+const BB8_ROW: ModelSpec = ModelSpec {
+    model: Model::BB8,
+    id: "bb8",
+    aliases: &[],
+    advertised: Advertised::Prefix("BB-"),
+    name: "BB-8",
+    protocol: Protocol::SpheroV1,
+    pacing_ms: 60,
+    processors: 1,
+    full_turn_ms: 450,
+    caps: V1_BALL,
+};
+
+/// The model table, in [`Model::ALL`]'s order (a test holds the two together). Pacing is
+/// the reference clients' minimum write interval (`droid-facts.md` §1; spherov2.py's
+/// `cmd_safe_interval` for BOLT, RVR and Mini, §6): only a default, configurable. BOLT and
+/// RVR have a primary processor (0x11: power, lights, RVR's colour sensor) and a secondary
+/// (0x12: drive, sensors, BOLT's matrix).
+pub const MODELS: [ModelSpec; 10] = [
+    R2D2_ROW,
+    ModelSpec {
+        model: Model::R2Q5,
+        id: "r2q5",
+        advertised: Advertised::Prefix("Q5-"),
+        name: "R2-Q5",
+        ..R2D2_ROW
+    },
+    ModelSpec {
+        model: Model::BB9E,
+        id: "bb9e",
+        advertised: Advertised::Prefix("GB-"),
+        name: "BB-9E",
+        full_turn_ms: 450,
+        caps: SPHERO
+            .with(Caps::ANIMATIONS)
+            .with(Caps::AIM)
+            .with(Caps::DOME_LIGHTS),
+        ..R2D2_ROW
+    },
+    BB8_ROW,
+    ModelSpec {
+        model: Model::SprkPlus,
+        id: "sprk",
+        aliases: &["sprkplus", "sprk+"],
+        advertised: Advertised::Prefix("SK-"),
+        name: "SPRK+",
+        ..BB8_ROW
+    },
+    ModelSpec {
+        model: Model::Ollie,
+        id: "ollie",
+        advertised: Advertised::Prefix("2B-"),
+        name: "Ollie",
+        full_turn_ms: 600,
+        caps: V1_BALL.with(Caps::ROTATED_AXES),
+        ..BB8_ROW
+    },
+    ModelSpec {
+        model: Model::Robi42,
+        // Earlier versions wrote `robi42`, which [`Model::from_id`] still reads.
+        id: "robi",
+        aliases: &["robi42"],
+        advertised: Advertised::Name("Robi 42"),
+        name: "Robi 42",
+        protocol: Protocol::Rsrcp,
+        pacing_ms: 20,
+        processors: 1,
+        full_turn_ms: 450,
+        caps: Caps::NONE,
+    },
+    ModelSpec {
+        model: Model::Bolt,
+        id: "bolt",
+        aliases: &["boltplus", "bolt+", "spherobolt"],
+        advertised: Advertised::Prefix("SB-"),
+        name: "Sphero BOLT",
+        pacing_ms: 75,
+        processors: 2,
+        full_turn_ms: 450,
+        caps: SPHERO
+            .with(Caps::AIM)
+            .with(Caps::FRONT_LED)
+            .with(Caps::MAIN_FRONT_BACK)
+            .with(Caps::MATRIX)
+            .with(Caps::COMPASS)
+            .with(Caps::LIGHT_SENSOR)
+            .with(Caps::IR)
+            .with(Caps::RAW_MOTORS)
+            .with(Caps::HOPS),
+        ..R2D2_ROW
+    },
+    ModelSpec {
+        model: Model::Mini,
+        id: "mini",
+        aliases: &["spheromini"],
+        advertised: Advertised::Prefix("SM-"),
+        name: "Sphero Mini",
+        full_turn_ms: 500,
+        caps: SPHERO
+            .with(Caps::AIM)
+            .with(Caps::FRONT_LED)
+            .with(Caps::SCALED_SPEED)
+            .with(Caps::RAW_MOTORS)
+            .with(Caps::HOPS),
+        ..R2D2_ROW
+    },
+    ModelSpec {
+        model: Model::Rvr,
+        id: "rvr",
+        aliases: &["spherorvr", "rvr+"],
+        advertised: Advertised::Prefix("RV-"),
+        name: "Sphero RVR",
+        pacing_ms: 75,
+        processors: 2,
+        full_turn_ms: 1500,
+        caps: SPHERO
+            .with(Caps::AIM)
+            .with(Caps::FRONT_LED)
+            .with(Caps::TRACKS)
+            .with(Caps::COLOR_SENSOR)
+            .with(Caps::LIGHT_SENSOR)
+            .with(Caps::IR)
+            .with(Caps::RAW_MOTORS)
+            .with(Caps::TARGETED)
+            .with(Caps::STREAM_SERVICE)
+            .with(Caps::NO_UNLOCK),
+        ..R2D2_ROW
+    },
+];
+
+impl Model {
     pub const ALL: [Model; 10] = [
         Model::R2D2,
         Model::R2Q5,
@@ -51,86 +355,82 @@ impl Model {
         Model::Rvr,
     ];
 
+    /// The model droidctl assumes when none is named (a simulator without a model, a
+    /// placeholder droid before one is chosen).
+    pub const DEFAULT: Model = Model::R2D2;
+
+    /// The first model of the table that speaks `protocol`: its family's representative, for
+    /// a capture that names only the family.
+    pub fn first_speaking(protocol: Protocol) -> Model {
+        MODELS
+            .iter()
+            .find(|s| s.protocol == protocol)
+            .map_or(Model::DEFAULT, |s| s.model)
+    }
+
+    /// This model's row of [`MODELS`].
+    pub const fn spec(self) -> &'static ModelSpec {
+        &MODELS[self as usize]
+    }
+
+    /// What the model can do.
+    pub const fn caps(self) -> Caps {
+        self.spec().caps
+    }
+
+    /// Whether the model has every capability in `caps`.
+    pub const fn has(self, caps: Caps) -> bool {
+        self.caps().contains(caps)
+    }
+
+    /// Sphero's rolling robots that raw motor power can throw off the floor.
+    pub fn hops(self) -> bool {
+        self.has(Caps::HOPS)
+    }
+
     /// Recognise a model from its advertised BLE name (`D2-1234` → R2-D2).
     pub fn from_advertised_name(name: &str) -> Option<Model> {
         let n = name.trim();
-        if n == "Robi 42" {
-            return Some(Model::Robi42);
-        }
-        Model::ALL
-            .into_iter()
-            .find(|m| m.name_prefix().is_some_and(|p| n.starts_with(p)))
+        MODELS
+            .iter()
+            .find(|s| match s.advertised {
+                Advertised::Prefix(p) => n.starts_with(p),
+                Advertised::Name(full) => n == full,
+            })
+            .map(|s| s.model)
     }
 
     /// The advertised-name prefix (`None` for Robi 42, which uses a full local name).
     pub fn name_prefix(self) -> Option<&'static str> {
-        match self {
-            Model::R2D2 => Some("D2-"),
-            Model::R2Q5 => Some("Q5-"),
-            Model::BB9E => Some("GB-"),
-            Model::BB8 => Some("BB-"),
-            Model::SprkPlus => Some("SK-"),
-            Model::Ollie => Some("2B-"),
-            Model::Robi42 => None,
-            Model::Bolt => Some("SB-"),
-            Model::Mini => Some("SM-"),
-            Model::Rvr => Some("RV-"),
+        match self.spec().advertised {
+            Advertised::Prefix(p) => Some(p),
+            Advertised::Name(_) => None,
         }
     }
 
     pub fn display_name(self) -> &'static str {
-        match self {
-            Model::R2D2 => "R2-D2",
-            Model::R2Q5 => "R2-Q5",
-            Model::BB9E => "BB-9E",
-            Model::BB8 => "BB-8",
-            Model::SprkPlus => "SPRK+",
-            Model::Ollie => "Ollie",
-            Model::Robi42 => "Robi 42",
-            Model::Bolt => "Sphero BOLT",
-            Model::Mini => "Sphero Mini",
-            Model::Rvr => "Sphero RVR",
-        }
+        self.spec().name
     }
 
     /// Short lower-case id: what the command line takes (`--sim r2d2`), what every document
-    /// says, and what captures and JSON outputs name the model with. Robi 42's is `robi`
-    /// (earlier versions wrote `robi42`, which [`Model::from_id`] still reads).
+    /// says, and what captures and JSON outputs name the model with.
     pub fn id(self) -> &'static str {
-        match self {
-            Model::R2D2 => "r2d2",
-            Model::R2Q5 => "r2q5",
-            Model::BB9E => "bb9e",
-            Model::BB8 => "bb8",
-            Model::SprkPlus => "sprk",
-            Model::Ollie => "ollie",
-            Model::Robi42 => "robi",
-            Model::Bolt => "bolt",
-            Model::Mini => "mini",
-            Model::Rvr => "rvr",
-        }
+        self.spec().id
     }
 
     /// The model an id names: its [`Model::id`], its display name in any case, with or
-    /// without `-`, `_` and spaces (`R2-D2`, `Robi 42`), or a short form people type.
+    /// without `-`, `_` and spaces (`R2-D2`, `Robi 42`), or a short form people type (the
+    /// row's aliases).
     pub fn from_id(id: &str) -> Option<Model> {
         let id = id.trim().to_ascii_lowercase().replace(['-', '_', ' '], "");
-        // Short forms people type.
-        let id = match id.as_str() {
-            "robi42" => "robi".to_string(),
-            "sprkplus" | "sprk+" => "sprk".to_string(),
-            "boltplus" | "bolt+" | "spherobolt" => "bolt".to_string(),
-            "spherorvr" | "rvr+" => "rvr".to_string(),
-            "spheromini" => "mini".to_string(),
-            _ => id,
-        };
-        Model::ALL.into_iter().find(|m| {
-            m.id() == id
-                || m.display_name()
-                    .to_ascii_lowercase()
-                    .replace(['-', ' '], "")
-                    == id
-        })
+        MODELS
+            .iter()
+            .find(|s| {
+                s.id == id
+                    || s.aliases.contains(&id.as_str())
+                    || s.name.to_ascii_lowercase().replace(['-', ' '], "") == id
+            })
+            .map(|s| s.model)
     }
 
     /// Every model's id, in the table's order, for messages: `r2d2, r2q5, …, rvr`.
@@ -146,35 +446,18 @@ impl Model {
     }
 
     pub fn protocol(self) -> Protocol {
-        match self {
-            Model::R2D2 | Model::R2Q5 | Model::BB9E | Model::Bolt | Model::Mini | Model::Rvr => {
-                Protocol::SpheroV2
-            }
-            Model::BB8 | Model::SprkPlus | Model::Ollie => Protocol::SpheroV1,
-            Model::Robi42 => Protocol::Rsrcp,
-        }
+        self.spec().protocol
     }
 
     /// Minimum interval between writes used by reference clients (`droid-facts.md` §1).
     /// One client uses 12 ms for R2-D2: this is only a default, configurable.
     pub fn write_pacing(self) -> Duration {
-        match self {
-            // spherov2.py's `cmd_safe_interval` (`droid-facts.md` §6): BOLT and RVR 75 ms,
-            // Mini 120 ms.
-            Model::Bolt | Model::Rvr => return Duration::from_millis(75),
-            Model::Mini => return Duration::from_millis(120),
-            _ => {}
-        }
-        match self.protocol() {
-            Protocol::SpheroV2 => Duration::from_millis(120),
-            Protocol::SpheroV1 => Duration::from_millis(60),
-            Protocol::Rsrcp => Duration::from_millis(20),
-        }
+        Duration::from_millis(self.spec().pacing_ms)
     }
 
     /// Whether the droid has R2's legs (stances).
     pub fn has_legs(self) -> bool {
-        matches!(self, Model::R2D2 | Model::R2Q5)
+        self.has(Caps::LEGS)
     }
 
     /// Reports its state as RSRCP frames (motor speeds, poti, buttons, lamps, piezo) rather
@@ -188,76 +471,83 @@ impl Model {
         true
     }
 
-    /// A rolling droid with an aim mode (back light, turn in place, set heading 0): BB-8,
-    /// SPRK+, Ollie, and BB-9E (its aiming LED, `droid-facts.md` §2).
+    /// A rolling droid with an aim mode (back light, turn in place, set heading 0).
     pub fn can_aim(self) -> bool {
-        matches!(
-            self,
-            Model::BB8
-                | Model::SprkPlus
-                | Model::Ollie
-                | Model::BB9E
-                | Model::Bolt
-                | Model::Mini
-                | Model::Rvr
-        )
+        self.has(Caps::AIM)
+    }
+
+    /// The least time a full turn in place takes (spherov2's `spin`).
+    pub fn full_turn(self) -> Duration {
+        Duration::from_millis(self.spec().full_turn_ms.into())
     }
 
     /// How many processors take commands: BOLT and RVR have a primary (0x11: power, lights,
     /// RVR's colour sensor) and a secondary (0x12: drive, sensors, BOLT's matrix); the others
     /// one, addressed without a target (`droid-facts.md` §6).
     pub fn processors(self) -> u8 {
-        match self {
-            Model::Bolt | Model::Rvr => 2,
-            _ => 1,
-        }
+        self.spec().processors
     }
 
     /// Whether every command must name its processor (RVR; spherov2's `_require_target`).
     pub fn requires_target(self) -> bool {
-        self == Model::Rvr
+        self.has(Caps::TARGETED)
     }
 
     /// BOLT's 8×8 LED matrix.
     pub fn has_matrix(self) -> bool {
-        self == Model::Bolt
+        self.has(Caps::MATRIX)
     }
 
     /// A magnetometer to calibrate to north, and an ambient light sensor (BOLT).
     pub fn has_compass(self) -> bool {
-        self == Model::Bolt
+        self.has(Caps::COMPASS)
     }
 
     /// Driven by its two tracks as well as by heading (RVR's raw motors).
     pub fn has_tracks(self) -> bool {
-        self == Model::Rvr
+        self.has(Caps::TRACKS)
     }
 
     /// Sensors through the streaming service (tokens, periods) rather than masks (RVR).
     pub fn streams_by_service(self) -> bool {
-        self == Model::Rvr
+        self.has(Caps::STREAM_SERVICE)
     }
 
     /// A colour sensor underneath (RVR).
     pub fn has_color_sensor(self) -> bool {
-        self == Model::Rvr
+        self.has(Caps::COLOR_SENSOR)
     }
 
-    /// The Star Wars droids' animations and sounds (IO 0x17 `play_animation`,
-    /// `play_audio_file`); spherov2 binds neither to BOLT, Mini or RVR, which have no speaker.
+    /// The Star Wars droids' animations and sounds.
     pub fn plays_animations(self) -> bool {
-        matches!(self, Model::R2D2 | Model::R2Q5 | Model::BB9E)
+        self.has(Caps::ANIMATIONS)
     }
 
     /// Whether the droid has R2's rotating dome.
     pub fn has_dome(self) -> bool {
-        matches!(self, Model::R2D2 | Model::R2Q5)
+        self.has(Caps::DOME)
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_table_is_in_all_order() {
+        for (i, m) in Model::ALL.into_iter().enumerate() {
+            assert_eq!(MODELS[i].model, m);
+            assert_eq!(m.spec().model, m);
+        }
+        let mut ids: Vec<&str> = MODELS.iter().map(|s| s.id).collect();
+        ids.sort_unstable();
+        ids.dedup();
+        assert_eq!(ids.len(), MODELS.len(), "ids are unique");
+        assert_eq!(
+            format!("{:?}", Caps::LEGS | Caps::DOME),
+            "Caps(legs | dome)"
+        );
+    }
 
     #[test]
     fn names_to_models() {

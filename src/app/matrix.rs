@@ -128,10 +128,13 @@ impl App {
             }
             Action::Calibrate => {
                 let chosen = self.chosen();
-                match self.io[chosen].family.calibrate_compass() {
-                    Some(c) if model.has_compass() => {
+                let calibrate = crate::family::intent::Intent::CalibrateCompass;
+                match self.io[chosen].family.lower(model, &calibrate) {
+                    Ok(cmds) => {
                         if let Some(mut d) = self.droid(chosen) {
-                            d.send(c, "compass calibration");
+                            for c in cmds {
+                                d.send(c, "compass calibration");
+                            }
                         }
                         self.hint("calibrating the compass: north is reported when done");
                     }
@@ -152,8 +155,11 @@ impl App {
         if matches!(d.view.matrix.shows, MatrixShows::Unknown) {
             d.view.matrix.shows = MatrixShows::Fill;
         }
-        if let Some(c) = d.io.family.matrix(&action) {
-            d.send(c, "matrix");
+        let draw = crate::family::intent::Intent::Matrix((&action).into());
+        if let Ok(cmds) = d.io.family.lower(d.view.model, &draw) {
+            for c in cmds {
+                d.send(c, "matrix");
+            }
         }
     }
 

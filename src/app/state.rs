@@ -262,7 +262,7 @@ impl AppState {
     /// R2-D2 rather than a panic).
     pub fn for_droids(mut droids: Vec<DroidState>) -> Self {
         if droids.is_empty() {
-            droids.push(DroidState::new(Model::R2D2, String::new()));
+            droids.push(DroidState::new(Model::DEFAULT, String::new()));
         }
         AppState {
             now: Duration::ZERO,

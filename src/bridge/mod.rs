@@ -119,31 +119,54 @@ struct DroidState {
     setup: crate::family::setup::SetupOptions,
 }
 
-/// What droid `model` can do, in the words of an `unsupported` error's `capability`.
-pub fn capabilities(model: Model) -> Vec<&'static str> {
-    use crate::script::{Action, LedGroup};
-    let family = crate::family::for_model(model);
-    let lights = [
-        LedGroup::Front,
-        LedGroup::Back,
-        LedGroup::Logic,
-        LedGroup::Holo,
-    ]
-    .iter()
-    .any(|g| family.led(model, &Action::LedRgb(*g, [0, 0, 0])).is_some());
+/// The bridge's capability words, each with the flags of the model table it stands for
+/// (an `unsupported` error's `capability` is one of these words).
+pub const CAPABILITY_WORDS: [(&str, crate::model::Caps); 8] = {
+    use crate::model::Caps;
     [
-        ("dome", model.has_dome()),
-        ("legs", model.has_legs()),
-        ("lights", lights),
-        ("animations", family.animation(model, 0).is_some()),
-        ("sounds", family.sound(model, 0).is_some()),
-        ("matrix", model.has_matrix()),
-        ("streaming", family.stream_caps(model).is_some()),
-        ("reverse", family.can_reverse()),
+        ("dome", Caps::DOME),
+        ("legs", Caps::LEGS),
+        ("lights", Caps::LIGHTS),
+        ("animations", Caps::ANIMATIONS),
+        ("sounds", Caps::ANIMATIONS),
+        ("matrix", Caps::MATRIX),
+        ("streaming", Caps::STREAMING),
+        ("reverse", Caps::HEADING),
     ]
-    .into_iter()
-    .filter_map(|(c, has)| has.then_some(c))
-    .collect()
+};
+
+/// What droid `model` can do, in the words of an `unsupported` error's `capability`: read
+/// from the model table, not probed from the family.
+pub fn capabilities(model: Model) -> Vec<&'static str> {
+    CAPABILITY_WORDS
+        .into_iter()
+        .filter_map(|(word, caps)| model.has(caps).then_some(word))
+        .collect()
+}
+
+/// Why a droid refuses a command its family cannot lower: the capability word and what the
+/// droid lacks, as an `unsupported` error says them.
+fn refusal(cmd: &Cmd) -> (&'static str, String) {
+    use crate::script::{Action, LedGroup};
+    match cmd {
+        Cmd::Head(_) => ("dome", "has no dome to turn".into()),
+        Cmd::Stance(_) => ("legs", "has no legs to change stance".into()),
+        Cmd::Lights(a) => {
+            let (group, kind) = match a {
+                Action::LedRgb(g, _) => (*g, "colour"),
+                Action::LedBrightness(g, _) => (*g, "brightness"),
+                _ => (LedGroup::Front, "brightness"),
+            };
+            (
+                "lights",
+                format!("has no {} light to set by {kind}", group_name(group)),
+            )
+        }
+        Cmd::Animation(_) => ("animations", "has no animations".into()),
+        Cmd::Sound(_) => ("sounds", "cannot play sounds".into()),
+        Cmd::Matrix(_) => ("matrix", "has no LED matrix".into()),
+        _ => ("", String::new()),
+    }
 }
 
 /// New samples a second droid `model` offers with `setup`: the bridge's rate `hz`, or its
@@ -459,48 +482,29 @@ impl Bridge {
                 self.stop_here(i);
             }
             Cmd::Estop => {}
-            Cmd::Head(a) => match family.head(*a).filter(|_| model.has_dome()) {
-                Some(c) => self
-                    .fleet
-                    .members()
-                    .get(i)
-                    .map_or((), |m| m.session.set(Slot::Head, c)),
-                None => return unsupported("dome", "has no dome to turn".into()),
-            },
-            Cmd::Stance(a) => match family.stance(*a).filter(|_| model.has_legs()) {
-                Some(c) => return self.request(req, i, vec![c], None),
-                None => return unsupported("legs", "has no legs to change stance".into()),
-            },
-            Cmd::Lights(a) => match family.led(model, a) {
-                Some(c) => return self.request(req, i, vec![c], None),
-                None => {
-                    let group = match a {
-                        crate::script::Action::LedRgb(g, _)
-                        | crate::script::Action::LedBrightness(g, _) => g,
-                        _ => &crate::script::LedGroup::Front,
-                    };
-                    let kind = match a {
-                        crate::script::Action::LedRgb(..) => "colour",
-                        _ => "brightness",
-                    };
-                    return unsupported(
-                        "lights",
-                        format!("has no {} light to set by {kind}", group_name(*group)),
-                    );
+            Cmd::Head(_)
+            | Cmd::Stance(_)
+            | Cmd::Lights(_)
+            | Cmd::Animation(_)
+            | Cmd::Sound(_)
+            | Cmd::Matrix(_) => {
+                let lowered = req
+                    .cmd
+                    .intent()
+                    .and_then(|intent| family.lower(model, &intent).ok());
+                let Some(cmds) = lowered else {
+                    let (capability, what) = refusal(&req.cmd);
+                    return unsupported(capability, what);
+                };
+                if !matches!(req.cmd, Cmd::Head(_)) {
+                    return self.request(req, i, cmds, None);
                 }
-            },
-            Cmd::Animation(id) => match family.animation(model, *id) {
-                Some(c) => return self.request(req, i, vec![c], None),
-                None => return unsupported("animations", "has no animations".into()),
-            },
-            Cmd::Sound(id) => match family.sound(model, *id) {
-                Some(c) => return self.request(req, i, vec![c], None),
-                None => return unsupported("sounds", "cannot play sounds".into()),
-            },
-            Cmd::Matrix(a) => match family.matrix(a).filter(|_| model.has_matrix()) {
-                Some(c) => return self.request(req, i, vec![c], None),
-                None => return unsupported("matrix", "has no LED matrix".into()),
-            },
+                if let Some(m) = self.fleet.members().get(i) {
+                    for c in cmds {
+                        m.session.set(Slot::Head, c);
+                    }
+                }
+            }
             Cmd::Stream { rate_hz, sensors } => {
                 let ask = crate::tuning::StreamRequest {
                     rate_hz: *rate_hz,

@@ -72,6 +72,23 @@ pub enum Cmd {
 }
 
 impl Cmd {
+    /// What the command asks of the droid as the families' one vocabulary, for the commands
+    /// that are one (`None`: driving, stopping and streaming, which the bridge runs itself).
+    pub fn intent(&self) -> Option<crate::family::intent::Intent> {
+        use crate::family::intent::{Intent, Matrix};
+        Some(match self {
+            Cmd::Head(a) => Intent::Head(*a),
+            Cmd::Stance(a) => Intent::Stance(*a),
+            Cmd::Lights(a) => Intent::of_action(a)?,
+            Cmd::Animation(id) => Intent::Animation(*id),
+            Cmd::Sound(id) => Intent::Sound(*id),
+            Cmd::Matrix(m) => Intent::Matrix(Matrix::from(m)),
+            Cmd::Drive { .. } | Cmd::Twist { .. } | Cmd::Stop | Cmd::Estop | Cmd::Stream { .. } => {
+                return None;
+            }
+        })
+    }
+
     /// The verb as written.
     pub fn verb(&self) -> &'static str {
         match self {

@@ -593,3 +593,35 @@ fn a_dome_angle_out_of_range_names_one_range() {
     }
     assert!(schema::parse(br#"{"v":1,"cmd":"head","angle":-160}"#).is_ok());
 }
+
+/// The bridge's capabilities, read from the model table, agree with what each family can
+/// build for the model (the probe `capabilities` used to make with dummy commands).
+#[test]
+fn capabilities_agree_with_the_families() {
+    use crate::script::{Action, LedGroup};
+    for model in Model::ALL {
+        let family = crate::family::for_model(model);
+        let lights = [
+            LedGroup::Front,
+            LedGroup::Back,
+            LedGroup::Logic,
+            LedGroup::Holo,
+        ]
+        .iter()
+        .any(|g| family.led(model, &Action::LedRgb(*g, [0, 0, 0])).is_some());
+        let probed: Vec<&str> = [
+            ("dome", model.has_dome()),
+            ("legs", model.has_legs()),
+            ("lights", lights),
+            ("animations", family.animation(model, 0).is_some()),
+            ("sounds", family.sound(model, 0).is_some()),
+            ("matrix", model.has_matrix()),
+            ("streaming", family.stream_caps(model).is_some()),
+            ("reverse", family.can_reverse()),
+        ]
+        .into_iter()
+        .filter_map(|(c, has)| has.then_some(c))
+        .collect();
+        assert_eq!(super::capabilities(model), probed, "{model:?}");
+    }
+}

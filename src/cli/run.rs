@@ -85,7 +85,7 @@ pub(super) fn resolve(args: &RunArgs) -> Result<(PathBuf, Vec<Model>), CliError>
             }
             None if script.is_none() => {
                 script = Some(PathBuf::from(m));
-                vec![Model::R2D2]
+                vec![Model::DEFAULT]
             }
             None => {
                 return Err(CliError::usage(

@@ -69,7 +69,7 @@ pub fn listen_addr(s: &str, port: u16) -> Result<SocketAddr, String> {
 /// The simulated models asked for: none given is one R2-D2.
 fn sim_models(ids: &[String]) -> Result<Vec<Model>, CliError> {
     if ids.is_empty() {
-        return Ok(vec![Model::R2D2]);
+        return Ok(vec![Model::DEFAULT]);
     }
     ids.iter()
         .map(|m| match Model::from_id(m) {

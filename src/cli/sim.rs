@@ -92,7 +92,7 @@ fn check(args: &SimArgs) -> Result<Plan, CliError> {
     let mut models = models_of(&args.models)?;
     let remembered = models_of(&args.remembered)?;
     if models.is_empty() {
-        models.push(Model::R2D2);
+        models.push(Model::DEFAULT);
     }
     const MAX: usize = 16;
     if models.len() + remembered.len() > MAX {

@@ -223,19 +223,30 @@ pub enum Needs {
 impl Needs {
     /// Whether a key needing this applies to `model` (`fleet`: several droids are driven).
     pub fn applies(self, model: crate::model::Model, fleet: bool) -> bool {
-        use crate::model::Protocol;
-        match self {
-            Needs::All => true,
-            Needs::Fleet => fleet,
-            Needs::Dome => model.has_dome(),
-            Needs::Legs => model.has_legs(),
-            Needs::Turbo | Needs::Lights => model.protocol() != Protocol::Rsrcp,
-            Needs::Aim => model.can_aim(),
-            Needs::Animations => model.plays_animations(),
-            Needs::Tracks => model.has_tracks(),
-            Needs::Matrix => model.has_matrix(),
-            Needs::Compass => model.has_compass(),
+        match (self, self.caps()) {
+            (Needs::Fleet, _) => fleet,
+            (_, Some(caps)) => model.has(caps),
+            (_, None) => true,
         }
+    }
+
+    /// The capabilities of the model table a key needing this asks for (`None`: every droid,
+    /// or not a droid's capability at all: [`Needs::Fleet`]).
+    pub fn caps(self) -> Option<crate::model::Caps> {
+        use crate::model::Caps;
+        Some(match self {
+            Needs::All | Needs::Fleet => return None,
+            Needs::Dome => Caps::DOME,
+            Needs::Legs => Caps::LEGS,
+            // A turbo and settable lights: every Sphero droid (Robi has neither).
+            Needs::Turbo => Caps::HEADING,
+            Needs::Lights => Caps::LIGHTS,
+            Needs::Aim => Caps::AIM,
+            Needs::Animations => Caps::ANIMATIONS,
+            Needs::Tracks => Caps::TRACKS,
+            Needs::Matrix => Caps::MATRIX,
+            Needs::Compass => Caps::COMPASS,
+        })
     }
 }
 
@@ -644,6 +655,36 @@ fn unknown_action(key: &str, ctx: Context) -> (String, String) {
 mod tests {
     use super::*;
     use crate::config::Config;
+
+    /// `Needs` reads the model table; this is what it spelled out before, so a row that
+    /// changes which keys apply shows here.
+    #[test]
+    fn needs_agree_with_the_model_table() {
+        use crate::model::{Model, Protocol};
+        for m in Model::ALL {
+            let sphero = m.protocol() != Protocol::Rsrcp;
+            let r2 = matches!(m, Model::R2D2 | Model::R2Q5);
+            let spelled = [
+                (Needs::All, true),
+                (Needs::Dome, r2),
+                (Needs::Legs, r2),
+                (Needs::Turbo, sphero),
+                (Needs::Lights, sphero),
+                (Needs::Aim, sphero && !r2),
+                (
+                    Needs::Animations,
+                    matches!(m, Model::R2D2 | Model::R2Q5 | Model::BB9E),
+                ),
+                (Needs::Tracks, m == Model::Rvr),
+                (Needs::Matrix, m == Model::Bolt),
+                (Needs::Compass, m == Model::Bolt),
+            ];
+            for (needs, applies) in spelled {
+                assert_eq!(needs.applies(m, false), applies, "{needs:?} on {m:?}");
+            }
+            assert!(Needs::Fleet.applies(m, true) && !Needs::Fleet.applies(m, false));
+        }
+    }
 
     #[test]
     fn parses_key_names() {

@@ -12,7 +12,7 @@
 //! Ollie, 1.5 on RVR); `fade` steps the main light; `strobe` starts dark.
 
 use super::timeline::{Steps, Timeline};
-use crate::model::Model;
+use crate::model::{Caps, Model};
 use crate::protocol::wire::LegAction;
 use std::time::Duration;
 
@@ -23,43 +23,14 @@ pub enum Arg {
     Text(String),
 }
 
-/// What BOLT's matrix draws.
-#[derive(Debug, Clone, PartialEq)]
-pub enum Matrix {
-    Char(char, [u8; 3]),
-    Text {
-        text: String,
-        rgb: [u8; 3],
-        fps: u8,
-    },
-    Pixel(u8, u8, [u8; 3]),
-    Line([u8; 4], [u8; 3]),
-    Fill([u8; 4], [u8; 3]),
-    Clear,
-    Rotate(u16),
-    /// A frame to keep: its index and palette indexes `[y][x]` (spherov2's
-    /// `save_compressed_frame_player64_bit_frame`).
-    SaveFrame(u16, [[u8; 8]; 8]),
-    /// An animation to keep (spherov2's `save_compressed_frame_player_animation`).
-    SaveAnimation {
-        id: u8,
-        fps: u8,
-        fade: bool,
-        palette: Vec<[u8; 3]>,
-        frames: Vec<u16>,
-    },
-    /// Play a kept animation, once or in a loop.
-    Play(u8, bool),
-    Pause,
-    Resume,
-    /// End the animation (spherov2's `clear_matrix` sends only this).
-    Reset,
-}
+/// What BOLT's matrix draws, and what a robot is asked to do in infrared: the family's
+/// vocabulary ([`crate::family::intent`]), which lowers them to each robot's commands.
+pub use crate::family::intent::{Ir, Matrix};
 
 /// Frames one program may register on BOLT (all its animations together), and colours a
 /// palette holds (Sphero's docs: "up to 16 colors"). The robot's own frame limit is not
-/// published; the simulator keeps as many (src/sim/animation.rs).
-pub const MAX_FRAMES: usize = crate::sim::animation::SAVED_MAX;
+/// published; the family says how many droidctl keeps (and the simulator keeps as many).
+pub const MAX_FRAMES: usize = crate::family::v2::robots::MATRIX_SAVED_MAX;
 pub const MAX_COLOURS: usize = 16;
 /// The most arguments a call takes: `registerMatrixAnimation`'s fps, transition, palette
 /// size, colours, frame count and 64 pixels a frame.
@@ -96,33 +67,6 @@ pub enum Act {
     CalibrateCompass,
     /// Robot-to-robot infrared (BOLT, RVR): one wire command each ([`Ir`]).
     Ir(Ir),
-}
-
-/// What a robot is asked to do in infrared; channels 0..=7 and intensity 1..=64, bounded as
-/// spherov2's `SpheroEduAPI` bounds them (`bound_value`).
-#[derive(Debug, Clone, PartialEq)]
-pub enum Ir {
-    Broadcast {
-        far: u8,
-        near: u8,
-    },
-    StopBroadcast,
-    Follow {
-        far: u8,
-        near: u8,
-    },
-    StopFollow,
-    Evade {
-        far: u8,
-        near: u8,
-    },
-    StopEvade,
-    Send {
-        channel: u8,
-        intensity: u8,
-    },
-    /// Hear the next message on each of these channels (none: nothing is sent, as spherov2).
-    Listen(Vec<u8>),
 }
 
 /// What the program waits for after the call's immediate actions.
@@ -242,7 +186,7 @@ impl Driver {
         if speed.is_nan() {
             return Err(format!("{call}: speed is a number −255 to 255, not NaN"));
         }
-        let s = if self.model == Model::Mini && speed != 0.0 {
+        let s = if self.model.has(Caps::SCALED_SPEED) && speed != 0.0 {
             let offset = if speed > 0.0 { 126.0 } else { -126.0 };
             ((speed + offset) * 2.0 / 3.0).round()
         } else {
@@ -278,7 +222,7 @@ impl Driver {
     fn main_led(&mut self, rgb: [u8; 3]) -> Act {
         self.main = rgb;
         // R2-D2, R2-Q5 and BOLT: front and back (spherov2's `LedManager` maps main to both).
-        if matches!(self.model, Model::R2D2 | Model::R2Q5 | Model::Bolt) {
+        if self.model.has(Caps::MAIN_FRONT_BACK) {
             self.front = rgb;
             self.back = rgb;
         }
@@ -287,13 +231,7 @@ impl Driver {
 
     /// Seconds a full turn takes at the least (spherov2's `spin`).
     fn turn_time(&self) -> f64 {
-        match self.model {
-            Model::Rvr => 1.5,
-            Model::R2D2 | Model::R2Q5 => 0.7,
-            Model::Mini => 0.5,
-            Model::Ollie => 0.6,
-            _ => 0.45,
-        }
+        self.model.full_turn().as_secs_f64()
     }
 
     /// Run call `name` with `args` (as the prelude passes them). Any arguments at all come

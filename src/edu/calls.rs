@@ -7,7 +7,7 @@
 //! "Lights", "Sensors", "Communications", "Events"); where spherov2.py's `SpheroEduAPI`
 //! (`sphero_edu.py`) implements a call, [`super::api`] behaves as it does.
 
-use crate::model::Model;
+use crate::model::{Caps, Model};
 
 /// Which robots a call applies to.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -40,27 +40,26 @@ pub enum Robots {
 }
 
 impl Robots {
-    pub fn applies(self, m: Model) -> bool {
+    /// What a robot needs of the model table for a call to apply to it.
+    pub fn caps(self) -> Caps {
         match self {
-            Robots::All => true,
-            Robots::Sphero => m != Model::Robi42,
-            Robots::Matrix => m.has_matrix(),
-            Robots::Dome => m.has_dome(),
-            Robots::Animations => m.plays_animations(),
-            Robots::Bb9e => m == Model::BB9E,
-            Robots::FrontLed => matches!(
-                m,
-                Model::R2D2 | Model::R2Q5 | Model::Bolt | Model::Rvr | Model::Mini
-            ),
-            Robots::Compass => m.has_compass(),
-            Robots::Light => matches!(m, Model::Bolt | Model::Rvr),
-            Robots::ColorSensor => m.has_color_sensor(),
-            Robots::RawMotors => {
-                matches!(m, Model::Bolt | Model::Mini | Model::Rvr)
-                    || m.protocol() == crate::model::Protocol::SpheroV1
-            }
-            Robots::Infrared => matches!(m, Model::Bolt | Model::Rvr),
+            Robots::All => Caps::NONE,
+            Robots::Sphero => Caps::HEADING,
+            Robots::Matrix => Caps::MATRIX,
+            Robots::Dome => Caps::DOME,
+            Robots::Animations => Caps::ANIMATIONS,
+            Robots::Bb9e => Caps::DOME_LIGHTS,
+            Robots::FrontLed => Caps::FRONT_LED,
+            Robots::Compass => Caps::COMPASS,
+            Robots::Light => Caps::LIGHT_SENSOR,
+            Robots::ColorSensor => Caps::COLOR_SENSOR,
+            Robots::RawMotors => Caps::RAW_MOTORS,
+            Robots::Infrared => Caps::IR,
         }
+    }
+
+    pub fn applies(self, m: Model) -> bool {
+        m.has(self.caps())
     }
 
     /// The robots, by name, for the docs and error messages.
@@ -72,8 +71,12 @@ impl Robots {
             .collect();
         if all.len() == Model::ALL.len() {
             "all".into()
-        } else if all.len() == Model::ALL.len() - 1 && !self.applies(Model::Robi42) {
-            "all but Robi 42".into()
+        } else if let [left_out] = Model::ALL
+            .into_iter()
+            .filter(|m| !self.applies(*m))
+            .collect::<Vec<_>>()[..]
+        {
+            format!("all but {}", left_out.display_name())
         } else {
             all.join(", ")
         }
@@ -562,6 +565,46 @@ pub fn markdown() -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The calls table reads the model table; this is the table it spelled out before, robot
+    /// by robot, so a row that changes what a call applies to shows here.
+    #[test]
+    fn robots_agree_with_the_model_table() {
+        use crate::model::Protocol;
+        for m in Model::ALL {
+            let spelled = [
+                (Robots::All, true),
+                (Robots::Sphero, m != Model::Robi42),
+                (Robots::Matrix, m == Model::Bolt),
+                (Robots::Dome, matches!(m, Model::R2D2 | Model::R2Q5)),
+                (
+                    Robots::Animations,
+                    matches!(m, Model::R2D2 | Model::R2Q5 | Model::BB9E),
+                ),
+                (Robots::Bb9e, m == Model::BB9E),
+                (
+                    Robots::FrontLed,
+                    matches!(
+                        m,
+                        Model::R2D2 | Model::R2Q5 | Model::Bolt | Model::Rvr | Model::Mini
+                    ),
+                ),
+                (Robots::Compass, m == Model::Bolt),
+                (Robots::Light, matches!(m, Model::Bolt | Model::Rvr)),
+                (Robots::ColorSensor, m == Model::Rvr),
+                (
+                    Robots::RawMotors,
+                    matches!(m, Model::Bolt | Model::Mini | Model::Rvr)
+                        || m.protocol() == Protocol::SpheroV1,
+                ),
+                (Robots::Infrared, matches!(m, Model::Bolt | Model::Rvr)),
+            ];
+            for (robots, applies) in spelled {
+                assert_eq!(robots.applies(m), applies, "{robots:?} on {m:?}");
+            }
+        }
+        assert_eq!(Robots::Sphero.names(), "all but Robi 42");
+    }
 
     #[test]
     fn calls_are_unique_and_say_where_they_are_missing() {

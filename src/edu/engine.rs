@@ -731,7 +731,7 @@ fn native_call(_this: &JsValue, args: &[JsValue], ctx: &mut Context) -> JsResult
 
 fn native_read(_this: &JsValue, args: &[JsValue], ctx: &mut Context) -> JsResult<JsValue> {
     let name = name_of(args);
-    let model = with_js(|js| js.driver.model).unwrap_or(Model::R2D2);
+    let model = with_js(|js| js.driver.model).unwrap_or(Model::DEFAULT);
     if let Some(why) = calls::not_on(&name, model) {
         return Err(JsNativeError::typ().with_message(why).into());
     }
@@ -779,7 +779,7 @@ fn native_on(_this: &JsValue, args: &[JsValue], _ctx: &mut Context) -> JsResult<
             ))
             .into());
     };
-    let model = with_js(|js| js.driver.model).unwrap_or(Model::R2D2);
+    let model = with_js(|js| js.driver.model).unwrap_or(Model::DEFAULT);
     if !event.1.applies(model) {
         return Err(JsNativeError::typ()
             .with_message(format!(

@@ -5,19 +5,17 @@
 //! become the droid's commands here, timed waits (`roll`'s duration, `spin`'s steps, `fade`,
 //! `delay`) run on tokio's clock, and the droid's notifications become the program's events.
 
-use super::api::{Act, Ir, Matrix, Wait};
+use super::api::{Act, Ir, Wait};
 use super::engine::{Event, Failure, Op, Readings, Status};
 use super::host::{CheckError, Engine, EngineOptions, TurnError};
 use super::schedule::{Due, Schedule};
+use crate::family::intent::Intent;
 use crate::family::{Command, Family};
 use crate::mission::{DroidMission, Emit, MissionError, MissionEvent, MissionOptions, Summary};
 use crate::model::Model;
 use crate::protocol::notify::{Notification, RobotEvent};
-use crate::protocol::v2::cmd;
-use crate::protocol::v2::types::{FrameList, Palette, ScrollText};
-use crate::protocol::v2::wire::Bytes;
 use crate::protocol::wire::LegAction;
-use crate::script::{Action, LedGroup, MatrixAction, Step};
+use crate::script::{Action, LedGroup, Step};
 use crate::session::{SessionEvent, SessionHandle, Slot};
 use crate::telemetry::{Stance, Telemetry};
 use crate::units::Heading;
@@ -556,9 +554,27 @@ impl Player {
         });
     }
 
-    fn led(&mut self, line: u32, a: Action) {
-        let c = self.family.led(self.model, &a);
-        self.send(line, c, "light");
+    /// `intent` lowered by the droid's family and sent (`what` names the call in warnings); a
+    /// model without it is warned about.
+    fn intend(&mut self, line: u32, intent: Intent, what: &str) {
+        match self.family.lower(self.model, &intent) {
+            Ok(cmds) => {
+                for c in cmds {
+                    self.send(line, Some(c), what);
+                }
+            }
+            Err(_) => self.send(line, None, what),
+        }
+    }
+
+    /// As [`Self::intend`], but a model without it does nothing (stabilisation on Robi 42,
+    /// resetting the aim of a droid with no aim mode).
+    fn intend_quietly(&mut self, line: u32, intent: Intent, what: &str) {
+        if let Ok(cmds) = self.family.lower(self.model, &intent) {
+            for c in cmds {
+                self.send(line, Some(c), what);
+            }
+        }
     }
 
     /// R2-D2 and R2-Q5 roll only in tripod: put them there first, as missions do.
@@ -592,97 +608,74 @@ impl Player {
                     self.tripod(line).await;
                 }
                 let h = Heading::wrapped(*heading as f64);
-                let c = if *reverse && self.family.can_reverse() {
-                    self.family.drive(*speed, h, true)
-                } else {
-                    crate::mission::drive_command(self.family, *speed, h)
-                };
+                let c = crate::family::intent::drive(self.family, *speed, h, *reverse);
                 self.last_heading = *heading;
                 self.session.set(Slot::Drive, c.clone());
                 self.drive = (*speed > 0).then_some(c);
             }
             Act::Raw(l, r) => {
                 self.drive = None;
-                let c = self.family.tank(*l, *r);
                 self.raw = *l != 0 || *r != 0;
-                self.send(line, c, "rawMotor");
+                let raw = Intent::RawMotors {
+                    left: *l,
+                    right: *r,
+                };
+                self.intend(line, raw, "rawMotor");
             }
             Act::Stabilization(on) => {
-                use crate::model::Protocol;
-                use crate::protocol::wire::StabilizationIndex;
-                let c: Option<Command> = match self.model.protocol() {
-                    Protocol::SpheroV2 => Some(
-                        cmd::set_stabilization(if *on {
-                            StabilizationIndex::Full
-                        } else {
-                            StabilizationIndex::None
-                        })
-                        .into(),
-                    ),
-                    Protocol::SpheroV1 => {
-                        Some(crate::protocol::v1::cmd::set_stabilization(*on).into())
-                    }
-                    _ => None,
-                };
-                if c.is_some() {
-                    self.send(line, c, "setStabilization");
-                }
+                self.intend_quietly(line, Intent::Stabilization(*on), "setStabilization")
             }
-            Act::ResetAim => {
-                for c in self.family.aim_end(self.model) {
-                    self.send(line, Some(c), "resetAim");
-                }
+            Act::ResetAim => self.intend_quietly(line, Intent::ResetAim, "resetAim"),
+            Act::Main(rgb) => self.intend(line, Intent::MainLight(*rgb), "light"),
+            Act::Front(rgb) => self.intend(line, Intent::LedRgb(LedGroup::Front, *rgb), "light"),
+            Act::Back(rgb) => self.intend(line, Intent::LedRgb(LedGroup::Back, *rgb), "light"),
+            Act::BackBrightness(b) => {
+                self.intend(line, Intent::LedBrightness(LedGroup::Back, *b), "light")
             }
-            Act::Main(rgb) => match self.model {
-                // spherov2 lights BOLT's whole matrix (`set_led_matrix_one_colour`).
-                Model::Bolt => self.matrix(line, &Matrix::Fill([0, 0, 7, 7], *rgb)),
-                Model::R2D2 | Model::R2Q5 | Model::Rvr => {
-                    self.led(line, Action::LedRgb(LedGroup::Front, *rgb));
-                    self.led(line, Action::LedRgb(LedGroup::Back, *rgb));
-                }
-                _ => self.led(line, Action::LedRgb(LedGroup::Front, *rgb)),
-            },
-            Act::Front(rgb) => self.led(line, Action::LedRgb(LedGroup::Front, *rgb)),
-            Act::Back(rgb) => self.led(line, Action::LedRgb(LedGroup::Back, *rgb)),
-            Act::BackBrightness(b) => self.led(line, Action::LedBrightness(LedGroup::Back, *b)),
-            Act::Holo(b) => self.led(line, Action::LedBrightness(LedGroup::Holo, *b)),
-            Act::Logic(b) => self.led(line, Action::LedBrightness(LedGroup::Logic, *b)),
+            Act::Holo(b) => self.intend(line, Intent::LedBrightness(LedGroup::Holo, *b), "light"),
+            Act::Logic(b) => self.intend(line, Intent::LedBrightness(LedGroup::Logic, *b), "light"),
             // BB-9E's dome light, 0..15 scaled to 0..255 as spherov2 does.
-            Act::DomeLeds(b) => self.led(
+            Act::DomeLeds(b) => self.intend(
                 line,
-                Action::LedBrightness(LedGroup::Holo, (*b as u16 * 255 / 15) as u8),
+                Intent::LedBrightness(LedGroup::Holo, (*b as u16 * 255 / 15) as u8),
+                "light",
             ),
-            Act::Matrix(m) => self.matrix(line, m),
+            Act::Matrix(m) => self.intend(line, Intent::Matrix(m.clone()), "matrix"),
             Act::Dome(deg) => {
-                let c = self.family.head(crate::units::HeadAngle::clamped(*deg));
-                match c {
-                    Some(c) => self.session.set(Slot::Head, c),
-                    None => self.warn(line, "setDomePosition: no dome".into()),
+                let head = Intent::Head(crate::units::HeadAngle::clamped(*deg));
+                match self.family.lower(self.model, &head) {
+                    Ok(cmds) => {
+                        for c in cmds {
+                            self.session.set(Slot::Head, c);
+                        }
+                    }
+                    Err(_) => self.warn(line, "setDomePosition: no dome".into()),
                 }
             }
             Act::Stance(s) => {
                 self.drive = None;
                 lock(&self.telemetry).stance_requested(*s);
-                let c = self.family.stance(*s);
-                self.send(line, c, "setStance");
+                self.intend(line, Intent::Stance(*s), "setStance");
             }
             Act::Animation(id) => {
                 self.drive = None;
-                let c = self.family.animation(self.model, *id);
-                self.send(line, c, "playAnimation");
+                self.intend(line, Intent::Animation(*id), "playAnimation");
             }
             Act::Sound(s) => match s
                 .parse::<u16>()
                 .ok()
-                .and_then(|id| self.family.sound(self.model, id))
+                .and_then(|id| self.family.lower(self.model, &Intent::Sound(id)).ok())
             {
-                Some(c) => self.send(line, Some(c), "playSound"),
+                Some(cmds) => {
+                    for c in cmds {
+                        self.send(line, Some(c), "playSound");
+                    }
+                }
                 None => self.say(line, format!("plays sound {s:?}")),
             },
             Act::Say(text) => self.say(line, format!("says {text:?}")),
             Act::CalibrateCompass => {
-                let c = self.family.calibrate_compass();
-                self.send(line, c, "calibrateCompass");
+                self.intend(line, Intent::CalibrateCompass, "calibrateCompass")
             }
             Act::Ir(ir) => self.infrared(line, ir),
         }
@@ -691,9 +684,7 @@ impl Player {
     /// Robot-to-robot infrared: the robot's own commands ([`super::infrared`]).
     fn infrared(&mut self, line: u32, ir: &Ir) {
         self.ir_running.note(ir);
-        for c in super::infrared::commands(self.model, ir) {
-            self.send(line, Some(c.into()), "infrared");
-        }
+        self.intend(line, Intent::Ir(ir.clone()), "infrared");
     }
 
     /// What a robot without a speaker would have said: a line of the output.
@@ -703,71 +694,6 @@ impl Player {
             line: line as usize,
             text: format!("{} {text}", self.model.display_name()),
         });
-    }
-
-    fn matrix(&mut self, line: u32, m: &Matrix) {
-        let plain = |a: MatrixAction, f: &dyn Family| f.matrix(&a);
-        let c: Option<Command> = match m {
-            Matrix::Char(ch, rgb) => plain(MatrixAction::Char { ch: *ch, rgb: *rgb }, self.family),
-            Matrix::Pixel(x, y, rgb) => plain(
-                MatrixAction::Pixel {
-                    x: *x,
-                    y: *y,
-                    rgb: *rgb,
-                },
-                self.family,
-            ),
-            Matrix::Clear => plain(MatrixAction::Clear, self.family),
-            Matrix::Rotate(d) => plain(MatrixAction::Rotate(*d), self.family),
-            Matrix::Text { text, rgb, fps } => Some(
-                cmd::set_compressed_frame_player_text_scrolling(
-                    rgb[0],
-                    rgb[1],
-                    rgb[2],
-                    *fps,
-                    false,
-                    ScrollText(text.clone()),
-                )
-                .into(),
-            ),
-            Matrix::Line([x1, y1, x2, y2], [r, g, b]) => {
-                Some(cmd::draw_compressed_frame_player_line(*x1, *y1, *x2, *y2, *r, *g, *b).into())
-            }
-            Matrix::Fill([x1, y1, x2, y2], [r, g, b]) => {
-                Some(cmd::draw_compressed_frame_player_fill(*x1, *y1, *x2, *y2, *r, *g, *b).into())
-            }
-            Matrix::SaveFrame(i, frame) => Some(
-                cmd::save_compressed_frame_player_64_bit_frame(
-                    *i,
-                    Bytes(crate::protocol::v2::frame::pack(frame).to_vec()),
-                )
-                .into(),
-            ),
-            Matrix::SaveAnimation {
-                id,
-                fps,
-                fade,
-                palette,
-                frames,
-            } => Some(
-                // spherov2 sends `fps % 31`; fps is 1..=30 here.
-                cmd::save_compressed_frame_player_animation(
-                    *id,
-                    *fps,
-                    *fade,
-                    Palette(palette.clone()),
-                    FrameList(frames.clone()),
-                )
-                .into(),
-            ),
-            Matrix::Play(id, looping) => Some(
-                cmd::play_compressed_frame_player_animation_with_loop_option(*id, *looping).into(),
-            ),
-            Matrix::Pause => Some(cmd::pause_compressed_frame_player_animation().into()),
-            Matrix::Resume => Some(cmd::resume_compressed_frame_player_animation().into()),
-            Matrix::Reset => Some(cmd::reset_compressed_frame_player_animation().into()),
-        };
-        self.send(line, c, "matrix");
     }
 
     /// Stop rolling and the motors (the run ends, or the program failed), and the infrared

@@ -12,10 +12,15 @@
 //!   side's bytes into packets explained as text or JSON;
 //! - packets built by name and its catalogue listed (`packet encode`, `packet list`);
 //! - the commands behind each capability (drive, stop, dome, stance, LEDs, aim, sleep …),
-//!   built from its own catalogue, or `None` when the family has no such thing.
+//!   built from its own catalogue, or `None` when the family has no such thing;
+//! - [`Family::lower`]: what a droid should do ([`intent::Intent`], the one vocabulary of
+//!   everything above the families) as `(model, intent)` → commands, or
+//!   [`intent::Unsupported`]. What the model can do is the model table's ([`crate::model::Caps`]),
+//!   not something to find out by building dummy commands.
 //!
 //! Everything here is sans-IO: no clocks, no tokio.
 
+pub mod intent;
 pub mod listing;
 pub mod named;
 pub mod read;
@@ -198,16 +203,17 @@ pub trait Family: Sync {
     fn aim_end(&self, _model: Model) -> Vec<Command> {
         Vec::new()
     }
-    /// What a `matrix` line draws (BOLT's LED matrix).
-    fn matrix(&self, _action: &crate::script::MatrixAction) -> Option<Command> {
-        None
+    /// The commands of `intent` on `model` ([`intent`]); a family lowers what is its own and
+    /// leaves the rest to [`intent::lower_common`], which builds from the methods above.
+    fn lower(
+        &self,
+        model: Model,
+        intent: &intent::Intent,
+    ) -> Result<Vec<Command>, intent::Unsupported> {
+        intent::lower_common(self, model, intent)
     }
     /// Drive each track at `left`/`right` in −255..=255 (RVR's raw motors).
     fn tank(&self, _left: i16, _right: i16) -> Option<Command> {
-        None
-    }
-    /// Calibrate the compass to north; the droid answers with north's yaw (BOLT).
-    fn calibrate_compass(&self) -> Option<Command> {
         None
     }
     /// What `model` can stream and how fast ([`stream`]); `None` when the droid streams by

@@ -22,6 +22,7 @@ pub mod name;
 
 pub use crate::mission::drive_command;
 
+use crate::family::intent::Intent;
 use crate::family::{Command, Family};
 use crate::link::Link;
 use crate::model::Model;
@@ -228,24 +229,35 @@ impl Fleet {
                 error,
             })
         };
-        match cmd {
-            FleetCommand::Drive { speed, heading } => {
-                m.session
-                    .set(Slot::Drive, drive_command(m.family, speed, heading));
-                Ok(())
-            }
+        let intent = match cmd {
             FleetCommand::Stop => {
                 m.session.stop_now(m.family);
-                Ok(())
+                return Ok(());
             }
-            FleetCommand::Stance(a) => send(m.family.stance(a).ok_or_else(|| unsupported("legs"))?),
-            FleetCommand::Head(a) => {
-                let c = m.family.head(a).ok_or_else(|| unsupported("dome"))?;
-                m.session.set(Slot::Head, c);
-                Ok(())
+            FleetCommand::Raw(c) => return send(c),
+            FleetCommand::Drive { speed, heading } => Intent::Drive {
+                speed,
+                heading,
+                reverse: false,
+            },
+            FleetCommand::Stance(a) => Intent::Stance(a),
+            FleetCommand::Head(a) => Intent::Head(a),
+        };
+        let cmds = m.family.lower(m.model, &intent).map_err(|_| {
+            // The bridge's capability words.
+            unsupported(match intent {
+                Intent::Stance(_) => "legs",
+                _ => "dome",
+            })
+        })?;
+        for c in cmds {
+            match intent {
+                Intent::Drive { .. } => m.session.set(Slot::Drive, c),
+                Intent::Head(_) => m.session.set(Slot::Head, c),
+                _ => send(c)?,
             }
-            FleetCommand::Raw(c) => send(c),
         }
+        Ok(())
     }
 
     /// Emergency stop: every droid's session gets its stop (speed 0 at its last heading) in

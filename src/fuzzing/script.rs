@@ -59,9 +59,11 @@ fn command(family: &dyn Family, model: Model, action: &Action) -> Option<Command
         Action::Animation(id) => family.animation(model, *id),
         Action::Sound(id) => family.sound(model, *id),
         a @ (Action::LedRgb(..) | Action::LedBrightness(..)) => family.led(model, a),
-        Action::Matrix(m) => family.matrix(m),
+        a @ (Action::Matrix(_) | Action::CalibrateCompass) => {
+            let intent = crate::family::intent::Intent::of_action(a)?;
+            family.lower(model, &intent).ok()?.into_iter().next()
+        }
         Action::Tank { left, right, .. } => family.tank(*left, *right),
-        Action::CalibrateCompass => family.calibrate_compass(),
         Action::Stream { rate_hz, sensors } => {
             let request = crate::tuning::StreamRequest {
                 rate_hz: *rate_hz,

@@ -24,7 +24,7 @@ use crate::protocol::v2::frame::unpack;
 use std::time::Duration;
 
 /// Frames and animations kept (bounded; the real limits are unpublished).
-pub const SAVED_MAX: usize = 64;
+pub const SAVED_MAX: usize = crate::family::v2::robots::MATRIX_SAVED_MAX;
 
 /// One saved animation.
 #[derive(Debug, Clone, PartialEq)]

@@ -277,9 +277,7 @@ impl SimDroid {
         let Some(def) = catalog::lookup(p.did, p.cid) else {
             return (ErrorCode::BadCommandId, vec![]);
         };
-        if device == Device::Animatronic
-            && matches!(self.body.model(), Model::Bolt | Model::Mini | Model::Rvr)
-        {
+        if device == Device::Animatronic && !super::robots::has_animatronic(self.body.model()) {
             // The newer robots have no animatronic device at all.
             return (ErrorCode::BadDeviceId, vec![]);
         }
@@ -572,15 +570,7 @@ impl SimDroid {
     }
 
     fn set_leds(&mut self, mask: u32, values: &[u8]) -> (ErrorCode, Vec<u8>) {
-        // R2: 8 LEDs; BB-9E: body RGB, aiming, head (`droid-facts.md` §2); BOLT front and
-        // back RGB, Mini aiming, body and user RGB, RVR 31 (spherov2 `toy/*.py` LEDs).
-        let valid: u32 = match self.body.model() {
-            m if m.has_legs() => 0xFF,
-            Model::Bolt => 0x3F,
-            Model::Mini => 0x7F,
-            Model::Rvr => 0x7FFF_FFFF,
-            _ => 0x1F,
-        };
+        let valid = super::robots::led_mask(self.body.model());
         if mask & !valid != 0 {
             return (ErrorCode::BadParameterValue, vec![]);
         }

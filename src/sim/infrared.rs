@@ -51,7 +51,6 @@
 
 use super::physics::{angle_diff, wrap360};
 use super::room::Place;
-use crate::model::Model;
 use crate::protocol::v2::ErrorCode;
 use std::collections::VecDeque;
 use std::time::Duration;
@@ -140,20 +139,9 @@ pub struct Infrared {
     far_since: Option<Duration>,
 }
 
-/// Whether `model` has Sensor command `cid`; `None` when `cid` is no infrared command.
-pub fn has(model: Model, cid: u8) -> Option<bool> {
-    let behaviours = matches!(cid, 0x27..=0x29 | 0x32..=0x34);
-    let robot_to_robot = matches!(cid, 0x2A | 0x2B);
-    let newer = matches!(cid, 0x3E | 0x3F);
-    if !(behaviours || robot_to_robot || newer) {
-        return None;
-    }
-    Some(match model {
-        Model::Bolt => behaviours || robot_to_robot,
-        Model::Rvr => behaviours || newer,
-        _ => false,
-    })
-}
+/// Whether a model has an infrared Sensor command: the family's word
+/// ([`crate::family::v2::robots::infrared_has`]).
+pub use crate::family::v2::robots::infrared_has as has;
 
 /// How far a message of `strength` carries, edge to edge, cm.
 pub fn reach(strength: u8) -> f32 {
@@ -374,6 +362,7 @@ impl Place {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::model::Model;
     use crate::protocol::v2::catalog::targets;
     use crate::protocol::v2::{Command, Packet};
     use crate::sim::room::SharedRoom;

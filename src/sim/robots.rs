@@ -144,6 +144,24 @@ pub struct RobotParts {
     pub motor_fault_notify: bool,
 }
 
+/// The LEDs a model's Set All LEDs may address: R2 8; BB-9E body RGB, aiming, head
+/// (`droid-facts.md` §2); BOLT front and back RGB, Mini aiming, body and user RGB, RVR 31
+/// (spherov2 `toy/*.py` LEDs).
+pub fn led_mask(model: Model) -> u32 {
+    match model {
+        m if m.has_legs() => 0xFF,
+        Model::Bolt => 0x3F,
+        Model::Mini => 0x7F,
+        Model::Rvr => 0x7FFF_FFFF,
+        _ => 0x1F,
+    }
+}
+
+/// The newer robots have no animatronic device at all.
+pub fn has_animatronic(model: Model) -> bool {
+    !matches!(model, Model::Bolt | Model::Mini | Model::Rvr)
+}
+
 /// Where a packet's target sends it on `model`; the robot's answer to a wrong one.
 pub fn route(model: Model, did: u8, cid: u8, tid: Option<u8>) -> Result<(), ErrorCode> {
     let home = targets::home(model, did, cid);

@@ -173,7 +173,7 @@ impl Family for Robi {
     }
 
     fn representative(&self) -> Model {
-        Model::Robi42
+        Model::first_speaking(self.protocol())
     }
 
     fn error_kinds(&self) -> &'static [ErrorKind] {

@@ -224,7 +224,7 @@ impl Family for V1 {
     }
 
     fn representative(&self) -> Model {
-        Model::BB8
+        Model::first_speaking(self.protocol())
     }
 
     fn error_kinds(&self) -> &'static [ErrorKind] {
@@ -285,6 +285,20 @@ impl Family for V1 {
     /// Set Raw Motors (0x02/0x33), as spherov2's `raw_motor` drives the API v1 robots.
     fn tank(&self, left: i16, right: i16) -> Option<Command> {
         Some(raw_motors(left, right))
+    }
+
+    /// v1's own: stabilisation is Set Stabilization on or off.
+    fn lower(
+        &self,
+        model: Model,
+        intent: &super::intent::Intent,
+    ) -> Result<Vec<Command>, super::intent::Unsupported> {
+        match intent {
+            super::intent::Intent::Stabilization(on) => {
+                Ok(vec![cmd::set_stabilization(*on).into()])
+            }
+            _ => super::intent::lower_common(self, model, intent),
+        }
     }
 
     /// Roll has no reverse flag: backing up is rolling toward the opposite heading.

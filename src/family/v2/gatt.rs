@@ -3,7 +3,7 @@
 //! droid answers.
 
 use crate::gatt::{ATT_PAYLOAD, CharRef, GattProfile, GattUuid, HandshakeStep};
-use crate::model::Model;
+use crate::model::{Caps, Model};
 
 /// `0000xxxx-574f-4f20-5370-6865726f2121` ("WOO Sphero!!").
 const fn sphero_v2(short: u32) -> GattUuid {
@@ -29,7 +29,7 @@ pub fn profile(model: Model) -> GattProfile {
         inputs: Vec::new(),
         // RVR takes commands without the unlock (spherov2.py's `toy/rvr.py` writes none;
         // `droid-facts.md` §6); BOLT and Mini want it like R2-D2.
-        handshake: if model == Model::Rvr {
+        handshake: if model.has(Caps::NO_UNLOCK) {
             Vec::new()
         } else {
             vec![HandshakeStep::Write {

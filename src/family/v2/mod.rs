@@ -9,12 +9,13 @@ use super::{
     Codec, Command, DroidError, Explained, Family, Incoming, Key, Packet, PacketKind, ReadOption,
     ReadOptions, Reader,
 };
+use crate::family::intent::{self, Intent, Unsupported};
 use crate::family::setup::SetupOptions;
 use crate::family::stream::{
     BLE_SENSOR_NOTIFICATIONS_PER_S, STANDARD_RATES, SensorGroup, SensorSet, StreamCaps, StreamPlan,
 };
 use crate::family::{RecordedDrive, RecordedLeds};
-use crate::model::{Model, Protocol};
+use crate::model::{Caps, Model, Protocol};
 use crate::protocol::decode::ErrorKind;
 use crate::protocol::v2::catalog::targets;
 use crate::protocol::v2::sensor::StreamingConfig;
@@ -92,8 +93,7 @@ impl V2Codec {
         let Some(model) = self.model else {
             return c;
         };
-        if matches!(model, Model::Bolt | Model::Mini | Model::Rvr) && (c.did, c.cid) == (0x00, 0x01)
-        {
+        if robots::has_no_core(model) && (c.did, c.cid) == (0x00, 0x01) {
             c = cmd::echo(Bytes(Vec::new()));
         }
         if c.target.is_none() {
@@ -233,7 +233,7 @@ impl Family for V2 {
     }
 
     fn representative(&self) -> Model {
-        Model::R2D2
+        Model::first_speaking(self.protocol())
     }
 
     fn error_kinds(&self) -> &'static [ErrorKind] {
@@ -441,16 +441,40 @@ impl Family for V2 {
         ]
     }
 
-    fn matrix(&self, action: &crate::script::MatrixAction) -> Option<Command> {
-        Some(robots::matrix(action))
+    /// v2's own: stabilisation, BOLT's matrix (and its main light) and compass, BOLT's and
+    /// RVR's infrared.
+    fn lower(&self, model: Model, intent: &Intent) -> Result<Vec<Command>, Unsupported> {
+        match intent {
+            Intent::Stabilization(on) => Ok(vec![
+                cmd::set_stabilization(if *on {
+                    StabilizationIndex::Full
+                } else {
+                    StabilizationIndex::None
+                })
+                .into(),
+            ]),
+            Intent::Matrix(m) if model.has_matrix() => Ok(vec![robots::matrix(m)]),
+            // The droid answers with north's yaw.
+            Intent::CalibrateCompass if model.has_compass() => {
+                Ok(vec![cmd::magnetometer_calibrate_to_north().into()])
+            }
+            Intent::Ir(ir) if model.has(Caps::IR) => Ok(robots::infrared(model, ir)
+                .into_iter()
+                .map(Command::from)
+                .collect()),
+            Intent::MainLight(rgb) => {
+                let mut out = Vec::new();
+                for i in robots::main_light(model, *rgb) {
+                    out.extend(self.lower(model, &i)?);
+                }
+                Ok(out)
+            }
+            _ => intent::lower_common(self, model, intent),
+        }
     }
 
     fn tank(&self, left: i16, right: i16) -> Option<Command> {
         Some(robots::tank(left, right))
-    }
-
-    fn calibrate_compass(&self) -> Option<Command> {
-        Some(cmd::magnetometer_calibrate_to_north().into())
     }
 
     fn stream_caps(&self, model: Model) -> Option<StreamCaps> {

@@ -90,27 +90,6 @@ fn check_led_values(name: &str, data: &[u8]) -> Result<(), String> {
     Ok(())
 }
 
-/// Whether `model` has the command `did`/`cid`: R2's dome and legs, BOLT's matrix and
-/// RVR's palettes and streaming service are theirs alone (spherov2.py's `toy/*.py`).
-pub fn model_has(model: Model, did: u8, cid: u8) -> bool {
-    match (did, cid) {
-        (0x17, 0x05 | 0x11 | 0x2B | 0x2C) => {
-            matches!(model, Model::R2D2 | Model::R2Q5 | Model::BB9E)
-        }
-        (0x17, _) => model.has_legs(),
-        (0x1A, 0x07..=0x0A) => matches!(model, Model::R2D2 | Model::R2Q5 | Model::BB9E),
-        (0x1A, 0x0E) => !matches!(model, Model::Bolt | Model::Rvr),
-        (0x1A, 0x1A) => model == Model::Rvr,
-        (0x1A, 0x1C) => model == Model::Bolt,
-        (0x1A, 0x2D..=0x4E) => model.has_matrix() || model == Model::Rvr,
-        (0x18, 0x39..=0x3D) | (0x18, 0x35..=0x38) | (0x16, 0x25..=0x29) => {
-            model.streams_by_service()
-        }
-        (0x18, 0x25 | 0x26 | 0x30) => model.has_compass() || model == Model::Rvr,
-        _ => true,
-    }
-}
-
 /// `packet list` for v2: commands with their parameters, notifications with their fields.
 /// A model id as the filter (`bolt`) lists that model's commands, with the processor each
 /// is addressed to on robots with two.
@@ -120,7 +99,7 @@ pub fn list(filter: Option<&str>, out: &mut dyn Write) -> std::io::Result<usize>
         .and_then(Model::from_id)
         .filter(|m| m.protocol() == crate::model::Protocol::SpheroV2);
     let keep = |n: &str, did: u8, cid: u8| match model {
-        Some(m) => model_has(m, did, cid),
+        Some(m) => super::robots::model_has(m, did, cid),
         None => keep(filter, n),
     };
     l.heading("Commands (DID/CID  name  parameters):");

@@ -1,15 +1,19 @@
 //! The v2 family's commands for BOLT, Mini and RVR: their lights (BOLT's 8-bit mask, Mini's
 //! 16-bit one, RVR's 32-bit one, as spherov2.py's `toy/*.py` LEDs enums number them), aim
-//! mode, BOLT's matrix and compass, RVR's tracks and streaming service.
+//! mode, main light, BOLT's matrix and compass, BOLT's and RVR's infrared, RVR's tracks and
+//! streaming service.
 
 use crate::family::Command;
+use crate::family::intent::{Intent, Ir, Matrix};
 use crate::model::Model;
 use crate::protocol::v2::catalog::targets::Processor;
 use crate::protocol::v2::stream::sensor_by_name;
-use crate::protocol::v2::types::{Char, FrameRotation, ScrollText, StreamSlots, StreamWidth};
+use crate::protocol::v2::types::{
+    Char, FrameList, FrameRotation, Palette, ScrollText, StreamSlots, StreamWidth,
+};
 use crate::protocol::v2::wire::{Bytes, Mask, RawMotorMode, VoltageReadingType};
 use crate::protocol::v2::{self, cmd};
-use crate::script::{Action, LedGroup, MatrixAction};
+use crate::script::{Action, LedGroup};
 
 /// The LED command of a script's LED line on BOLT, Mini or RVR; `None` for other models or
 /// LEDs they do not have.
@@ -52,6 +56,33 @@ pub fn led(model: Model, action: &Action) -> Option<Option<Command>> {
     Some(Some(c.into()))
 }
 
+/// Whether `model` has the command `did`/`cid`: R2's dome and legs, BOLT's matrix and
+/// RVR's palettes and streaming service are theirs alone (spherov2.py's `toy/*.py`).
+pub fn model_has(model: Model, did: u8, cid: u8) -> bool {
+    match (did, cid) {
+        (0x17, 0x05 | 0x11 | 0x2B | 0x2C) => {
+            matches!(model, Model::R2D2 | Model::R2Q5 | Model::BB9E)
+        }
+        (0x17, _) => model.has_legs(),
+        (0x1A, 0x07..=0x0A) => matches!(model, Model::R2D2 | Model::R2Q5 | Model::BB9E),
+        (0x1A, 0x0E) => !matches!(model, Model::Bolt | Model::Rvr),
+        (0x1A, 0x1A) => model == Model::Rvr,
+        (0x1A, 0x1C) => model == Model::Bolt,
+        (0x1A, 0x2D..=0x4E) => model.has_matrix() || model == Model::Rvr,
+        (0x18, 0x39..=0x3D) | (0x18, 0x35..=0x38) | (0x16, 0x25..=0x29) => {
+            model.streams_by_service()
+        }
+        (0x18, 0x25 | 0x26 | 0x30) => model.has_compass() || model == Model::Rvr,
+        _ => true,
+    }
+}
+
+/// The newer robots have no Core device: Core's Ping goes as API and Shell's Echo
+/// (spherov2.py pings them with 0x10/0x00).
+pub fn has_no_core(model: Model) -> bool {
+    matches!(model, Model::Bolt | Model::Mini | Model::Rvr)
+}
+
 /// The aiming light on or off: BOLT's back LED blue, Mini's aiming LED, RVR's brake lights.
 fn aim_light(model: Model, on: bool) -> Option<v2::Command> {
     let v = if on { 255 } else { 0 };
@@ -76,35 +107,128 @@ pub fn aim_end(model: Model) -> Option<Vec<Command>> {
     Some(vec![cmd::reset_yaw().into(), off.into()])
 }
 
-/// BOLT's matrix commands for a `matrix` line.
-pub fn matrix(action: &MatrixAction) -> Command {
-    let c = match action {
-        MatrixAction::Text {
-            text,
-            rgb: [r, g, b],
-        } => cmd::set_compressed_frame_player_text_scrolling(
-            *r,
-            *g,
-            *b,
-            7,
+/// Frames (and animations) BOLT keeps: its own limit is not published, so the simulator keeps
+/// this many and a Sphero Edu program may register as many (all its animations together).
+pub const MATRIX_SAVED_MAX: usize = 64;
+
+/// BOLT's matrix command for what it is to draw.
+pub fn matrix(m: &Matrix) -> Command {
+    let c = match m {
+        Matrix::Text { text, rgb, fps } => cmd::set_compressed_frame_player_text_scrolling(
+            rgb[0],
+            rgb[1],
+            rgb[2],
+            *fps,
             false,
-            ScrollText(text.chars().take(25).collect()),
+            ScrollText(text.clone()),
         ),
-        MatrixAction::Char { ch, rgb: [r, g, b] } => {
+        Matrix::Char(ch, [r, g, b]) => {
             cmd::set_compressed_frame_player_single_character(*r, *g, *b, Char(*ch as u8))
         }
-        MatrixAction::Fill([r, g, b]) => cmd::set_compressed_frame_player_one_color(*r, *g, *b),
-        MatrixAction::Pixel {
-            x,
-            y,
-            rgb: [r, g, b],
-        } => cmd::set_compressed_frame_player_pixel(*x, *y, *r, *g, *b),
-        MatrixAction::Clear => cmd::set_compressed_frame_player_one_color(0, 0, 0),
-        MatrixAction::Rotate(deg) => cmd::set_compressed_frame_player_frame_rotation(
+        Matrix::OneColour([r, g, b]) => cmd::set_compressed_frame_player_one_color(*r, *g, *b),
+        Matrix::Pixel(x, y, [r, g, b]) => {
+            cmd::set_compressed_frame_player_pixel(*x, *y, *r, *g, *b)
+        }
+        Matrix::Clear => cmd::set_compressed_frame_player_one_color(0, 0, 0),
+        Matrix::Rotate(deg) => cmd::set_compressed_frame_player_frame_rotation(
             FrameRotation::from_byte((deg / 90) as u8).unwrap_or(FrameRotation::Normal),
         ),
+        Matrix::Line([x1, y1, x2, y2], [r, g, b]) => {
+            cmd::draw_compressed_frame_player_line(*x1, *y1, *x2, *y2, *r, *g, *b)
+        }
+        Matrix::Fill([x1, y1, x2, y2], [r, g, b]) => {
+            cmd::draw_compressed_frame_player_fill(*x1, *y1, *x2, *y2, *r, *g, *b)
+        }
+        Matrix::SaveFrame(i, frame) => cmd::save_compressed_frame_player_64_bit_frame(
+            *i,
+            Bytes(v2::frame::pack(frame).to_vec()),
+        ),
+        // spherov2 sends `fps % 31`; fps is 1..=30 here.
+        Matrix::SaveAnimation {
+            id,
+            fps,
+            fade,
+            palette,
+            frames,
+        } => cmd::save_compressed_frame_player_animation(
+            *id,
+            *fps,
+            *fade,
+            Palette(palette.clone()),
+            FrameList(frames.clone()),
+        ),
+        Matrix::Play(id, looping) => {
+            cmd::play_compressed_frame_player_animation_with_loop_option(*id, *looping)
+        }
+        Matrix::Pause => cmd::pause_compressed_frame_player_animation(),
+        Matrix::Resume => cmd::resume_compressed_frame_player_animation(),
+        Matrix::Reset => cmd::reset_compressed_frame_player_animation(),
     };
     c.into()
+}
+
+/// The main light as each v2 robot shows it: spherov2 lights BOLT's whole matrix
+/// (`set_led_matrix_one_colour`), R2-D2, R2-Q5 and RVR front and back, the others their front
+/// (or body) light.
+pub fn main_light(model: Model, rgb: [u8; 3]) -> Vec<Intent> {
+    match model {
+        Model::Bolt => vec![Intent::Matrix(Matrix::Fill([0, 0, 7, 7], rgb))],
+        Model::R2D2 | Model::R2Q5 | Model::Rvr => vec![
+            Intent::LedRgb(LedGroup::Front, rgb),
+            Intent::LedRgb(LedGroup::Back, rgb),
+        ],
+        _ => vec![Intent::LedRgb(LedGroup::Front, rgb)],
+    }
+}
+
+/// Sphero Edu's infrared calls ("Communications": broadcast, follow, evade, messages) as BOLT
+/// and RVR each take them on the wire. The behaviours alike: start broadcasting, following or
+/// evading with `[far, near]` (Sensor 0x27, 0x28, 0x33) and their stops (0x29, 0x32, 0x34).
+/// A message is BOLT's robot-to-robot send (0x2A: the channel, then the intensity for each of
+/// the four emitters) and listen (0x2B: once per channel, 0xFF for "without end"), and RVR's
+/// send infrared message (0x3F, the same five bytes) and message notify (0x3E, on): spherov2.py
+/// binds those to BOLT and to RVR respectively, and Sphero's RVR SDK sends RVR's
+/// (src/sim/infrared.rs has the sources and what the unnamed bytes are taken to be). spherov2's
+/// own `SpheroEduAPI` sends nothing for BOLT's messages ("TODO: BOLT").
+pub fn infrared(model: Model, ir: &Ir) -> Vec<v2::Command> {
+    let rvr = model == Model::Rvr;
+    match ir {
+        Ir::Broadcast { far, near } => vec![cmd::start_robot_to_robot_ir_broadcasting(*far, *near)],
+        Ir::StopBroadcast => vec![cmd::stop_robot_to_robot_ir_broadcasting()],
+        Ir::Follow { far, near } => vec![cmd::start_robot_to_robot_ir_following(*far, *near)],
+        Ir::StopFollow => vec![cmd::stop_robot_to_robot_ir_following()],
+        Ir::Evade { far, near } => vec![cmd::start_robot_to_robot_ir_evading(*far, *near)],
+        Ir::StopEvade => vec![cmd::stop_robot_to_robot_ir_evading()],
+        Ir::Send { channel, intensity } => {
+            let data = [*channel, *intensity, *intensity, *intensity, *intensity];
+            vec![if rvr {
+                cmd::send_infrared_message(data)
+            } else {
+                cmd::send_robot_to_robot_ir_message(data)
+            }]
+        }
+        Ir::Listen(_) if rvr => vec![cmd::enable_robot_ir_message_notify(true)],
+        Ir::Listen(channels) => channels
+            .iter()
+            .map(|c| cmd::listen_for_robot_to_robot_ir_message([*c, 0xFF]))
+            .collect(),
+    }
+}
+
+/// Whether `model` has infrared Sensor command `cid` (BOLT the behaviours and its
+/// robot-to-robot messages, RVR the behaviours and its own messages); `None` when `cid` is no infrared command.
+pub fn infrared_has(model: Model, cid: u8) -> Option<bool> {
+    let behaviours = matches!(cid, 0x27..=0x29 | 0x32..=0x34);
+    let robot_to_robot = matches!(cid, 0x2A | 0x2B);
+    let newer = matches!(cid, 0x3E | 0x3F);
+    if !(behaviours || robot_to_robot || newer) {
+        return None;
+    }
+    Some(match model {
+        Model::Bolt => behaviours || robot_to_robot,
+        Model::Rvr => behaviours || newer,
+        _ => false,
+    })
 }
 
 /// Raw motors for tracks at `left`/`right` in −255..=255.
@@ -225,6 +349,37 @@ mod tests {
                 "{m:?}"
             );
         }
+    }
+
+    #[test]
+    fn each_robot_gets_its_own_message_commands() {
+        let send = Ir::Send {
+            channel: 3,
+            intensity: 64,
+        };
+        let bolt = infrared(Model::Bolt, &send);
+        assert_eq!(
+            (bolt[0].cid, bolt[0].data.clone()),
+            (0x2A, vec![3, 64, 64, 64, 64])
+        );
+        let rvr = infrared(Model::Rvr, &send);
+        assert_eq!(
+            (rvr[0].cid, rvr[0].data.clone()),
+            (0x3F, vec![3, 64, 64, 64, 64])
+        );
+        let listen = Ir::Listen(vec![2, 5]);
+        let bolt: Vec<_> = infrared(Model::Bolt, &listen)
+            .into_iter()
+            .map(|c| (c.cid, c.data))
+            .collect();
+        assert_eq!(bolt, vec![(0x2B, vec![2, 0xFF]), (0x2B, vec![5, 0xFF])]);
+        let rvr = infrared(Model::Rvr, &listen);
+        assert_eq!(
+            (rvr.len(), rvr[0].cid, rvr[0].data.clone()),
+            (1, 0x3E, vec![1])
+        );
+        let follow = infrared(Model::Bolt, &Ir::Follow { far: 1, near: 0 });
+        assert_eq!((follow[0].cid, follow[0].data.clone()), (0x28, vec![1, 0]));
     }
 
     #[test]

@@ -319,7 +319,7 @@ fn to_raw(v: f32) -> i16 {
 /// spherov2 is the field's reference and the only client that treats Ollie apart, so
 /// droidctl takes its word: an Ollie rolling east (+x) streams (0, −d), rolling north (d, 0).
 pub fn rotated_axes(model: crate::model::Model) -> bool {
-    model == crate::model::Model::Ollie
+    model.has(crate::model::Caps::ROTATED_AXES)
 }
 
 /// The locator and velocity pairs a rotated-axes droid streams.
