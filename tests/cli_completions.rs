@@ -39,6 +39,7 @@ fn the_subcommand_list_is_complete() {
         "config",
         "completions",
         "man",
+        "examples",
     ] {
         assert!(all.contains(&vec![name.to_string()]), "{name}: {all:?}");
     }

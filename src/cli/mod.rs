@@ -7,6 +7,7 @@ pub mod completions;
 pub mod config_cmd;
 pub mod connect;
 pub mod drive;
+pub mod examples;
 pub mod fleet;
 mod fleet_run;
 pub mod man;
@@ -71,6 +72,9 @@ pub enum Command {
     /// Show or create the configuration file.
     #[command(subcommand)]
     Config(config_cmd::ConfigCmd),
+    /// List the built-in missions and Sphero Edu programs with the models each is for, or
+    /// print one (`droidctl examples square.js > square.js`).
+    Examples(examples::ExamplesArgs),
     /// Print shell completions (`droidctl completions bash > …`).
     Completions(completions::CompletionsArgs),
     /// Print a manual page, in roff: droidctl(1), or a subcommand's (`droidctl man packet
@@ -189,6 +193,7 @@ pub fn main() -> i32 {
             sim::run(args)
         }
         Some(Command::Config(cmd)) => config_cmd::run(cmd, &mut out),
+        Some(Command::Examples(args)) => examples::run(args, &mut out),
         Some(Command::Completions(args)) => completions::completions(args, &mut out),
         Some(Command::Man(args)) => man::run(args, &mut out),
         Some(Command::Drive(args)) => {
