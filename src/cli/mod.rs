@@ -3,6 +3,7 @@
 //! 1 for failures at run time.
 
 pub mod bridge;
+pub mod complete;
 pub mod completions;
 pub mod config_cmd;
 pub mod connect;
@@ -156,6 +157,9 @@ impl CliError {
 
 /// Run the CLI, returning the process exit status.
 pub fn main() -> i32 {
+    // A shell asking for completions (`DROIDCTL_COMPLETE=bash droidctl -- …`) is answered
+    // here, before anything else is read or written.
+    complete::complete_if_asked();
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(e) => {
