@@ -150,11 +150,7 @@ fn install_panic_hook() {
 
 pub fn run(args: DriveArgs) -> Result<i32, CliError> {
     let config_path = crate::config::config_path();
-    let config = Config::load(&config_path).map_err(|e| {
-        CliError::usage(format!(
-            "{e}\nFix the file (or move it away to use the defaults) and try again."
-        ))
-    })?;
+    let config = super::app_config(&config_path)?;
     let sims = sim_models(&args.sim)?;
     let program = program(&args)?;
     if super::fleet::is_fleet(sims.len(), &args.ble) {

@@ -119,6 +119,20 @@ pub const EXIT_STATUSES: [(i32, &str); 4] = [
     ),
 ];
 
+/// The configuration the app runs with: the file at `path` (a bad one is bad input, with what
+/// to do), its theme turned off when `NO_COLOR` asks (<https://no-color.org>).
+pub(crate) fn app_config(path: &std::path::Path) -> Result<crate::config::Config, CliError> {
+    let mut config = crate::config::Config::load(path).map_err(|e| {
+        CliError::usage(format!(
+            "{e}\nFix the file (or move it away to use the defaults) and try again."
+        ))
+    })?;
+    let no_color = std::env::var_os("NO_COLOR");
+    config.display.theme =
+        crate::config::Theme::effective(config.display.theme, no_color.as_deref());
+    Ok(config)
+}
+
 /// A failure with the exit status it deserves.
 #[derive(Debug)]
 pub struct CliError {
