@@ -9,6 +9,7 @@ pub mod capture;
 pub mod cli;
 pub mod config;
 pub mod edu;
+pub mod examples;
 pub mod family;
 pub mod fleet;
 #[doc(hidden)]

@@ -39,14 +39,60 @@ fn the_subcommand_list_is_complete() {
         "config",
         "completions",
         "man",
+        "examples",
     ] {
         assert!(all.contains(&vec![name.to_string()]), "{name}: {all:?}");
     }
     assert!(all.contains(&vec!["packet".to_string(), "decode".to_string()]));
 }
 
+/// What bash offers for the last word of `words` with droidctl's script loaded, run in `dir`:
+/// the real shell calling the real binary, as at a prompt.
+pub fn bash_offers(words: &[&str], dir: &std::path::Path) -> Vec<String> {
+    let bin = std::path::Path::new(env!("CARGO_BIN_EXE_droidctl"));
+    let path = format!(
+        "{}:{}",
+        bin.parent().unwrap().display(),
+        std::env::var("PATH").unwrap_or_default()
+    );
+    let quoted: Vec<String> = words.iter().map(|w| format!("'{w}'")).collect();
+    let script = format!(
+        "source <(droidctl completions bash)\n\
+         COMP_WORDS=({words})\nCOMP_CWORD={cword}\nCOMP_TYPE=9\n\
+         _clap_complete_droidctl droidctl {last}\n\
+         printf '%s\\n' \"${{COMPREPLY[@]}}\"\n",
+        words = quoted.join(" "),
+        cword = words.len() - 1,
+        last = quoted.last().unwrap(),
+    );
+    let out = Command::new("bash")
+        .arg("-c")
+        .arg(script)
+        .current_dir(dir)
+        .env("PATH", path)
+        .output()
+        .expect("bash runs");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .filter(|l| !l.is_empty())
+        .map(|l| l.trim_end().to_string())
+        .collect()
+}
+
+fn scratch(name: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("droidctl-compl-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
 #[test]
-fn completions_for_every_shell_name_every_subcommand() {
+fn every_shell_gets_a_script_that_asks_droidctl() {
     for shell in ["bash", "zsh", "fish", "powershell", "elvish"] {
         let out = droidctl(&["completions", shell]);
         let stderr = String::from_utf8_lossy(&out.stderr);
@@ -54,35 +100,70 @@ fn completions_for_every_shell_name_every_subcommand() {
         assert!(stderr.is_empty(), "{shell}: {stderr}");
         let script = String::from_utf8(out.stdout).unwrap();
         assert!(script.contains("droidctl"), "{shell}");
-        for path in subcommands() {
-            let name = path.last().unwrap();
-            assert!(
-                script.contains(name.as_str()),
-                "{shell} completions do not mention `{}`",
-                path.join(" ")
-            );
-        }
-        // Options are completed too.
-        assert!(script.contains("scan-timeout"), "{shell}");
+        assert!(script.contains("DROIDCTL_COMPLETE"), "{shell}: {script}");
     }
 }
 
 #[test]
-fn bash_completions_offer_the_subcommands_first() {
-    let out = droidctl(&["completions", "bash"]);
-    let script = String::from_utf8(out.stdout).unwrap();
-    // The word list bash offers after `droidctl `: every top-level subcommand.
-    let top = script
-        .lines()
-        .find(|l| l.contains("opts=\"") && l.contains(" drive "))
-        .unwrap_or_else(|| panic!("no top-level word list in:\n{script}"));
+fn bash_offers_every_subcommand_and_option() {
+    let dir = scratch("subcommands");
+    let top = bash_offers(&["droidctl", ""], &dir);
     for path in subcommands().iter().filter(|p| p.len() == 1) {
+        assert!(top.contains(&path[0]), "`{}` missing from {top:?}", path[0]);
+    }
+    for path in subcommands().iter().filter(|p| p.len() == 2) {
+        let offered = bash_offers(&["droidctl", &path[0], ""], &dir);
         assert!(
-            top.split(['"', ' ']).any(|w| w == path[0]),
-            "`{}` missing from {top}",
-            path[0]
+            offered.contains(&path[1]),
+            "`{}`: {offered:?}",
+            path.join(" ")
         );
     }
+    // Options are completed too.
+    assert_eq!(
+        bash_offers(&["droidctl", "scan", "--scan-t"], &dir),
+        ["--scan-timeout"]
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn bash_completes_the_values_models_commands_channels_and_examples() {
+    let dir = scratch("values");
+    assert_eq!(
+        bash_offers(&["droidctl", "--sim", "r2d2,b"], &dir),
+        ["r2d2,bb9e", "r2d2,bb8", "r2d2,bolt"]
+    );
+    assert_eq!(
+        bash_offers(&["droidctl", "run", "x.txt", "--sim", "bolt,m"], &dir),
+        ["bolt,mini"]
+    );
+    let v2 = bash_offers(
+        &["droidctl", "packet", "encode", "set-all-leds-with-"],
+        &dir,
+    );
+    assert_eq!(v2.len(), 3, "{v2:?}");
+    assert!(
+        v2.iter().all(|n| n.starts_with("set-all-leds-with-")),
+        "{v2:?}"
+    );
+    // Robi's family: its two names (beside the options), none of v2's.
+    let rsrcp = bash_offers(
+        &["droidctl", "packet", "encode", "--protocol", "rsrcp", ""],
+        &dir,
+    );
+    let names: Vec<&String> = rsrcp.iter().filter(|w| !w.starts_with('-')).collect();
+    assert_eq!(names, ["frame", "handshake"], "{rsrcp:?}");
+    let channels = bash_offers(
+        &["droidctl", "plot", "a.json", "--channels", "speed,ya"],
+        &dir,
+    );
+    assert_eq!(channels, ["speed,yaw"]);
+    assert_eq!(
+        bash_offers(&["droidctl", "examples", "to"], &dir),
+        ["tour.txt"]
+    );
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]

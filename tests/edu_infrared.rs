@@ -42,7 +42,7 @@ fn two_bolts_hear_each_other_and_one_alone_hears_nothing() {
         // The handler lit it green: the step is there, after the message was sent.
         assert!(
             text.lines()
-                .any(|l| l.contains(droid) && l.contains("line 6: setMainLed(0, 255, 0)")),
+                .any(|l| l.contains(droid) && l.contains("line 7: setMainLed(0, 255, 0)")),
             "{text}"
         );
     }

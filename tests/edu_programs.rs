@@ -48,13 +48,13 @@ fn the_examples_run_as_written_in_simulated_time() {
     let (out, _) = dir.run_timed(&["run", &example("matrix.js"), "--sim", "bolt"]);
     assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
     let text = stdout(&out);
-    assert!(text.contains("line 11: scrollMatrixText"), "{text}");
+    assert!(text.contains("line 12: scrollMatrixText"), "{text}");
     // The text takes 16 columns at 10 frames/s: the spin starts 1.6 s after it.
     let at = |needle: &str| -> f64 {
         let line = text.lines().find(|l| l.contains(needle)).unwrap();
         line[1..line.find('s').unwrap()].trim().parse().unwrap()
     };
-    let took = at("line 12: spin") - at("line 11: scrollMatrixText");
+    let took = at("line 13: spin") - at("line 12: scrollMatrixText");
     assert!((took - 1.6).abs() < 0.05, "{text}");
 }
 

@@ -130,6 +130,8 @@ fn every_subcommand_keeps_the_contract() {
         (&["config", "show"], Out::Read, Some(&bad), 2),
         (&["completions", "nosuch"], Out::Read, None, 2),
         (&["man", "nosuch"], Out::Read, None, 2),
+        (&["examples", "nosuch"], Out::Read, None, 2),
+        (&["examples", "square"], Out::Read, None, 2),
         // A failure at run time: 1 (no Bluetooth here; a full disk).
         (&["scan"], Out::Read, None, 1),
         (&["packet", "list"], Out::Full, None, 1),
@@ -146,6 +148,8 @@ fn every_subcommand_keeps_the_contract() {
         (&["config", "show"], Out::Full, None, 1),
         (&["completions", "bash"], Out::Full, None, 1),
         (&["man"], Out::Full, None, 1),
+        (&["examples"], Out::Full, None, 1),
+        (&["examples", "tour.txt"], Out::Full, None, 1),
         // The reader went away: 0.
         (&["packet", "list"], Out::Closed, None, 0),
         (
@@ -165,6 +169,8 @@ fn every_subcommand_keeps_the_contract() {
         (&["config", "show"], Out::Closed, None, 0),
         (&["completions", "bash"], Out::Closed, None, 0),
         (&["man"], Out::Closed, None, 0),
+        (&["examples"], Out::Closed, None, 0),
+        (&["examples", "square.js"], Out::Closed, None, 0),
     ];
     let mut wrong = Vec::new();
     for (args, out, config, want) in cases {

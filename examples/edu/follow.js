@@ -1,6 +1,7 @@
-// Follow the robot that runs examples/edu/beacon.js: look for a broadcaster on channels 0 and
-// 1, roll up to it, and say how far that took.
-//   droidctl run examples/edu/beacon.js examples/edu/follow.js --sim bolt,bolt
+// Follow the robot that runs beacon.js: find it on infrared, roll up to it, say how far.
+// Models: bolt, rvr (with beacon.js on a second robot)
+//   droidctl run beacon.js follow.js --sim bolt,bolt
+// It looks for a broadcaster on channels 0 and 1.
 async function startProgram() {
   setMainLed({ r: 0, g: 255, b: 0 });
   startIRFollow(0, 1);

@@ -1,5 +1,6 @@
 // BOLT's matrix: a letter, a drawing, scrolling text, and a spin to finish.
-// Run it with `droidctl run examples/edu/matrix.js --sim bolt`.
+// Models: bolt
+//   droidctl examples matrix.js > matrix.js && droidctl run matrix.js --sim bolt
 async function startProgram() {
   setMatrixCharacter("A", { r: 255, g: 0, b: 0 });
   await delay(1);

@@ -1,5 +1,6 @@
 // Pong: roll forward, turn around at each hit, and end after the third.
-// Run it with `droidctl run examples/edu/pong.js --sim bolt`.
+// Models: all but robi
+//   droidctl examples pong.js > pong.js && droidctl run pong.js --sim bolt
 let hits = 0;
 
 async function onCollision() {

@@ -1,5 +1,6 @@
-// A square: four sides of one second each, turning right at each corner, a new colour on
-// each side. Run it with `droidctl run examples/edu/square.js --sim bolt`.
+// A square: four one-second sides, a right turn and a new colour at each corner.
+// Models: all but robi
+//   droidctl examples square.js > square.js && droidctl run square.js --sim bolt
 async function startProgram() {
   const colours = [
     { r: 255, g: 0, b: 0 },

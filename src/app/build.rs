@@ -148,6 +148,7 @@ pub(super) fn build(droids: Vec<Origin>, opts: AppOptions) -> App {
     };
     // A replay drives nothing (Space pauses it): its help names no stop.
     state.help_nav = super::help::nav(&keymap, live);
+    state.theme = config.display.theme;
     state.footer = super::help::footer(&keymap, live);
     state.help = if live {
         super::help::live(&config)

@@ -165,6 +165,8 @@ pub struct AppState {
     pub sounds: Vec<Entry>,
     /// A collision flashes this long.
     pub collision_flash: Duration,
+    /// The colours the screen is drawn in (`[display] theme`, `NO_COLOR`).
+    pub theme: crate::config::Theme,
 }
 
 /// What the screen shows of one droid.
@@ -283,6 +285,7 @@ impl AppState {
             animations: catalog::animations(),
             sounds: catalog::sounds(),
             collision_flash: Duration::from_millis(1500),
+            theme: crate::config::Theme::Dark,
         }
     }
 

@@ -36,7 +36,8 @@ pub struct BridgeArgs {
     /// Bridge simulated droids (r2d2 without a MODEL); several share one room:
     /// --sim r2d2,bb8,robi.
     #[arg(long, num_args = 0..=1, default_missing_value = "r2d2", value_name = "MODEL[,MODEL…]",
-          value_parser = super::models::ModelNames::list())]
+          value_parser = super::models::ModelNames::list(),
+          add = clap_complete::ArgValueCompleter::new(super::complete::model_list))]
     pub sim: Option<String>,
     #[command(flatten)]
     pub ble: super::connect::BleArgs,

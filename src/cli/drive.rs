@@ -19,7 +19,8 @@ pub struct DriveArgs {
     /// Drive a simulated droid in-process (r2d2 without a MODEL); several at once, sharing
     /// one room: --sim r2d2,bb8,robi.
     #[arg(long, num_args = 0..=1, default_missing_value = "r2d2", value_name = "MODEL[,MODEL…]",
-          value_parser = super::models::ModelNames::list())]
+          value_parser = super::models::ModelNames::list(),
+          add = clap_complete::ArgValueCompleter::new(super::complete::model_list))]
     pub sim: Option<String>,
     #[command(flatten)]
     pub ble: super::connect::BleArgs,
@@ -149,11 +150,7 @@ fn install_panic_hook() {
 
 pub fn run(args: DriveArgs) -> Result<i32, CliError> {
     let config_path = crate::config::config_path();
-    let config = Config::load(&config_path).map_err(|e| {
-        CliError::usage(format!(
-            "{e}\nFix the file (or move it away to use the defaults) and try again."
-        ))
-    })?;
+    let config = super::app_config(&config_path)?;
     let sims = sim_models(&args.sim)?;
     let program = program(&args)?;
     if super::fleet::is_fleet(sims.len(), &args.ble) {

@@ -3,10 +3,12 @@
 //! 1 for failures at run time.
 
 pub mod bridge;
+pub mod complete;
 pub mod completions;
 pub mod config_cmd;
 pub mod connect;
 pub mod drive;
+pub mod examples;
 pub mod fleet;
 mod fleet_run;
 pub mod man;
@@ -71,6 +73,9 @@ pub enum Command {
     /// Show or create the configuration file.
     #[command(subcommand)]
     Config(config_cmd::ConfigCmd),
+    /// List the built-in missions and Sphero Edu programs with the models each is for, or
+    /// print one (`droidctl examples square.js > square.js`).
+    Examples(examples::ExamplesArgs),
     /// Print shell completions (`droidctl completions bash > …`).
     Completions(completions::CompletionsArgs),
     /// Print a manual page, in roff: droidctl(1), or a subcommand's (`droidctl man packet
@@ -114,6 +119,20 @@ pub const EXIT_STATUSES: [(i32, &str); 4] = [
     ),
 ];
 
+/// The configuration the app runs with: the file at `path` (a bad one is bad input, with what
+/// to do), its theme turned off when `NO_COLOR` asks (<https://no-color.org>).
+pub(crate) fn app_config(path: &std::path::Path) -> Result<crate::config::Config, CliError> {
+    let mut config = crate::config::Config::load(path).map_err(|e| {
+        CliError::usage(format!(
+            "{e}\nFix the file (or move it away to use the defaults) and try again."
+        ))
+    })?;
+    let no_color = std::env::var_os("NO_COLOR");
+    config.display.theme =
+        crate::config::Theme::effective(config.display.theme, no_color.as_deref());
+    Ok(config)
+}
+
 /// A failure with the exit status it deserves.
 #[derive(Debug)]
 pub struct CliError {
@@ -152,6 +171,9 @@ impl CliError {
 
 /// Run the CLI, returning the process exit status.
 pub fn main() -> i32 {
+    // A shell asking for completions (`DROIDCTL_COMPLETE=bash droidctl -- …`) is answered
+    // here, before anything else is read or written.
+    complete::complete_if_asked();
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(e) => {
@@ -189,6 +211,7 @@ pub fn main() -> i32 {
             sim::run(args)
         }
         Some(Command::Config(cmd)) => config_cmd::run(cmd, &mut out),
+        Some(Command::Examples(args)) => examples::run(args, &mut out),
         Some(Command::Completions(args)) => completions::completions(args, &mut out),
         Some(Command::Man(args)) => man::run(args, &mut out),
         Some(Command::Drive(args)) => {

@@ -22,7 +22,8 @@ pub struct PlotArgs {
     pub force: bool,
     /// Channels plotted against time, comma separated (e.g. `speed,yaw,gyro_z`; see docs/monitoring.md
     /// for the names). Default: speed and yaw, Robi's wheels on Robi 42.
-    #[arg(long, value_delimiter = ',', value_name = "NAMES")]
+    #[arg(long, value_delimiter = ',', value_name = "NAMES",
+          add = clap_complete::ArgValueCandidates::new(super::complete::channels))]
     pub channels: Vec<String>,
     /// Image size in pixels, WIDTHxHEIGHT.
     #[arg(long, default_value = "1200x900", value_name = "WxH")]

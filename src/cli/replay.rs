@@ -309,11 +309,7 @@ fn play(played: Played, file: String) -> Result<i32, CliError> {
     use ratatui::backend::CrosstermBackend;
     use tokio::sync::mpsc;
 
-    let config = crate::config::Config::load(&crate::config::config_path()).map_err(|e| {
-        CliError::usage(format!(
-            "{e}\nFix the file (or move it away to use the defaults) and try again."
-        ))
-    })?;
+    let config = super::app_config(&crate::config::config_path())?;
     let log_path = crate::logging::init().ok();
     let (model, name) = match &played {
         Played::One(r, name) => (r.model(), name.clone()),

@@ -30,7 +30,8 @@ pub struct RunArgs {
     /// Run against a simulated droid (r2d2 without a MODEL); the mission runs in simulated
     /// time. Several share one room: --sim r2d2,bb8,robi.
     #[arg(long, num_args = 0..=1, default_missing_value = "r2d2", value_name = "MODEL[,MODEL…]",
-          value_parser = super::models::ModelNames::list_or_other())]
+          value_parser = super::models::ModelNames::list_or_other(),
+          add = clap_complete::ArgValueCompleter::new(super::complete::model_list))]
     pub sim: Option<String>,
     /// One JSON object per telemetry sample, then a summary object.
     #[arg(long)]

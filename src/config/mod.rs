@@ -115,6 +115,35 @@ pub struct Gamepad {
     pub sound_right: u16,
 }
 
+/// `[display]`: how the app looks.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Display {
+    pub theme: Theme,
+}
+
+/// The app's colours: for a dark terminal (the default), a light one, or none at all (also
+/// what `NO_COLOR` asks for, <https://no-color.org>).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Theme {
+    #[default]
+    Dark,
+    Light,
+    None,
+}
+
+impl Theme {
+    /// The theme to use: none when `NO_COLOR` is set to anything but the empty string (the
+    /// convention's rule), else the configured one. The variable's value is passed in.
+    pub fn effective(configured: Theme, no_color: Option<&std::ffi::OsStr>) -> Theme {
+        match no_color {
+            Some(v) if !v.is_empty() => Theme::None,
+            _ => configured,
+        }
+    }
+}
+
 /// The file as written, before bindings are parsed.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -128,6 +157,7 @@ struct RawConfig {
     streaming: monitor::Streaming,
     collision: crate::tuning::CollisionConfig,
     bridge: bridge::Bridge,
+    display: Display,
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -147,6 +177,8 @@ pub struct Config {
     pub collision: crate::tuning::CollisionConfig,
     /// `[bridge]`: `droidctl bridge`'s command timeout, telemetry rate and MQTT settings.
     pub bridge: bridge::Bridge,
+    /// `[display]`: the app's theme.
+    pub display: Display,
 }
 
 /// Why a config could not be used: where and what.
@@ -501,6 +533,7 @@ impl Config {
             streaming: raw.streaming,
             collision: raw.collision,
             bridge: raw.bridge,
+            display: raw.display,
         };
         cfg.validate()?;
         Ok(cfg)

@@ -104,6 +104,9 @@ pub trait Family: Sync {
     fn gatt_profile(&self, model: Model) -> crate::gatt::GattProfile;
     /// `packet encode`: the wire bytes of the packet `name` with `--key value` parameters.
     fn encode_named(&self, name: &str, params: Vec<(String, String)>) -> Result<Vec<u8>, String>;
+    /// The names [`Family::encode_named`] takes, with what each is (the shell completions of
+    /// `packet encode NAME`).
+    fn encode_names(&self) -> Vec<(String, &'static str)>;
     /// `packet list`: the catalogue, names containing `filter` only; how many entries were
     /// listed (a heading is printed only above entries: [`listing::Listing`]).
     fn list(&self, filter: Option<&str>, out: &mut dyn std::io::Write) -> std::io::Result<usize>;

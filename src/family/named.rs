@@ -33,3 +33,18 @@ pub fn params_text(params: &[FieldDef]) -> String {
 pub fn keep(filter: Option<&str>, name: &str) -> bool {
     filter.is_none_or(|f| name.contains(f))
 }
+
+/// A catalogue's command names with their names in the spec, and `raw` (any DID/CID): what
+/// `packet encode NAME` takes in the v1 and v2 families.
+pub fn catalogue_names(
+    commands: &'static [crate::protocol::table::CommandDef],
+) -> Vec<(String, &'static str)> {
+    commands
+        .iter()
+        .map(|c| (c.name.clone(), c.spec_name))
+        .chain([(
+            "raw".to_string(),
+            "any DID and CID: --did N --cid N --data HEX",
+        )])
+        .collect()
+}

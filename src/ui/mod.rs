@@ -34,8 +34,13 @@ use ratatui::Frame;
 use ratatui::text::Span;
 use ratatui::widgets::Paragraph;
 
-/// Draw the whole screen for `state`.
+/// Draw the whole screen for `state`, in its theme's colours.
 pub fn draw(frame: &mut Frame, state: &AppState) {
+    draw_panels(frame, state);
+    theme::apply(frame.buffer_mut(), state.theme);
+}
+
+fn draw_panels(frame: &mut Frame, state: &AppState) {
     // A fleet's roster strip takes the top row; the rest is the one-droid screen.
     let fleet = state.roster();
     let screen = layout::screen(frame.area(), fleet.is_some());

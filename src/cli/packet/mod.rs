@@ -101,6 +101,7 @@ pub enum PacketCmd {
         #[arg(long, value_name = "v2|v1|rsrcp")]
         protocol: Option<String>,
         /// Command name (see `droidctl packet list`), or `raw`.
+        #[arg(add = clap_complete::ArgValueCompleter::new(crate::cli::complete::encode_names))]
         name: String,
         /// Parameters as `--name value`, plus the header options above.
         #[arg(

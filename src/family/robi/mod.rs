@@ -206,6 +206,13 @@ impl Family for Robi {
         named::encode(name, params)
     }
 
+    fn encode_names(&self) -> Vec<(String, &'static str)> {
+        named::NAMES
+            .iter()
+            .map(|&(n, what)| (n.to_string(), what))
+            .collect()
+    }
+
     fn list(&self, filter: Option<&str>, out: &mut dyn std::io::Write) -> std::io::Result<usize> {
         named::list(filter, out)
     }

@@ -16,6 +16,12 @@ use crate::protocol::rsrcp::{
 };
 use std::io::Write;
 
+/// The names [`encode`] takes, with what each builds.
+pub const NAMES: [(&str, &str); 2] = [
+    ("frame", "a state frame, as the robot sends it"),
+    ("handshake", "the handshake, as the robot sends it"),
+];
+
 /// What the robot sends, built from options: `frame` or `handshake`. Anything else is a usage
 /// error that says how the robot is actually driven.
 pub fn encode(name: &str, given: Vec<(String, String)>) -> Result<Vec<u8>, String> {

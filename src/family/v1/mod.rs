@@ -257,6 +257,10 @@ impl Family for V1 {
         named::encode(name, params)
     }
 
+    fn encode_names(&self) -> Vec<(String, &'static str)> {
+        named::names()
+    }
+
     fn list(&self, filter: Option<&str>, out: &mut dyn std::io::Write) -> std::io::Result<usize> {
         named::list(filter, out)
     }

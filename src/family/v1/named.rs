@@ -1,10 +1,15 @@
 //! `packet encode --protocol v1` and `packet list --protocol v1`: v1 commands built from
 //! catalogue names and parameters, and the catalogue listed.
 
-use crate::family::named::{byte_opt, data_opt, keep, params_text};
+use crate::family::named::{byte_opt, catalogue_names, data_opt, keep, params_text};
 use crate::protocol::table::unknown_command;
 use crate::protocol::v1::{CommandPacket, Packet, catalog};
 use std::io::Write;
+
+/// The names [`encode`] takes: the catalogue's, and `raw`.
+pub fn names() -> Vec<(String, &'static str)> {
+    catalogue_names(catalog::commands())
+}
 
 /// Build the wire bytes of a v1 command: a catalogue name with its parameters, or `raw`.
 /// Header options: `--seq N` (0..=255), `--no-response` (clears SOP2's answer bit),

@@ -265,6 +265,10 @@ impl Family for V2 {
         named::encode(name, params)
     }
 
+    fn encode_names(&self) -> Vec<(String, &'static str)> {
+        named::names()
+    }
+
     fn list(&self, filter: Option<&str>, out: &mut dyn std::io::Write) -> std::io::Result<usize> {
         named::list(filter, out)
     }

@@ -1,7 +1,7 @@
 //! `packet encode` and `packet list` for Sphero API v2: packets built from catalogue names
 //! and parameters, and the catalogue listed.
 
-use crate::family::named::{byte_opt, data_opt, keep, params_text};
+use crate::family::named::{byte_opt, catalogue_names, data_opt, keep, params_text};
 use crate::model::Model;
 use crate::protocol::table::unknown_command;
 use crate::protocol::v2::catalog::targets::{self, Home};
@@ -15,6 +15,11 @@ struct Header {
     tid: Option<u8>,
     sid: Option<u8>,
     no_response: bool,
+}
+
+/// The names [`encode`] takes: the catalogue's, and `raw`.
+pub fn names() -> Vec<(String, &'static str)> {
+    catalogue_names(catalog::commands())
 }
 
 /// Build the wire bytes for `packet encode NAME --key value ...` (v2): a catalogue name with
