@@ -411,7 +411,8 @@ fn components(edges: &BTreeMap<PathBuf, BTreeSet<PathBuf>>) -> Vec<Vec<PathBuf>>
 #[test]
 fn no_import_circle_is_over_three_files() {
     let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
-    let mut circles: Vec<Vec<PathBuf>> = components(&graph(&src))
+    let edges = graph(&src);
+    let mut circles: Vec<Vec<PathBuf>> = components(&edges)
         .into_iter()
         .filter(|c| c.len() > 1)
         .collect();
@@ -424,7 +425,20 @@ fn no_import_circle_is_over_three_files() {
                 .iter()
                 .map(|f| f.strip_prefix(&src).unwrap_or(f).display().to_string())
                 .collect();
-            format!("{} files: {}", c.len(), names.join(", "))
+            let mut line = format!("{} files: {}", c.len(), names.join(", "));
+            if c.len() > BOUND {
+                // The edges inside the circle: where to cut.
+                let short = |f: &PathBuf| f.strip_prefix(&src).unwrap_or(f).display().to_string();
+                for from in c {
+                    let inside: Vec<String> = edges[from]
+                        .iter()
+                        .filter(|t| c.contains(t))
+                        .map(short)
+                        .collect();
+                    line.push_str(&format!("\n    {} -> {}", short(from), inside.join(", ")));
+                }
+            }
+            line
         })
         .collect();
     eprintln!(

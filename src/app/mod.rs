@@ -43,6 +43,7 @@ mod replay;
 pub mod roster;
 pub mod run;
 pub mod state;
+pub mod view;
 
 pub use core::InputTrace;
 pub use place::Place;
