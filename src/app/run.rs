@@ -4,40 +4,22 @@
 //! [`super::pad`], [`super::core`], [`super::replay`]). Every outside input is a parameter, so
 //! tests drive it with fakes under paused time and render into ratatui's `TestBackend`.
 
+pub use super::build::AppOptions;
 use super::build::{Origin, build};
+pub use super::core::ExitReason;
 use super::core::{App, InputTrace};
 use super::input::TermEvent;
 use super::player::Player;
 use super::state::AppState;
 use crate::capture::replay::Replay;
-use crate::config::Config;
 use crate::family::Command;
 use crate::model::Model;
 use crate::session::SessionHandle;
 use crate::teleop::gamepad::PadEvent;
-use crate::teleop::held::ReleaseMode;
 use ratatui::{Frame, Terminal, backend::Backend};
-use std::path::PathBuf;
 use std::time::Duration;
 use tokio::sync::{mpsc, watch};
 use tokio::time::{Instant, MissedTickBehavior, interval, sleep_until};
-
-/// How the app is set up.
-pub struct AppOptions {
-    pub config: Config,
-    pub model: Model,
-    pub droid_name: String,
-    pub log_path: Option<PathBuf>,
-    pub release: ReleaseMode,
-    /// Whether the session's connect setup puts a droid with legs into tripod (the app then
-    /// shows the stance as requested on every connect).
-    pub tripod_on_connect: bool,
-    /// Where every sample the droid streams is written (`drive --csv`, `--jsonl`).
-    pub samples: Option<crate::mission::csv::SampleFiles>,
-    /// Where settings are remembered per droid model ([`super::remember`]); `None`: nothing
-    /// is remembered (replay, tests).
-    pub remember: Option<PathBuf>,
-}
 
 /// Everything from outside the app.
 pub struct AppInputs {
@@ -45,16 +27,6 @@ pub struct AppInputs {
     pub pad: mpsc::Receiver<PadEvent>,
     /// Signals (SIGTERM, SIGHUP, Ctrl-C from outside the terminal): the reason.
     pub quit: mpsc::Receiver<String>,
-}
-
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub enum ExitReason {
-    /// The operator quit.
-    Quit,
-    /// A signal.
-    Signal(String),
-    /// The terminal input ended.
-    InputClosed,
 }
 
 /// How the loop ended, with the stop to send before restoring the terminal.
@@ -213,12 +185,8 @@ async fn run_droids<B: Backend>(
     // Closed channels would fire their select branch forever: disable them instead.
     let mut events_open = !lives.is_empty();
 
-    // Test hook for the crash path (stop first, then restore the terminal): panic after this
-    // many ms. Only read from the environment, never set by droidctl itself.
-    let crash_at = std::env::var("DROIDCTL_TEST_PANIC_AFTER_MS")
-        .ok()
-        .and_then(|v| v.parse::<u64>().ok())
-        .map(|ms| start + Duration::from_millis(ms));
+    #[cfg(feature = "test-hooks")]
+    let crash_at = crash_deadline(start);
     let reason = loop {
         let expiry = app.held.next_expiry().map(|d| start + d);
         let change = next_change(&app);
@@ -253,6 +221,7 @@ async fn run_droids<B: Backend>(
             }
             _ = tick.tick() => {
                 app.control(true);
+                #[cfg(feature = "test-hooks")]
                 if crash_at.is_some_and(|t| Instant::now() >= t) {
                     panic!("test panic requested by DROIDCTL_TEST_PANIC_AFTER_MS");
                 }
@@ -303,6 +272,17 @@ async fn run_droids<B: Backend>(
         stop,
         stops,
     })
+}
+
+/// The test hook of the crash path (stop first, then restore the terminal: `tests/e2e_pty.rs`):
+/// the loop panics `DROIDCTL_TEST_PANIC_AFTER_MS` ms after it started. Built only with the
+/// `test-hooks` feature, so a droidctl built without it never reads that variable.
+#[cfg(feature = "test-hooks")]
+fn crash_deadline(start: Instant) -> Option<Instant> {
+    std::env::var("DROIDCTL_TEST_PANIC_AFTER_MS")
+        .ok()
+        .and_then(|v| v.parse::<u64>().ok())
+        .map(|ms| start + Duration::from_millis(ms))
 }
 
 /// When something on screen ends by itself (a hint, the collision flash): redraw then. In
