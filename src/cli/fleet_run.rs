@@ -5,26 +5,17 @@
 //! give the same output every run.
 
 use super::CliError;
-use super::run::{
+use super::mission_run::{
     RunArgs, finish_recording, mission_session, report_link_of, sample_line, summary_line,
 };
-use super::run_output::{OUTPUT_GONE, RunOutput, note};
+use super::run_output::{OUTPUT_GONE, RunOutput, Tagged, note};
 use crate::fleet::Fleet;
 use crate::fleet::mission::{self as fleet_mission, FleetEmit};
 use crate::mission::{MissionEvent, MissionOptions, Summary};
 use crate::model::Model;
 use crate::script::{Item, ScriptError};
-use serde::Serialize;
 use std::sync::Arc;
 use std::time::Duration;
-
-/// A JSON line naming its droid first (`run --json` and `replay --json` of a fleet).
-#[derive(Serialize)]
-pub(super) struct Tagged<'a, T: Serialize> {
-    pub droid: &'a str,
-    #[serde(flatten)]
-    pub inner: &'a T,
-}
 
 pub fn run(
     args: &RunArgs,

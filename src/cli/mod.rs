@@ -10,6 +10,7 @@ pub mod drive;
 pub mod fleet;
 mod fleet_run;
 pub mod man;
+mod mission_run;
 pub mod models;
 pub mod packet;
 pub mod plot;
