@@ -19,16 +19,9 @@ use std::path::{Path, PathBuf};
 /// The most files one import circle may hold.
 const BOUND: usize = 3;
 
-fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
-    for entry in std::fs::read_dir(dir).expect("src is readable") {
-        let path = entry.expect("a directory entry").path();
-        if path.is_dir() {
-            rust_files(&path, out);
-        } else if path.extension().is_some_and(|e| e == "rs") {
-            out.push(path);
-        }
-    }
-}
+#[path = "common/source.rs"]
+mod source;
+use source::rust_files;
 
 /// The module path of a file: `src/app/core.rs` → `app::core`, `src/app/mod.rs` → `app`,
 /// `src/lib.rs` → the crate root (empty).

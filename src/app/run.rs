@@ -41,47 +41,80 @@ pub struct Exit {
 
 pub type DrawFn = fn(&mut Frame, &AppState);
 
-/// Where the app's droid comes from.
+/// Where the app's droids come from: the one choice the app loop's one entry point ([`run`])
+/// takes. A session or a fleet converts into it (`run(&mut t, session, …)`).
 pub enum Source {
     /// A live session: the droid is driven.
     Live(SessionHandle),
-    /// A capture played back: nothing is sent anywhere. The string names the file.
+    /// A live fleet: the roster strip shows every droid, the keys drive the chosen one (or
+    /// all, mirrored), the e-stop and quitting reach all. `opts.model` and `opts.droid_name`
+    /// are ignored: each droid's come from the fleet. A fleet of one is the one-droid app.
+    /// With a sender, what the input routing did is published after every terminal and
+    /// gamepad event ([`InputTrace`]: the place on top, held keys let go, emergency stops):
+    /// the safety tests and the fuzz harness read it to know where each key went.
+    Fleet(crate::fleet::Fleet, Option<watch::Sender<InputTrace>>),
+    /// A capture played back: nothing is sent anywhere (the status bar says REPLAY). The
+    /// string names the file.
     Replay(Box<Replay>, String),
+    /// A fleet's capture: every droid's replay on one clock, the roster and the choice of
+    /// droid as live (nothing is sent); in fleet order, each with its name. The string names
+    /// the file.
+    FleetReplay(Vec<(Replay, String)>, String),
 }
 
-/// Run the app until the operator quits, a signal arrives, or input ends.
+impl From<SessionHandle> for Source {
+    fn from(session: SessionHandle) -> Source {
+        Source::Live(session)
+    }
+}
+
+impl From<crate::fleet::Fleet> for Source {
+    fn from(fleet: crate::fleet::Fleet) -> Source {
+        Source::Fleet(fleet, None)
+    }
+}
+
+/// Run the app until the operator quits, a signal arrives, or input ends: the one entry
+/// point of the app loop, live or replayed, one droid or a fleet.
 pub async fn run<B: Backend>(
     terminal: &mut Terminal<B>,
-    session: SessionHandle,
+    source: impl Into<Source>,
     opts: AppOptions,
     inputs: AppInputs,
     draw: DrawFn,
 ) -> std::io::Result<Exit> {
-    run_source(terminal, Source::Live(session), opts, inputs, draw).await
-}
-
-/// Run the app on a live session or a replay (the status bar says REPLAY; nothing is sent).
-pub async fn run_source<B: Backend>(
-    terminal: &mut Terminal<B>,
-    source: Source,
-    opts: AppOptions,
-    inputs: AppInputs,
-    draw: DrawFn,
-) -> std::io::Result<Exit> {
-    let origin = match source {
-        Source::Live(session) => Origin::Live {
-            session,
-            model: opts.model,
-            name: opts.droid_name.clone(),
-            family: crate::family::for_model(opts.model),
-        },
-        Source::Replay(replay, file) => Origin::Replay {
-            replay,
-            name: opts.droid_name.clone(),
-            file,
-        },
+    let (droids, trace) = match source.into() {
+        Source::Live(session) => (
+            vec![Origin::Live {
+                session,
+                model: opts.model,
+                name: opts.droid_name.clone(),
+                family: crate::family::for_model(opts.model),
+            }],
+            None,
+        ),
+        Source::Fleet(fleet, trace) => (live(&fleet), trace),
+        Source::Replay(replay, file) => (
+            vec![Origin::Replay {
+                replay,
+                name: opts.droid_name.clone(),
+                file,
+            }],
+            None,
+        ),
+        Source::FleetReplay(replays, file) => (
+            replays
+                .into_iter()
+                .map(|(r, name)| Origin::Replay {
+                    replay: Box::new(r),
+                    name,
+                    file: file.clone(),
+                })
+                .collect(),
+            None,
+        ),
     };
-    run_droids(terminal, vec![origin], opts, inputs, draw, None).await
+    run_droids(terminal, droids, opts, inputs, draw, trace).await
 }
 
 /// The droids of a live fleet, in its order.
@@ -96,55 +129,6 @@ fn live(fleet: &crate::fleet::Fleet) -> Vec<Origin> {
             family: m.family,
         })
         .collect()
-}
-
-/// Run the app on a fleet: the roster strip shows every droid, the keys drive the chosen one
-/// (or all, mirrored), the e-stop and quitting reach all. `opts.model` and
-/// `opts.droid_name` are ignored: each droid's come from the fleet. A fleet of one is the
-/// one-droid app.
-pub async fn run_fleet<B: Backend>(
-    terminal: &mut Terminal<B>,
-    fleet: crate::fleet::Fleet,
-    opts: AppOptions,
-    inputs: AppInputs,
-    draw: DrawFn,
-) -> std::io::Result<Exit> {
-    run_droids(terminal, live(&fleet), opts, inputs, draw, None).await
-}
-
-/// [`run_fleet`], publishing after every terminal and gamepad event what the input routing
-/// did ([`InputTrace`]: the place on top, held keys let go, emergency stops): the safety
-/// tests and the fuzz harness read it to know where each key went.
-pub async fn run_fleet_traced<B: Backend>(
-    terminal: &mut Terminal<B>,
-    fleet: crate::fleet::Fleet,
-    opts: AppOptions,
-    inputs: AppInputs,
-    draw: DrawFn,
-    trace: watch::Sender<InputTrace>,
-) -> std::io::Result<Exit> {
-    run_droids(terminal, live(&fleet), opts, inputs, draw, Some(trace)).await
-}
-
-/// Replay a fleet's capture: every droid's replay on one clock, the roster and the choice
-/// of droid as live (nothing is sent). `replays` in fleet order, each with its name.
-pub async fn run_fleet_replay<B: Backend>(
-    terminal: &mut Terminal<B>,
-    replays: Vec<(Replay, String)>,
-    file: String,
-    opts: AppOptions,
-    inputs: AppInputs,
-    draw: DrawFn,
-) -> std::io::Result<Exit> {
-    let droids = replays
-        .into_iter()
-        .map(|(r, name)| Origin::Replay {
-            replay: Box::new(r),
-            name,
-            file: file.clone(),
-        })
-        .collect();
-    run_droids(terminal, droids, opts, inputs, draw, None).await
 }
 
 async fn run_droids<B: Backend>(

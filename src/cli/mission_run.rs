@@ -68,6 +68,25 @@ fn parse_seconds(s: &str) -> Result<f64, String> {
     }
 }
 
+/// A mission's warning on stderr, at its time and line; `who` names the droid of a fleet
+/// (`"R2-D2: "`) or is empty.
+pub(super) fn warning(who: &str, t_ms: u64, line: Option<usize>, message: &str) {
+    let at = line.map(|l| format!("line {l}: ")).unwrap_or_default();
+    note(format_args!(
+        "[{:>8.2}s] {who}warning: {at}{message}",
+        t_ms as f64 / 1000.0
+    ));
+}
+
+/// A run's result once the droid is stopped; on an error, the output that went away is why
+/// the run ended: that is said first (or nothing, for a closed pipe).
+pub(super) fn ended<T>(result: Result<T, CliError>, out: &RunOutput) -> Result<T, CliError> {
+    result.or_else(|e| {
+        out.result()?;
+        Err(e)
+    })
+}
+
 /// How a run on one droid ends once the droid is stopped (a mission and a program alike):
 /// the summary line, or the error after what the output said; then whether the recording was
 /// kept. Status 1 when a step failed.
@@ -77,15 +96,7 @@ pub(super) fn finish_run(
     json: bool,
     out: &RunOutput,
 ) -> Result<i32, CliError> {
-    let summary = match result {
-        Ok(s) => s,
-        Err(e) => {
-            // The output that went away is why the mission ended: say that (or nothing, for
-            // a closed pipe).
-            out.result()?;
-            return Err(e);
-        }
-    };
+    let summary = ended(result, out)?;
     out.stdout(|w| writeln!(w, "{}", summary_line(&summary, json)));
     out.result()?;
     kept?;
@@ -210,13 +221,7 @@ where
                 t_ms,
                 line,
                 message,
-            } => {
-                let at = line.map(|l| format!("line {l}: ")).unwrap_or_default();
-                note(format_args!(
-                    "[{:>8.2}s] warning: {at}{message}",
-                    t_ms as f64 / 1000.0
-                ));
-            }
+            } => warning("", t_ms, line, &message),
         }
     });
     let link_lines = tokio::spawn(report_link(session.watch_state()));
@@ -361,18 +366,26 @@ fn opt(v: Option<f32>, prec: usize) -> String {
         .unwrap_or_else(|| "-".into())
 }
 
+/// What every sample line starts with: its time, where the droid is, how fast, its heading.
+fn sample_where(s: &mission::Sample) -> String {
+    format!(
+        "[{:>8.2}s] pos ({}, {}) cm  speed {} cm/s  heading {}",
+        s.t_ms as f64 / 1000.0,
+        opt(s.x_cm, 1),
+        opt(s.y_cm, 1),
+        opt(s.speed, 0),
+        s.heading
+            .map(|h| format!("{h}°"))
+            .unwrap_or_else(|| "-".into()),
+    )
+}
+
 pub fn sample_line(s: &mission::Sample) -> String {
     // Robi 42 reports wheels and frames, not a dome, stance or battery.
     if let (Some(l), Some(r)) = (s.motor_left_rad_s, s.motor_right_rad_s) {
         return format!(
-            "[{:>8.2}s] pos ({}, {}) cm  speed {} cm/s  heading {}  motors L {l:.2} R {r:.2} rad/s  frames {} lost {}",
-            s.t_ms as f64 / 1000.0,
-            opt(s.x_cm, 1),
-            opt(s.y_cm, 1),
-            opt(s.speed, 0),
-            s.heading
-                .map(|h| format!("{h}°"))
-                .unwrap_or_else(|| "-".into()),
+            "{}  motors L {l:.2} R {r:.2} rad/s  frames {} lost {}",
+            sample_where(s),
             s.frames.unwrap_or(0),
             s.lost_frames.unwrap_or(0),
         );
@@ -389,14 +402,8 @@ pub fn sample_line(s: &mission::Sample) -> String {
         (None, None) => String::new(),
     };
     format!(
-        "[{:>8.2}s] pos ({}, {}) cm  speed {} cm/s  heading {}{head}{stance}  battery {} V  collisions {}",
-        s.t_ms as f64 / 1000.0,
-        opt(s.x_cm, 1),
-        opt(s.y_cm, 1),
-        opt(s.speed, 0),
-        s.heading
-            .map(|h| format!("{h}°"))
-            .unwrap_or_else(|| "-".into()),
+        "{}{head}{stance}  battery {} V  collisions {}",
+        sample_where(s),
         opt(s.battery_v, 2),
         s.collisions
     )

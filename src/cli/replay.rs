@@ -357,13 +357,12 @@ fn play(played: Played, file: String) -> Result<i32, CliError> {
             match played {
                 Played::One(replay, _) => {
                     let source = Source::Replay(replay, file);
-                    run::run_source(&mut terminal, source, opts, inputs, crate::ui::draw).await
+                    run::run(&mut terminal, source, opts, inputs, crate::ui::draw).await
                 }
                 Played::Fleet(replays) => {
-                    run::run_fleet_replay(
+                    run::run(
                         &mut terminal,
-                        replays,
-                        file,
+                        Source::FleetReplay(replays, file),
                         opts,
                         inputs,
                         crate::ui::draw,
