@@ -172,7 +172,7 @@ mod linux {
                 pad: pad_rx,
                 quit: quit_rx,
             };
-            run::run_fleet(&mut terminal, f, opts, inputs, droidctl::ui::draw).await
+            run::run(&mut terminal, f, opts, inputs, droidctl::ui::draw).await
         });
         let key = |key: Key, kind: KeyKind| TermEvent::Key { key, kind };
         // R2 stands up on three legs (about 2 s) before it rolls.

@@ -11,7 +11,7 @@
 //!   `dbus-daemon`; Linux only): D-Bus, BlueZ's GATT calls, the droid behind them.
 //!
 //! Then the emergency stop of a fleet (issue 26): four droids (R2-D2, BB-8, Robi 42, BB-9E)
-//! driven by `droidctl::app::run::run_fleet` as `droidctl --sim r2d2,bb8,robi,bb9e` or
+//! driven by `droidctl::app::run::run` on a fleet as `droidctl --sim r2d2,bb8,robi,bb9e` or
 //! `--name … ×4` does, the first chosen and driving, the other three idle (`fleet idle`) or
 //! driven too in mirror mode (`fleet mirrored`); Space timed to the stop taken by each
 //! droid's link, the last of the four (BB-9E, whose stop the app writes last) reported beside
@@ -447,7 +447,7 @@ async fn measure_fleet(found: Vec<Found>, reps: usize, mirrored: bool) -> FleetR
     let app_inputs = io.app;
     let app = tokio::spawn(async move {
         let mut terminal = terminal();
-        run::run_fleet(&mut terminal, f, opts, app_inputs, droidctl::ui::draw).await
+        run::run(&mut terminal, f, opts, app_inputs, droidctl::ui::draw).await
     });
     let mut b = Bench {
         term: io.term,

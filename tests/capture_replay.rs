@@ -4,7 +4,7 @@
 //! hold.
 
 use droidctl::app::input::{KeyKind, TermEvent};
-use droidctl::app::run::{AppInputs, AppOptions, Source, run_source};
+use droidctl::app::run::{AppInputs, AppOptions, Source, run as run_source};
 use droidctl::capture::replay::Replay;
 use droidctl::capture::{Capture, Event};
 use droidctl::config::Config;

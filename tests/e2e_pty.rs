@@ -303,6 +303,10 @@ fn sigterm_stops_the_droid_then_restores_the_terminal() {
 }
 
 #[test]
+#[cfg_attr(
+    not(feature = "test-hooks"),
+    ignore = "the crash hook is built only with `--features test-hooks` (as .ci/run tests)"
+)]
 fn a_crash_stops_the_droid_then_restores_the_terminal() {
     let mut tui = Tui::start_with(100, 30, false, &[("DROIDCTL_TEST_PANIC_AFTER_MS", "4000")]);
     tui.wait_for("stance tripod", Duration::from_secs(20));

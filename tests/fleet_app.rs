@@ -134,7 +134,7 @@ async fn start(lost: Option<(usize, Duration)>) -> Harness {
     let f = fleet.clone();
     let app = tokio::spawn(async move {
         let _keep = keep_alive;
-        run::run_fleet(&mut terminal(), f, opts, inputs, keep)
+        run::run(&mut terminal(), f, opts, inputs, keep)
             .await
             .unwrap()
     });
@@ -390,9 +390,15 @@ async fn a_fleet_capture_replays_every_droid_together() {
     let app = tokio::spawn(async move {
         let _keep = keep_alive;
         let file = "fleet.capture".to_string();
-        run::run_fleet_replay(&mut terminal(), replays, file, opts, inputs, keep)
-            .await
-            .unwrap()
+        run::run(
+            &mut terminal(),
+            run::Source::FleetReplay(replays, file),
+            opts,
+            inputs,
+            keep,
+        )
+        .await
+        .unwrap()
     });
     // Past the end of the mission (7 s), at 1×.
     sleep(Duration::from_secs(9)).await;

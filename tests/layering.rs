@@ -4,7 +4,7 @@
 //! in `src/` (comments aside) and fails with the offending file and line.
 
 use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// Each top-level module's rank: a module may use only modules of strictly lower rank.
 const RANKS: &[(&str, u32)] = &[
@@ -64,16 +64,9 @@ fn rank(module: &str) -> Option<u32> {
     RANKS.iter().find(|(m, _)| *m == module).map(|(_, r)| *r)
 }
 
-fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
-    for entry in std::fs::read_dir(dir).expect("src is readable") {
-        let path = entry.expect("a directory entry").path();
-        if path.is_dir() {
-            rust_files(&path, out);
-        } else if path.extension().is_some_and(|e| e == "rs") {
-            out.push(path);
-        }
-    }
-}
+#[path = "common/source.rs"]
+mod source;
+use source::rust_files;
 
 /// The top-level module a file belongs to (`src/family/v2/read.rs` → `family`).
 fn module_of(src: &Path, file: &Path) -> String {

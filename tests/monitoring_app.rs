@@ -407,7 +407,7 @@ async fn replay_until(
     let mut o = opts(Model::R2D2);
     o.tripod_on_connect = false;
     let (exit, ()) = tokio::join!(
-        run::run_source(&mut terminal, source, o, inputs, droidctl::ui::draw),
+        run::run(&mut terminal, source, o, inputs, droidctl::ui::draw),
         driver
     );
     (exit.unwrap(), ())

@@ -216,7 +216,7 @@ fn at_80x24_no_word_is_cut() {
     s.hint = None;
     s.overlay = Overlay::Tuning {
         selected: 0,
-        draft: droidctl::app::monitor::TuningDraft {
+        draft: droidctl::app::view::scope::TuningDraft {
             rate_hz: 10,
             sensors: droidctl::family::stream::all_groups(Model::R2D2),
             collision: Default::default(),

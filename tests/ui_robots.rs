@@ -4,8 +4,8 @@
 //! Snapshots at 80×24 and 160×48 (`INSTA_UPDATE=always cargo test --test ui_robots` after an
 //! intended change, then read every changed `.snap`).
 
-use droidctl::app::matrix::{MatrixShows, MatrixView};
 use droidctl::app::state::{AppState, Overlay};
+use droidctl::app::view::matrix::{MatrixShows, MatrixView};
 use droidctl::model::Model;
 use droidctl::session::LinkState;
 use ratatui::Terminal;

@@ -351,7 +351,7 @@ snap!(
         let mut s = driving();
         s.overlay = Overlay::Tuning {
             selected: 0,
-            draft: droidctl::app::monitor::TuningDraft {
+            draft: droidctl::app::view::scope::TuningDraft {
                 rate_hz: 10,
                 sensors: droidctl::family::stream::all_groups(Model::R2D2),
                 collision: Default::default(),

@@ -6,7 +6,7 @@
 use super::core::App;
 use super::droid::DroidMut;
 use super::place::Place;
-use super::state::MAIN_LED_CYCLE;
+use super::view::matrix::MAIN_LED_CYCLE;
 use crate::config::Action;
 use crate::family::Command;
 use crate::script::{Action as ScriptAction, LedGroup};

@@ -7,18 +7,36 @@ use super::pacing::FramePacer;
 use super::player::Player;
 use super::rates::Rates;
 use super::remember::Remembered;
-use super::run::AppOptions;
 use super::state::{AppState, DroidState, GamepadStatus, KeyboardMode};
 use crate::capture::replay::Replay;
+use crate::config::Config;
 use crate::family::Family;
 use crate::model::Model;
 use crate::session::{SessionHandle, SessionStats};
 use crate::teleop::control::Controller;
 use crate::teleop::gamepad::PadState;
 use crate::teleop::held::{HeldKeys, ReleaseMode};
+use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Duration;
 use tokio::time::Instant;
+
+/// How the app is set up.
+pub struct AppOptions {
+    pub config: Config,
+    pub model: Model,
+    pub droid_name: String,
+    pub log_path: Option<PathBuf>,
+    pub release: ReleaseMode,
+    /// Whether the session's connect setup puts a droid with legs into tripod (the app then
+    /// shows the stance as requested on every connect).
+    pub tripod_on_connect: bool,
+    /// Where every sample the droid streams is written (`drive --csv`, `--jsonl`).
+    pub samples: Option<crate::mission::csv::SampleFiles>,
+    /// Where settings are remembered per droid model ([`super::remember`]); `None`: nothing
+    /// is remembered (replay, tests).
+    pub remember: Option<PathBuf>,
+}
 
 /// Where a droid comes from.
 pub(super) enum Origin {
@@ -66,7 +84,7 @@ pub(super) fn build(droids: Vec<Origin>, opts: AppOptions) -> App {
         };
         let mut view = DroidState::new(model, name.clone());
         view.monitor =
-            super::monitor::MonitorView::new(model, config.stream_request(), config.collision);
+            super::view::scope::MonitorView::new(model, config.stream_request(), config.collision);
         // What this model's droids were left with last time (live only: a replay is the
         // capture's).
         let kept = match (&opts.remember, &session) {
@@ -134,7 +152,7 @@ pub(super) fn build(droids: Vec<Origin>, opts: AppOptions) -> App {
         state.mirror = first.mirror.unwrap_or(false) && state.droids.len() > 1;
     }
     if !warnings.is_empty() {
-        state.show_hint(warnings.join(" · "), super::core::HINT_TIME * 3);
+        state.show_hint(warnings.join(" · "), super::state::HINT_TIME * 3);
     }
     state.log_path = opts.log_path;
     state.keyboard = match opts.release {

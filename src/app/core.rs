@@ -9,7 +9,7 @@
 use super::droid::{DroidIo, DroidMut};
 use super::pacing::FramePacer;
 use super::place::Place;
-use super::state::AppState;
+use super::state::{AppState, HINT_TIME};
 use crate::capture::mirror::Output;
 use crate::config::KeyMap;
 use crate::teleop::gamepad::PadState;
@@ -17,8 +17,16 @@ use crate::teleop::held::HeldKeys;
 use std::time::Duration;
 use tokio::time::Instant;
 
-/// How long a hint stays on screen.
-pub const HINT_TIME: Duration = Duration::from_secs(4);
+/// Why the app loop ended (the terminal's keys, a signal or the end of input).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum ExitReason {
+    /// The operator quit.
+    Quit,
+    /// A signal.
+    Signal(String),
+    /// The terminal input ended.
+    InputClosed,
+}
 
 pub(super) struct App {
     pub state: AppState,

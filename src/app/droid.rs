@@ -4,11 +4,10 @@
 //! files). A droid's events (notifications, log lines, link changes, battery readings) and
 //! its control tick are handled here, on the droid they belong to.
 
-use super::core::HINT_TIME;
 use super::packet_log::{LogLine, PacketLog};
 use super::player::Player;
 use super::rates::Rates;
-use super::state::{DroidState, Hint};
+use super::state::{DroidState, HINT_TIME, Hint};
 use crate::family::{Command, Family};
 use crate::protocol::notify::Notification;
 use crate::protocol::wire::LegAction;
@@ -141,7 +140,7 @@ impl DroidMut<'_> {
         // of every reconnect).
         if connected && let Some(rate_hz) = self.io.pending_rate.take() {
             let m = &self.view.monitor;
-            let draft = super::monitor::TuningDraft {
+            let draft = super::view::scope::TuningDraft {
                 rate_hz,
                 sensors: m.request.sensors,
                 collision: m.collision,

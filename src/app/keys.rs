@@ -9,11 +9,10 @@
 //!
 //! [`HeldKeys`]: crate::teleop::held::HeldKeys
 
-use super::core::App;
+use super::core::{App, ExitReason};
 use super::input::{KeyKind, TermEvent};
 use super::packet_log::LogFilter;
 use super::place::Place;
-use super::run::ExitReason;
 use super::state::{Focus, Overlay};
 use crate::config::{Action, Context, Key, KeyCode};
 

@@ -1,20 +1,28 @@
 //! The application: state, the packet log, palettes, and the event loop that owns them.
+//! Imports point down and close no circle (`tests/circles.rs`): [`view`] and [`state`] know
+//! nothing of [`core`]'s `App`; the handlers (`impl App` in keys, pad, actions, fleet,
+//! matrix, monitor, remember, replay) sit above it, `build` and [`run`] on top.
 //!
 //! - [`run`]: the event loop and its wiring (inputs in, frames out);
-//! - [`core`]: what the loop owns, and the events every source shares;
+//! - `build`: the app set up for its droids, and [`run::AppOptions`];
+//! - `core`: what the loop owns, why it ended ([`run::ExitReason`]), the events every
+//!   source shares;
+//! - [`state`]: what the screen shows ([`AppState`]), [`place`]: where keys are read;
+//! - [`view`]: view state below everything that changes it (the matrix as drawn, the scope
+//!   and the monitoring settings);
 //! - [`keys`], [`pad`]: key dispatch by context and gamepad events;
 //! - [`actions`]: what reaches the droid (control outputs, lights, animations, sounds);
 //! - [`replay`], [`player`]: the app on a capture;
 //! - [`help`]: the help overlay's text, generated from the bindings;
-//! - [`monitor`]: the scope's view, the streaming and collision settings and their keys;
+//! - [`monitor`]: the keys of the scope, its channel list and the settings palette;
 //! - [`pacing`], [`rates`]: frame pacing and per-second rates, small state machines without IO;
 //! - [`battery`]: the battery poller;
-//! - `fleet`, [`roster`]: several droids (the parked ones, choosing, mirror) and the roster
-//!   strip's view of them.
+//! - `fleet`, [`roster`]: several droids (every droid held alike in fleet order, the chosen
+//!   one an index; choosing, mirror) and the roster strip's view of them.
 //! - [`layout`]: where each part of the screen goes (the UI draws there, the mouse hits
 //!   there); `mouse`: wheel and clicks;
 //! - [`remember`]: settings remembered per droid model between launches;
-//! - [`matrix`]: BOLT's LED matrix as droidctl drew it, its prompt, colour and compass keys.
+//! - [`matrix`]: BOLT's LED matrix's prompt, colour and compass keys.
 
 mod actions;
 pub mod battery;
@@ -43,6 +51,7 @@ mod replay;
 pub mod roster;
 pub mod run;
 pub mod state;
+pub mod view;
 
 pub use core::InputTrace;
 pub use place::Place;

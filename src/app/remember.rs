@@ -17,8 +17,8 @@ use std::path::{Path, PathBuf};
 
 /// A settings file bigger than this is not read.
 const MAX_BYTES: u64 = 64 * 1024;
-/// The scope's windows there are ([`super::monitor::WINDOWS`]).
-const WINDOWS: usize = super::monitor::WINDOWS.len();
+/// The scope's windows there are ([`super::view::scope::WINDOWS`]).
+const WINDOWS: usize = super::view::scope::WINDOWS.len();
 
 /// What is remembered of one model; `None`: not remembered, the configuration's value.
 #[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -201,11 +201,11 @@ impl super::core::App {
         if let Some(mut d) = self.droid(i) {
             d.io.controller.set_cruise(cruise);
             d.view.control.cruise = cruise;
-            d.view.scope = super::monitor::ScopeView::for_model(model);
+            d.view.scope = super::view::scope::ScopeView::for_model(model);
             d.io.pending_rate = None;
             let m = &d.view.monitor;
             if m.live && m.caps.is_some() && m.request.rate_hz != rate {
-                let draft = super::monitor::TuningDraft {
+                let draft = super::view::scope::TuningDraft {
                     rate_hz: rate,
                     sensors: m.request.sensors,
                     collision: m.collision,

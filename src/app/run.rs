@@ -4,40 +4,22 @@
 //! [`super::pad`], [`super::core`], [`super::replay`]). Every outside input is a parameter, so
 //! tests drive it with fakes under paused time and render into ratatui's `TestBackend`.
 
+pub use super::build::AppOptions;
 use super::build::{Origin, build};
+pub use super::core::ExitReason;
 use super::core::{App, InputTrace};
 use super::input::TermEvent;
 use super::player::Player;
 use super::state::AppState;
 use crate::capture::replay::Replay;
-use crate::config::Config;
 use crate::family::Command;
 use crate::model::Model;
 use crate::session::SessionHandle;
 use crate::teleop::gamepad::PadEvent;
-use crate::teleop::held::ReleaseMode;
 use ratatui::{Frame, Terminal, backend::Backend};
-use std::path::PathBuf;
 use std::time::Duration;
 use tokio::sync::{mpsc, watch};
 use tokio::time::{Instant, MissedTickBehavior, interval, sleep_until};
-
-/// How the app is set up.
-pub struct AppOptions {
-    pub config: Config,
-    pub model: Model,
-    pub droid_name: String,
-    pub log_path: Option<PathBuf>,
-    pub release: ReleaseMode,
-    /// Whether the session's connect setup puts a droid with legs into tripod (the app then
-    /// shows the stance as requested on every connect).
-    pub tripod_on_connect: bool,
-    /// Where every sample the droid streams is written (`drive --csv`, `--jsonl`).
-    pub samples: Option<crate::mission::csv::SampleFiles>,
-    /// Where settings are remembered per droid model ([`super::remember`]); `None`: nothing
-    /// is remembered (replay, tests).
-    pub remember: Option<PathBuf>,
-}
 
 /// Everything from outside the app.
 pub struct AppInputs {
@@ -45,16 +27,6 @@ pub struct AppInputs {
     pub pad: mpsc::Receiver<PadEvent>,
     /// Signals (SIGTERM, SIGHUP, Ctrl-C from outside the terminal): the reason.
     pub quit: mpsc::Receiver<String>,
-}
-
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub enum ExitReason {
-    /// The operator quit.
-    Quit,
-    /// A signal.
-    Signal(String),
-    /// The terminal input ended.
-    InputClosed,
 }
 
 /// How the loop ended, with the stop to send before restoring the terminal.
@@ -69,47 +41,80 @@ pub struct Exit {
 
 pub type DrawFn = fn(&mut Frame, &AppState);
 
-/// Where the app's droid comes from.
+/// Where the app's droids come from: the one choice the app loop's one entry point ([`run`])
+/// takes. A session or a fleet converts into it (`run(&mut t, session, …)`).
 pub enum Source {
     /// A live session: the droid is driven.
     Live(SessionHandle),
-    /// A capture played back: nothing is sent anywhere. The string names the file.
+    /// A live fleet: the roster strip shows every droid, the keys drive the chosen one (or
+    /// all, mirrored), the e-stop and quitting reach all. `opts.model` and `opts.droid_name`
+    /// are ignored: each droid's come from the fleet. A fleet of one is the one-droid app.
+    /// With a sender, what the input routing did is published after every terminal and
+    /// gamepad event ([`InputTrace`]: the place on top, held keys let go, emergency stops):
+    /// the safety tests and the fuzz harness read it to know where each key went.
+    Fleet(crate::fleet::Fleet, Option<watch::Sender<InputTrace>>),
+    /// A capture played back: nothing is sent anywhere (the status bar says REPLAY). The
+    /// string names the file.
     Replay(Box<Replay>, String),
+    /// A fleet's capture: every droid's replay on one clock, the roster and the choice of
+    /// droid as live (nothing is sent); in fleet order, each with its name. The string names
+    /// the file.
+    FleetReplay(Vec<(Replay, String)>, String),
 }
 
-/// Run the app until the operator quits, a signal arrives, or input ends.
+impl From<SessionHandle> for Source {
+    fn from(session: SessionHandle) -> Source {
+        Source::Live(session)
+    }
+}
+
+impl From<crate::fleet::Fleet> for Source {
+    fn from(fleet: crate::fleet::Fleet) -> Source {
+        Source::Fleet(fleet, None)
+    }
+}
+
+/// Run the app until the operator quits, a signal arrives, or input ends: the one entry
+/// point of the app loop, live or replayed, one droid or a fleet.
 pub async fn run<B: Backend>(
     terminal: &mut Terminal<B>,
-    session: SessionHandle,
+    source: impl Into<Source>,
     opts: AppOptions,
     inputs: AppInputs,
     draw: DrawFn,
 ) -> std::io::Result<Exit> {
-    run_source(terminal, Source::Live(session), opts, inputs, draw).await
-}
-
-/// Run the app on a live session or a replay (the status bar says REPLAY; nothing is sent).
-pub async fn run_source<B: Backend>(
-    terminal: &mut Terminal<B>,
-    source: Source,
-    opts: AppOptions,
-    inputs: AppInputs,
-    draw: DrawFn,
-) -> std::io::Result<Exit> {
-    let origin = match source {
-        Source::Live(session) => Origin::Live {
-            session,
-            model: opts.model,
-            name: opts.droid_name.clone(),
-            family: crate::family::for_model(opts.model),
-        },
-        Source::Replay(replay, file) => Origin::Replay {
-            replay,
-            name: opts.droid_name.clone(),
-            file,
-        },
+    let (droids, trace) = match source.into() {
+        Source::Live(session) => (
+            vec![Origin::Live {
+                session,
+                model: opts.model,
+                name: opts.droid_name.clone(),
+                family: crate::family::for_model(opts.model),
+            }],
+            None,
+        ),
+        Source::Fleet(fleet, trace) => (live(&fleet), trace),
+        Source::Replay(replay, file) => (
+            vec![Origin::Replay {
+                replay,
+                name: opts.droid_name.clone(),
+                file,
+            }],
+            None,
+        ),
+        Source::FleetReplay(replays, file) => (
+            replays
+                .into_iter()
+                .map(|(r, name)| Origin::Replay {
+                    replay: Box::new(r),
+                    name,
+                    file: file.clone(),
+                })
+                .collect(),
+            None,
+        ),
     };
-    run_droids(terminal, vec![origin], opts, inputs, draw, None).await
+    run_droids(terminal, droids, opts, inputs, draw, trace).await
 }
 
 /// The droids of a live fleet, in its order.
@@ -124,55 +129,6 @@ fn live(fleet: &crate::fleet::Fleet) -> Vec<Origin> {
             family: m.family,
         })
         .collect()
-}
-
-/// Run the app on a fleet: the roster strip shows every droid, the keys drive the chosen one
-/// (or all, mirrored), the e-stop and quitting reach all. `opts.model` and
-/// `opts.droid_name` are ignored: each droid's come from the fleet. A fleet of one is the
-/// one-droid app.
-pub async fn run_fleet<B: Backend>(
-    terminal: &mut Terminal<B>,
-    fleet: crate::fleet::Fleet,
-    opts: AppOptions,
-    inputs: AppInputs,
-    draw: DrawFn,
-) -> std::io::Result<Exit> {
-    run_droids(terminal, live(&fleet), opts, inputs, draw, None).await
-}
-
-/// [`run_fleet`], publishing after every terminal and gamepad event what the input routing
-/// did ([`InputTrace`]: the place on top, held keys let go, emergency stops): the safety
-/// tests and the fuzz harness read it to know where each key went.
-pub async fn run_fleet_traced<B: Backend>(
-    terminal: &mut Terminal<B>,
-    fleet: crate::fleet::Fleet,
-    opts: AppOptions,
-    inputs: AppInputs,
-    draw: DrawFn,
-    trace: watch::Sender<InputTrace>,
-) -> std::io::Result<Exit> {
-    run_droids(terminal, live(&fleet), opts, inputs, draw, Some(trace)).await
-}
-
-/// Replay a fleet's capture: every droid's replay on one clock, the roster and the choice
-/// of droid as live (nothing is sent). `replays` in fleet order, each with its name.
-pub async fn run_fleet_replay<B: Backend>(
-    terminal: &mut Terminal<B>,
-    replays: Vec<(Replay, String)>,
-    file: String,
-    opts: AppOptions,
-    inputs: AppInputs,
-    draw: DrawFn,
-) -> std::io::Result<Exit> {
-    let droids = replays
-        .into_iter()
-        .map(|(r, name)| Origin::Replay {
-            replay: Box::new(r),
-            name,
-            file: file.clone(),
-        })
-        .collect();
-    run_droids(terminal, droids, opts, inputs, draw, None).await
 }
 
 async fn run_droids<B: Backend>(
@@ -213,12 +169,8 @@ async fn run_droids<B: Backend>(
     // Closed channels would fire their select branch forever: disable them instead.
     let mut events_open = !lives.is_empty();
 
-    // Test hook for the crash path (stop first, then restore the terminal): panic after this
-    // many ms. Only read from the environment, never set by droidctl itself.
-    let crash_at = std::env::var("DROIDCTL_TEST_PANIC_AFTER_MS")
-        .ok()
-        .and_then(|v| v.parse::<u64>().ok())
-        .map(|ms| start + Duration::from_millis(ms));
+    #[cfg(feature = "test-hooks")]
+    let crash_at = crash_deadline(start);
     let reason = loop {
         let expiry = app.held.next_expiry().map(|d| start + d);
         let change = next_change(&app);
@@ -253,6 +205,7 @@ async fn run_droids<B: Backend>(
             }
             _ = tick.tick() => {
                 app.control(true);
+                #[cfg(feature = "test-hooks")]
                 if crash_at.is_some_and(|t| Instant::now() >= t) {
                     panic!("test panic requested by DROIDCTL_TEST_PANIC_AFTER_MS");
                 }
@@ -303,6 +256,17 @@ async fn run_droids<B: Backend>(
         stop,
         stops,
     })
+}
+
+/// The test hook of the crash path (stop first, then restore the terminal: `tests/e2e_pty.rs`):
+/// the loop panics `DROIDCTL_TEST_PANIC_AFTER_MS` ms after it started. Built only with the
+/// `test-hooks` feature, so a droidctl built without it never reads that variable.
+#[cfg(feature = "test-hooks")]
+fn crash_deadline(start: Instant) -> Option<Instant> {
+    std::env::var("DROIDCTL_TEST_PANIC_AFTER_MS")
+        .ok()
+        .and_then(|v| v.parse::<u64>().ok())
+        .map(|ms| start + Duration::from_millis(ms))
 }
 
 /// When something on screen ends by itself (a hint, the collision flash): redraw then. In

@@ -70,7 +70,7 @@ pub enum Overlay {
     /// The streaming and collision settings being edited (sent on apply).
     Tuning {
         selected: usize,
-        draft: super::monitor::TuningDraft,
+        draft: super::view::scope::TuningDraft,
     },
 }
 
@@ -123,6 +123,9 @@ pub struct FooterKey {
     /// Kept when the row is too narrow (the help and quit keys: `?` shows the rest).
     pub keep: bool,
 }
+
+/// How long a hint stays on screen.
+pub const HINT_TIME: Duration = Duration::from_secs(4);
 
 /// A message shown for a while (e.g. "R2 can't roll on two legs — switching to tripod").
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -187,12 +190,12 @@ pub struct DroidState {
     /// Replaying a capture (nothing is sent): where, how fast.
     pub replay: Option<ReplayView>,
     /// What BOLT's matrix shows, as droidctl drew it.
-    pub matrix: super::matrix::MatrixView,
+    pub matrix: super::view::matrix::MatrixView,
     /// The scope: which channels, what window, paused or following (kept per droid: each
     /// droid's view is as it was left when it is chosen again).
-    pub scope: super::monitor::ScopeView,
+    pub scope: super::view::scope::ScopeView,
     /// Streaming and collision detection as asked for and as sent.
-    pub monitor: super::monitor::MonitorView,
+    pub monitor: super::view::scope::MonitorView,
 }
 
 impl DroidState {
@@ -209,8 +212,8 @@ impl DroidState {
             leds: LedView::default(),
             replay: None,
             matrix: Default::default(),
-            scope: super::monitor::ScopeView::for_model(model),
-            monitor: super::monitor::MonitorView::new(
+            scope: super::view::scope::ScopeView::for_model(model),
+            monitor: super::view::scope::MonitorView::new(
                 model,
                 crate::tuning::StreamRequest {
                     rate_hz: 10,
@@ -243,16 +246,6 @@ pub struct LedView {
     pub main: Option<[u8; 3]>,
     pub back: Option<u8>,
 }
-
-/// The colours the colour key cycles through.
-pub const MAIN_LED_CYCLE: [[u8; 3]; 6] = [
-    [255, 0, 0],
-    [0, 255, 0],
-    [0, 0, 255],
-    [255, 255, 255],
-    [255, 140, 0],
-    [0, 0, 0],
-];
 
 impl AppState {
     /// The screen of one droid.

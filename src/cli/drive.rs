@@ -354,7 +354,7 @@ async fn drive(
         // The alternate screen was cleared on entry; `Terminal::clear` would also ask the
         // terminal for the cursor position, which some terminals never answer.
         let mut terminal = Terminal::new(backend)?;
-        run::run_fleet(&mut terminal, app_fleet, opts, inputs, crate::ui::draw).await
+        run::run(&mut terminal, app_fleet, opts, inputs, crate::ui::draw).await
     });
     let programs = start_programs(&fleet, program);
     let result = app.await;

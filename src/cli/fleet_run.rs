@@ -5,26 +5,18 @@
 //! give the same output every run.
 
 use super::CliError;
-use super::run::{
-    RunArgs, finish_recording, mission_session, report_link_of, sample_line, summary_line,
+use super::mission_run::{
+    RunArgs, ended, finish_recording, mission_session, report_link_of, sample_line, summary_line,
+    warning,
 };
-use super::run_output::{OUTPUT_GONE, RunOutput, note};
+use super::run_output::{OUTPUT_GONE, RunOutput, Tagged};
 use crate::fleet::Fleet;
 use crate::fleet::mission::{self as fleet_mission, FleetEmit};
 use crate::mission::{MissionEvent, MissionOptions, Summary};
 use crate::model::Model;
 use crate::script::{Item, ScriptError};
-use serde::Serialize;
 use std::sync::Arc;
 use std::time::Duration;
-
-/// A JSON line naming its droid first (`run --json` and `replay --json` of a fleet).
-#[derive(Serialize)]
-pub(super) struct Tagged<'a, T: Serialize> {
-    pub droid: &'a str,
-    #[serde(flatten)]
-    pub inner: &'a T,
-}
 
 pub fn run(
     args: &RunArgs,
@@ -141,14 +133,7 @@ pub(super) fn finish_fleet(
     json: bool,
     out: &RunOutput,
 ) -> Result<i32, CliError> {
-    let summaries = match summaries {
-        Ok(s) => s,
-        Err(e) => {
-            // The output that went away is why the mission ended.
-            out.result()?;
-            return Err(e);
-        }
-    };
+    let summaries = ended(summaries, out)?;
     let mut failed = 0;
     for (name, s) in &summaries {
         failed += s.failed_steps;
@@ -248,13 +233,7 @@ pub(super) fn printer(
                 t_ms,
                 line,
                 message,
-            } => {
-                let at = line.map(|l| format!("line {l}: ")).unwrap_or_default();
-                note(format_args!(
-                    "[{:>8.2}s] {name}: warning: {at}{message}",
-                    t_ms as f64 / 1000.0
-                ));
-            }
+            } => warning(&format!("{name}: "), t_ms, line, &message),
         }
     })
 }

@@ -12,6 +12,7 @@ pub mod examples;
 pub mod fleet;
 mod fleet_run;
 pub mod man;
+mod mission_run;
 pub mod models;
 pub mod packet;
 pub mod plot;

@@ -5,7 +5,7 @@
 
 use super::CliError;
 use super::fleet_run::{finish_fleet, printer};
-use super::run::{
+use super::mission_run::{
     RunArgs, finish_recording, finish_run, mission_session, report_link_of, run_session,
 };
 use super::run_output::{OUTPUT_GONE, RunOutput};

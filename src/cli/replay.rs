@@ -188,7 +188,7 @@ fn load_fleet(args: &ReplayArgs) -> Result<Option<FleetCaptures>, CliError> {
 
 /// `replay --json` of a fleet's capture: each droid's samples and summary, naming it.
 fn fleet_json(args: &ReplayArgs, droids: &FleetCaptures) -> Result<i32, CliError> {
-    use super::fleet_run::Tagged;
+    use super::run_output::Tagged;
     use std::io::Write;
     let mut out = std::io::BufWriter::new(std::io::stdout().lock());
     let file = args.file.display().to_string();
@@ -353,13 +353,12 @@ fn play(played: Played, file: String) -> Result<i32, CliError> {
             match played {
                 Played::One(replay, _) => {
                     let source = Source::Replay(replay, file);
-                    run::run_source(&mut terminal, source, opts, inputs, crate::ui::draw).await
+                    run::run(&mut terminal, source, opts, inputs, crate::ui::draw).await
                 }
                 Played::Fleet(replays) => {
-                    run::run_fleet_replay(
+                    run::run(
                         &mut terminal,
-                        replays,
-                        file,
+                        Source::FleetReplay(replays, file),
                         opts,
                         inputs,
                         crate::ui::draw,

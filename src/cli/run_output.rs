@@ -131,6 +131,14 @@ impl RunOutput {
 /// The mission interrupted because its output went away.
 pub const OUTPUT_GONE: &str = "the output went away: mission ended, the droid was stopped";
 
+/// A JSON line naming its droid first (`run --json` and `replay --json` of a fleet).
+#[derive(serde::Serialize)]
+pub(super) struct Tagged<'a, T: serde::Serialize> {
+    pub droid: &'a str,
+    #[serde(flatten)]
+    pub inner: &'a T,
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

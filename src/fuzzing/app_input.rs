@@ -247,7 +247,14 @@ async fn rig(
             pad: pad_rx,
             quit: quit_rx,
         };
-        let _ = run::run_fleet_traced(&mut terminal, f, opts, inputs, keep, trace_tx).await;
+        let _ = run::run(
+            &mut terminal,
+            run::Source::Fleet(f, Some(trace_tx)),
+            opts,
+            inputs,
+            keep,
+        )
+        .await;
     });
     // R2 up on three legs before the keys start.
     sleep(Duration::from_secs(3)).await;

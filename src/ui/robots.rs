@@ -5,8 +5,8 @@
 use super::layout::Plan;
 use super::text::{clean, truncate};
 use super::theme;
-use crate::app::matrix::MatrixShows;
 use crate::app::state::AppState;
+use crate::app::view::matrix::MatrixShows;
 use ratatui::Frame;
 use ratatui::layout::Rect;
 use ratatui::style::{Color, Modifier, Style};

@@ -48,9 +48,9 @@ fn cursor(frame: &mut Frame, inner: Rect, shown: &str) {
 /// BOLT's matrix prompt: one character is drawn, more scroll (up to 25).
 pub fn matrix(frame: &mut Frame, area: Rect, input: &str) {
     let (inner, shown) = prompt(frame, area, "On the matrix", input);
-    let what = match crate::app::matrix::MatrixView::typed(input) {
+    let what = match crate::app::view::matrix::MatrixView::typed(input) {
         None => "nothing yet".to_string(),
-        Some(crate::app::matrix::MatrixShows::Char(c)) => format!("draws {c:?}"),
+        Some(crate::app::view::matrix::MatrixShows::Char(c)) => format!("draws {c:?}"),
         Some(_) => format!("scrolls {} characters", input.trim().len()),
     };
     let lines = vec![
