@@ -130,10 +130,7 @@ impl Bridge {
 
     /// Write droid `i`'s held drive or twist again now (it became ready).
     pub(super) fn resend_held(&self, i: usize) {
-        let w = self
-            .droids
-            .get(i)
-            .and_then(|d| d.lock().holder.current());
+        let w = self.droids.get(i).and_then(|d| d.lock().holder.current());
         if let Some(w) = w {
             self.write_wheels(i, w);
         }

@@ -127,7 +127,11 @@ impl SessionCore {
     // ----- inputs from the handle -----
 
     /// Queue a discrete request; `wait` asks for its answer through [`Self::poll_answer`].
-    pub fn handle_request(&mut self, cmd: Command, wait: bool) -> Result<Option<Reply>, RequestError> {
+    pub fn handle_request(
+        &mut self,
+        cmd: Command,
+        wait: bool,
+    ) -> Result<Option<Reply>, RequestError> {
         if self.closed {
             return Err(RequestError::Closed);
         }
@@ -450,7 +454,9 @@ impl SessionCore {
         let queued = self.queue.clear();
         let n = self.pending.len() as u64 + queued.len() as u64;
         let waiting = self.pending.drain().filter_map(|(_, p)| p.reply);
-        let waiting: Vec<Reply> = waiting.chain(queued.into_iter().filter_map(|q| q.reply)).collect();
+        let waiting: Vec<Reply> = waiting
+            .chain(queued.into_iter().filter_map(|q| q.reply))
+            .collect();
         for r in waiting {
             self.answers.push_back((r, Err(why.clone())));
         }
@@ -558,7 +564,13 @@ impl SessionCore {
         });
     }
 
-    fn log_packet(&mut self, now: Instant, dir: Direction, packet: Packet, request: Option<&Command>) {
+    fn log_packet(
+        &mut self,
+        now: Instant,
+        dir: Direction,
+        packet: Packet,
+        request: Option<&Command>,
+    ) {
         if !self.log_wanted {
             return;
         }

@@ -56,7 +56,10 @@ fn next_packet(core: &mut SessionCore, mut now: Instant) -> (V2, Instant) {
 }
 
 fn respond(core: &mut SessionCore, request: &V2, now: Instant) {
-    core.handle_bytes(&V2::response_to(request, ErrorCode::Success, vec![]).encode(), now);
+    core.handle_bytes(
+        &V2::response_to(request, ErrorCode::Success, vec![]).encode(),
+        now,
+    );
 }
 
 #[test]
@@ -205,7 +208,10 @@ fn an_unanswered_request_expires_at_its_deadline() {
     core.handle_timeout(t + TIMEOUT - ms(1));
     assert_eq!(core.poll_answer(), None);
     core.handle_timeout(t + TIMEOUT);
-    assert_eq!(core.poll_answer(), Some((waiter, Err(RequestError::Timeout))));
+    assert_eq!(
+        core.poll_answer(),
+        Some((waiter, Err(RequestError::Timeout)))
+    );
     assert_eq!(core.stats().timeouts, 1);
     // Nothing is left to wait for.
     assert_eq!(core.poll_timeout(), None);

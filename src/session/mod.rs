@@ -2,21 +2,24 @@
 //! notification fan-out, write pacing and chunking, latest-wins coalescing of continuous
 //! controls, a packet log, and automatic reconnection.
 //!
-//! The session runs as one tokio task that owns the link; callers hold a cheap, cloneable
-//! [`SessionHandle`]. All timing goes through `tokio::time`, so tests run with paused time.
+//! The rules (what to write when, SEQ numbers, retries, expiry, keep-alive, the urgent stop)
+//! are [`core::SessionCore`]'s, which does no I/O and reads no clock: time is passed in, so
+//! they are unit-tested on plain instants. A small tokio task ([`task`]) owns the link and
+//! drives the core; callers hold a cheap, cloneable [`SessionHandle`], which reaches the core
+//! through one short lock. The driver's clock is `tokio::time`, so tests run with paused time.
 
-mod core;
+pub(crate) mod core;
 pub mod queue;
 mod task;
 
 pub use queue::Slot;
 
+use self::core::SessionCore;
 use crate::family::{Command, DecodeError, DroidError, Explained, Packet};
 use crate::link::Link;
 use crate::link::backoff::Backoff;
 use crate::model::Protocol;
 use crate::protocol::notify::Notification;
-use self::core::SessionCore;
 use queue::Reply;
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};

@@ -165,10 +165,7 @@ impl Task {
                 return Ended::Shutdown;
             }
             // Everything due now: the emergency stop's chunks back to back, or one paced chunk.
-            loop {
-                let Some(t) = self.step(|core| core.poll_transmit(now())) else {
-                    break;
-                };
+            while let Some(t) = self.step(|core| core.poll_transmit(now())) {
                 if let Err(e) = write(conn, &t).await {
                     conn.writer.close().await;
                     return Ended::LinkLost(format!("write failed: {e}"));
@@ -178,9 +175,7 @@ impl Task {
                     break;
                 }
             }
-            let deadline = self
-                .step(|core| core.poll_timeout())
-                .map(Instant::from_std);
+            let deadline = self.step(|core| core.poll_timeout()).map(Instant::from_std);
             tokio::select! {
                 biased;
                 _ = self.shared.shutdown_wake.notified() => {
