@@ -163,9 +163,7 @@ async fn link(bridge: Weak<Bridge>, i: usize, name: String) {
         match bridge.upgrade() {
             Some(b) => {
                 // A change of the link: not ready until [`super::ready`] says so anew.
-                if let Some(r) = b.ready.get(i) {
-                    r.store(false, std::sync::atomic::Ordering::SeqCst);
-                }
+                b.set_ready(i, false);
                 b.emit(Some(i), link_out(&name, &now, false))
             }
             None => return,

@@ -30,7 +30,6 @@ use crate::units::Heading;
 use motion::{Holder, Kinematics, Motion, Tick, Wheels};
 use outbox::{Outbox, Outputs};
 use schema::{Cmd, ErrorCode, Out, Request};
-use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 use tokio::task::JoinHandle;
@@ -114,9 +113,26 @@ pub fn topic_names(names: &[String]) -> Vec<String> {
     out
 }
 
+/// Everything the bridge keeps about one droid, in one place: its topic level (fixed at
+/// start) and its changing state behind one lock. (It used to be five vectors side by side,
+/// under mutexes and atomics of their own, that every change had to keep in step.)
+struct Droid {
+    /// The droid's MQTT topic level ([`topic_names`]).
+    topic: String,
+    state: Mutex<DroidState>,
+}
+
 struct DroidState {
+    /// The held drive or twist and the command timeout.
     holder: Holder,
     setup: crate::family::setup::SetupOptions,
+    /// Requests (lights, sounds …) waiting for the droid's answer ([`MAX_IN_FLIGHT`]).
+    in_flight: usize,
+    /// The latest battery reading, for samples (the fleet's fold has only what the droid
+    /// notifies).
+    battery: Option<f32>,
+    /// Connected and its connect setup done ([`ready`]).
+    ready: bool,
 }
 
 /// The bridge's capability words, each with the flags of the model table it stands for
@@ -188,21 +204,21 @@ pub struct Bridge {
     fleet: Fleet,
     settings: Settings,
     start: Instant,
-    droids: Vec<Mutex<DroidState>>,
-    in_flight: Vec<AtomicUsize>,
+    /// One per fleet member, in the fleet's order.
+    droids: Vec<Droid>,
     out: Outbox,
-    /// Each droid's MQTT topic level ([`topic_names`]).
-    topics: Vec<String>,
     tasks: Mutex<Vec<JoinHandle<()>>>,
-    /// The latest battery reading per droid, for samples (the fleet's fold has only what
-    /// the droid notifies).
-    battery: Vec<Mutex<Option<f32>>>,
-    /// Whether each droid is ready: connected and its connect setup done ([`ready`]).
-    ready: Vec<AtomicBool>,
 }
 
 fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
     m.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+impl Droid {
+    /// The droid's state, for one short step (never held across an `await` or a send).
+    fn lock(&self) -> std::sync::MutexGuard<'_, DroidState> {
+        lock(&self.state)
+    }
 }
 
 impl Bridge {
@@ -219,12 +235,17 @@ impl Bridge {
         let droids = fleet
             .members()
             .iter()
+            .zip(topics)
             .enumerate()
-            .map(|(i, m)| {
-                Mutex::new(DroidState {
+            .map(|(i, (m, topic))| Droid {
+                topic,
+                state: Mutex::new(DroidState {
                     holder: Holder::new(kinematics(m.model), settings.command_timeout),
                     setup: setups.get(i).copied().unwrap_or_default(),
-                })
+                    in_flight: 0,
+                    battery: None,
+                    ready: false,
+                }),
             })
             .collect();
         let n = fleet.len();
@@ -233,12 +254,8 @@ impl Bridge {
             settings,
             start: Instant::now(),
             droids,
-            in_flight: (0..n).map(|_| AtomicUsize::new(0)).collect(),
             out: tx,
-            topics,
             tasks: Mutex::new(Vec::new()),
-            battery: (0..n).map(|_| Mutex::new(None)).collect(),
-            ready: (0..n).map(|_| AtomicBool::new(false)).collect(),
         });
         let mut tasks = vec![tokio::spawn(control(Arc::downgrade(&bridge)))];
         for i in 0..n {
@@ -270,7 +287,7 @@ impl Bridge {
 
     /// Droid `i`'s MQTT topic level (distinct per droid).
     pub fn topic(&self, i: usize) -> Option<&str> {
-        self.topics.get(i).map(String::as_str)
+        self.droids.get(i).map(|d| d.topic.as_str())
     }
 
     /// Wait until the transport has taken enough of what waits for it: a transport reads
@@ -301,13 +318,14 @@ impl Bridge {
     /// Droid `i` as `hello` lists it.
     pub fn droid_info(&self, i: usize) -> Option<schema::DroidInfo> {
         let m = self.fleet.member(i)?;
-        let setup = lock(self.droids.get(i)?).setup;
+        let d = self.droids.get(i)?;
+        let setup = d.lock().setup;
         Some(schema::DroidInfo {
             droid: m.name.clone(),
             model: m.model.id(),
             robot: m.model.display_name(),
             origin: m.origin.clone(),
-            topic: self.topics.get(i)?.clone(),
+            topic: d.topic.clone(),
             capabilities: capabilities(m.model),
             telemetry_hz: offered_hz(m.model, &setup, self.settings.telemetry_hz),
             top_speed_m_s: kinematics(m.model).top_speed_m_s,
@@ -325,7 +343,7 @@ impl Bridge {
 
     /// Whether droid `i` is ready: a drive sent now moves it.
     pub fn is_ready(&self, i: usize) -> bool {
-        self.ready.get(i).is_some_and(|r| r.load(Ordering::SeqCst))
+        self.droids.get(i).is_some_and(|d| d.lock().ready)
     }
 
     /// Send `o`, about droid `droid` (its index), to the transport: telemetry is dropped
@@ -421,7 +439,7 @@ impl Bridge {
         // while the link is down); the reconnect's own stop is all a droid gets then.
         if let Some(state) = self.link_down(i) {
             if req.cmd == Cmd::Stop {
-                lock(&self.droids[i]).holder.stop();
+                self.droids[i].lock().holder.stop();
             }
             return self.emit(
                 Some(i),
@@ -446,7 +464,7 @@ impl Bridge {
                     speed: *speed,
                     heading: heading.degrees(),
                 };
-                let w = lock(&self.droids[i]).holder.command(now, m);
+                let w = self.droids[i].lock().holder.command(now, m);
                 match w {
                     Ok(w) => self.write_wheels(i, w),
                     Err(_) => return unsupported("reverse", "cannot roll backwards".into()),
@@ -458,7 +476,7 @@ impl Bridge {
                     linear: *linear,
                     angular: *angular,
                 };
-                let w = lock(&self.droids[i]).holder.command(now, m);
+                let w = self.droids[i].lock().holder.command(now, m);
                 match w {
                     Ok(w) => self.write_wheels(i, w),
                     Err(_) => {
@@ -478,7 +496,7 @@ impl Bridge {
                 return self.reply(&req, Some(i), (!note.is_empty()).then(|| note.join("; ")));
             }
             Cmd::Stop => {
-                lock(&self.droids[i]).holder.stop();
+                self.droids[i].lock().holder.stop();
                 self.stop_here(i);
             }
             Cmd::Estop => {}
@@ -517,7 +535,7 @@ impl Bridge {
                     );
                 };
                 let setup = {
-                    let mut d = lock(&self.droids[i]);
+                    let mut d = self.droids[i].lock();
                     d.setup = d.setup.with_plan(&plan);
                     d.setup
                 };
@@ -577,9 +595,15 @@ impl Bridge {
             return;
         };
         let name = m.name.clone();
-        let busy = self.in_flight[i].fetch_add(1, Ordering::Relaxed) >= MAX_IN_FLIGHT;
+        let busy = {
+            let mut d = self.droids[i].lock();
+            let busy = d.in_flight >= MAX_IN_FLIGHT;
+            if !busy {
+                d.in_flight += 1;
+            }
+            busy
+        };
         if busy {
-            self.in_flight[i].fetch_sub(1, Ordering::Relaxed);
             return self.emit(Some(i), Out::Error {
                 id: req.id,
                 droid: Some(name),
@@ -603,7 +627,10 @@ impl Bridge {
                     break;
                 }
             }
-            bridge.in_flight[i].fetch_sub(1, Ordering::Relaxed);
+            {
+                let mut d = bridge.droids[i].lock();
+                d.in_flight = d.in_flight.saturating_sub(1);
+            }
             match failed {
                 None => {
                     bridge.reply(&req, Some(i), note);
@@ -655,7 +682,7 @@ impl Bridge {
     pub fn estop(&self) {
         self.fleet.estop_all();
         for d in &self.droids {
-            lock(d).holder.stop();
+            d.lock().holder.stop();
         }
     }
 
@@ -667,7 +694,7 @@ impl Bridge {
                 continue;
             }
             let driving = {
-                let mut d = lock(&self.droids[i]);
+                let mut d = self.droids[i].lock();
                 let was = d.holder.is_driving();
                 d.holder.stop();
                 was
@@ -711,7 +738,7 @@ impl Bridge {
             // would wait in its session's queue and drive it after the reconnect.
             if !self.connected(i) {
                 let was = {
-                    let mut d = lock(d);
+                    let mut d = d.lock();
                     let was = d.holder.is_driving();
                     d.holder.stop();
                     was
@@ -721,7 +748,7 @@ impl Bridge {
                 }
                 continue;
             }
-            let t = lock(d).holder.tick(now);
+            let t = d.lock().holder.tick(now);
             match t {
                 Tick::Nothing => {}
                 Tick::Send(w) => self.write_wheels(i, w),
@@ -751,19 +778,26 @@ impl Bridge {
             t.abort();
         }
         for d in &self.droids {
-            lock(d).holder.stop();
+            d.lock().holder.stop();
         }
         self.fleet.shutdown_all(|_| Vec::new()).await;
     }
 
     fn set_battery(&self, i: usize, v: f32) {
-        if let Some(b) = self.battery.get(i) {
-            *lock(b) = Some(v);
+        if let Some(d) = self.droids.get(i) {
+            d.lock().battery = Some(v);
         }
     }
 
     fn battery(&self, i: usize) -> Option<f32> {
-        self.battery.get(i).and_then(|b| *lock(b))
+        self.droids.get(i).and_then(|d| d.lock().battery)
+    }
+
+    /// Say whether droid `i` is ready ([`ready`]); its link's feed says not at every change.
+    fn set_ready(&self, i: usize, ready: bool) {
+        if let Some(d) = self.droids.get(i) {
+            d.lock().ready = ready;
+        }
     }
 }
 

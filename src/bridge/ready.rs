@@ -18,7 +18,6 @@ use super::feeds::link_out;
 use crate::protocol::notify::Notification;
 use crate::session::{LinkState, SessionEvent};
 use std::sync::Weak;
-use std::sync::atomic::Ordering;
 use std::time::Duration;
 use tokio::sync::broadcast;
 
@@ -89,9 +88,7 @@ pub async fn watch(bridge: Weak<Bridge>, i: usize) {
         if *state.borrow() != LinkState::Connected {
             continue;
         }
-        if let Some(r) = b.ready.get(i) {
-            r.store(true, Ordering::SeqCst);
-        }
+        b.set_ready(i, true);
         b.emit(Some(i), link_out(&name, &LinkState::Connected, true));
         b.resend_held(i);
         drop(b);
@@ -133,10 +130,7 @@ impl Bridge {
 
     /// Write droid `i`'s held drive or twist again now (it became ready).
     pub(super) fn resend_held(&self, i: usize) {
-        let w = self
-            .droids
-            .get(i)
-            .and_then(|d| super::lock(d).holder.current());
+        let w = self.droids.get(i).and_then(|d| d.lock().holder.current());
         if let Some(w) = w {
             self.write_wheels(i, w);
         }

@@ -409,7 +409,7 @@ async fn a_twist_turns_the_heading_at_its_yaw_rate() {
         r.send(r#"{"v":1,"cmd":"twist","linear":0.4,"angular":1.5707964}"#);
         run_for(100).await;
     }
-    let h = lock(&r.bridge.droids[0]).holder.heading();
+    let h = r.bridge.droids[0].lock().holder.heading();
     assert!((265..=275).contains(&h), "heading {h}");
     let w = r.writes(0);
     assert!(

@@ -33,6 +33,7 @@ pub mod relay_codec;
 pub mod relay_server;
 pub mod runner;
 pub mod script;
+pub mod session_core;
 
 /// One fuzz target: its name (the libFuzzer binary and the corpus directory), the harness, and
 /// words its inputs are made of (the stable mutator splices them in).
@@ -62,6 +63,7 @@ pub fn targets() -> Vec<&'static Target> {
         &app_input::TARGET,
         &edu::TARGET,
         &edu_wire::TARGET,
+        &session_core::TARGET,
     ];
     #[cfg(target_os = "linux")]
     let v = [v, vec![&bluez::TARGET]].concat();

@@ -2,20 +2,26 @@
 //! notification fan-out, write pacing and chunking, latest-wins coalescing of continuous
 //! controls, a packet log, and automatic reconnection.
 //!
-//! The session runs as one tokio task that owns the link; callers hold a cheap, cloneable
-//! [`SessionHandle`]. All timing goes through `tokio::time`, so tests run with paused time.
+//! The rules (what to write when, SEQ numbers, retries, expiry, keep-alive, the urgent stop)
+//! are [`core::SessionCore`]'s, which does no I/O and reads no clock: time is passed in, so
+//! they are unit-tested on plain instants. A small tokio task ([`task`]) owns the link and
+//! drives the core; callers hold a cheap, cloneable [`SessionHandle`], which reaches the core
+//! through one short lock. The driver's clock is `tokio::time`, so tests run with paused time.
 
+pub(crate) mod core;
 pub mod queue;
 mod task;
 
 pub use queue::Slot;
 
+use self::core::SessionCore;
 use crate::family::{Command, DecodeError, DroidError, Explained, Packet};
 use crate::link::Link;
 use crate::link::backoff::Backoff;
 use crate::model::Protocol;
 use crate::protocol::notify::Notification;
-use queue::{OutQueue, Queued};
+use queue::Reply;
+use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 use tokio::sync::{Notify, broadcast, oneshot, watch};
@@ -214,31 +220,73 @@ pub struct SessionStats {
     pub retried: u64,
 }
 
+/// What the handle and the driver share: the core behind one lock (held only for the core's
+/// own pure steps, never across I/O), with the channels of those who wait for answers.
+pub(crate) struct Inner {
+    pub core: SessionCore,
+    replies: HashMap<Reply, oneshot::Sender<Result<Packet, RequestError>>>,
+}
+
+impl Inner {
+    /// Hand the core's answers to their waiters.
+    fn deliver(&mut self) {
+        while let Some((id, answer)) = self.core.poll_answer() {
+            if let Some(tx) = self.replies.remove(&id) {
+                let _ = tx.send(answer);
+            }
+        }
+    }
+}
+
+/// How often an emergency stop tries the core's lock before leaving the stop to the driver:
+/// the driver holds it only for short pure steps, so a few yields find it free.
+const TRY_LOCK_TRIES: u32 = 1000;
+
 /// State shared between the handle and the task.
 pub(crate) struct Shared {
-    pub queue: Mutex<OutQueue>,
+    inner: Mutex<Inner>,
+    /// Something new for the core (a command, a stop, a setup to redo): the driver looks.
     pub wake: Notify,
-    pub stats: Mutex<SessionStats>,
     pub shutdown: Mutex<Option<Vec<Command>>>,
     pub shutdown_wake: Notify,
-    /// On shutdown, write a stop at the last commanded heading before the final commands.
-    pub stop_on_shutdown: std::sync::atomic::AtomicBool,
-    /// What the droid said once at connect (Robi's handshake), for subscribers that arrive
-    /// later than that.
-    pub greeting: Mutex<Vec<Notification>>,
-    /// Run the connect setup again at the next opportunity (after a sleep and wake).
-    pub redo_setup: std::sync::atomic::AtomicBool,
-    /// The last drive command written: the task's stop after a reconnect or on shutdown, and
-    /// the panic hook's, keep its heading.
-    pub last_drive: Mutex<Option<Command>>,
-    /// A new connect setup for the next (re)connect ([`SessionHandle::set_setup`]).
-    pub setup: Mutex<Option<Vec<Command>>>,
-    /// An emergency stop to write at once, ahead of pacing ([`SessionHandle::emergency_stop`]).
-    pub urgent: Mutex<Option<Command>>,
-    pub urgent_wake: Notify,
+    /// An emergency stop the caller could not hand to the core because its lock was taken
+    /// (the panic hook, on the thread that panicked holding it): the driver applies it.
+    /// `None` inside means "at the last heading written".
+    pub urgent: Mutex<Option<Option<Command>>>,
     /// Emergency stops so far: whatever drives the droid besides the operator (a Sphero Edu
     /// program, `crate::edu`) watches it and ends.
     pub estops: watch::Sender<u64>,
+}
+
+impl Shared {
+    /// Run one step of the core, then hand out the answers it made.
+    pub fn with<T>(&self, f: impl FnOnce(&mut SessionCore) -> T) -> T {
+        let mut inner = lock(&self.inner);
+        let out = f(&mut inner.core);
+        inner.deliver();
+        out
+    }
+
+    /// The core if its lock comes free within a few tries (or is poisoned): never waits for
+    /// good, for the emergency paths. The panic hook runs on the thread that panicked, which
+    /// may hold this very lock; waiting on it there would never end.
+    fn try_with<T>(&self, f: impl FnOnce(&mut SessionCore) -> T) -> Option<T> {
+        let mut tries = 0;
+        let mut inner = loop {
+            match self.inner.try_lock() {
+                Ok(g) => break g,
+                Err(std::sync::TryLockError::Poisoned(e)) => break e.into_inner(),
+                Err(std::sync::TryLockError::WouldBlock) if tries < TRY_LOCK_TRIES => {
+                    tries += 1;
+                    std::thread::yield_now();
+                }
+                Err(std::sync::TryLockError::WouldBlock) => return None,
+            }
+        };
+        let out = f(&mut inner.core);
+        inner.deliver();
+        Some(out)
+    }
 }
 
 /// A handle to a running session. Cloning is cheap.
@@ -253,19 +301,16 @@ pub struct SessionHandle {
 
 /// Start a session over `link`. Needs a tokio runtime with time enabled.
 pub fn start(link: Box<dyn Link>, config: SessionConfig) -> SessionHandle {
+    let now = tokio::time::Instant::now();
     let shared = Arc::new(Shared {
-        queue: Mutex::new(OutQueue::new(config.queue_capacity)),
+        inner: Mutex::new(Inner {
+            core: SessionCore::new(config.clone(), now.into_std()),
+            replies: HashMap::new(),
+        }),
         wake: Notify::new(),
-        stats: Mutex::new(SessionStats::default()),
         shutdown: Mutex::new(None),
         shutdown_wake: Notify::new(),
-        stop_on_shutdown: std::sync::atomic::AtomicBool::new(false),
-        greeting: Mutex::new(Vec::new()),
-        redo_setup: std::sync::atomic::AtomicBool::new(false),
-        last_drive: Mutex::new(None),
-        setup: Mutex::new(None),
         urgent: Mutex::new(None),
-        urgent_wake: Notify::new(),
         estops: watch::channel(0).0,
     });
     let (state_tx, state_rx) = watch::channel(LinkState::Connecting);
@@ -299,53 +344,46 @@ impl SessionHandle {
     /// Send a request and wait for its response (or a typed error).
     pub async fn request(&self, cmd: impl Into<Command>) -> Result<Packet, RequestError> {
         let (tx, rx) = oneshot::channel();
-        self.enqueue(Queued {
-            reply: Some(tx),
-            ..Queued::new(cmd.into())
-        })?;
+        self.enqueue(cmd.into(), Some(tx))?;
         rx.await.unwrap_or(Err(RequestError::Closed))
     }
 
     /// Send a request without waiting. Its response (or error) is still matched and counted.
     pub fn send(&self, cmd: impl Into<Command>) -> Result<(), RequestError> {
-        self.enqueue(Queued::new(cmd.into()))
+        self.enqueue(cmd.into(), None)
     }
 
-    fn enqueue(&self, q: Queued) -> Result<(), RequestError> {
+    fn enqueue(
+        &self,
+        cmd: Command,
+        tx: Option<oneshot::Sender<Result<Packet, RequestError>>>,
+    ) -> Result<(), RequestError> {
         if self.is_closed() {
             return Err(RequestError::Closed);
         }
-        let pushed = lock(&self.shared.queue).push(q);
-        match pushed {
-            Ok(()) => {
-                self.shared.wake.notify_one();
-                Ok(())
-            }
-            Err(_) => {
-                lock(&self.shared.stats).rejected += 1;
-                Err(RequestError::QueueFull)
+        {
+            let mut inner = lock(&self.shared.inner);
+            let reply = inner.core.handle_request(cmd, tx.is_some())?;
+            if let (Some(id), Some(tx)) = (reply, tx) {
+                inner.replies.insert(id, tx);
             }
         }
+        self.shared.wake.notify_one();
+        Ok(())
     }
 
     /// Set the latest value of a continuous control (drive or head): replaces any older
     /// unwritten one, and a drive the drive commands queued before it. Never blocks, never
     /// queues more than one per slot.
     pub fn set(&self, slot: Slot, cmd: impl Into<Command>) {
-        let mut q = lock(&self.shared.queue);
-        let superseded = q.set_slot(slot, cmd.into());
-        let coalesced = q.coalesced;
-        drop(q);
-        lock(&self.shared.stats).coalesced = coalesced;
+        let cmd = cmd.into();
+        self.shared.with(|core| core.handle_write(slot, cmd));
         self.shared.wake.notify_one();
-        for r in superseded.into_iter().filter_map(|q| q.reply) {
-            let _ = r.send(Err(RequestError::Superseded));
-        }
     }
 
     /// Commands waiting to be written (slots included).
     pub fn queued(&self) -> usize {
-        lock(&self.shared.queue).len()
+        self.shared.with(|core| core.queued())
     }
 
     pub fn state(&self) -> LinkState {
@@ -369,8 +407,16 @@ impl SessionHandle {
     /// would turn the droid), as an [emergency stop](Self::emergency_stop): ahead of pacing,
     /// and again one slot later. Synchronous and lock-free of the task, for the panic hook.
     pub fn stop_now(&self, family: &dyn crate::family::Family) {
-        let last = lock(&self.shared.last_drive).clone();
-        self.emergency_stop(family.stop_after(last.as_ref()));
+        let done = self.shared.try_with(|core| {
+            let stop = family.stop_after(core.last_drive());
+            core.emergency_stop(stop);
+        });
+        if done.is_none() {
+            // The core is busy (or this thread panicked holding it): the driver stops the
+            // droid at its own last heading as soon as it can.
+            *lock(&self.shared.urgent) = Some(None);
+        }
+        self.after_estop();
     }
 
     /// An emergency stop: `stop` is written at once, ahead of pacing and of everything
@@ -380,9 +426,18 @@ impl SessionHandle {
     /// down it waits for the reconnect, whose own first write is a stop too.
     pub fn emergency_stop(&self, stop: impl Into<Command>) {
         let stop = stop.into();
-        self.set(Slot::Drive, stop.clone());
-        *lock(&self.shared.urgent) = Some(stop);
-        self.shared.urgent_wake.notify_one();
+        if let Err(stop) = self
+            .shared
+            .try_with(|core| core.emergency_stop(stop.clone()))
+            .ok_or(stop)
+        {
+            *lock(&self.shared.urgent) = Some(Some(stop));
+        }
+        self.after_estop();
+    }
+
+    fn after_estop(&self) {
+        self.shared.wake.notify_one();
         self.shared.estops.send_modify(|n| *n += 1);
     }
 
@@ -394,9 +449,7 @@ impl SessionHandle {
     /// Write the connect setup again, ahead of everything queued: a droid woken from sleep
     /// has forgotten its streaming, collision and notification settings.
     pub fn redo_setup(&self) {
-        self.shared
-            .redo_setup
-            .store(true, std::sync::atomic::Ordering::SeqCst);
+        self.shared.with(|core| core.redo_setup());
         self.shared.wake.notify_one();
     }
 
@@ -404,18 +457,18 @@ impl SessionHandle {
     /// [`SessionHandle::redo_setup`]): what the operator changed while connected — streaming,
     /// collision detection — survives a reconnect. Nothing is sent now.
     pub fn set_setup(&self, setup: Vec<Command>) {
-        *lock(&self.shared.setup) = Some(setup);
+        self.shared.with(|core| core.set_setup(setup));
     }
 
     /// What the droid announced once when the current connection opened (Robi 42's
     /// handshake: version and frame interval). A subscriber that starts after the connect
     /// folds these in first; later ones arrive as notifications too.
     pub fn greeting(&self) -> Vec<Notification> {
-        lock(&self.shared.greeting).clone()
+        self.shared.with(|core| core.greeting().to_vec())
     }
 
     pub fn stats(&self) -> SessionStats {
-        *lock(&self.shared.stats)
+        self.shared.with(|core| core.stats())
     }
 
     pub fn is_closed(&self) -> bool {
@@ -425,9 +478,7 @@ impl SessionHandle {
     /// End the session with a stop: speed 0 at the last heading the session wrote (so the
     /// droid does not turn), then `last`, then close. Waits for the task to finish.
     pub async fn shutdown_stopped(&self, last: Vec<Command>) {
-        self.shared
-            .stop_on_shutdown
-            .store(true, std::sync::atomic::Ordering::SeqCst);
+        self.shared.with(|core| core.stop_on_shutdown());
         self.shutdown(last).await;
     }
 

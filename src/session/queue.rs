@@ -2,10 +2,8 @@
 //! continuous controls (drive, dome). A newer drive command replaces a queued older one, so
 //! under any input rate there is at most one drive and one head command waiting.
 
-use super::RequestError;
-use crate::family::{Command, Packet};
+use crate::family::Command;
 use std::collections::VecDeque;
-use tokio::sync::oneshot;
 
 /// Continuous controls whose latest value is all that matters.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -14,7 +12,10 @@ pub enum Slot {
     Head,
 }
 
-pub type Reply = oneshot::Sender<Result<Packet, RequestError>>;
+/// Who waits for a request's answer. The queue and the core hold only this number (they do
+/// no I/O); the handle keeps the channel it stands for and is given the answer under it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct Reply(pub u64);
 
 /// A discrete request waiting to be written.
 #[derive(Debug)]
