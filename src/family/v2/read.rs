@@ -137,7 +137,7 @@ impl Reader for V2Reader {
             .collect()
     }
 
-    fn one(&mut self, bytes: &[u8]) -> Result<Box<dyn Found>, String> {
+    fn one(&mut self, bytes: &[u8]) -> Result<Box<dyn Found>, crate::family::error::ReadError> {
         let mut items: Vec<_> = self.decoder.feed(bytes).collect();
         items.extend(self.decoder.finish().into_iter().map(Err));
         if items.len() != 1 {
