@@ -26,6 +26,8 @@ const RANKS: &[(&str, u32)] = &[
     ("tuning", 0),
     // Which addresses are loopback.
     ("net", 0),
+    // The one poison-tolerant lock.
+    ("sync", 0),
     // The sans-IO protocol core.
     ("protocol", 10),
     // Links, and the plain data built on the protocol (scripts, telemetry, configuration).

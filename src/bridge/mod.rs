@@ -26,6 +26,7 @@ pub mod thread;
 use crate::fleet::Fleet;
 use crate::model::Model;
 use crate::session::Slot;
+use crate::sync::lock;
 use crate::units::Heading;
 use motion::{Holder, Kinematics, Motion, Tick, Wheels};
 use outbox::{Outbox, Outputs};
@@ -176,10 +177,6 @@ pub struct Bridge {
     battery: Vec<Mutex<Option<f32>>>,
     /// Whether each droid is ready: connected and its connect setup done ([`ready`]).
     ready: Vec<AtomicBool>,
-}
-
-fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
-    m.lock().unwrap_or_else(|e| e.into_inner())
 }
 
 impl Bridge {

@@ -136,7 +136,7 @@ impl Bridge {
         let w = self
             .droids
             .get(i)
-            .and_then(|d| super::lock(d).holder.current());
+            .and_then(|d| crate::sync::lock(d).holder.current());
         if let Some(w) = w {
             self.write_wheels(i, w);
         }
