@@ -98,7 +98,7 @@ pub(super) fn watch_writes(fleet: &Fleet) -> Writes {
 }
 
 pub(super) fn still(writes: &Writes, when: &str) {
-    let w = lock(&writes);
+    let w = lock(writes);
     for (i, speeds) in w.iter().enumerate() {
         assert!(
             speeds.last().is_none_or(|s| *s == 0),

@@ -228,7 +228,7 @@ fn check(
             "droid {i}: retained commands said once"
         );
     }
-    let w = lock(&writes);
+    let w = lock(writes);
     for (i, speeds) in w.iter().enumerate() {
         if !drove[i] {
             assert!(
