@@ -9,6 +9,9 @@
 #   - spherov2.py's own parser (spherov2/controls/v2.py, Packet.Collector.add, which calls
 #     Packet.parse_response per packet) on the same stream, installed with pip in a venv;
 #   - the ratio.
+#   - the case a user meets: a mixed stream as spherov2.py's own `Packet.build` makes it
+#     (benches/spherov2_mixed.py), `packet decode --file - --json` into a file, against
+#     spherov2's Collector fed in 20-byte chunks (packets/s, and the ratio);
 # The Python half is skipped with a message when spherov2 cannot be installed.
 #
 # Usage: bash benches/spherov2_compare.sh [CLI_FILE_MB]   (default 256)
@@ -21,6 +24,7 @@ stream=$work/stream.bin
 
 echo "building (release) and measuring droidctl's decoder with criterion..."
 cargo build --release -q
+bin=${CARGO_TARGET_DIR:-target}/release/droidctl
 sensors=$work/sensors.bin
 bench_out=$(DROIDCTL_CODEC_STREAM="$PWD/$stream" DROIDCTL_SENSOR_STREAM="$PWD/$sensors" \
   cargo bench -q --bench codec -- \
@@ -44,7 +48,7 @@ if [ ! -f "$big" ] || [ "$(stat -c %s "$big")" -lt $((mb * 1000000)) ]; then
 fi
 big_bytes=$(stat -c %s "$big")
 cat "$big" > /dev/null   # warm the page cache
-timing=$( { /usr/bin/time -f '%e %M' target/release/droidctl packet decode --file "$big" --summary > "$work/cli.out"; } 2>&1 )
+timing=$( { /usr/bin/time -f '%e %M' "$bin" packet decode --file "$big" --summary > "$work/cli.out"; } 2>&1 )
 secs=$(echo "$timing" | tail -n1 | awk '{print $1}')
 rss_kb=$(echo "$timing" | tail -n1 | awk '{print $2}')
 cli_mbs=$(echo "$big_bytes / $secs / 1000000" | bc -l)
@@ -87,8 +91,8 @@ EOF
   sreps=$((64000000 / $(stat -c %s "$sensors") + 1))
   for _ in $(seq "$sreps"); do cat "$sensors"; done > "$sbig"
   cat "$sbig" > /dev/null
-  spackets=$(target/release/droidctl packet decode --file "$sbig" --json --sensor-mask "$mask" --ext-mask "$ext" | wc -l)
-  stiming=$( { /usr/bin/time -f '%e %M' target/release/droidctl packet decode --file "$sbig" --json --sensor-mask "$mask" --ext-mask "$ext" > /dev/null; } 2>&1 )
+  spackets=$("$bin" packet decode --file "$sbig" --json --sensor-mask "$mask" --ext-mask "$ext" | wc -l)
+  stiming=$( { /usr/bin/time -f '%e %M' "$bin" packet decode --file "$sbig" --json --sensor-mask "$mask" --ext-mask "$ext" > /dev/null; } 2>&1 )
   ssecs=$(echo "$stiming" | tail -n1 | awk '{print $1}')
   srss=$(echo "$stiming" | tail -n1 | awk '{print $2}')
   read -r py_spps < <("$venv/bin/python" - "$sensors" <<'EOF'
@@ -116,6 +120,28 @@ EOF
     "$sv2_version" "$pyver" "$((py_bytes / 1000000))" "$py_mbs" "$py_packets"
   printf 'ratio: droidctl decoder / spherov2.py = %.0f×; droidctl CLI / spherov2.py = %.0f×\n' \
     "$(echo "$rust_mbs / $py_mbs" | bc -l)" "$(echo "$cli_mbs / $py_mbs" | bc -l)"
+
+  # The case a user meets (issue 42 point 6): a mixed stream as spherov2's own Packet.build
+  # makes it (half notifications of 17 floats, no masks given; drive commands, responses,
+  # LED commands that need escapes), `packet decode --file - --json` from stdin into a file,
+  # against spherov2's Collector fed in 20-byte BLE-sized chunks. Python's packets/s do not
+  # depend on the stream's length: it decodes a tenth of droidctl's.
+  mixed=$work/mixed.bin
+  mixed_py=$work/mixed-py.bin
+  mixed_n=${MIXED_PACKETS:-200000}
+  "$venv/bin/python" benches/spherov2_mixed.py write "$mixed" "$mixed_n"
+  "$venv/bin/python" benches/spherov2_mixed.py write "$mixed_py" $((mixed_n / 10))
+  cat "$mixed" > /dev/null
+  mtiming=$( { /usr/bin/time -f '%e %M' "$bin" packet decode --file - --json < "$mixed" > "$work/mixed.json"; } 2>&1 )
+  msecs=$(echo "$mtiming" | tail -n1 | awk '{print $1}')
+  mlines=$(wc -l < "$work/mixed.json")
+  read -r _ _ py_mpps < <("$venv/bin/python" benches/spherov2_mixed.py time "$mixed_py")
+  rust_mpps=$(echo "$mlines / $msecs" | bc -l)
+  printf 'mixed stream (spherov2 Packet.build), droidctl packet decode --file - --json > file, %d packets: %8.0f packets/s\n' \
+    "$mlines" "$rust_mpps"
+  printf 'mixed stream, spherov2.py Packet.Collector in 20-byte chunks:                                 %8.0f packets/s\n' "$py_mpps"
+  printf 'ratio (packet decode --json / spherov2 Collector, 20-byte chunks) = %.1fx\n' \
+    "$(echo "$rust_mpps / $py_mpps" | bc -l)"
 else
   echo "spherov2.py: skipped (cannot create a venv or pip install spherov2; see $work/pip.log)"
 fi

@@ -30,6 +30,7 @@ pub mod rng;
 pub mod script;
 pub mod session;
 pub mod sim;
+pub mod sync;
 pub mod telemetry;
 pub mod teleop;
 pub mod text_file;

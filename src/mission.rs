@@ -11,6 +11,7 @@ use crate::protocol::notify::Notification;
 use crate::protocol::wire::{LegAction, LegState};
 use crate::script::{Action, Step};
 use crate::session::{LinkState, SessionEvent, SessionHandle, Slot};
+use crate::sync::lock;
 use crate::telemetry::{Stance, Telemetry};
 use crate::units::Heading;
 use serde::Serialize;
@@ -232,10 +233,6 @@ struct Runner {
     slept: bool,
     /// The connect setup as the mission has changed it.
     setup: crate::family::setup::SetupOptions,
-}
-
-fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
-    m.lock().unwrap_or_else(|e| e.into_inner())
 }
 
 impl Runner {

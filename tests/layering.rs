@@ -28,6 +28,8 @@ const RANKS: &[(&str, u32)] = &[
     ("net", 0),
     // The examples built into the binary (they name the models they are for).
     ("examples", 1),
+    // The one poison-tolerant lock.
+    ("sync", 0),
     // The sans-IO protocol core.
     ("protocol", 10),
     // Links, and the plain data built on the protocol (scripts, telemetry, configuration).

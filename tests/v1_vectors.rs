@@ -139,7 +139,8 @@ fn golden_roll_comes_from_the_typed_constructor_and_the_cli_defaults() {
     let err = catalog::by_name("roll")
         .unwrap()
         .encode_params(&given(&[("speed", "1"), ("heading", "360")]))
-        .unwrap_err();
+        .unwrap_err()
+        .to_string();
     assert!(
         err.contains("--heading") && err.contains("0..=359"),
         "{err}"
@@ -416,12 +417,14 @@ fn catalogue_ids() {
     let err = catalog::by_name("ping")
         .unwrap()
         .encode_params(&given(&[("x", "1")]))
-        .unwrap_err();
+        .unwrap_err()
+        .to_string();
     assert!(err.contains("takes no parameters"), "{err}");
     let err = catalog::by_name("set-rgb-led")
         .unwrap()
         .encode_params(&given(&[("red", "1")]))
-        .unwrap_err();
+        .unwrap_err()
+        .to_string();
     assert!(err.contains("needs --green"), "{err}");
 }
 

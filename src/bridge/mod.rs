@@ -26,6 +26,7 @@ pub mod thread;
 use crate::fleet::Fleet;
 use crate::model::Model;
 use crate::session::Slot;
+use crate::sync::lock;
 use crate::units::Heading;
 use motion::{Holder, Kinematics, Motion, Tick, Wheels};
 use outbox::{Outbox, Outputs};
@@ -210,14 +211,10 @@ pub struct Bridge {
     tasks: Mutex<Vec<JoinHandle<()>>>,
 }
 
-fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
-    m.lock().unwrap_or_else(|e| e.into_inner())
-}
-
 impl Droid {
     /// The droid's state, for one short step (never held across an `await` or a send).
     fn lock(&self) -> std::sync::MutexGuard<'_, DroidState> {
-        lock(&self.state)
+        crate::sync::lock(&self.state)
     }
 }
 

@@ -11,6 +11,7 @@
 use crate::capture::{self, Event, Header, Timed};
 use crate::gatt::Endpoint;
 use crate::link::{Connection, Link, LinkError, LinkEvent, LinkWriter};
+use crate::sync::lock;
 use futures_util::future::BoxFuture;
 use std::fs::File;
 use std::io::{BufWriter, Write};
@@ -91,10 +92,6 @@ pub fn flush_all() {
             s.flush();
         }
     }
-}
-
-fn lock(s: &Shared) -> std::sync::MutexGuard<'_, State> {
-    s.lock().unwrap_or_else(|e| e.into_inner())
 }
 
 /// A capture file being written. Cloning gives another handle to the same file.

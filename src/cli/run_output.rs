@@ -8,6 +8,7 @@
 use super::CliError;
 use crate::mission::Sample;
 use crate::mission::csv::SampleFiles;
+use crate::sync::lock;
 use std::io::Write;
 use std::sync::Mutex;
 
@@ -21,10 +22,6 @@ pub struct RunOutput {
     csv_error: Mutex<Option<String>>,
     /// Told when stdout fails: the mission ends.
     gone: tokio::sync::Notify,
-}
-
-fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
-    m.lock().unwrap_or_else(|e| e.into_inner())
 }
 
 /// A line on stderr; a failure to write it is ignored (there is nowhere left to say it).

@@ -13,6 +13,7 @@ use super::child::{DEFAULT_MEMORY_MIB, ENGINE_ARG};
 use super::engine::{Call, Event, Failure, Op, Readings, SyntaxError, TurnOut};
 use super::wire::{self, FrameError, FromChild, ToChild};
 use crate::model::Model;
+use crate::sync::lock;
 use std::collections::HashMap;
 use std::io::Read;
 use std::path::PathBuf;
@@ -345,10 +346,6 @@ struct Proc {
     gone: tokio::sync::watch::Receiver<bool>,
     /// The end of the child's stderr, and whether it has closed.
     stderr: Arc<Mutex<(Vec<u8>, bool)>>,
-}
-
-fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
-    m.lock().unwrap_or_else(|e| e.into_inner())
 }
 
 impl Proc {

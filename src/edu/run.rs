@@ -17,6 +17,7 @@ use crate::protocol::notify::{Notification, RobotEvent};
 use crate::protocol::wire::LegAction;
 use crate::script::{Action, LedGroup, Step};
 use crate::session::{SessionEvent, SessionHandle, Slot};
+use crate::sync::lock;
 use crate::telemetry::{Stance, Telemetry};
 use crate::units::Heading;
 use std::sync::{Arc, Mutex};
@@ -136,10 +137,6 @@ struct Sensed {
     colour: Option<u8>,
     /// On the charger, as the droid last said.
     charging: Option<bool>,
-}
-
-fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
-    m.lock().unwrap_or_else(|e| e.into_inner())
 }
 
 /// Run `program` on the droid behind `session`.

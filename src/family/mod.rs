@@ -21,6 +21,7 @@
 //! Everything here is sans-IO: no clocks, no tokio.
 
 pub mod intent;
+pub mod error;
 pub mod listing;
 pub mod named;
 pub mod read;
@@ -95,7 +96,7 @@ pub trait Family: Sync {
     /// The [`ReadOptions`] its readers use; a caller refuses the others.
     fn read_options(&self) -> &'static [ReadOption];
     /// A reader of one side's bytes; `Err` says which option makes no sense.
-    fn reader(&self, opts: &ReadOptions) -> Result<Box<dyn Reader>, String>;
+    fn reader(&self, opts: &ReadOptions) -> Result<Box<dyn Reader>, error::ReadError>;
     /// A reader told nothing but the side (and whether values come whole), as captures and
     /// traces read: it cannot fail.
     fn side_reader(&self, side: Side, whole_values: bool) -> Box<dyn Reader>;
@@ -103,7 +104,11 @@ pub trait Family: Sync {
     /// subscribes to, and the handshake that unlocks the droid.
     fn gatt_profile(&self, model: Model) -> crate::gatt::GattProfile;
     /// `packet encode`: the wire bytes of the packet `name` with `--key value` parameters.
-    fn encode_named(&self, name: &str, params: Vec<(String, String)>) -> Result<Vec<u8>, String>;
+    fn encode_named(
+        &self,
+        name: &str,
+        params: Vec<(String, String)>,
+    ) -> Result<Vec<u8>, error::NamedError>;
     /// The names [`Family::encode_named`] takes, with what each is (the shell completions of
     /// `packet encode NAME`).
     fn encode_names(&self) -> Vec<(String, &'static str)>;

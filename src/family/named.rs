@@ -2,22 +2,30 @@
 //! and `--key value` parameters, and catalogues listed with their parameters. Each family's
 //! own rules (headers, `raw`, test input) live in its `named.rs`.
 
+use crate::family::error::NamedError;
+use crate::protocol::error::ParamError;
 use crate::protocol::schema::FieldDef;
 use crate::protocol::wire::parse_uint;
 
 /// A number in `0..=max` for option `--key` (decimal or `0x` hex).
-pub fn uint_opt(key: &str, v: &str, max: u64) -> Result<u64, String> {
-    parse_uint(v, max).map_err(|e| format!("--{key}: {e}"))
+pub fn uint_opt(key: &str, v: &str, max: u64) -> Result<u64, NamedError> {
+    parse_uint(v, max).map_err(|error| NamedError::Option {
+        key: key.to_string(),
+        error,
+    })
 }
 
 /// A byte in `0..=max` for option `--key`.
-pub fn byte_opt(key: &str, v: &str, max: u64) -> Result<u8, String> {
+pub fn byte_opt(key: &str, v: &str, max: u64) -> Result<u8, NamedError> {
     uint_opt(key, v, max.min(255)).map(|n| n as u8)
 }
 
 /// Hex data of `--data`.
-pub fn data_opt(v: &str) -> Result<Vec<u8>, String> {
-    crate::hex::parse(v).map_err(|e| format!("--data: {e}"))
+pub fn data_opt(v: &str) -> Result<Vec<u8>, NamedError> {
+    crate::hex::parse(v).map_err(|e| NamedError::Option {
+        key: "data".to_string(),
+        error: ParamError::Hex(e),
+    })
 }
 
 /// A command's parameters as `--name <description> ...`, for `packet list`.

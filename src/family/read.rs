@@ -137,7 +137,7 @@ pub trait Reader: Send {
     fn kinds(&self) -> Vec<(&'static str, u64)>;
     /// The input as exactly one packet (a packet whose checksum fails is still shown, with
     /// the verdict); `Err` says why the input is not one packet.
-    fn one(&mut self, bytes: &[u8]) -> Result<Box<dyn Found>, String>;
+    fn one(&mut self, bytes: &[u8]) -> Result<Box<dyn Found>, super::error::ReadError>;
     /// What to try when a single packet does not decode.
     fn hint(&self) -> Option<&'static str> {
         None
@@ -145,11 +145,11 @@ pub trait Reader: Send {
 }
 
 /// "the input holds N WHAT, not one packet; use --stream …" for a single decode of several.
-pub fn not_one(n: usize, what: &str) -> String {
+pub fn not_one(n: usize, what: &'static str) -> super::error::ReadError {
     if n == 0 {
-        "no bytes to decode".to_string()
+        super::error::ReadError::NoBytes
     } else {
-        format!("the input holds {n} {what}, not one packet; use --stream to decode a byte stream")
+        super::error::ReadError::NotOne { n, what }
     }
 }
 
@@ -215,7 +215,11 @@ mod tests {
             .map(ReadOption::flag)
             .collect();
         assert_eq!(flags, ["--ext-mask", "--request"]);
-        assert_eq!(not_one(0, "packets"), "no bytes to decode");
-        assert!(not_one(3, "packets or errors").contains("holds 3 packets or errors"));
+        assert_eq!(not_one(0, "packets").to_string(), "no bytes to decode");
+        assert!(
+            not_one(3, "packets or errors")
+                .to_string()
+                .contains("holds 3 packets or errors")
+        );
     }
 }

@@ -13,6 +13,7 @@
 //! message saying what to do.
 
 use crate::link::{Connection, Link, LinkError};
+use crate::sync::lock;
 use futures_util::future::BoxFuture;
 use std::collections::BTreeMap;
 use std::sync::{Arc, Mutex};
@@ -39,11 +40,11 @@ pub struct GateStats {
 
 impl Gate {
     pub fn stats(&self) -> GateStats {
-        *self.stats.lock().unwrap_or_else(|e| e.into_inner())
+        *lock(&self.stats)
     }
 
     fn count(&self, delta: i32) {
-        let mut s = self.stats.lock().unwrap_or_else(|e| e.into_inner());
+        let mut s = lock(&self.stats);
         if delta > 0 {
             s.attempts += 1;
             s.in_progress += 1;
@@ -99,7 +100,7 @@ impl Adapters {
 
     /// Count `droid` on `adapter` and hand out the adapter's gate, or refuse it over the cap.
     pub fn admit(&self, adapter: &str, droid: &str) -> Result<Arc<Gate>, OverCap> {
-        let mut all = self.admitted.lock().unwrap_or_else(|e| e.into_inner());
+        let mut all = lock(&self.admitted);
         let (gate, holding) = all.entry(adapter.to_string()).or_default();
         if holding.len() >= self.cap {
             return Err(OverCap {
@@ -118,7 +119,7 @@ impl Adapters {
     /// Which of `adapters` (by index) takes the next droid: the one holding the fewest, the
     /// first on a tie (an adapter over the cap is then full everywhere, and `admit` says so).
     pub fn least_loaded(&self, adapters: &[String]) -> usize {
-        let all = self.admitted.lock().unwrap_or_else(|e| e.into_inner());
+        let all = lock(&self.admitted);
         adapters
             .iter()
             .enumerate()

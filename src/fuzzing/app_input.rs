@@ -28,6 +28,7 @@ use crate::config::{Action, Config, Key, KeyCode};
 use crate::fleet::Fleet;
 use crate::model::Model;
 use crate::session::{Direction, LinkState, LogItem};
+use crate::sync::lock;
 use crate::teleop::held::ReleaseMode;
 use ratatui::{Frame, Terminal, backend::TestBackend};
 use std::collections::HashMap;
@@ -304,7 +305,7 @@ async fn rig(
     drop(term);
     let _ = app.await;
     fleet.shutdown_all(|_| Vec::new()).await;
-    let w = writes.lock().unwrap_or_else(|e| e.into_inner()).clone();
+    let w = lock(&writes).clone();
     let estops = oracle.estops.len();
     if promises {
         oracle.verify(&w, if quit { None } else { Some(end) })?;

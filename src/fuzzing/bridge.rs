@@ -16,6 +16,7 @@ use crate::family::setup::SetupOptions;
 use crate::fleet::Fleet;
 use crate::model::Model;
 use crate::session::{Direction, LinkState, LogItem};
+use crate::sync::lock;
 use serde_json::Value;
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
@@ -97,7 +98,7 @@ pub(super) fn watch_writes(fleet: &Fleet) -> Writes {
 }
 
 pub(super) fn still(writes: &Writes, when: &str) {
-    let w = writes.lock().unwrap_or_else(|e| e.into_inner());
+    let w = lock(writes);
     for (i, speeds) in w.iter().enumerate() {
         assert!(
             speeds.last().is_none_or(|s| *s == 0),

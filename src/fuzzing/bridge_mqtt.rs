@@ -22,6 +22,7 @@ use crate::bridge::outbox::Routed;
 use crate::bridge::schema::{self, ErrorCode, Out};
 use crate::bridge::{Bridge, Settings};
 use crate::session::LinkState;
+use crate::sync::lock;
 use std::time::Duration;
 use tokio::time::sleep;
 
@@ -227,7 +228,7 @@ fn check(
             "droid {i}: retained commands said once"
         );
     }
-    let w = writes.lock().unwrap_or_else(|e| e.into_inner());
+    let w = lock(writes);
     for (i, speeds) in w.iter().enumerate() {
         if !drove[i] {
             assert!(

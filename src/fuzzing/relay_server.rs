@@ -18,6 +18,7 @@ use crate::protocol::relay::{
 use crate::relay::server::{EventSink, ServerConfig, ServerEvent, serve_stream};
 use crate::relay::sim_backend::SimBackend;
 use crate::sim::faults::GattFaults;
+use crate::sync::lock;
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 use tokio::io::{AsyncReadExt, AsyncWriteExt};
@@ -132,10 +133,6 @@ fn slowest_request(stream: &[u8], pieces: &[&[u8]], pause: Duration, limits: Lim
         slowest = slowest.max(sent_at[stream.len() - 1] - sent_at[start]);
     }
     slowest
-}
-
-fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
-    m.lock().unwrap_or_else(|e| e.into_inner())
 }
 
 pub fn run_input(data: &[u8]) {

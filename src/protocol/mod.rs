@@ -2,6 +2,7 @@
 //! (wire types, decoded values, payload schemas).
 
 pub mod decode;
+pub mod error;
 pub mod notify;
 pub mod relay;
 pub mod rsrcp;

@@ -4,6 +4,7 @@
 //! notification. The CLI encodes from it, the packet log and `packet decode` decode with it,
 //! and the simulators check lengths against it, so a field is described in exactly one place.
 
+use super::error::{EncodeError, ParamError};
 use super::value::Fields;
 use super::wire::{FieldError, Reader, Size, Wire};
 
@@ -17,7 +18,7 @@ pub struct FieldDef {
     /// The value used when the command line leaves this parameter out, as command-line
     /// text (`None`: the parameter is required).
     pub default: Option<&'static str>,
-    pub parse_put: fn(&str, &mut Vec<u8>) -> Result<(), String>,
+    pub parse_put: fn(&str, &mut Vec<u8>) -> Result<(), ParamError>,
     pub decode: fn(&mut Reader<'_>, &'static str, &mut Fields) -> Result<(), FieldError>,
 }
 
@@ -99,18 +100,22 @@ pub fn encode_params(
     name: &str,
     params: Schema,
     given: &[(String, String)],
-) -> Result<Vec<u8>, String> {
+) -> Result<Vec<u8>, EncodeError> {
     for (k, _) in given {
         if !params.iter().any(|p| p.option() == *k) {
             let expected: Vec<String> =
                 params.iter().map(|p| format!("--{}", p.option())).collect();
             return Err(if expected.is_empty() {
-                format!("{name} takes no parameters, got --{k}")
+                EncodeError::NoParameters {
+                    command: name.to_string(),
+                    given: k.clone(),
+                }
             } else {
-                format!(
-                    "{name} has no parameter --{k} (expected {})",
-                    expected.join(" ")
-                )
+                EncodeError::UnknownParameter {
+                    command: name.to_string(),
+                    given: k.clone(),
+                    expected: expected.join(" "),
+                }
             });
         }
     }
@@ -123,8 +128,15 @@ pub fn encode_params(
             .find(|(k, _)| *k == opt)
             .map(|(_, v)| v.as_str())
             .or(p.default)
-            .ok_or_else(|| format!("{name} needs --{opt} ({})", p.description))?;
-        (p.parse_put)(text, &mut data).map_err(|e| format!("--{opt}: {e}"))?;
+            .ok_or_else(|| EncodeError::Missing {
+                command: name.to_string(),
+                option: opt.clone(),
+                description: p.description,
+            })?;
+        (p.parse_put)(text, &mut data).map_err(|error| EncodeError::Invalid {
+            option: opt.clone(),
+            error,
+        })?;
     }
     Ok(data)
 }

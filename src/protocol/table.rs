@@ -6,6 +6,7 @@
 //! same rows); the lookup machinery lives here once, so the two families cannot drift apart in
 //! how a name is derived, found or suggested.
 
+use super::error::{EncodeError, UnknownCommand};
 use super::schema::Schema;
 use std::collections::HashMap;
 
@@ -25,7 +26,7 @@ pub struct CommandDef {
 impl CommandDef {
     /// Encode parameters given as (option name, text) pairs, in any order. A parameter left
     /// out takes its default; one without a default is required. Unknown options are errors.
-    pub fn encode_params(&self, given: &[(String, String)]) -> Result<Vec<u8>, String> {
+    pub fn encode_params(&self, given: &[(String, String)]) -> Result<Vec<u8>, EncodeError> {
         super::schema::encode_params(&self.name, self.params, given)
     }
 }
@@ -128,13 +129,12 @@ impl CommandTable {
 
 /// "unknown command X; did you mean …?" from a catalogue's suggestions; `list` is what
 /// follows `droidctl packet list` to see that catalogue (` --protocol v1`).
-pub fn unknown_command(name: &str, suggestions: Vec<&str>, list: &str) -> String {
-    let hint = if suggestions.is_empty() {
-        format!("see `droidctl packet list{list}`")
-    } else {
-        format!("did you mean {}?", suggestions.join(", "))
-    };
-    format!("unknown command {name:?}; {hint}")
+pub fn unknown_command(name: &str, suggestions: Vec<&str>, list: &'static str) -> UnknownCommand {
+    UnknownCommand {
+        name: name.to_string(),
+        suggestions: suggestions.into_iter().map(str::to_string).collect(),
+        list,
+    }
 }
 
 #[cfg(test)]

@@ -5,6 +5,7 @@
 //! command-line text with range checks. The catalogue stores these as function pointers, so the
 //! CLI, the packet log and the simulator all read one schema.
 
+use super::error::ParamError;
 use super::value::{Fields, Value};
 use crate::units::{HEAD_MAX_DEG, HEAD_MIN_DEG, HeadAngle, Heading};
 
@@ -102,7 +103,7 @@ pub trait Wire: Sized {
     fn get(r: &mut Reader<'_>, field: &'static str) -> Result<Self, FieldError>;
     fn value(&self) -> Value;
     /// Parse command-line text (decimal, `0x` hex, or a name for enums).
-    fn parse(text: &str) -> Result<Self, String>;
+    fn parse(text: &str) -> Result<Self, ParamError>;
 
     /// Decode into named values; most types give one, some (collision axis) give several.
     fn decode_into(
@@ -115,34 +116,37 @@ pub trait Wire: Sized {
         Ok(())
     }
 
-    fn parse_put(text: &str, out: &mut Vec<u8>) -> Result<(), String> {
+    fn parse_put(text: &str, out: &mut Vec<u8>) -> Result<(), ParamError> {
         Self::parse(text)?.put(out);
         Ok(())
     }
 }
 
 /// Parse an unsigned integer in decimal or `0x` hex, within `max`.
-pub fn parse_uint(text: &str, max: u64) -> Result<u64, String> {
+pub fn parse_uint(text: &str, max: u64) -> Result<u64, ParamError> {
     let t = text.trim();
     let (digits, radix) = match t.strip_prefix("0x").or_else(|| t.strip_prefix("0X")) {
         Some(h) => (h, 16),
         None => (t, 10),
     };
-    let v = u64::from_str_radix(&digits.replace('_', ""), radix)
-        .map_err(|_| format!("{text:?} is not a number (decimal or 0x hex)"))?;
+    let v =
+        u64::from_str_radix(&digits.replace('_', ""), radix).map_err(|_| ParamError::NotUint {
+            text: text.to_string(),
+        })?;
     if v > max {
-        return Err(format!("{v} is out of range 0..={max}"));
+        return Err(ParamError::UintRange { value: v, max });
     }
     Ok(v)
 }
 
-fn parse_f32(text: &str) -> Result<f32, String> {
-    let v: f32 = text
-        .trim()
-        .parse()
-        .map_err(|_| format!("{text:?} is not a number"))?;
+fn parse_f32(text: &str) -> Result<f32, ParamError> {
+    let v: f32 = text.trim().parse().map_err(|_| ParamError::NotNumber {
+        text: text.to_string(),
+    })?;
     if !v.is_finite() {
-        return Err(format!("{text:?} is not a finite number"));
+        return Err(ParamError::NotFinite {
+            text: text.to_string(),
+        });
     }
     Ok(v)
 }
@@ -161,7 +165,7 @@ macro_rules! wire_uint {
             fn value(&self) -> Value {
                 Value::Int(*self as i64)
             }
-            fn parse(text: &str) -> Result<Self, String> {
+            fn parse(text: &str) -> Result<Self, ParamError> {
                 Ok(parse_uint(text, <$t>::MAX as u64)? as $t)
             }
         }
@@ -183,10 +187,10 @@ impl Wire for i16 {
     fn value(&self) -> Value {
         Value::Int(*self as i64)
     }
-    fn parse(text: &str) -> Result<Self, String> {
-        text.trim()
-            .parse()
-            .map_err(|_| format!("{text:?} is not an integer in -32768..=32767"))
+    fn parse(text: &str) -> Result<Self, ParamError> {
+        text.trim().parse().map_err(|_| ParamError::NotI16 {
+            text: text.to_string(),
+        })
     }
 }
 
@@ -202,7 +206,7 @@ impl Wire for f32 {
     fn value(&self) -> Value {
         Value::Float(*self as f64)
     }
-    fn parse(text: &str) -> Result<Self, String> {
+    fn parse(text: &str) -> Result<Self, ParamError> {
         parse_f32(text)
     }
 }
@@ -219,13 +223,13 @@ impl Wire for bool {
     fn value(&self) -> Value {
         Value::Bool(*self)
     }
-    fn parse(text: &str) -> Result<Self, String> {
+    fn parse(text: &str) -> Result<Self, ParamError> {
         match text.trim().to_ascii_lowercase().as_str() {
             "1" | "true" | "on" | "yes" => Ok(true),
             "0" | "false" | "off" | "no" => Ok(false),
-            _ => Err(format!(
-                "{text:?} is not a boolean (true/false, on/off, 1/0)"
-            )),
+            _ => Err(ParamError::NotBool {
+                text: text.to_string(),
+            }),
         }
     }
 }
@@ -246,9 +250,9 @@ impl Wire for Heading {
     fn value(&self) -> Value {
         Value::Int(self.degrees() as i64)
     }
-    fn parse(text: &str) -> Result<Self, String> {
+    fn parse(text: &str) -> Result<Self, ParamError> {
         let v = parse_uint(text, u16::MAX as u64)?;
-        Heading::new(v as u16).ok_or_else(|| format!("heading {v} is out of range 0..=359"))
+        Heading::new(v as u16).ok_or(ParamError::Heading(v))
     }
 }
 
@@ -268,11 +272,9 @@ impl Wire for HeadAngle {
     fn value(&self) -> Value {
         Value::Float(self.degrees() as f64)
     }
-    fn parse(text: &str) -> Result<Self, String> {
+    fn parse(text: &str) -> Result<Self, ParamError> {
         let v = parse_f32(text)?;
-        HeadAngle::new(v).ok_or_else(|| {
-            format!("dome angle {v} is out of range {HEAD_MIN_DEG}..={HEAD_MAX_DEG}")
-        })
+        HeadAngle::new(v).ok_or(ParamError::DomeAngle(v))
     }
 }
 
@@ -296,7 +298,7 @@ impl<const N: usize> Wire for Mask<N> {
             width: N as u8,
         }
     }
-    fn parse(text: &str) -> Result<Self, String> {
+    fn parse(text: &str) -> Result<Self, ParamError> {
         let max = if N >= 4 {
             u32::MAX as u64
         } else {
@@ -322,10 +324,10 @@ impl Wire for CentiVolts {
     fn value(&self) -> Value {
         Value::Float(self.0 as f64 / 100.0)
     }
-    fn parse(text: &str) -> Result<Self, String> {
+    fn parse(text: &str) -> Result<Self, ParamError> {
         let v = parse_f32(text)?;
         if !(0.0..=655.35).contains(&v) {
-            return Err(format!("{v} V is out of range 0..=655.35"));
+            return Err(ParamError::Volts(v));
         }
         Ok(CentiVolts((v * 100.0).round() as u16))
     }
@@ -344,11 +346,11 @@ impl<const N: usize> Wire for [u8; N] {
     fn value(&self) -> Value {
         Value::Bytes(self.to_vec())
     }
-    fn parse(text: &str) -> Result<Self, String> {
-        let b = crate::hex::parse(text)?;
-        b.clone()
-            .try_into()
-            .map_err(|_| format!("expected exactly {N} byte(s), got {}", b.len()))
+    fn parse(text: &str) -> Result<Self, ParamError> {
+        let b = crate::hex::parse(text).map_err(ParamError::Hex)?;
+        let got = b.len();
+        b.try_into()
+            .map_err(|_| ParamError::ByteCount { expected: N, got })
     }
 }
 
@@ -368,8 +370,8 @@ impl Wire for Bytes {
     fn value(&self) -> Value {
         Value::Bytes(self.0.clone())
     }
-    fn parse(text: &str) -> Result<Self, String> {
-        crate::hex::parse(text).map(Bytes)
+    fn parse(text: &str) -> Result<Self, ParamError> {
+        crate::hex::parse(text).map(Bytes).map_err(ParamError::Hex)
     }
 }
 
@@ -392,9 +394,9 @@ impl Wire for Text {
     fn value(&self) -> Value {
         Value::Text(self.0.clone())
     }
-    fn parse(text: &str) -> Result<Self, String> {
+    fn parse(text: &str) -> Result<Self, ParamError> {
         if text.contains('\0') {
-            return Err("text must not contain NUL".into());
+            return Err(ParamError::TextNul);
         }
         Ok(Text(text.to_string()))
     }
@@ -427,9 +429,9 @@ impl<const N: usize> Wire for FixedText<N> {
     fn value(&self) -> Value {
         Value::Text(self.0.clone())
     }
-    fn parse(text: &str) -> Result<Self, String> {
+    fn parse(text: &str) -> Result<Self, ParamError> {
         if text.len() > N {
-            return Err(format!("text longer than {N} bytes"));
+            return Err(ParamError::TextBytes { max: N });
         }
         Ok(FixedText(text.to_string()))
     }
@@ -465,7 +467,7 @@ impl Wire for F32List {
     fn value(&self) -> Value {
         Value::List(self.0.iter().map(|v| Value::Float(*v as f64)).collect())
     }
-    fn parse(text: &str) -> Result<Self, String> {
+    fn parse(text: &str) -> Result<Self, ParamError> {
         text.split(',')
             .filter(|s| !s.trim().is_empty())
             .map(parse_f32)
@@ -496,11 +498,11 @@ impl Wire for AccelRaw {
     fn value(&self) -> Value {
         Value::Float(self.g() as f64)
     }
-    fn parse(text: &str) -> Result<Self, String> {
+    fn parse(text: &str) -> Result<Self, ParamError> {
         let g = parse_f32(text)?;
         let raw = (g * 4096.0).round();
         if !(i16::MIN as f32..=i16::MAX as f32).contains(&raw) {
-            return Err(format!("{g} g is out of range"));
+            return Err(ParamError::Accel(g));
         }
         Ok(AccelRaw(raw as i16))
     }
@@ -529,7 +531,7 @@ impl Wire for CollisionAxis {
     fn value(&self) -> Value {
         Value::Int(self.x as i64 | (self.y as i64) << 1)
     }
-    fn parse(text: &str) -> Result<Self, String> {
+    fn parse(text: &str) -> Result<Self, ParamError> {
         let b = parse_uint(text, 3)? as u8;
         Ok(CollisionAxis {
             x: b & 1 != 0,
@@ -577,13 +579,13 @@ macro_rules! wire_enum {
                 Self::from_byte(b).ok_or(FieldError::Invalid { field, reason: format!("unknown value {b}") })
             }
             fn value(&self) -> Value { Value::Enum { value: self.to_byte() as u64, name: Some(self.label()) } }
-            fn parse(text: &str) -> Result<Self, String> {
+            fn parse(text: &str) -> Result<Self, ParamError> {
                 let t = text.trim().to_ascii_lowercase().replace('_', "-");
                 $( if t == $label $(|| t == $alias)* { return Ok($name::$variant); } )+
                 if let Ok(n) = parse_uint(&t, 255) {
                     if let Some(v) = Self::from_byte(n as u8) { return Ok(v); }
                 }
-                Err(format!("{text:?} is not one of: {}", [$($label),+].join(", ")))
+                Err(ParamError::NotOneOf { text: text.to_string(), choices: [$($label),+].join(", ") })
             }
             fn decode_into(r: &mut Reader<'_>, name: &'static str, out: &mut Fields) -> Result<(), FieldError> {
                 let b = r.array::<1>(name)?[0];
@@ -694,7 +696,7 @@ impl Wire for DriveFlags {
                 .collect(),
         }
     }
-    fn parse(text: &str) -> Result<Self, String> {
+    fn parse(text: &str) -> Result<Self, ParamError> {
         if let Ok(n) = parse_uint(text, 255) {
             return Ok(DriveFlags::from_bits_retain(n as u8));
         }
@@ -709,10 +711,10 @@ impl Wire for DriveFlags {
                 Some((f, _)) => flags |= *f,
                 None if p == "forward" || p == "none" => {}
                 None => {
-                    return Err(format!(
-                        "{part:?} is not a drive flag ({})",
-                        Self::DESCRIPTION
-                    ));
+                    return Err(ParamError::NotDriveFlag {
+                        part: part.to_string(),
+                        description: Self::DESCRIPTION,
+                    });
                 }
             }
         }
@@ -730,7 +732,12 @@ mod tests {
         assert_eq!(LegAction::parse("THREE_LEGS"), Ok(LegAction::Tripod));
         assert_eq!(LegAction::parse("3"), Ok(LegAction::Waddle));
         assert!(LegAction::parse("4").is_err());
-        assert!(LegAction::parse("fly").unwrap_err().contains("tripod"));
+        assert!(
+            LegAction::parse("fly")
+                .unwrap_err()
+                .to_string()
+                .contains("tripod")
+        );
         assert_eq!(AudioMode::parse("immediate"), Ok(AudioMode::Immediate));
     }
 
@@ -760,7 +767,12 @@ mod tests {
     #[test]
     fn uint_ranges() {
         assert_eq!(u8::parse("0xff"), Ok(255));
-        assert!(u8::parse("256").unwrap_err().contains("out of range"));
+        assert!(
+            u8::parse("256")
+                .unwrap_err()
+                .to_string()
+                .contains("out of range")
+        );
         assert!(u16::parse("abc").is_err());
         assert_eq!(Mask::<2>::parse("0x0080"), Ok(Mask(0x80)));
         assert!(Mask::<2>::parse("0x10000").is_err());
@@ -768,7 +780,12 @@ mod tests {
 
     #[test]
     fn heading_and_head_angle_ranges() {
-        assert!(Heading::parse("360").unwrap_err().contains("0..=359"));
+        assert!(
+            Heading::parse("360")
+                .unwrap_err()
+                .to_string()
+                .contains("0..=359")
+        );
         assert!(HeadAngle::parse("181").is_err());
         assert_eq!(HeadAngle::parse("-160").map(|h| h.degrees()), Ok(-160.0));
     }

@@ -10,6 +10,7 @@ use crate::link::ble::{
     ScanEntry, scan,
 };
 use crate::model::Model;
+use crate::sync::lock;
 use futures_util::StreamExt;
 use futures_util::future::BoxFuture;
 use std::collections::HashMap;
@@ -40,7 +41,7 @@ pub struct BleBackend {
 impl BleBackend {
     /// How many device names are remembered.
     pub fn names_remembered(&self) -> usize {
-        self.names.lock().unwrap_or_else(|e| e.into_inner()).len()
+        lock(&self.names).len()
     }
 
     pub fn new(central: Arc<dyn BleCentral>) -> Self {
@@ -53,7 +54,7 @@ impl BleBackend {
 
     /// Keep the names heard, for INIT (bounded: see [`MAX_NAMES`]).
     pub(crate) fn remember(&self, entries: &[ScanEntry]) {
-        let mut names = self.names.lock().unwrap_or_else(|e| e.into_inner());
+        let mut names = lock(&self.names);
         // Phones and headphones rotate random addresses: the names heard would pile up for
         // as long as the relay runs. Past the bound only this scan's devices are kept.
         if names.len() + entries.len() > MAX_NAMES {
@@ -155,13 +156,7 @@ impl BleBackend {
                 }
             }
         });
-        let mut name = self
-            .names
-            .lock()
-            .unwrap_or_else(|e| e.into_inner())
-            .get(&addr)
-            .cloned()
-            .unwrap_or_default();
+        let mut name = lock(&self.names).get(&addr).cloned().unwrap_or_default();
         if name.is_empty() {
             // A client that knew the address without scanning through us: the adapter may
             // still know the name (the model decides which stop to write).

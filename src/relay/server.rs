@@ -23,6 +23,7 @@ pub use super::stream::{MAX_QUEUED, MAX_QUEUED_SCANS};
 use crate::gatt::{CharRole, Endpoint, GattUuid};
 use crate::model::Model;
 use crate::protocol::relay::{DecodeError, Device, Limits, Reply, Request, RequestDecoder};
+use crate::sync::lock;
 use std::collections::{HashMap, VecDeque};
 use std::future::Future;
 use std::net::SocketAddr;
@@ -112,10 +113,6 @@ struct Shared {
     held: Mutex<HashMap<String, Holder>>,
     next_id: AtomicU64,
     slots: Arc<Semaphore>,
-}
-
-fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
-    m.lock().unwrap_or_else(|e| e.into_inner())
 }
 
 impl Shared {

@@ -10,6 +10,7 @@ use crate::gatt::GattUuid;
 use crate::model::Model;
 use crate::sim::gatt::{GattDroid, GattEvent, GattFaults};
 use crate::sim::{SimConfig, SimState};
+use crate::sync::lock;
 use futures_util::future::BoxFuture;
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
@@ -28,10 +29,6 @@ struct SimSlot {
     address: String,
     model: Model,
     droid: Mutex<GattDroid>,
-}
-
-fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
-    m.lock().unwrap_or_else(|e| e.into_inner())
 }
 
 /// Simulated droids, found by scans and connected by address.

@@ -20,6 +20,7 @@ use crate::link::Link;
 use crate::link::backoff::Backoff;
 use crate::model::Protocol;
 use crate::protocol::notify::Notification;
+use crate::sync::lock;
 use queue::Reply;
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
@@ -332,12 +333,6 @@ pub fn start(link: Box<dyn Link>, config: SessionConfig) -> SessionHandle {
         log,
         done: Arc::new(Mutex::new(Some(join))),
     }
-}
-
-fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
-    // A panic while holding one of these locks cannot leave the data half-updated in a way
-    // that matters more than stopping the droid: keep going.
-    m.lock().unwrap_or_else(|e| e.into_inner())
 }
 
 impl SessionHandle {

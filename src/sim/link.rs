@@ -6,6 +6,7 @@ use crate::gatt::Endpoint;
 use crate::link::{Connection, Link, LinkError, LinkEvent, LinkWriter};
 use crate::model::Model;
 use crate::rng::Rng;
+use crate::sync::lock;
 use futures_util::future::BoxFuture;
 use std::collections::VecDeque;
 use std::sync::{Arc, Mutex};
@@ -64,10 +65,6 @@ impl SimProbe {
     pub fn opens(&self) -> u32 {
         lock(&self.shared).opens
     }
-}
-
-fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
-    m.lock().unwrap_or_else(|e| e.into_inner())
 }
 
 /// A link to a simulated droid.

@@ -66,7 +66,7 @@ impl SharedRoom {
     }
 
     pub(super) fn lock(&self) -> std::sync::MutexGuard<'_, Vec<Occupant>> {
-        self.0.lock().unwrap_or_else(|e| e.into_inner())
+        crate::sync::lock(&self.0)
     }
 
     /// A place for one more droid of `radius`, starting at `origin`.

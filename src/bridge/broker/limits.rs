@@ -243,7 +243,7 @@ impl Slot {
     /// Take a slot for `ip` from `admission`.
     pub fn take(admission: &Arc<Mutex<Admission>>, ip: IpAddr) -> Result<Slot, Refusal> {
         let now = tokio::time::Instant::now();
-        let (key, kick) = super::lock(admission).admit_at(ip, now)?;
+        let (key, kick) = crate::sync::lock(admission).admit_at(ip, now)?;
         Ok(Slot {
             admission: admission.clone(),
             key,
@@ -253,14 +253,14 @@ impl Slot {
 
     /// The connection sent something now.
     pub fn heard(&self) {
-        if let Some(h) = super::lock(&self.admission).held.get_mut(&self.key) {
+        if let Some(h) = crate::sync::lock(&self.admission).held.get_mut(&self.key) {
             h.last = tokio::time::Instant::now();
         }
     }
 
     /// The connection is droidctl's own bridge's: never evicted.
     pub fn own(&self) {
-        if let Some(h) = super::lock(&self.admission).held.get_mut(&self.key) {
+        if let Some(h) = crate::sync::lock(&self.admission).held.get_mut(&self.key) {
             h.own = true;
         }
     }
@@ -273,7 +273,7 @@ impl Slot {
 
 impl Drop for Slot {
     fn drop(&mut self) {
-        super::lock(&self.admission).release_key(self.key);
+        crate::sync::lock(&self.admission).release_key(self.key);
     }
 }
 

@@ -32,6 +32,7 @@ pub mod wire;
 pub use limits::{MAX_CONNECTIONS, MAX_PACKET, MAX_RETAINED, Refusal};
 pub use state::Counters;
 
+use crate::sync::lock;
 use bytes::BytesMut;
 use limits::{Admission, CONNECT_TIMEOUT, Slot, idle_deadline};
 use rumqttc::mqttbytes::QoS;
@@ -286,10 +287,6 @@ fn admit(shared: &Shared, peer: SocketAddr) -> Result<Slot, Refusal> {
         lock(&shared.state).counters.refused += 1;
         tracing::warn!("mqtt broker: {peer} refused: {why}");
     })
-}
-
-pub(crate) fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
-    m.lock().unwrap_or_else(|p| p.into_inner())
 }
 
 /// A connection as accepted.

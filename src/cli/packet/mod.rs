@@ -303,7 +303,9 @@ fn reader_for(
 ) -> Result<(&'static dyn Family, Box<dyn family::Reader>), CliError> {
     let (family, why) = choose_family(&args, bytes)?;
     let opts = read_options(args, family, &why, follow)?;
-    let reader = family.reader(&opts).map_err(CliError::usage)?;
+    let reader = family
+        .reader(&opts)
+        .map_err(|e| CliError::usage(e.to_string()))?;
     Ok((family, reader))
 }
 
@@ -330,7 +332,9 @@ fn encode_cmd(
         Some(p) => family_named(p)?,
         None => family::all()[0],
     };
-    let wire = family.encode_named(name, params).map_err(CliError::usage)?;
+    let wire = family
+        .encode_named(name, params)
+        .map_err(|e| CliError::usage(e.to_string()))?;
     writeln!(out, "{}", hex::spaced(&wire)).map_err(io_err)?;
     Ok(0)
 }

@@ -89,7 +89,9 @@ pub(super) fn decode(
     let (_, mut reader) = super::reader_for(args, bytes, false)?;
     let mut printer = Printer::new(out, json, false, false);
     if !stream {
-        let found = reader.one(bytes).map_err(CliError::usage)?;
+        let found = reader
+            .one(bytes)
+            .map_err(|e| CliError::usage(e.to_string()))?;
         printer.show(&*found).map_err(io_err)?;
         if found.error_kind().is_some()
             && !json

@@ -185,7 +185,7 @@ impl Family for Robi {
         &[]
     }
 
-    fn reader(&self, opts: &ReadOptions) -> Result<Box<dyn Reader>, String> {
+    fn reader(&self, opts: &ReadOptions) -> Result<Box<dyn Reader>, super::error::ReadError> {
         Ok(Box::new(read::RobiReader::new(opts)))
     }
 
@@ -202,7 +202,11 @@ impl Family for Robi {
         gatt::profile(model)
     }
 
-    fn encode_named(&self, name: &str, params: Vec<(String, String)>) -> Result<Vec<u8>, String> {
+    fn encode_named(
+        &self,
+        name: &str,
+        params: Vec<(String, String)>,
+    ) -> Result<Vec<u8>, super::error::NamedError> {
         named::encode(name, params)
     }
 

@@ -8,8 +8,10 @@ use super::gatt::{
     ROBI_FRAMES, ROBI_HANDSHAKE, ROBI_RC_SERVICE, ROBI_RSRC_SERVICE, ROBI_START, ROBI_STEERING,
     ROBI_VELOCITY,
 };
+use crate::family::error::{MotorsError, NamedError};
 use crate::family::named::{keep, uint_opt};
 use crate::gatt::GattUuid;
+use crate::protocol::error::ParamError;
 use crate::protocol::rsrcp::frame::{MOTOR_LIMIT_RAD_S, PIEZO_MAX_HZ};
 use crate::protocol::rsrcp::{
     Buttons, FRAME_ID_MASK, Feature, Frame, Handshake, Leds, STEERING_STRAIGHT,
@@ -24,21 +26,15 @@ pub const NAMES: [(&str, &str); 2] = [
 
 /// What the robot sends, built from options: `frame` or `handshake`. Anything else is a usage
 /// error that says how the robot is actually driven.
-pub fn encode(name: &str, given: Vec<(String, String)>) -> Result<Vec<u8>, String> {
+pub fn encode(name: &str, given: Vec<(String, String)>) -> Result<Vec<u8>, NamedError> {
     match name {
         "frame" => encode_frame(given),
         "handshake" => encode_handshake(given),
-        _ => Err(format!(
-            "RSRCP has no command {name:?}: the Robi 42 sends the handshake and state frames, \
-             and is driven by writing one velocity byte (0..=255 = 0..1 forward, \
-             characteristic 0x6B2F) and one steering byte (0 left, 128 straight, 255 right, \
-             0x3F4A) to the remote-control service 0xBA73; `encode --protocol rsrcp frame` or \
-             `handshake` builds test input"
-        )),
+        _ => Err(NamedError::NoRsrcpCommand(name.to_string())),
     }
 }
 
-fn encode_handshake(given: Vec<(String, String)>) -> Result<Vec<u8>, String> {
+fn encode_handshake(given: Vec<(String, String)>) -> Result<Vec<u8>, NamedError> {
     let mut h = Handshake {
         version: 1,
         msdt_ms: 10,
@@ -48,16 +44,14 @@ fn encode_handshake(given: Vec<(String, String)>) -> Result<Vec<u8>, String> {
             "version" => h.version = uint_opt(&k, &v, u8::MAX as u64)? as u8,
             "msdt" => h.msdt_ms = uint_opt(&k, &v, u16::MAX as u64)? as u16,
             _ => {
-                return Err(format!(
-                    "handshake has no parameter --{k} (expected --version --msdt)"
-                ));
+                return Err(NamedError::HandshakeParameter(k));
             }
         }
     }
     Ok(h.encode().to_vec())
 }
 
-fn encode_frame(given: Vec<(String, String)>) -> Result<Vec<u8>, String> {
+fn encode_frame(given: Vec<(String, String)>) -> Result<Vec<u8>, NamedError> {
     let mut f = Frame::default();
     for (k, v) in given {
         f = match k.as_str() {
@@ -85,10 +79,7 @@ fn encode_frame(given: Vec<(String, String)>) -> Result<Vec<u8>, String> {
                 f.with_piezo(on, hz)
             }
             _ => {
-                return Err(format!(
-                    "frame has no parameter --{k} (expected --frame-id --motors --poti \
-                     --buttons --leds --piezo)"
-                ));
+                return Err(NamedError::FrameParameter(k));
             }
         };
     }
@@ -96,37 +87,40 @@ fn encode_frame(given: Vec<(String, String)>) -> Result<Vec<u8>, String> {
 }
 
 /// `--motors L,R` in rad/s, each within ±300.
-fn motors(text: &str) -> Result<(f32, f32), String> {
-    let bad = |why: &str| format!("--motors: {why} (expected L,R in rad/s)");
+fn motors(text: &str) -> Result<(f32, f32), NamedError> {
     let (l, r) = text
         .split_once(',')
-        .ok_or_else(|| bad(&format!("{text:?} is not two numbers")))?;
-    let speed = |s: &str| -> Result<f32, String> {
-        let v: f32 = s
-            .trim()
-            .parse()
-            .map_err(|_| bad(&format!("{s:?} is not a number")))?;
+        .ok_or_else(|| MotorsError::NotTwo(text.to_string()))
+        .map_err(NamedError::Motors)?;
+    let speed = |s: &str| -> Result<f32, MotorsError> {
+        let v: f32 = s.trim().parse().map_err(|_| ParamError::NotNumber {
+            text: s.to_string(),
+        })?;
         if !v.is_finite() {
-            return Err(bad(&format!("{s:?} is not a finite number")));
+            return Err(ParamError::NotFinite {
+                text: s.to_string(),
+            }
+            .into());
         }
         if v.abs() > MOTOR_LIMIT_RAD_S {
-            return Err(bad(&format!("{s} is out of range -300..=300")));
+            return Err(MotorsError::Range(s.to_string()));
         }
         Ok(v)
     };
-    Ok((speed(l)?, speed(r)?))
+    Ok((
+        speed(l).map_err(NamedError::Motors)?,
+        speed(r).map_err(NamedError::Motors)?,
+    ))
 }
 
 /// `--piezo HZ` (sounding), `--piezo HZ,off` (silent at HZ) or `--piezo off` (silent, 0 Hz).
-fn piezo(text: &str) -> Result<(bool, u16), String> {
+fn piezo(text: &str) -> Result<(bool, u16), NamedError> {
     let (hz, on) = match text.split_once(',') {
         _ if text.eq_ignore_ascii_case("off") => return Ok((false, 0)),
         Some((hz, state)) if state.trim().eq_ignore_ascii_case("off") => (hz, false),
         Some((hz, state)) if state.trim().eq_ignore_ascii_case("on") => (hz, true),
         Some((_, state)) => {
-            return Err(format!(
-                "--piezo: {state:?} is neither on nor off (expected HZ, HZ,off or off)"
-            ));
+            return Err(NamedError::PiezoState(state.to_string()));
         }
         None => (text, true),
     };
@@ -146,7 +140,7 @@ fn named_bits(names_of: impl Fn(u8) -> Vec<&'static str>) -> Vec<(u8, &'static s
 }
 
 /// A byte of named bits: names joined by `,` or `|`, `none`, or a number.
-fn bits(key: &str, text: &str, table: &[(u8, &str)]) -> Result<u8, String> {
+fn bits(key: &str, text: &str, table: &[(u8, &str)]) -> Result<u8, NamedError> {
     if text.eq_ignore_ascii_case("none") {
         return Ok(0);
     }
@@ -163,10 +157,11 @@ fn bits(key: &str, text: &str, table: &[(u8, &str)]) -> Result<u8, String> {
                 .map(|(b, _)| acc | b)
                 .ok_or_else(|| {
                     let names: Vec<&str> = table.iter().map(|(_, n)| *n).collect();
-                    format!(
-                        "--{key}: unknown name {name:?} (expected {}, none or a number)",
-                        names.join(", ")
-                    )
+                    NamedError::UnknownBitName {
+                        key: key.to_string(),
+                        name: name.to_string(),
+                        expected: names.join(", "),
+                    }
                 })
         })
 }

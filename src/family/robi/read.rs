@@ -180,18 +180,16 @@ impl Reader for RobiReader {
     /// One BLE value: the handshake characteristic's 5 bytes or one frames notification,
     /// which must be exactly one handshake or frame (too short, too long, a bad EOP, an
     /// unsized feature are errors). Input holding several is refused in favour of `--stream`.
-    fn one(&mut self, bytes: &[u8]) -> Result<Box<dyn Found>, String> {
+    fn one(&mut self, bytes: &[u8]) -> Result<Box<dyn Found>, crate::family::error::ReadError> {
         if bytes.is_empty() {
-            return Err("no bytes to decode".into());
+            return Err(crate::family::error::ReadError::NoBytes);
         }
         let mut framer = Framer::new();
         let mut all: Vec<_> = framer.feed(bytes).collect();
         all.extend(framer.finish());
         let found = all.iter().filter(|r| r.is_ok()).count();
         if found > 1 {
-            return Err(format!(
-                "the input holds {found} handshakes or frames, not one; use --stream to decode a byte stream"
-            ));
+            return Err(crate::family::error::ReadError::NotOneFrame(found));
         }
         let item = self.value(bytes);
         self.count(&item);

@@ -241,7 +241,7 @@ impl Family for V1 {
         ]
     }
 
-    fn reader(&self, opts: &ReadOptions) -> Result<Box<dyn Reader>, String> {
+    fn reader(&self, opts: &ReadOptions) -> Result<Box<dyn Reader>, super::error::ReadError> {
         Ok(Box::new(read::V1Reader::new(opts)?))
     }
 
@@ -253,7 +253,11 @@ impl Family for V1 {
         gatt::profile(model)
     }
 
-    fn encode_named(&self, name: &str, params: Vec<(String, String)>) -> Result<Vec<u8>, String> {
+    fn encode_named(
+        &self,
+        name: &str,
+        params: Vec<(String, String)>,
+    ) -> Result<Vec<u8>, super::error::NamedError> {
         named::encode(name, params)
     }
 

@@ -1,6 +1,7 @@
 //! `packet encode --protocol v1` and `packet list --protocol v1`: v1 commands built from
 //! catalogue names and parameters, and the catalogue listed.
 
+use crate::family::error::NamedError;
 use crate::family::named::{byte_opt, catalogue_names, data_opt, keep, params_text};
 use crate::protocol::table::unknown_command;
 use crate::protocol::v1::{CommandPacket, Packet, catalog};
@@ -14,7 +15,7 @@ pub fn names() -> Vec<(String, &'static str)> {
 /// Build the wire bytes of a v1 command: a catalogue name with its parameters, or `raw`.
 /// Header options: `--seq N` (0..=255), `--no-response` (clears SOP2's answer bit),
 /// `--no-reset-timeout` (clears its reset-timeout bit).
-pub fn encode(name: &str, given: Vec<(String, String)>) -> Result<Vec<u8>, String> {
+pub fn encode(name: &str, given: Vec<(String, String)>) -> Result<Vec<u8>, NamedError> {
     let is_raw = name == "raw";
     let (mut seq, mut answer, mut reset_timeout) = (0, true, true);
     let mut params = Vec::new();
@@ -25,7 +26,7 @@ pub fn encode(name: &str, given: Vec<(String, String)>) -> Result<Vec<u8>, Strin
             "no-response" => answer = false,
             "no-reset-timeout" => reset_timeout = false,
             "tid" | "sid" => {
-                return Err(format!("--{k}: API v1 packets have no target or source id"));
+                return Err(NamedError::NoIdsInV1(k));
             }
             "did" if is_raw => did = Some(byte_opt(&k, &v, 255)?),
             "cid" if is_raw => cid = Some(byte_opt(&k, &v, 255)?),
@@ -35,10 +36,10 @@ pub fn encode(name: &str, given: Vec<(String, String)>) -> Result<Vec<u8>, Strin
     }
     let (did, cid, data) = if is_raw {
         if let Some((k, _)) = params.first() {
-            return Err(format!("raw takes --did, --cid and --data, not --{k}"));
+            return Err(NamedError::RawParameter(k.clone()));
         }
-        let did = did.ok_or("raw needs --did")?;
-        let cid = cid.ok_or("raw needs --cid")?;
+        let did = did.ok_or(NamedError::RawNeeds("did"))?;
+        let cid = cid.ok_or(NamedError::RawNeeds("cid"))?;
         (did, cid, data)
     } else {
         let def = catalog::by_name(name)
@@ -47,7 +48,9 @@ pub fn encode(name: &str, given: Vec<(String, String)>) -> Result<Vec<u8>, Strin
         (def.did, def.cid, data)
     };
     let packet = CommandPacket::new(did, cid, seq, data).with_options(answer, reset_timeout);
-    Packet::Command(packet).encode().map_err(|e| e.to_string())
+    Packet::Command(packet)
+        .encode()
+        .map_err(|e| NamedError::V1Frame(e.to_string()))
 }
 
 /// `packet list --protocol v1`: commands with their parameters, async messages with their

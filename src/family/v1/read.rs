@@ -2,6 +2,7 @@
 //! a v1 response both start `FF FF`, so a reader reads one side; a response does not name its
 //! command, so a request given by name (`--request`) decodes their payloads.
 
+use crate::family::error::ReadError;
 use crate::family::read::{
     Emit, Found, FoundError, ReadOptions, Reader, Side, not_one, write_json,
 };
@@ -47,12 +48,10 @@ impl V1Reader {
     }
 
     /// `Err` says which option makes no sense (`--frames` without masks, an unknown request).
-    pub fn new(opts: &ReadOptions) -> Result<V1Reader, String> {
+    pub fn new(opts: &ReadOptions) -> Result<V1Reader, ReadError> {
         let streaming = if opts.sensor_mask.is_none() && opts.mask2.is_none() {
             if opts.frames.is_some() {
-                return Err(
-                    "--frames needs the masks in effect: --sensor-mask and/or --mask2".into(),
-                );
+                return Err(ReadError::FramesWithoutMasks);
             }
             None
         } else {
@@ -69,11 +68,13 @@ impl V1Reader {
             .as_deref()
             .map(|name| {
                 let def = v1::catalog::by_name(name).ok_or_else(|| {
-                    let msg =
-                        unknown_command(name, v1::catalog::suggestions(name), " --protocol v1");
-                    format!("--request: {msg}")
+                    ReadError::Request(unknown_command(
+                        name,
+                        v1::catalog::suggestions(name),
+                        " --protocol v1",
+                    ))
                 })?;
-                Ok::<_, String>(v1::Command {
+                Ok::<_, ReadError>(v1::Command {
                     did: def.did,
                     cid: def.cid,
                     data: Vec::new(),
@@ -189,7 +190,7 @@ impl Reader for V1Reader {
         ]
     }
 
-    fn one(&mut self, bytes: &[u8]) -> Result<Box<dyn Found>, String> {
+    fn one(&mut self, bytes: &[u8]) -> Result<Box<dyn Found>, crate::family::error::ReadError> {
         let mut items: Vec<_> = self.decoder.feed(bytes).collect();
         items.extend(self.decoder.finish());
         if items.len() != 1 {

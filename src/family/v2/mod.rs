@@ -244,7 +244,7 @@ impl Family for V2 {
         &[ReadOption::SensorMask, ReadOption::ExtMask]
     }
 
-    fn reader(&self, opts: &ReadOptions) -> Result<Box<dyn Reader>, String> {
+    fn reader(&self, opts: &ReadOptions) -> Result<Box<dyn Reader>, super::error::ReadError> {
         Ok(Box::new(read::V2Reader::new(opts)))
     }
 
@@ -261,7 +261,11 @@ impl Family for V2 {
         gatt::profile(model)
     }
 
-    fn encode_named(&self, name: &str, params: Vec<(String, String)>) -> Result<Vec<u8>, String> {
+    fn encode_named(
+        &self,
+        name: &str,
+        params: Vec<(String, String)>,
+    ) -> Result<Vec<u8>, super::error::NamedError> {
         named::encode(name, params)
     }
 

@@ -1,6 +1,7 @@
 //! `packet encode` and `packet list` for Sphero API v2: packets built from catalogue names
 //! and parameters, and the catalogue listed.
 
+use crate::family::error::NamedError;
 use crate::family::named::{byte_opt, catalogue_names, data_opt, keep, params_text};
 use crate::model::Model;
 use crate::protocol::table::unknown_command;
@@ -24,7 +25,7 @@ pub fn names() -> Vec<(String, &'static str)> {
 
 /// Build the wire bytes for `packet encode NAME --key value ...` (v2): a catalogue name with
 /// its parameters, or `raw`; header options `--seq N`, `--tid N`, `--sid N`, `--no-response`.
-pub fn encode(name: &str, given: Vec<(String, String)>) -> Result<Vec<u8>, String> {
+pub fn encode(name: &str, given: Vec<(String, String)>) -> Result<Vec<u8>, NamedError> {
     let mut header = Header::default();
     let mut params = Vec::new();
     let mut raw = (None, None, Vec::new());
@@ -39,20 +40,17 @@ pub fn encode(name: &str, given: Vec<(String, String)>) -> Result<Vec<u8>, Strin
             "cid" if name == "raw" => raw.1 = Some(byte_opt(&k, &v, 255)?),
             "data" if name == "raw" => raw.2 = data_opt(&v)?,
             "no-reset-timeout" => {
-                return Err(
-                    "--no-reset-timeout is an API v1 option (--protocol v1); v2 has no such bit"
-                        .into(),
-                );
+                return Err(NamedError::NoResetTimeoutInV2);
             }
             _ => params.push((k, v)),
         }
     }
     let (did, cid, data) = if name == "raw" {
         if let Some((k, _)) = params.first() {
-            return Err(format!("raw takes --did, --cid and --data, not --{k}"));
+            return Err(NamedError::RawParameter(k.clone()));
         }
-        let did = raw.0.ok_or("raw needs --did")?;
-        let cid = raw.1.ok_or("raw needs --cid")?;
+        let did = raw.0.ok_or(NamedError::RawNeeds("did"))?;
+        let cid = raw.1.ok_or(NamedError::RawNeeds("cid"))?;
         (did, cid, raw.2)
     } else {
         let def = catalog::by_name(name)
@@ -72,7 +70,7 @@ pub fn encode(name: &str, given: Vec<(String, String)>) -> Result<Vec<u8>, Strin
 
 /// The LED mask commands carry one value per set mask bit; catch a mismatch before the droid
 /// answers bad_data_length.
-fn check_led_values(name: &str, data: &[u8]) -> Result<(), String> {
+fn check_led_values(name: &str, data: &[u8]) -> Result<(), NamedError> {
     let width = match name {
         "set-all-leds-with-8-bit-mask" => 1,
         "set-all-leds-with-16-bit-mask" => 2,
@@ -85,12 +83,12 @@ fn check_led_values(name: &str, data: &[u8]) -> Result<(), String> {
     let mask = mask_bytes.iter().fold(0u32, |a, &b| (a << 8) | b as u32);
     let values = data.len() - width;
     if values != mask.count_ones() as usize {
-        return Err(format!(
-            "--values: mask 0x{mask:0w$X} has {} bit(s) set, so it needs {} value byte(s), got {values}",
-            mask.count_ones(),
-            mask.count_ones(),
-            w = width * 2
-        ));
+        return Err(NamedError::LedValues {
+            mask,
+            width,
+            bits: mask.count_ones(),
+            values,
+        });
     }
     Ok(())
 }

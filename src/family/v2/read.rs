@@ -12,6 +12,8 @@ use std::io;
 pub struct V2Reader {
     decoder: Decoder,
     seen: Seen,
+    /// The payload buffer of the packet last shown, reused for the next one.
+    spare: Vec<u8>,
 }
 
 /// What the reader learnt from the packets so far.
@@ -36,6 +38,7 @@ impl V2Reader {
                 follow: opts.follow && opts.sensor_mask.is_none(),
                 kinds: [0; 3],
             },
+            spare: Vec::new(),
         }
     }
 }
@@ -95,6 +98,7 @@ impl Reader for V2Reader {
     fn feed(&mut self, bytes: &[u8], mut emit: Emit<'_>) -> io::Result<()> {
         let mut result = Ok(());
         let seen = &mut self.seen;
+        let spare = &mut self.spare;
         // Borrowed packets: nothing is allocated per packet unless it is shown.
         self.decoder.feed_with(bytes, |d| {
             if result.is_err() {
@@ -104,7 +108,10 @@ impl Reader for V2Reader {
                 Decoded::Packet { offset, packet } => {
                     seen.saw(kind_of(&packet), packet.did, packet.cid, packet.data);
                     if let Some(emit) = emit.as_mut() {
-                        result = emit(&seen.found(offset, packet.to_packet(), None));
+                        let packet = packet.to_packet_in(std::mem::take(spare));
+                        let found = seen.found(offset, packet, None);
+                        result = emit(&found);
+                        *spare = found.packet.data;
                     }
                 }
                 Decoded::Error(e) => {
@@ -137,7 +144,7 @@ impl Reader for V2Reader {
             .collect()
     }
 
-    fn one(&mut self, bytes: &[u8]) -> Result<Box<dyn Found>, String> {
+    fn one(&mut self, bytes: &[u8]) -> Result<Box<dyn Found>, crate::family::error::ReadError> {
         let mut items: Vec<_> = self.decoder.feed(bytes).collect();
         items.extend(self.decoder.finish().into_iter().map(Err));
         if items.len() != 1 {

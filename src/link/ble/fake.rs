@@ -9,6 +9,7 @@ use super::backend::{
 };
 use super::error::{BleError, BleErrorKind};
 use crate::gatt::{CharRef, GattProfile, GattUuid};
+use crate::sync::lock;
 use futures_util::future::BoxFuture;
 use futures_util::stream::{self, BoxStream, StreamExt};
 use std::collections::{HashMap, HashSet};
@@ -16,10 +17,6 @@ use std::sync::{Arc, Mutex};
 use std::time::Duration;
 use tokio::sync::mpsc;
 use tokio::time::Instant;
-
-fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
-    m.lock().unwrap_or_else(|e| e.into_inner())
-}
 
 /// One operation the fake peripheral saw.
 #[derive(Debug, Clone, PartialEq, Eq)]

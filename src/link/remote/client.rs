@@ -5,6 +5,7 @@
 use super::RelayAddr;
 use crate::link::LinkError;
 use crate::protocol::relay::{Limits, Reply, ReplyDecoder, Request};
+use crate::sync::lock;
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
@@ -31,10 +32,6 @@ struct Waiters {
     /// Set when the connection is gone: why.
     closed: Option<String>,
     next_seq: u8,
-}
-
-pub(super) fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
-    m.lock().unwrap_or_else(|e| e.into_inner())
 }
 
 /// The writing half of a connection to a relay.

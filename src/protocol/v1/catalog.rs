@@ -48,7 +48,10 @@ pub use crate::protocol::table::CommandDef;
 use crate::protocol::table::{CommandTable, RawCommand};
 
 /// A catalogue command with its parameters encoded.
-pub fn command(def: &CommandDef, given: &[(String, String)]) -> Result<Command, String> {
+pub fn command(
+    def: &CommandDef,
+    given: &[(String, String)],
+) -> Result<Command, crate::protocol::error::EncodeError> {
     Ok(Command {
         did: def.did,
         cid: def.cid,

@@ -4,6 +4,7 @@
 //!
 //! The enumerations use the same `wire_enum!` as the shared ones.
 
+use crate::protocol::error::ParamError;
 use crate::protocol::value::{Fields, Value};
 use crate::protocol::wire::{FieldError, Reader, Size, Wire, parse_uint};
 
@@ -51,7 +52,7 @@ impl Wire for OptionalMask {
             width: 4,
         }
     }
-    fn parse(text: &str) -> Result<Self, String> {
+    fn parse(text: &str) -> Result<Self, ParamError> {
         match text.trim().to_ascii_lowercase().as_str() {
             "" | "none" | "-" => Ok(OptionalMask(None)),
             t => Ok(OptionalMask(Some(parse_uint(t, u32::MAX as u64)? as u32))),
@@ -109,14 +110,14 @@ impl Wire for ApiVersion {
             None => Value::Text(String::new()),
         }
     }
-    fn parse(text: &str) -> Result<Self, String> {
+    fn parse(text: &str) -> Result<Self, ParamError> {
         let t = text.trim();
         if t.is_empty() || t.eq_ignore_ascii_case("none") {
             return Ok(ApiVersion(None));
         }
-        let (a, b) = t
-            .split_once('.')
-            .ok_or_else(|| format!("{text:?} is not major.minor"))?;
+        let (a, b) = t.split_once('.').ok_or_else(|| ParamError::NotVersion {
+            text: text.to_string(),
+        })?;
         Ok(ApiVersion(Some((
             parse_uint(a, 255)? as u8,
             parse_uint(b, 255)? as u8,
@@ -166,13 +167,14 @@ impl Wire for I16List {
     fn value(&self) -> Value {
         Value::List(self.0.iter().map(|v| Value::Int(*v as i64)).collect())
     }
-    fn parse(text: &str) -> Result<Self, String> {
+    fn parse(text: &str) -> Result<Self, ParamError> {
         text.split(',')
             .map(str::trim)
             .filter(|s| !s.is_empty())
             .map(|s| {
-                s.parse::<i16>()
-                    .map_err(|_| format!("{s:?} is not an integer in -32768..=32767"))
+                s.parse::<i16>().map_err(|_| ParamError::NotI16 {
+                    text: s.to_string(),
+                })
             })
             .collect::<Result<Vec<_>, _>>()
             .map(I16List)

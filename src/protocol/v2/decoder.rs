@@ -113,25 +113,64 @@ impl Decoder {
         }
     }
 
-    /// The next packet or error in `bytes[*pos..]`, moving `pos` past what it consumed.
-    fn next_in(&mut self, bytes: &[u8], pos: &mut usize) -> Option<Decoded<'_>> {
+    /// The next packet or error in `bytes[*pos..]`, moving `pos` past what it consumed. A
+    /// packet borrows the input itself when it lies whole in it without escapes, else the
+    /// decoder's buffer.
+    fn next_in<'s>(&'s mut self, bytes: &'s [u8], pos: &mut usize) -> Option<Decoded<'s>> {
+        if let Some(body) = self.whole_body(bytes, pos) {
+            if let Ok(packet) = parse_body_ref(body) {
+                self.stats.packets += 1;
+                let offset = self.packet_start;
+                return Some(Decoded::Packet { offset, packet });
+            }
+            // Not a packet: reported as the buffered path reports it.
+            self.buf.clear();
+            self.buf.extend_from_slice(body);
+            return self.buffered_body();
+        }
         match self.scan(bytes, pos)? {
             Err(e) => Some(Decoded::Error(e)),
             // A body ended: `buf` holds it until the next packet starts.
-            Ok(()) => {
-                // Checked first, then handed out: a packet borrows `buf`, an error needs the
-                // decoder mutably.
-                if let Err((e, packet)) = parse_body_ref(&self.buf) {
-                    let packet = packet.map(|p| p.to_packet());
-                    let e = self.body_error(e, packet);
-                    self.buf.clear();
-                    return Some(Decoded::Error(e));
-                }
-                self.stats.packets += 1;
-                let offset = self.packet_start;
-                body_ref_unchecked(&self.buf).map(|packet| Decoded::Packet { offset, packet })
-            }
+            Ok(()) => self.buffered_body(),
         }
+    }
+
+    /// The fast path of a clean stream: at `bytes[*pos]` a packet starts (no garbage
+    /// pending) and ends in `bytes` with no escape and no SOP inside, within the bound. Its
+    /// body is the input itself (nothing copied); `pos`, the offsets and the statistics move
+    /// on exactly as [`Decoder::scan`] would move them.
+    fn whole_body<'b>(&mut self, bytes: &'b [u8], pos: &mut usize) -> Option<&'b [u8]> {
+        if self.state != State::Hunting || self.garbage_start.is_some() {
+            return None;
+        }
+        let rest = bytes.get(*pos..)?;
+        if rest.first() != Some(&SOP) {
+            return None;
+        }
+        let len = memchr::memchr3(SOP, EOP, ESC, &rest[1..])?;
+        if rest[1 + len] != EOP || len > self.max_body {
+            return None;
+        }
+        let body = &rest[1..1 + len];
+        self.packet_start = self.offset;
+        self.packet_wire_len = len as u64 + 2;
+        self.advance(pos, len + 2);
+        Some(body)
+    }
+
+    /// The body in `buf` as a packet, or the error it is.
+    fn buffered_body(&mut self) -> Option<Decoded<'_>> {
+        // Checked first, then handed out: a packet borrows `buf`, an error needs the
+        // decoder mutably.
+        if let Err((e, packet)) = parse_body_ref(&self.buf) {
+            let packet = packet.map(|p| p.to_packet());
+            let e = self.body_error(e, packet);
+            self.buf.clear();
+            return Some(Decoded::Error(e));
+        }
+        self.stats.packets += 1;
+        let offset = self.packet_start;
+        body_ref_unchecked(&self.buf).map(|packet| Decoded::Packet { offset, packet })
     }
 
     /// Consume `n` bytes of the input.

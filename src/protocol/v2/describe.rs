@@ -131,17 +131,26 @@ pub struct Json<'a> {
     cid: u8,
     seq: u8,
     flags: u8,
-    flag_names: Vec<&'static str>,
+    flag_names: FlagNames,
     ext_flags: Option<u8>,
     tid: Option<u8>,
     sid: Option<u8>,
     err: Option<u8>,
-    err_name: Option<String>,
+    err_name: Option<std::borrow::Cow<'static, str>>,
     data: HexJson<'a>,
     checksum_ok: bool,
     command: Option<&'static str>,
     fields: Option<FieldsJson<'a>>,
     problem: Option<&'a str>,
+}
+
+/// The flags' names as a JSON array, written without collecting them.
+struct FlagNames(super::Flags);
+
+impl Serialize for FlagNames {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.collect_seq(self.0.name_iter())
+    }
 }
 
 impl Json<'_> {
@@ -161,12 +170,12 @@ pub fn json<'a>(p: &'a Packet, checksum_ok: bool, d: &'a Described) -> Json<'a> 
         cid: p.cid,
         seq: p.seq,
         flags: p.flags.bits(),
-        flag_names: p.flags.names(),
+        flag_names: FlagNames(p.flags),
         ext_flags: p.ext_flags,
         tid: p.tid,
         sid: p.sid,
         err: p.err.map(|e| e.to_byte()),
-        err_name: p.err.map(|e| e.name()),
+        err_name: p.err.map(|e| e.name_cow()),
         data: HexJson(&p.data),
         checksum_ok,
         command: d.name,

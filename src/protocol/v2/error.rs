@@ -62,8 +62,13 @@ impl ErrorCode {
 
     /// The spec's snake-case name (`bad_device_id`), or `unknown_0xNN`.
     pub fn name(self) -> String {
+        self.name_cow().into_owned()
+    }
+
+    /// [`ErrorCode::name`], allocating only for an unknown code (JSON output, per packet).
+    pub fn name_cow(self) -> std::borrow::Cow<'static, str> {
         use ErrorCode::*;
-        match self {
+        std::borrow::Cow::Borrowed(match self {
             Success => "success",
             BadDeviceId => "bad_device_id",
             BadCommandId => "bad_command_id",
@@ -75,9 +80,8 @@ impl ErrorCode {
             Busy => "busy",
             BadTargetId => "bad_target_id",
             TargetUnavailable => "target_unavailable",
-            Unknown(b) => return format!("unknown_0x{b:02x}"),
-        }
-        .to_string()
+            Unknown(b) => return std::borrow::Cow::Owned(format!("unknown_0x{b:02x}")),
+        })
     }
 
     /// A sentence for people.

@@ -24,8 +24,12 @@ impl Flags {
 
     /// The flag names in snake case, lowest bit first, for humans and JSON.
     pub fn names(self) -> Vec<&'static str> {
-        let mut out = Vec::new();
-        for (bit, name) in [
+        self.name_iter().collect()
+    }
+
+    /// [`Flags::names`] without collecting them (JSON output writes them as they come).
+    pub fn name_iter(self) -> impl Iterator<Item = &'static str> {
+        [
             (Flags::IS_RESPONSE, "is_response"),
             (Flags::REQUESTS_RESPONSE, "requests_response"),
             (
@@ -37,12 +41,10 @@ impl Flags {
             (Flags::HAS_SOURCE_ID, "has_source_id"),
             (Flags::UNUSED, "unused_bit6"),
             (Flags::EXTENDED_FLAGS, "extended_flags"),
-        ] {
-            if self.contains(bit) {
-                out.push(name);
-            }
-        }
-        out
+        ]
+        .into_iter()
+        .filter(move |(bit, _)| self.contains(*bit))
+        .map(|(_, name)| name)
     }
 }
 

@@ -190,6 +190,14 @@ pub struct PacketRef<'a> {
 
 impl PacketRef<'_> {
     pub fn to_packet(&self) -> Packet {
+        self.to_packet_in(Vec::new())
+    }
+
+    /// The owned packet with its payload copied into `data` (cleared first): a caller that
+    /// makes one packet after another reuses one allocation.
+    pub fn to_packet_in(&self, mut data: Vec<u8>) -> Packet {
+        data.clear();
+        data.extend_from_slice(self.data);
         Packet {
             flags: self.flags,
             ext_flags: self.ext_flags,
@@ -199,7 +207,7 @@ impl PacketRef<'_> {
             cid: self.cid,
             seq: self.seq,
             err: self.err,
-            data: self.data.to_vec(),
+            data,
         }
     }
 

@@ -5,6 +5,7 @@
 
 use super::value::{Fields, Value};
 use super::wire::{FieldError, Reader, Size, Wire, parse_uint, wire_enum};
+use crate::protocol::error::ParamError;
 
 /// One ASCII character (the matrix's Set Single Character).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -22,11 +23,13 @@ impl Wire for Char {
     fn value(&self) -> Value {
         Value::Text(char::from(self.0).to_string())
     }
-    fn parse(text: &str) -> Result<Self, String> {
+    fn parse(text: &str) -> Result<Self, ParamError> {
         let mut chars = text.chars();
         match (chars.next(), chars.next()) {
             (Some(c), None) if c.is_ascii() && !c.is_ascii_control() => Ok(Char(c as u8)),
-            _ => Err(format!("{text:?} is not one printable ASCII character")),
+            _ => Err(ParamError::NotPrintableChar {
+                text: text.to_string(),
+            }),
         }
     }
 }
@@ -60,12 +63,14 @@ impl Wire for ScrollText {
     fn value(&self) -> Value {
         Value::Text(self.0.clone())
     }
-    fn parse(text: &str) -> Result<Self, String> {
+    fn parse(text: &str) -> Result<Self, ParamError> {
         if !text.is_ascii() || text.bytes().any(|b| b.is_ascii_control()) {
-            return Err("text must be printable ASCII".into());
+            return Err(ParamError::NotPrintableText);
         }
         if text.len() > SCROLL_TEXT_MAX {
-            return Err(format!("text longer than {SCROLL_TEXT_MAX} characters"));
+            return Err(ParamError::TextChars {
+                max: SCROLL_TEXT_MAX,
+            });
         }
         Ok(ScrollText(text.to_string()))
     }
@@ -112,12 +117,14 @@ impl Wire for Palette {
     fn value(&self) -> Value {
         Value::List(self.0.iter().map(|c| Value::Bytes(c.to_vec())).collect())
     }
-    fn parse(text: &str) -> Result<Self, String> {
+    fn parse(text: &str) -> Result<Self, ParamError> {
         text.split(',')
             .filter(|s| !s.trim().is_empty())
             .map(|s| {
-                let b = crate::hex::parse(s)?;
-                <[u8; 3]>::try_from(b.as_slice()).map_err(|_| format!("{s:?} is not RRGGBB"))
+                let b = crate::hex::parse(s).map_err(ParamError::Hex)?;
+                <[u8; 3]>::try_from(b.as_slice()).map_err(|_| ParamError::NotRgb {
+                    text: s.to_string(),
+                })
             })
             .collect::<Result<Vec<_>, _>>()
             .map(Palette)
@@ -148,7 +155,7 @@ impl Wire for FrameList {
     fn value(&self) -> Value {
         Value::List(self.0.iter().map(|i| Value::Int(*i as i64)).collect())
     }
-    fn parse(text: &str) -> Result<Self, String> {
+    fn parse(text: &str) -> Result<Self, ParamError> {
         text.split(',')
             .filter(|s| !s.trim().is_empty())
             .map(|s| parse_uint(s, u16::MAX as u64).map(|v| v as u16))
@@ -186,7 +193,7 @@ impl Wire for U16List {
     fn value(&self) -> Value {
         Value::List(self.0.iter().map(|i| Value::Int(*i as i64)).collect())
     }
-    fn parse(text: &str) -> Result<Self, String> {
+    fn parse(text: &str) -> Result<Self, ParamError> {
         FrameList::parse(text).map(|l| U16List(l.0))
     }
 }
@@ -240,19 +247,19 @@ impl Wire for StreamSlots {
                 .collect(),
         )
     }
-    fn parse(text: &str) -> Result<Self, String> {
+    fn parse(text: &str) -> Result<Self, ParamError> {
         text.split(',')
             .filter(|s| !s.trim().is_empty())
             .map(|pair| {
-                let (id, w) = pair
-                    .split_once(':')
-                    .ok_or_else(|| format!("{pair:?} is not ID:WIDTH"))?;
+                let (id, w) = pair.split_once(':').ok_or_else(|| ParamError::NotIdWidth {
+                    text: pair.to_string(),
+                })?;
                 Ok((
                     parse_uint(id, u16::MAX as u64)? as u16,
                     StreamWidth::parse(w)?,
                 ))
             })
-            .collect::<Result<Vec<_>, String>>()
+            .collect::<Result<Vec<_>, ParamError>>()
             .map(StreamSlots)
     }
 }

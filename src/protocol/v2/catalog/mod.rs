@@ -303,12 +303,16 @@ mod tests {
                 ("heading", "360"),
                 ("flags", "0"),
             ]))
-            .unwrap_err();
+            .unwrap_err()
+            .to_string();
         assert!(
             err.contains("--heading") && err.contains("0..=359"),
             "{err}"
         );
-        let err = c.encode_params(&given(&[("speed", "100")])).unwrap_err();
+        let err = c
+            .encode_params(&given(&[("speed", "100")]))
+            .unwrap_err()
+            .to_string();
         assert!(err.contains("needs --heading"), "{err}");
         // Flags default to none (issue 8), so speed and heading are enough.
         assert_eq!(
@@ -325,7 +329,8 @@ mod tests {
         let err = by_name("wake")
             .unwrap()
             .encode_params(&given(&[("x", "1")]))
-            .unwrap_err();
+            .unwrap_err()
+            .to_string();
         assert!(err.contains("takes no parameters"));
     }
 
