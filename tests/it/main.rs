@@ -49,6 +49,7 @@ mod fleet_app;
 mod fleet_mission;
 mod fuzz_smoke;
 mod layering;
+mod layout;
 mod man_pages;
 mod monitoring;
 mod monitoring_app;
