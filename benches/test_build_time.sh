@@ -44,4 +44,4 @@ for _ in $(seq "$runs"); do
   timed incremental cargo test --no-run -q
 done
 echo "test binaries built: $(cargo test --no-run --message-format=json 2>/dev/null \
-  | grep '"reason":"compiler-artifact"' | grep -c '"test":true')"
+  | grep '"reason":"compiler-artifact"' | grep -c '"profile":{[^}]*"test":true')"
