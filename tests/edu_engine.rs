@@ -9,7 +9,7 @@ use std::path::Path;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-#[path = "common/scratch.rs"]
+#[path = "it/common/scratch.rs"]
 mod scratch;
 use scratch::{Scratch, path, stderr};
 

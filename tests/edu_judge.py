@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """The Sphero Edu programs of tests/fixtures/edu/*.js written again in Python, run by
-spherov2.py's own SpheroEduAPI against `droidctl serve --sim bolt` (tests/edu_spherov2.rs
+spherov2.py's own SpheroEduAPI against `droidctl serve --sim bolt` (tests/it/edu_spherov2.rs
 compares where the droid went, its lights and its matrix with droidctl's runs of the
 JavaScript).
 

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""spherov2.py's own TCP adapter against `droidctl serve` (run by tests/relay_e2e.rs when a
+"""spherov2.py's own TCP adapter against `droidctl serve` (run by tests/it/relay_e2e.rs when a
 Python with spherov2 installed is at hand): find the toy through the relay, then drive it with
 spherov2's Sphero Edu API, which connects, unlocks, subscribes, wakes and streams sensors.
 

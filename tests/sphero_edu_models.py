@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """spherov2.py's Sphero Edu API against one simulated model, through `droidctl serve --sim`
 (spherov2's TCP adapter) or on the virtual BlueZ of `droidctl sim --bluez` (bleak, with
-DBUS_SYSTEM_BUS_ADDRESS pointing at its bus); run by tests/relay_e2e.rs when a Python with
+DBUS_SYSTEM_BUS_ADDRESS pointing at its bus); run by tests/it/relay_e2e.rs when a Python with
 spherov2 is at hand (issue 32): spin(360, 1) while sampling the streamed yaw, raw motors on a
 v1 droid, then a roll east into the wall with collision detection.
 

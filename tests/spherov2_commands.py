@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Every command spherov2.py builds for an API v2 toy, called method by method (run by
-tests/spherov2_catalogue.rs when a Python with spherov2 installed is at hand).
+tests/it/spherov2_catalogue.rs when a Python with spherov2 installed is at hand).
 
 For each toy class (R2D2, R2Q5, BB9E, BOLT, Mini, RVR) and each of its methods that is one of
 spherov2's command builders (a `commands.*` static method, bound plainly or through a

@@ -1,6 +1,6 @@
 //! libFuzzer on `droidctl::fuzzing::app_input`: what it checks and the input's layout are
-//! documented there (the same harness runs on stable in `tests/fuzz_smoke.rs` and, as a
-//! property test, in `tests/safety.rs`).
+//! documented there (the same harness runs on stable in `tests/it/fuzz_smoke.rs` and, as a
+//! property test, in `tests/it/safety.rs`).
 
 #![no_main]
 

@@ -1,5 +1,5 @@
 //! libFuzzer on `droidctl::fuzzing::btsnoop`: what it checks and the input's layout are
-//! documented there (the same harness runs on stable in `tests/fuzz_smoke.rs`).
+//! documented there (the same harness runs on stable in `tests/it/fuzz_smoke.rs`).
 
 #![no_main]
 

@@ -1,7 +1,7 @@
 //! The Sphero Edu JavaScript calls droidctl offers, with the robots each applies to: one
 //! table, read by the engine (a call on a robot it does not apply to throws "… is not on
 //! R2-D2") and by the docs (docs/edu-programs.md lists [`markdown`]'s table, and
-//! tests/edu_programs.rs checks the two agree).
+//! tests/it/edu_programs.rs checks the two agree).
 //!
 //! Names, arguments and units are Sphero Edu's JavaScript ones (its public docs, "Movement",
 //! "Lights", "Sensors", "Communications", "Events"); where spherov2.py's `SpheroEduAPI`

@@ -20,8 +20,8 @@
 //!
 //! Everything here is sans-IO: no clocks, no tokio.
 
-pub mod intent;
 pub mod error;
+pub mod intent;
 pub mod listing;
 pub mod named;
 pub mod read;

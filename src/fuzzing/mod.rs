@@ -4,7 +4,7 @@
 //!
 //! Two engines run the same functions: the libFuzzer binaries in `fuzz/fuzz_targets/` (one
 //! line each, `cargo +nightly fuzz run NAME`) and, on stable Rust, [`runner`] with the
-//! seeded [`mutate::Mutator`]: `tests/fuzz_smoke.rs` runs every harness over its seed corpus
+//! seeded [`mutate::Mutator`]: `tests/it/fuzz_smoke.rs` runs every harness over its seed corpus
 //! in `fuzz/corpus/NAME/` plus a few thousand generated inputs on each `cargo test`, and an
 //! ignored test runs one for as long as it is asked to. README's "Reliability" section lists
 //! the targets and what running them found.

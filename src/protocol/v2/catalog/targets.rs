@@ -2,7 +2,7 @@
 //!
 //! Source: spherov2.py 0.12.1 `toy/bolt.py` and `toy/rvr.py`, which bind each command to
 //! `Processors.PRIMARY` (target 0x11) or `SECONDARY` (0x12) or leave it to the caller; the
-//! rules below reproduce those bindings device by device (tests/spherov2_catalogue.rs checks
+//! rules below reproduce those bindings device by device (tests/it/spherov2_catalogue.rs checks
 //! every packet spherov2 builds against them). `droid-facts.md` §6 says BOLT's power goes to
 //! the primary; spherov2 sends BOLT's power commands without a target, and so does droidctl
 //! (a command without a target is taken by the primary). The seeds say nothing of processors.
