@@ -122,6 +122,11 @@ fn broker() {
     smoke("broker", 300);
 }
 
+#[test]
+fn session_core() {
+    smoke("session_core", 4000);
+}
+
 /// Each input runs the whole app on three simulated droids: fewer inputs.
 #[test]
 fn app_input() {
