@@ -211,14 +211,6 @@ impl Fits {
             Fits::Each(ms) => ms.iter().map(|m| m.id()).collect::<Vec<_>>().join(", "),
         }
     }
-
-    /// The `--sim` value that runs the example: the first model it fits, or the fleet.
-    pub fn sim_value(&self) -> String {
-        match self {
-            Fits::Each(ms) => ms.first().map_or("r2d2", |m| m.id()).to_string(),
-            Fits::Together(ms) => ms.iter().map(|m| m.id()).collect::<Vec<_>>().join(","),
-        }
-    }
 }
 
 #[cfg(test)]

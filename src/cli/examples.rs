@@ -64,13 +64,14 @@ pub fn run(args: ExamplesArgs, out: &mut dyn Write) -> Result<i32, CliError> {
 pub fn listing() -> String {
     let mut s = String::new();
     for (kind, how) in [
-        (examples::Kind::Mission, "missions: `droidctl run NAME.txt`"),
+        (examples::Kind::Mission, "Missions: `droidctl run NAME.txt`"),
         (
             examples::Kind::Program,
             "Sphero Edu programs: `droidctl run NAME.js`",
         ),
     ] {
-        s.push_str(&format!("{}\n", capitalise(how)));
+        s.push_str(how);
+        s.push('\n');
         for e in EXAMPLES.iter().filter(|e| e.kind == kind) {
             s.push_str(&line(e));
         }
@@ -109,13 +110,6 @@ fn line(e: &Example) -> String {
     }
     s.push('\n');
     s
-}
-
-fn capitalise(s: &str) -> String {
-    let mut c = s.chars();
-    c.next()
-        .map(|f| f.to_uppercase().chain(c).collect())
-        .unwrap_or_default()
 }
 
 #[cfg(test)]
