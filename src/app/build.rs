@@ -9,7 +9,7 @@ use super::rates::Rates;
 use super::remember::Remembered;
 use super::state::{AppState, DroidState, GamepadStatus, KeyboardMode};
 use crate::capture::replay::Replay;
-use crate::config::Config;
+use crate::config::{Action, Config};
 use crate::family::Family;
 use crate::model::Model;
 use crate::session::{SessionHandle, SessionStats};
@@ -93,6 +93,16 @@ pub(super) fn build(droids: Vec<Origin>, opts: AppOptions) -> App {
                 .or_insert_with(|| {
                     let (r, warning) = Remembered::load(dir, model);
                     warnings.extend(warning);
+                    let over =
+                        r.over_config(config.control.cruise_speed, config.stream_request().rate_hz);
+                    if !over.is_empty() {
+                        let key = keymap.shown(Action::ForgetSettings).unwrap_or_default();
+                        warnings.push(format!(
+                            "remembered for {}: {} ({key} forgets)",
+                            model.display_name(),
+                            over.join(", ")
+                        ));
+                    }
                     r
                 })
                 .clone(),
@@ -152,7 +162,7 @@ pub(super) fn build(droids: Vec<Origin>, opts: AppOptions) -> App {
         state.mirror = first.mirror.unwrap_or(false) && state.droids.len() > 1;
     }
     if !warnings.is_empty() {
-        state.show_hint(warnings.join(" · "), super::state::HINT_TIME * 3);
+        state.show_kept_hint(warnings.join(" · "), super::state::HINT_TIME * 3);
     }
     state.log_path = opts.log_path;
     state.keyboard = match opts.release {
@@ -168,6 +178,7 @@ pub(super) fn build(droids: Vec<Origin>, opts: AppOptions) -> App {
     state.help_nav = super::help::nav(&keymap, live);
     state.theme = config.display.theme;
     state.footer = super::help::footer(&keymap, live);
+    state.keymap = Arc::new(keymap.clone());
     state.help = if live {
         super::help::live(&config)
     } else {
@@ -187,6 +198,7 @@ pub(super) fn build(droids: Vec<Origin>, opts: AppOptions) -> App {
         remember: opts.remember,
         default_cruise: config.control.cruise_speed,
         default_rate: config.stream_request().rate_hz,
+        forget_asked: None,
         samples: opts.samples,
         start,
         dirty: true,

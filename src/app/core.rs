@@ -55,6 +55,8 @@ pub(super) struct App {
     /// The configuration's cruise speed and streaming rate (what forgetting goes back to).
     pub default_cruise: u8,
     pub default_rate: u16,
+    /// When the forget key was pressed once (it asks before it forgets).
+    pub forget_asked: Option<Duration>,
     /// The terminal's area at the last frame (where the mouse's clicks land).
     pub area: ratatui::layout::Rect,
 }

@@ -8,7 +8,7 @@ use super::core::App;
 use super::keys::edit;
 use super::packet_log::LogLine;
 use super::state::Overlay;
-use crate::config::{Action, Context, Key, KeyCode};
+use crate::config::{Action, Context, Key};
 
 /// Longest search typed.
 const SEARCH_MAX: usize = 60;
@@ -95,9 +95,10 @@ pub fn matches(rows: &[Row], search: &str) -> Vec<usize> {
 }
 
 impl App {
-    /// The log's newest line shown, in full.
+    /// The log's selected line, in full.
     pub(super) fn open_detail(&mut self) {
-        let Some(line) = self.state.log.visible(1).first().map(|l| (*l).clone()) else {
+        let rows = self.log_rows();
+        let Some(line) = self.state.log.selected(rows).cloned() else {
             return self.hint("no packet to show");
         };
         self.state.overlay = Overlay::Packet {
@@ -134,15 +135,16 @@ impl App {
         };
         let rows = rows(line);
         if *typing {
-            match key.code {
-                KeyCode::Enter => {
+            // While typing, the prompts' keys (as the log filter's): the rest is text.
+            match self.keymap.action_in(Context::Filter, &key) {
+                Some(Action::FilterApply) => {
                     *typing = false;
                     *matched = 0;
                     if let Some(&i) = matches(&rows, search).first() {
                         *scroll = i;
                     }
                 }
-                KeyCode::Esc => {
+                Some(Action::FilterCancel) => {
                     *typing = false;
                     search.clear();
                 }

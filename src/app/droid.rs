@@ -63,10 +63,7 @@ impl DroidMut<'_> {
     pub fn hint(&mut self, text: impl Into<String>) {
         let at = self.clock();
         *self.screen_now = at;
-        *self.hint = Some(Hint {
-            text: text.into(),
-            until: at + HINT_TIME,
-        });
+        *self.hint = Some(Hint::after(self.hint.as_ref(), text.into(), at, HINT_TIME));
         *self.dirty = true;
     }
 

@@ -72,21 +72,18 @@ pub fn replay(km: &KeyMap) -> Vec<HelpSection> {
     ]
 }
 
-/// The help overlay's page keys, for its footer (`PgDn/PgUp`), after the stop when `live`.
+/// The help overlay's stop, for its bottom edge (`Space stop`; empty in a replay, which
+/// drives nothing): help covers the footer, and the stop works over it. The page keys come
+/// from [`HELP_PAGES`] as bound, shown only when there is another page.
 pub fn nav(km: &KeyMap, live: bool) -> String {
-    let first = |a| km.keys(a).first().map(ToString::to_string);
-    let pages = match (first(Action::HelpNext), first(Action::HelpPrevious)) {
-        (Some(n), Some(p)) => format!("{n}/{p}"),
-        (Some(k), None) | (None, Some(k)) => k,
-        (None, None) => String::new(),
-    };
-    // Help covers the footer: its border names the stop, which works over it.
-    match first(Action::EStop).filter(|_| live) {
-        Some(stop) if pages.is_empty() => format!("{stop} stop"),
-        Some(stop) => format!("{stop} stop · {pages}"),
-        None => pages,
+    match km.keys(Action::EStop).first().filter(|_| live) {
+        Some(stop) => format!("{stop} stop"),
+        None => String::new(),
     }
 }
+
+/// Help's page keys.
+pub const HELP_PAGES: &[Hint] = &[(&[Action::HelpNext, Action::HelpPrevious], "pages")];
 
 /// The context footer's keys for every place keys are read: the keys the table gives a
 /// footer word, the first key bound to each, then (kept however narrow the row) the keys that
@@ -100,6 +97,7 @@ pub fn footer(km: &KeyMap, live: bool) -> Vec<(Context, Vec<FooterKey>)> {
             word: word.into(),
             needs: a.needs(),
             keep,
+            action: Some(a),
         })
     };
     let words = |ctx: Context| -> Vec<FooterKey> {
@@ -148,6 +146,7 @@ pub fn footer(km: &KeyMap, live: bool) -> Vec<(Context, Vec<FooterKey>)> {
             word: Action::EStop.short().into(),
             needs: Needs::All,
             keep: true,
+            action: Some(Action::EStop),
         })
     };
     let with = |ctx: Context, extra: &[(Action, &str)]| {
@@ -170,6 +169,7 @@ pub fn footer(km: &KeyMap, live: bool) -> Vec<(Context, Vec<FooterKey>)> {
         word: "close".into(),
         needs: Needs::All,
         keep: true,
+        action: None,
     });
     vec![
         with(
@@ -200,6 +200,76 @@ pub fn footer(km: &KeyMap, live: bool) -> Vec<(Context, Vec<FooterKey>)> {
     ]
 }
 
+/// One entry of an overlay's border hint: the actions whose first keys are shown, and the
+/// word for what they do there.
+pub type Hint = (&'static [Action], &'static str);
+
+/// The palettes' border.
+pub const PALETTE: &[Hint] = &[
+    (&[Action::PaletteUp, Action::PaletteDown], "select"),
+    (&[Action::PalettePlay], "play"),
+    (&[Action::PaletteClose], "close"),
+];
+/// The scope's channel list: both the toggle and the apply key switch the row there.
+pub const CHANNELS: &[Hint] = &[
+    (&[Action::SettingsUp, Action::SettingsDown], "choose"),
+    (&[Action::SettingsToggle, Action::SettingsApply], "switch"),
+    (&[Action::SettingsClose], "close"),
+];
+/// The streaming and collision settings.
+pub const TUNING: &[Hint] = &[
+    (&[Action::SettingsUp, Action::SettingsDown], "choose"),
+    (&[Action::SettingsLess, Action::SettingsMore], "value"),
+    (&[Action::SettingsToggle], "on/off"),
+    (&[Action::SettingsApply], "send"),
+    (&[Action::SettingsClose], "close"),
+];
+/// The text prompts (the log filter, BOLT's matrix).
+pub const PROMPT: &[Hint] = &[
+    (&[Action::FilterApply], "apply"),
+    (&[Action::FilterCancel], "cancel"),
+];
+/// A packet in full, browsing.
+pub const DETAIL: &[Hint] = &[
+    (&[Action::DetailSearch], "search"),
+    (&[Action::DetailUp, Action::DetailDown], "scroll"),
+    (&[Action::DetailClose], "close"),
+];
+/// A packet in full, typing the search (the prompts' keys).
+pub const DETAIL_TYPING: &[Hint] = &[
+    (&[Action::FilterApply], "find"),
+    (&[Action::FilterCancel], "cancel"),
+];
+/// A packet in full, going through the matches.
+pub const DETAIL_MATCHES: &[Hint] = &[
+    (&[Action::DetailNext], "next"),
+    (&[Action::DetailPrevious], "previous"),
+    (&[Action::DetailClose], "close"),
+];
+
+/// A border hint from the bindings as configured (`↑↓ select · Enter play · Esc close`): each
+/// entry's actions by their first keys (run together when each is one character, as `↑↓`,
+/// else with `/`); an entry none of whose actions has a key is left out, so a hint never names
+/// a key that does not do it.
+pub fn border(km: &KeyMap, hints: &[Hint]) -> String {
+    hints
+        .iter()
+        .filter_map(|(actions, word)| {
+            let keys: Vec<String> = actions
+                .iter()
+                .filter_map(|a| km.keys(*a).first().map(ToString::to_string))
+                .collect();
+            if keys.is_empty() {
+                return None;
+            }
+            let short = keys.iter().all(|k| k.chars().count() == 1);
+            let keys = keys.join(if short { "" } else { "/" });
+            Some(format!("{keys} {word}"))
+        })
+        .collect::<Vec<_>>()
+        .join(" · ")
+}
+
 /// The table of keys read in `place` (the scope's own while it is on screen in driving).
 pub fn context_of(place: Place, scope: bool) -> Context {
     match place {
@@ -218,8 +288,15 @@ pub fn context_of(place: Place, scope: bool) -> Context {
 /// The footer's keys now: for the place on top and the chosen droid.
 pub fn footer_now(state: &AppState) -> Vec<&FooterKey> {
     let replay = state.droid().replay.is_some();
-    let ctx = context_of(Place::of(state, replay), state.droid().scope.visible);
+    let place = Place::of(state, replay);
+    let ctx = match &state.overlay {
+        // Typing a search in a packet in full: the prompts' keys, as in the filter.
+        super::state::Overlay::Packet { typing: true, .. } => Context::Filter,
+        _ => context_of(place, state.droid().scope.visible),
+    };
     let (model, fleet) = (state.droid().model, state.droids.len() > 1);
+    let no_search = matches!(&state.overlay,
+        super::state::Overlay::Packet { search, .. } if search.is_empty());
     state
         .footer
         .iter()
@@ -227,6 +304,14 @@ pub fn footer_now(state: &AppState) -> Vec<&FooterKey> {
         .map(|(_, keys)| {
             keys.iter()
                 .filter(|k| k.needs.applies(model, fleet))
+                // The channel list shares the settings' table, but there the apply key
+                // switches the row: its word is in the border, not "apply" here.
+                .filter(|k| !(place == Place::Channels && k.action == Some(Action::SettingsApply)))
+                // A packet in full goes through matches only once there is a search.
+                .filter(|k| {
+                    !(no_search
+                        && matches!(k.action, Some(Action::DetailNext | Action::DetailPrevious)))
+                })
                 .collect()
         })
         .unwrap_or_default()
@@ -337,8 +422,9 @@ mod tests {
         let r = replay(&c.keymap);
         assert_eq!(keys_of(find(&r, "Replay"), "pause / play"), ["Space / p"]);
         assert_eq!(keys_of(find(&r, "Replay"), "quit"), ["q"]);
-        assert_eq!(nav(&c.keymap, true), "Space stop · PgDn/PgUp");
-        assert_eq!(nav(&c.keymap, false), "PgDn/PgUp");
+        assert_eq!(nav(&c.keymap, true), "Space stop");
+        assert_eq!(nav(&c.keymap, false), "");
+        assert_eq!(border(&c.keymap, HELP_PAGES), "PgDn/PgUp pages");
     }
 
     #[test]

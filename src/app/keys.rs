@@ -110,6 +110,13 @@ impl App {
             (true, _) => self.held.press(key, now),
             (false, kind) => kind == KeyKind::Press,
         };
+        // Forgetting asks first; any other key pressed meanwhile is a no.
+        if kind == KeyKind::Press
+            && !(before.0 == Place::Driving
+                && self.keymap.action(&key) == Some(Action::ForgetSettings))
+        {
+            self.forget_asked = None;
+        }
         let r = self.on_key(before.0, scope_key, key, new);
         if (self.place(), self.chosen(), self.mirroring()) != before {
             self.clear_held();
@@ -233,32 +240,40 @@ impl App {
 
     fn filter_key(&mut self, key: Key) {
         let action = self.keymap.action_in(Context::Filter, &key);
-        let Overlay::Filter { input } = &mut self.state.overlay else {
+        let Overlay::Filter { input, before } = &mut self.state.overlay else {
             return;
         };
         match action {
-            Some(Action::FilterCancel) => self.state.overlay = Overlay::None,
-            Some(Action::FilterApply) => {
-                let f = LogFilter::parse(input);
-                self.state.log.set_filter(f);
+            Some(Action::FilterCancel) => {
+                let before = std::mem::take(before.as_mut());
+                self.state.log.set_filter(before);
                 self.state.overlay = Overlay::None;
             }
-            // The rest is typing.
-            _ => edit(input, key, FILTER_MAX, |_| true),
+            Some(Action::FilterApply) => self.state.overlay = Overlay::None,
+            // The rest is typing, and the log follows as it is typed.
+            _ => {
+                let was = input.clone();
+                edit(input, key, FILTER_MAX, |_| true);
+                if *input != was {
+                    let f = LogFilter::parse(input);
+                    self.state.log.set_filter(f);
+                }
+            }
         }
     }
 
     /// The packet log has the keys: its own bindings first, then the drive table's quit,
     /// help, e-stop and log (back to driving).
     fn log_key(&mut self, key: Key, new_press: bool) -> Option<ExitReason> {
+        let rows = self.log_rows();
         let log = &mut self.state.log;
         match self.keymap.action_in(Context::Log, &key) {
-            Some(Action::LogUp) => log.scroll_up(1),
-            Some(Action::LogDown) => log.scroll_down(1),
-            Some(Action::LogPageUp) => log.scroll_up(10),
-            Some(Action::LogPageDown) => log.scroll_down(10),
-            Some(Action::LogTop) => log.scroll_up(usize::MAX / 2),
-            Some(Action::LogBottom) => log.scroll_down(usize::MAX / 2),
+            Some(Action::LogUp) => log.cursor_up(rows),
+            Some(Action::LogDown) => log.cursor_down(rows),
+            Some(Action::LogPageUp) => log.scroll_up(rows.max(1)),
+            Some(Action::LogPageDown) => log.scroll_down(rows.max(1)),
+            Some(Action::LogTop) => log.cursor_top(rows),
+            Some(Action::LogBottom) => log.cursor_bottom(),
             Some(Action::LogBack) => self.state.focus = Focus::Drive,
             // The toggles fire once per press.
             Some(_) if !new_press => {}
@@ -267,6 +282,7 @@ impl App {
             Some(Action::LogFilter) => {
                 self.state.overlay = Overlay::Filter {
                     input: log.filter_input(),
+                    before: Box::new(log.filter.clone()),
                 }
             }
             Some(Action::LogClearFilter) => log.set_filter(Default::default()),
@@ -343,7 +359,7 @@ impl App {
             Action::Mirror => self.toggle_mirror(),
             Action::Scope => self.toggle_scope(),
             Action::Tuning => self.open_tuning(),
-            Action::ForgetSettings => self.forget_settings(),
+            Action::ForgetSettings => self.ask_to_forget(),
             Action::Colour | Action::BackLight => {
                 if let Some(mut d) = self.droid(self.chosen()) {
                     if action == Action::Colour {

@@ -44,6 +44,13 @@ impl App {
         }
     }
 
+    /// Lines of packets the log pane shows at the last frame's size (its borders and header
+    /// off): the window the log's cursor moves in.
+    pub(super) fn log_rows(&self) -> usize {
+        let log = layout::screen(self.area, self.len() > 1).plan.log;
+        usize::from(log.height.saturating_sub(3))
+    }
+
     /// The main screen: the roster, the log, the panels.
     fn screen_mouse(&mut self, kind: MouseKind, at: Position) {
         let fleet = self.len() > 1;

@@ -253,6 +253,10 @@ pub struct PacketLog {
     capacity: usize,
     /// Lines scrolled up from the newest (0 = follow the tail).
     pub scroll: usize,
+    /// The selected line, counted up from the bottom of the window (0: the bottom line). The
+    /// cursor moves inside the window and the window scrolls only at its edges, as in lazygit's
+    /// lists; Enter opens the selected line.
+    pub cursor: usize,
     /// Paused: the view holds still while lines keep arriving.
     pub paused: bool,
     /// Show decoded fields (true) or raw hex (false).
@@ -275,6 +279,7 @@ impl PacketLog {
             lines: VecDeque::with_capacity(capacity.min(1024)),
             capacity: capacity.max(1),
             scroll: 0,
+            cursor: 0,
             paused: false,
             decoded: true,
             filter: LogFilter::default(),
@@ -288,8 +293,9 @@ impl PacketLog {
             self.lines.pop_front();
             self.dropped += 1;
         }
-        // While paused or scrolled back, keep the same lines in view.
-        if (self.paused || self.scroll > 0) && self.filter.matches(&line) {
+        // While paused, scrolled back or with a line selected above the newest, keep the same
+        // lines in view (the selection stays on its line).
+        if (self.paused || self.scroll > 0 || self.cursor > 0) && self.filter.matches(&line) {
             self.scroll += 1;
         }
         self.lines.push_back(line);
@@ -333,16 +339,75 @@ impl PacketLog {
         self.scroll = self.scroll.saturating_sub(n);
     }
 
+    /// The selected line in a window of `rows` lines.
+    pub fn selected(&self, rows: usize) -> Option<&LogLine> {
+        let v = self.visible(rows);
+        v.get(self.selected_index(v.len())?).copied()
+    }
+
+    /// Where the selected line is among `shown` lines in view (a window made smaller since
+    /// keeps its top line selected).
+    pub fn selected_index(&self, shown: usize) -> Option<usize> {
+        let last = shown.checked_sub(1)?;
+        Some(last - self.cursor.min(last))
+    }
+
+    /// The window's real offset: scrolled past the oldest page, the view shows that page.
+    fn settle(&mut self, rows: usize) {
+        let count = self.filtered().count();
+        self.scroll = self.scroll.min(count.saturating_sub(rows));
+        let shown = count.min(rows);
+        self.cursor = self.cursor.min(shown.saturating_sub(1));
+    }
+
+    /// Cursor one line up (older) in a window of `rows` lines; at the window's top edge the
+    /// window scrolls.
+    pub fn cursor_up(&mut self, rows: usize) {
+        self.settle(rows);
+        let count = self.filtered().count();
+        let shown = count.min(rows);
+        if self.cursor + 1 < shown {
+            self.cursor += 1;
+        } else if self.scroll + shown < count {
+            self.scroll += 1;
+        }
+    }
+
+    /// Cursor one line down (newer); at the bottom edge the window scrolls.
+    pub fn cursor_down(&mut self, rows: usize) {
+        self.settle(rows);
+        if self.cursor > 0 {
+            self.cursor -= 1;
+        } else {
+            self.scroll = self.scroll.saturating_sub(1);
+        }
+    }
+
+    /// To the oldest line (selected).
+    pub fn cursor_top(&mut self, rows: usize) {
+        self.scroll = usize::MAX / 2;
+        self.cursor = usize::MAX / 2;
+        self.settle(rows);
+    }
+
+    /// To the newest line, following the tail again.
+    pub fn cursor_bottom(&mut self) {
+        self.scroll = 0;
+        self.cursor = 0;
+    }
+
     pub fn toggle_pause(&mut self) {
         self.paused = !self.paused;
         if !self.paused {
             self.scroll = 0;
+            self.cursor = 0;
         }
     }
 
     pub fn set_filter(&mut self, f: LogFilter) {
         self.filter = f;
         self.scroll = 0;
+        self.cursor = 0;
     }
 
     /// The filter as text, to edit it again in the prompt.
@@ -477,5 +542,62 @@ mod tests {
         assert_eq!(log.visible(3).first().unwrap().seq, Some(0));
         log.scroll_down(1000);
         assert_eq!(log.scroll, 0);
+    }
+
+    fn numbered(n: u16) -> PacketLog {
+        let mut log = PacketLog::default();
+        for i in 0..n {
+            log.push(line(
+                Direction::Out,
+                cmd::play_animation(i).to_packet(i as u8),
+            ));
+        }
+        log
+    }
+
+    #[test]
+    fn the_cursor_moves_inside_the_window_and_scrolls_at_its_edges() {
+        let mut log = numbered(10);
+        assert_eq!(log.selected(3).unwrap().seq, Some(9));
+        log.cursor_up(3);
+        log.cursor_up(3);
+        // The top of a three-line window: the window has not moved.
+        assert_eq!(log.selected(3).unwrap().seq, Some(7));
+        assert_eq!(log.visible(3).last().unwrap().seq, Some(9));
+        log.cursor_up(3);
+        assert_eq!(log.selected(3).unwrap().seq, Some(6));
+        assert_eq!(log.visible(3).first().unwrap().seq, Some(6));
+        log.cursor_down(3);
+        assert_eq!(log.selected(3).unwrap().seq, Some(7));
+        assert_eq!(log.visible(3).first().unwrap().seq, Some(6), "window holds");
+        // New lines keep the selection on its line.
+        log.push(line(Direction::Out, cmd::play_animation(10).to_packet(10)));
+        assert_eq!(log.selected(3).unwrap().seq, Some(7));
+        log.cursor_top(3);
+        assert_eq!(log.selected(3).unwrap().seq, Some(0));
+        log.cursor_up(3);
+        assert_eq!(
+            log.selected(3).unwrap().seq,
+            Some(0),
+            "nothing above the oldest"
+        );
+        log.cursor_bottom();
+        assert_eq!(log.selected(3).unwrap().seq, Some(10));
+        log.push(line(Direction::Out, cmd::play_animation(11).to_packet(11)));
+        assert_eq!(
+            log.selected(3).unwrap().seq,
+            Some(11),
+            "following the tail again"
+        );
+    }
+
+    #[test]
+    fn a_short_log_selects_only_lines_that_exist() {
+        let mut log = numbered(2);
+        for _ in 0..5 {
+            log.cursor_up(10);
+        }
+        assert_eq!(log.selected(10).unwrap().seq, Some(0));
+        assert!(PacketLog::default().selected(10).is_none());
     }
 }

@@ -127,6 +127,23 @@ impl Remembered {
         (self, bad)
     }
 
+    /// What of this beats the configuration, in words (`cruise 145 (config 60)`): said on
+    /// screen at start, so a remembered value never silently wins over the file. `cruise` and
+    /// `rate` are the configuration's.
+    pub fn over_config(&self, cruise: u8, rate: u16) -> Vec<String> {
+        let mut said = Vec::new();
+        if let Some(c) = self.cruise.filter(|c| *c != cruise) {
+            said.push(format!("cruise {c} (config {cruise})"));
+        }
+        if let Some(r) = self.stream_rate_hz.filter(|r| *r != rate) {
+            said.push(format!("rate {r}/s (config {rate}/s)"));
+        }
+        if let Some(f) = self.log_filter.as_deref().filter(|f| !f.is_empty()) {
+            said.push(format!("log filter \"{f}\""));
+        }
+        said
+    }
+
     /// The scope's channels, as channels.
     pub fn channels(&self) -> Option<Vec<Channel>> {
         self.scope_channels.as_ref().map(|names| {
@@ -191,9 +208,32 @@ impl super::core::App {
         }
     }
 
-    /// The forget key: the chosen droid's model goes back to the configuration's settings
+    /// The forget key asks first: the first press says what would be forgotten, a second
+    /// press while that is on screen (and before any other key) forgets it.
+    pub(super) fn ask_to_forget(&mut self) {
+        let now = self.now();
+        if self
+            .forget_asked
+            .is_some_and(|at| now.saturating_sub(at) < super::state::HINT_TIME)
+        {
+            self.forget_asked = None;
+            return self.forget_settings();
+        }
+        self.forget_asked = Some(now);
+        let key = self
+            .keymap
+            .shown(crate::config::Action::ForgetSettings)
+            .unwrap_or_default();
+        let model = self.state.droid().model;
+        self.hint(format!(
+            "forget {}'s remembered settings (cruise, scope, rate, filter)? {key} again: yes · any other key: no",
+            model.display_name()
+        ));
+    }
+
+    /// Forgetting: the chosen droid's model goes back to the configuration's settings
     /// (cruise, scope, streaming rate) and the log filter is cleared; its file is deleted.
-    pub(super) fn forget_settings(&mut self) {
+    fn forget_settings(&mut self) {
         let i = self.chosen();
         let model = self.state.droid().model;
         let cruise = self.default_cruise;

@@ -2,7 +2,7 @@
 //! from events. [`crate::ui`] renders an immutable borrow of it; nothing here draws.
 
 use super::catalog::{self, Entry};
-use super::packet_log::PacketLog;
+use super::packet_log::{LogFilter, PacketLog};
 use crate::config::{Context, Needs};
 use crate::model::Model;
 use crate::session::{LinkState, SessionStats};
@@ -45,9 +45,11 @@ pub enum Overlay {
     Sounds {
         selected: usize,
     },
-    /// Typing a packet-log filter.
+    /// Typing a packet-log filter. It applies as it is typed; `before` is the filter to go
+    /// back to on cancel.
     Filter {
         input: String,
+        before: Box<LogFilter>,
     },
     /// Typing what BOLT's matrix shows: one character is drawn, more scroll.
     Matrix {
@@ -122,6 +124,8 @@ pub struct FooterKey {
     pub needs: Needs,
     /// Kept when the row is too narrow (the help and quit keys: `?` shows the rest).
     pub keep: bool,
+    /// What the key does (`None`: not one binding, as help's "other keys").
+    pub action: Option<crate::config::Action>,
 }
 
 /// How long a hint stays on screen.
@@ -132,6 +136,30 @@ pub const HINT_TIME: Duration = Duration::from_secs(4);
 pub struct Hint {
     pub text: String,
     pub until: Duration,
+    /// What was said at start (remembered settings over the configuration, unreadable
+    /// files) and until when: later hints are shown after it instead of hiding it.
+    pub kept: Option<(String, Duration)>,
+}
+
+impl Hint {
+    /// `text` for `for_` from `now`, after what `prev` keeps on screen.
+    pub fn after(prev: Option<&Hint>, text: String, now: Duration, for_: Duration) -> Hint {
+        match prev
+            .and_then(|h| h.kept.clone())
+            .filter(|(_, until)| *until > now)
+        {
+            Some((kept, until)) => Hint {
+                text: format!("{kept} · {text}"),
+                until: (now + for_).max(until),
+                kept: Some((kept, until)),
+            },
+            None => Hint {
+                text,
+                until: now + for_,
+                kept: None,
+            },
+        }
+    }
 }
 
 /// What the screen shows: the droids (one droid is a fleet of one), which one the keys drive
@@ -164,6 +192,9 @@ pub struct AppState {
     pub help_page: usize,
     /// The context footer's keys, per place keys are read ([`crate::app::help::footer`]).
     pub footer: Vec<(Context, Vec<FooterKey>)>,
+    /// The bindings as configured: overlays' border hints are built from them
+    /// ([`crate::app::help::border`]), so no hint can name a key that does something else.
+    pub keymap: std::sync::Arc<crate::config::KeyMap>,
     pub animations: Vec<Entry>,
     pub sounds: Vec<Entry>,
     /// A collision flashes this long.
@@ -275,6 +306,7 @@ impl AppState {
             help_nav: String::new(),
             help_page: 0,
             footer: Vec::new(),
+            keymap: std::sync::Arc::new(crate::config::Config::defaults().keymap),
             animations: catalog::animations(),
             sounds: catalog::sounds(),
             collision_flash: Duration::from_millis(1500),
@@ -330,9 +362,17 @@ impl AppState {
     }
 
     pub fn show_hint(&mut self, text: impl Into<String>, for_: Duration) {
+        self.hint = Some(Hint::after(self.hint.as_ref(), text.into(), self.now, for_));
+    }
+
+    /// A hint no later hint hides while it lasts (what is said at start).
+    pub fn show_kept_hint(&mut self, text: impl Into<String>, for_: Duration) {
+        let text = text.into();
+        let until = self.now + for_;
         self.hint = Some(Hint {
-            text: text.into(),
-            until: self.now + for_,
+            text: text.clone(),
+            until,
+            kept: Some((text, until)),
         });
     }
 }

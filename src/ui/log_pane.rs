@@ -76,15 +76,16 @@ pub fn render(frame: &mut Frame, area: Rect, s: &AppState) {
         };
         lines.push(Line::from(Span::styled(msg, theme::dim())));
     }
-    let any = !visible.is_empty();
-    lines.extend(visible.into_iter().map(|l| row(l, &cols, log.decoded)));
-    // With the keys, the newest line shown is the one Enter opens in full: marked.
-    if focused
-        && any
-        && let Some(last) = lines.pop()
-    {
-        lines.push(last.style(theme::selected()));
-    }
+    // With the keys, the selected line (the one Enter opens in full) is marked.
+    let chosen = focused.then(|| log.selected_index(visible.len())).flatten();
+    lines.extend(visible.into_iter().enumerate().map(|(i, l)| {
+        let r = row(l, &cols, log.decoded);
+        if Some(i) == chosen {
+            r.style(theme::selected())
+        } else {
+            r
+        }
+    }));
     frame.render_widget(Paragraph::new(lines), inner);
 }
 

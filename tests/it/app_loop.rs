@@ -452,7 +452,11 @@ async fn rebound_keys_work_in_every_context_and_show_in_help() {
     assert_eq!(line("Keyboard", "the packet log").as_deref(), Some("L"));
     assert_eq!(line("Help", "next page").as_deref(), Some("n"));
     // Help covers the footer: its border names the stop first.
-    assert_eq!(s.help_nav, "Space stop · n/PgUp");
+    assert_eq!(s.help_nav, "Space stop");
+    assert_eq!(
+        droidctl::app::help::border(&s.keymap, droidctl::app::help::HELP_PAGES),
+        "n/PgUp pages"
+    );
 }
 
 #[tokio::test(start_paused = true)]

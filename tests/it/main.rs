@@ -50,6 +50,7 @@ mod failsafe;
 mod fleet_app;
 mod fleet_mission;
 mod fuzz_smoke;
+mod hints;
 mod layering;
 mod layout;
 mod man_pages;

@@ -459,8 +459,21 @@ async fn settings_are_remembered_per_model_and_forgotten_with_r() {
     assert!(file.contains(&format!("cruise = {cruise}")), "{file}");
     // The next launch starts where the first ended (the rate is asked for once connected).
     let esc = || press(Key::plain(KeyCode::Esc));
-    let (second, sent) = live_opts(vec![(2000, esc())], with_dir()).await;
+    let (second, sent) = live_opts(vec![(2000, press(Key::ch('l')))], with_dir()).await;
     let d = second.state.droid();
+    // Issue 39 point 9: what is remembered over the configuration is said at start.
+    let hint = second
+        .state
+        .hint
+        .as_ref()
+        .map(|h| h.text.clone())
+        .unwrap_or_default();
+    assert!(
+        hint.contains(&format!(
+            "remembered for R2-D2: cruise {cruise} (config 100)"
+        )) && hint.contains("R forgets"),
+        "{hint}"
+    );
     assert_eq!(d.control.cruise, cruise);
     assert_eq!(
         (d.scope.window, d.scope.channels.clone()),
@@ -472,8 +485,19 @@ async fn settings_are_remembered_per_model_and_forgotten_with_r() {
         "{sent:?}"
     );
     assert_eq!(second.state.log.filter_input(), "in");
-    // R: back to the configuration's, the file gone.
-    let (third, _) = live_opts(vec![(3000, press(Key::ch('R')))], with_dir()).await;
+    // R asks first: R, another key (a no), R again (asks again) forgets nothing.
+    let r = || press(Key::ch('R'));
+    let (asked, _) = live_opts(vec![(3000, r()), (3100, esc()), (3200, r())], with_dir()).await;
+    assert_eq!(asked.state.droid().control.cruise, cruise);
+    let hint = asked.state.hint.as_ref().map(|h| h.text.clone());
+    assert!(
+        hint.as_deref().is_some_and(
+            |h| h.contains("forget R2-D2's remembered settings") && h.contains("R again: yes")
+        ),
+        "{hint:?}"
+    );
+    // R twice: back to the configuration's, the file gone.
+    let (third, _) = live_opts(vec![(3000, r()), (3100, r())], with_dir()).await;
     let d = third.state.droid();
     assert_eq!(d.control.cruise, 100);
     assert_eq!(d.monitor.request.rate_hz, 10);
@@ -531,4 +555,57 @@ async fn enter_opens_a_packet_in_full_with_search() {
         rows[*scroll]
     );
     assert!(rows.iter().any(|r| r.label == "hex" && !r.value.is_empty()));
+}
+
+/// Issue 39 point 11: the packet log has a cursor (`k`/`j` as well as the arrows) and Enter
+/// opens the selected line, not only the newest.
+#[tokio::test(start_paused = true)]
+async fn the_log_cursor_chooses_the_line_enter_opens() {
+    use droidctl::app::state::Overlay;
+    let keys = vec![
+        (3000, press(Key::ch('l'))),
+        (3100, press(Key::ch('p'))),
+        (3200, press(Key::ch('k'))),
+        (3300, press(Key::ch('k'))),
+        (3400, press(Key::plain(KeyCode::Up))),
+        (3500, press(Key::ch('j'))),
+        (3600, press(Key::plain(KeyCode::Enter))),
+    ];
+    let (exit, _) = live(keys).await;
+    let Overlay::Packet { line, .. } = &exit.state.overlay else {
+        panic!("the packet in full: {:?}", exit.state.overlay)
+    };
+    let log = &exit.state.log;
+    assert_eq!(log.cursor, 2, "three up, one down");
+    let newest_shown = log.filtered().rev().nth(log.scroll).expect("lines");
+    let selected = log.filtered().rev().nth(log.scroll + 2).expect("lines");
+    assert_eq!(**line, *selected);
+    assert_ne!(**line, *newest_shown);
+}
+
+/// Issue 39 point 11: the log filter applies as it is typed; Esc puts back the one before.
+#[tokio::test(start_paused = true)]
+async fn the_log_filter_applies_as_it_is_typed() {
+    let mut keys = vec![(3000, press(Key::ch('l'))), (3100, press(Key::ch('/')))];
+    // (The harness ends the run with `q`, typed here: "out q" is "out" and the text "q".)
+    for (i, c) in "out ".chars().enumerate() {
+        keys.push((3200 + i as u64 * 10, press(Key::ch(c))));
+    }
+    let (typing, _) = live(keys.clone()).await;
+    assert!(matches!(
+        typing.state.overlay,
+        droidctl::app::state::Overlay::Filter { .. }
+    ));
+    assert_eq!(
+        typing.state.log.filter.dir,
+        Some(droidctl::session::Direction::Out),
+        "applied before Enter"
+    );
+    keys.push((3400, press(Key::plain(KeyCode::Esc))));
+    let (cancelled, _) = live(keys).await;
+    assert_eq!(
+        cancelled.state.log.filter_input(),
+        "",
+        "Esc: the filter before"
+    );
 }

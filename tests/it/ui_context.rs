@@ -66,12 +66,15 @@ fn the_footer_follows_the_place_and_the_droid() {
     let mut tuning = r2.clone();
     tuning.overlay = Overlay::Channels { selected: 0 };
     let f = footer(&tuning);
-    assert!(f.contains("Enter apply") && f.contains("Esc close"), "{f}");
+    // The channel list's Enter switches the row (issue 39 point 3): no "apply" there.
+    assert!(f.contains("x on/off") && f.contains("Esc close"), "{f}");
+    assert!(!f.contains("apply"), "{f}");
     assert!(f.starts_with(" Space stop"), "{f}");
     // In a text prompt Space is typed: the footer names the stop that works there.
     let mut prompt = r2.clone();
     prompt.overlay = Overlay::Filter {
         input: String::new(),
+        before: Default::default(),
     };
     let f = footer(&prompt);
     assert!(f.starts_with(" Ctrl+Space stop"), "{f}");
@@ -332,6 +335,7 @@ fn the_estop_badge_shows_over_every_overlay() {
         Overlay::Help,
         Overlay::Filter {
             input: String::new(),
+            before: Default::default(),
         },
         Overlay::Channels { selected: 0 },
         Overlay::Animations { selected: 0 },

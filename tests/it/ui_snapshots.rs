@@ -289,6 +289,7 @@ snap!(
         let mut s = filtered();
         s.overlay = Overlay::Filter {
             input: "in dev:power batt".into(),
+            before: Default::default(),
         };
         s
     },
@@ -537,6 +538,7 @@ fn never_panics_at_any_size_or_state() {
             Overlay::Sounds { selected: 3 },
             Overlay::Filter {
                 input: "in dev:x ".repeat(40),
+                before: Default::default(),
             },
         ] {
             let mut s = base.clone();

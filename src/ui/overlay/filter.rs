@@ -12,7 +12,7 @@ use ratatui::widgets::{Clear, Paragraph};
 const SYNTAX: &str = "in|out dev:NAME text";
 
 /// A prompt box low on the screen: its inner rect and the input as it fits.
-fn prompt(frame: &mut Frame, area: Rect, title: &str, input: &str) -> (Rect, String) {
+fn prompt(frame: &mut Frame, area: Rect, title: &str, input: &str, keys: &str) -> (Rect, String) {
     let w = area.width.saturating_sub(4).clamp(1, 70).min(area.width);
     let h = 5.min(area.height);
     // Low on the screen, over the packet log.
@@ -24,9 +24,7 @@ fn prompt(frame: &mut Frame, area: Rect, title: &str, input: &str) -> (Rect, Str
     };
     let block = theme::panel(Span::styled(format!(" {title} "), theme::bold()))
         .border_style(theme::commanded())
-        .title_bottom(
-            Line::from(Span::styled(" Enter apply · Esc cancel ", theme::dim())).centered(),
-        );
+        .title_bottom(Line::from(Span::styled(format!(" {keys} "), theme::dim())).centered());
     let inner = block.inner(rect);
     frame.render_widget(Clear, rect);
     frame.render_widget(block, rect);
@@ -46,8 +44,8 @@ fn cursor(frame: &mut Frame, inner: Rect, shown: &str) {
 }
 
 /// BOLT's matrix prompt: one character is drawn, more scroll (up to 25).
-pub fn matrix(frame: &mut Frame, area: Rect, input: &str) {
-    let (inner, shown) = prompt(frame, area, "On the matrix", input);
+pub fn matrix(frame: &mut Frame, area: Rect, input: &str, keys: &str) {
+    let (inner, shown) = prompt(frame, area, "On the matrix", input, keys);
     let what = match crate::app::view::matrix::MatrixView::typed(input) {
         None => "nothing yet".to_string(),
         Some(crate::app::view::matrix::MatrixShows::Char(c)) => format!("draws {c:?}"),
@@ -71,8 +69,9 @@ pub fn matrix(frame: &mut Frame, area: Rect, input: &str) {
     cursor(frame, inner, &shown);
 }
 
-pub fn render(frame: &mut Frame, area: Rect, input: &str, current: &LogFilter) {
-    let (inner, shown) = prompt(frame, area, "Filter packets", input);
+/// `before`: the filter Esc goes back to (what is typed already applies).
+pub fn render(frame: &mut Frame, area: Rect, input: &str, before: &LogFilter, keys: &str) {
+    let (inner, shown) = prompt(frame, area, "Filter packets", input, keys);
     let iw = inner.width as usize;
     let parsed = LogFilter::parse(input);
     let preview = if parsed.is_active() {
@@ -80,8 +79,8 @@ pub fn render(frame: &mut Frame, area: Rect, input: &str, current: &LogFilter) {
     } else {
         "everything".into()
     };
-    let now = if current.is_active() {
-        current.describe()
+    let now = if before.is_active() {
+        before.describe()
     } else {
         "none".into()
     };
@@ -98,7 +97,7 @@ pub fn render(frame: &mut Frame, area: Rect, input: &str, current: &LogFilter) {
             Span::styled("shows ", theme::label()),
             Span::styled(truncate(&clean(&preview), iw / 2), theme::commanded()),
             Span::styled(
-                format!("  (now: {})", truncate(&clean(&now), iw / 3)),
+                format!("  (was: {})", truncate(&clean(&now), iw / 3)),
                 theme::dim(),
             ),
         ]),

@@ -110,8 +110,15 @@ fn flow(sections: Vec<Vec<Unit>>, rows: usize) -> Vec<Vec<Line<'static>>> {
     cols
 }
 
-/// `nav` names the page keys as configured (`PgDn/PgUp`).
-pub fn render(frame: &mut Frame, area: Rect, sections: &[HelpSection], nav: &str, page: usize) {
+/// `nav` names the stop that works over help (`Space stop`), `page_keys` the page keys as
+/// configured ([`crate::app::help::HELP_PAGES`]).
+pub fn render(
+    frame: &mut Frame,
+    area: Rect,
+    sections: &[HelpSection],
+    (nav, page_keys): (&str, &str),
+    page: usize,
+) {
     let rows = area.height.saturating_sub(2) as usize;
     let avail = area.width.saturating_sub(4) as usize;
     let max_cols = ((avail + GAP) / (MIN_COL_W + GAP)).max(1);
@@ -145,11 +152,23 @@ pub fn render(frame: &mut Frame, area: Rect, sections: &[HelpSection], nav: &str
     let inner_h = cols.iter().map(Vec::len).max().unwrap_or(0);
     let inner_w = col_w * per_page + GAP * (per_page - 1);
     let rect = centered(area, (inner_w + 4) as u16, (inner_h + 2) as u16);
-    let foot = if pages > 1 {
-        format!(" page {}/{pages} · {nav} · other keys close ", page + 1)
-    } else {
-        " any key closes ".to_string()
-    };
+    let mut foot: Vec<String> = Vec::new();
+    if pages > 1 {
+        foot.push(format!("page {}/{pages}", page + 1));
+    }
+    foot.extend((!nav.is_empty()).then(|| nav.to_string()));
+    if pages > 1 {
+        foot.push(page_keys.to_string());
+    }
+    foot.push(
+        if foot.is_empty() {
+            "any key closes"
+        } else {
+            "other keys close"
+        }
+        .into(),
+    );
+    let foot = format!(" {} ", foot.join(" · "));
     let block = theme::panel(Span::styled(" Help ", theme::bold()))
         .border_style(theme::label())
         .title_bottom(Line::from(Span::styled(foot, theme::dim())).centered());

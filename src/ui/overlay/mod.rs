@@ -8,6 +8,7 @@ mod packet;
 mod palette;
 mod settings;
 
+use crate::app::help::border;
 use crate::app::state::{AppState, Overlay};
 use ratatui::Frame;
 
@@ -49,16 +50,27 @@ fn draw(frame: &mut Frame, s: &AppState, area: ratatui::layout::Rect) {
                 .map(|h| h.applying(model, fleet))
                 .filter(|h| !h.lines.is_empty())
                 .collect();
-            help::render(frame, area, &shown, &s.help_nav, s.help_page)
+            let pages = border(&s.keymap, crate::app::help::HELP_PAGES);
+            help::render(frame, area, &shown, (&s.help_nav, &pages), s.help_page)
         }
         Overlay::Animations { selected } => {
-            palette::render(frame, area, "Animations", &s.animations, *selected)
+            let keys = border(&s.keymap, crate::app::help::PALETTE);
+            palette::render(frame, area, "Animations", &s.animations, *selected, &keys)
         }
         Overlay::Sounds { selected } => {
-            palette::render(frame, area, "Sounds", &s.sounds, *selected)
+            let keys = border(&s.keymap, crate::app::help::PALETTE);
+            palette::render(frame, area, "Sounds", &s.sounds, *selected, &keys)
         }
-        Overlay::Filter { input } => filter::render(frame, area, input, &s.log.filter),
-        Overlay::Matrix { input } => filter::matrix(frame, area, input),
+        Overlay::Filter { input, before } => {
+            let keys = border(&s.keymap, crate::app::help::PROMPT);
+            filter::render(frame, area, input, before, &keys)
+        }
+        Overlay::Matrix { input } => filter::matrix(
+            frame,
+            area,
+            input,
+            &border(&s.keymap, crate::app::help::PROMPT),
+        ),
         Overlay::Channels { selected } => settings::channels(frame, area, s, *selected),
         Overlay::Tuning { selected, draft } => settings::tuning(frame, area, s, *selected, draft),
         Overlay::Packet {
@@ -76,6 +88,7 @@ fn draw(frame: &mut Frame, s: &AppState, area: ratatui::layout::Rect) {
                 typing: *typing,
                 matched: *matched,
                 scroll: *scroll,
+                keymap: &s.keymap,
             },
         ),
     }

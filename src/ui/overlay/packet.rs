@@ -4,6 +4,7 @@
 use super::super::text::{clean, width, wrap};
 use super::super::theme;
 use crate::app::detail::{matches, rows};
+use crate::app::help::{self, border};
 use crate::app::packet_log::LogLine;
 use ratatui::Frame;
 use ratatui::layout::Rect;
@@ -17,6 +18,8 @@ pub struct View<'a> {
     pub typing: bool,
     pub matched: usize,
     pub scroll: usize,
+    /// The bindings, for the keys in the bottom edge.
+    pub keymap: &'a crate::config::KeyMap,
 }
 
 const LABEL_W: usize = 10;
@@ -30,20 +33,23 @@ pub fn render(frame: &mut Frame, area: Rect, line: &LogLine, v: View<'_>) {
     };
     let rows = rows(line);
     let found = matches(&rows, v.search);
+    let keys = |hints| border(v.keymap, hints);
     let foot = if v.typing {
-        format!(" /{}▏ Enter find · Esc cancel ", clean(v.search))
+        format!(" /{}▏ {} ", clean(v.search), keys(help::DETAIL_TYPING))
     } else if v.search.is_empty() {
-        " / search · ↑↓ scroll · Esc close ".to_string()
+        format!(" {} ", keys(help::DETAIL))
     } else if found.is_empty() {
         format!(
-            " no match for {:?} · / search · Esc close ",
-            clean(v.search)
+            " no match for {:?} · {} ",
+            clean(v.search),
+            keys(help::DETAIL)
         )
     } else {
         format!(
-            " match {}/{} · n next · N previous · Esc close ",
+            " match {}/{} · {} ",
             v.matched % found.len() + 1,
-            found.len()
+            found.len(),
+            keys(help::DETAIL_MATCHES)
         )
     };
     let block = theme::panel(Span::styled(

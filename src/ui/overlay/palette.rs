@@ -13,7 +13,15 @@ use ratatui::widgets::{Clear, Paragraph};
 
 pub use crate::app::layout::list_offset as offset;
 
-pub fn render(frame: &mut Frame, area: Rect, title: &str, entries: &[Entry], selected: usize) {
+/// `keys`: the border's hint ([`crate::app::help::PALETTE`] as bound).
+pub fn render(
+    frame: &mut Frame,
+    area: Rect,
+    title: &str,
+    entries: &[Entry],
+    selected: usize,
+    keys: &str,
+) {
     let rect = palette_rect(area, entries.iter().map(|e| width(&e.name)), entries.len());
     let sel = selected.min(entries.len().saturating_sub(1));
     let mut block = theme::panel(Line::from(vec![
@@ -28,13 +36,8 @@ pub fn render(frame: &mut Frame, area: Rect, title: &str, entries: &[Entry], sel
         ),
     ]))
     .border_style(theme::label());
-    block = block.title_bottom(
-        Line::from(Span::styled(
-            " ↑↓ select · Enter play · Esc close ",
-            theme::dim(),
-        ))
-        .centered(),
-    );
+    block =
+        block.title_bottom(Line::from(Span::styled(format!(" {keys} "), theme::dim())).centered());
     let inner = block.inner(rect);
     frame.render_widget(Clear, rect);
     frame.render_widget(block, rect);

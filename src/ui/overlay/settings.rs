@@ -62,7 +62,7 @@ pub fn channels(frame: &mut Frame, area: Rect, s: &AppState, selected: usize) {
         frame,
         area,
         "Scope channels",
-        "↑↓ choose · Space switch · Esc close",
+        &crate::app::help::border(&s.keymap, crate::app::help::CHANNELS),
         rows,
         selected,
     );
@@ -110,7 +110,7 @@ pub fn tuning(frame: &mut Frame, area: Rect, s: &AppState, selected: usize, d: &
         frame,
         area,
         &title,
-        "↑↓ ←→ value · Space on/off · Enter send · Esc close",
+        &crate::app::help::border(&s.keymap, crate::app::help::TUNING),
         rows,
         selected,
     );
