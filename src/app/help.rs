@@ -247,6 +247,16 @@ pub const DETAIL_MATCHES: &[Hint] = &[
     (&[Action::DetailClose], "close"),
 ];
 
+/// BOLT's matrix panel: its own keys.
+pub const MATRIX_PANEL: &[Hint] = &[
+    (&[Action::Matrix], "type"),
+    (&[Action::MatrixColour], "colour"),
+    (&[Action::Calibrate], "calibrate"),
+];
+
+/// RVR's panel, out of tank mode.
+pub const TANK_PANEL: &[Hint] = &[(&[Action::Tank], "tank mode")];
+
 /// A border hint from the bindings as configured (`↑↓ select · Enter play · Esc close`): each
 /// entry's actions by their first keys (run together when each is one character, as `↑↓`,
 /// else with `/`); an entry none of whose actions has a key is left out, so a hint never names

@@ -113,11 +113,18 @@ fn text(s: &AppState) -> Vec<Line<'static>> {
             Span::styled("● droid ", theme::reported()),
             Span::styled(droid, theme::reported().add_modifier(Modifier::BOLD)),
         ]),
-        Line::from(vec![
-            Span::styled("speed ", theme::label()),
-            Span::styled(format!("{:>3}", c.speed), theme::commanded()),
-            Span::styled("/255", theme::dim()),
-        ]),
+        // In tank mode the tracks are driven, not a speed: their speeds are what is asked.
+        match c.tank {
+            Some((l, r)) => Line::from(vec![
+                Span::styled("tank ", theme::label()),
+                Span::styled(format!("L{l:+} R{r:+}"), theme::commanded()),
+            ]),
+            None => Line::from(vec![
+                Span::styled("speed ", theme::label()),
+                Span::styled(format!("{:>3}", c.speed), theme::commanded()),
+                Span::styled("/255", theme::dim()),
+            ]),
+        },
         Line::from(vec![
             Span::styled(" meas ", theme::label()),
             Span::styled(opt(t.speed_cm_s(), 1, ""), theme::reported()),
@@ -142,8 +149,10 @@ fn text(s: &AppState) -> Vec<Line<'static>> {
                 Span::raw(" "),
                 flag(c.reverse, "REVERSE"),
             ])
-        } else {
+        } else if crate::family::for_model(s.droid().model).can_reverse() {
             Line::from(flag(c.reverse, "REVERSE"))
+        } else {
+            Line::default()
         },
     ];
     if s.droid().model.has_legs() {

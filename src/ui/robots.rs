@@ -101,10 +101,7 @@ pub fn bolt(frame: &mut Frame, area: Rect, s: &AppState) {
             format!("compass {h:.0}°"),
         ),
         (None, Some(n)) => (format!("north at yaw {n}°"), format!("north at yaw {n}°")),
-        (None, None) => (
-            "compass not calibrated".into(),
-            "compass not calibrated".into(),
-        ),
+        (None, None) => ("not calibrated".into(), "compass not calibrated".into()),
     };
     let light = match r.ambient_lux {
         Some(l) if l.is_finite() => format!("light {l:.0} lx"),
@@ -146,8 +143,9 @@ pub fn bolt(frame: &mut Frame, area: Rect, s: &AppState) {
             Span::styled("ambient ", theme::label()),
             Span::raw(light),
         ]),
+        // The keys as bound (a rebound key shows here as in the footer).
         Line::from(Span::styled(
-            "i type · k colour · N calibrate",
+            crate::app::help::border(&s.keymap, crate::app::help::MATRIX_PANEL),
             theme::dim(),
         )),
     ];
@@ -164,8 +162,10 @@ pub fn rvr(frame: &mut Frame, area: Rect, s: &AppState) {
         Some((c, index, confidence)) => vec![
             Span::styled("floor ", theme::label()),
             Span::styled("■", Style::new().fg(rgb(c))),
+            // RVR's own words: the colour read (RGB), which of its known colours that is
+            // (an index), and how sure it is.
             Span::raw(format!(
-                " {},{},{} #{index} {:.0}%",
+                " rgb {},{},{} · colour {index} ({:.0}% sure)",
                 c[0],
                 c[1],
                 c[2],
@@ -189,7 +189,7 @@ pub fn rvr(frame: &mut Frame, area: Rect, s: &AppState) {
     };
     let tracks = match s.droid().control.tank {
         Some((l, rt)) => format!("tracks L {l:+} R {rt:+}"),
-        None => "v: tank mode".to_string(),
+        None => crate::app::help::border(&s.keymap, crate::app::help::TANK_PANEL),
     };
     let mut lines = vec![
         Line::from(colour),

@@ -13,13 +13,14 @@ use ratatui::style::Modifier;
 use ratatui::text::{Line, Span};
 use ratatui::widgets::Paragraph;
 
-/// The widest state ("retry 9"), battery (" 3.9V") and rate (" 12/10/s") an entry makes
+/// The widest state ("retry 9"), battery (" 3.9V") and rate (" 12/s in") an entry makes
 /// room for.
 const STATE_W: usize = 7;
 const BATTERY_W: usize = 5;
 const RATE_W: usize = 9;
 
-/// One entry at full length: `▶2 D2-0001 conn 3.9V 12/9/s`.
+/// One entry at full length: `▶2 D2-0001 conn 3.9V 12/s in` (packets in a second: whether the
+/// droid is talking; the status bar has both directions for the chosen one).
 /// `chosen`: the keys' droid; `driven`: it or, in mirror mode, every droid.
 fn entry(i: usize, e: &RosterEntry, chosen: bool, driven: bool, room: usize) -> Vec<Span<'static>> {
     let state = match &e.link {
@@ -35,7 +36,7 @@ fn entry(i: usize, e: &RosterEntry, chosen: bool, driven: bool, room: usize) -> 
         _ => theme::attention(),
     };
     let battery = e.battery_v.map(|v| format!(" {v:.1}V")).unwrap_or_default();
-    let rate = truncate(&format!(" {:.0}/{:.0}/s", e.rate_in, e.rate_out), RATE_W);
+    let rate = truncate(&format!(" {:.0}/s in", e.rate_in), RATE_W);
     let marker = match (chosen, driven) {
         (true, _) => "▶",
         (false, true) => "»",

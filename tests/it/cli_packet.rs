@@ -279,8 +279,14 @@ fn decode_single_error_exits_1() {
     assert_eq!(
         v,
         [
-            json!({"error": "truncated", "offset": 0, "detail": "1 body bytes before the stream ended"})
+            json!({"error": "truncated", "offset": 0, "detail": "1 body bytes before the stream ended, no end byte (D8): cut short, or its end byte is wrong (the last byte is 0A)"})
         ]
+    );
+    // Issue 39 point 13: a wrong end byte is named, not only "truncated".
+    let out = ok_with(&["packet", "decode", "8D 0A 13 0D 00 D5 D9"], 1);
+    assert!(
+        out.contains("no end byte (D8)") && out.contains("the last byte is D9"),
+        "{out}"
     );
     let out = ok_with(&["packet", "decode", "01 02"], 1);
     assert!(

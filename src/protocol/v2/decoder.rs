@@ -291,7 +291,16 @@ impl Decoder {
             out.push(e);
         }
         if let State::Body { .. } = self.state {
-            let detail = format!("{} body bytes before the stream ended", self.buf.len());
+            // A packet whose end byte is wrong reads as one that never ended: say both, and
+            // the last byte, so `8D … D9` is not taken for a cut-short capture alone.
+            let detail = match self.buf.last() {
+                Some(last) => format!(
+                    "{} body bytes before the stream ended, no end byte (D8): cut short, or \
+                     its end byte is wrong (the last byte is {last:02X})",
+                    self.buf.len()
+                ),
+                None => "the stream ended right after a start byte".to_string(),
+            };
             out.push(self.error(ErrorKind::Truncated, self.packet_start, detail));
             self.stats.skipped_bytes += self.packet_wire_len;
         }
