@@ -47,13 +47,12 @@ impl BleArgs {
     /// Scan, pick and build the link to the droid these arguments select.
     pub async fn connect(&self, chooser: Chooser) -> Result<Connected, CliError> {
         if let Some(r) = self.remote.first() {
-            return connect_remote(
-                &r.relay,
-                r.name.clone().or_else(|| self.name.first().cloned()),
-                self.address.clone(),
-                Duration::from_secs(self.scan_timeout),
-            )
-            .await;
+            let name = r.name.clone().or_else(|| self.name.first().cloned());
+            let timeout = Duration::from_secs(self.scan_timeout);
+            if name.is_none() && self.address.is_none() && std::io::stdin().is_terminal() {
+                return connect_remote_picked(&r.relay, timeout, chooser).await;
+            }
+            return connect_remote(&r.relay, name, self.address.clone(), timeout).await;
         }
         connect(
             self.name.first().cloned(),
@@ -254,6 +253,92 @@ pub async fn connect_remote(
         link: Box::new(link),
         others: Vec::new(),
     })
+}
+
+/// `--remote HOST` with nothing named, at a terminal: the relay's droids are listed; with
+/// several, the same picker as for Bluetooth (the full-screen list in the app, the numbered
+/// prompt elsewhere) chooses one or, marked, several (a fleet behind the relay).
+async fn connect_remote_picked(
+    relay: &crate::link::remote::RelayAddr,
+    scan_timeout: Duration,
+    chooser: Chooser,
+) -> Result<Connected, CliError> {
+    use crate::link::remote::{RemoteLink, RemoteSelector, pick as pick_remote, scan};
+    eprintln!("droidctl: asking the relay at {relay} for droids…");
+    let all = scan(relay, scan_timeout)
+        .await
+        .map_err(|e| CliError::failure(e.message))?;
+    let droids: Vec<_> = all
+        .iter()
+        .filter(|d| d.model.is_some_and(Model::drivable))
+        .collect();
+    let chosen: Vec<_> = if droids.len() > 1 {
+        // The picker's entries: a relay's address is its key (as INIT takes it back).
+        let entries: Vec<ScanEntry> = droids
+            .iter()
+            .map(|d| {
+                let address = d.address.parse().ok();
+                ScanEntry {
+                    name: Some(d.name.clone()),
+                    model: d.model,
+                    id: DeviceId::new(d.address.clone(), address),
+                    address: address.unwrap_or(crate::link::ble::BleAddress([0; 6])),
+                    rssi: None,
+                    heard: true,
+                }
+            })
+            .collect();
+        let ids: Vec<DeviceId> = match chooser {
+            Chooser::Prompt => {
+                let refs: Vec<&ScanEntry> = entries.iter().collect();
+                pick(&refs)?.into_iter().collect()
+            }
+            Chooser::Screen(keys) => {
+                tokio::task::spawn_blocking(move || pick_on_screen(entries, keys))
+                    .await
+                    .map_err(|e| CliError::failure(format!("picker failed: {e}")))??
+            }
+        };
+        ids.iter()
+            .filter_map(|id| droids.iter().find(|d| d.address == id.key()).copied())
+            .cloned()
+            .collect()
+    } else {
+        // One or none: the relay's own words (none says how to wake one).
+        let sel = RemoteSelector {
+            scan_timeout,
+            ..RemoteSelector::default()
+        };
+        vec![pick_remote(&all, &sel).map_err(CliError::failure)?]
+    };
+    let mut links = chosen.into_iter().filter_map(|d| {
+        let model = d.model?;
+        let profile = crate::family::gatt_profile(model);
+        Some(Connected {
+            model,
+            name: d.name.clone(),
+            pacing: profile.pacing,
+            chunk_size: profile.chunk_size,
+            link: Box::new(RemoteLink::new(
+                relay.clone(),
+                d.address.clone(),
+                d.name.clone(),
+                model,
+                profile,
+            )),
+            others: Vec::new(),
+        })
+    });
+    let Some(mut first) = links.next() else {
+        return Err(CliError::failure("no droid chosen".to_string()));
+    };
+    first.others = links.collect();
+    eprintln!(
+        "droidctl: connecting to {} ({}) behind {relay}",
+        first.name,
+        first.model.display_name()
+    );
+    Ok(first)
 }
 
 /// A numbered list on stderr, an answer on stdin; Enter takes the strongest.

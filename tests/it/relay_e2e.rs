@@ -473,6 +473,36 @@ fn the_app_drives_through_the_relay() {
     serve.stop();
 }
 
+/// Issue 39 point 6: `--remote HOST` with several droids behind the relay opens the picker (as
+/// a Bluetooth scan does) instead of ending; the droid chosen there is the one driven.
+#[test]
+fn several_droids_behind_a_relay_open_the_picker() {
+    let dir = TempDir::new("picker");
+    let serve = Serve::start(&["r2d2", "r2q5"], &[], &dir);
+    let log = dir.path("app.log");
+    let mut tui = pty::Tui::start(
+        &["--remote", &serve.address],
+        &[
+            ("DROIDCTL_LOG_FILE", log.as_str()),
+            ("DROIDCTL_CONFIG", "/dev/null"),
+            (
+                "DBUS_SYSTEM_BUS_ADDRESS",
+                "unix:path=/nonexistent/droidctl-test/bus",
+            ),
+        ],
+    );
+    let screen = tui.wait_for("Q5-0002", Duration::from_secs(20));
+    assert!(screen.contains("D2-0001"), "both droids listed:\n{screen}");
+    // The second one, by its digit.
+    tui.send(b"2");
+    let screen = tui.wait_for("connected", Duration::from_secs(20));
+    assert!(screen.contains("Q5-0002"), "the droid chosen:\n{screen}");
+    tui.send(b"q");
+    let status = tui.wait_exit(Duration::from_secs(10));
+    assert!(status.success(), "{status:?}");
+    serve.stop();
+}
+
 // ---------------------------------------------------------------------------------------------
 // spherov2.py itself, when a Python with it is at hand (`pip install spherov2`, and bleak for
 // its server). Point DROIDCTL_TEST_SPHEROV2_PYTHON at that Python (default python3); without
