@@ -492,6 +492,7 @@ async fn two_droids_with_the_same_name_get_their_own_topics() {
         qos: 0,
         prefix: "droidctl".into(),
         client_id: mqtt::default_client_id(),
+        bridge_id: "test".into(),
         keepalive: Duration::from_secs(5),
         username: None,
         password: None,
