@@ -159,9 +159,16 @@ pub fn configs(ha: &str, d: &Droid) -> Vec<(String, String)> {
     let node = node_id(d);
     let at = |leaf: &str| topic(d.prefix, d.topic, leaf);
     let (state, cmd) = (at("state"), at("cmd"));
+    // A droid that took a distinct topic (its name was live on the broker already) is
+    // named by it: two devices called alike would be told apart by nothing.
+    let name = if super::topic_name(d.name) == d.topic {
+        d.name
+    } else {
+        d.topic
+    };
     let mut device = json!({
         "identifiers": [node.clone()],
-        "name": d.name,
+        "name": name,
         "model": d.model.display_name(),
         "sw_version": concat!("droidctl ", env!("CARGO_PKG_VERSION")),
         "via_device": bridge_node(d.prefix, d.bridge),

@@ -17,7 +17,8 @@
 //! | `PREFIX/bridge/ID` | out, retained | the `hello` object: every droid of bridge `ID` ([`super::presence`]) |
 //! | `PREFIX/bridge/ID/state` | out, retained | the bridge online or offline (its own last will) |
 //!
-//! The retained `info` and `bridge/ID` topics are cleared when the bridge ends cleanly.
+//! The retained `info`, `hold`, `collisions`, `light` and `bridge/ID` topics are cleared
+//! when the bridge ends cleanly; `state` says offline.
 //!
 //! When the broker goes, the droids driven through it are stopped and the connection is
 //! retried (backoff up to 5 s) while the droids' links stay up; back, the subscriptions and
@@ -558,16 +559,19 @@ pub async fn run(
     // asked (issue 40 point 4): availability says they are gone.
     let remove = bridge.settings().homeassistant_remove;
     for (i, ((name, t), client)) in members.iter().zip(&clients).enumerate() {
-        let mut gone = vec![topic(&settings.prefix, t, "info")];
+        let mut gone: Vec<String> = ["info", "hold", super::kept::COLLISIONS_LEAF]
+            .into_iter()
+            .chain(
+                bridge
+                    .settings()
+                    .homeassistant
+                    .as_ref()
+                    .map(|_| super::ha_light::STATE_LEAF),
+            )
+            .map(|leaf| topic(&settings.prefix, t, leaf))
+            .collect();
         if remove {
             gone.extend(discovery(&bridge, &settings, i).into_iter().map(|(t, _)| t));
-            for leaf in [
-                "hold",
-                super::kept::COLLISIONS_LEAF,
-                super::ha_light::STATE_LEAF,
-            ] {
-                gone.push(topic(&settings.prefix, t, leaf));
-            }
         }
         for g in gone {
             let _ = client.try_publish(g, QoS::AtLeastOnce, true, Vec::new());

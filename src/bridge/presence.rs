@@ -145,7 +145,11 @@ pub async fn probe(s: &MqttSettings, within: Duration) -> Result<Live, String> {
     .await;
     match got {
         Ok(Ok(live)) => Ok(live),
-        Ok(Err(e)) => Err(format!("cannot connect to the broker at {}: {e}", s.url)),
+        Ok(Err(e)) => Err(format!(
+            "cannot connect to the broker at {}: {e} (check the URL, --username and \
+             --password-file)",
+            s.url
+        )),
         Err(_) => Err(format!(
             "the broker at {} did not answer within {} s",
             s.url,
@@ -173,7 +177,8 @@ impl Presence {
         hello: impl Fn() -> String + Send + Sync + 'static,
     ) -> Result<Presence, String> {
         let id = s.bridge_id.clone();
-        let mut o = super::mqtt::options(s, &format!("{}-bridge", s.client_id))?;
+        let cid = format!("{}-bridge", s.client_id);
+        let mut o = super::mqtt::options(s, &cid)?;
         o.set_last_will(LastWill::new(
             state_topic(&s.prefix, &id),
             state_json(&id, false),
@@ -201,9 +206,11 @@ impl Presence {
                     let _ = c.try_publish(t, QoS::AtLeastOnce, true, p);
                 }
             };
+            let mut takeovers = super::mqtt::Takeovers::default();
             loop {
                 match ev.poll().await {
                     Ok(Event::Incoming(Packet::ConnAck(_))) => {
+                        takeovers.connected(tokio::time::Instant::now());
                         if let Some(b) = &birth {
                             let _ = c.try_subscribe(b.clone(), QoS::AtMostOnce);
                         }
@@ -222,6 +229,20 @@ impl Presence {
                         return;
                     }
                     Ok(_) => {}
+                    // Said as a droid's connection says it (issue 37 point 7), never the
+                    // end of the bridge.
+                    Err(_) if takeovers.lost(tokio::time::Instant::now()) => {
+                        eprintln!(
+                            "droidctl: bridge {bid}: the broker ended the connection right \
+                             after accepting it, {} times in a row: most likely another client \
+                             is connected with the same client id ({cid}); give each bridge its \
+                             own --client-id (or leave it out: the default is unique). Trying \
+                             again in {} s",
+                            super::mqtt::TAKEOVERS,
+                            super::mqtt::TAKEOVER_BACKOFF.as_secs()
+                        );
+                        tokio::time::sleep(super::mqtt::TAKEOVER_BACKOFF).await;
+                    }
                     Err(_) => tokio::time::sleep(Duration::from_secs(1)).await,
                 }
             }

@@ -244,10 +244,16 @@ async fn everything_the_bridge_sends_is_valid_against_the_schema() {
         .iter()
         .find(|v| v["id"] == "h2")
         .expect("the held drive's answer");
-    assert_eq!((&held["type"], &held["code"]), (&json!("error"), &json!("held")));
+    assert_eq!(
+        (&held["type"], &held["code"]),
+        (&json!("error"), &json!("held"))
+    );
     let holds: Vec<&Value> = lines.iter().filter(|v| v["type"] == "hold").collect();
     assert_eq!(holds.len(), 2, "held, then released: {holds:?}");
-    assert_eq!((&holds[0]["held"], &holds[1]["held"]), (&json!(true), &json!(false)));
+    assert_eq!(
+        (&holds[0]["held"], &holds[1]["held"]),
+        (&json!(true), &json!(false))
+    );
     // Readiness and odometry (issue 31 points 3 and 5).
     assert!(
         lines
@@ -316,7 +322,11 @@ fn mqtt_only_objects_and_the_home_assistant_light_are_valid() {
         presence::state_json("pi-lab-1", true),
         presence::state_json("pi-lab-1", false),
     ];
-    objects.extend(k.at_connect(0, "D2-0001", false).into_iter().map(|(_, p)| p));
+    objects.extend(
+        k.at_connect(0, "D2-0001", false)
+            .into_iter()
+            .map(|(_, p)| p),
+    );
     for o in &objects {
         let v: Value = serde_json::from_str(o).unwrap();
         assert!(out.is_valid(&v), "{v}: {}", errors(&out, &v));
@@ -337,8 +347,14 @@ fn mqtt_only_objects_and_the_home_assistant_light_are_valid() {
         let s: Value = serde_json::from_str(&l.state()).unwrap();
         assert!(state.is_valid(&s), "{s}: {}", errors(&state, &s));
     }
-    for c in [json!({"brightness":3}), json!({"state":"ON","brightness":256})] {
+    for c in [
+        json!({"brightness":3}),
+        json!({"state":"ON","brightness":256}),
+    ] {
         assert!(!cmd.is_valid(&c), "the schema takes {c}");
-        assert!(l.apply(c.to_string().as_bytes()).is_err(), "the bridge takes {c}");
+        assert!(
+            l.apply(c.to_string().as_bytes()).is_err(),
+            "the bridge takes {c}"
+        );
     }
 }
