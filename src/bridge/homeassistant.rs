@@ -432,12 +432,27 @@ mod tests {
             topics,
             [
                 "homeassistant/sensor/droidctl_D2-0001/battery/config",
+                "homeassistant/sensor/droidctl_D2-0001/battery_level/config",
                 "homeassistant/binary_sensor/droidctl_D2-0001/connection/config",
                 "homeassistant/sensor/droidctl_D2-0001/collisions/config",
                 "homeassistant/button/droidctl_D2-0001/stop/config",
+                "homeassistant/switch/droidctl_D2-0001/motion/config",
                 "homeassistant/light/droidctl_D2-0001/light/config",
+                "homeassistant/select/droidctl_D2-0001/stance/config",
+                "homeassistant/number/droidctl_D2-0001/heading/config",
             ]
         );
+        // RVR's pack is not one cell: volts, no percent.
+        let rvr = Droid {
+            model: Model::Rvr,
+            ..d
+        };
+        let rvr: Vec<String> = configs("homeassistant", &rvr)
+            .into_iter()
+            .map(|(t, _)| t)
+            .collect();
+        assert!(rvr.iter().any(|t| t.contains("/battery/")), "{rvr:?}");
+        assert!(!rvr.iter().any(|t| t.contains("battery_level")), "{rvr:?}");
         for (_, p) in configs("homeassistant", &d) {
             let v: Value = serde_json::from_str(&p).unwrap();
             assert!(
