@@ -46,13 +46,7 @@ fn origin() -> Value {
 
 /// The identifier of bridge `id`'s device under `prefix` (the droids' `via_device`).
 pub fn bridge_node(prefix: &str, id: &str) -> String {
-    node_id(&Droid {
-        prefix,
-        topic: &format!("bridge-{id}"),
-        name: "",
-        model: Model::R2D2,
-        bridge: id,
-    })
+    node_of(prefix, &format!("bridge-{id}"))
 }
 
 /// The bridge's own discovery messages: its device (version in `sw_version`) and a droid
@@ -91,7 +85,9 @@ pub fn bridge_configs(ha: &str, prefix: &str, id: &str) -> Vec<(String, String)>
 /// Battery percent from a one-cell LiPo's volts, as a Home Assistant template: linear
 /// from 3.4 V (empty) to 4.2 V (full). No spec gives the curve (droid-facts.md says only
 /// how volts are encoded): these are the simulator's own end points (`sim::body`), which
-/// also answer Get Battery Percentage. RVR's pack is not one cell: no percent for it.
+/// also answer Get Battery Percentage. RVR's pack is not one cell: no percent for it (the
+/// model table tells it by its processors that each command names, `Caps::TARGETED`, the
+/// one rover among the droids; spherov2's RVR reads its own percentage instead).
 const PERCENT_TEMPLATE: &str =
     "{{ ((value_json.volts - 3.4) / 0.8 * 100) | round(0) | int | max(0) | min(100) }}";
 
@@ -132,12 +128,16 @@ fn command(cmd: Value) -> String {
 /// `lab_2fa__D2-0001`. Both forms read back one way only, and a plain id holds one `_` where
 /// an escaped one holds `__`, so no two (prefix, topic) pairs share an id.
 pub fn node_id(d: &Droid) -> String {
+    node_of(d.prefix, d.topic)
+}
+
+fn node_of(prefix: &str, topic: &str) -> String {
     let plain =
         |s: &str| !s.is_empty() && s.bytes().all(|b| b.is_ascii_alphanumeric() || b == b'-');
-    if plain(d.prefix) && plain(d.topic) {
-        format!("{}_{}", d.prefix, d.topic)
+    if plain(prefix) && plain(topic) {
+        format!("{prefix}_{topic}")
     } else {
-        format!("{}__{}", escaped(d.prefix), escaped(d.topic))
+        format!("{}__{}", escaped(prefix), escaped(topic))
     }
 }
 
@@ -198,7 +198,7 @@ pub fn configs(ha: &str, d: &Droid) -> Vec<(String, String)> {
                 "availability": availability,
             }),
         ));
-        if d.model != Model::Rvr {
+        if !d.model.has(crate::model::Caps::TARGETED) {
             entities.push((
                 "sensor",
                 "battery_level",
@@ -342,11 +342,12 @@ pub fn configs(ha: &str, d: &Droid) -> Vec<(String, String)> {
         .collect()
 }
 
-/// Who makes droid `model` (the device's `manufacturer`): Sphero for its robots (the
-/// Star Wars droids included, made by Sphero under licence). Robi 42 is not Sphero's
-/// (`model::SPHERO` leaves it out) and no spec here names its maker: none said.
+/// Who makes droid `model` (the device's `manufacturer`): Sphero for the robots that speak
+/// Sphero's protocols (the Star Wars droids included, made by Sphero under licence). Robi
+/// 42 (RSRCP) is not Sphero's and no spec here names its maker: none said.
 fn manufacturer(model: Model) -> Option<&'static str> {
-    (model != Model::Robi42).then_some("Sphero")
+    use crate::model::Protocol;
+    matches!(model.protocol(), Protocol::SpheroV1 | Protocol::SpheroV2).then_some("Sphero")
 }
 
 #[cfg(test)]
@@ -354,12 +355,17 @@ mod tests {
     use super::*;
     use proptest::prelude::*;
 
+    /// R2-D2, by its id (a robot is named in its own files only).
+    fn r2() -> Model {
+        Model::from_id("r2d2").unwrap()
+    }
+
     fn node(prefix: &str, topic: &str) -> String {
         node_id(&Droid {
             prefix,
             topic,
             name: topic,
-            model: Model::R2D2,
+            model: r2(),
             bridge: "b",
         })
     }
@@ -421,7 +427,7 @@ mod tests {
             prefix: "droidctl",
             topic: "D2-0001",
             name: "D2-0001",
-            model: Model::R2D2,
+            model: r2(),
             bridge: "pi",
         };
         let topics: Vec<String> = configs("homeassistant", &d)
@@ -444,7 +450,7 @@ mod tests {
         );
         // RVR's pack is not one cell: volts, no percent.
         let rvr = Droid {
-            model: Model::Rvr,
+            model: Model::from_id("rvr").unwrap(),
             ..d
         };
         let rvr: Vec<String> = configs("homeassistant", &rvr)
