@@ -350,6 +350,43 @@ fn manufacturer(model: Model) -> Option<&'static str> {
     matches!(model.protocol(), Protocol::SpheroV1 | Protocol::SpheroV2).then_some("Sphero")
 }
 
+/// The topics a droid's connection takes from Home Assistant: its birth message and the
+/// light's commands (JSON schema: [`super::ha_light`]).
+pub struct Topics {
+    pub birth: Option<String>,
+    /// The light's command topic and the light group it sets.
+    pub light: Option<(String, &'static str)>,
+}
+
+impl Topics {
+    /// Droid `i`'s, under the bridge's topic prefix `prefix`.
+    pub fn new(bridge: &super::Bridge, prefix: &str, i: usize) -> Topics {
+        let Some(ha) = bridge.settings().homeassistant.as_deref() else {
+            return Topics {
+                birth: None,
+                light: None,
+            };
+        };
+        let t = bridge.topic(i).unwrap_or("droid");
+        let group = bridge.fleet().member(i).and_then(|m| main_light(m.model));
+        Topics {
+            birth: Some(format!("{ha}/status")),
+            light: group.map(|g| (topic(prefix, t, super::ha_light::SET_LEAF), g)),
+        }
+    }
+
+    /// What the connection subscribes to.
+    pub fn filters(&self) -> Vec<String> {
+        let light = self.light.as_ref().map(|(t, _)| t.clone());
+        self.birth.iter().cloned().chain(light).collect()
+    }
+
+    /// Whether `t` is one of them.
+    pub fn owns(&self, t: &str) -> bool {
+        self.birth.as_deref() == Some(t) || self.light.as_ref().is_some_and(|(l, _)| l == t)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -619,43 +619,6 @@ fn discovery(bridge: &Bridge, s: &MqttSettings, i: usize) -> Vec<(String, String
     )
 }
 
-/// The topics a droid's connection takes from Home Assistant: its birth message and the
-/// light's commands (JSON schema: [`super::ha_light`]).
-struct HaTopics {
-    birth: Option<String>,
-    /// The light's command topic and the light group it sets.
-    light: Option<(String, &'static str)>,
-}
-
-impl HaTopics {
-    fn new(bridge: &Bridge, s: &MqttSettings, i: usize) -> HaTopics {
-        let Some(ha) = bridge.settings().homeassistant.as_deref() else {
-            return HaTopics {
-                birth: None,
-                light: None,
-            };
-        };
-        let t = bridge.topic(i).unwrap_or("droid");
-        let group = bridge
-            .fleet()
-            .member(i)
-            .and_then(|m| super::homeassistant::main_light(m.model));
-        HaTopics {
-            birth: Some(format!("{ha}/status")),
-            light: group.map(|g| (topic(&s.prefix, t, super::ha_light::SET_LEAF), g)),
-        }
-    }
-
-    fn filters(&self) -> Vec<String> {
-        let light = self.light.as_ref().map(|(t, _)| t.clone());
-        self.birth.iter().cloned().chain(light).collect()
-    }
-
-    fn owns(&self, t: &str) -> bool {
-        self.birth.as_deref() == Some(t) || self.light.as_ref().is_some_and(|(l, _)| l == t)
-    }
-}
-
 /// One droid's connection: subscribe on every connect, hand commands to the bridge, stop the
 /// droid and retry when the broker goes.
 async fn connection(
@@ -667,7 +630,7 @@ async fn connection(
     kept: Arc<super::kept::Kept>,
 ) {
     let t = bridge.topic(i).unwrap_or("droid").to_string();
-    let ha = HaTopics::new(&bridge, &settings, i);
+    let ha = super::homeassistant::Topics::new(&bridge, &settings.prefix, i);
     let mut inbox = Inbox::new(bridge.clone(), i, &settings.prefix);
     let cmd = inbox.cmd_topic().to_string();
     let mut takeovers = Takeovers::default();
