@@ -155,6 +155,7 @@ mod linux {
             qos: 0,
             prefix: "droidctl".into(),
             client_id: "bench-bridge".into(),
+            bridge_id: "bench".into(),
             keepalive: Duration::from_secs(5),
             username: None,
             password: None,

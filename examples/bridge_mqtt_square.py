@@ -5,7 +5,8 @@
     pip install paho-mqtt
     python3 examples/bridge_mqtt_square.py --port 1883
 
-It finds the droids on the retained `PREFIX/bridge` topic (the `hello` object), waits until
+It finds the droids on the retained `PREFIX/bridge/+` topics (each bridge's `hello` object,
+under its own id: several bridges may share a broker), waits until
 the droid's retained `state` says `"ready":true` (a drive before that is held until the
 droid can move), drives four sides (heading 0, 90, 180, 270), re-sending each drive well
 within the command timeout, stops and waits for the stop's reply on `PREFIX/DROID/reply`.
@@ -59,10 +60,13 @@ def main():
                 return o
         return None
 
-    client.subscribe(f"{a.prefix}/bridge", qos=1)
-    hello = take(lambda t, o: o.get("type") == "hello", 30)
+    client.subscribe(f"{a.prefix}/bridge/+", qos=1)
+    wanted = lambda o: o.get("type") == "hello" and any(
+        a.droid in (None, d["topic"]) for d in o["droids"]
+    )
+    hello = take(lambda t, o: wanted(o), 30)
     if hello is None:
-        sys.exit(f"no bridge on {a.prefix}/bridge")
+        sys.exit(f"no bridge on {a.prefix}/bridge/+")
     droid = next(d for d in hello["droids"] if a.droid in (None, d["topic"]))
     base = f"{a.prefix}/{droid['topic']}"
     timeout_s = hello["command_timeout_ms"] / 1000.0

@@ -1,14 +1,21 @@
-//! Home Assistant MQTT discovery (issue 31 point 6), with `--homeassistant` (off by
-//! default): each droid appears in Home Assistant by itself as a device with its battery,
-//! its connection, its collisions, a stop button and its main light where it has one.
+//! Home Assistant MQTT discovery (issue 31 point 6, issue 40 points 3–6), with
+//! `--homeassistant` (off by default): the bridge appears in Home Assistant as a device of
+//! its own (its version, its droid count), and each droid as a device connected through it
+//! (`via_device`), made by Sphero, with its battery (volts and percent), its connection and
+//! collisions (diagnostic), a stop button, a "Motion enabled" switch (the latched stop:
+//! [`super::hold`]), its main light in colour and brightness (JSON schema:
+//! [`super::ha_light`]) and a stance select where it has legs.
 //!
-//! Sans-IO: [`configs`] makes the retained discovery messages, the MQTT transport publishes
-//! them at each connection to the broker and clears them (an empty retained message, which
-//! Home Assistant reads as "remove") when the bridge ends cleanly. Home Assistant's
-//! documented discovery topic is `<discovery_prefix>/<component>/[<node_id>/]<object_id>/config`
+//! Sans-IO: [`configs`] and [`bridge_configs`] make the retained discovery messages; the
+//! MQTT transport publishes them at each connection to the broker and again when Home
+//! Assistant says it started (its birth message, `online` on `<discovery_prefix>/status`).
+//! A clean exit keeps them (as Zigbee2MQTT and ESPHome do: history and customisations stay,
+//! availability says the droid is gone); `--homeassistant-remove` clears them (an empty
+//! retained message, which Home Assistant reads as "remove"). Home Assistant's documented
+//! discovery topic is `<discovery_prefix>/<component>/[<node_id>/]<object_id>/config`
 //! (<https://www.home-assistant.io/integrations/mqtt/#mqtt-discovery>); the payload keys are
-//! those of the MQTT sensor, binary sensor, button and light (template schema) integrations.
-//! The entities read the bridge's own topics: nothing is published twice.
+//! those of the MQTT sensor, binary sensor, button, switch, select and light (JSON schema)
+//! integrations. The entities read the bridge's own topics: nothing is published twice.
 
 use super::mqtt::topic;
 use crate::model::Model;
@@ -25,10 +32,67 @@ pub struct Droid<'a> {
     pub topic: &'a str,
     pub name: &'a str,
     pub model: Model,
+    /// The id of the bridge it is connected through ([`super::presence`]).
+    pub bridge: &'a str,
 }
 
+/// The `origin` of every discovery message: who publishes it (Home Assistant logs it).
+fn origin() -> Value {
+    json!({
+        "name": "droidctl",
+        "sw_version": env!("CARGO_PKG_VERSION"),
+    })
+}
+
+/// The identifier of bridge `id`'s device under `prefix` (the droids' `via_device`).
+pub fn bridge_node(prefix: &str, id: &str) -> String {
+    node_of(prefix, &format!("bridge-{id}"))
+}
+
+/// The bridge's own discovery messages: its device (version in `sw_version`) and a droid
+/// count, read from its `hello` on `PREFIX/bridge/ID`, available while its
+/// `PREFIX/bridge/ID/state` says online.
+pub fn bridge_configs(ha: &str, prefix: &str, id: &str) -> Vec<(String, String)> {
+    let node = bridge_node(prefix, id);
+    let hello = super::presence::hello_topic(prefix, id);
+    let device = json!({
+        "identifiers": [node.clone()],
+        "name": format!("droidctl bridge {id}"),
+        "manufacturer": "droidctl",
+        "model": "bridge",
+        "sw_version": env!("CARGO_PKG_VERSION"),
+    });
+    let payload = json!({
+        "name": "Droids",
+        "unique_id": format!("{node}_droids"),
+        "state_topic": hello,
+        "value_template": "{{ value_json.droids | length }}",
+        "icon": "mdi:robot",
+        "entity_category": "diagnostic",
+        "availability": [{
+            "topic": super::presence::state_topic(prefix, id),
+            "value_template": "{{ value_json.state }}",
+        }],
+        "device": device,
+        "origin": origin(),
+    });
+    vec![(
+        format!("{ha}/sensor/{node}/droids/config"),
+        payload.to_string(),
+    )]
+}
+
+/// Battery percent from a one-cell LiPo's volts, as a Home Assistant template: linear
+/// from 3.4 V (empty) to 4.2 V (full). No spec gives the curve (droid-facts.md says only
+/// how volts are encoded): these are the simulator's own end points (`sim::body`), which
+/// also answer Get Battery Percentage. RVR's pack is not one cell: no percent for it (the
+/// model table tells it by its processors that each command names, `Caps::TARGETED`, the
+/// one rover among the droids; spherov2's RVR reads its own percentage instead).
+const PERCENT_TEMPLATE: &str =
+    "{{ ((value_json.volts - 3.4) / 0.8 * 100) | round(0) | int | max(0) | min(100) }}";
+
 /// The light group Home Assistant switches: the first the droid lights in colour.
-fn main_light(model: Model) -> Option<&'static str> {
+pub fn main_light(model: Model) -> Option<&'static str> {
     use crate::script::{Action, LedGroup};
     let family = crate::family::for_model(model);
     [
@@ -64,12 +128,16 @@ fn command(cmd: Value) -> String {
 /// `lab_2fa__D2-0001`. Both forms read back one way only, and a plain id holds one `_` where
 /// an escaped one holds `__`, so no two (prefix, topic) pairs share an id.
 pub fn node_id(d: &Droid) -> String {
+    node_of(d.prefix, d.topic)
+}
+
+fn node_of(prefix: &str, topic: &str) -> String {
     let plain =
         |s: &str| !s.is_empty() && s.bytes().all(|b| b.is_ascii_alphanumeric() || b == b'-');
-    if plain(d.prefix) && plain(d.topic) {
-        format!("{}_{}", d.prefix, d.topic)
+    if plain(prefix) && plain(topic) {
+        format!("{prefix}_{topic}")
     } else {
-        format!("{}__{}", escaped(d.prefix), escaped(d.topic))
+        format!("{}__{}", escaped(prefix), escaped(topic))
     }
 }
 
@@ -89,14 +157,25 @@ fn escaped(s: &str) -> String {
 /// Droid `d`'s discovery messages under `ha` (the discovery prefix): (topic, payload).
 pub fn configs(ha: &str, d: &Droid) -> Vec<(String, String)> {
     let node = node_id(d);
-    let state = topic(d.prefix, d.topic, "state");
-    let cmd = topic(d.prefix, d.topic, "cmd");
-    let device = json!({
+    let at = |leaf: &str| topic(d.prefix, d.topic, leaf);
+    let (state, cmd) = (at("state"), at("cmd"));
+    // A droid that took a distinct topic (its name was live on the broker already) is
+    // named by it: two devices called alike would be told apart by nothing.
+    let name = if super::topic_name(d.name) == d.topic {
+        d.name
+    } else {
+        d.topic
+    };
+    let mut device = json!({
         "identifiers": [node.clone()],
-        "name": d.name,
+        "name": name,
         "model": d.model.display_name(),
         "sw_version": concat!("droidctl ", env!("CARGO_PKG_VERSION")),
+        "via_device": bridge_node(d.prefix, d.bridge),
     });
+    if let (Some(m), Some(dev)) = (manufacturer(d.model), device.as_object_mut()) {
+        dev.insert("manufacturer".into(), json!(m));
+    }
     // Unavailable unless the droid's link is up (the last will says offline).
     let availability = json!([{
         "topic": state,
@@ -109,15 +188,32 @@ pub fn configs(ha: &str, d: &Droid) -> Vec<(String, String)> {
             "sensor",
             "battery",
             json!({
-                "name": "Battery",
-                "state_topic": topic(d.prefix, d.topic, "battery"),
+                "name": "Battery voltage",
+                "state_topic": at("battery"),
                 "value_template": "{{ value_json.volts }}",
                 "device_class": "voltage",
                 "unit_of_measurement": "V",
                 "state_class": "measurement",
+                "entity_category": "diagnostic",
                 "availability": availability,
             }),
         ));
+        if !d.model.has(crate::model::Caps::TARGETED) {
+            entities.push((
+                "sensor",
+                "battery_level",
+                json!({
+                    "name": "Battery",
+                    "state_topic": at("battery"),
+                    "value_template": PERCENT_TEMPLATE,
+                    "device_class": "battery",
+                    "unit_of_measurement": "%",
+                    "state_class": "measurement",
+                    "entity_category": "diagnostic",
+                    "availability": availability,
+                }),
+            ));
+        }
     }
     entities.push((
         "binary_sensor",
@@ -127,6 +223,7 @@ pub fn configs(ha: &str, d: &Droid) -> Vec<(String, String)> {
             "state_topic": state,
             "value_template": "{{ 'ON' if value_json.state == 'connected' else 'OFF' }}",
             "device_class": "connectivity",
+            "entity_category": "diagnostic",
         }),
     ));
     entities.push((
@@ -134,10 +231,12 @@ pub fn configs(ha: &str, d: &Droid) -> Vec<(String, String)> {
         "collisions",
         json!({
             "name": "Collisions",
-            "state_topic": topic(d.prefix, d.topic, "collision"),
+            // Retained (issue 40 point 5): Home Assistant restarted reads the count at once.
+            "state_topic": at("collisions"),
             "value_template": "{{ value_json.collisions }}",
             "state_class": "total_increasing",
             "icon": "mdi:car-brake-alert",
+            "entity_category": "diagnostic",
             "availability": availability,
         }),
     ));
@@ -152,19 +251,77 @@ pub fn configs(ha: &str, d: &Droid) -> Vec<(String, String)> {
             "availability": availability,
         }),
     ));
+    entities.push((
+        "switch",
+        "motion",
+        json!({
+            "name": "Motion enabled",
+            "command_topic": cmd,
+            "payload_on": command(json!({"cmd": "release"})),
+            "payload_off": command(json!({"cmd": "hold"})),
+            "state_topic": at("hold"),
+            "value_template": "{{ 'OFF' if value_json.held else 'ON' }}",
+            "state_on": "ON",
+            "state_off": "OFF",
+            "icon": "mdi:hand-back-left",
+            "availability": availability,
+        }),
+    ));
     if let Some(group) = main_light(d.model) {
         entities.push((
             "light",
             "light",
             json!({
                 "name": "Light",
-                "schema": "template",
+                "schema": "json",
+                "command_topic": at(super::ha_light::SET_LEAF),
+                "state_topic": at(super::ha_light::STATE_LEAF),
+                "supported_color_modes": ["rgb"],
+                "brightness": true,
+                "brightness_scale": 255,
+                "icon": format!("mdi:lightbulb-{}", if group == "front" { "on" } else { "outline" }),
+                "availability": availability,
+            }),
+        ));
+    }
+    let stance = crate::family::intent::Intent::Stance(crate::protocol::wire::LegAction::Tripod);
+    if d.model.has(crate::model::Caps::LEGS) && family.lower(d.model, &stance).is_ok() {
+        entities.push((
+            "select",
+            "stance",
+            json!({
+                "name": "Stance",
                 "command_topic": cmd,
-                "command_on_template":
-                    command(json!({"cmd": "lights", "group": group, "rgb": [255, 255, 255]})),
-                "command_off_template":
-                    command(json!({"cmd": "lights", "group": group, "rgb": [0, 0, 0]})),
+                "command_template": format!(
+                    "{{\"v\":{},\"cmd\":\"stance\",\"stance\":\"{{{{ value }}}}\"}}",
+                    super::schema::VERSION
+                ),
+                "options": ["bipod", "tripod", "waddle", "stop"],
                 "optimistic": true,
+                "icon": "mdi:human-male",
+                "availability": availability,
+            }),
+        ));
+    }
+    if d.model.has(crate::model::Caps::HEADING) {
+        entities.push((
+            "number",
+            "heading",
+            json!({
+                "name": "Heading",
+                "command_topic": cmd,
+                // Speed 0 toward a heading: the droid turns in place to face it.
+                "command_template": format!(
+                    "{{\"v\":{},\"cmd\":\"drive\",\"speed\":0,\"heading\":{{{{ value | int }}}}}}",
+                    super::schema::VERSION
+                ),
+                "min": 0,
+                "max": 359,
+                "step": 1,
+                "mode": "slider",
+                "unit_of_measurement": "°",
+                "optimistic": true,
+                "icon": "mdi:compass",
                 "availability": availability,
             }),
         ));
@@ -175,6 +332,7 @@ pub fn configs(ha: &str, d: &Droid) -> Vec<(String, String)> {
             if let Some(p) = payload.as_object_mut() {
                 p.insert("unique_id".into(), json!(format!("{node}_{object}")));
                 p.insert("device".into(), device.clone());
+                p.insert("origin".into(), origin());
             }
             (
                 format!("{ha}/{component}/{node}/{object}/config"),
@@ -184,17 +342,68 @@ pub fn configs(ha: &str, d: &Droid) -> Vec<(String, String)> {
         .collect()
 }
 
+/// Who makes droid `model` (the device's `manufacturer`): Sphero for the robots that speak
+/// Sphero's protocols (the Star Wars droids included, made by Sphero under licence). Robi
+/// 42 (RSRCP) is not Sphero's and no spec here names its maker: none said.
+fn manufacturer(model: Model) -> Option<&'static str> {
+    use crate::model::Protocol;
+    matches!(model.protocol(), Protocol::SpheroV1 | Protocol::SpheroV2).then_some("Sphero")
+}
+
+/// The topics a droid's connection takes from Home Assistant: its birth message and the
+/// light's commands (JSON schema: [`super::ha_light`]).
+pub struct Topics {
+    pub birth: Option<String>,
+    /// The light's command topic and the light group it sets.
+    pub light: Option<(String, &'static str)>,
+}
+
+impl Topics {
+    /// Droid `i`'s, under the bridge's topic prefix `prefix`.
+    pub fn new(bridge: &super::Bridge, prefix: &str, i: usize) -> Topics {
+        let Some(ha) = bridge.settings().homeassistant.as_deref() else {
+            return Topics {
+                birth: None,
+                light: None,
+            };
+        };
+        let t = bridge.topic(i).unwrap_or("droid");
+        let group = bridge.fleet().member(i).and_then(|m| main_light(m.model));
+        Topics {
+            birth: Some(format!("{ha}/status")),
+            light: group.map(|g| (topic(prefix, t, super::ha_light::SET_LEAF), g)),
+        }
+    }
+
+    /// What the connection subscribes to.
+    pub fn filters(&self) -> Vec<String> {
+        let light = self.light.as_ref().map(|(t, _)| t.clone());
+        self.birth.iter().cloned().chain(light).collect()
+    }
+
+    /// Whether `t` is one of them.
+    pub fn owns(&self, t: &str) -> bool {
+        self.birth.as_deref() == Some(t) || self.light.as_ref().is_some_and(|(l, _)| l == t)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use proptest::prelude::*;
+
+    /// R2-D2, by its id (a robot is named in its own files only).
+    fn r2() -> Model {
+        Model::from_id("r2d2").unwrap()
+    }
 
     fn node(prefix: &str, topic: &str) -> String {
         node_id(&Droid {
             prefix,
             topic,
             name: topic,
-            model: Model::R2D2,
+            model: r2(),
+            bridge: "b",
         })
     }
 
@@ -255,7 +464,8 @@ mod tests {
             prefix: "droidctl",
             topic: "D2-0001",
             name: "D2-0001",
-            model: Model::R2D2,
+            model: r2(),
+            bridge: "pi",
         };
         let topics: Vec<String> = configs("homeassistant", &d)
             .into_iter()
@@ -265,12 +475,27 @@ mod tests {
             topics,
             [
                 "homeassistant/sensor/droidctl_D2-0001/battery/config",
+                "homeassistant/sensor/droidctl_D2-0001/battery_level/config",
                 "homeassistant/binary_sensor/droidctl_D2-0001/connection/config",
                 "homeassistant/sensor/droidctl_D2-0001/collisions/config",
                 "homeassistant/button/droidctl_D2-0001/stop/config",
+                "homeassistant/switch/droidctl_D2-0001/motion/config",
                 "homeassistant/light/droidctl_D2-0001/light/config",
+                "homeassistant/select/droidctl_D2-0001/stance/config",
+                "homeassistant/number/droidctl_D2-0001/heading/config",
             ]
         );
+        // RVR's pack is not one cell: volts, no percent.
+        let rvr = Droid {
+            model: Model::from_id("rvr").unwrap(),
+            ..d
+        };
+        let rvr: Vec<String> = configs("homeassistant", &rvr)
+            .into_iter()
+            .map(|(t, _)| t)
+            .collect();
+        assert!(rvr.iter().any(|t| t.contains("/battery/")), "{rvr:?}");
+        assert!(!rvr.iter().any(|t| t.contains("battery_level")), "{rvr:?}");
         for (_, p) in configs("homeassistant", &d) {
             let v: Value = serde_json::from_str(&p).unwrap();
             assert!(

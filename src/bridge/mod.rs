@@ -14,10 +14,14 @@
 
 pub mod broker;
 pub mod feeds;
+pub mod ha_light;
+pub mod hold;
 pub mod homeassistant;
+pub mod kept;
 pub mod motion;
 pub mod mqtt;
 pub mod outbox;
+pub mod presence;
 pub mod ready;
 pub mod schema;
 pub mod stdio;
@@ -52,6 +56,12 @@ pub struct Settings {
     /// MQTT: Home Assistant's discovery prefix, to publish discovery under
     /// ([`homeassistant`]); `None`: none published.
     pub homeassistant: Option<String>,
+    /// MQTT: clear the Home Assistant discovery at a clean exit (kept by default: the
+    /// entities stay, unavailable, as Zigbee2MQTT's and ESPHome's do).
+    pub homeassistant_remove: bool,
+    /// MQTT: droid topic levels live on the broker already (another bridge's, lowercase:
+    /// [`presence::probe`]); a droid of the same name takes a distinct one.
+    pub taken_topics: std::collections::HashSet<String>,
 }
 
 impl Default for Settings {
@@ -61,6 +71,8 @@ impl Default for Settings {
             telemetry_hz: 10,
             battery_poll: Duration::from_secs(10),
             homeassistant: None,
+            homeassistant_remove: false,
+            taken_topics: Default::default(),
         }
     }
 }
@@ -99,7 +111,15 @@ pub fn topic_name(name: &str) -> String {
 /// earlier droid has it already (two robots both called `Robi 42`), `-2`, `-3` … added:
 /// two droids never share a topic.
 pub fn topic_names(names: &[String]) -> Vec<String> {
-    let mut taken = std::collections::HashSet::new();
+    topic_names_besides(names, &Default::default())
+}
+
+/// [`topic_names`], none of them one of `taken` (lowercase: live on the broker already).
+pub fn topic_names_besides(
+    names: &[String],
+    taken: &std::collections::HashSet<String>,
+) -> Vec<String> {
+    let mut taken = taken.clone();
     let mut out = Vec::with_capacity(names.len());
     for n in names {
         let base = topic_name(n);
@@ -134,6 +154,8 @@ struct DroidState {
     battery: Option<f32>,
     /// Connected and its connect setup done ([`ready`]).
     ready: bool,
+    /// Held (`hold`, issue 40 point 6): what would move it is refused until `release`.
+    held: bool,
 }
 
 /// The bridge's capability words, each with the flags of the model table it stands for
@@ -228,7 +250,7 @@ impl Bridge {
         settings: Settings,
     ) -> (Arc<Bridge>, Outputs) {
         let (tx, rx) = outbox::channel();
-        let topics = topic_names(&fleet.names());
+        let topics = topic_names_besides(&fleet.names(), &settings.taken_topics);
         let droids = fleet
             .members()
             .iter()
@@ -242,6 +264,7 @@ impl Bridge {
                     in_flight: 0,
                     battery: None,
                     ready: false,
+                    held: false,
                 }),
             })
             .collect();
@@ -431,6 +454,13 @@ impl Bridge {
                 },
             )
         };
+        // A hold latches whatever the link (a droid reconnecting comes back held).
+        if let Some(refused) = self.hold_or_refuse(&req, i) {
+            return self.emit(Some(i), refused);
+        }
+        if matches!(req.cmd, Cmd::Hold | Cmd::Release) {
+            return self.reply(&req, Some(i), None);
+        }
         // Nothing waits for a link to come back (issue 26 point 8): a command kept until a
         // reconnect would run when nobody expects it (the session's queue keeps what is sent
         // while the link is down); the reconnect's own stop is all a droid gets then.
@@ -496,7 +526,7 @@ impl Bridge {
                 self.droids[i].lock().holder.stop();
                 self.stop_here(i);
             }
-            Cmd::Estop => {}
+            Cmd::Estop | Cmd::Hold | Cmd::Release => {}
             Cmd::Head(_)
             | Cmd::Stance(_)
             | Cmd::Lights(_)

@@ -11,9 +11,14 @@
 //! | `PREFIX/DROID/state` | out, retained | the link's state; the last will says `offline` |
 //! | `PREFIX/DROID/info` | out, retained | the droid as `hello` says it on stdio (`info`) |
 //! | `PREFIX/DROID/reply` | out | replies, errors, and the bridge's own stops |
-//! | `PREFIX/bridge` | out, retained | the `hello` object: every droid of the bridge |
+//! | `PREFIX/DROID/hold` | out, retained | whether the droid is held ([`super::hold`]) |
+//! | `PREFIX/DROID/collisions` | out, retained | the collision count ([`super::kept`]) |
+//! | `PREFIX/DROID/light`, `…/light/set` | out retained, in | Home Assistant's light ([`super::ha_light`]) |
+//! | `PREFIX/bridge/ID` | out, retained | the `hello` object: every droid of bridge `ID` ([`super::presence`]) |
+//! | `PREFIX/bridge/ID/state` | out, retained | the bridge online or offline (its own last will) |
 //!
-//! The retained `info` and `bridge` topics are cleared when the bridge ends cleanly.
+//! The retained `info`, `hold`, `collisions`, `light` and `bridge/ID` topics are cleared
+//! when the bridge ends cleanly; `state` says offline.
 //!
 //! When the broker goes, the droids driven through it are stopped and the connection is
 //! retried (backoff up to 5 s) while the droids' links stay up; back, the subscriptions and
@@ -161,6 +166,8 @@ pub struct MqttSettings {
     pub prefix: String,
     /// The client id's start; each droid's connection adds its topic name.
     pub client_id: String,
+    /// This bridge's id among the bridges on the broker ([`super::presence`]).
+    pub bridge_id: String,
     pub keepalive: Duration,
     pub username: Option<String>,
     pub password: Option<String>,
@@ -180,11 +187,6 @@ fn qos(q: u8) -> QoS {
 /// The topic of droid topic-name `t`'s `leaf`.
 pub fn topic(prefix: &str, t: &str, leaf: &str) -> String {
     format!("{prefix}/{t}/{leaf}")
-}
-
-/// The topic of the bridge's `hello` object (retained).
-pub fn bridge_topic(prefix: &str) -> String {
-    format!("{prefix}/bridge")
 }
 
 /// The topic leaves of telemetry: dropped, never replayed, when the broker was away.
@@ -209,24 +211,30 @@ fn route(o: &Out) -> (&'static str, bool) {
         Out::Battery { .. } => ("battery", false),
         Out::Link { .. } => ("state", true),
         Out::Info { .. } => ("info", true),
+        Out::Hold { .. } => ("hold", true),
         Out::Hello { .. } | Out::Stopped { .. } | Out::Reply { .. } | Out::Error { .. } => {
             ("reply", false)
         }
     }
 }
 
-fn options(s: &MqttSettings, i: usize, t: &str, name: &str) -> Result<MqttOptions, String> {
-    let id = format!("{}-{i}-{t}", s.client_id);
-    let mut o = MqttOptions::new(id, s.url.host.clone(), s.url.port);
-    o.set_keep_alive(s.keepalive.max(Duration::from_secs(1)));
-    o.set_clean_session(true);
-    o.set_max_packet_size(MAX_INCOMING_BYTES, super::schema::MAX_COMMAND_BYTES * 4);
+fn droid_options(s: &MqttSettings, i: usize, t: &str, name: &str) -> Result<MqttOptions, String> {
+    let mut o = options(s, &format!("{}-{i}-{t}", s.client_id))?;
     o.set_last_will(LastWill::new(
         topic(&s.prefix, t, "state"),
         offline(name).to_json(),
         QoS::AtLeastOnce,
         true,
     ));
+    Ok(o)
+}
+
+/// A connection's options as client `id`: the broker, keepalive, credentials, TLS.
+pub(super) fn options(s: &MqttSettings, id: &str) -> Result<MqttOptions, String> {
+    let mut o = MqttOptions::new(id, s.url.host.clone(), s.url.port);
+    o.set_keep_alive(s.keepalive.max(Duration::from_secs(1)));
+    o.set_clean_session(true);
+    o.set_max_packet_size(MAX_INCOMING_BYTES, super::schema::MAX_COMMAND_BYTES * 4);
     if let Some(u) = s.username.clone().or_else(|| s.url.username.clone()) {
         let p = s
             .password
@@ -450,11 +458,20 @@ pub async fn run(
             (m.name.clone(), t)
         })
         .collect();
+    let kept = Arc::new(super::kept::Kept::new(members.len()));
+    let presence = {
+        let b = bridge.clone();
+        super::presence::Presence::start(
+            &settings,
+            bridge.settings().homeassistant.clone(),
+            move || b.hello().to_json(),
+        )?
+    };
     let mut clients = Vec::new();
     let mut states = Vec::new();
     let mut loops = Vec::new();
     for (i, (name, t)) in members.iter().enumerate() {
-        let (client, mut eventloop) = AsyncClient::new(options(&settings, i, t, name)?, 1024);
+        let (client, mut eventloop) = AsyncClient::new(droid_options(&settings, i, t, name)?, 1024);
         // Small messages out at once: without TCP_NODELAY a reply or a state change can wait
         // for the broker's delayed ACK (tens of ms) behind the telemetry before it.
         let mut net = rumqttc::NetworkOptions::new();
@@ -464,10 +481,10 @@ pub async fn run(
         loops.push(tokio::spawn(connection(
             bridge.clone(),
             i,
-            client.clone(),
-            eventloop,
+            (client.clone(), eventloop),
             settings.clone(),
             tx,
+            kept.clone(),
         )));
         clients.push(client);
         states.push(st);
@@ -523,6 +540,14 @@ pub async fn run(
             {
                 tracing::debug!(droid = %t, leaf, "bridge: MQTT publish dropped (client queue full)");
             }
+            // The retained count and light beside it; the bridge's hello with a new info.
+            if let Some((leaf, payload)) = kept.after(i, &o) {
+                let at = topic(&settings.prefix, t, leaf);
+                let _ = client.try_publish(at, QoS::AtLeastOnce, true, payload);
+            }
+            if matches!(o, Out::Info { .. }) {
+                presence.hello(bridge.hello().to_json());
+            }
         }
     };
     tokio::select! {
@@ -530,15 +555,23 @@ pub async fn run(
         _ = stopped => {}
     }
     // A clean goodbye sends no will: say offline ourselves, clear what describes a running
-    // bridge, then disconnect.
+    // bridge (its own topics only), then disconnect. Home Assistant's entities stay unless
+    // asked (issue 40 point 4): availability says they are gone.
+    let remove = bridge.settings().homeassistant_remove;
     for (i, ((name, t), client)) in members.iter().zip(&clients).enumerate() {
-        let mut gone: Vec<String> = discovery(&bridge, &settings.prefix, i)
+        let mut gone: Vec<String> = ["info", "hold", super::kept::COLLISIONS_LEAF]
             .into_iter()
-            .map(|(t, _)| t)
+            .chain(
+                bridge
+                    .settings()
+                    .homeassistant
+                    .as_ref()
+                    .map(|_| super::ha_light::STATE_LEAF),
+            )
+            .map(|leaf| topic(&settings.prefix, t, leaf))
             .collect();
-        gone.push(topic(&settings.prefix, t, "info"));
-        if i == 0 {
-            gone.insert(0, bridge_topic(&settings.prefix));
+        if remove {
+            gone.extend(discovery(&bridge, &settings, i).into_iter().map(|(t, _)| t));
         }
         for g in gone {
             let _ = client.try_publish(g, QoS::AtLeastOnce, true, Vec::new());
@@ -553,7 +586,10 @@ pub async fn run(
     }
     let _ = tokio::time::timeout(
         Duration::from_secs(2),
-        futures_util::future::join_all(loops.iter_mut()),
+        futures_util::future::join(
+            futures_util::future::join_all(loops.iter_mut()),
+            presence.goodbye(remove),
+        ),
     )
     .await;
     for l in &loops {
@@ -563,7 +599,7 @@ pub async fn run(
 }
 
 /// Droid `i`'s Home Assistant discovery messages, when the bridge was asked for them.
-fn discovery(bridge: &Bridge, prefix: &str, i: usize) -> Vec<(String, String)> {
+fn discovery(bridge: &Bridge, s: &MqttSettings, i: usize) -> Vec<(String, String)> {
     let (Some(ha), Some(m), Some(t)) = (
         bridge.settings().homeassistant.as_deref(),
         bridge.fleet().member(i),
@@ -574,10 +610,11 @@ fn discovery(bridge: &Bridge, prefix: &str, i: usize) -> Vec<(String, String)> {
     super::homeassistant::configs(
         ha,
         &super::homeassistant::Droid {
-            prefix,
+            prefix: &s.prefix,
             topic: t,
             name: &m.name,
             model: m.model,
+            bridge: &s.bridge_id,
         },
     )
 }
@@ -587,12 +624,13 @@ fn discovery(bridge: &Bridge, prefix: &str, i: usize) -> Vec<(String, String)> {
 async fn connection(
     bridge: Arc<Bridge>,
     i: usize,
-    client: AsyncClient,
-    mut eventloop: EventLoop,
+    (client, mut eventloop): (AsyncClient, EventLoop),
     settings: MqttSettings,
     state: watch::Sender<BrokerState>,
+    kept: Arc<super::kept::Kept>,
 ) {
     let t = bridge.topic(i).unwrap_or("droid").to_string();
+    let ha = super::homeassistant::Topics::new(&bridge, &settings.prefix, i);
     let mut inbox = Inbox::new(bridge.clone(), i, &settings.prefix);
     let cmd = inbox.cmd_topic().to_string();
     let mut takeovers = Takeovers::default();
@@ -616,6 +654,9 @@ async fn connection(
                 // Telemetry held from before the loss goes, the rest is delivered.
                 eventloop.pending.retain(|r| !is_telemetry(r));
                 let _ = client.try_subscribe(cmd.clone(), qos(settings.qos));
+                for f in ha.filters() {
+                    let _ = client.try_subscribe(f, QoS::AtMostOnce);
+                }
                 // The retained state anew (the will may have replaced it); at the first
                 // connection the droid's link feed says it (once).
                 if again && let Some(s) = bridge.fleet().link_state(i) {
@@ -629,24 +670,53 @@ async fn connection(
                 }
                 // What the droid and the bridge are, retained (a broker restarted without
                 // persistence forgot them).
-                let mut retained: Vec<(String, Out)> = bridge
-                    .info(i)
-                    .map(|o| (topic(&settings.prefix, &t, "info"), o))
-                    .into_iter()
-                    .collect();
-                if i == 0 {
-                    retained.push((bridge_topic(&settings.prefix), bridge.hello()));
-                }
-                for (topic, o) in retained {
-                    let _ = client.try_publish(topic, QoS::AtLeastOnce, true, o.to_json());
-                }
-                for (topic, payload) in discovery(&bridge, &settings.prefix, i) {
+                let mut retained: Vec<(String, String)> = [
+                    bridge.info(i).map(|o| ("info", o)),
+                    bridge.hold_state(i).map(|o| ("hold", o)),
+                ]
+                .into_iter()
+                .flatten()
+                .map(|(leaf, o)| (topic(&settings.prefix, &t, leaf), o.to_json()))
+                .collect();
+                retained.extend(
+                    kept.at_connect(i, &name, ha.light.is_some())
+                        .into_iter()
+                        .map(|(leaf, p)| (topic(&settings.prefix, &t, leaf), p)),
+                );
+                retained.extend(discovery(&bridge, &settings, i));
+                for (topic, payload) in retained {
                     let _ = client.try_publish(topic, QoS::AtLeastOnce, true, payload);
                 }
                 if *state.borrow() != BrokerState::Connecting {
                     eprintln!("droidctl: {name}: connected to the broker again");
                 }
                 state.send_replace(BrokerState::Connected);
+            }
+            Ok(Event::Incoming(Packet::Publish(p))) if ha.owns(&p.topic) => {
+                // Home Assistant started: everything it reads of this droid anew.
+                if ha.birth.as_deref() == Some(&p.topic) && &p.payload[..] == b"online" {
+                    for (topic, payload) in discovery(&bridge, &settings, i) {
+                        let _ = client.try_publish(topic, QoS::AtLeastOnce, true, payload);
+                    }
+                } else if let (Some((set, group)), false) = (&ha.light, p.retain)
+                    && *set == p.topic
+                {
+                    match kept.light_set(i, group, &p.payload) {
+                        Ok(cmd) => bridge.handle(cmd.as_bytes(), Some(i)),
+                        Err(error) => bridge.emit(
+                            Some(i),
+                            Out::Error {
+                                id: None,
+                                droid: Some(name.clone()),
+                                cmd: Some("lights".into()),
+                                code: ErrorCode::BadJson,
+                                robot: None,
+                                capability: None,
+                                error: format!("{set}: {error}"),
+                            },
+                        ),
+                    }
+                }
             }
             Ok(Event::Incoming(Packet::Publish(p))) => {
                 if let Some(said) = inbox.publish(&p.topic, p.retain, &p.payload) {
@@ -758,12 +828,13 @@ mod tests {
             qos: 0,
             prefix: "droidctl".into(),
             client_id: "x".into(),
+            bridge_id: "b".into(),
             keepalive: Duration::from_secs(5),
             username: None,
             password: None,
             ca_pem: None,
         };
-        let o = options(&s, 0, "D2-0001", "D2-0001").unwrap();
+        let o = droid_options(&s, 0, "D2-0001", "D2-0001").unwrap();
         assert!(o.max_packet_size() >= MAX_INCOMING_BYTES);
         const { assert!(MAX_INCOMING_BYTES >= 100 * super::super::schema::MAX_COMMAND_BYTES) };
     }

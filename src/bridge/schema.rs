@@ -57,6 +57,11 @@ pub enum Cmd {
     Stop,
     /// Every droid of the bridge stops now, whatever `droid` says.
     Estop,
+    /// A latched stop (issue 40 point 6): the droid stops and refuses whatever moves it
+    /// (drive, twist, head, stance, animation: code `held`) until [`Cmd::Release`].
+    Hold,
+    /// Motion allowed again after [`Cmd::Hold`].
+    Release,
     Head(HeadAngle),
     Stance(LegAction),
     /// A light: `LedRgb` or `LedBrightness` ([`Action`], as mission lines make them).
@@ -83,7 +88,13 @@ impl Cmd {
             Cmd::Animation(id) => Intent::Animation(*id),
             Cmd::Sound(id) => Intent::Sound(*id),
             Cmd::Matrix(m) => Intent::Matrix(Matrix::from(m)),
-            Cmd::Drive { .. } | Cmd::Twist { .. } | Cmd::Stop | Cmd::Estop | Cmd::Stream { .. } => {
+            Cmd::Drive { .. }
+            | Cmd::Twist { .. }
+            | Cmd::Stop
+            | Cmd::Estop
+            | Cmd::Hold
+            | Cmd::Release
+            | Cmd::Stream { .. } => {
                 return None;
             }
         })
@@ -96,6 +107,8 @@ impl Cmd {
             Cmd::Twist { .. } => "twist",
             Cmd::Stop => "stop",
             Cmd::Estop => "estop",
+            Cmd::Hold => "hold",
+            Cmd::Release => "release",
             Cmd::Head(_) => "head",
             Cmd::Stance(_) => "stance",
             Cmd::Lights(_) => "lights",
@@ -110,6 +123,19 @@ impl Cmd {
     pub fn is_motion(&self) -> bool {
         matches!(self, Cmd::Drive { .. } | Cmd::Twist { .. })
     }
+
+    /// Whether a held droid refuses it: whatever moves the droid's body (an animation
+    /// may roll it; a stop, lights or sounds do not).
+    pub fn moves(&self) -> bool {
+        matches!(
+            self,
+            Cmd::Drive { .. }
+                | Cmd::Twist { .. }
+                | Cmd::Head(_)
+                | Cmd::Stance(_)
+                | Cmd::Animation(_)
+        )
+    }
 }
 
 /// The verbs, with the fields each takes besides `v`, `cmd`, `droid` and `id`.
@@ -118,6 +144,8 @@ pub const VERBS: &[(&str, &[&str])] = &[
     ("twist", &["linear", "angular"]),
     ("stop", &[]),
     ("estop", &[]),
+    ("hold", &[]),
+    ("release", &[]),
     ("head", &["angle"]),
     ("stance", &["stance"]),
     ("lights", &["group", "rgb", "brightness"]),
@@ -163,6 +191,8 @@ pub enum ErrorCode {
     Busy,
     /// A retained MQTT message on a `cmd` topic: never executed (said once per droid).
     Retained,
+    /// The droid is held (`hold`): what would move it is refused until `release`.
+    Held,
 }
 
 /// Why a command is refused, before what could be read of it is added.
@@ -321,6 +351,8 @@ fn parse_object(obj: &Map<String, Value>) -> Result<Request, Refusal> {
         },
         "stop" => Cmd::Stop,
         "estop" => Cmd::Estop,
+        "hold" => Cmd::Hold,
+        "release" => Cmd::Release,
         "head" => {
             // One range in every refusal: the dome's own (a number past ±180 was once
             // refused with the generic ±180 and one inside it with the dome's).
@@ -694,6 +726,9 @@ pub enum Out {
         reason: &'static str,
         message: String,
     },
+    /// Whether the droid is held (`hold`, `release`; issue 40 point 6): sent at each
+    /// change, retained on MQTT's `hold` topic.
+    Hold { droid: String, held: bool },
     /// A command done (sent only for commands with an `id`).
     Reply {
         id: Value,
@@ -735,6 +770,7 @@ impl Out {
             | Out::Collision { droid, .. }
             | Out::Battery { droid, .. }
             | Out::Link { droid, .. }
+            | Out::Hold { droid, .. }
             | Out::Stopped { droid, .. } => Some(droid),
             Out::Reply { droid, .. } | Out::Error { droid, .. } => droid.as_deref(),
         }

@@ -71,10 +71,18 @@ pub struct BridgeArgs {
     #[arg(long)]
     pub allow_remote: bool,
     /// MQTT: publish Home Assistant discovery (retained under PREFIX, homeassistant by
-    /// default) so each droid appears in Home Assistant with its battery, connection,
-    /// collisions, a stop button and its main light; removed when the bridge ends cleanly.
+    /// default) so the bridge and each droid appear in Home Assistant (battery, connection,
+    /// collisions, stop, motion enabled, light …); kept when the bridge ends (shown
+    /// unavailable) unless --homeassistant-remove.
     #[arg(long, value_name = "PREFIX", num_args = 0..=1, default_missing_value = "homeassistant")]
     pub homeassistant: Option<String>,
+    /// MQTT: remove the Home Assistant devices and entities when the bridge ends cleanly.
+    #[arg(long, requires = "homeassistant")]
+    pub homeassistant_remove: bool,
+    /// MQTT: this bridge's id among the bridges on the broker (its hello on
+    /// PREFIX/bridge/ID); the host name by default.
+    #[arg(long, value_name = "ID")]
+    pub bridge_id: Option<String>,
 }
 
 fn parse_broker_listen(s: &str) -> Result<std::net::SocketAddr, String> {
@@ -163,6 +171,8 @@ fn settings(args: &BridgeArgs, config: &crate::config::Config) -> Settings {
         telemetry_hz: args.rate.unwrap_or(b.telemetry_hz),
         battery_poll: Duration::from_secs(b.battery_poll_s),
         homeassistant: args.homeassistant.clone(),
+        homeassistant_remove: args.homeassistant_remove,
+        taken_topics: Default::default(),
     }
 }
 
@@ -199,16 +209,74 @@ fn mqtt_settings(
         .client_id
         .clone()
         .unwrap_or_else(bridge::mqtt::default_client_id);
+    let bridge_id = match &args.bridge_id {
+        Some(id) if bridge::topic_name(id) != *id => {
+            return Err(CliError::usage(format!(
+                "--bridge-id {id:?}: letters, digits, - and _ only (it is a topic level)"
+            )));
+        }
+        Some(id) => id.clone(),
+        None => bridge::presence::default_id(),
+    };
     Ok(MqttSettings {
         url: url.clone(),
         qos: args.qos.unwrap_or(b.qos),
         prefix,
         client_id,
+        bridge_id,
         keepalive: Duration::from_secs(b.keepalive_s),
         username: args.username.clone(),
         password,
         ca_pem,
     })
+}
+
+/// Take this bridge's place among those live on the broker (issue 40 points 1 and 2): a
+/// bridge id and droid topics nobody running has. A default id taken becomes `ID-2` …, an id
+/// asked for with --bridge-id is refused; a droid whose topic is taken gets `NAME-2` …;
+/// each said.
+async fn share_broker(
+    m: &mut MqttSettings,
+    settings: &mut Settings,
+    fleet: &Fleet,
+    asked: bool,
+) -> Result<(), CliError> {
+    let live = bridge::presence::probe(m, Duration::from_secs(10))
+        .await
+        .map_err(CliError::failure)?;
+    if live.bridges.contains(&m.bridge_id) {
+        if asked {
+            return Err(CliError::usage(format!(
+                "another bridge with id {} is online on {} ({}/bridge/{}/state): give this \
+                 one another --bridge-id",
+                m.bridge_id, m.url, m.prefix, m.bridge_id
+            )));
+        }
+        let taken = live.bridges.iter().map(|b| b.to_lowercase()).collect();
+        let id = bridge::presence::distinct(&m.bridge_id, &taken);
+        eprintln!(
+            "droidctl: bridge: another bridge with id {} is online on the broker: this one is {id} \
+             (say --bridge-id to choose)",
+            m.bridge_id
+        );
+        m.bridge_id = id;
+    }
+    let names = fleet.names();
+    let ours = bridge::topic_names_besides(&names, &live.droids);
+    for (name, (plain, t)) in names
+        .iter()
+        .zip(bridge::topic_names(&names).iter().zip(&ours))
+    {
+        if plain != t {
+            eprintln!(
+                "droidctl: bridge: {name} is live on the broker already ({}/{plain}/state, \
+                 another bridge's): this one's topics are {}/{t}/…",
+                m.prefix, m.prefix
+            );
+        }
+    }
+    settings.taken_topics = live.droids;
+    Ok(())
 }
 
 /// The longest password file read (its first line is the password): `/dev/zero` or a large
@@ -254,6 +322,7 @@ fn mqtt_only(args: &BridgeArgs) -> Vec<&'static str> {
         ("--allow-remote", args.allow_remote),
         ("--listen", args.listen.is_some()),
         ("--homeassistant", args.homeassistant.is_some()),
+        ("--bridge-id", args.bridge_id.is_some()),
     ]
     .into_iter()
     .filter_map(|(name, given)| given.then_some(name))
@@ -361,6 +430,11 @@ pub fn run(args: BridgeArgs) -> Result<i32, CliError> {
                 m.model.display_name(),
                 m.origin
             );
+        }
+        let mut settings = settings;
+        let mut mqtt = mqtt;
+        if let Some(m) = &mut mqtt {
+            share_broker(m, &mut settings, &fleet, args.bridge_id.is_some()).await?;
         }
         let (bridge, rx) = Bridge::start(fleet, setups, settings);
         let stopped = async {

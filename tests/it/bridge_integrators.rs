@@ -12,71 +12,92 @@ use std::time::Duration;
 
 /// The payload keys Home Assistant documents for each MQTT platform discovery makes here
 /// (https://www.home-assistant.io/integrations/sensor.mqtt/, binary_sensor.mqtt/,
-/// button.mqtt/, light.mqtt/ template schema): (component, required, optional).
+/// button.mqtt/, switch.mqtt/, select.mqtt/, number.mqtt/, light.mqtt/ JSON schema):
+/// (component, required, optional). Every entity may carry these too.
+const COMMON_KEYS: &[&str] = &[
+    "name",
+    "unique_id",
+    "device",
+    "origin",
+    "availability",
+    "entity_category",
+    "icon",
+    "optimistic",
+];
 const HA_KEYS: &[(&str, &[&str], &[&str])] = &[
     (
         "sensor",
         &["state_topic"],
         &[
-            "name",
-            "unique_id",
-            "device",
-            "availability",
             "value_template",
             "device_class",
             "unit_of_measurement",
             "state_class",
-            "icon",
         ],
     ),
     (
         "binary_sensor",
         &["state_topic"],
         &[
-            "name",
-            "unique_id",
-            "device",
-            "availability",
             "value_template",
             "device_class",
             "payload_on",
             "payload_off",
-            "icon",
+        ],
+    ),
+    ("button", &["command_topic"], &["payload_press"]),
+    (
+        "switch",
+        &["command_topic"],
+        &[
+            "payload_on",
+            "payload_off",
+            "state_topic",
+            "value_template",
+            "state_on",
+            "state_off",
         ],
     ),
     (
-        "button",
+        "select",
+        &["command_topic", "options"],
+        &["command_template"],
+    ),
+    (
+        "number",
         &["command_topic"],
         &[
-            "name",
-            "unique_id",
-            "device",
-            "availability",
-            "payload_press",
-            "icon",
+            "command_template",
+            "min",
+            "max",
+            "step",
+            "mode",
+            "unit_of_measurement",
         ],
     ),
     (
         "light",
+        &["command_topic", "schema"],
         &[
-            "command_topic",
-            "command_on_template",
-            "command_off_template",
-            "schema",
-        ],
-        &[
-            "name",
-            "unique_id",
-            "device",
-            "availability",
-            "optimistic",
-            "icon",
+            "state_topic",
+            "supported_color_modes",
+            "brightness",
+            "brightness_scale",
         ],
     ),
 ];
 
-/// Keys of a discovery payload's `device` and of an `availability` entry, as documented.
-const DEVICE_KEYS: &[&str] = &["identifiers", "name", "model", "manufacturer", "sw_version"];
+/// Keys of a discovery payload's `device`, `origin` and of an `availability` entry, as
+/// documented.
+const DEVICE_KEYS: &[&str] = &[
+    "identifiers",
+    "name",
+    "model",
+    "manufacturer",
+    "sw_version",
+    "via_device",
+];
+const ORIGIN_KEYS: &[&str] = &["name", "sw_version", "support_url"];
 const AVAILABILITY_KEYS: &[&str] = &[
     "topic",
     "value_template",
@@ -117,12 +138,19 @@ fn home_assistant_discovery_through_mosquitto() {
             "--sim",
             "r2d2,robi",
             "--homeassistant",
+            "--bridge-id",
+            "lab-1",
         ],
     );
-    sub.wait(20, "droidctl/D2-0001/state", |v| v["ready"] == true);
-    // Retained: a subscriber that comes later gets every config.
+    let both = [
+        "droidctl/D2-0001/state".into(),
+        "droidctl/Robi-42/state".into(),
+    ];
+    sub.wait_all(20, &both, |v| v["ready"] == true);
+    // Retained: a subscriber that comes later gets every config: R2-D2's 9, Robi's 4, the
+    // bridge's 1.
     let ha = Sub::start(p, "homeassistant/#", &[]);
-    let configs = gather(&ha, 5, |got| got.len() >= 9);
+    let configs = gather(&ha, 5, |got| got.len() >= 14);
     let mut seen = Vec::new();
     for (topic, payload) in &configs {
         let (component, node, object) =
@@ -139,12 +167,20 @@ fn home_assistant_discovery_through_mosquitto() {
         }
         for k in obj.keys() {
             assert!(
-                required.contains(&k.as_str()) || optional.contains(&k.as_str()),
+                required.contains(&k.as_str())
+                    || optional.contains(&k.as_str())
+                    || COMMON_KEYS.contains(&k.as_str()),
                 "{topic}: {k} is not a documented {component} key"
             );
         }
         for k in payload["device"].as_object().expect("device").keys() {
             assert!(DEVICE_KEYS.contains(&k.as_str()), "{topic}: device.{k}");
+        }
+        for k in payload["origin"].as_object().expect("origin").keys() {
+            assert!(ORIGIN_KEYS.contains(&k.as_str()), "{topic}: origin.{k}");
+        }
+        if let Some(c) = obj.get("entity_category") {
+            assert!(c == "diagnostic" || c == "config", "{topic}: {c}");
         }
         for a in payload["availability"].as_array().into_iter().flatten() {
             for k in a.as_object().unwrap().keys() {
@@ -154,27 +190,75 @@ fn home_assistant_discovery_through_mosquitto() {
                 );
             }
         }
-        // Every entity reads or writes the droid's own topics.
+        // Every entity reads or writes the bridge's own topics.
         for (k, v) in obj.iter().filter(|(k, _)| k.ends_with("topic")) {
             let t = v.as_str().unwrap();
-            assert!(
-                t.starts_with("droidctl/") && t.split('/').count() == 3,
-                "{topic}: {k} {t}"
-            );
+            assert!(t.starts_with("droidctl/"), "{topic}: {k} {t}");
         }
         seen.push(format!("{node}/{object}"));
     }
     for want in [
         "droidctl_D2-0001/battery",
+        "droidctl_D2-0001/battery_level",
         "droidctl_D2-0001/connection",
         "droidctl_D2-0001/collisions",
         "droidctl_D2-0001/stop",
+        "droidctl_D2-0001/motion",
         "droidctl_D2-0001/light",
+        "droidctl_D2-0001/stance",
+        "droidctl_D2-0001/heading",
         "droidctl_Robi-42/connection",
         "droidctl_Robi-42/stop",
+        "droidctl_Robi-42/motion",
+        "droidctl_bridge-lab-1/droids",
     ] {
         assert!(seen.iter().any(|s| s == want), "no {want} in {seen:?}");
     }
+    let config = |end: &str| {
+        configs
+            .iter()
+            .find(|(t, _)| t.ends_with(end))
+            .unwrap_or_else(|| panic!("no {end}"))
+            .1
+            .clone()
+    };
+    // Each droid points to the bridge's device, which counts them; made by Sphero (Robi
+    // 42 is not).
+    let bridge_dev = config("bridge-lab-1/droids/config");
+    let bridge_node = &bridge_dev["device"]["identifiers"][0];
+    assert_eq!(
+        config("D2-0001/stop/config")["device"]["via_device"],
+        *bridge_node
+    );
+    assert_eq!(
+        config("Robi-42/stop/config")["device"]["via_device"],
+        *bridge_node
+    );
+    assert_eq!(
+        config("D2-0001/stop/config")["device"]["manufacturer"],
+        "Sphero"
+    );
+    assert!(config("Robi-42/stop/config")["device"]["manufacturer"].is_null());
+    let hello_topic = bridge_dev["state_topic"].as_str().unwrap();
+    assert_eq!(hello_topic, "droidctl/bridge/lab-1");
+    let hello = Sub::start(p, hello_topic, &[]).wait(5, hello_topic, |_| true);
+    assert_eq!(hello["droids"].as_array().map(Vec::len), Some(2), "{hello}");
+    for d in ["battery", "battery_level", "connection", "collisions"] {
+        assert_eq!(
+            config(&format!("D2-0001/{d}/config"))["entity_category"],
+            "diagnostic",
+            "{d}"
+        );
+    }
+    let level = config("D2-0001/battery_level/config");
+    assert_eq!(
+        (&level["device_class"], &level["unit_of_measurement"]),
+        (&Value::from("battery"), &Value::from("%"))
+    );
+    // The collision count is retained (0 before any).
+    let count = Sub::start(p, "droidctl/D2-0001/collisions", &[]);
+    let c = count.wait(5, "droidctl/D2-0001/collisions", |_| true);
+    assert_eq!(c["collisions"], 0, "{c}");
     // The value templates read fields the state topics carry.
     let battery = configs
         .iter()
@@ -203,20 +287,83 @@ fn home_assistant_discovery_through_mosquitto() {
     let _ = sub.drain();
     let t = sub.wait(3, "droidctl/D2-0001/telemetry", |_| true);
     assert!(speed(&t) < 3.0, "still rolling after the stop button: {t}");
-    // The light's payloads are commands the bridge takes (asked with an id: a reply).
-    let light = configs
-        .iter()
-        .find(|(t, _)| t.ends_with("D2-0001/light/config"))
-        .unwrap();
-    for k in ["command_on_template", "command_off_template"] {
-        let mut c: Value = serde_json::from_str(light.1[k].as_str().unwrap()).unwrap();
-        c["id"] = k.into();
-        assert!(publish(p, cmd_topic, &c.to_string(), &[]));
-        let r = sub.wait(5, "droidctl/D2-0001/reply", |v| v["id"] == k);
-        assert_eq!(r["type"], "reply", "{r}");
-    }
-    // A clean end removes the entities: nothing retained under homeassistant/ any more.
+    // The light, in Home Assistant's JSON schema: a colour and a brightness arrive as one
+    // colour (brightness scales it), and the state is retained once the droid said done.
+    let light = config("D2-0001/light/config");
+    assert_eq!(light["schema"], "json");
+    let (set, state) = (
+        light["command_topic"].as_str().unwrap(),
+        light["state_topic"].as_str().unwrap(),
+    );
+    assert!(publish(
+        p,
+        set,
+        r#"{"state":"ON","color":{"r":255,"g":0,"b":0},"brightness":128}"#,
+        &[]
+    ));
+    // The droid's answer, then the state (published on it).
+    let r = sub.wait(5, "droidctl/D2-0001/reply", |v| v["cmd"] == "lights");
+    assert_eq!(r["ok"], true, "{r}");
+    let s = sub.wait(5, state, |v| v["state"] == "ON");
+    assert_eq!(
+        (&s["brightness"], &s["color"]["r"], &s["color"]["g"]),
+        (&Value::from(128), &Value::from(255), &Value::from(0)),
+        "{s}"
+    );
+    // A light command Home Assistant would not send is said, not guessed.
+    assert!(publish(p, set, r#"{"brightness":9}"#, &[]));
+    let e = sub.wait(5, "droidctl/D2-0001/reply", |v| v["type"] == "error");
+    assert!(e["error"].as_str().unwrap().contains("state"), "{e}");
+    // Motion enabled off: a latched stop, each drive refused (code held) until on again.
+    let motion = config("D2-0001/motion/config");
+    let (off, on) = (
+        motion["payload_off"].as_str().unwrap(),
+        motion["payload_on"].as_str().unwrap(),
+    );
+    assert!(publish(p, cmd_topic, off, &[]));
+    let h = sub.wait(5, "droidctl/D2-0001/hold", |v| v["held"] == true);
+    assert_eq!(h["type"], "hold");
+    let held_drive = r#"{"v":1,"cmd":"drive","speed":120,"heading":90,"id":"d1"}"#;
+    assert!(publish(p, cmd_topic, held_drive, &[]));
+    let e = sub.wait(5, "droidctl/D2-0001/reply", |v| v["id"] == "d1");
+    assert_eq!(
+        (&e["type"], &e["code"]),
+        (&Value::from("error"), &Value::from("held"))
+    );
+    assert!(publish(p, cmd_topic, on, &[]));
+    sub.wait(5, "droidctl/D2-0001/hold", |v| v["held"] == false);
+    let free = r#"{"v":1,"cmd":"drive","speed":0,"heading":90,"id":"d2"}"#;
+    assert!(publish(p, cmd_topic, free, &[]));
+    let r = sub.wait(5, "droidctl/D2-0001/reply", |v| v["id"] == "d2");
+    assert_eq!(r["type"], "reply", "{r}");
+    // Home Assistant's birth message: every config published again.
+    let _ = ha.drain();
+    assert!(publish(p, "homeassistant/status", "online", &[]));
+    let again = gather(&ha, 5, |got| got.len() >= 14);
+    assert!(again.len() >= 14, "{} configs again", again.len());
+    // A clean end keeps the entities (availability says offline) …
     drop(ha);
+    interrupt(&mut bridge);
+    std::thread::sleep(Duration::from_millis(500));
+    let after = Sub::start(p, "homeassistant/#", &[]);
+    let kept = gather(&after, 5, |got| got.len() >= 14);
+    assert_eq!(kept.len(), 14, "{kept:?}");
+    drop(after);
+    // … and --homeassistant-remove removes them.
+    let mut bridge = BridgeProc::start(
+        &dir,
+        &[
+            "--mqtt",
+            &broker.url(),
+            "--sim",
+            "r2d2,robi",
+            "--homeassistant",
+            "--homeassistant-remove",
+            "--bridge-id",
+            "lab-1",
+        ],
+    );
+    sub.wait_all(20, &both, |v| v["ready"] == true);
     interrupt(&mut bridge);
     std::thread::sleep(Duration::from_millis(500));
     let after = Sub::start(p, "homeassistant/#", &[]);

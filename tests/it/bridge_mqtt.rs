@@ -265,10 +265,7 @@ fn a_broker_with_a_password(kind: Kind) {
     );
     assert_eq!(wrong.wait(20), Some(1));
     let err = wrong.stderr();
-    assert!(
-        err.contains("cannot connect D2-0001 to the broker"),
-        "{err}"
-    );
+    assert!(err.contains("cannot connect to the broker at"), "{err}");
     let sub = Sub::start(p, "droidctl/#", &["-u", "pupil", "-P", "r2-d2"]);
     let url = format!("mqtt://pupil:r2-d2@127.0.0.1:{p}");
     let _right = BridgeProc::start(&dir, &["--mqtt", &url, "--sim", "bb8"]);
@@ -492,6 +489,7 @@ async fn two_droids_with_the_same_name_get_their_own_topics() {
         qos: 0,
         prefix: "droidctl".into(),
         client_id: mqtt::default_client_id(),
+        bridge_id: "test".into(),
         keepalive: Duration::from_secs(5),
         username: None,
         password: None,
@@ -705,6 +703,8 @@ fn info_and_bridge_topics_are_retained_and_connected_is_said_once() {
             "r2d2,bolt",
             "--rate",
             "50",
+            "--bridge-id",
+            "lab-1",
         ],
     );
     let ready = |got: &[(String, Value)], d: &str| {
@@ -749,8 +749,9 @@ fn info_and_bridge_topics_are_retained_and_connected_is_said_once() {
         bolt["capabilities"].to_string().contains("matrix"),
         "{bolt}"
     );
-    let late = Sub::start(p, "droidctl/bridge", &[]);
-    let hello = late.wait(5, "droidctl/bridge", |_| true);
+    // Under the bridge's own id (issue 40 point 1).
+    let late = Sub::start(p, "droidctl/bridge/+", &[]);
+    let hello = late.wait(5, "droidctl/bridge/lab-1", |_| true);
     assert_eq!(hello["type"], "hello");
     let topics: Vec<&str> = hello["droids"]
         .as_array()
@@ -771,5 +772,10 @@ fn info_and_bridge_topics_are_retained_and_connected_is_said_once() {
         "retained after a clean end: {got:?}"
     );
     assert!(got.iter().any(|(_, v)| v["state"] == "offline"), "{got:?}");
+    assert!(
+        got.iter()
+            .any(|(t, v)| t == "droidctl/bridge/lab-1/state" && v["state"] == "offline"),
+        "{got:?}"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -44,6 +44,8 @@ fn the_schema_is_valid_and_takes_the_readme_examples() {
         json!({"v":1,"cmd":"twist","linear":{"x":0.3},"angular":0.5}),
         json!({"v":1,"cmd":"stop"}),
         json!({"v":1,"cmd":"estop"}),
+        json!({"v":1,"cmd":"hold","droid":"D2-0001","id":"h"}),
+        json!({"v":1,"cmd":"release"}),
         json!({"v":1,"cmd":"head","angle":-45.5,"droid":"D2-0001"}),
         json!({"v":1,"cmd":"stance","stance":"bipod","id":"s1"}),
         json!({"v":1,"cmd":"lights","group":"front","rgb":[255,0,0],"id":7}),
@@ -91,6 +93,8 @@ fn what_the_schema_refuses_the_bridge_refuses() {
         json!({"v":1,"cmd":"twist","linear":{"x":"1"},"angular":0}),
         json!({"v":1,"cmd":"twist","linear":{"w":1},"angular":0}),
         json!({"v":1,"cmd":"stop","speed":0}),
+        json!({"v":1,"cmd":"hold","speed":0}),
+        json!({"v":1,"cmd":"release","held":false}),
         json!({"v":1,"cmd":"stop","droid":""}),
         json!({"v":1,"cmd":"stop","id":[1]}),
         json!({"v":1,"cmd":"stop","id":1.5}),
@@ -189,6 +193,10 @@ async fn a_session() -> Vec<Value> {
         send(r#"{"v":1,"cmd":"drive","droid":"BB-0002","speed":255,"heading":0}"#).await;
         sleep(Duration::from_millis(200)).await;
     }
+    // A latched stop: the next drive is refused (code held) until released.
+    send(r#"{"v":1,"cmd":"hold","droid":"BB-0002","id":"h1"}"#).await;
+    send(r#"{"v":1,"cmd":"drive","droid":"BB-0002","speed":255,"heading":0,"id":"h2"}"#).await;
+    send(r#"{"v":1,"cmd":"release","droid":"BB-0002","id":"h3"}"#).await;
     send(r#"{"v":1,"cmd":"twist","droid":"D2-0001","linear":0.2,"angular":0.3}"#).await;
     sleep(Duration::from_secs(1)).await;
     send(r#"{"v":1,"cmd":"drive","droid":"robi","speed":40,"heading":0}"#).await;
@@ -220,6 +228,7 @@ async fn everything_the_bridge_sends_is_valid_against_the_schema() {
         "collision",
         "battery",
         "link",
+        "hold",
         "stopped",
         "reply",
         "error",
@@ -231,6 +240,20 @@ async fn everything_the_bridge_sends_is_valid_against_the_schema() {
         );
     }
     assert_eq!(lines[0]["type"], "hello");
+    let held = lines
+        .iter()
+        .find(|v| v["id"] == "h2")
+        .expect("the held drive's answer");
+    assert_eq!(
+        (&held["type"], &held["code"]),
+        (&json!("error"), &json!("held"))
+    );
+    let holds: Vec<&Value> = lines.iter().filter(|v| v["type"] == "hold").collect();
+    assert_eq!(holds.len(), 2, "held, then released: {holds:?}");
+    assert_eq!(
+        (&holds[0]["held"], &holds[1]["held"]),
+        (&json!(true), &json!(false))
+    );
     // Readiness and odometry (issue 31 points 3 and 5).
     assert!(
         lines
@@ -283,6 +306,55 @@ async fn everything_the_bridge_sends_is_valid_against_the_schema() {
                 .iter()
                 .any(|v| v["type"] == "stopped" && v["reason"] == reason),
             "no stop for {reason}"
+        );
+    }
+}
+
+/// What only MQTT carries (the retained collision count, a bridge's availability) and Home
+/// Assistant's JSON light (its command and the state the bridge retains) agree with the
+/// schema (issue 40).
+#[test]
+fn mqtt_only_objects_and_the_home_assistant_light_are_valid() {
+    use droidctl::bridge::{ha_light::Light, kept::Kept, presence};
+    let out = validator("out");
+    let k = Kept::new(1);
+    let mut objects: Vec<String> = vec![
+        presence::state_json("pi-lab-1", true),
+        presence::state_json("pi-lab-1", false),
+    ];
+    objects.extend(
+        k.at_connect(0, "D2-0001", false)
+            .into_iter()
+            .map(|(_, p)| p),
+    );
+    for o in &objects {
+        let v: Value = serde_json::from_str(o).unwrap();
+        assert!(out.is_valid(&v), "{v}: {}", errors(&out, &v));
+    }
+    let (cmd, state) = (
+        validator("homeassistant_light_command"),
+        validator("homeassistant_light_state"),
+    );
+    let mut l = Light::default();
+    for c in [
+        json!({"state":"ON"}),
+        json!({"state":"ON","brightness":77}),
+        json!({"state":"ON","color":{"r":10,"g":20,"b":30}}),
+        json!({"state":"OFF"}),
+    ] {
+        assert!(cmd.is_valid(&c), "{c}: {}", errors(&cmd, &c));
+        l = l.apply(c.to_string().as_bytes()).unwrap();
+        let s: Value = serde_json::from_str(&l.state()).unwrap();
+        assert!(state.is_valid(&s), "{s}: {}", errors(&state, &s));
+    }
+    for c in [
+        json!({"brightness":3}),
+        json!({"state":"ON","brightness":256}),
+    ] {
+        assert!(!cmd.is_valid(&c), "the schema takes {c}");
+        assert!(
+            l.apply(c.to_string().as_bytes()).is_err(),
+            "the bridge takes {c}"
         );
     }
 }

@@ -24,6 +24,7 @@ mod bridge_hostile;
 mod bridge_integrators;
 mod bridge_mqtt;
 mod bridge_schema;
+mod bridge_shared_broker;
 mod capture_cli;
 mod capture_replay;
 mod circles;
