@@ -71,15 +71,40 @@ pub async fn read_line<R: AsyncBufRead + Unpin>(
     }
 }
 
+/// How long a command for a droid that has not been ready yet waits for it, by default
+/// ([`run_waiting`]; the CLI gives its scan timeout).
+pub const FIRST_READY: Duration = Duration::from_secs(10);
+
+/// [`run_waiting`] with [`FIRST_READY`].
+pub async fn run<R, W>(
+    bridge: Arc<Bridge>,
+    rx: Outputs,
+    input: R,
+    output: W,
+    stopped: impl std::future::Future<Output = ()>,
+) -> End
+where
+    R: AsyncBufRead + Unpin,
+    W: AsyncWrite + Unpin + Send + 'static,
+{
+    run_waiting(bridge, rx, input, output, stopped, FIRST_READY).await
+}
+
 /// Run the bridge over `input` and `output` until the input ends, the output fails or
 /// `stopped` completes; then stop the droids being driven (saying so when the input
 /// ended), stop and disconnect every droid, and write what is left.
-pub async fn run<R, W>(
+///
+/// A command for a droid that has not been ready yet since the start is held, and no
+/// line after it read, until the droid is ready or `first_ready` passed (issue 40 point
+/// 11): a script piped in is answered the same way every time, whatever the connection
+/// takes. An `estop` and a line that is no command never wait.
+pub async fn run_waiting<R, W>(
     bridge: Arc<Bridge>,
     mut rx: Outputs,
     mut input: R,
     mut output: W,
     stopped: impl std::future::Future<Output = ()>,
+    first_ready: Duration,
 ) -> End
 where
     R: AsyncBufRead + Unpin,
@@ -150,7 +175,14 @@ where
                     let text = line.strip_suffix(b"\r").unwrap_or(&line);
                     // Blank lines are ignored (a client's keep-alive).
                     if !text.iter().all(u8::is_ascii_whitespace) {
-                        bridge.handle(text, None);
+                        let parsed = schema::parse(text);
+                        if let Ok(req) = &parsed
+                            && req.cmd != schema::Cmd::Estop
+                            && let Ok(i) = bridge.target(req, None)
+                        {
+                            bridge.first_ready(i, first_ready).await;
+                        }
+                        bridge.handle_parsed(parsed, None);
                     }
                 }
             }

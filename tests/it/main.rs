@@ -23,6 +23,7 @@ mod bridge_cli;
 mod bridge_hostile;
 mod bridge_integrators;
 mod bridge_mqtt;
+mod bridge_ros;
 mod bridge_schema;
 mod capture_cli;
 mod capture_replay;
