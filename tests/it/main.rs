@@ -25,6 +25,7 @@ mod bridge_integrators;
 mod bridge_mqtt;
 mod bridge_ros;
 mod bridge_schema;
+mod bridge_topics;
 mod capture_cli;
 mod capture_replay;
 mod circles;
