@@ -26,7 +26,9 @@
 //! are kept and delivered after the reconnect.
 //!
 //! What arrives is handled by an [`Inbox`] (no connection in it: the fuzz target drives
-//! it): a retained command never drives (issue 26 point 5), a payload over the command
+//! it): a command the broker hands over flagged retained (kept, at a (re)subscription)
+//! never drives (issue 26 point 5; one published retained while the bridge is subscribed
+//! arrives live, unflagged, and runs once: issue 40 point 10), a payload over the command
 //! limit is a `bad_json` error (the client takes payloads far larger than that, so one
 //! large message does not end the connection: point 6), and a connection the broker ends
 //! right after making it, again and again, is another client with the same client id
