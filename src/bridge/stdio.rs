@@ -237,3 +237,60 @@ where
     }
     end
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::Model;
+    use tokio::io::AsyncReadExt;
+
+    /// The lines out for `script` piped into a bridge on a simulated R2-D2 whose commands
+    /// wait at most `first_ready` for its first `ready` (paused time: the same every run).
+    async fn piped(script: &str, first_ready: Duration) -> Vec<serde_json::Value> {
+        let rig = super::super::tests::rig(&[Model::R2D2], 600).await;
+        let (writer, mut out_r) = tokio::io::duplex(1 << 22);
+        let input = tokio::io::BufReader::new(script.as_bytes());
+        let end = run_waiting(
+            rig.bridge.clone(),
+            rig.rx,
+            input,
+            writer,
+            std::future::pending(),
+            first_ready,
+        )
+        .await;
+        assert_eq!(end, End::InputClosed);
+        let mut text = String::new();
+        out_r.read_to_string(&mut text).await.unwrap();
+        text.lines()
+            .map(|l| serde_json::from_str(l).unwrap())
+            .collect()
+    }
+
+    /// Issue 40 point 11: no command for a droid is read before its first `ready`, so a
+    /// script piped in is answered by replies only, every time; past the bound the first
+    /// lines are carried out as they come (a stop before R2 stands is answered at once).
+    #[tokio::test(start_paused = true)]
+    async fn a_piped_script_waits_for_the_droids_first_ready_within_a_bound() {
+        let script: String = (0..500)
+            .map(|n| format!("{{\"v\":1,\"cmd\":\"stop\",\"id\":{n}}}\n"))
+            .collect();
+        let lines = piped(&script, Duration::from_secs(10)).await;
+        let at = |f: &dyn Fn(&serde_json::Value) -> bool| lines.iter().position(f);
+        let ready = at(&|v| v["type"] == "link" && v["ready"] == true).expect("ready");
+        let first = at(&|v| v["type"] == "reply").expect("replies");
+        assert!(
+            ready < first,
+            "a reply before the droid was ready: {lines:?}"
+        );
+        let replies = lines.iter().filter(|v| v["type"] == "reply").count();
+        assert_eq!(replies, 500);
+        // Bounded: waiting 1 ms, the first stop is answered before R2 stands.
+        let lines = piped(&script, Duration::from_millis(1)).await;
+        let ready = lines
+            .iter()
+            .position(|v| v["type"] == "link" && v["ready"] == true);
+        let first = lines.iter().position(|v| v["type"] == "reply").unwrap();
+        assert!(ready.is_none_or(|r| first < r), "{lines:?}");
+    }
+}
