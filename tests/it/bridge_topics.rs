@@ -1,11 +1,11 @@
-//! What the bridge's topics and lines say, as a client relies on it (issue 40 points 9 and
-//! 10): the rate in `hello`, the retained `bridge` and `info` topics and the samples agree
+//! What the bridge's topics and lines say, as a client relies on it (issue 40 points 8, 9
+//! and 10): a paho-mqtt client's persistent session on droidctl's broker as on mosquitto, the rate in `hello`, the retained `bridge` and `info` topics and the samples agree
 //! after a `stream`, samples come evenly at that rate (RVR's reports come as several
 //! notifications: one sample each), and a retained command is carried out exactly when
 //! docs/bridge.md says.
 
 use crate::common::bridge_proc::{BridgeProc, scratch};
-use crate::common::mosquitto::{Broker, Sub, publish};
+use crate::common::mosquitto::{Broker, Kind, Sub, publish};
 use serde_json::Value;
 use std::io::{BufRead, BufReader};
 use std::process::{Command, Stdio};
@@ -138,5 +138,83 @@ fn a_retained_command_runs_once_when_the_bridge_listens_and_never_again() {
         "{}",
         again.stderr()
     );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// paho-mqtt as a ROS node would run it, `clean_session=False`, away while two QoS 1
+/// messages are published, then back: its `on_connect` flags say the session is present,
+/// and both messages arrive without a new SUBSCRIBE (issue 40 point 8), on droidctl's
+/// broker as on mosquitto.
+const PAHO_SESSION: &str = r#"
+import sys, time, paho.mqtt.client as m
+port = int(sys.argv[1])
+def connect():
+    got, flags = [], {}
+    c = m.Client(m.CallbackAPIVersion.VERSION2, client_id="ros-node", clean_session=False)
+    c.on_connect = lambda c, u, f, rc, p: flags.update(present=f.session_present)
+    c.on_message = lambda c, u, msg: got.append(msg.payload.decode())
+    c.connect("127.0.0.1", port)
+    c.loop_start()
+    end = time.time() + 10
+    while "present" not in flags and time.time() < end:
+        time.sleep(0.02)
+    return c, got, flags
+c, got, flags = connect()
+print("first", flags.get("present"), flush=True)
+c.subscribe("droidctl/+/odom", 1)
+time.sleep(0.5)
+c.disconnect()
+c.loop_stop()
+print("away", flush=True)
+sys.stdin.readline()
+c, got, flags = connect()
+end = time.time() + 5
+while len(got) < 2 and time.time() < end:
+    time.sleep(0.02)
+print("again", flags.get("present"), ",".join(got), flush=True)
+c.disconnect()
+"#;
+
+#[test]
+fn a_paho_client_keeps_its_session_on_droidctls_broker() {
+    paho_keeps_its_session(Kind::Embedded);
+}
+
+#[test]
+fn a_paho_client_keeps_its_session_on_mosquitto() {
+    if crate::common::mosquitto::mosquitto_here() {
+        paho_keeps_its_session(Kind::Mosquitto);
+    }
+}
+
+fn paho_keeps_its_session(kind: Kind) {
+    let python = match crate::bridge_integrators::python_with_paho() {
+        Ok(p) => p,
+        Err(why) => {
+            eprintln!("SKIPPED: {why}");
+            return;
+        }
+    };
+    let dir = scratch(&format!("session-{kind:?}"));
+    let broker = Broker::start_kind(&dir, kind);
+    let p = broker.port;
+    let mut py = Command::new(python)
+        .args(["-c", PAHO_SESSION, &p.to_string()])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .spawn()
+        .expect("python");
+    let mut stdin = py.stdin.take().unwrap();
+    let mut lines = BufReader::new(py.stdout.take().unwrap()).lines();
+    let mut next = || lines.next().expect("a line from paho").unwrap();
+    assert_eq!(next(), "first False", "no session at first");
+    assert_eq!(next(), "away");
+    for n in ["one", "two"] {
+        assert!(publish(p, "droidctl/BB-0001/odom", n, &[]));
+    }
+    use std::io::Write;
+    writeln!(stdin).unwrap();
+    assert_eq!(next(), "again True one,two");
+    let _ = py.wait();
     let _ = std::fs::remove_dir_all(&dir);
 }
