@@ -1,9 +1,9 @@
 //! What the bridge's topics and lines say, as a client relies on it (issue 40 points 8, 9
-//! and 10): a paho-mqtt client's persistent session on droidctl's broker as on mosquitto, the rate in `hello`, the retained `bridge` and `info` topics and the samples agree
-//! after a `stream`, samples come evenly at that rate (RVR's reports come as several
-//! notifications: one sample each), and a retained command is carried out exactly when
+//! and 10): a paho-mqtt client's persistent session on droidctl's broker as on mosquitto;
+//! the rate in `hello`, the retained `bridge` and `info` topics and the samples agree after
+//! a `stream`, and samples come evenly at that rate (RVR's reports come as several
+//! notifications: one sample each); a retained command is carried out exactly when
 //! docs/bridge.md says.
-
 use crate::common::bridge_proc::{BridgeProc, scratch};
 use crate::common::mosquitto::{Broker, Kind, Sub, publish};
 use serde_json::Value;
