@@ -4,6 +4,7 @@
 //! a `stream`, and samples come evenly at that rate (RVR's reports come as several
 //! notifications: one sample each); a retained command is carried out exactly when
 //! docs/bridge.md says.
+
 use crate::common::bridge_proc::{BridgeProc, scratch};
 use crate::common::mosquitto::{Broker, Kind, Sub, publish};
 use serde_json::Value;
