@@ -63,11 +63,15 @@ pub fn spawn(bridge: &Arc<Bridge>, i: usize) -> Vec<JoinHandle<()>> {
     ]
 }
 
-/// A sample each time the droid reported something new (issue 31 point 2), at most the
-/// bridge's rate: reports that come faster are folded into the next sample; nothing is
-/// repeated while the droid reports nothing. (The cap is the bridge's rate, not the droid's
-/// own: a gap of exactly the droid's interval after each sample would beat against its
-/// stream and skip every other sample now and then.)
+/// A sample each time the droid reported something new (issue 31 point 2), at the rate it
+/// offers ([`Bridge::telemetry_hz`], what `hello` and `info` say), evenly spaced (issue 40
+/// point 9): a sample goes out [`settle`] after the report that starts it, so the parts of
+/// one report that come as several notifications (RVR's: its two processors' and sensors',
+/// about 10 ms apart) make one sample, and never sooner than one interval after the sample
+/// before; reports that come faster are folded into the next sample, and nothing is
+/// repeated while the droid reports nothing. A droid that reports at the rate it offers is
+/// sampled once per report, late by jitter only: never two of its reports folded into one
+/// unless one comes a whole interval late.
 async fn samples(bridge: Weak<Bridge>, i: usize, name: String) {
     let (telemetry, state) = match bridge.upgrade() {
         Some(b) => (b.fleet.telemetry(i), b.fleet.link_state(i)),
@@ -76,10 +80,26 @@ async fn samples(bridge: Weak<Bridge>, i: usize, name: String) {
     let (Some(mut telemetry), Some(state)) = (telemetry, state) else {
         return;
     };
+    let mut last: Option<tokio::time::Instant> = None;
     loop {
         if telemetry.changed().await.is_err() {
             return;
         }
+        let interval = match bridge.upgrade() {
+            Some(b) => {
+                // A droid that streams nothing (0) still reports now and then: at most the
+                // bridge's rate.
+                let hz = match b.telemetry_hz(i) {
+                    0 => b.settings.telemetry_hz,
+                    hz => hz,
+                };
+                Duration::from_secs(1) / u32::from(hz.max(1))
+            }
+            None => return,
+        };
+        let now = tokio::time::Instant::now();
+        let at = (now + settle(interval)).max(last.map_or(now, |l| l + interval));
+        tokio::time::sleep_until(at).await;
         let Some(b) = bridge.upgrade() else {
             return;
         };
@@ -91,11 +111,16 @@ async fn samples(bridge: Weak<Bridge>, i: usize, name: String) {
             let t = telemetry.borrow_and_update();
             crate::mission::sample_of(&t, b.t_ms())
         };
-        let gap = Duration::from_secs(1) / u32::from(b.settings.telemetry_hz.max(1));
         b.emit(Some(i), telemetry_out(&name, sample, b.battery(i)));
-        drop(b);
-        tokio::time::sleep(gap).await;
+        last = Some(at);
     }
+}
+
+/// How long a sample waits after the report that starts it, for the rest of that report:
+/// a quarter of the interval, at most 25 ms (RVR's notifications of one report span about
+/// 20 ms).
+pub fn settle(interval: Duration) -> Duration {
+    (interval / 4).min(Duration::from_millis(25))
 }
 
 /// The telemetry object of a sample: the battery as last read when the droid does not

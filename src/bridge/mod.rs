@@ -20,9 +20,11 @@ pub mod homeassistant;
 pub mod kept;
 pub mod motion;
 pub mod mqtt;
+pub mod msgpack;
 pub mod outbox;
 pub mod presence;
 pub mod ready;
+pub mod ros;
 pub mod schema;
 pub mod stdio;
 pub mod thread;
@@ -141,6 +143,8 @@ struct Droid {
     /// The droid's MQTT topic level ([`topic_names`]).
     topic: String,
     state: Mutex<DroidState>,
+    /// Ready at least once since the bridge started ([`ready`]: the stdio reader waits for it).
+    was_ready: tokio::sync::watch::Sender<bool>,
 }
 
 struct DroidState {
@@ -266,6 +270,7 @@ impl Bridge {
                     ready: false,
                     held: false,
                 }),
+                was_ready: tokio::sync::watch::Sender::new(false),
             })
             .collect();
         let n = fleet.len();
@@ -335,11 +340,23 @@ impl Bridge {
         }
     }
 
+    /// The samples a second droid `i` offers now ([`offered_hz`] of its setup as the last
+    /// `stream` left it): the one value `hello`, `info` and the sampler ([`feeds`]) read,
+    /// so they always agree (issue 40 point 9).
+    pub fn telemetry_hz(&self, i: usize) -> u16 {
+        match (self.fleet.member(i), self.droids.get(i)) {
+            (Some(m), Some(d)) => {
+                let setup = d.lock().setup;
+                offered_hz(m.model, &setup, self.settings.telemetry_hz)
+            }
+            _ => 0,
+        }
+    }
+
     /// Droid `i` as `hello` lists it.
     pub fn droid_info(&self, i: usize) -> Option<schema::DroidInfo> {
         let m = self.fleet.member(i)?;
         let d = self.droids.get(i)?;
-        let setup = d.lock().setup;
         Some(schema::DroidInfo {
             droid: m.name.clone(),
             model: m.model.id(),
@@ -347,7 +364,7 @@ impl Bridge {
             origin: m.origin.clone(),
             topic: d.topic.clone(),
             capabilities: capabilities(m.model),
-            telemetry_hz: offered_hz(m.model, &setup, self.settings.telemetry_hz),
+            telemetry_hz: self.telemetry_hz(i),
             top_speed_m_s: kinematics(m.model).top_speed_m_s,
         })
     }
@@ -376,7 +393,16 @@ impl Bridge {
     /// addresses by itself (the MQTT topic's); a `droid` in the command must agree with it.
     /// Never waits: commands that need the droid's answer reply when it comes.
     pub fn handle(self: &Arc<Self>, text: &[u8], default: Option<usize>) {
-        match schema::parse(text) {
+        self.handle_parsed(schema::parse(text), default)
+    }
+
+    /// A command parsed by a transport's own reader ([`ros::cmd_vel`]), or why not.
+    pub fn handle_parsed(
+        self: &Arc<Self>,
+        parsed: Result<Request, Box<schema::BadCommand>>,
+        default: Option<usize>,
+    ) {
+        match parsed {
             Ok(req) => self.execute(req, default),
             Err(mut e) => {
                 if e.droid.is_none() {
@@ -824,6 +850,9 @@ impl Bridge {
     fn set_ready(&self, i: usize, ready: bool) {
         if let Some(d) = self.droids.get(i) {
             d.lock().ready = ready;
+            if ready {
+                d.was_ready.send_replace(true);
+            }
         }
     }
 }

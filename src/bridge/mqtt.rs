@@ -5,6 +5,8 @@
 //! | topic | direction | what |
 //! |---|---|---|
 //! | `PREFIX/DROID/cmd` | in | commands ([`super::schema`]); the topic names the droid |
+//! | `PREFIX/DROID/cmd_vel` | in | a ROS `geometry_msgs/Twist`, MessagePack or JSON ([`super::ros`]) |
+//! | `PREFIX/DROID/odom` | out | each sample as a ROS `nav_msgs/Odometry` ([`super::ros`]) |
 //! | `PREFIX/DROID/telemetry` | out | samples |
 //! | `PREFIX/DROID/collision` | out | collisions |
 //! | `PREFIX/DROID/battery` | out | battery readings |
@@ -29,7 +31,9 @@
 //! are kept and delivered after the reconnect.
 //!
 //! What arrives is handled by an [`Inbox`] (no connection in it: the fuzz target drives
-//! it): a retained command never drives (issue 26 point 5), a payload over the command
+//! it): a command the broker hands over flagged retained (kept, at a (re)subscription)
+//! never drives (issue 26 point 5; one published retained while the bridge is subscribed
+//! arrives live, unflagged, and runs once: issue 40 point 10), a payload over the command
 //! limit is a `bad_json` error (the client takes payloads far larger than that, so one
 //! large message does not end the connection: point 6), and a connection the broker ends
 //! right after making it, again and again, is another client with the same client id
@@ -190,7 +194,7 @@ pub fn topic(prefix: &str, t: &str, leaf: &str) -> String {
 }
 
 /// The topic leaves of telemetry: dropped, never replayed, when the broker was away.
-pub const TELEMETRY_LEAVES: [&str; 3] = ["telemetry", "collision", "battery"];
+pub const TELEMETRY_LEAVES: [&str; 4] = ["telemetry", "collision", "battery", "odom"];
 
 /// Whether a request the MQTT client still holds is telemetry (to be dropped when the
 /// connection was lost, not replayed late).
@@ -371,6 +375,7 @@ pub struct Inbox {
     bridge: Arc<Bridge>,
     i: usize,
     cmd: String,
+    cmd_vel: String,
     retained: u64,
 }
 
@@ -380,6 +385,7 @@ impl Inbox {
         let t = bridge.topic(i).unwrap_or("droid").to_string();
         Inbox {
             cmd: topic(prefix, &t, "cmd"),
+            cmd_vel: topic(prefix, &t, super::ros::CMD_VEL),
             bridge,
             i,
             retained: 0,
@@ -391,6 +397,11 @@ impl Inbox {
         &self.cmd
     }
 
+    /// The topic it takes ROS Twists on.
+    pub fn cmd_vel_topic(&self) -> &str {
+        &self.cmd_vel
+    }
+
     /// Retained commands ignored so far.
     pub fn retained(&self) -> u64 {
         self.retained
@@ -399,7 +410,7 @@ impl Inbox {
     /// One publish delivered by the broker; the first retained command ignored is said on
     /// the droid's `reply` topic and in the log, and returned for the terminal.
     pub fn publish(&mut self, topic: &str, retain: bool, payload: &[u8]) -> Option<String> {
-        if topic != self.cmd {
+        if topic != self.cmd && topic != self.cmd_vel {
             return None;
         }
         if retain {
@@ -409,12 +420,11 @@ impl Inbox {
             if self.retained == 1 {
                 let name = self.bridge.fleet().member(self.i).map(|m| m.name.clone());
                 let error = format!(
-                    "a retained message on {} was ignored: commands are taken only from a \
+                    "a retained message on {topic} was ignored: commands are taken only from a \
                      client that is there (publish without -r); clear it with \
-                     `mosquitto_pub -r -n -t {}`",
-                    self.cmd, self.cmd
+                     `mosquitto_pub -r -n -t {topic}`"
                 );
-                tracing::warn!(topic = %self.cmd, "bridge: a retained command ignored");
+                tracing::warn!(topic, "bridge: a retained command ignored");
                 let said = format!("droidctl: {error}");
                 self.bridge.emit(
                     Some(self.i),
@@ -430,10 +440,15 @@ impl Inbox {
                 );
                 return Some(said);
             }
-            tracing::debug!(topic = %self.cmd, "bridge: a retained command ignored");
+            tracing::debug!(topic, "bridge: a retained command ignored");
             return None;
         }
-        self.bridge.handle(payload, Some(self.i));
+        if topic == self.cmd_vel {
+            self.bridge
+                .handle_parsed(super::ros::cmd_vel(payload), Some(self.i));
+        } else {
+            self.bridge.handle(payload, Some(self.i));
+        }
         None
     }
 }
@@ -512,6 +527,10 @@ pub async fn run(
             ));
         }
     }
+    let epoch = std::time::SystemTime::now() - Duration::from_millis(bridge.t_ms());
+    let mut odom: Vec<_> = (0..members.len())
+        .map(|_| super::ros::OdomTrack::new(epoch))
+        .collect();
     let router = async {
         // By the droid's index: two droids may share a name, never a topic.
         while let Some(r) = rx.recv_routed().await {
@@ -534,6 +553,13 @@ pub async fn run(
             let Some(((_, t), client)) = members.get(i).zip(clients.get(i)) else {
                 continue;
             };
+            // Each sample also as ROS odometry, beside it.
+            if let Some(od) = odom.get_mut(i).and_then(|od| od.odometry(&o))
+                && let Ok(json) = serde_json::to_string(&od)
+            {
+                let ros = topic(&settings.prefix, t, super::ros::ODOM);
+                let _ = client.try_publish(ros, q, false, json);
+            }
             if client
                 .try_publish(topic(&settings.prefix, t, leaf), q, retain, o.to_json())
                 .is_err()
@@ -633,6 +659,7 @@ async fn connection(
     let ha = super::homeassistant::Topics::new(&bridge, &settings.prefix, i);
     let mut inbox = Inbox::new(bridge.clone(), i, &settings.prefix);
     let cmd = inbox.cmd_topic().to_string();
+    let cmd_vel = inbox.cmd_vel_topic().to_string();
     let mut takeovers = Takeovers::default();
     let name = bridge
         .fleet()
@@ -657,6 +684,7 @@ async fn connection(
                 for f in ha.filters() {
                     let _ = client.try_subscribe(f, QoS::AtMostOnce);
                 }
+                let _ = client.try_subscribe(cmd_vel.clone(), qos(settings.qos));
                 // The retained state anew (the will may have replaced it); at the first
                 // connection the droid's link feed says it (once).
                 if again && let Some(s) = bridge.fleet().link_state(i) {

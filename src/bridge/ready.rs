@@ -110,6 +110,20 @@ async fn stance_done(events: &mut broadcast::Receiver<SessionEvent>) {
 }
 
 impl Bridge {
+    /// Wait until droid `i` has been ready once since the bridge started (at once when it
+    /// has), for at most `bound`: whether it has. The stdio reader reads no command for a
+    /// droid before that (issue 40 point 11), so a piped script's first lines do not race
+    /// the connection; past `bound` the command is carried out as it comes (a droid still
+    /// down answers that it is not connected).
+    pub async fn first_ready(&self, i: usize, bound: Duration) -> bool {
+        let Some(d) = self.droids.get(i) else {
+            return false;
+        };
+        let mut rx = d.was_ready.subscribe();
+        let ready = tokio::time::timeout(bound, rx.wait_for(|r| *r)).await;
+        matches!(ready, Ok(Ok(_)))
+    }
+
     /// A reply's note for a drive or twist sent to droid `i` before it is ready.
     pub(super) fn not_ready_note(&self, i: usize) -> Option<String> {
         if self.is_ready(i) {

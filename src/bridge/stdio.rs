@@ -71,15 +71,40 @@ pub async fn read_line<R: AsyncBufRead + Unpin>(
     }
 }
 
+/// How long a command for a droid that has not been ready yet waits for it, by default
+/// ([`run_waiting`]; the CLI gives its scan timeout).
+pub const FIRST_READY: Duration = Duration::from_secs(10);
+
+/// [`run_waiting`] with [`FIRST_READY`].
+pub async fn run<R, W>(
+    bridge: Arc<Bridge>,
+    rx: Outputs,
+    input: R,
+    output: W,
+    stopped: impl std::future::Future<Output = ()>,
+) -> End
+where
+    R: AsyncBufRead + Unpin,
+    W: AsyncWrite + Unpin + Send + 'static,
+{
+    run_waiting(bridge, rx, input, output, stopped, FIRST_READY).await
+}
+
 /// Run the bridge over `input` and `output` until the input ends, the output fails or
 /// `stopped` completes; then stop the droids being driven (saying so when the input
 /// ended), stop and disconnect every droid, and write what is left.
-pub async fn run<R, W>(
+///
+/// A command for a droid that has not been ready yet since the start is held, and no
+/// line after it read, until the droid is ready or `first_ready` passed (issue 40 point
+/// 11): a script piped in is answered the same way every time, whatever the connection
+/// takes. An `estop` and a line that is no command never wait.
+pub async fn run_waiting<R, W>(
     bridge: Arc<Bridge>,
     mut rx: Outputs,
     mut input: R,
     mut output: W,
     stopped: impl std::future::Future<Output = ()>,
+    first_ready: Duration,
 ) -> End
 where
     R: AsyncBufRead + Unpin,
@@ -150,7 +175,14 @@ where
                     let text = line.strip_suffix(b"\r").unwrap_or(&line);
                     // Blank lines are ignored (a client's keep-alive).
                     if !text.iter().all(u8::is_ascii_whitespace) {
-                        bridge.handle(text, None);
+                        let parsed = schema::parse(text);
+                        if let Ok(req) = &parsed
+                            && req.cmd != schema::Cmd::Estop
+                            && let Ok(i) = bridge.target(req, None)
+                        {
+                            bridge.first_ready(i, first_ready).await;
+                        }
+                        bridge.handle_parsed(parsed, None);
                     }
                 }
             }
@@ -204,4 +236,61 @@ where
         }
     }
     end
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::Model;
+    use tokio::io::AsyncReadExt;
+
+    /// The lines out for `script` piped into a bridge on a simulated R2-D2 whose commands
+    /// wait at most `first_ready` for its first `ready` (paused time: the same every run).
+    async fn piped(script: &str, first_ready: Duration) -> Vec<serde_json::Value> {
+        let rig = super::super::tests::rig(&[Model::R2D2], 600).await;
+        let (writer, mut out_r) = tokio::io::duplex(1 << 22);
+        let input = tokio::io::BufReader::new(script.as_bytes());
+        let end = run_waiting(
+            rig.bridge.clone(),
+            rig.rx,
+            input,
+            writer,
+            std::future::pending(),
+            first_ready,
+        )
+        .await;
+        assert_eq!(end, End::InputClosed);
+        let mut text = String::new();
+        out_r.read_to_string(&mut text).await.unwrap();
+        text.lines()
+            .map(|l| serde_json::from_str(l).unwrap())
+            .collect()
+    }
+
+    /// Issue 40 point 11: no command for a droid is read before its first `ready`, so a
+    /// script piped in is answered by replies only, every time; past the bound the first
+    /// lines are carried out as they come (a stop before R2 stands is answered at once).
+    #[tokio::test(start_paused = true)]
+    async fn a_piped_script_waits_for_the_droids_first_ready_within_a_bound() {
+        let script: String = (0..500)
+            .map(|n| format!("{{\"v\":1,\"cmd\":\"stop\",\"id\":{n}}}\n"))
+            .collect();
+        let lines = piped(&script, Duration::from_secs(10)).await;
+        let at = |f: &dyn Fn(&serde_json::Value) -> bool| lines.iter().position(f);
+        let ready = at(&|v| v["type"] == "link" && v["ready"] == true).expect("ready");
+        let first = at(&|v| v["type"] == "reply").expect("replies");
+        assert!(
+            ready < first,
+            "a reply before the droid was ready: {lines:?}"
+        );
+        let replies = lines.iter().filter(|v| v["type"] == "reply").count();
+        assert_eq!(replies, 500);
+        // Bounded: waiting 1 ms, the first stop is answered before R2 stands.
+        let lines = piped(&script, Duration::from_millis(1)).await;
+        let ready = lines
+            .iter()
+            .position(|v| v["type"] == "link" && v["ready"] == true);
+        let first = lines.iter().position(|v| v["type"] == "reply").unwrap();
+        assert!(ready.is_none_or(|r| first < r), "{lines:?}");
+    }
 }

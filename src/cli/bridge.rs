@@ -443,12 +443,15 @@ pub fn run(args: BridgeArgs) -> Result<i32, CliError> {
         };
         match mqtt {
             None => {
-                let end = bridge::stdio::run(
+                // A droid's first commands wait for it to be ready, at most as long as
+                // finding it may take.
+                let end = bridge::stdio::run_waiting(
                     bridge.clone(),
                     rx,
                     tokio::io::BufReader::new(tokio::io::stdin()),
                     tokio::io::stdout(),
                     stopped,
+                    Duration::from_secs(args.ble.scan_timeout),
                 )
                 .await;
                 if let bridge::stdio::End::OutputClosed(why) = &end {

@@ -31,6 +31,7 @@ pub mod packet_file;
 pub mod plot;
 pub mod relay_codec;
 pub mod relay_server;
+pub mod ros;
 pub mod runner;
 pub mod script;
 pub mod session_core;
@@ -59,6 +60,7 @@ pub fn targets() -> Vec<&'static Target> {
         &relay_server::TARGET,
         &bridge::TARGET,
         &bridge_mqtt::TARGET,
+        &ros::TARGET,
         &broker::TARGET,
         &app_input::TARGET,
         &edu::TARGET,

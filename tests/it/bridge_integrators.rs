@@ -453,7 +453,7 @@ const OFFLINE: &[&str] = &[
 /// A Python that imports paho-mqtt: CI's venv (`.ci/run` installs it beside spherov2), or
 /// one made under target/ with pip. `Err` (the test is skipped) only when the package
 /// registry cannot be reached.
-fn python_with_paho() -> Result<String, String> {
+pub(crate) fn python_with_paho() -> Result<String, String> {
     let imports = |py: &str| {
         std::process::Command::new(py)
             .args(["-c", "import paho.mqtt.client"])

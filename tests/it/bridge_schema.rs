@@ -18,7 +18,7 @@ fn schema_doc() -> Value {
 }
 
 /// A validator for one of the schema's definitions (`command`, `out`).
-fn validator(def: &str) -> jsonschema::Validator {
+pub(crate) fn validator(def: &str) -> jsonschema::Validator {
     let mut doc = schema_doc();
     let root = doc.as_object_mut().unwrap();
     root.remove("anyOf");
@@ -26,7 +26,7 @@ fn validator(def: &str) -> jsonschema::Validator {
     jsonschema::draft202012::new(&doc).expect("a valid JSON Schema")
 }
 
-fn errors(v: &jsonschema::Validator, x: &Value) -> String {
+pub(crate) fn errors(v: &jsonschema::Validator, x: &Value) -> String {
     v.iter_errors(x)
         .map(|e| format!("{} at {}", e, e.instance_path()))
         .collect::<Vec<_>>()
@@ -356,5 +356,47 @@ fn mqtt_only_objects_and_the_home_assistant_light_are_valid() {
             l.apply(c.to_string().as_bytes()).is_err(),
             "the bridge takes {c}"
         );
+    }
+}
+
+/// Issue 40 point 7: the ROS shapes on `cmd_vel` (`ros_twist`) and `odom`
+/// (`ros_odometry`): what the schema takes the bridge takes, and the bridge's odometry is
+/// valid against it.
+#[test]
+fn the_ros_shapes_agree_with_the_schema() {
+    use droidctl::bridge::ros;
+    let twists = validator("ros_twist");
+    for t in [
+        json!({"linear":{"x":0.3,"y":0.0,"z":0.0},"angular":{"x":0.0,"y":0.0,"z":-0.5}}),
+        json!({"angular":{"z":1}}),
+        json!({}),
+        json!({"op":"publish","topic":"/cmd_vel","msg":{"linear":{"x":0.2},"angular":{"z":0.1}}}),
+    ] {
+        assert!(twists.is_valid(&t), "{t}: {}", errors(&twists, &t));
+        let parsed = ros::cmd_vel(t.to_string().as_bytes());
+        assert!(parsed.is_ok(), "{t}: {parsed:?}");
+    }
+    for t in [
+        json!({"linear":{"x":0.3},"angular":{"z":0.5},"extra":1}),
+        json!({"linear":{"w":0.3}}),
+        json!({"op":"publish","topic":"/cmd_vel"}),
+        json!({"op":"subscribe","msg":{}}),
+    ] {
+        assert!(!twists.is_valid(&t), "the schema takes {t}");
+        assert!(
+            ros::cmd_vel(t.to_string().as_bytes()).is_err(),
+            "the bridge takes {t}"
+        );
+    }
+    let odometry = validator("ros_odometry");
+    let mut track = ros::OdomTrack::new(std::time::SystemTime::now());
+    for (t_ms, yaw) in [(0u64, 10.0f32), (100, 30.0), (200, 350.0)] {
+        let sample: droidctl::mission::Sample = serde_json::from_value(json!({"t_ms": t_ms,
+            "x_cm": 12.0, "y_cm": -3.0, "speed": 20.0, "yaw_deg": yaw, "collisions": 0,
+            "velocity_cm_s": [3.0, -20.0]}))
+        .unwrap();
+        let o = droidctl::bridge::feeds::telemetry_out("BB-0001", sample, None);
+        let od = serde_json::to_value(track.odometry(&o).expect("odometry")).unwrap();
+        assert!(odometry.is_valid(&od), "{od}: {}", errors(&odometry, &od));
     }
 }

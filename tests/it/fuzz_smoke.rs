@@ -118,6 +118,11 @@ fn bridge_mqtt() {
 }
 
 #[test]
+fn ros() {
+    smoke("ros", 4000);
+}
+
+#[test]
 fn broker() {
     smoke("broker", 300);
 }

@@ -8,10 +8,11 @@
 //! build, which would nearly double the build on a 2-core machine (README, "What a build
 //! costs").
 //!
-//! What it does: clean sessions only (every CONNECT starts afresh; `session_present` is
-//! always false), QoS 0, 1 and 2 both ways (delivered at the lower of the publisher's and
-//! the subscription's QoS, acknowledged as the protocol says; nothing is retransmitted, as
-//! no session outlives its connection), retained messages (an empty one clears its topic),
+//! What it does: clean and persistent sessions (`clean_session = 0` keeps a client's
+//! subscriptions and queues its QoS 1 and 2 messages while it is away, bounded:
+//! [`session`]), QoS 0, 1 and 2 both ways (delivered at the lower of the publisher's and
+//! the subscription's QoS, acknowledged as the protocol says; nothing written is
+//! retransmitted), retained messages (an empty one clears its topic),
 //! last wills (sent when a client goes without DISCONNECT, or stays silent past its idle
 //! deadline), `+`/`#` filters, a second connection with a client's id closing the first
 //! (except droidctl's own ids: [`OwnIds`]), and an optional user name and password.
@@ -26,6 +27,7 @@
 //! ([`Broker::stats`]); the broker goes on.
 
 pub mod limits;
+pub mod session;
 pub mod state;
 pub mod wire;
 
@@ -121,6 +123,9 @@ pub struct Stats {
     pub retained: usize,
     pub retained_bytes: usize,
     pub queued_bytes: usize,
+    /// Sessions kept for clients away, and the bytes queued for them.
+    pub sessions: usize,
+    pub session_bytes: usize,
     pub counters: Counters,
 }
 
@@ -201,6 +206,8 @@ impl Broker {
             retained: st.retained_count(),
             retained_bytes: st.retained_bytes(),
             queued_bytes: st.queued_bytes(),
+            sessions: st.sessions.count(),
+            session_bytes: st.sessions.bytes(),
             counters: st.counters,
         }
     }
@@ -443,7 +450,7 @@ async fn serve(mut s: Box<dyn Stream>, shared: &Shared, slot: &Slot) -> Result<(
         slot.own();
     }
     let (tx, mut rx) = mpsc::channel::<Queued>(state::queue_capacity());
-    let (client_id, me, budget) = {
+    let (client_id, me, budget, present) = {
         let mut st = lock(&shared.state);
         let me = st.next_conn();
         let id = if connect.client_id.is_empty() {
@@ -451,12 +458,13 @@ async fn serve(mut s: Box<dyn Stream>, shared: &Shared, slot: &Slot) -> Result<(
         } else {
             connect.client_id.clone()
         };
-        let budget = st.connect(&id, me, tx);
-        (id, me, budget)
+        let now = tokio::time::Instant::now();
+        let (budget, present) = st.connect_session(&id, me, tx, connect.clean_session, now);
+        (id, me, budget, present)
     };
     let acked = wire::write(
         &mut s,
-        &Packet::ConnAck(ConnAck::new(ConnectReturnCode::Success, false)),
+        &Packet::ConnAck(ConnAck::new(ConnectReturnCode::Success, present)),
     )
     .await;
     let idle = idle_deadline(connect.keep_alive);
@@ -512,12 +520,18 @@ async fn serve(mut s: Box<dyn Stream>, shared: &Shared, slot: &Slot) -> Result<(
             }
         },
     };
-    // What was queued and not sent gives its bytes back.
+    // What was queued and not sent gives its bytes back (and stays in a persistent
+    // client's session).
     rx.close();
+    let mut left = Vec::new();
     while let Ok(q) = rx.try_recv() {
         budget.release(q.bytes);
+        if let Out::Packet(Packet::Publish(p)) = q.out {
+            left.push(p);
+        }
     }
-    lock(&shared.state).disconnect(&client_id, me);
+    let now = tokio::time::Instant::now();
+    lock(&shared.state).disconnect_session(&client_id, me, left, now);
     if outcome.is_err()
         && !matches!(outcome, Err(Why::Shutdown))
         && let Some(will) = connect.last_will

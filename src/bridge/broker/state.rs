@@ -40,6 +40,9 @@ pub struct Client {
     pub budget: QueueBytes,
     /// Filters and their granted QoS.
     subs: BTreeMap<String, QoS>,
+    /// Connected with `clean_session = 0`: its session is kept when it goes
+    /// ([`super::session`]).
+    persistent: bool,
 }
 
 /// Counters, for the log and the tests.
@@ -73,6 +76,8 @@ pub struct State {
     retained_bytes: usize,
     /// Bytes queued for every client together.
     queued: Arc<AtomicUsize>,
+    /// The sessions of clients away ([`super::session`]).
+    pub sessions: super::session::Sessions,
     pub counters: Counters,
 }
 
@@ -99,23 +104,57 @@ impl State {
     /// Client `id` is now connection `conn`, sending to `tx`; a connection that held the id
     /// before is told it was taken over. The client's queue budget.
     pub fn connect(&mut self, id: &str, conn: u64, tx: mpsc::Sender<Queued>) -> QueueBytes {
+        self.connect_session(id, conn, tx, true, tokio::time::Instant::now())
+            .0
+    }
+
+    /// [`State::connect`] with `clean_session`: whether a session was present (a client
+    /// away with `clean_session = 0`, or one connected now, taken over); its subscriptions
+    /// are the client's again and what was queued for it is queued for the connection.
+    /// A clean session ends any kept under the id.
+    pub fn connect_session(
+        &mut self,
+        id: &str,
+        conn: u64,
+        tx: mpsc::Sender<Queued>,
+        clean: bool,
+        now: tokio::time::Instant,
+    ) -> (QueueBytes, bool) {
         let budget = QueueBytes::new(self.queued.clone());
-        let old = self.clients.insert(
-            id.to_string(),
-            Client {
-                conn,
-                tx,
-                budget: budget.clone(),
-                subs: BTreeMap::new(),
-            },
-        );
+        let mut client = Client {
+            conn,
+            tx,
+            budget: budget.clone(),
+            subs: BTreeMap::new(),
+            persistent: !clean,
+        };
+        let old = self.clients.remove(id);
+        let mut kept = None;
+        if clean {
+            self.sessions.end(id);
+        } else {
+            match &old {
+                Some(o) if o.persistent => client.subs = o.subs.clone(),
+                _ => kept = self.sessions.take(id, now),
+            }
+        }
+        let present = !clean && (old.as_ref().is_some_and(|o| o.persistent) || kept.is_some());
+        if let Some(k) = kept {
+            client.subs = k.subs;
+            for p in k.queue {
+                if !queue(&client, p) {
+                    self.counters.dropped += 1;
+                }
+            }
+        }
+        self.clients.insert(id.to_string(), client);
         if let Some(old) = old {
             let _ = old.tx.try_send(Queued {
                 out: Out::TakenOver,
                 bytes: 0,
             });
         }
-        budget
+        (budget, present)
     }
 
     /// Whether connection `conn` holds client id `id`.
@@ -125,8 +164,23 @@ impl State {
 
     /// Connection `conn` ends: its client id is free (unless taken over meanwhile).
     pub fn disconnect(&mut self, id: &str, conn: u64) {
-        if self.holds(id, conn) {
-            self.clients.remove(id);
+        self.disconnect_session(id, conn, Vec::new(), tokio::time::Instant::now());
+    }
+
+    /// [`State::disconnect`]; a persistent client's session is kept, with `left`, what its
+    /// connection had queued and not written.
+    pub fn disconnect_session(
+        &mut self,
+        id: &str,
+        conn: u64,
+        left: Vec<Publish>,
+        now: tokio::time::Instant,
+    ) {
+        if self.holds(id, conn)
+            && let Some(c) = self.clients.remove(id)
+            && c.persistent
+        {
+            self.sessions.keep(id, c.subs, left, now);
         }
     }
 
@@ -214,6 +268,7 @@ impl State {
                 }
             }
         }
+        self.sessions.offer(&p);
         self.counters.dropped += dropped;
         dropped
     }

@@ -495,3 +495,85 @@ async fn what_mqtt_3_1_1_refuses_is_refused() {
     }
     assert_eq!(b.stats().counters.closed, 4);
 }
+
+/// A client with `clean_session = 0`, as `id`; its CONNACK's `session_present`.
+async fn persistent(
+    addr: SocketAddr,
+    id: &str,
+    clean: bool,
+) -> (AsyncClient, rumqttc::EventLoop, bool) {
+    let mut o = MqttOptions::new(id, addr.ip().to_string(), addr.port());
+    o.set_keep_alive(Duration::from_secs(5));
+    o.set_clean_session(clean);
+    let (c, mut el) = AsyncClient::new(o, 64);
+    loop {
+        match tokio::time::timeout(Duration::from_secs(5), el.poll()).await {
+            Ok(Ok(Event::Incoming(Packet::ConnAck(a)))) => return (c, el, a.session_present),
+            Ok(Ok(_)) => {}
+            other => panic!("no CONNACK: {other:?}"),
+        }
+    }
+}
+
+/// Issue 40 point 8: `clean_session = 0` is kept, both ways a client notices: its
+/// reconnection's CONNACK says `session_present`, and the QoS 1 messages published while it
+/// was away arrive, in order, without subscribing again (QoS 0 ones do not: MQTT 3.1.1,
+/// 3.1.2.4); a clean CONNECT ends the session.
+#[tokio::test]
+async fn a_persistent_session_keeps_subscriptions_and_qos1_messages_while_away() {
+    let b = start("127.0.0.1:0".parse().unwrap(), Access::default())
+        .await
+        .unwrap();
+    let (c, mut el, present) = persistent(b.addr(), "ros-node", false).await;
+    assert!(!present, "no session yet");
+    c.subscribe("droidctl/+/odom", QoS::AtLeastOnce)
+        .await
+        .unwrap();
+    until_suback(&mut el).await;
+    c.disconnect().await.unwrap();
+    while el.poll().await.is_ok() {}
+    // Away: two QoS 1 messages and a QoS 0 one.
+    let (pubc, mut pub_el) = client(b.addr(), "pub").await;
+    for (n, q) in [
+        ("1", QoS::AtLeastOnce),
+        ("0", QoS::AtMostOnce),
+        ("2", QoS::AtLeastOnce),
+    ] {
+        pubc.publish("droidctl/BB-0001/odom", q, false, n)
+            .await
+            .unwrap();
+    }
+    let mut acked = 0;
+    while acked < 2 {
+        if let Event::Incoming(Packet::PubAck(_)) = pub_el.poll().await.unwrap() {
+            acked += 1;
+        }
+    }
+    // The broker has handled the QoS 0 one before the second PUBACK (one connection, in order).
+    assert_eq!(b.stats().sessions, 1);
+    let (_c, mut el, present) = persistent(b.addr(), "ros-node", false).await;
+    assert!(present, "CONNACK says the session is there");
+    let got: Vec<_> = [next_publish(&mut el).await, next_publish(&mut el).await]
+        .into_iter()
+        .map(|p| (p.payload.to_vec(), p.qos))
+        .collect();
+    assert_eq!(
+        got,
+        [
+            (b"1".to_vec(), QoS::AtLeastOnce),
+            (b"2".to_vec(), QoS::AtLeastOnce)
+        ]
+    );
+    // Still subscribed, without a SUBSCRIBE.
+    pubc.publish("droidctl/BB-0001/odom", QoS::AtLeastOnce, false, "live")
+        .await
+        .unwrap();
+    let pub_task = tokio::spawn(async move { while pub_el.poll().await.is_ok() {} });
+    assert_eq!(&next_publish(&mut el).await.payload[..], b"live");
+    drop(el);
+    // A clean CONNECT under the id ends the session: nothing present, nothing kept.
+    let (_c, _el, present) = persistent(b.addr(), "ros-node", true).await;
+    assert!(!present);
+    assert_eq!((b.stats().sessions, b.stats().session_bytes), (0, 0));
+    pub_task.abort();
+}
