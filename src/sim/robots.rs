@@ -144,22 +144,11 @@ pub struct RobotParts {
     pub motor_fault_notify: bool,
 }
 
-/// The LEDs a model's Set All LEDs may address: R2 8; BB-9E body RGB, aiming, head
-/// (`droid-facts.md` §2); BOLT front and back RGB, Mini aiming, body and user RGB, RVR 31
-/// (spherov2 `toy/*.py` LEDs).
-pub fn led_mask(model: Model) -> u32 {
-    match model {
-        m if m.has_legs() => 0xFF,
-        Model::Bolt => 0x3F,
-        Model::Mini => 0x7F,
-        Model::Rvr => 0x7FFF_FFFF,
-        _ => 0x1F,
-    }
-}
+pub use crate::family::v2::robots::led_mask;
 
-/// The newer robots have no animatronic device at all.
+/// The newer robots (those without a Core device) have no animatronic device at all.
 pub fn has_animatronic(model: Model) -> bool {
-    !matches!(model, Model::Bolt | Model::Mini | Model::Rvr)
+    !crate::family::v2::robots::has_no_core(model)
 }
 
 /// Where a packet's target sends it on `model`; the robot's answer to a wrong one.
