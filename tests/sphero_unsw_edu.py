@@ -10,7 +10,9 @@ line, fill, rotation, an animation), then a roll east into the wall with collisi
 as sphero-unsw's Edu API reports them (its own software detection from the streamed sensors, and
 the robot's notification) and as the toy's raw collision notifications.
 
-Usage: sphero_unsw_edu.py PORT NAME
+Usage: sphero_unsw_edu.py tcp PORT NAME | sphero_unsw_edu.py bleak NAME
+(bleak: on the virtual BlueZ of `droidctl sim --bluez boltplus`, DBUS_SYSTEM_BUS_ADDRESS
+pointing at its bus)
 Prints one JSON object:
   class        the class sphero-unsw made of the toy (BOLTPLUS)
   yaw          [t_s, yaw] streamed from the start of the spin to a second after it
@@ -36,8 +38,13 @@ from sphero_unsw.types import Color
 
 
 def main():
-    port, name = int(sys.argv[1]), sys.argv[2]
-    toy = scanner.find_toy(toy_name=name, adapter=get_tcp_adapter("127.0.0.1", port), timeout=5.0)
+    if sys.argv[1] == "tcp":
+        adapter, name = get_tcp_adapter("127.0.0.1", int(sys.argv[2])), sys.argv[3]
+    else:
+        from sphero_unsw.adapter.bleak_adapter import BleakAdapter
+
+        adapter, name = BleakAdapter, sys.argv[2]
+    toy = scanner.find_toy(toy_name=name, adapter=adapter, timeout=5.0)
     out = {"class": type(toy).__name__, "yaw": [], "collisions": 0, "notified": []}
     with SpheroEduAPI(toy) as api:
         time.sleep(0.5)

@@ -553,15 +553,15 @@ fn spherov2_tcp_adapter_drives_through_serve() {
 
 /// A running `droidctl sim --bluez MODEL… [--trace --json]`: its bus, its droids' names (in
 /// the order given), and with `--trace --json` its trace lines.
-struct Bluez {
+pub(crate) struct Bluez {
     child: Child,
-    bus: String,
-    names: Vec<String>,
-    trace: Arc<Mutex<Vec<Value>>>,
+    pub(crate) bus: String,
+    pub(crate) names: Vec<String>,
+    pub(crate) trace: Arc<Mutex<Vec<Value>>>,
 }
 
 impl Bluez {
-    fn start(models: &[&str], dir: &TempDir) -> Bluez {
+    pub(crate) fn start(models: &[&str], dir: &TempDir) -> Bluez {
         let mut child = Command::new(env!("CARGO_BIN_EXE_droidctl"))
             .args(["sim", "--bluez"])
             .args(models)
@@ -614,7 +614,7 @@ impl Bluez {
         }
     }
 
-    fn stop(self) {
+    pub(crate) fn stop(self) {
         let _ = Command::new("kill")
             .args(["-TERM", &self.child.id().to_string()])
             .status();

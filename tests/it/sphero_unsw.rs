@@ -14,7 +14,7 @@
 #![cfg(unix)]
 
 use crate::common::mission_run::{f, text};
-use crate::relay_e2e::{Serve, TempDir, edu_hit_head_on, edu_spin_turned_once, finish};
+use crate::relay_e2e::{Bluez, Serve, TempDir, edu_hit_head_on, edu_spin_turned_once, finish};
 use droidctl::capture::{Capture, Event};
 use droidctl::protocol::v2::{Decoder, ErrorCode, Flags, Packet, catalog};
 use serde_json::Value;
@@ -123,55 +123,42 @@ fn conversation(cap: &str) -> Conversation {
     seen
 }
 
-/// sphero-unsw's Sphero Edu API drives the simulated BOLT+ through `serve`: its class is
-/// BOLTPLUS; spin(360, 1) turns once; heading, lights, sensors and the compass read back what
-/// was set and done; the roll east ends at the wall with collisions reported; and of the
-/// whole session, 0 commands are unnamed, 0 unanswered, 0 refused, 0 notifications unnamed.
-#[test]
-fn sphero_unsw_edu_api_drives_boltplus_through_serve() {
-    let py = match python() {
-        Ok(py) => py,
-        Err(why) => {
-            println!("SKIPPED sphero_unsw_edu_api_drives_boltplus_through_serve: {why}");
-            return;
-        }
-    };
-    let dir = TempDir::new("sphero-unsw");
-    let cap = dir.path("serve.txt");
-    let serve = Serve::start(&["boltplus"], &["--record", &cap], &dir);
-    let port = serve.address.rsplit(':').next().unwrap().to_string();
+/// Run tests/sphero_unsw_edu.py with `how` (`tcp PORT NAME` or `bleak NAME`): what it printed.
+fn edu(py: &str, how: &[&str], bus: Option<&str>, dir: &TempDir, serve: &str) -> Value {
     let script = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/sphero_unsw_edu.py");
-    let child = Command::new(&py)
-        .args([script, &port, "BP-0001"])
+    let mut cmd = Command::new(py);
+    cmd.arg(script)
+        .args(how)
         .current_dir(&dir.0)
         .stdin(Stdio::null())
         .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let out = finish(child, Duration::from_secs(120), "the sphero-unsw client");
+        .stderr(Stdio::piped());
+    if let Some(bus) = bus {
+        cmd.env("DBUS_SYSTEM_BUS_ADDRESS", bus);
+    }
+    let out = finish(
+        cmd.spawn().unwrap(),
+        Duration::from_secs(120),
+        "the sphero-unsw client",
+    );
     assert!(
         out.status.success(),
-        "{}\nserve: {}",
-        text(&out.stderr),
-        serve.stderr.lock().unwrap().join("\n")
+        "{}\nserver: {serve}",
+        text(&out.stderr)
     );
-    let seen: Value = serde_json::from_str(text(&out.stdout).trim()).unwrap();
+    serde_json::from_str(text(&out.stdout).trim()).unwrap()
+}
+
+/// What sphero-unsw's Edu API saw of the BOLT+ `name`: its class is BOLTPLUS; spin(360, 1)
+/// turned once; heading, lights, sensors and the compass read back what was set and done; the
+/// roll east ended at the wall head-on, with sphero-unsw's on_collision fired.
+fn edu_checks(name: &str, seen: &Value) {
     assert_eq!(seen["class"], "BOLTPLUS", "{seen}");
-    edu_spin_turned_once("BP-0001", &seen);
+    edu_spin_turned_once(name, seen);
     assert_eq!(seen["heading"], 45, "{seen}");
-    // sphero-unsw fills the screen for the main light (its get_main_led keeps what it had);
-    // the front and back lights read back.
-    assert_eq!(
-        seen["lights"]["front"],
-        serde_json::json!([255, 0, 0]),
-        "{seen}"
-    );
-    assert_eq!(
-        seen["lights"]["back"],
-        serde_json::json!([0, 255, 0]),
-        "{seen}"
-    );
+    // sphero-unsw fills the screen for the main light; front and back lights read back.
+    assert_eq!(seen["lights"]["front"], serde_json::json!([255, 0, 0]), "{seen}");
+    assert_eq!(seen["lights"]["back"], serde_json::json!([0, 255, 0]), "{seen}");
     let sensors = &seen["sensors"];
     for k in [
         "acceleration",
@@ -191,15 +178,34 @@ fn sphero_unsw_edu_api_drives_boltplus_through_serve() {
         "luminosity: {seen}"
     );
     assert!(sensors["compass"].is_number(), "compass calibrated: {seen}");
-    // The roll east ends at the east wall, head-on.
     let (x, y) = (f(&seen["location"]["x"]), f(&seen["location"]["y"]));
     assert!(x > 100.0 && y.abs() < x / 3.0, "rolled east: {seen}");
     assert!(
         f(&seen["collisions"]) >= 1.0,
         "sphero-unsw's on_collision fired: {seen}"
     );
-    let notified = serde_json::json!({"collisions": seen["notified"]});
-    edu_hit_head_on("BP-0001", &notified);
+    edu_hit_head_on(name, &serde_json::json!({"collisions": seen["notified"]}));
+}
+
+/// sphero-unsw's Sphero Edu API drives the simulated BOLT+ through `serve` (its TCP adapter):
+/// the checks above, and of the whole session 0 commands unnamed, 0 unanswered, 0 refused and
+/// 0 notifications unnamed; it drove and drew on the primary processor.
+#[test]
+fn sphero_unsw_edu_api_drives_boltplus_through_serve() {
+    let py = match python() {
+        Ok(py) => py,
+        Err(why) => {
+            println!("SKIPPED sphero_unsw_edu_api_drives_boltplus_through_serve: {why}");
+            return;
+        }
+    };
+    let dir = TempDir::new("sphero-unsw");
+    let cap = dir.path("serve.txt");
+    let serve = Serve::start(&["boltplus"], &["--record", &cap], &dir);
+    let port = serve.address.rsplit(':').next().unwrap().to_string();
+    let said = serve.stderr.lock().unwrap().join("\n");
+    let seen = edu(&py, &["tcp", &port, "BP-0001"], None, &dir, &said);
+    edu_checks("BP-0001", &seen);
     serve.wait_event("released stopped", |e| {
         e["event"] == "droid_released" && e["stopped"] == true
     });
@@ -224,4 +230,46 @@ fn sphero_unsw_edu_api_drives_boltplus_through_serve() {
     for c in ["16/07@Some(17)", "1A/42@Some(17)", "1A/3E@Some(17)"] {
         assert!(talk.distinct.contains(c), "{c} sent: {talk:?}");
     }
+}
+
+/// The same through sphero-unsw's bleak adapter on the virtual BlueZ of `droidctl sim --bluez
+/// boltplus` (no unlock written: sphero-unsw has none for BOLT+), whose trace shows the screen
+/// drawing the character, and names every packet.
+#[test]
+fn sphero_unsw_edu_api_drives_boltplus_through_bleak() {
+    let py = match python() {
+        Ok(py) => py,
+        Err(why) => {
+            println!("SKIPPED sphero_unsw_edu_api_drives_boltplus_through_bleak: {why}");
+            return;
+        }
+    };
+    let dir = TempDir::new("sphero-unsw-bleak");
+    let bluez = Bluez::start(&["boltplus"], &dir);
+    let name = bluez.names[0].clone();
+    assert!(name.starts_with("BP-"), "{name}");
+    let seen = edu(&py, &["bleak", &name], Some(&bluez.bus), &dir, "sim --bluez");
+    edu_checks(&name, &seen);
+    let trace = bluez.trace.lock().unwrap().clone();
+    bluez.stop();
+    let shown: Vec<&str> = trace
+        .iter()
+        .filter(|t| t["packet"]["kind"] == "state")
+        .filter_map(|t| t["packet"]["shows"].as_str())
+        .collect();
+    assert!(
+        shown.contains(&"screen: character 'A' in #ff0000"),
+        "{shown:?}"
+    );
+    let unnamed: Vec<&Value> = trace
+        .iter()
+        .filter(|t| matches!(t["packet"]["kind"].as_str(), Some("command" | "async")))
+        .filter(|t| t["packet"]["command"].as_str().is_none_or(|c| c.starts_with("unknown")))
+        .collect();
+    assert!(unnamed.is_empty(), "unnamed in the trace: {unnamed:?}");
+    assert!(
+        trace.iter().all(|t| t["packet"]["kind"] != "gatt-write"
+            || !t["packet"].to_string().contains("usetheforce")),
+        "no unlock written"
+    );
 }
