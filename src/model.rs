@@ -607,7 +607,10 @@ mod tests {
         assert_eq!(Model::from_advertised_name("2B-9"), Some(Model::Ollie));
         assert_eq!(Model::from_advertised_name("Robi 42"), Some(Model::Robi42));
         assert_eq!(Model::from_advertised_name("SB-5A1C"), Some(Model::Bolt));
-        assert_eq!(Model::from_advertised_name("BP-81C4"), Some(Model::BoltPlus));
+        assert_eq!(
+            Model::from_advertised_name("BP-81C4"),
+            Some(Model::BoltPlus)
+        );
         assert_eq!(Model::from_advertised_name("SM-0B12"), Some(Model::Mini));
         assert_eq!(Model::from_advertised_name("RV-F00D"), Some(Model::Rvr));
         assert_eq!(Model::from_advertised_name("JBL Flip"), None);

@@ -157,8 +157,16 @@ fn edu_checks(name: &str, seen: &Value) {
     edu_spin_turned_once(name, seen);
     assert_eq!(seen["heading"], 45, "{seen}");
     // sphero-unsw fills the screen for the main light; front and back lights read back.
-    assert_eq!(seen["lights"]["front"], serde_json::json!([255, 0, 0]), "{seen}");
-    assert_eq!(seen["lights"]["back"], serde_json::json!([0, 255, 0]), "{seen}");
+    assert_eq!(
+        seen["lights"]["front"],
+        serde_json::json!([255, 0, 0]),
+        "{seen}"
+    );
+    assert_eq!(
+        seen["lights"]["back"],
+        serde_json::json!([0, 255, 0]),
+        "{seen}"
+    );
     let sensors = &seen["sensors"];
     for k in [
         "acceleration",
@@ -248,7 +256,13 @@ fn sphero_unsw_edu_api_drives_boltplus_through_bleak() {
     let bluez = Bluez::start(&["boltplus"], &dir);
     let name = bluez.names[0].clone();
     assert!(name.starts_with("BP-"), "{name}");
-    let seen = edu(&py, &["bleak", &name], Some(&bluez.bus), &dir, "sim --bluez");
+    let seen = edu(
+        &py,
+        &["bleak", &name],
+        Some(&bluez.bus),
+        &dir,
+        "sim --bluez",
+    );
     edu_checks(&name, &seen);
     let trace = bluez.trace.lock().unwrap().clone();
     bluez.stop();
@@ -264,7 +278,11 @@ fn sphero_unsw_edu_api_drives_boltplus_through_bleak() {
     let unnamed: Vec<&Value> = trace
         .iter()
         .filter(|t| matches!(t["packet"]["kind"].as_str(), Some("command" | "async")))
-        .filter(|t| t["packet"]["command"].as_str().is_none_or(|c| c.starts_with("unknown")))
+        .filter(|t| {
+            t["packet"]["command"]
+                .as_str()
+                .is_none_or(|c| c.starts_with("unknown"))
+        })
         .collect();
     assert!(unnamed.is_empty(), "unnamed in the trace: {unnamed:?}");
     assert!(

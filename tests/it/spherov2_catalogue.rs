@@ -208,7 +208,11 @@ fn every_sphero_unsw_boltplus_command_is_named_and_encoded_byte_for_byte() {
     let (distinct, checked) = check_named_and_encoded(&rows);
     let bp = &distinct["BOLTPLUS"];
     println!("BOLTPLUS: {} distinct commands, all named", bp.len());
-    assert!(checked >= 75 && bp.len() >= 75, "{checked} packets, {}", bp.len());
+    assert!(
+        checked >= 75 && bp.len() >= 75,
+        "{checked} packets, {}",
+        bp.len()
+    );
     // Drive and the screen on the primary (0x11), where BOLT has them on the secondary.
     for (method, did, cid) in [
         ("drive_with_heading", 0x16, 0x07),
