@@ -23,6 +23,7 @@ Prints one JSON object:
   location     get_location() after the roll east into the wall
   collisions   on_collision events sphero-unsw's Edu API fired during the roll
   notified     raw collision notifications (x_axis, y_axis, accel x/y)
+  secondary_version  get_secondary_main_app_version() (its notification followed)
 """
 
 import json
@@ -110,6 +111,9 @@ def main():
             "luminosity": api.get_luminosity(),
             "compass": api.get_compass_direction(),
         }
+
+        # The secondary processor's version: a response, then the version as a notification.
+        out["secondary_version"] = list(toy.get_secondary_main_app_version())
 
         # Infrared: broadcasting on channels 0 and 1, then stopped.
         api.start_ir_broadcast(0, 1)

@@ -142,7 +142,19 @@ pub struct RobotParts {
     pub color_detection: bool,
     pub motor_stall_notify: bool,
     pub motor_fault_notify: bool,
+    /// System Info notifications owed, and when: the secondary's versions (CID 0x18, 0x25)
+    /// follow their request's response (see [`RobotParts::owe_version`]).
+    pub versions_due: Vec<(Duration, u8)>,
 }
+
+/// How long after its response a secondary's version notification comes (unverified: the
+/// firmware's timing is not published; after the response, so that a client waiting for it
+/// once the response came, as spherov2's `_wait_packet` does, hears it).
+pub const VERSION_NOTICE_DELAY: Duration = Duration::from_millis(20);
+
+/// Most version notifications owed at once (each request owes one; a host that floods
+/// requests loses the oldest).
+const VERSIONS_DUE_MAX: usize = 16;
 
 pub use crate::family::v2::robots::led_mask;
 
@@ -185,7 +197,36 @@ impl RobotParts {
             color_detection: false,
             motor_stall_notify: false,
             motor_fault_notify: false,
+            versions_due: Vec::new(),
         }
+    }
+
+    /// Get Secondary Main App Version (System Info 0x17) and Get Secondary MCU Bootloader
+    /// Version (0x24) on a two-processor robot: an empty response now, the version as a
+    /// notification (0x18, 0x25) after it (spherov2 and sphero-unsw `commands/system_info.py`
+    /// wait for it). `None` when `cid` is neither or the robot has one processor.
+    pub fn owe_version(&mut self, cid: u8, now: Duration) -> Option<()> {
+        let notice = match cid {
+            0x17 => 0x18,
+            0x24 => 0x25,
+            _ => return None,
+        };
+        if self.model.processors() < 2 {
+            return None;
+        }
+        if self.versions_due.len() >= VERSIONS_DUE_MAX {
+            self.versions_due.remove(0);
+        }
+        self.versions_due.push((now + VERSION_NOTICE_DELAY, notice));
+        Some(())
+    }
+
+    /// The version notifications due by `now` (their CIDs), taken.
+    pub fn versions_now(&mut self, now: Duration) -> Vec<u8> {
+        let (due, later): (Vec<_>, Vec<_>) =
+            self.versions_due.iter().partition(|(at, _)| *at <= now);
+        self.versions_due = later;
+        due.into_iter().map(|(_, cid)| cid).collect()
     }
 
     /// A matrix command (IO 0x2D..=0x4E); `None` when `cid` is not one.
@@ -355,7 +396,8 @@ impl RobotParts {
         };
         let frame = self.matrix.player.next_due();
         let data = self.service.running.iter().map(|(_, _, at)| *at).min();
-        [text, frame, data].into_iter().flatten().min()
+        let version = self.versions_due.iter().map(|(at, _)| *at).min();
+        [text, frame, data, version].into_iter().flatten().min()
     }
 
     /// A streaming-service command (Sensor 0x39..=0x3C) sent to processor `p` (on a robot

@@ -186,6 +186,11 @@ fn edu_checks(name: &str, seen: &Value) {
         "luminosity: {seen}"
     );
     assert!(sensors["compass"].is_number(), "compass calibrated: {seen}");
+    assert_eq!(
+        seen["secondary_version"],
+        serde_json::json!([4, 0, 1]),
+        "{seen}"
+    );
     let (x, y) = (f(&seen["location"]["x"]), f(&seen["location"]["y"]));
     assert!(x > 100.0 && y.abs() < x / 3.0, "rolled east: {seen}");
     assert!(
