@@ -588,4 +588,21 @@ mod tests {
         assert_eq!(r.streaming(0x3B, &[], s, now), Ok(()));
         assert_eq!(r.streaming(0x39, &[2, 0, 6, 2], s, now), Ok(()));
     }
+
+    #[test]
+    fn a_secondary_version_follows_its_response() {
+        let t = Duration::from_secs(1);
+        let mut r = RobotParts::new(Model::BoltPlus);
+        assert_eq!(r.owe_version(0x17, t), Some(()));
+        assert!(r.versions_now(t).is_empty(), "not with the response");
+        assert_eq!(r.next_due(), Some(t + VERSION_NOTICE_DELAY));
+        assert_eq!(r.versions_now(t + VERSION_NOTICE_DELAY), vec![0x18]);
+        assert!(r.versions_due.is_empty());
+        for _ in 0..100 {
+            r.owe_version(0x24, t);
+        }
+        assert_eq!(r.versions_due.len(), VERSIONS_DUE_MAX, "bounded");
+        // One processor: no secondary to ask.
+        assert!(RobotParts::new(Model::Mini).owe_version(0x17, t).is_none());
+    }
 }
