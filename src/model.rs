@@ -15,9 +15,14 @@ pub enum Model {
     SprkPlus,
     Ollie,
     Robi42,
-    /// Sphero BOLT (and BOLT+, which advertises the same way): two processors, an 8×8 LED
-    /// matrix, compass, ambient light, robot-to-robot IR (`droid-facts.md` §6).
+    /// Sphero BOLT: two processors, an 8×8 LED matrix, compass, ambient light,
+    /// robot-to-robot IR (`droid-facts.md` §6).
     Bolt,
+    /// Sphero BOLT+, the BOLT sold to classrooms now: a screen instead of the 8×8 matrix,
+    /// advertised as `BP-`, everything addressed to its primary processor. `droid-facts.md` is
+    /// silent on it; the row follows sphero-unsw 0.1.13's `toy/boltplus.py` (a spherov2 fork,
+    /// MIT), whose guesses are marked unverified where they are used.
+    BoltPlus,
     /// Sphero Mini: one processor, BB-8-like on API v2.
     Mini,
     /// Sphero RVR: a tracked rover, every command addressed to one of two processors.
@@ -46,7 +51,9 @@ impl Caps {
     /// The Star Wars droids' animations and sounds (IO 0x17 `play_animation`,
     /// `play_audio_file`); spherov2 binds neither to BOLT, Mini or RVR, which have no speaker.
     pub const ANIMATIONS: Caps = Caps(1 << 2);
-    /// BOLT's 8×8 LED matrix.
+    /// Takes BOLT's 8×8 frame-player commands (IO 0x2D..0x43): BOLT's LED matrix, and
+    /// BOLT+'s screen, which sphero-unsw draws with exactly those commands (an 8×8 picture,
+    /// `set_main_led` as a fill of it).
     pub const MATRIX: Caps = Caps(1 << 3);
     /// A magnetometer to calibrate to north, and an ambient light sensor (BOLT).
     pub const COMPASS: Caps = Caps(1 << 4);
@@ -93,9 +100,13 @@ impl Caps {
     /// Takes commands without the v2 anti-DoS unlock (RVR: spherov2.py's `toy/rvr.py`
     /// writes none; `droid-facts.md` §6).
     pub const NO_UNLOCK: Caps = Caps(1 << 22);
+    /// A screen where BOLT has its 8×8 LED matrix (BOLT+). What it shows is what the matrix
+    /// commands draw: sphero-unsw describes nothing else of it (no image, text or resolution
+    /// commands of its own), so how the real screen scales the 8×8 picture is unverified.
+    pub const SCREEN: Caps = Caps(1 << 23);
 
     /// Every flag with its name, for `Debug` and documents.
-    pub const NAMED: [(Caps, &'static str); 23] = [
+    pub const NAMED: [(Caps, &'static str); 24] = [
         (Caps::LEGS, "legs"),
         (Caps::DOME, "dome"),
         (Caps::ANIMATIONS, "animations"),
@@ -119,6 +130,7 @@ impl Caps {
         (Caps::SCALED_SPEED, "scaled speed"),
         (Caps::ROTATED_AXES, "rotated axes"),
         (Caps::NO_UNLOCK, "no unlock"),
+        (Caps::SCREEN, "screen"),
     ];
 
     /// Both sets' flags (usable in the `const` table).
@@ -228,8 +240,8 @@ const BB8_ROW: ModelSpec = ModelSpec {
 /// the reference clients' minimum write interval (`droid-facts.md` §1; spherov2.py's
 /// `cmd_safe_interval` for BOLT, RVR and Mini, §6): only a default, configurable. BOLT and
 /// RVR have a primary processor (0x11: power, lights, RVR's colour sensor) and a secondary
-/// (0x12: drive, sensors, BOLT's matrix).
-pub const MODELS: [ModelSpec; 10] = [
+/// (0x12: drive, sensors, BOLT's matrix); BOLT+ is addressed on its primary alone.
+pub const MODELS: [ModelSpec; 11] = [
     R2D2_ROW,
     ModelSpec {
         model: Model::R2Q5,
@@ -284,7 +296,7 @@ pub const MODELS: [ModelSpec; 10] = [
     ModelSpec {
         model: Model::Bolt,
         id: "bolt",
-        aliases: &["boltplus", "bolt+", "spherobolt"],
+        aliases: &["spherobolt"],
         advertised: Advertised::Prefix("SB-"),
         name: "Sphero BOLT",
         pacing_ms: 75,
@@ -300,6 +312,35 @@ pub const MODELS: [ModelSpec; 10] = [
             .with(Caps::IR)
             .with(Caps::RAW_MOTORS)
             .with(Caps::HOPS),
+        ..R2D2_ROW
+    },
+    // sphero-unsw's `BOLTPLUS`: `ToyType('Sphero BOLT', 'BP-', 'BP', .075)` (its display
+    // name says BOLT; the prefix and the 75 ms pacing are its own), BOLT's LEDs, sensors and
+    // robot-to-robot infrared, no anti-DoS unlock (its `_handshake` is commented out, "TODO:
+    // find correct info here"; its users drive real BOLT+s without one). A second
+    // description, `sphero-bolt-plus` 1.0.1 (PyPI), disagrees: it scans for `SB+` and writes
+    // JSON to the Nordic UART service, which its own comments call "a simplified
+    // implementation"; nothing is taken from it. Size and turn pace are BOLT's (unverified).
+    ModelSpec {
+        model: Model::BoltPlus,
+        id: "boltplus",
+        aliases: &["bolt+", "spheroboltplus", "spherobolt+"],
+        advertised: Advertised::Prefix("BP-"),
+        name: "Sphero BOLT+",
+        pacing_ms: 75,
+        processors: 2,
+        full_turn_ms: 450,
+        caps: SPHERO
+            .with(Caps::AIM)
+            .with(Caps::FRONT_LED)
+            .with(Caps::MATRIX)
+            .with(Caps::SCREEN)
+            .with(Caps::COMPASS)
+            .with(Caps::LIGHT_SENSOR)
+            .with(Caps::IR)
+            .with(Caps::RAW_MOTORS)
+            .with(Caps::HOPS)
+            .with(Caps::NO_UNLOCK),
         ..R2D2_ROW
     },
     ModelSpec {
@@ -342,7 +383,7 @@ pub const MODELS: [ModelSpec; 10] = [
 ];
 
 impl Model {
-    pub const ALL: [Model; 10] = [
+    pub const ALL: [Model; 11] = [
         Model::R2D2,
         Model::R2Q5,
         Model::BB9E,
@@ -351,6 +392,7 @@ impl Model {
         Model::Ollie,
         Model::Robi42,
         Model::Bolt,
+        Model::BoltPlus,
         Model::Mini,
         Model::Rvr,
     ];
@@ -493,9 +535,15 @@ impl Model {
         self.has(Caps::TARGETED)
     }
 
-    /// BOLT's 8×8 LED matrix.
+    /// Takes BOLT's 8×8 frame-player commands: BOLT's matrix, BOLT+'s screen.
     pub fn has_matrix(self) -> bool {
         self.has(Caps::MATRIX)
+    }
+
+    /// A screen instead of BOLT's LED matrix (BOLT+): the app shows the frame-player picture
+    /// as the screen's, not as 64 LEDs.
+    pub fn has_screen(self) -> bool {
+        self.has(Caps::SCREEN)
     }
 
     /// A magnetometer to calibrate to north, and an ambient light sensor (BOLT).
@@ -559,6 +607,10 @@ mod tests {
         assert_eq!(Model::from_advertised_name("2B-9"), Some(Model::Ollie));
         assert_eq!(Model::from_advertised_name("Robi 42"), Some(Model::Robi42));
         assert_eq!(Model::from_advertised_name("SB-5A1C"), Some(Model::Bolt));
+        assert_eq!(
+            Model::from_advertised_name("BP-81C4"),
+            Some(Model::BoltPlus)
+        );
         assert_eq!(Model::from_advertised_name("SM-0B12"), Some(Model::Mini));
         assert_eq!(Model::from_advertised_name("RV-F00D"), Some(Model::Rvr));
         assert_eq!(Model::from_advertised_name("JBL Flip"), None);
@@ -583,12 +635,15 @@ mod tests {
         }
         assert_eq!(
             Model::parse_id("c3po"),
-            Err("unknown model \"c3po\": use one of r2d2, r2q5, bb9e, bb8, sprk, ollie, robi, bolt, mini, rvr".into())
+            Err("unknown model \"c3po\": use one of r2d2, r2q5, bb9e, bb8, sprk, ollie, robi, bolt, boltplus, mini, rvr".into())
         );
         assert_eq!(Model::from_id("Robi 42"), Some(Model::Robi42));
         assert_eq!(Model::from_id("sprk+"), Some(Model::SprkPlus));
         assert_eq!(Model::R2D2.write_pacing(), Duration::from_millis(120));
-        assert_eq!(Model::from_id("bolt+"), Some(Model::Bolt));
+        assert_eq!(Model::from_id("bolt+"), Some(Model::BoltPlus));
+        assert_eq!(Model::from_id("Sphero BOLT+"), Some(Model::BoltPlus));
+        assert_eq!(Model::from_id("boltplus"), Some(Model::BoltPlus));
+        assert_eq!(Model::BoltPlus.write_pacing(), Duration::from_millis(75));
         assert_eq!(Model::from_id("Sphero RVR"), Some(Model::Rvr));
         assert_eq!(Model::from_id("mini"), Some(Model::Mini));
         assert_eq!(Model::Bolt.write_pacing(), Duration::from_millis(75));

@@ -2,7 +2,8 @@
 """Every command spherov2.py builds for an API v2 toy, called method by method (run by
 tests/it/spherov2_catalogue.rs when a Python with spherov2 installed is at hand).
 
-For each toy class (R2D2, R2Q5, BB9E, BOLT, Mini, RVR) and each of its methods that is one of
+For each toy class (R2D2, R2Q5, BB9E, BOLT, Mini, RVR; with `sphero_unsw` as the argument,
+that fork's BOLTPLUS, the Sphero BOLT+) and each of its methods that is one of
 spherov2's command builders (a `commands.*` static method, bound plainly or through a
 partialmethod that names the processor), the builder is called once with fixed arguments on a
 toy whose `_execute` records the packet instead of writing it. A method that leaves the
@@ -12,25 +13,32 @@ Prints one JSON object a line: toy, method, did, cid, tid, sid, flags, seq, data
 payload) and wire (hex of the framed packet, as spherov2 writes it); then one summary line a
 toy: {"summary": toy, "distinct": number of distinct (did, cid, tid) sent}.
 
-Usage: spherov2_commands.py
+Usage: spherov2_commands.py [sphero_unsw]
 """
 
+import importlib
 import inspect
 import json
 import sys
 from enum import IntEnum
 from functools import partialmethod
 
-from spherov2.commands import Commands
-from spherov2.controls.v2 import Packet, Processors
-from spherov2.toy.bb9e import BB9E
-from spherov2.toy.bolt import BOLT
-from spherov2.toy.mini import Mini
-from spherov2.toy.r2d2 import R2D2
-from spherov2.toy.r2q5 import R2Q5
-from spherov2.toy.rvr import RVR
+# spherov2 itself, or sphero-unsw (a fork of it under its own package name, with BOLT+).
+LIB = sys.argv[1] if len(sys.argv) > 1 else "spherov2"
+Commands = importlib.import_module(f"{LIB}.commands").Commands
+_controls = importlib.import_module(f"{LIB}.controls.v2")
+Packet, Processors = _controls.Packet, _controls.Processors
 
-TOYS = [R2D2, R2Q5, BB9E, BOLT, Mini, RVR]
+
+def _toy(module, name):
+    return getattr(importlib.import_module(f"{LIB}.toy.{module}"), name)
+
+
+if LIB == "sphero_unsw":
+    TOYS = [_toy("boltplus", "BOLTPLUS")]
+else:
+    TOYS = [_toy(m, n) for m, n in [("r2d2", "R2D2"), ("r2q5", "R2Q5"), ("bb9e", "BB9E"),
+                                    ("bolt", "BOLT"), ("mini", "Mini"), ("rvr", "RVR")]]
 
 # Arguments by parameter name: fixed values, so the Rust side can rebuild the same packets.
 ARGS = {

@@ -1,5 +1,5 @@
 // A beacon for follow.js: broadcast on infrared channels 0 (near) and 1 (far), stay, blue.
-// Models: bolt, rvr (with follow.js on a second robot)
+// Models: bolt, boltplus, rvr (with follow.js on a second robot)
 //   droidctl run beacon.js follow.js --sim bolt,bolt
 // This robot stays where it is for six seconds.
 async function startProgram() {

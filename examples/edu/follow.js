@@ -1,5 +1,5 @@
 // Follow the robot that runs beacon.js: find it on infrared, roll up to it, say how far.
-// Models: bolt, rvr (with beacon.js on a second robot)
+// Models: bolt, boltplus, rvr (with beacon.js on a second robot)
 //   droidctl run beacon.js follow.js --sim bolt,bolt
 // It looks for a broadcaster on channels 0 and 1.
 async function startProgram() {

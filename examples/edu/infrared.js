@@ -1,5 +1,5 @@
 // Two robots greet each other in infrared.
-// Models: bolt, rvr (run it on two at once, each runs it)
+// Models: bolt, boltplus, rvr (run it on two at once, each runs it)
 //   droidctl examples infrared.js > infrared.js && droidctl run infrared.js --sim bolt,bolt
 // Each turns red, listens on channel 3, says hello on it, and turns green when it hears the
 // other (a robot does not hear itself). Alone, it hears nothing and ends red.

@@ -1,5 +1,5 @@
 // BOLT's matrix: a letter, a drawing, scrolling text, and a spin to finish.
-// Models: bolt
+// Models: bolt, boltplus
 //   droidctl examples matrix.js > matrix.js && droidctl run matrix.js --sim bolt
 async function startProgram() {
   setMatrixCharacter("A", { r: 255, g: 0, b: 0 });

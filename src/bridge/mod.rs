@@ -163,8 +163,9 @@ struct DroidState {
 }
 
 /// The bridge's capability words, each with the flags of the model table it stands for
-/// (an `unsupported` error's `capability` is one of these words).
-pub const CAPABILITY_WORDS: [(&str, crate::model::Caps); 8] = {
+/// (an `unsupported` error's `capability` is one of these words; `screen` only says that the
+/// matrix commands draw on BOLT+'s screen, it has no commands of its own).
+pub const CAPABILITY_WORDS: [(&str, crate::model::Caps); 9] = {
     use crate::model::Caps;
     [
         ("dome", Caps::DOME),
@@ -173,6 +174,7 @@ pub const CAPABILITY_WORDS: [(&str, crate::model::Caps); 8] = {
         ("animations", Caps::ANIMATIONS),
         ("sounds", Caps::ANIMATIONS),
         ("matrix", Caps::MATRIX),
+        ("screen", Caps::SCREEN),
         ("streaming", Caps::STREAMING),
         ("reverse", Caps::HEADING),
     ]

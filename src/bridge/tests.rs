@@ -616,6 +616,7 @@ fn capabilities_agree_with_the_families() {
             ("animations", family.animation(model, 0).is_some()),
             ("sounds", family.sound(model, 0).is_some()),
             ("matrix", model.has_matrix()),
+            ("screen", model.has_screen()),
             ("streaming", family.stream_caps(model).is_some()),
             ("reverse", family.can_reverse()),
         ]

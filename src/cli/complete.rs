@@ -129,7 +129,7 @@ mod tests {
     fn a_list_of_models_completes_after_its_last_comma() {
         assert_eq!(
             offered("droidctl --sim r2d2,b"),
-            ["r2d2,bb9e", "r2d2,bb8", "r2d2,bolt"]
+            ["r2d2,bb9e", "r2d2,bb8", "r2d2,bolt", "r2d2,boltplus"]
         );
         assert_eq!(offered("droidctl run tour.txt --sim bb8,r"), {
             ["bb8,r2d2", "bb8,r2q5", "bb8,robi", "bb8,rvr"]

@@ -91,7 +91,8 @@ fn line(e: &Example) -> String {
         .fits()
         .map(|f| f.describe())
         .unwrap_or_else(|err| format!("? ({err})"));
-    let head = format!("  {:<12} {:<14} ", e.name, models);
+    // Wide enough for "bolt, boltplus, rvr" (issue 41 added BOLT+ to BOLT's examples).
+    let head = format!("  {:<12} {:<19} ", e.name, models);
     let indent = head.chars().count();
     let mut s = head;
     let mut col = indent;
@@ -128,7 +129,7 @@ mod tests {
             assert!(row.contains(first_word), "{row}");
         }
         assert!(text.contains("  tour.txt     all "), "{text}");
-        assert!(text.contains("  matrix.js    bolt "), "{text}");
+        assert!(text.contains("  matrix.js    bolt, boltplus "), "{text}");
         assert!(text.contains("  patrol.txt   r2d2 + bb8 "), "{text}");
         for l in text.lines() {
             assert!(

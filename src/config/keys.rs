@@ -676,8 +676,8 @@ mod tests {
                     matches!(m, Model::R2D2 | Model::R2Q5 | Model::BB9E),
                 ),
                 (Needs::Tracks, m == Model::Rvr),
-                (Needs::Matrix, m == Model::Bolt),
-                (Needs::Compass, m == Model::Bolt),
+                (Needs::Matrix, matches!(m, Model::Bolt | Model::BoltPlus)),
+                (Needs::Compass, matches!(m, Model::Bolt | Model::BoltPlus)),
             ];
             for (needs, applies) in spelled {
                 assert_eq!(needs.applies(m, false), applies, "{needs:?} on {m:?}");

@@ -575,7 +575,7 @@ mod tests {
             let spelled = [
                 (Robots::All, true),
                 (Robots::Sphero, m != Model::Robi42),
-                (Robots::Matrix, m == Model::Bolt),
+                (Robots::Matrix, matches!(m, Model::Bolt | Model::BoltPlus)),
                 (Robots::Dome, matches!(m, Model::R2D2 | Model::R2Q5)),
                 (
                     Robots::Animations,
@@ -586,18 +586,29 @@ mod tests {
                     Robots::FrontLed,
                     matches!(
                         m,
-                        Model::R2D2 | Model::R2Q5 | Model::Bolt | Model::Rvr | Model::Mini
+                        Model::R2D2
+                            | Model::R2Q5
+                            | Model::Bolt
+                            | Model::BoltPlus
+                            | Model::Rvr
+                            | Model::Mini
                     ),
                 ),
-                (Robots::Compass, m == Model::Bolt),
-                (Robots::Light, matches!(m, Model::Bolt | Model::Rvr)),
+                (Robots::Compass, matches!(m, Model::Bolt | Model::BoltPlus)),
+                (
+                    Robots::Light,
+                    matches!(m, Model::Bolt | Model::BoltPlus | Model::Rvr),
+                ),
                 (Robots::ColorSensor, m == Model::Rvr),
                 (
                     Robots::RawMotors,
-                    matches!(m, Model::Bolt | Model::Mini | Model::Rvr)
+                    matches!(m, Model::Bolt | Model::BoltPlus | Model::Mini | Model::Rvr)
                         || m.protocol() == Protocol::SpheroV1,
                 ),
-                (Robots::Infrared, matches!(m, Model::Bolt | Model::Rvr)),
+                (
+                    Robots::Infrared,
+                    matches!(m, Model::Bolt | Model::BoltPlus | Model::Rvr),
+                ),
             ];
             for (robots, applies) in spelled {
                 assert_eq!(robots.applies(m), applies, "{robots:?} on {m:?}");

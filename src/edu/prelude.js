@@ -54,6 +54,10 @@ function strobe(color, period, count) { return __call("strobe", ...__rgb(color, 
 function setHoloProjectorLed(b) { return __call("setHoloProjectorLed", __num(b, "setHoloProjectorLed: brightness")); }
 function setLogicDisplayLeds(b) { return __call("setLogicDisplayLeds", __num(b, "setLogicDisplayLeds: brightness")); }
 function setDomeLeds(b) { return __call("setDomeLeds", __num(b, "setDomeLeds: brightness")); }
+// Sphero Edu's BOLT+ screen pictures: no public description says what BOLT+ takes on the wire
+// for them (sphero-unsw 0.1.13, the one description of BOLT+, draws its screen with BOLT's matrix
+// commands only), so the call is refused in words rather than guessed (issue 41).
+function setDisplayImage() { throw new TypeError("setDisplayImage(): what BOLT+ takes on the wire for a screen picture is not described anywhere public, so droidctl cannot send one; draw on its screen with setMatrixCharacter, drawMatrixPixel, drawMatrixLine, drawMatrixFill or registerMatrixAnimation"); }
 function setMatrixCharacter(character, color) { return __call("setMatrixCharacter", String(character), ...__rgb(color, "setMatrixCharacter: color")); }
 function scrollMatrixText(text, color, fps, wait) { return __call("scrollMatrixText", String(text), ...__rgb(color, "scrollMatrixText: color"), fps === undefined ? 10 : __num(fps, "scrollMatrixText: fps"), wait === false ? 0 : 1); }
 function drawMatrixPixel(color, p) { return __call("drawMatrixPixel", ...__rgb(color, "drawMatrixPixel: color"), ...__xy(p, "drawMatrixPixel: point")); }
@@ -150,6 +154,7 @@ const __api = {
   setHoloProjectorLed,
   setLogicDisplayLeds,
   setDomeLeds,
+  setDisplayImage,
   setMatrixCharacter,
   scrollMatrixText,
   drawMatrixPixel,

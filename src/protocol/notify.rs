@@ -32,7 +32,14 @@ impl Collision {
                 i16::get(r, "power_z")?,
             ],
             speed: u8::get(r, "speed")?,
-            time_ms: u32::get(r, "time_ms")?,
+            // sphero-unsw 0.1.13 reads BOLT+'s collisions in 16 bytes as well as 18, the time
+            // then a 16-bit count (`>3hB3hBh`: "Changed original 3hB3hBL to 3hB3hBh");
+            // unverified, so both are taken.
+            time_ms: if data.len() == Self::LEN - 2 {
+                u16::get(r, "time_ms")?.into()
+            } else {
+                u32::get(r, "time_ms")?
+            },
         };
         r.finish()?;
         Ok(c)

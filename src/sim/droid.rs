@@ -151,6 +151,9 @@ impl SimDroid {
         if let Some(id) = self.robot.animate(now) {
             self.notify(0x1A, 0x3F, vec![id]);
         }
+        for cid in self.robot.versions_now(now) {
+            self.notify(0x11, cid, version_bytes());
+        }
         if !self.robot.service.running.is_empty() && self.body.state.awake {
             let values = self.body.sample_values();
             for (p, data) in self.robot.stream_due(now, &values) {
@@ -355,10 +358,10 @@ impl SimDroid {
                 info.extend_from_slice(b"00:00:00:5E:D2:D2\0");
                 (ErrorCode::Success, info)
             }
-            (Device::SystemInfo, 0x00) | (Device::SystemInfo, 0x01) => (
-                ErrorCode::Success,
-                [4u16, 0, 1].iter().flat_map(|v| v.to_be_bytes()).collect(),
-            ),
+            (Device::SystemInfo, 0x00) | (Device::SystemInfo, 0x01) => {
+                (ErrorCode::Success, version_bytes())
+            }
+            (Device::SystemInfo, 0x17 | 0x24) if self.robot.owe_version(p.cid, now).is_some() => ok,
             (Device::SystemInfo, 0x1F) => (ErrorCode::Success, b"droidctl-sim\0".to_vec()),
             (Device::SystemInfo, 0x39) => (
                 ErrorCode::Success,
@@ -590,6 +593,11 @@ impl SimDroid {
         }
         (ErrorCode::Success, vec![])
     }
+}
+
+/// The simulator's firmware version, major, minor, revision (System Info's version answers).
+fn version_bytes() -> Vec<u8> {
+    [4u16, 0, 1].iter().flat_map(|v| v.to_be_bytes()).collect()
 }
 
 /// The processor a notification comes from on a two-processor robot.

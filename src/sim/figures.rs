@@ -40,7 +40,8 @@ pub fn of(model: Model) -> Option<Figures> {
     };
     Some(match model {
         Model::Mini => f(4.2, 0.5, 3.6),
-        Model::Bolt => f(7.3, 0.45, 6.4),
+        // BOLT+'s shell as BOLT's (unverified: no published dimension of its own).
+        Model::Bolt | Model::BoltPlus => f(7.3, 0.45, 6.4),
         Model::SprkPlus | Model::BB8 => f(7.3, 0.6, 6.4),
         Model::BB9E => f(8.0, 0.45, 7.0),
         Model::Ollie => f(11.4, 0.6, 11.4),

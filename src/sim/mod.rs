@@ -104,10 +104,16 @@ impl WireDroid for SimDroid {
     fn next_due(&self) -> Option<Duration> {
         SimDroid::next_due(self)
     }
+    /// BOLT's matrix, or BOLT+'s screen (the same 8×8 picture, `Caps::SCREEN`).
     fn shows(&self) -> Option<String> {
+        let what = if self.model().has_screen() {
+            "screen"
+        } else {
+            "matrix"
+        };
         self.model()
             .has_matrix()
-            .then(|| format!("matrix: {}", self.robot().matrix.summary()))
+            .then(|| format!("{what}: {}", self.robot().matrix.summary()))
     }
 }
 

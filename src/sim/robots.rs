@@ -142,24 +142,25 @@ pub struct RobotParts {
     pub color_detection: bool,
     pub motor_stall_notify: bool,
     pub motor_fault_notify: bool,
+    /// System Info notifications owed, and when: the secondary's versions (CID 0x18, 0x25)
+    /// follow their request's response (see [`RobotParts::owe_version`]).
+    pub versions_due: Vec<(Duration, u8)>,
 }
 
-/// The LEDs a model's Set All LEDs may address: R2 8; BB-9E body RGB, aiming, head
-/// (`droid-facts.md` §2); BOLT front and back RGB, Mini aiming, body and user RGB, RVR 31
-/// (spherov2 `toy/*.py` LEDs).
-pub fn led_mask(model: Model) -> u32 {
-    match model {
-        m if m.has_legs() => 0xFF,
-        Model::Bolt => 0x3F,
-        Model::Mini => 0x7F,
-        Model::Rvr => 0x7FFF_FFFF,
-        _ => 0x1F,
-    }
-}
+/// How long after its response a secondary's version notification comes (unverified: the
+/// firmware's timing is not published; after the response, so that a client waiting for it
+/// once the response came, as spherov2's `_wait_packet` does, hears it).
+pub const VERSION_NOTICE_DELAY: Duration = Duration::from_millis(20);
 
-/// The newer robots have no animatronic device at all.
+/// Most version notifications owed at once (each request owes one; a host that floods
+/// requests loses the oldest).
+const VERSIONS_DUE_MAX: usize = 16;
+
+pub use crate::family::v2::robots::led_mask;
+
+/// The newer robots (those without a Core device) have no animatronic device at all.
 pub fn has_animatronic(model: Model) -> bool {
-    !matches!(model, Model::Bolt | Model::Mini | Model::Rvr)
+    !crate::family::v2::robots::has_no_core(model)
 }
 
 /// Where a packet's target sends it on `model`; the robot's answer to a wrong one.
@@ -196,7 +197,36 @@ impl RobotParts {
             color_detection: false,
             motor_stall_notify: false,
             motor_fault_notify: false,
+            versions_due: Vec::new(),
         }
+    }
+
+    /// Get Secondary Main App Version (System Info 0x17) and Get Secondary MCU Bootloader
+    /// Version (0x24) on a two-processor robot: an empty response now, the version as a
+    /// notification (0x18, 0x25) after it (spherov2 and sphero-unsw `commands/system_info.py`
+    /// wait for it). `None` when `cid` is neither or the robot has one processor.
+    pub fn owe_version(&mut self, cid: u8, now: Duration) -> Option<()> {
+        let notice = match cid {
+            0x17 => 0x18,
+            0x24 => 0x25,
+            _ => return None,
+        };
+        if self.model.processors() < 2 {
+            return None;
+        }
+        if self.versions_due.len() >= VERSIONS_DUE_MAX {
+            self.versions_due.remove(0);
+        }
+        self.versions_due.push((now + VERSION_NOTICE_DELAY, notice));
+        Some(())
+    }
+
+    /// The version notifications due by `now` (their CIDs), taken.
+    pub fn versions_now(&mut self, now: Duration) -> Vec<u8> {
+        let (due, later): (Vec<_>, Vec<_>) =
+            self.versions_due.iter().partition(|(at, _)| *at <= now);
+        self.versions_due = later;
+        due.into_iter().map(|(_, cid)| cid).collect()
     }
 
     /// A matrix command (IO 0x2D..=0x4E); `None` when `cid` is not one.
@@ -366,7 +396,8 @@ impl RobotParts {
         };
         let frame = self.matrix.player.next_due();
         let data = self.service.running.iter().map(|(_, _, at)| *at).min();
-        [text, frame, data].into_iter().flatten().min()
+        let version = self.versions_due.iter().map(|(at, _)| *at).min();
+        [text, frame, data, version].into_iter().flatten().min()
     }
 
     /// A streaming-service command (Sensor 0x39..=0x3C) sent to processor `p` (on a robot
@@ -556,5 +587,22 @@ mod tests {
         assert_eq!(out[0].1.len(), 1 + 3 * 4);
         assert_eq!(r.streaming(0x3B, &[], s, now), Ok(()));
         assert_eq!(r.streaming(0x39, &[2, 0, 6, 2], s, now), Ok(()));
+    }
+
+    #[test]
+    fn a_secondary_version_follows_its_response() {
+        let t = Duration::from_secs(1);
+        let mut r = RobotParts::new(Model::BoltPlus);
+        assert_eq!(r.owe_version(0x17, t), Some(()));
+        assert!(r.versions_now(t).is_empty(), "not with the response");
+        assert_eq!(r.next_due(), Some(t + VERSION_NOTICE_DELAY));
+        assert_eq!(r.versions_now(t + VERSION_NOTICE_DELAY), vec![0x18]);
+        assert!(r.versions_due.is_empty());
+        for _ in 0..100 {
+            r.owe_version(0x24, t);
+        }
+        assert_eq!(r.versions_due.len(), VERSIONS_DUE_MAX, "bounded");
+        // One processor: no secondary to ask.
+        assert!(RobotParts::new(Model::Mini).owe_version(0x17, t).is_none());
     }
 }

@@ -83,9 +83,16 @@ fn what_it_shows(s: &AppState) -> String {
     format!("{what} #{r:02x}{g:02x}{b:02x}")
 }
 
-/// BOLT: the matrix, the compass and the light.
+/// BOLT: the matrix, the compass and the light. BOLT+: its screen in the matrix's place, drawn
+/// as the 8×8 picture the frame-player commands make of it (all sphero-unsw describes of the
+/// screen; how the real screen scales it is unverified).
 pub fn bolt(frame: &mut Frame, area: Rect, s: &AppState) {
-    let block = theme::panel(title("Matrix", s));
+    let name = if s.droid().model.has_screen() {
+        "Screen (8×8)"
+    } else {
+        "Matrix"
+    };
+    let block = theme::panel(title(name, s));
     let inner = block.inner(area);
     frame.render_widget(block, area);
     let r = &s.droid().telemetry.robot;

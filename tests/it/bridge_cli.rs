@@ -120,6 +120,63 @@ fn a_program_drives_a_simulated_droid_through_a_pipe() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// Issue 41: a BOLT+ behind the bridge: its capabilities say `matrix` and `screen`, and a
+/// matrix command (drawn on its screen) and a drive are done on the simulated BOLT+.
+#[test]
+fn a_boltplus_draws_on_its_screen_through_the_bridge() {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_droidctl"))
+        .args(["bridge", "--stdio", "--sim", "boltplus"])
+        .env("DROIDCTL_CONFIG", "/dev/null")
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("run droidctl bridge");
+    let mut stdin = child.stdin.take().unwrap();
+    let rx = lines(child.stdout.take().unwrap());
+    let hello = wait(&rx, 10, "hello", |v| v["type"] == "hello");
+    let droid = &hello["droids"][0];
+    assert!(
+        droid["droid"].as_str().unwrap().starts_with("BP-"),
+        "{hello}"
+    );
+    assert_eq!(droid["model"], "boltplus", "{hello}");
+    let caps = droid["capabilities"].to_string();
+    assert!(
+        caps.contains("\"matrix\"") && caps.contains("\"screen\""),
+        "{hello}"
+    );
+    wait(&rx, 10, "ready", |v| {
+        v["type"] == "link" && v["ready"] == true
+    });
+    stdin
+        .write_all(b"{\"v\":1,\"cmd\":\"matrix\",\"op\":\"char\",\"char\":\"A\",\"id\":\"m1\"}\n")
+        .unwrap();
+    stdin.flush().unwrap();
+    let r = wait(&rx, 5, "the matrix reply", |v| {
+        v["type"] == "reply" || v["type"] == "error"
+    });
+    assert_eq!(
+        (r["type"].as_str(), r["id"].as_str()),
+        (Some("reply"), Some("m1")),
+        "{r}"
+    );
+    assert_eq!(r["ok"], true, "{r}");
+    drop(stdin);
+    let end = Instant::now() + Duration::from_secs(10);
+    let status = loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            break s;
+        }
+        assert!(
+            Instant::now() < end,
+            "the bridge did not exit after its input ended"
+        );
+        std::thread::sleep(Duration::from_millis(50));
+    };
+    assert_eq!(status.code(), Some(0));
+}
+
 #[test]
 fn the_command_line_refuses_what_it_cannot_do() {
     let e = cli::usage_error(&["bridge", "--stdio"]);

@@ -132,7 +132,7 @@ fn bash_completes_the_values_models_commands_channels_and_examples() {
     let dir = scratch("values");
     assert_eq!(
         bash_offers(&["droidctl", "--sim", "r2d2,b"], &dir),
-        ["r2d2,bb9e", "r2d2,bb8", "r2d2,bolt"]
+        ["r2d2,bb9e", "r2d2,bb8", "r2d2,bolt", "r2d2,boltplus"]
     );
     assert_eq!(
         bash_offers(&["droidctl", "run", "x.txt", "--sim", "bolt,m"], &dir),

@@ -46,7 +46,7 @@ fn every_help_that_takes_a_model_lists_every_model() {
 
 #[test]
 fn an_unknown_model_is_a_usage_error_offering_every_id() {
-    let listed = "r2d2, r2q5, bb9e, bb8, sprk, ollie, robi, bolt, mini, rvr";
+    let listed = "r2d2, r2q5, bb9e, bb8, sprk, ollie, robi, bolt, boltplus, mini, rvr";
     assert_eq!(
         Model::ALL.map(Model::id).join(", "),
         listed,

@@ -39,6 +39,38 @@ fn bolt_and_rvr_missions_run_on_their_simulators() {
     assert!(f(&last["speed"]).abs() < 0.5, "stopped: {last:?}");
 }
 
+/// Issue 41: BOLT+ runs BOLT's mission lines on its simulator (its screen takes the matrix
+/// lines, sphero-unsw's way), and a Sphero Edu program's `setDisplayImage`, which nothing public
+/// describes, is refused in words that say what to use instead.
+#[test]
+fn boltplus_runs_bolts_lines_and_refuses_the_undescribed_screen_picture() {
+    let dir = Scratch::new("cli-run-robots", "boltplus");
+    let mission = dir.file(
+        "bp.txt",
+        "wake\nmatrix text \"HI\" 255 0 0\nmatrix char A\nmatrix fill 0 0 255\n\
+         calibrate compass\nled back 0 0 255\ndrive 100 90 for 1s\nwait 0.3s\n",
+    );
+    let o = dir.run(&["run", path(&mission), "--sim", "boltplus", "--json"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let lines = json_lines(&scratch::stdout(&o));
+    let done = lines.last().expect("summary");
+    assert_eq!(done["errors"], 0, "{done:?}");
+    assert_eq!(done["failed_steps"], 0, "{done:?}");
+    assert!(f(&done["x_cm"]) > 30.0, "rolled east: {done:?}");
+    let program = dir.file(
+        "picture.js",
+        "async function startProgram() {\n  setDisplayImage(\"smile\");\n}\n",
+    );
+    let o = dir.run(&["run", path(&program), "--sim", "boltplus"]);
+    assert_ne!(o.status.code(), Some(0), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(
+        err.contains("setDisplayImage()") && err.contains("not described anywhere public"),
+        "{err}"
+    );
+    assert!(err.contains("setMatrixCharacter"), "{err}");
+}
+
 #[test]
 fn lines_a_model_lacks_are_refused_before_anything_is_sent() {
     let dir = Scratch::new("cli-run-robots", "refused");

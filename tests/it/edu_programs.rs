@@ -162,7 +162,7 @@ fn a_call_a_robot_does_not_have_is_an_error_naming_the_robots_it_is_on() {
     let err = stderr(&out);
     assert!(
         err.contains(
-            "m.js:3: TypeError: setMatrixCharacter() is not on R2-D2 (it is on Sphero BOLT)"
+            "m.js:3: TypeError: setMatrixCharacter() is not on R2-D2 (it is on Sphero BOLT, Sphero BOLT+)"
         ),
         "{err}"
     );

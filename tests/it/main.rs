@@ -81,6 +81,7 @@ mod sim_robi;
 mod sim_v1;
 mod smoke_session;
 mod soak;
+mod sphero_unsw;
 mod spherov2_catalogue;
 mod teleop_robi;
 mod theme;

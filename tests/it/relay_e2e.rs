@@ -13,10 +13,10 @@ use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 /// A scratch directory per test, removed on drop.
-struct TempDir(std::path::PathBuf);
+pub(crate) struct TempDir(pub(crate) std::path::PathBuf);
 
 impl TempDir {
-    fn new(tag: &str) -> TempDir {
+    pub(crate) fn new(tag: &str) -> TempDir {
         let p = std::env::temp_dir().join(format!("droidctl-relay-{tag}-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&p);
         std::fs::create_dir_all(&p).unwrap();
@@ -29,7 +29,7 @@ impl TempDir {
         p.to_string_lossy().into_owned()
     }
 
-    fn path(&self, name: &str) -> String {
+    pub(crate) fn path(&self, name: &str) -> String {
         self.0.join(name).to_string_lossy().into_owned()
     }
 }
@@ -41,16 +41,16 @@ impl Drop for TempDir {
 }
 
 /// A running `droidctl serve --sim … --json` on a free loopback port.
-struct Serve {
+pub(crate) struct Serve {
     child: Child,
     /// `127.0.0.1:PORT`.
-    address: String,
+    pub(crate) address: String,
     events: Arc<Mutex<Vec<Value>>>,
-    stderr: Arc<Mutex<Vec<String>>>,
+    pub(crate) stderr: Arc<Mutex<Vec<String>>>,
 }
 
 impl Serve {
-    fn start(models: &[&str], extra: &[&str], dir: &TempDir) -> Serve {
+    pub(crate) fn start(models: &[&str], extra: &[&str], dir: &TempDir) -> Serve {
         let mut child = Command::new(env!("CARGO_BIN_EXE_droidctl"))
             .args(["serve", "--listen", "127.0.0.1:0", "--json", "--sim"])
             .args(models)
@@ -98,7 +98,7 @@ impl Serve {
         self.events.lock().unwrap().clone()
     }
 
-    fn wait_event(&self, what: &str, f: impl Fn(&Value) -> bool) -> Value {
+    pub(crate) fn wait_event(&self, what: &str, f: impl Fn(&Value) -> bool) -> Value {
         let start = Instant::now();
         loop {
             if let Some(e) = self.events().into_iter().find(&f) {
@@ -115,7 +115,7 @@ impl Serve {
     }
 
     /// SIGTERM: it must stop every droid and exit 0. Its stderr lines.
-    fn stop(mut self) -> Vec<String> {
+    pub(crate) fn stop(mut self) -> Vec<String> {
         let _ = Command::new("kill")
             .args(["-TERM", &self.child.id().to_string()])
             .status();
@@ -530,7 +530,7 @@ fn python_with(modules: &str) -> Result<String, String> {
 }
 
 /// Wait for a child with a limit; its output.
-fn finish(mut child: Child, limit: Duration, what: &str) -> Output {
+pub(crate) fn finish(mut child: Child, limit: Duration, what: &str) -> Output {
     let start = Instant::now();
     while child.try_wait().unwrap().is_none() {
         if start.elapsed() > limit {
@@ -583,15 +583,15 @@ fn spherov2_tcp_adapter_drives_through_serve() {
 
 /// A running `droidctl sim --bluez MODEL… [--trace --json]`: its bus, its droids' names (in
 /// the order given), and with `--trace --json` its trace lines.
-struct Bluez {
+pub(crate) struct Bluez {
     child: Child,
-    bus: String,
-    names: Vec<String>,
-    trace: Arc<Mutex<Vec<Value>>>,
+    pub(crate) bus: String,
+    pub(crate) names: Vec<String>,
+    pub(crate) trace: Arc<Mutex<Vec<Value>>>,
 }
 
 impl Bluez {
-    fn start(models: &[&str], dir: &TempDir) -> Bluez {
+    pub(crate) fn start(models: &[&str], dir: &TempDir) -> Bluez {
         let mut child = Command::new(env!("CARGO_BIN_EXE_droidctl"))
             .args(["sim", "--bluez"])
             .args(models)
@@ -644,7 +644,7 @@ impl Bluez {
         }
     }
 
-    fn stop(self) {
+    pub(crate) fn stop(self) {
         let _ = Command::new("kill")
             .args(["-TERM", &self.child.id().to_string()])
             .status();
@@ -978,7 +978,7 @@ fn edu_checks(name: &str, class: &str, seen: &Value) {
 }
 
 /// spin(360, 1): the streamed yaw went once round, one way, and never turned back.
-fn edu_spin_turned_once(name: &str, seen: &Value) {
+pub(crate) fn edu_spin_turned_once(name: &str, seen: &Value) {
     let yaws: Vec<f64> = seen["yaw"]
         .as_array()
         .unwrap()
@@ -1004,7 +1004,7 @@ fn edu_spin_turned_once(name: &str, seen: &Value) {
 
 /// The roll east ended against the east wall head-on: the hit is on the robot's forward axis
 /// (RVR reports no collisions to spherov2's Edu API).
-fn edu_hit_head_on(name: &str, seen: &Value) {
+pub(crate) fn edu_hit_head_on(name: &str, seen: &Value) {
     let hits = seen["collisions"].as_array().unwrap();
     if name.starts_with("RV-") {
         return;

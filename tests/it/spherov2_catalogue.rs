@@ -2,7 +2,9 @@
 //! method for every API v2 toy (tests/spherov2_commands.py), against droidctl's catalogue and
 //! encoder, byte for byte. Needs a Python with spherov2 (`pip install spherov2`): point
 //! DROIDCTL_TEST_SPHEROV2_PYTHON at it (default python3); without it the test says it is
-//! skipped.
+//! skipped. Issue 41: the same for sphero-unsw's BOLTPLUS (the Sphero BOLT+), with a Python
+//! that has sphero-unsw (DROIDCTL_TEST_SPHERO_UNSW_PYTHON, or target/sphero-unsw-venv that
+//! `.ci/run` makes).
 
 use droidctl::family::v2::V2Codec;
 use droidctl::family::{Codec, Command as FamilyCommand};
@@ -22,9 +24,31 @@ use std::process::Command as Process;
 fn spherov2_packets() -> Result<Vec<Json>, String> {
     let py =
         std::env::var("DROIDCTL_TEST_SPHEROV2_PYTHON").unwrap_or_else(|_| "python3".to_string());
+    packets_of(&py, &[])
+}
+
+/// The Python with sphero-unsw: DROIDCTL_TEST_SPHERO_UNSW_PYTHON, else the venv `.ci/run`
+/// makes (target/sphero-unsw-venv), else python3.
+pub fn sphero_unsw_python() -> String {
+    let venv = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/target/sphero-unsw-venv/bin/python"
+    );
+    std::env::var("DROIDCTL_TEST_SPHERO_UNSW_PYTHON").unwrap_or_else(|_| {
+        if std::path::Path::new(venv).exists() {
+            venv.to_string()
+        } else {
+            "python3".to_string()
+        }
+    })
+}
+
+/// The packets the helper prints with `py` and `args`, or why they cannot be had.
+fn packets_of(py: &str, args: &[&str]) -> Result<Vec<Json>, String> {
     let script = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/spherov2_commands.py");
-    let out = Process::new(&py)
+    let out = Process::new(py)
         .arg(script)
+        .args(args)
         .output()
         .map_err(|e| format!("cannot run {py}: {e}"))?;
     if !out.status.success() {
@@ -49,6 +73,7 @@ fn model_of(toy: &str) -> Model {
         "R2Q5" => Model::R2Q5,
         "BB9E" => Model::BB9E,
         "BOLT" => Model::Bolt,
+        "BOLTPLUS" => Model::BoltPlus,
         "Mini" => Model::Mini,
         "RVR" => Model::Rvr,
         other => panic!("unknown toy {other}"),
@@ -90,6 +115,24 @@ fn every_spherov2_command_is_named_and_encoded_byte_for_byte() {
             return;
         }
     };
+    let (distinct, checked) = check_named_and_encoded(&rows);
+    assert!(checked > 400, "only {checked} packets checked");
+    for s in rows.iter().filter(|r| r.get("summary").is_some()) {
+        println!(
+            "{}: {} distinct commands, all named",
+            s["summary"], s["distinct"]
+        );
+    }
+    // Every robot of the issue, and every droid, sends dozens of distinct commands.
+    for (toy, min) in [("R2D2", 50), ("BOLT", 70), ("Mini", 35), ("RVR", 90)] {
+        assert!(distinct[toy].len() >= min, "{toy}: {}", distinct[toy].len());
+    }
+}
+
+/// Each row's packet is named, decodes and re-encodes to its bytes, is addressed as the library
+/// addresses it, and frames to its wire bytes: the distinct (DID, CID) per toy, and how many
+/// packets were checked.
+fn check_named_and_encoded(rows: &[Json]) -> (BTreeMap<String, BTreeSet<(u64, u64)>>, usize) {
     let mut distinct: BTreeMap<String, BTreeSet<(u64, u64)>> = BTreeMap::new();
     let mut checked = 0;
     for r in rows.iter().filter(|r| r.get("toy").is_some()) {
@@ -144,16 +187,42 @@ fn every_spherov2_command_is_named_and_encoded_byte_for_byte() {
         );
         checked += 1;
     }
-    assert!(checked > 400, "only {checked} packets checked");
-    for s in rows.iter().filter(|r| r.get("summary").is_some()) {
-        println!(
-            "{}: {} distinct commands, all named",
-            s["summary"], s["distinct"]
-        );
-    }
-    // Every robot of the issue, and every droid, sends dozens of distinct commands.
-    for (toy, min) in [("R2D2", 50), ("BOLT", 70), ("Mini", 35), ("RVR", 90)] {
-        assert!(distinct[toy].len() >= min, "{toy}: {}", distinct[toy].len());
+    (distinct, checked)
+}
+
+/// Issue 41: every command sphero-unsw builds for its BOLTPLUS is named, decodes, re-encodes
+/// and goes to the processor sphero-unsw sends it to (BOLT+'s primary), byte for byte.
+#[test]
+fn every_sphero_unsw_boltplus_command_is_named_and_encoded_byte_for_byte() {
+    let py = sphero_unsw_python();
+    let rows = match packets_of(&py, &["sphero_unsw"]) {
+        Ok(rows) => rows,
+        Err(why) => {
+            println!(
+                "SKIPPED every_sphero_unsw_boltplus_command_is_named_and_encoded_byte_for_byte: \
+                 {why} (set DROIDCTL_TEST_SPHERO_UNSW_PYTHON to a Python with sphero-unsw)"
+            );
+            return;
+        }
+    };
+    let (distinct, checked) = check_named_and_encoded(&rows);
+    let bp = &distinct["BOLTPLUS"];
+    println!("BOLTPLUS: {} distinct commands, all named", bp.len());
+    assert!(
+        checked >= 75 && bp.len() >= 75,
+        "{checked} packets, {}",
+        bp.len()
+    );
+    // Drive and the screen on the primary (0x11), where BOLT has them on the secondary.
+    for (method, did, cid) in [
+        ("drive_with_heading", 0x16, 0x07),
+        ("draw_compressed_frame_player_fill", 0x1A, 0x3E),
+    ] {
+        let r = rows
+            .iter()
+            .find(|r| r["toy"] == "BOLTPLUS" && r["did"] == did && r["cid"] == cid);
+        let r = r.unwrap_or_else(|| panic!("{method} not built"));
+        assert_eq!(r["tid"], 0x11, "{method}: {r}");
     }
 }
 

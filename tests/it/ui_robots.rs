@@ -43,7 +43,12 @@ fn connected(model: Model, name: &str) -> AppState {
 }
 
 fn bolt() -> AppState {
-    let mut s = connected(Model::Bolt, "SB-5A1C");
+    bolt_like(Model::Bolt, "SB-5A1C")
+}
+
+/// BOLT, or BOLT+, showing a red 'A', calibrated, in 320 lx.
+fn bolt_like(model: Model, name: &str) -> AppState {
+    let mut s = connected(model, name);
     s.droid_mut().matrix = MatrixView {
         colour: [255, 0, 0],
         shows: MatrixShows::Char('A'),
@@ -93,6 +98,21 @@ fn bolt_matrix_panel_shows_the_character_in_its_colour_and_the_compass() {
     let term = render(&s, 160, 48);
     let all = rows(term.backend().buffer()).join("\n");
     assert!(all.contains("scrolling \"HELLO\""), "{all}");
+}
+
+/// Issue 41: BOLT+ has a screen where BOLT has its matrix: the panel in the matrix's place is
+/// the screen, showing the 8×8 picture the frame-player commands drew (all sphero-unsw
+/// describes of the screen), with BOLT's compass and light.
+#[test]
+fn boltplus_shows_its_screen_not_a_matrix() {
+    for (w, h) in [(80, 24), (160, 48)] {
+        let s = bolt_like(Model::BoltPlus, "BP-81C4");
+        let all = rows(render(&s, w, h).backend().buffer()).join("\n");
+        assert!(all.contains("Screen"), "{w}×{h}: {all}");
+        assert!(!all.contains(" Matrix "), "{w}×{h}: {all}");
+        assert!(all.contains("'A' #ff0000"), "{w}×{h}: {all}");
+        assert!(all.contains("320 lx"), "the light: {all}");
+    }
 }
 
 #[test]

@@ -1,7 +1,7 @@
-//! The v2 family's commands for BOLT, Mini and RVR: their lights (BOLT's 8-bit mask, Mini's
-//! 16-bit one, RVR's 32-bit one, as spherov2.py's `toy/*.py` LEDs enums number them), aim
-//! mode, main light, BOLT's matrix and compass, BOLT's and RVR's infrared, RVR's tracks and
-//! streaming service.
+//! The v2 family's commands for BOLT, BOLT+, Mini and RVR: their lights (BOLT's 8-bit mask,
+//! Mini's 16-bit one, RVR's 32-bit one, as spherov2.py's `toy/*.py` LEDs enums number them;
+//! BOLT+'s as BOLT's, sphero-unsw's `toy/boltplus.py`), aim mode, main light, BOLT's matrix
+//! (BOLT+'s screen) and compass, BOLT's and RVR's infrared, RVR's tracks and streaming service.
 
 use crate::family::Command;
 use crate::family::intent::{Intent, Ir, Matrix};
@@ -19,15 +19,16 @@ use crate::script::{Action, LedGroup};
 /// LEDs they do not have.
 pub fn led(model: Model, action: &Action) -> Option<Option<Command>> {
     let c = match (model, action) {
-        // BOLT: bits 0..2 front RGB, 3..5 back RGB (8-bit mask).
-        (Model::Bolt, Action::LedRgb(LedGroup::Front, rgb)) => {
+        // BOLT and BOLT+: bits 0..2 front RGB, 3..5 back RGB (8-bit mask; sphero-unsw's
+        // BOLTPLUS.LEDs numbers them as BOLT's).
+        (Model::Bolt | Model::BoltPlus, Action::LedRgb(LedGroup::Front, rgb)) => {
             cmd::set_all_leds_with_8_bit_mask(Mask(0x07), Bytes(rgb.to_vec()))
         }
-        (Model::Bolt, Action::LedRgb(LedGroup::Back, rgb)) => {
+        (Model::Bolt | Model::BoltPlus, Action::LedRgb(LedGroup::Back, rgb)) => {
             cmd::set_all_leds_with_8_bit_mask(Mask(0x38), Bytes(rgb.to_vec()))
         }
         // The back light as a brightness: BOLT's back LED in blue (its aiming colour here).
-        (Model::Bolt, Action::LedBrightness(LedGroup::Back, v)) => {
+        (Model::Bolt | Model::BoltPlus, Action::LedBrightness(LedGroup::Back, v)) => {
             cmd::set_all_leds_with_8_bit_mask(Mask(0x38), Bytes(vec![0, 0, *v]))
         }
         // Mini: bit 0 aiming (back) light, 1..3 body RGB (16-bit mask).
@@ -50,7 +51,7 @@ pub fn led(model: Model, action: &Action) -> Option<Option<Command>> {
         (Model::Rvr, Action::LedBrightness(LedGroup::Back, v)) => {
             cmd::set_all_leds_with_32_bit_mask(Mask(0x3F00_0000), Bytes(vec![*v, 0, 0, *v, 0, 0]))
         }
-        (Model::Bolt | Model::Mini | Model::Rvr, _) => return Some(None),
+        (Model::Bolt | Model::BoltPlus | Model::Mini | Model::Rvr, _) => return Some(None),
         _ => return None,
     };
     Some(Some(c.into()))
@@ -65,9 +66,9 @@ pub fn model_has(model: Model, did: u8, cid: u8) -> bool {
         }
         (0x17, _) => model.has_legs(),
         (0x1A, 0x07..=0x0A) => matches!(model, Model::R2D2 | Model::R2Q5 | Model::BB9E),
-        (0x1A, 0x0E) => !matches!(model, Model::Bolt | Model::Rvr),
+        (0x1A, 0x0E) => !matches!(model, Model::Bolt | Model::BoltPlus | Model::Rvr),
         (0x1A, 0x1A) => model == Model::Rvr,
-        (0x1A, 0x1C) => model == Model::Bolt,
+        (0x1A, 0x1C) => matches!(model, Model::Bolt | Model::BoltPlus),
         (0x1A, 0x2D..=0x4E) => model.has_matrix() || model == Model::Rvr,
         (0x18, 0x39..=0x3D) | (0x18, 0x35..=0x38) | (0x16, 0x25..=0x29) => {
             model.streams_by_service()
@@ -80,14 +81,32 @@ pub fn model_has(model: Model, did: u8, cid: u8) -> bool {
 /// The newer robots have no Core device: Core's Ping goes as API and Shell's Echo
 /// (spherov2.py pings them with 0x10/0x00).
 pub fn has_no_core(model: Model) -> bool {
-    matches!(model, Model::Bolt | Model::Mini | Model::Rvr)
+    matches!(
+        model,
+        Model::Bolt | Model::BoltPlus | Model::Mini | Model::Rvr
+    )
+}
+
+/// The LEDs a model's Set All LEDs may address: R2 8; BB-9E body RGB, aiming, head
+/// (`droid-facts.md` §2); BOLT and BOLT+ front and back RGB, Mini aiming, body and user RGB,
+/// RVR 31 (spherov2 `toy/*.py` LEDs, sphero-unsw `toy/boltplus.py`).
+pub fn led_mask(model: Model) -> u32 {
+    match model {
+        m if m.has_legs() => 0xFF,
+        Model::Bolt | Model::BoltPlus => 0x3F,
+        Model::Mini => 0x7F,
+        Model::Rvr => 0x7FFF_FFFF,
+        _ => 0x1F,
+    }
 }
 
 /// The aiming light on or off: BOLT's back LED blue, Mini's aiming LED, RVR's brake lights.
 fn aim_light(model: Model, on: bool) -> Option<v2::Command> {
     let v = if on { 255 } else { 0 };
     Some(match model {
-        Model::Bolt => cmd::set_all_leds_with_8_bit_mask(Mask(0x38), Bytes(vec![0, 0, v])),
+        Model::Bolt | Model::BoltPlus => {
+            cmd::set_all_leds_with_8_bit_mask(Mask(0x38), Bytes(vec![0, 0, v]))
+        }
         Model::Mini => cmd::set_all_leds_with_16_bit_mask(Mask(0x01), Bytes(vec![v])),
         Model::Rvr => {
             cmd::set_all_leds_with_32_bit_mask(Mask(0x3F00_0000), Bytes(vec![v, 0, 0, v, 0, 0]))
@@ -168,11 +187,11 @@ pub fn matrix(m: &Matrix) -> Command {
 }
 
 /// The main light as each v2 robot shows it: spherov2 lights BOLT's whole matrix
-/// (`set_led_matrix_one_colour`), R2-D2, R2-Q5 and RVR front and back, the others their front
-/// (or body) light.
+/// (`set_led_matrix_one_colour`), sphero-unsw fills BOLT+'s screen (`set_matrix_fill(0, 0, 7,
+/// 7, …)`), R2-D2, R2-Q5 and RVR light front and back, the others their front (or body) light.
 pub fn main_light(model: Model, rgb: [u8; 3]) -> Vec<Intent> {
     match model {
-        Model::Bolt => vec![Intent::Matrix(Matrix::Fill([0, 0, 7, 7], rgb))],
+        m if m.has_matrix() => vec![Intent::Matrix(Matrix::Fill([0, 0, 7, 7], rgb))],
         Model::R2D2 | Model::R2Q5 | Model::Rvr => vec![
             Intent::LedRgb(LedGroup::Front, rgb),
             Intent::LedRgb(LedGroup::Back, rgb),
@@ -225,7 +244,8 @@ pub fn infrared_has(model: Model, cid: u8) -> Option<bool> {
         return None;
     }
     Some(match model {
-        Model::Bolt => behaviours || robot_to_robot,
+        // sphero-unsw binds BOLT's robot-to-robot commands to BOLT+ (on its primary).
+        Model::Bolt | Model::BoltPlus => behaviours || robot_to_robot,
         Model::Rvr => behaviours || newer,
         _ => false,
     })
@@ -343,7 +363,7 @@ mod tests {
             );
         }
         // No speaker, and spherov2 binds neither: refused here, not by the robot.
-        for m in [Model::Bolt, Model::Mini, Model::Rvr] {
+        for m in [Model::Bolt, Model::BoltPlus, Model::Mini, Model::Rvr] {
             assert!(
                 f.animation(m, 3).is_none() && f.sound(m, 1915).is_none(),
                 "{m:?}"

@@ -173,6 +173,11 @@ mod tests {
         assert_eq!(c.encode(), collision_bytes());
         // The seed's 17 bytes is rejected.
         assert!(Collision::decode(&collision_bytes()[..17]).is_err());
+        // BOLT+'s 16 as sphero-unsw reads them: the time a 16-bit count.
+        let mut short = collision_bytes()[..14].to_vec();
+        short.extend_from_slice(&0x0123u16.to_be_bytes());
+        let c = Collision::decode(&short[..16]).unwrap();
+        assert_eq!((c.speed, c.time_ms), (80, 0x0123));
     }
 
     #[test]

@@ -6,6 +6,12 @@
 //! every packet spherov2 builds against them). `droid-facts.md` §6 says BOLT's power goes to
 //! the primary; spherov2 sends BOLT's power commands without a target, and so does droidctl
 //! (a command without a target is taken by the primary). The seeds say nothing of processors.
+//!
+//! BOLT+: sphero-unsw 0.1.13's `toy/boltplus.py` binds every command BOLT sends to a
+//! processor (drive, sensors, lights, the matrix) to `PRIMARY` on BOLT+, and leaves power,
+//! system, connection and the compass calibration without one, as for BOLT. It asks for the
+//! secondary's versions (System Info 0x17, 0x24), so a secondary exists; what runs on it is not
+//! described (unverified: here only the commands both processors answer).
 
 use super::Device;
 use crate::model::Model;
@@ -92,6 +98,12 @@ pub fn home(model: Model, did: u8, cid: u8) -> Home {
                 Home::On(Primary)
             }
         },
+        Model::BoltPlus => match device {
+            Device::ApiAndShell | Device::SystemInfo | Device::Firmware | Device::FactoryTest => {
+                Home::Both
+            }
+            _ => Home::On(Primary),
+        },
         Model::Rvr => match device {
             Device::Drive | Device::Animatronic => Home::On(Secondary),
             // RGBC, ambient light and colour detection sit by the colour sensor (primary);
@@ -114,7 +126,8 @@ pub fn home(model: Model, did: u8, cid: u8) -> Home {
 /// The target a host puts on `did`/`cid` for `model` when the command names none, as
 /// spherov2 does: on RVR every command carries one (the primary where both answer); on BOLT
 /// drive, sensors and lights do, while power, system and the robot-to-robot IR commands go
-/// without.
+/// without; on BOLT+ (sphero-unsw) drive, sensors, lights and infrared do, the compass
+/// calibration does not.
 pub fn addressed(model: Model, did: u8, cid: u8) -> Option<Processor> {
     let h = home(model, did, cid);
     match (model, h) {
@@ -126,6 +139,12 @@ pub fn addressed(model: Model, did: u8, cid: u8) -> Option<Processor> {
                 device == Device::Sensor && matches!(cid, 0x22 | 0x27..=0x2B | 0x32..=0x34);
             let addressed = matches!(device, Device::Drive | Device::Sensor | Device::Io);
             (addressed && !untargeted_ir).then_some(p)
+        }
+        (Model::BoltPlus, Home::On(p)) => {
+            let device = Device::from_id(did)?;
+            let addressed = matches!(device, Device::Drive | Device::Sensor | Device::Io);
+            let untargeted = device == Device::Sensor && cid == 0x25;
+            (addressed && !untargeted).then_some(p)
         }
         _ => None,
     }
@@ -151,5 +170,13 @@ mod tests {
         assert!(!home(Model::Mini, 0x16, 0x07).accepts(Some(0x12)));
         assert!(!home(Model::Rvr, 0x18, 0x39).accepts(Some(0x13)));
         assert!(home(Model::Rvr, 0x18, 0x39).accepts(Some(0x11)));
+        // BOLT+ drives and draws on its primary (sphero-unsw), calibrates without a target.
+        assert_eq!(addressed(Model::BoltPlus, 0x16, 0x07), Some(Primary));
+        assert_eq!(addressed(Model::BoltPlus, 0x1A, 0x42), Some(Primary));
+        assert_eq!(addressed(Model::BoltPlus, 0x18, 0x2A), Some(Primary));
+        assert_eq!(addressed(Model::BoltPlus, 0x18, 0x25), None);
+        assert_eq!(addressed(Model::BoltPlus, 0x13, 0x0D), None);
+        assert!(!home(Model::BoltPlus, 0x16, 0x07).accepts(Some(0x12)));
+        assert!(home(Model::BoltPlus, 0x11, 0x17).accepts(Some(0x12)));
     }
 }
