@@ -37,6 +37,8 @@ pub enum Robots {
     RawMotors,
     /// Robot-to-robot infrared: BOLT and RVR (Sphero Edu's "Communications").
     Infrared,
+    /// RVR's own calls: its drive by distance and its headlights and side lights.
+    Rvr,
 }
 
 impl Robots {
@@ -55,6 +57,7 @@ impl Robots {
             Robots::ColorSensor => Caps::COLOR_SENSOR,
             Robots::RawMotors => Caps::RAW_MOTORS,
             Robots::Infrared => Caps::IR,
+            Robots::Rvr => Caps::TRACKS,
         }
     }
 
@@ -130,6 +133,20 @@ pub const CALLS: &[Call] = &[
         true,
         Sphero,
         "roll toward heading at speed until distance (cm) is covered, then stop",
+    ),
+    call(
+        "rollToDistance",
+        "heading, speed, distance",
+        true,
+        Sphero,
+        "Sphero Edu's name for rollDistance: the same",
+    ),
+    call(
+        "driveToDistance",
+        "heading, speed, distance",
+        true,
+        Rvr,
+        "RVR: roll toward heading at speed until distance (cm) is covered, then stop (as rollDistance)",
     ),
     call(
         "setSpeed",
@@ -239,6 +256,34 @@ pub const CALLS: &[Call] = &[
         Bb9e,
         "BB-9E's dome lights 0..15",
     ),
+    call(
+        "setLeftHeadlightLed",
+        "color",
+        false,
+        Rvr,
+        "RVR's left headlight",
+    ),
+    call(
+        "setRightHeadlightLed",
+        "color",
+        false,
+        Rvr,
+        "RVR's right headlight",
+    ),
+    call(
+        "setLeftLed",
+        "color",
+        false,
+        Rvr,
+        "RVR's left side light (the battery door's side)",
+    ),
+    call(
+        "setRightLed",
+        "color",
+        false,
+        Rvr,
+        "RVR's right side light (the power button's side)",
+    ),
     // BOLT's matrix.
     call(
         "setMatrixCharacter",
@@ -326,6 +371,16 @@ pub const CALLS: &[Call] = &[
         true,
         All,
         "a sound: played by R2-D2, R2-Q5 and BB-9E, printed by the others",
+    ),
+    call(
+        "Sound.Category.Name.play",
+        "wait",
+        true,
+        All,
+        "Sphero Edu's sounds (`Sound.Animal.Cat.play(true)`; `Sound.Animal.play` a random one of \
+         the category, `Sound.play` any): played by R2-D2, R2-Q5 and BB-9E where droidctl knows \
+         the droid's sound, printed by the others; with wait, waits the sound's length (1 s, \
+         unverified: Sphero does not publish the lengths)",
     ),
     // Star Wars droids.
     call(
@@ -422,6 +477,63 @@ pub const CALLS: &[Call] = &[
         "the main light's {r, g, b}",
     ),
     call(
+        "getFrontLed",
+        "",
+        false,
+        Sphero,
+        "the front light's {r, g, b} as last set",
+    ),
+    call(
+        "getBackLed",
+        "",
+        false,
+        Sphero,
+        "the back light's {r, g, b} as last set",
+    ),
+    call(
+        "getColorChannel",
+        "channel",
+        false,
+        ColorSensor,
+        "one channel of getColor(): \"r\", \"g\" or \"b\"",
+    ),
+    call(
+        "getRandomInt",
+        "min, max",
+        false,
+        All,
+        "a whole number from min to max",
+    ),
+    call(
+        "getRandomFloat",
+        "min, max",
+        false,
+        All,
+        "a number from min up to max",
+    ),
+    call(
+        "getRandomColor",
+        "",
+        false,
+        All,
+        "a colour {r, g, b}",
+    ),
+    call(
+        "getCurrentTime",
+        "",
+        false,
+        All,
+        "seconds since the program started, on droidctl's clock (simulated under --sim; \
+         Sphero Edu's is the device's clock)",
+    ),
+    call(
+        "buildString",
+        "values…",
+        false,
+        All,
+        "its arguments as one text, joined as they are",
+    ),
+    call(
         "getLastIRMessage",
         "",
         false,
@@ -479,6 +591,31 @@ pub const CALLS: &[Call] = &[
         Infrared,
         "hear the next message on these channels (a channel or a list): onIRMessage fires",
     ),
+    // The host's functions.
+    call(
+        "console.log",
+        "values…",
+        false,
+        All,
+        "print its arguments with the program's line",
+    ),
+    call(
+        "setTimeout",
+        "function, ms",
+        false,
+        All,
+        "call function once after ms milliseconds; returns an id (the program ends when \
+         startProgram returns, timers pending or not, unless events are registered)",
+    ),
+    call(
+        "setInterval",
+        "function, ms",
+        false,
+        All,
+        "call function every ms milliseconds; returns an id",
+    ),
+    call("clearTimeout", "id", false, All, "cancel a setTimeout"),
+    call("clearInterval", "id", false, All, "cancel a setInterval"),
     // Events.
     call(
         "registerEvent",
@@ -598,6 +735,7 @@ mod tests {
                         || m.protocol() == Protocol::SpheroV1,
                 ),
                 (Robots::Infrared, matches!(m, Model::Bolt | Model::Rvr)),
+                (Robots::Rvr, m == Model::Rvr),
             ];
             for (robots, applies) in spelled {
                 assert_eq!(robots.applies(m), applies, "{robots:?} on {m:?}");

@@ -118,13 +118,13 @@ fn an_exception_stops_the_droid_and_names_its_line() {
     let dir = Scratch::new("edu", "exception");
     let p = dir.file(
         "oops.js",
-        "async function startProgram() {\n  setSpeed(120);\n  await delay(1);\n  undefinedCall(3);\n}\n",
+        "async function startProgram() {\n  setSpeed(120);\n  await delay(1);\n  const n = undefinedValue + 3;\n}\n",
     );
     let out = dir.run(&["run", path(&p), "--sim", "bolt", "--json"]);
     assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
     let err = stderr(&out);
     assert!(
-        err.contains("oops.js:4: ReferenceError: undefinedCall is not defined"),
+        err.contains("oops.js:4: ReferenceError: undefinedValue is not defined"),
         "{err}"
     );
     assert!(err.contains("droid stopped"), "{err}");
