@@ -154,8 +154,8 @@ pub fn run(args: &RunArgs, sims: Vec<Model>, text: String, shown: &str) -> Resul
                 move |session, mission, emit| async move {
                     let opts = ProgramOptions { mission, ..opts };
                     let start = tokio::time::Instant::now();
-                    let e = crate::edu::run::run_to_end(&session, model, p, opts, emit, start)
-                        .await;
+                    let e =
+                        crate::edu::run::run_to_end(&session, model, p, opts, emit, start).await;
                     if e.result.is_err() {
                         *crate::sync::lock(&slot) = e.summary;
                     }

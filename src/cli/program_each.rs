@@ -53,9 +53,7 @@ impl Line {
             .unwrap_or_default();
         match self.result {
             Outcome::Ended => format!("{}: ended{t}{at}", self.program),
-            Outcome::Error | Outcome::TimeLimit => {
-                self.message.clone().unwrap_or_default()
-            }
+            Outcome::Error | Outcome::TimeLimit => self.message.clone().unwrap_or_default(),
         }
     }
 }
@@ -139,8 +137,10 @@ fn read(
         ));
     }
     super::program::parse(text, shown, engine).map_err(|e| {
-        e.message
-            .replace("\nthe program has an error; nothing was sent", "; nothing was run")
+        e.message.replace(
+            "\nthe program has an error; nothing was sent",
+            "; nothing was run",
+        )
     })
 }
 

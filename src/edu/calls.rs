@@ -378,8 +378,8 @@ pub const CALLS: &[Call] = &[
         true,
         All,
         "Sphero Edu's sounds (`Sound.Animal.Cat.play(true)`; `Sound.Animal.play` a random one of \
-         the category, `Sound.play` any): played by R2-D2, R2-Q5 and BB-9E where droidctl knows \
-         the droid's sound, printed by the others; with wait, waits the sound's length (1 s, \
+         the category, `Sound.play` any): played by R2-D2 and R2-Q5 where droidctl knows their \
+         clip, printed by the others; with wait, waits the sound's length (1 s, \
          unverified: Sphero does not publish the lengths)",
     ),
     // Star Wars droids.
@@ -511,13 +511,7 @@ pub const CALLS: &[Call] = &[
         All,
         "a number from min up to max",
     ),
-    call(
-        "getRandomColor",
-        "",
-        false,
-        All,
-        "a colour {r, g, b}",
-    ),
+    call("getRandomColor", "", false, All, "a colour {r, g, b}"),
     call(
         "getCurrentTime",
         "",

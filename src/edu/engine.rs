@@ -379,13 +379,17 @@ pub(super) fn js_thread(
 /// ([`not_on_robot`] says which and where).
 const NOT_ON_ROBOT: &str = "droidctl: a call not on this robot";
 
+/// How the failure of a program calling what its robot does not have ends: nothing of the
+/// program ran.
+pub const FOUND_BEFORE: &str = "(found before anything was sent)";
+
 /// The first call of `source` that `model` does not have, as a failure at its line.
 fn not_on_robot(source: &str, model: Model) -> Failure {
     let called = super::names::called_from_outside(source).unwrap_or_default();
     match super::names::not_on_robot(&called, model) {
         Some((line, why)) => Failure {
             line: Some(line),
-            message: format!("TypeError: {why} (found before anything was sent)"),
+            message: format!("TypeError: {why} {FOUND_BEFORE}"),
         },
         None => Failure {
             line: None,

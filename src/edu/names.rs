@@ -146,10 +146,7 @@ pub(super) fn not_on_robot(called: &[Called], model: Model) -> Option<(u32, Stri
 /// (a third of a long name).
 fn did_you_mean<'a>(name: &str, candidates: &[&'a str]) -> Option<&'a str> {
     let lower = name.to_ascii_lowercase();
-    if let Some(c) = candidates
-        .iter()
-        .find(|c| c.to_ascii_lowercase() == lower)
-    {
+    if let Some(c) = candidates.iter().find(|c| c.to_ascii_lowercase() == lower) {
         return Some(c);
     }
     let most = (name.chars().count() / 3).clamp(1, 3);

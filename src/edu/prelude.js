@@ -179,9 +179,15 @@ function getColorChannel(channel) {
   return c[k];
 }
 function getCurrentTime() { return __read("getCurrentTime"); }
-function getRandomFloat(min, max) { return Math.random() * (__number(max) - __number(min)) + __number(min); }
+function getRandomFloat(min, max) {
+  const lo = __num(min, "getRandomFloat: min"), hi = __num(max, "getRandomFloat: max");
+  return Math.random() * (hi - lo) + lo;
+}
 function getLastIRMessage() { return __read("getLastIRMessage"); }
-function getRandomInt(min, max) { return Math.floor(Math.random() * (max - min + 1)) + min; }
+function getRandomInt(min, max) {
+  const lo = __num(min, "getRandomInt: min"), hi = __num(max, "getRandomInt: max");
+  return Math.floor(Math.random() * (hi - lo + 1)) + lo;
+}
 function getRandomColor() { return { r: getRandomInt(0, 255), g: getRandomInt(0, 255), b: getRandomInt(0, 255) }; }
 function registerEvent(type, fn) {
   if (typeof fn !== "function") throw new TypeError("registerEvent: needs a function to call");

@@ -188,12 +188,18 @@ pub async fn run_to_end(
         result,
     };
     let events = session.subscribe();
-    let mission =
-        match DroidMission::start(session, model, opts.mission.clone(), emit.clone(), start).await
-        {
-            Ok(m) => m,
-            Err(e) => return ended(Err(e)),
-        };
+    let mission = match DroidMission::start(
+        session,
+        model,
+        opts.mission.clone(),
+        emit.clone(),
+        start,
+    )
+    .await
+    {
+        Ok(m) => m,
+        Err(e) => return ended(Err(e)),
+    };
     let mut p = Player {
         session: session.clone(),
         model,

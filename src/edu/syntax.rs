@@ -10,7 +10,10 @@ type At = (u32, u32);
 /// its place and what to do.
 pub(super) fn explained(source: &str, message: &str, at: Option<At>) -> (At, String) {
     if let Some((line, col)) = at {
-        let text = source.lines().nth(line.saturating_sub(1) as usize).unwrap_or("");
+        let text = source
+            .lines()
+            .nth(line.saturating_sub(1) as usize)
+            .unwrap_or("");
         if message.contains("expected token") && has_word(text, "await") {
             return (
                 (line, col),
@@ -80,8 +83,7 @@ fn unclosed(source: &str) -> Option<(At, String)> {
                     '{' | '(' | '[' => open.push((c, at)),
                     '}' | ')' | ']' => {
                         if let Some((o, from)) = open.pop() {
-                            let first = text[..].trim_start().starts_with(c)
-                                && chars[..i].iter().all(|ch| ch.is_whitespace());
+                            let first = chars[..i].iter().all(|ch| ch.is_whitespace());
                             let opened = lines.get(from.0 as usize - 1).copied().unwrap_or("");
                             if o == '{' && first && indent(opened) != indent(text) {
                                 suspect.get_or_insert((o, from));

@@ -5,10 +5,10 @@
 //! later (ECMAScript's HostPromiseRejectionTracker); what is still unhandled at the end of a
 //! turn fails the program with its line.
 
+use boa_engine::Context;
 use boa_engine::builtins::promise::{OperationType, Promise};
 use boa_engine::context::HostHooks;
 use boa_engine::object::JsObject;
-use boa_engine::Context;
 use std::cell::RefCell;
 use std::rc::Rc;
 

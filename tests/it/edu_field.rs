@@ -59,7 +59,10 @@ fn the_calls_field_programs_use_run() {
     let text = stdout(&out);
     assert_eq!(out.status.code(), Some(0), "{}\n{text}", stderr(&out));
     // A sound with wait takes its (guessed) length; without, the program goes on at once.
-    assert!(text.contains("Sphero BOLT plays sound \"Animal.Cat\""), "{text}");
+    assert!(
+        text.contains("Sphero BOLT plays sound \"Animal.Cat\""),
+        "{text}"
+    );
     assert!(text.contains("plays a random Effects sound"), "{text}");
     assert!(text.contains("plays a random sound"), "{text}");
     let waited = at(&text, "playSound(\"Effects\"") - at(&text, "playSound(\"Animal.Cat\"");
@@ -68,7 +71,10 @@ fn the_calls_field_programs_use_run() {
         text.contains(r#"console.log("speed 80! {\"a\":1}")"#),
         "{text}"
     );
-    assert!(text.contains("line 21: rollToDistance(0, 80, 30)"), "{text}");
+    assert!(
+        text.contains("line 22: rollToDistance(0, 80, 30)"),
+        "{text}"
+    );
 }
 
 #[test]
@@ -83,11 +89,13 @@ fn rvr_drives_to_a_distance_reads_a_colour_channel_and_sets_its_own_lights() {
     // The lights went to RVR as spherov2 sends them: Set All LEDs with a 32-bit mask, the
     // left headlight's bits 3..5.
     let capture = std::fs::read_to_string(dir.0.join("rvr.drc")).unwrap();
-    assert!(
-        capture.to_ascii_lowercase().contains("1a1a00000038ff0000"),
-        "no left headlight command in the capture:\n{}",
-        &capture[..capture.len().min(3000)]
-    );
+    let left = capture.lines().any(|l| {
+        // `… out api 8d 3a 11 01 1a 1a SEQ 00000038 ff0000 …`: DID 0x1A, CID 0x1A.
+        l.contains(" out api ")
+            && l.find("1a1a")
+                .is_some_and(|i| l[i + 6..].starts_with("00000038ff0000"))
+    });
+    assert!(left, "no left headlight command in the capture:\n{capture}");
     // Not RVR: found before anything is sent.
     let out = dir.run(&["run", path(&p), "--sim", "bolt"]);
     assert_eq!(out.status.code(), Some(1));
@@ -218,7 +226,15 @@ fn a_program_that_never_ends_stops_at_the_sim_limit_and_says_so() {
     assert_eq!(last["ended"], "time_limit", "{last:?}");
     assert!(last["t_ms"].as_f64().unwrap() >= 300_000.0, "{last:?}");
     // --timeout sets another limit.
-    let out = dir.run(&["run", path(&p), "--sim", "bolt", "--timeout", "10", "--json"]);
+    let out = dir.run(&[
+        "run",
+        path(&p),
+        "--sim",
+        "bolt",
+        "--timeout",
+        "10",
+        "--json",
+    ]);
     assert_eq!(out.status.code(), Some(1));
     let lines = json_lines(&stdout(&out));
     let t = lines.last().unwrap()["t_ms"].as_f64().unwrap();
@@ -239,7 +255,10 @@ fn json_ends_with_a_summary_when_a_program_errors() {
     assert_eq!(last.get("done"), Some(&Value::Bool(true)), "{last:?}");
     assert_eq!(last["ended"], "error");
     assert!(
-        last["error"].as_str().unwrap().contains("oops.js:3: Error: boom"),
+        last["error"]
+            .as_str()
+            .unwrap()
+            .contains("oops.js:3: Error: boom"),
         "{last:?}"
     );
 }
@@ -283,11 +302,41 @@ fn each_runs_a_class_of_programs_one_line_per_file() {
     assert!(lines[3].contains("did you mean roll()?"), "{text}");
     // Each on a fresh droid: the same program twice ends in the same place.
     let out = dir.run(&[
-        "run", "--each", path(&good), path(&good), "--sim", "bolt", "--json",
+        "run",
+        "--each",
+        path(&good),
+        path(&good),
+        "--sim",
+        "bolt",
+        "--json",
     ]);
     assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
     let lines = json_lines(&stdout(&out));
     assert_eq!(lines.len(), 2);
     assert_eq!(lines[0]["result"], "ended");
     assert_eq!(lines[0]["y_cm"], lines[1]["y_cm"], "{lines:?}");
+}
+
+/// A program's capture replays and plots: what a robot without a speaker says is marked as a
+/// step (`step 2 Sphero BOLT plays sound "Animal.Cat"`) and is not read as a mission line.
+#[test]
+fn a_programs_capture_with_sounds_and_speech_replays_and_plots() {
+    let dir = Scratch::new("edu-field", "record");
+    let p = dir.file(
+        "rec.js",
+        "async function startProgram() {\n  await Sound.Animal.Cat.play(true);\n  setMainLed({ r: 255, g: 0, b: 0 });\n  await roll(0, 80, 2);\n  await speak(\"done\", false);\n}\n",
+    );
+    let out = dir.run(&["run", path(&p), "--sim", "bolt", "--record", "rec.drc"]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let capture = dir.0.join("rec.drc");
+    let text = std::fs::read_to_string(&capture).unwrap();
+    assert!(text.contains("plays sound \"Animal.Cat\""), "{text}");
+    let out = dir.run(&["replay", path(&capture), "--json"]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let last = json_lines(&stdout(&out)).pop().expect("a summary");
+    assert!(last["y_cm"].as_f64().unwrap_or(0.0) > 30.0, "{last:?}");
+    let png = dir.0.join("rec.png");
+    let out = dir.run(&["plot", path(&capture), "-o", path(&png)]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    assert!(png.exists());
 }

@@ -129,7 +129,11 @@ fn an_exception_stops_the_droid_and_names_its_line() {
     );
     assert!(err.contains("droid stopped"), "{err}");
     // The last sample: slowing to a stop (the simulated body brakes over a few tenths).
-    let samples = json_lines(&stdout(&out));
+    // The samples (the summary comes last, with the error: `"ended": "error"`).
+    let samples: Vec<_> = json_lines(&stdout(&out))
+        .into_iter()
+        .filter(|s| s.get("done").is_none())
+        .collect();
     let last = samples.last().expect("samples");
     let top = samples.iter().map(|s| num(s, "speed")).fold(0.0, f64::max);
     assert!(
