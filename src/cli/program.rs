@@ -170,6 +170,14 @@ pub fn run(args: &RunArgs, sims: Vec<Model>, text: String, shown: &str) -> Resul
     // An engine still spinning in a program that never yields is not waited for.
     rt.shutdown_background();
     let (result, kept) = r;
+    // A call the droid does not have is bad input, found before anything was sent (exit 2).
+    let result = result.map_err(|e| {
+        if e.message.contains(crate::edu::engine::FOUND_BEFORE) {
+            CliError::usage(e.message)
+        } else {
+            e
+        }
+    });
     if json
         && let Err(e) = &result
         && let Some(s) = crate::sync::lock(&failed_summary).take()

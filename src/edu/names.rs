@@ -10,6 +10,7 @@
 
 use super::calls;
 use crate::model::Model;
+use boa_engine::ast::expression::access::{PropertyAccess, PropertyAccessField};
 use boa_engine::ast::expression::{Call, Identifier};
 use boa_engine::ast::visitor::{VisitWith, Visitor};
 use boa_engine::ast::{Expression, Spanned};
@@ -20,7 +21,8 @@ use std::collections::HashMap;
 use std::convert::Infallible;
 use std::ops::ControlFlow;
 
-/// A name the program calls from outside itself, and where (1-based).
+/// A name the program calls from outside itself, and where (1-based). An event it registers
+/// (`registerEvent(EventType.onColor, …)`) is one too, as `EventType.onColor`.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub(super) struct Called {
     pub name: String,
@@ -28,12 +30,18 @@ pub(super) struct Called {
     pub column: u32,
 }
 
+/// How an event registered is named among [`Called`]'s names.
+const EVENT: &str = "EventType.";
+
 #[derive(Default)]
 struct Names {
     /// How often each name appears anywhere.
     seen: HashMap<Sym, u32>,
     /// Each plain call `name(…)`: its name and place.
     calls: Vec<(Sym, u32, u32)>,
+    /// Each plain call whose first argument is `A.B` (`registerEvent(EventType.onColor, …)`):
+    /// the call's name, `A`, `B` and the place.
+    member_args: Vec<(Sym, Sym, Sym, u32, u32)>,
 }
 
 impl<'ast> Visitor<'ast> for Names {
@@ -49,6 +57,19 @@ impl<'ast> Visitor<'ast> for Names {
             let at = id.span().start();
             self.calls
                 .push((id.sym(), at.line_number(), at.column_number()));
+            if let Some(Expression::PropertyAccess(PropertyAccess::Simple(arg))) =
+                call.args().first()
+                && let Expression::Identifier(target) = arg.target()
+                && let PropertyAccessField::Const(field) = arg.field()
+            {
+                self.member_args.push((
+                    id.sym(),
+                    target.sym(),
+                    field.sym(),
+                    at.line_number(),
+                    at.column_number(),
+                ));
+            }
         }
         call.visit_with(self)
     }
@@ -77,6 +98,17 @@ pub(super) fn called_from_outside(source: &str) -> Option<Vec<Called>> {
         if out.iter().all(|c| c.name != name) {
             out.push(Called {
                 name,
+                line: *line,
+                column: *column,
+            });
+        }
+    }
+    for (call, target, field, line, column) in &names.member_args {
+        if interner.resolve_expect(*call).to_string() == "registerEvent"
+            && interner.resolve_expect(*target).to_string() == "EventType"
+        {
+            out.push(Called {
+                name: format!("{EVENT}{}", interner.resolve_expect(*field)),
                 line: *line,
                 column: *column,
             });
@@ -112,7 +144,9 @@ pub(super) fn unknown_call(source: &str) -> Option<(Called, String)> {
     let called = called_from_outside(source)?;
     let globals = engine_globals();
     let known = |n: &str| api_names().any(|a| a == n) || globals.iter().any(|g| g == n);
-    let c = called.into_iter().find(|c| !known(&c.name))?;
+    let c = called
+        .into_iter()
+        .find(|c| !c.name.starts_with(EVENT) && !known(&c.name))?;
     let mut candidates: Vec<&str> = Vec::new();
     for a in api_names() {
         candidates.push(a);
@@ -139,7 +173,21 @@ pub(super) fn unknown_call(source: &str) -> Option<(Called, String)> {
 pub(super) fn not_on_robot(called: &[Called], model: Model) -> Option<(u32, String)> {
     called
         .iter()
-        .find_map(|c| calls::not_on(&c.name, model).map(|why| (c.line, why)))
+        .find_map(|c| match c.name.strip_prefix(EVENT) {
+            Some(event) => calls::event(event)
+                .filter(|robots| !robots.applies(model))
+                .map(|robots| {
+                    (
+                        c.line,
+                        format!(
+                            "registerEvent: {event} is not on {} (it is on {})",
+                            model.display_name(),
+                            robots.names()
+                        ),
+                    )
+                }),
+            None => calls::not_on(&c.name, model).map(|why| (c.line, why)),
+        })
 }
 
 /// The closest of `candidates` to `name`: the same but for case, or at most two edits away
@@ -204,5 +252,12 @@ mod tests {
         assert_eq!(line, 3);
         assert!(why.contains("not on R2-D2"), "{why}");
         assert_eq!(not_on_robot(&called, Model::Bolt), None);
+        // An event registered is checked too.
+        let src = "registerEvent(EventType.onColor, () => {});\nasync function startProgram() {}\n";
+        let called = called_from_outside(src).unwrap();
+        let (line, why) = not_on_robot(&called, Model::Bolt).expect("onColor is RVR's");
+        assert_eq!(line, 1);
+        assert!(why.contains("onColor is not on Sphero BOLT"), "{why}");
+        assert_eq!(not_on_robot(&called, Model::Rvr), None);
     }
 }

@@ -98,7 +98,7 @@ fn rvr_drives_to_a_distance_reads_a_colour_channel_and_sets_its_own_lights() {
     assert!(left, "no left headlight command in the capture:\n{capture}");
     // Not RVR: found before anything is sent.
     let out = dir.run(&["run", path(&p), "--sim", "bolt"]);
-    assert_eq!(out.status.code(), Some(1));
+    assert_eq!(out.status.code(), Some(2));
     assert!(
         stderr(&out).contains("rvr.js:2: TypeError: setLeftHeadlightLed() is not on Sphero BOLT"),
         "{}",
@@ -146,7 +146,7 @@ fn a_call_not_on_the_robot_is_found_before_the_first_call_is_sent() {
         "async function startProgram() {\n  await roll(0, 80, 2);\n  setMatrixCharacter(\"A\", { r: 255, g: 0, b: 0 });\n}\n",
     );
     let out = dir.run(&["run", path(&p), "--sim", "r2d2"]);
-    assert_eq!(out.status.code(), Some(1));
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
     let err = stderr(&out);
     assert!(
         err.contains("m.js:3: TypeError: setMatrixCharacter() is not on R2-D2"),

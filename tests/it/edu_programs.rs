@@ -162,7 +162,8 @@ fn a_call_a_robot_does_not_have_is_an_error_naming_the_robots_it_is_on() {
         "async function startProgram() {\n  await delay(0.1);\n  setMatrixCharacter(\"A\", { r: 255, g: 0, b: 0 });\n}\n",
     );
     let out = dir.run(&["run", path(&p), "--sim", "r2d2"]);
-    assert_eq!(out.status.code(), Some(1));
+    // Found before anything is sent: bad input.
+    assert_eq!(out.status.code(), Some(2));
     let err = stderr(&out);
     assert!(
         err.contains(
