@@ -25,7 +25,8 @@ pub fn droid_clip(model: Model, sound: &str) -> Option<u16> {
     if let Ok(id) = sound.trim().parse::<u16>() {
         return Some(id);
     }
-    if !matches!(model, Model::R2D2 | Model::R2Q5) {
+    // The catalogue is R2's clips: R2-D2's and R2-Q5's (the droids with legs).
+    if !model.has_legs() {
         return None;
     }
     let wanted = sound.rsplit('.').next()?.to_ascii_lowercase();
