@@ -670,17 +670,44 @@ pub fn not_on(name: &str, model: Model) -> Option<String> {
     })
 }
 
-/// The table as Markdown rows (`| call | robots | what |`), as docs/edu-programs.md has it.
+/// How droidctl runs a call next to Sphero Edu: as Sphero Edu does, or differently and how.
+/// (A robot a call is not on is the table's robots column: there the program is refused
+/// before anything is sent.)
+pub fn support(name: &str) -> &'static str {
+    match name {
+        "rollDistance" => "droidctl's own name for rollToDistance",
+        "speak" | "playSound" | "Sound.Category.Name.play" => {
+            "differently: printed where the robot has no speaker (Sphero Edu plays it on the \
+             phone or tablet); a sound's length is guessed"
+        }
+        "getCurrentTime" => {
+            "differently: seconds since the program started, not the device's clock"
+        }
+        "setTimeout" | "setInterval" => {
+            "differently: the program ends when startProgram returns and no event is \
+             registered, timers pending or not"
+        }
+        "console.log" => "printed as a call line",
+        "registerMatrixAnimation" => "at most 64 frames in all",
+        _ => "as Sphero Edu",
+    }
+}
+
+/// The table as Markdown rows (`| call | robots | what | next to Sphero Edu |`), as
+/// docs/edu-programs.md has it.
 pub fn markdown() -> String {
-    let mut out = String::from("| call | robots | what it does |\n| --- | --- | --- |\n");
+    let mut out = String::from(
+        "| call | robots | what it does | next to Sphero Edu |\n| --- | --- | --- | --- |\n",
+    );
     for c in CALLS {
         let aw = if c.waits { "await " } else { "" };
         out.push_str(&format!(
-            "| `{aw}{}({})` | {} | {} |\n",
+            "| `{aw}{}({})` | {} | {} | {} |\n",
             c.name,
             c.args,
             c.robots.names(),
-            c.what
+            c.what,
+            support(c.name)
         ));
     }
     out.push_str("\n| event | robots | when |\n| --- | --- | --- |\n");

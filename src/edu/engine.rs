@@ -313,13 +313,10 @@ pub(super) fn js_thread(
     reply: mpsc::Sender<FromJs>,
 ) {
     SOURCE.with(|s| *s.borrow_mut() = source.clone());
-    let mut ctx = match Context::builder()
+    let mut ctx = Context::builder()
         .host_hooks(super::unhandled::hooks())
         .build()
-    {
-        Ok(ctx) => ctx,
-        Err(_) => Context::default(),
-    };
+        .unwrap_or_default();
     ctx.runtime_limits_mut()
         .set_loop_iteration_limit(LOOP_LIMIT);
     ctx.runtime_limits_mut()

@@ -112,7 +112,7 @@ fn unclosed(source: &str) -> Option<(At, String)> {
             }
             if let State::Str(_, from) = state
                 && i + 1 >= chars.len()
-                && !chars.last().is_some_and(|l| *l == '\\')
+                && chars.last().is_none_or(|l| *l != '\\')
             {
                 return Some((
                     from,
