@@ -169,13 +169,18 @@ pub fn validate(c: &Capture) -> Result<(), String> {
 }
 
 /// The script line of a mission's `step LINE TEXT` mark. A Sphero Edu program's run marks
-/// its calls the same way (`step 3 roll(90, 100, 2)`): those are not script lines, and are
-/// neither read as one nor refused (a mission command's first word never holds `(`).
+/// its calls the same way (`step 3 roll(90, 100, 2)`, `step 4 setMainLed(255, 0, 0)`, and
+/// what a robot without a speaker says: `step 5 Sphero BOLT plays sound "Animal.Cat"`):
+/// those are not script lines, and are neither read as one nor refused. A mission line
+/// starts with one of the script's commands; nothing else is read as one.
 fn step_text(mark: &str) -> Option<&str> {
     let rest = mark.strip_prefix("step ")?;
     let (_, text) = rest.split_once(' ')?;
     let first = text.split_whitespace().next().unwrap_or("");
-    (!first.contains('(')).then_some(text)
+    crate::script::COMMANDS
+        .iter()
+        .any(|c| c.eq_ignore_ascii_case(first))
+        .then_some(text)
 }
 
 /// What sampling a capture needs to know before its first event: where the mission starts

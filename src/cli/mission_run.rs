@@ -28,6 +28,11 @@ pub struct RunArgs {
     /// SCRIPT.
     #[arg(value_name = "PROGRAM")]
     pub more: Vec<PathBuf>,
+    /// Sphero Edu programs: run SCRIPT and each PROGRAM after it on a fresh simulated droid
+    /// of its own (--sim MODEL), one after another, and print one line per file: ended, its
+    /// error with the line, or its time limit. Exit 1 when any did not end by itself.
+    #[arg(long)]
+    pub each: bool,
     /// Run against a simulated droid (r2d2 without a MODEL); the mission runs in simulated
     /// time. Several share one room: --sim r2d2,bb8,robi.
     #[arg(long, num_args = 0..=1, default_missing_value = "r2d2", value_name = "MODEL[,MODEL…]",

@@ -17,6 +17,7 @@ pub mod models;
 pub mod packet;
 pub mod plot;
 mod program;
+mod program_each;
 pub mod replay;
 pub mod run;
 mod run_output;

@@ -77,6 +77,10 @@ fn more_programs(
 
 pub fn run(args: &RunArgs, sims: Vec<Model>, text: String, shown: &str) -> Result<i32, CliError> {
     let engine = engine_options(args.program_memory);
+    if args.each {
+        let first = args.script.clone().unwrap_or_else(|| shown.into());
+        return super::program_each::run(args, &sims, first);
+    }
     let program = parse(text, shown, &engine)?;
     let mut programs = vec![program];
     programs.extend(more_programs(args, &engine)?);
@@ -87,11 +91,8 @@ pub fn run(args: &RunArgs, sims: Vec<Model>, text: String, shown: &str) -> Resul
     };
     // The timeout is the program's, on droidctl's clock; how long it may compute without
     // waiting is another bound (a tiny timeout ends the program at its timeout).
-    let opts = ProgramOptions {
-        mission,
-        timeout: args.timeout.map(Duration::from_secs_f64),
-        ..ProgramOptions::default()
-    };
+    let only_sims = args.ble.name.is_empty() && args.ble.remote.is_empty();
+    let opts = options(args, mission, !sims.is_empty() && only_sims);
     if super::fleet::is_fleet(sims.len(), &args.ble) {
         return fleet(args, sims, &programs, opts);
     }
@@ -114,6 +115,7 @@ pub fn run(args: &RunArgs, sims: Vec<Model>, text: String, shown: &str) -> Resul
     let out = Arc::new(RunOutput::new(files));
     let json = args.json;
     let _ = crate::logging::init();
+    let failed_summary: Arc<std::sync::Mutex<Option<Summary>>> = Arc::default();
     let (rt, sim) = match sims.first().copied() {
         // Simulated time, as missions: the clock jumps whenever everything waits.
         Some(model) => (paused_runtime()?, Some(model)),
@@ -139,6 +141,7 @@ pub fn run(args: &RunArgs, sims: Vec<Model>, text: String, shown: &str) -> Resul
             None => link,
         };
         let p = program;
+        let slot = failed_summary.clone();
         let r = run_session(
             link,
             model,
@@ -150,8 +153,13 @@ pub fn run(args: &RunArgs, sims: Vec<Model>, text: String, shown: &str) -> Resul
                 let opts = opts.clone();
                 move |session, mission, emit| async move {
                     let opts = ProgramOptions { mission, ..opts };
-                    crate::edu::run(&session, model, p, opts, emit, tokio::time::Instant::now())
-                        .await
+                    let start = tokio::time::Instant::now();
+                    let e =
+                        crate::edu::run::run_to_end(&session, model, p, opts, emit, start).await;
+                    if e.result.is_err() {
+                        *crate::sync::lock(&slot) = e.summary;
+                    }
+                    e.result
                 }
             },
         )
@@ -162,7 +170,50 @@ pub fn run(args: &RunArgs, sims: Vec<Model>, text: String, shown: &str) -> Resul
     // An engine still spinning in a program that never yields is not waited for.
     rt.shutdown_background();
     let (result, kept) = r;
+    // A call the droid does not have is bad input, found before anything was sent (exit 2).
+    let result = result.map_err(|e| {
+        if e.message.contains(crate::edu::engine::FOUND_BEFORE) {
+            CliError::usage(e.message)
+        } else {
+            e
+        }
+    });
+    if json
+        && let Err(e) = &result
+        && let Some(s) = crate::sync::lock(&failed_summary).take()
+    {
+        out.stdout(|w| writeln!(w, "{}", ended_line(&s, &e.message)));
+    }
     finish_run(result, kept, json, &out)
+}
+
+/// `--json`'s summary of a program that failed or hit its time limit: the summary as for a
+/// program that ended, with why it did not (`"ended": "error"` or `"time_limit"`, and the
+/// error).
+fn ended_line(s: &Summary, error: &str) -> String {
+    let mut v = serde_json::to_value(s).unwrap_or_default();
+    if let Some(o) = v.as_object_mut() {
+        let how = if error.contains(crate::edu::run::TIME_LIMIT) {
+            "time_limit"
+        } else {
+            "error"
+        };
+        o.insert("ended".into(), how.into());
+        o.insert("error".into(), error.into());
+    }
+    v.to_string()
+}
+
+/// A program's options: its `--timeout`, or under `--sim` droidctl's own time limit
+/// ([`crate::edu::run::SIM_TIME_LIMIT`]).
+pub(super) fn options(args: &RunArgs, mission: MissionOptions, sim: bool) -> ProgramOptions {
+    let given = args.timeout.map(Duration::from_secs_f64);
+    ProgramOptions {
+        mission,
+        timeout: given.or(sim.then_some(crate::edu::run::SIM_TIME_LIMIT)),
+        default_limit: given.is_none() && sim,
+        ..ProgramOptions::default()
+    }
 }
 
 fn paused_runtime() -> Result<tokio::runtime::Runtime, CliError> {

@@ -62,6 +62,11 @@ pub fn run(args: RunArgs) -> Result<i32, CliError> {
     if crate::edu::is_program(&path, &text) {
         return super::program::run(&args, sims, text, &shown);
     }
+    if args.each {
+        return Err(CliError::usage(format!(
+            "{shown} is a mission script: --each runs Sphero Edu programs (.js)"
+        )));
+    }
     if !args.more.is_empty() {
         return Err(CliError::usage(format!(
             "{shown} is a mission script: only Sphero Edu programs (.js) run one per droid; \

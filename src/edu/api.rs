@@ -62,11 +62,40 @@ pub enum Act {
     Dome(f32),
     Stance(LegAction),
     Animation(u16),
+    /// A sound by name or number ([`super::sounds`]); `secs`: how long the program waits.
     Sound(String),
     Say(String),
+    /// One of RVR's own lights: its headlights and side lights (spherov2's
+    /// `set_left_headlight_led` … `set_right_led`).
+    Rvr(RvrLight, [u8; 3]),
     CalibrateCompass,
     /// Robot-to-robot infrared (BOLT, RVR): one wire command each ([`Ir`]).
     Ir(Ir),
+}
+
+/// RVR's lights the Edu API sets one by one.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RvrLight {
+    LeftHeadlight,
+    RightHeadlight,
+    /// The battery door's side.
+    Left,
+    /// The power button's side.
+    Right,
+}
+
+impl RvrLight {
+    /// Its bits in RVR's 32-bit LED mask (spherov2's `RVR.LEDs` and `ToyUtil`'s
+    /// `set_left_front_led` … `set_power_side_led`: the side lights are the front LEDs of the
+    /// battery door and of the power button).
+    pub fn mask(self) -> u32 {
+        match self {
+            RvrLight::RightHeadlight => 0x7,
+            RvrLight::LeftHeadlight => 0x7 << 3,
+            RvrLight::Left => 0x7 << 15,
+            RvrLight::Right => 0x7 << 18,
+        }
+    }
 }
 
 /// What the program waits for after the call's immediate actions.
@@ -280,7 +309,9 @@ impl Driver {
         let rgb = |i: usize| [byte(n(i)), byte(n(i + 1)), byte(n(i + 2))];
         let mut e = Effect::default();
         match name {
-            "roll" | "rollDistance" => {
+            // `rollToDistance` is Sphero Edu's name, `driveToDistance` RVR's: droidctl's
+            // `rollDistance` for both.
+            "roll" | "rollDistance" | "rollToDistance" | "driveToDistance" => {
                 let speed = self.mapped(name, n(1))?;
                 let mut heading = degrees(name, n(0))?;
                 let wait = if name == "roll" {
@@ -288,7 +319,7 @@ impl Driver {
                 } else if n(2).is_finite() {
                     Some(n(2).clamp(0.0, 100_000.0) as f32)
                 } else {
-                    return Err(format!("rollDistance: a distance is in cm, not {}", n(2)));
+                    return Err(format!("{name}: a distance is in cm, not {}", n(2)));
                 };
                 let d = match wait {
                     None => secs(name, "duration", n(2))?,
@@ -518,10 +549,22 @@ impl Driver {
                 e.now.push(Act::Say(text(0)));
                 e.wait = wait_for(Duration::ZERO);
             }
+            // With `wait`, the sound's length: Sphero does not publish them, so every sound
+            // takes [`super::sounds::SOUND_SECONDS`] (unverified).
             "playSound" => {
                 e.now.push(Act::Sound(text(0)));
-                e.wait = wait_for(Duration::ZERO);
+                e.wait = wait_for(if n(1) != 0.0 {
+                    Duration::from_secs_f64(super::sounds::SOUND_SECONDS)
+                } else {
+                    Duration::ZERO
+                });
             }
+            "setLeftHeadlightLed" => e.now.push(Act::Rvr(RvrLight::LeftHeadlight, rgb(0))),
+            "setRightHeadlightLed" => e.now.push(Act::Rvr(RvrLight::RightHeadlight, rgb(0))),
+            "setLeftLed" => e.now.push(Act::Rvr(RvrLight::Left, rgb(0))),
+            "setRightLed" => e.now.push(Act::Rvr(RvrLight::Right, rgb(0))),
+            // Printed as the call is (its step line); nothing goes to the robot.
+            "console.log" => {}
             "playAnimation" => {
                 self.speed = 0;
                 e.now

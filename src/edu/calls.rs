@@ -37,6 +37,8 @@ pub enum Robots {
     RawMotors,
     /// Robot-to-robot infrared: BOLT and RVR (Sphero Edu's "Communications").
     Infrared,
+    /// RVR's own calls: its drive by distance and its headlights and side lights.
+    Rvr,
 }
 
 impl Robots {
@@ -55,6 +57,7 @@ impl Robots {
             Robots::ColorSensor => Caps::COLOR_SENSOR,
             Robots::RawMotors => Caps::RAW_MOTORS,
             Robots::Infrared => Caps::IR,
+            Robots::Rvr => Caps::TRACKS,
         }
     }
 
@@ -130,6 +133,20 @@ pub const CALLS: &[Call] = &[
         true,
         Sphero,
         "roll toward heading at speed until distance (cm) is covered, then stop",
+    ),
+    call(
+        "rollToDistance",
+        "heading, speed, distance",
+        true,
+        Sphero,
+        "Sphero Edu's name for rollDistance: the same",
+    ),
+    call(
+        "driveToDistance",
+        "heading, speed, distance",
+        true,
+        Rvr,
+        "RVR: roll toward heading at speed until distance (cm) is covered, then stop (as rollDistance)",
     ),
     call(
         "setSpeed",
@@ -239,6 +256,34 @@ pub const CALLS: &[Call] = &[
         Bb9e,
         "BB-9E's dome lights 0..15",
     ),
+    call(
+        "setLeftHeadlightLed",
+        "color",
+        false,
+        Rvr,
+        "RVR's left headlight",
+    ),
+    call(
+        "setRightHeadlightLed",
+        "color",
+        false,
+        Rvr,
+        "RVR's right headlight",
+    ),
+    call(
+        "setLeftLed",
+        "color",
+        false,
+        Rvr,
+        "RVR's left side light (the battery door's side)",
+    ),
+    call(
+        "setRightLed",
+        "color",
+        false,
+        Rvr,
+        "RVR's right side light (the power button's side)",
+    ),
     // BOLT's matrix.
     call(
         "setMatrixCharacter",
@@ -326,6 +371,16 @@ pub const CALLS: &[Call] = &[
         true,
         All,
         "a sound: played by R2-D2, R2-Q5 and BB-9E, printed by the others",
+    ),
+    call(
+        "Sound.Category.Name.play",
+        "wait",
+        true,
+        All,
+        "Sphero Edu's sounds (`Sound.Animal.Cat.play(true)`; `Sound.Animal.play` a random one of \
+         the category, `Sound.play` any): played by R2-D2 and R2-Q5 where droidctl knows their \
+         clip, printed by the others; with wait, waits the sound's length (1 s, \
+         unverified: Sphero does not publish the lengths)",
     ),
     // Star Wars droids.
     call(
@@ -422,6 +477,57 @@ pub const CALLS: &[Call] = &[
         "the main light's {r, g, b}",
     ),
     call(
+        "getFrontLed",
+        "",
+        false,
+        Sphero,
+        "the front light's {r, g, b} as last set",
+    ),
+    call(
+        "getBackLed",
+        "",
+        false,
+        Sphero,
+        "the back light's {r, g, b} as last set",
+    ),
+    call(
+        "getColorChannel",
+        "channel",
+        false,
+        ColorSensor,
+        "one channel of getColor(): \"r\", \"g\" or \"b\"",
+    ),
+    call(
+        "getRandomInt",
+        "min, max",
+        false,
+        All,
+        "a whole number from min to max",
+    ),
+    call(
+        "getRandomFloat",
+        "min, max",
+        false,
+        All,
+        "a number from min up to max",
+    ),
+    call("getRandomColor", "", false, All, "a colour {r, g, b}"),
+    call(
+        "getCurrentTime",
+        "",
+        false,
+        All,
+        "seconds since the program started, on droidctl's clock (simulated under --sim; \
+         Sphero Edu's is the device's clock)",
+    ),
+    call(
+        "buildString",
+        "values…",
+        false,
+        All,
+        "its arguments as one text, joined as they are",
+    ),
+    call(
         "getLastIRMessage",
         "",
         false,
@@ -479,6 +585,31 @@ pub const CALLS: &[Call] = &[
         Infrared,
         "hear the next message on these channels (a channel or a list): onIRMessage fires",
     ),
+    // The host's functions.
+    call(
+        "console.log",
+        "values…",
+        false,
+        All,
+        "print its arguments with the program's line",
+    ),
+    call(
+        "setTimeout",
+        "function, ms",
+        false,
+        All,
+        "call function once after ms milliseconds; returns an id (the program ends when \
+         startProgram returns, timers pending or not, unless events are registered)",
+    ),
+    call(
+        "setInterval",
+        "function, ms",
+        false,
+        All,
+        "call function every ms milliseconds; returns an id",
+    ),
+    call("clearTimeout", "id", false, All, "cancel a setTimeout"),
+    call("clearInterval", "id", false, All, "cancel a setInterval"),
     // Events.
     call(
         "registerEvent",
@@ -539,17 +670,44 @@ pub fn not_on(name: &str, model: Model) -> Option<String> {
     })
 }
 
-/// The table as Markdown rows (`| call | robots | what |`), as docs/edu-programs.md has it.
+/// How droidctl runs a call next to Sphero Edu: as Sphero Edu does, or differently and how.
+/// (A robot a call is not on is the table's robots column: there the program is refused
+/// before anything is sent.)
+pub fn support(name: &str) -> &'static str {
+    match name {
+        "rollDistance" => "droidctl's own name for rollToDistance",
+        "speak" | "playSound" | "Sound.Category.Name.play" => {
+            "differently: printed where the robot has no speaker (Sphero Edu plays it on the \
+             phone or tablet); a sound's length is guessed"
+        }
+        "getCurrentTime" => {
+            "differently: seconds since the program started, not the device's clock"
+        }
+        "setTimeout" | "setInterval" => {
+            "differently: the program ends when startProgram returns and no event is \
+             registered, timers pending or not"
+        }
+        "console.log" => "printed as a call line",
+        "registerMatrixAnimation" => "at most 64 frames in all",
+        _ => "as Sphero Edu",
+    }
+}
+
+/// The table as Markdown rows (`| call | robots | what | next to Sphero Edu |`), as
+/// docs/edu-programs.md has it.
 pub fn markdown() -> String {
-    let mut out = String::from("| call | robots | what it does |\n| --- | --- | --- |\n");
+    let mut out = String::from(
+        "| call | robots | what it does | next to Sphero Edu |\n| --- | --- | --- | --- |\n",
+    );
     for c in CALLS {
         let aw = if c.waits { "await " } else { "" };
         out.push_str(&format!(
-            "| `{aw}{}({})` | {} | {} |\n",
+            "| `{aw}{}({})` | {} | {} | {} |\n",
             c.name,
             c.args,
             c.robots.names(),
-            c.what
+            c.what,
+            support(c.name)
         ));
     }
     out.push_str("\n| event | robots | when |\n| --- | --- | --- |\n");
@@ -609,6 +767,7 @@ mod tests {
                     Robots::Infrared,
                     matches!(m, Model::Bolt | Model::BoltPlus | Model::Rvr),
                 ),
+                (Robots::Rvr, m == Model::Rvr),
             ];
             for (robots, applies) in spelled {
                 assert_eq!(robots.applies(m), applies, "{robots:?} on {m:?}");

@@ -194,18 +194,27 @@ pub(super) fn check(source: &str, path: &str) -> Result<(), SyntaxError> {
         Ok(_) => {}
         Err(e) => {
             let text = e.to_string();
-            let (line, column) = line_col(&text).unwrap_or((1, 1));
             // `… in argument list at line 4, col 1 (native)`: the place is said apart.
             let message = text
                 .rfind(" at line ")
                 .map_or(text.as_str(), |at| &text[..at])
+                .trim_end_matches(" (native)")
                 .to_string();
+            let ((line, column), message) =
+                super::syntax::explained(source, &message, line_col(&text));
             return Err(SyntaxError {
                 line,
                 column,
                 message,
             });
         }
+    }
+    if let Some((c, message)) = super::names::unknown_call(source) {
+        return Err(SyntaxError {
+            line: c.line,
+            column: c.column,
+            message,
+        });
     }
     if !source.contains("startProgram") {
         return Err(SyntaxError {
@@ -304,7 +313,10 @@ pub(super) fn js_thread(
     reply: mpsc::Sender<FromJs>,
 ) {
     SOURCE.with(|s| *s.borrow_mut() = source.clone());
-    let mut ctx = Context::default();
+    let mut ctx = Context::builder()
+        .host_hooks(super::unhandled::hooks())
+        .build()
+        .unwrap_or_default();
     ctx.runtime_limits_mut()
         .set_loop_iteration_limit(LOOP_LIMIT);
     ctx.runtime_limits_mut()
@@ -339,6 +351,9 @@ pub(super) fn js_thread(
             start(&mut ctx, &source, &path)
         };
         let status = match r {
+            Err(e) if e.as_native().is_some_and(|n| n.message() == NOT_ON_ROBOT) => {
+                Status::Failed(not_on_robot(&source, model))
+            }
             Ok(()) => status(&mut ctx),
             Err(e) => Status::Failed(failure(&e, &path, &mut ctx)),
         };
@@ -357,7 +372,38 @@ pub(super) fn js_thread(
     JS.with(|j| j.borrow_mut().take());
 }
 
+/// The error [`start`] ends with when the program calls something this robot does not have
+/// ([`not_on_robot`] says which and where).
+const NOT_ON_ROBOT: &str = "droidctl: a call not on this robot";
+
+/// How the failure of a program calling what its robot does not have ends: nothing of the
+/// program ran.
+pub const FOUND_BEFORE: &str = "(found before anything was sent)";
+
+/// The first call of `source` that `model` does not have, as a failure at its line.
+fn not_on_robot(source: &str, model: Model) -> Failure {
+    let called = super::names::called_from_outside(source).unwrap_or_default();
+    match super::names::not_on_robot(&called, model) {
+        Some((line, why)) => Failure {
+            line: Some(line),
+            message: format!("TypeError: {why} {FOUND_BEFORE}"),
+        },
+        None => Failure {
+            line: None,
+            message: "a call is not on this robot".into(),
+        },
+    }
+}
+
 fn start(ctx: &mut Context, source: &str, path: &str) -> JsResult<()> {
+    // Every call the program makes by name is on this robot, or nothing runs: a call it does
+    // not have is found before the first is sent, not when the program reaches it.
+    let model = with_js(|js| js.driver.model).unwrap_or(Model::DEFAULT);
+    if let Some(called) = super::names::called_from_outside(source)
+        && super::names::not_on_robot(&called, model).is_some()
+    {
+        return Err(JsNativeError::typ().with_message(NOT_ON_ROBOT).into());
+    }
     // The prelude is a function of the natives: they are its arguments, never globals, so a
     // program cannot call them past the prelude's checks.
     let prelude = Source::from_bytes(PRELUDE).with_path(std::path::Path::new(PRELUDE_PATH));
@@ -465,6 +511,21 @@ fn status(ctx: &mut Context) -> Status {
             }
             PromiseState::Pending => keep.push(p),
             PromiseState::Fulfilled(_) => {}
+        }
+    }
+    // An `async` call not awaited that threw: its error, and where.
+    for p in super::unhandled::take() {
+        let p = JsPromise::from(p);
+        if let PromiseState::Rejected(v) = p.state() {
+            let f = failure(&JsError::from_opaque(v), &path, ctx);
+            return Status::Failed(Failure {
+                line: f.line,
+                message: format!(
+                    "{} (in an async call that was not awaited: add `await` before it, or \
+                     catch its error)",
+                    f.message
+                ),
+            });
         }
     }
     let (exit, main_done, listening, waiting, resumed) = with_js(|js| {
@@ -758,6 +819,10 @@ fn native_read(_this: &JsValue, args: &[JsValue], ctx: &mut Context) -> JsResult
             "getCompassDirection" => V::N(r.compass.map(f64::from)),
             "getBatteryVoltage" => V::N(r.battery_v.map(f64::from)),
             "getMainLed" => V::A(Some(js.driver.main.iter().map(|v| *v as f64).collect())),
+            "getFrontLed" => V::A(Some(js.driver.front.iter().map(|v| *v as f64).collect())),
+            "getBackLed" => V::A(Some(js.driver.back.iter().map(|v| *v as f64).collect())),
+            "getColorChannel" => V::A(r.color.map(|c| c.iter().map(|v| *v as f64).collect())),
+            "getCurrentTime" => V::N(Some(r.elapsed_s)),
             "getLastIRMessage" => V::N(r.ir_message.map(f64::from)),
             _ => V::N(None),
         }

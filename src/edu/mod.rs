@@ -9,6 +9,8 @@
 //! - [`child`]: the engine's own process (droidctl started again), bounded in stack, memory
 //!   and time; [`wire`]: the turns across its pipe; [`host`]: droidctl's side of it, which
 //!   stops the droid whatever happens to the child;
+//! - [`sounds`]: Sphero Edu's sounds on droids with a speaker, and said on the others;
+//! - [`names`]: the names a program calls, checked before anything is sent;
 //! - [`infrared`]: the infrared calls as BOLT and RVR each take them on the wire;
 //! - [`run`]: a program on one droid, on droidctl's clock;
 //! - [`timeline`]: a timed call's steps, made when due (a few numbers however long);
@@ -36,10 +38,14 @@ pub mod host;
 #[cfg(test)]
 mod hostile;
 pub mod infrared;
+mod names;
 pub mod probe;
 pub mod run;
 pub mod schedule;
+pub mod sounds;
+mod syntax;
 pub mod timeline;
+mod unhandled;
 pub mod wire;
 
 pub use host::{CheckError, EngineOptions};

@@ -34,6 +34,8 @@ function __xy(p, what) {
 function __obj(keys, a) { if (!a) return null; const o = {}; keys.forEach((k, i) => { o[k] = a[i]; }); return o; }
 function roll(heading, speed, duration) { return __call("roll", __num(heading, "roll: heading"), __num(speed, "roll: speed"), __num(duration, "roll: duration")); }
 function rollDistance(heading, speed, distance) { return __call("rollDistance", __num(heading, "rollDistance: heading"), __num(speed, "rollDistance: speed"), __num(distance, "rollDistance: distance")); }
+function rollToDistance(heading, speed, distance) { return __call("rollToDistance", __num(heading, "rollToDistance: heading"), __num(speed, "rollToDistance: speed"), __num(distance, "rollToDistance: distance")); }
+function driveToDistance(heading, speed, distance) { return __call("driveToDistance", __num(heading, "driveToDistance: heading"), __num(speed, "driveToDistance: speed"), __num(distance, "driveToDistance: distance")); }
 function setSpeed(speed) { return __call("setSpeed", __num(speed, "setSpeed: speed")); }
 function setHeading(heading) { return __call("setHeading", __num(heading, "setHeading: heading")); }
 function stopRoll(heading) { return heading === undefined ? __call("stopRoll") : __call("stopRoll", __num(heading, "stopRoll: heading")); }
@@ -49,6 +51,10 @@ function setBackLed(color) {
   if (typeof color === "number") return __call("setBackLedBrightness", __num(color, "setBackLed: brightness"));
   return __call("setBackLed", ...__rgb(color, "setBackLed: color"));
 }
+function setLeftHeadlightLed(color) { return __call("setLeftHeadlightLed", ...__rgb(color, "setLeftHeadlightLed: color")); }
+function setRightHeadlightLed(color) { return __call("setRightHeadlightLed", ...__rgb(color, "setRightHeadlightLed: color")); }
+function setLeftLed(color) { return __call("setLeftLed", ...__rgb(color, "setLeftLed: color")); }
+function setRightLed(color) { return __call("setRightLed", ...__rgb(color, "setRightLed: color")); }
 function fade(from, to, duration) { return __call("fade", ...__rgb(from, "fade: fromColor"), ...__rgb(to, "fade: toColor"), __num(duration, "fade: duration")); }
 function strobe(color, period, count) { return __call("strobe", ...__rgb(color, "strobe: color"), __num(period, "strobe: period"), __num(count, "strobe: count")); }
 function setHoloProjectorLed(b) { return __call("setHoloProjectorLed", __num(b, "setHoloProjectorLed: brightness")); }
@@ -91,6 +97,50 @@ function pauseMatrixAnimation() { return __call("pauseMatrixAnimation"); }
 function resumeMatrixAnimation() { return __call("resumeMatrixAnimation"); }
 function speak(text, wait) { return __call("speak", String(text), wait ? 1 : 0); }
 function playSound(sound, wait) { return __call("playSound", String(sound), wait ? 1 : 0); }
+// Sphero Edu's sounds: `Sound.Category.Name.play(wait)`, `Sound.Category.play(wait)` (a
+// random one of the category), `Sound.play(wait)` (any). Sphero publishes no list of the
+// names, so any category and name is taken (two levels deep) and said as written.
+function __sound(path, depth) {
+  const play = (wait) => __call("playSound", path, wait ? 1 : 0);
+  return new Proxy(Object.freeze({ play }), {
+    get(target, key) {
+      if (key === "play") return play;
+      if (typeof key !== "string" || depth >= 2 || key === "then") return undefined;
+      return __sound(path === "" ? key : path + "." + key, depth + 1);
+    },
+  });
+}
+const Sound = __sound("", 0);
+function __text(v) {
+  if (typeof v === "string") return v;
+  if (v !== null && typeof v === "object") { try { return JSON.stringify(v); } catch (e) { return String(v); } }
+  return typeof v === "symbol" ? v.toString() : String(v);
+}
+function buildString(...parts) { return parts.map(__text).join(""); }
+const console = Object.freeze({ log: (...parts) => { __call("console.log", parts.map(__text).join(" ").slice(0, 900)); } });
+// Timers on droidctl's clock: each waits with `delay`, so under --sim they take simulated time.
+let __timer = 0;
+const __timers = new Map();
+function __arm(fn, ms, args, every) {
+  if (typeof fn !== "function") throw new TypeError((every ? "setInterval" : "setTimeout") + ": needs a function to call");
+  const id = ++__timer;
+  const wait = Math.max(0, __number(ms) || 0) / 1000;
+  __timers.set(id, true);
+  const tick = async () => {
+    await delay(wait);
+    if (!__timers.has(id)) return;
+    if (!every) __timers.delete(id);
+    const r = fn(...args);
+    if (every) { await r; tick(); }
+    else await r;
+  };
+  tick();
+  return id;
+}
+function setTimeout(fn, ms, ...args) { return __arm(fn, ms, args, false); }
+function setInterval(fn, ms, ...args) { return __arm(fn, ms, args, true); }
+function clearTimeout(id) { __timers.delete(id); }
+function clearInterval(id) { __timers.delete(id); }
 function playAnimation(animation) { return __call("playAnimation", __num(animation, "playAnimation: animation")); }
 function setDomePosition(degrees) { return __call("setDomePosition", __num(degrees, "setDomePosition: degrees")); }
 function setStance(stance) { return __call("setStance", stance === Stance.Bipod || stance === "bipod" ? 2 : 3); }
@@ -123,8 +173,25 @@ function getColor() { return __obj(["r", "g", "b"], __read("getColor")); }
 function getCompassDirection() { return __read("getCompassDirection"); }
 function getBatteryVoltage() { return __read("getBatteryVoltage"); }
 function getMainLed() { return __obj(["r", "g", "b"], __read("getMainLed")); }
+function getFrontLed() { return __obj(["r", "g", "b"], __read("getFrontLed")); }
+function getBackLed() { return __obj(["r", "g", "b"], __read("getBackLed")); }
+function getColorChannel(channel) {
+  const c = __obj(["r", "g", "b"], __read("getColorChannel"));
+  if (c === null) return null;
+  const k = { red: "r", green: "g", blue: "b", 0: "r", 1: "g", 2: "b" }[String(channel).toLowerCase()] || String(channel).toLowerCase();
+  if (!(k in c)) throw new RangeError("getColorChannel: the channel is \"r\", \"g\" or \"b\", not " + String(channel).slice(0, 40));
+  return c[k];
+}
+function getCurrentTime() { return __read("getCurrentTime"); }
+function getRandomFloat(min, max) {
+  const lo = __num(min, "getRandomFloat: min"), hi = __num(max, "getRandomFloat: max");
+  return Math.random() * (hi - lo) + lo;
+}
 function getLastIRMessage() { return __read("getLastIRMessage"); }
-function getRandomInt(min, max) { return Math.floor(Math.random() * (max - min + 1)) + min; }
+function getRandomInt(min, max) {
+  const lo = __num(min, "getRandomInt: min"), hi = __num(max, "getRandomInt: max");
+  return Math.floor(Math.random() * (hi - lo + 1)) + lo;
+}
 function getRandomColor() { return { r: getRandomInt(0, 255), g: getRandomInt(0, 255), b: getRandomInt(0, 255) }; }
 function registerEvent(type, fn) {
   if (typeof fn !== "function") throw new TypeError("registerEvent: needs a function to call");
@@ -135,8 +202,12 @@ const __api = {
   Stance,
   MatrixRotation,
   MatrixAnimationTransition,
+  Sound,
+  console,
   roll,
   rollDistance,
+  rollToDistance,
+  driveToDistance,
   setSpeed,
   setHeading,
   stopRoll,
@@ -149,6 +220,10 @@ const __api = {
   setMainLed,
   setFrontLed,
   setBackLed,
+  setLeftHeadlightLed,
+  setRightHeadlightLed,
+  setLeftLed,
+  setRightLed,
   fade,
   strobe,
   setHoloProjectorLed,
@@ -197,8 +272,18 @@ const __api = {
   getBatteryVoltage,
   getMainLed,
   getLastIRMessage,
+  getFrontLed,
+  getBackLed,
+  getColorChannel,
+  getCurrentTime,
   getRandomInt,
+  getRandomFloat,
   getRandomColor,
+  buildString,
+  setTimeout,
+  setInterval,
+  clearTimeout,
+  clearInterval,
   registerEvent,
 };
 for (const name of Object.keys(__api)) {

@@ -66,7 +66,20 @@ pub struct ProgramOptions {
     /// The longest the program may compute without waiting (wall-clock time), apart from
     /// `timeout`: past it the engine's child is killed.
     pub no_yield: Duration,
+    /// `timeout` is droidctl's own limit for a program under `--sim`
+    /// ([`SIM_TIME_LIMIT`]), not the user's `--timeout`: its end says so, and how to change it.
+    pub default_limit: bool,
 }
+
+/// How long a program may run in simulated time when no `--timeout` is given: a program
+/// that never ends (a bounce on every collision without `exitProgram`, a `while (true)` loop
+/// that waits) ends after 5 minutes of program time instead of running at full speed for
+/// ever.
+pub const SIM_TIME_LIMIT: Duration = Duration::from_secs(300);
+
+/// The start of the error of a program ended by its time limit (`--timeout`, or
+/// [`SIM_TIME_LIMIT`]): `run --each` tells it from other errors by it.
+pub const TIME_LIMIT: &str = "time limit: ";
 
 impl Default for ProgramOptions {
     fn default() -> Self {
@@ -74,6 +87,7 @@ impl Default for ProgramOptions {
             mission: MissionOptions::default(),
             timeout: None,
             no_yield: Duration::from_secs(5),
+            default_limit: false,
         }
     }
 }
@@ -148,9 +162,44 @@ pub async fn run(
     emit: Emit,
     start: Instant,
 ) -> Result<Summary, MissionError> {
+    run_to_end(session, model, program, opts, emit, start)
+        .await
+        .result
+}
+
+/// How a program's run ended: its result, and the run's summary even when the program
+/// failed or hit its time limit (`run --json` prints it then too).
+pub struct Ended {
+    pub result: Result<Summary, MissionError>,
+    pub summary: Option<Summary>,
+}
+
+/// [`run`], with the summary of a run that failed.
+pub async fn run_to_end(
+    session: &SessionHandle,
+    model: Model,
+    program: &Program,
+    opts: ProgramOptions,
+    emit: Emit,
+    start: Instant,
+) -> Ended {
+    let ended = |result: Result<Summary, MissionError>| Ended {
+        summary: result.as_ref().ok().cloned(),
+        result,
+    };
     let events = session.subscribe();
-    let mission =
-        DroidMission::start(session, model, opts.mission.clone(), emit.clone(), start).await?;
+    let mission = match DroidMission::start(
+        session,
+        model,
+        opts.mission.clone(),
+        emit.clone(),
+        start,
+    )
+    .await
+    {
+        Ok(m) => m,
+        Err(e) => return ended(Err(e)),
+    };
     let mut p = Player {
         session: session.clone(),
         model,
@@ -185,13 +234,16 @@ pub async fn run(
     p.stop_motion();
     let summary = p.mission.finish().await;
     match r {
-        Ok(()) => summary,
+        Ok(()) => ended(summary),
         Err(f) => {
             let at = f.line.map(|l| format!(":{l}")).unwrap_or_default();
-            Err(MissionError(format!(
-                "{}{at}: {}; the program was ended and the droid stopped",
-                program.path, f.message
-            )))
+            Ended {
+                result: Err(MissionError(format!(
+                    "{}{at}: {}; the program was ended and the droid stopped",
+                    program.path, f.message
+                ))),
+                summary: summary.ok(),
+            }
         }
     }
 }
@@ -219,12 +271,18 @@ impl Player {
         })?;
         let deadline = opts.timeout.map(|t| Instant::now() + t);
         let far = Instant::now() + Duration::from_secs(86_400 * 365);
+        let secs = opts.timeout.unwrap_or_default().as_secs_f64();
         let timed_out = || Failure {
             line: None,
-            message: format!(
-                "--timeout: the program ran {} s",
-                opts.timeout.unwrap_or_default().as_secs_f64()
-            ),
+            message: if opts.default_limit {
+                format!(
+                    "{TIME_LIMIT}the program ran {secs} s of simulated time, droidctl's limit \
+                     under --sim (end it with exitProgram(), or give --timeout SECONDS for \
+                     another limit)"
+                )
+            } else {
+                format!("{TIME_LIMIT}--timeout: the program ran {secs} s")
+            },
         };
         let mut heartbeat = tokio::time::interval(opts.mission.heartbeat);
         heartbeat.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
@@ -658,9 +716,7 @@ impl Player {
                 self.drive = None;
                 self.intend(line, Intent::Animation(*id), "playAnimation");
             }
-            Act::Sound(s) => match s
-                .parse::<u16>()
-                .ok()
+            Act::Sound(s) => match super::sounds::droid_clip(self.model, s)
                 .and_then(|id| self.family.lower(self.model, &Intent::Sound(id)).ok())
             {
                 Some(cmds) => {
@@ -668,8 +724,12 @@ impl Player {
                         self.send(line, Some(c), "playSound");
                     }
                 }
-                None => self.say(line, format!("plays sound {s:?}")),
+                None => self.say(line, format!("plays {}", super::sounds::described(s))),
             },
+            Act::Rvr(light, rgb) => {
+                let c = crate::family::v2::robots::rvr_leds(light.mask(), *rgb);
+                self.send(line, Some(c), "light");
+            }
             Act::Say(text) => self.say(line, format!("says {text:?}")),
             Act::CalibrateCompass => {
                 self.intend(line, Intent::CalibrateCompass, "calibrateCompass")

@@ -141,8 +141,10 @@ pub fn run_input(data: &[u8]) {
         check_effect(&op.text, &op.effect.now, op.effect.wait.as_ref());
         assert!(op.text.chars().count() <= 202, "{}", op.text);
     }
+    // A call not on the model fails the program before it starts, naming the call.
     if let Status::Failed(f) = status
         && !patched
+        && !(f.message.contains(crate::edu::engine::FOUND_BEFORE) && f.message.contains("()"))
     {
         panic!("{model:?}: {f:?}\n{source}");
     }

@@ -73,12 +73,11 @@ fn a_weak_message_falls_short_and_rvr_hears_a_bolt() {
     assert_eq!(heard(&text, "RV-0002").len(), 1, "{text}");
     // Not on a Mini: the event and the calls name the robots they are on.
     let out = dir.run(&["run", &example("infrared.js"), "--sim", "mini"]);
-    assert_eq!(out.status.code(), Some(1));
+    assert_eq!(out.status.code(), Some(2));
     let err = stderr(&out);
     assert!(
-        err.contains(
-            "onIRMessage is not on Sphero Mini (it is on Sphero BOLT, Sphero BOLT+, Sphero RVR)"
-        ),
+        // The calls are checked before anything runs: the first not on Mini is named.
+        err.contains("is not on Sphero Mini (it is on Sphero BOLT, Sphero BOLT+, Sphero RVR)"),
         "{err}"
     );
     let p = dir.file(
@@ -86,7 +85,7 @@ fn a_weak_message_falls_short_and_rvr_hears_a_bolt() {
         "async function startProgram() {\n  sendIRMessage(3, 64);\n}\n",
     );
     let out = dir.run(&["run", path(&p), "--sim", "mini"]);
-    assert_eq!(out.status.code(), Some(1));
+    assert_eq!(out.status.code(), Some(2));
     assert!(
         stderr(&out).contains("send.js:2: TypeError: sendIRMessage() is not on Sphero Mini"),
         "{}",

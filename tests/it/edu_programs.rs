@@ -118,18 +118,22 @@ fn an_exception_stops_the_droid_and_names_its_line() {
     let dir = Scratch::new("edu", "exception");
     let p = dir.file(
         "oops.js",
-        "async function startProgram() {\n  setSpeed(120);\n  await delay(1);\n  undefinedCall(3);\n}\n",
+        "async function startProgram() {\n  setSpeed(120);\n  await delay(1);\n  const n = undefinedValue + 3;\n}\n",
     );
     let out = dir.run(&["run", path(&p), "--sim", "bolt", "--json"]);
     assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
     let err = stderr(&out);
     assert!(
-        err.contains("oops.js:4: ReferenceError: undefinedCall is not defined"),
+        err.contains("oops.js:4: ReferenceError: undefinedValue is not defined"),
         "{err}"
     );
     assert!(err.contains("droid stopped"), "{err}");
     // The last sample: slowing to a stop (the simulated body brakes over a few tenths).
-    let samples = json_lines(&stdout(&out));
+    // The samples (the summary comes last, with the error: `"ended": "error"`).
+    let samples: Vec<_> = json_lines(&stdout(&out))
+        .into_iter()
+        .filter(|s| s.get("done").is_none())
+        .collect();
     let last = samples.last().expect("samples");
     let top = samples.iter().map(|s| num(s, "speed")).fold(0.0, f64::max);
     assert!(
@@ -158,7 +162,8 @@ fn a_call_a_robot_does_not_have_is_an_error_naming_the_robots_it_is_on() {
         "async function startProgram() {\n  await delay(0.1);\n  setMatrixCharacter(\"A\", { r: 255, g: 0, b: 0 });\n}\n",
     );
     let out = dir.run(&["run", path(&p), "--sim", "r2d2"]);
-    assert_eq!(out.status.code(), Some(1));
+    // Found before anything is sent: bad input.
+    assert_eq!(out.status.code(), Some(2));
     let err = stderr(&out);
     assert!(
         err.contains(

@@ -44,6 +44,7 @@ mod docs_commands;
 mod e2e_pty;
 mod edu_app;
 mod edu_charger;
+mod edu_field;
 mod edu_infrared;
 mod edu_programs;
 mod edu_spherov2;

@@ -57,6 +57,14 @@ pub fn led(model: Model, action: &Action) -> Option<Option<Command>> {
     Some(Some(c.into()))
 }
 
+/// RVR's LEDs of `mask` (its 32-bit mask, three bits a light) all set to `rgb`: the Edu API's
+/// headlights and side lights, one by one.
+pub fn rvr_leds(mask: u32, rgb: [u8; 3]) -> Command {
+    let lights = mask.count_ones() / 3;
+    let values: Vec<u8> = (0..lights).flat_map(|_| rgb).collect();
+    cmd::set_all_leds_with_32_bit_mask(Mask(mask), Bytes(values)).into()
+}
+
 /// Whether `model` has the command `did`/`cid`: R2's dome and legs, BOLT's matrix and
 /// RVR's palettes and streaming service are theirs alone (spherov2.py's `toy/*.py`).
 pub fn model_has(model: Model, did: u8, cid: u8) -> bool {
