@@ -269,7 +269,7 @@ pub async fn connect_remote(
 pub async fn connect_serial(port: &std::path::Path) -> Result<Connected, CliError> {
     use crate::link::serial::SerialLink;
     // RVR is the droid with a serial port (its UART); nothing else answers on one.
-    let link = SerialLink::new(port, Model::Rvr);
+    let link = SerialLink::new(port, Model::ON_SERIAL);
     link.check()
         .await
         .map_err(|e| CliError::failure(e.to_string()))?;

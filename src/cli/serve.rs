@@ -114,11 +114,11 @@ pub fn run(args: ServeArgs) -> Result<i32, CliError> {
             (Some(models), _) => Arc::new(SimBackend::new(&models, faults)),
             (None, Some(port)) => {
                 // What is wrong with the port, said now rather than to the first client.
-                crate::link::serial::SerialLink::new(port, Model::Rvr)
+                crate::link::serial::SerialLink::new(port, Model::ON_SERIAL)
                     .check()
                     .await
                     .map_err(|e| CliError::failure(e.to_string()))?;
-                Arc::new(SerialBackend::new(port, Model::Rvr))
+                Arc::new(SerialBackend::new(port, Model::ON_SERIAL))
             }
             (None, None) => {
                 let central = crate::link::ble::open_central()

@@ -10,7 +10,7 @@ use crate::model::Model;
 /// Which models have a serial port to simulate: RVR's UART is the one droidctl knows of.
 fn serial_model(id: &str) -> Result<Model, CliError> {
     match Model::from_id(id) {
-        Some(Model::Rvr) => Ok(Model::Rvr),
+        Some(m) if m == Model::ON_SERIAL => Ok(m),
         Some(m) => Err(CliError::usage(format!(
             "--serial: {} has no serial port (RVR's UART is the one there is); give `rvr`",
             m.display_name()

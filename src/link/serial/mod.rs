@@ -329,14 +329,14 @@ mod tests {
     async fn a_missing_port_and_a_file_that_is_no_terminal() {
         let dir = std::env::temp_dir().join(format!("droidctl-serial-{}", std::process::id()));
         let _ = std::fs::create_dir_all(&dir);
-        let missing = SerialLink::new(dir.join("ttyNONE"), Model::Rvr);
+        let missing = SerialLink::new(dir.join("ttyNONE"), Model::ON_SERIAL);
         assert!(matches!(
             missing.check().await,
             Err(SerialError::NotFound(_))
         ));
         let file = dir.join("plain");
         std::fs::write(&file, b"x").unwrap();
-        let plain = SerialLink::new(&file, Model::Rvr);
+        let plain = SerialLink::new(&file, Model::ON_SERIAL);
         assert!(matches!(
             plain.check().await,
             Err(SerialError::NotATerminal(_))
@@ -349,7 +349,7 @@ mod tests {
     #[tokio::test]
     async fn bytes_both_ways_busy_and_loss() {
         let (master, peer, path) = tty::open_pty().unwrap();
-        let mut link = SerialLink::new(&path, Model::Rvr);
+        let mut link = SerialLink::new(&path, Model::ON_SERIAL);
         assert_eq!(
             link.droid_name(),
             format!("RV-{}", path.file_name().unwrap().to_string_lossy())
