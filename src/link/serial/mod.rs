@@ -17,7 +17,9 @@
 #[cfg(unix)]
 pub mod tty;
 
-use crate::link::{Connection, Framing, Link, LinkError, LinkEvent, LinkWriter};
+use crate::link::{Connection, Framing, Link, LinkError};
+#[cfg(unix)]
+use crate::link::{LinkEvent, LinkWriter};
 use crate::model::Model;
 use futures_util::future::BoxFuture;
 use std::path::{Path, PathBuf};
@@ -101,9 +103,11 @@ pub const FRAMING: Framing = Framing {
 };
 
 /// Bytes read from the port at once, at most.
+#[cfg(unix)]
 const READ_MAX: usize = 512;
 /// Pieces of the droid's bytes waiting for the session; beyond, reading waits (the port's
 /// own buffer holds the rest).
+#[cfg(unix)]
 const EVENTS: usize = 256;
 
 /// A droid on a serial port.
