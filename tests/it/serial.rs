@@ -295,3 +295,59 @@ fn the_ports_errors_are_said_in_words() {
     assert!(e.contains("no serial port"), "{e}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `serve --serial PORT`: the RVR on a serial port relayed over TCP, driven from elsewhere
+/// with `--remote` as if the relay had reached it over Bluetooth.
+#[test]
+fn serve_relays_the_rvr_on_a_serial_port_to_remote_clients() {
+    let dir = scratch("serve");
+    let mission = dir.join("m.txt");
+    std::fs::write(&mission, "drive 70 180 for 1s\nstop\n").unwrap();
+    let sim = SerialSim::start();
+    let mut serve = Command::new(env!("CARGO_BIN_EXE_droidctl"))
+        .args([
+            "serve",
+            "--listen",
+            "127.0.0.1:0",
+            "--json",
+            "--serial",
+            &sim.path,
+        ])
+        .env("DROIDCTL_LOG_FILE", dir.join("serve.log"))
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let mut first = String::new();
+    BufReader::new(serve.stdout.take().unwrap())
+        .read_line(&mut first)
+        .unwrap();
+    let listening: Value = serde_json::from_str(&first).unwrap();
+    assert_eq!(listening["event"], "listening", "{first}");
+    let address = listening["address"].as_str().unwrap().to_string();
+    let out = Command::new(env!("CARGO_BIN_EXE_droidctl"))
+        .args([
+            "run",
+            mission.to_str().unwrap(),
+            "--remote",
+            &address,
+            "--json",
+        ])
+        .env("DROIDCTL_CONFIG", "/dev/null")
+        .env("DROIDCTL_LOG_FILE", dir.join("run.log"))
+        .stdin(Stdio::null())
+        .output()
+        .unwrap();
+    let _ = serve.kill();
+    let _ = serve.wait();
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let d = drives(&sim);
+    assert!(d.contains(&(70, 180)), "{d:?}");
+    assert!(
+        d.iter().rposition(|&(s, _)| s == 0) > d.iter().position(|&d| d == (70, 180)),
+        "{d:?}"
+    );
+    all_named_and_answered(&sim);
+    let _ = std::fs::remove_dir_all(&dir);
+}
