@@ -401,6 +401,10 @@ impl Model {
     /// placeholder droid before one is chosen).
     pub const DEFAULT: Model = Model::R2D2;
 
+    /// The droid with a serial port: RVR's UART, for a computer riding on it (Sphero's RVR
+    /// SDK). What `--serial PORT` drives and `sim --serial` simulates.
+    pub const ON_SERIAL: Model = Model::Rvr;
+
     /// The first model of the table that speaks `protocol`: its family's representative, for
     /// a capture that names only the family.
     pub fn first_speaking(protocol: Protocol) -> Model {

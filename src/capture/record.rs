@@ -281,6 +281,10 @@ impl Link for RecordingLink {
         self.inner.keepalive()
     }
 
+    fn framing(&self) -> Option<crate::link::Framing> {
+        self.inner.framing()
+    }
+
     fn describe(&self) -> String {
         self.inner.describe()
     }

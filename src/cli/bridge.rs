@@ -348,10 +348,11 @@ pub fn run(args: BridgeArgs) -> Result<i32, CliError> {
         && args.ble.name.is_empty()
         && args.ble.remote.is_empty()
         && args.ble.address.is_none()
+        && args.ble.serial.is_none()
     {
         return Err(CliError::usage(
             "say which droids to bridge: --sim MODEL[,MODEL…], --name NAME (repeatable), \
-             --remote [NAME@]HOST (repeatable) or --address ADDR",
+             --remote [NAME@]HOST (repeatable), --address ADDR or --serial PORT",
         ));
     }
     let settings = settings(&args, &config);
@@ -581,12 +582,13 @@ async fn start_fleet(
 ) -> Result<Fleet, CliError> {
     let found = if sims.is_empty()
         && !super::fleet::is_fleet(0, ble)
-        && (ble.address.is_some() || !ble.remote.is_empty())
+        && (ble.address.is_some() || !ble.remote.is_empty() || ble.serial.is_some())
     {
         let c = ble.connect(super::connect::Chooser::Prompt).await?;
-        let origin = match ble.remote.first() {
-            Some(r) => format!("relay {}", r.relay),
-            None => "Bluetooth".into(),
+        let origin = match (ble.remote.first(), &ble.serial) {
+            (Some(r), _) => format!("relay {}", r.relay),
+            (None, Some(port)) => format!("serial {}", port.display()),
+            (None, None) => "Bluetooth".into(),
         };
         vec![super::fleet::Found {
             link: c.link,

@@ -32,6 +32,10 @@ pub struct BleArgs {
     /// several.
     #[arg(long, value_name = "NAME")]
     pub adapter: Vec<String>,
+    /// Drive an RVR on this serial port instead of over Bluetooth: a Raspberry Pi's UART
+    /// (/dev/serial0) or a USB serial adapter, at 115200 baud (see docs/serial.md).
+    #[arg(long, value_name = "PORT", conflicts_with_all = ["sim", "name", "address", "remote", "adapter"])]
+    pub serial: Option<std::path::PathBuf>,
 }
 
 /// How to ask which droid, when several answer and none was named.
@@ -46,6 +50,9 @@ pub enum Chooser {
 impl BleArgs {
     /// Scan, pick and build the link to the droid these arguments select.
     pub async fn connect(&self, chooser: Chooser) -> Result<Connected, CliError> {
+        if let Some(port) = &self.serial {
+            return connect_serial(port).await;
+        }
         if let Some(r) = self.remote.first() {
             let name = r.name.clone().or_else(|| self.name.first().cloned());
             let timeout = Duration::from_secs(self.scan_timeout);
@@ -339,6 +346,30 @@ async fn connect_remote_picked(
         first.model.display_name()
     );
     Ok(first)
+}
+
+/// The RVR on a serial port (`--serial`): the port opened once to say at once what is wrong
+/// with it (missing, not ours to open, held by another program), then the link that the
+/// session opens and reopens.
+pub async fn connect_serial(port: &std::path::Path) -> Result<Connected, CliError> {
+    use crate::link::serial::SerialLink;
+    // RVR is the droid with a serial port (its UART); nothing else answers on one.
+    let link = SerialLink::new(port, Model::ON_SERIAL);
+    link.check()
+        .await
+        .map_err(|e| CliError::failure(e.to_string()))?;
+    if std::io::stderr().is_terminal() {
+        eprintln!("droidctl: {}", link.describe());
+    }
+    let model = link.model();
+    Ok(Connected {
+        name: link.droid_name(),
+        model,
+        pacing: crate::link::serial::FRAMING.pacing,
+        chunk_size: crate::link::serial::FRAMING.chunk_size,
+        link: Box::new(link),
+        others: Vec::new(),
+    })
 }
 
 /// A numbered list on stderr, an answer on stdin; Enter takes the strongest.

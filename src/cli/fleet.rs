@@ -188,13 +188,22 @@ pub async fn find_all(
     ble: &super::connect::BleArgs,
     config: &Config,
 ) -> Result<Vec<Found>, CliError> {
-    let total = sims.len() + ble.name.len() + ble.remote.len();
+    let total = sims.len() + ble.name.len() + ble.remote.len() + usize::from(ble.serial.is_some());
     if total > MAX_DROIDS {
         return Err(CliError::usage(format!(
             "{total} droids asked for: at most {MAX_DROIDS} at once"
         )));
     }
     let mut found = simulated(sims);
+    if let Some(port) = &ble.serial {
+        let c = super::connect::connect_serial(port).await?;
+        found.push(Found {
+            link: c.link,
+            model: c.model,
+            name: c.name,
+            origin: format!("serial {}", port.display()),
+        });
+    }
     let scan_timeout = Duration::from_secs(ble.scan_timeout);
     for r in &ble.remote {
         let c = super::connect::connect_remote(&r.relay, r.name.clone(), None, scan_timeout)

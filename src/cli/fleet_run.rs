@@ -42,7 +42,8 @@ pub fn run(
     };
     let out = Arc::new(RunOutput::new(files));
     let _ = crate::logging::init();
-    let only_sims = args.ble.name.is_empty() && args.ble.remote.is_empty();
+    let only_sims =
+        args.ble.name.is_empty() && args.ble.remote.is_empty() && args.ble.serial.is_none();
     let rt = if only_sims {
         // Simulated time, as for one simulated droid.
         tokio::runtime::Builder::new_current_thread()

@@ -25,6 +25,7 @@ pub mod scan;
 pub mod serve;
 pub mod signals;
 pub mod sim;
+mod sim_serial;
 pub mod term;
 
 use clap::{Parser, Subcommand};

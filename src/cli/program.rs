@@ -244,7 +244,8 @@ fn fleet(
     programs: &[Program],
     opts: ProgramOptions,
 ) -> Result<i32, CliError> {
-    let only_sims = args.ble.name.is_empty() && args.ble.remote.is_empty();
+    let only_sims =
+        args.ble.name.is_empty() && args.ble.remote.is_empty() && args.ble.serial.is_none();
     if only_sims {
         one_each(programs.len(), sims.len())?;
     }

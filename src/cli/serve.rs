@@ -7,6 +7,7 @@ use crate::model::Model;
 use crate::protocol::relay::DEFAULT_PORT;
 use crate::relay::backend::GattBackend;
 use crate::relay::ble_backend::BleBackend;
+use crate::relay::serial_backend::SerialBackend;
 use crate::relay::server::{self, EventSink, ServerConfig, ServerEvent};
 use crate::relay::sim_backend::SimBackend;
 use crate::sim::gatt::GattFaults;
@@ -26,6 +27,10 @@ pub struct ServeArgs {
     /// Relay to simulated droids instead of Bluetooth: one per MODEL given, one R2-D2 without.
     #[arg(long, num_args = 0.., value_name = "MODEL", value_parser = super::models::ModelNames::one())]
     pub sim: Option<Vec<String>>,
+    /// Relay to the RVR on this serial port (a Raspberry Pi's UART, /dev/serial0; see
+    /// docs/serial.md) instead of Bluetooth.
+    #[arg(long, value_name = "PORT", conflicts_with = "sim")]
+    pub serial: Option<std::path::PathBuf>,
     /// A fault for the simulated droids, as `droidctl sim --bluez` takes them
     /// (e.g. disconnect-after=5); repeatable.
     #[arg(long = "fault", value_name = "FAULT", requires = "sim")]
@@ -105,9 +110,17 @@ pub fn run(args: ServeArgs) -> Result<i32, CliError> {
     let listen = args.listen;
     let rt = super::realtime_runtime()?;
     rt.block_on(async move {
-        let backend: Arc<dyn GattBackend> = match models {
-            Some(models) => Arc::new(SimBackend::new(&models, faults)),
-            None => {
+        let backend: Arc<dyn GattBackend> = match (models, &args.serial) {
+            (Some(models), _) => Arc::new(SimBackend::new(&models, faults)),
+            (None, Some(port)) => {
+                // What is wrong with the port, said now rather than to the first client.
+                crate::link::serial::SerialLink::new(port, Model::ON_SERIAL)
+                    .check()
+                    .await
+                    .map_err(|e| CliError::failure(e.to_string()))?;
+                Arc::new(SerialBackend::new(port, Model::ON_SERIAL))
+            }
+            (None, None) => {
                 let central = crate::link::ble::open_central()
                     .await
                     .map_err(|e| CliError::failure(e.message))?;

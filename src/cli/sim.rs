@@ -15,8 +15,18 @@ use clap::Args;
 #[derive(Debug, Clone, Args)]
 pub struct SimArgs {
     /// Serve the droids on D-Bus as BlueZ does, for any BlueZ client (Linux).
-    #[arg(long, required = true)]
+    #[arg(long, required_unless_present = "serial")]
     pub bluez: bool,
+    /// Serve one simulated droid of MODEL (rvr: the droid with a serial port) on a new
+    /// pseudo-terminal, whose path is printed on stdout: for droidctl's `--serial PATH`,
+    /// Sphero's RVR SDK, anything that speaks RVR's UART (Linux and macOS).
+    #[arg(long, value_name = "MODEL", conflicts_with_all = ["bluez", "models", "remembered", "bus", "faults", "idle_sleep"], value_parser = super::models::ModelNames::one())]
+    pub serial: Option<String>,
+    /// With --serial: also make PATH a symbolic link to the pseudo-terminal, a name that
+    /// stays the same from run to run (removed when the simulator stops; an existing file
+    /// there is refused).
+    #[arg(long, value_name = "PATH", requires = "serial")]
+    pub link: Option<std::path::PathBuf>,
     /// The droids (one r2d2 without a MODEL); repeat a model for several of it.
     #[arg(value_name = "MODEL", value_parser = super::models::ModelNames::one())]
     pub models: Vec<String>,
@@ -115,6 +125,9 @@ fn check(args: &SimArgs) -> Result<Plan, CliError> {
 }
 
 pub fn run(args: SimArgs) -> Result<i32, CliError> {
+    if let Some(model) = &args.serial {
+        return super::sim_serial::run(model, args.link.as_deref(), args.trace, args.json);
+    }
     let plan = check(&args)?;
     serve(args, plan)
 }

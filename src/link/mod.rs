@@ -7,6 +7,7 @@
 pub mod backoff;
 pub mod ble;
 pub mod remote;
+pub mod serial;
 
 use crate::gatt::Endpoint;
 use futures_util::future::BoxFuture;
@@ -121,6 +122,19 @@ pub trait Link: Send {
     fn keepalive(&self) -> Option<std::time::Duration> {
         None
     }
+    /// The link's own write size and pacing, where they are not the model's Bluetooth ones
+    /// (a serial line has no 20-byte ATT payload). `None` (the default): the session's
+    /// configuration stands.
+    fn framing(&self) -> Option<Framing> {
+        None
+    }
     /// A name for the status bar: "R2-D2 D2-1A2B (simulated)".
     fn describe(&self) -> String;
+}
+
+/// How a link wants the session's writes: at most `chunk_size` bytes each, one per `pacing`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Framing {
+    pub chunk_size: usize,
+    pub pacing: std::time::Duration,
 }

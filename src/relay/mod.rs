@@ -8,6 +8,7 @@ pub mod backend;
 pub mod ble_backend;
 pub mod events;
 pub mod record;
+pub mod serial_backend;
 pub mod server;
 pub mod sim_backend;
 mod stream;

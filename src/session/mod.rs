@@ -301,7 +301,13 @@ pub struct SessionHandle {
 }
 
 /// Start a session over `link`. Needs a tokio runtime with time enabled.
-pub fn start(link: Box<dyn Link>, config: SessionConfig) -> SessionHandle {
+pub fn start(link: Box<dyn Link>, mut config: SessionConfig) -> SessionHandle {
+    // A link with its own framing (a serial line) writes as it needs, whatever the model's
+    // Bluetooth chunking and pacing.
+    if let Some(f) = link.framing() {
+        config.chunk_size = f.chunk_size.max(1);
+        config.pacing = f.pacing;
+    }
     let now = tokio::time::Instant::now();
     let shared = Arc::new(Shared {
         inner: Mutex::new(Inner {

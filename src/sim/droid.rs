@@ -28,6 +28,11 @@ pub struct SimDroid {
     /// BOLT's and RVR's robot-to-robot infrared.
     ir: Infrared,
     out: Vec<Packet>,
+    /// The port nibble of the host's last addressed command: 0x10 over Bluetooth, 0x00 on
+    /// RVR's UART (Sphero's SDK there addresses 0x01/0x02 and matches notifications by those
+    /// sources). Notifications come from the processor on that port (unverified on hardware:
+    /// what the SDK expects, not a capture).
+    host_port: u8,
 }
 
 /// Devices that answer while asleep; the rest say target_unavailable until Wake.
@@ -58,6 +63,7 @@ impl SimDroid {
             robot: RobotParts::new(model),
             ir: Infrared::default(),
             out: Vec::new(),
+            host_port: 0x10,
         }
     }
 
@@ -135,7 +141,7 @@ impl SimDroid {
                 _ => 0x12,
             };
             p.flags |= Flags::HAS_SOURCE_ID | Flags::HAS_TARGET_ID;
-            p.sid = Some(from);
+            p.sid = Some(self.host_port | (from & 0x0F));
             p.tid = Some(0x01);
         }
         self.out.push(p);
@@ -160,7 +166,7 @@ impl SimDroid {
                 let mut packet = Packet::notification(0x18, 0x3D, data);
                 if self.body.model().processors() > 1 {
                     packet.flags |= Flags::HAS_SOURCE_ID | Flags::HAS_TARGET_ID;
-                    packet.sid = Some(p.target_id());
+                    packet.sid = Some(self.host_port | (p.target_id() & 0x0F));
                     packet.tid = Some(0x01);
                 }
                 self.out.push(packet);
@@ -259,6 +265,9 @@ impl SimDroid {
             return;
         }
         self.body.state.commands += 1;
+        if let Some(t) = p.tid.filter(|t| Processor::of_id(*t).is_some()) {
+            self.host_port = t & 0xF0;
+        }
         if p.flags.contains(Flags::IS_ACTIVITY) {
             self.body.activity();
         }

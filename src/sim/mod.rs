@@ -21,6 +21,8 @@ mod physics;
 pub mod robi;
 pub mod robots;
 pub mod room;
+#[cfg(unix)]
+pub mod serial;
 pub mod sleep;
 pub mod trace;
 pub mod v1;

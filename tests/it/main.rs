@@ -72,6 +72,8 @@ mod rsrcp;
 mod rsrcp_props;
 mod run_outputs;
 mod safety;
+mod serial;
+mod serial_sdk;
 mod session;
 mod setup_retry;
 mod shutdown;

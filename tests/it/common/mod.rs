@@ -8,4 +8,5 @@ pub mod mission_run;
 pub mod mosquitto;
 pub mod pty;
 pub mod scratch;
+pub mod serial_sim;
 pub mod source;

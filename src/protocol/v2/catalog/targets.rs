@@ -37,13 +37,21 @@ impl Processor {
         }
     }
 
-    /// The processor of a target (or source) id; any other id names none.
+    /// The processor of a target (or source) id; any other id names none. An id is a port
+    /// (high nibble) and a node (low nibble): Bluetooth hosts use port 1 (spherov2: 0x11,
+    /// 0x12); Sphero's RVR SDK on RVR's UART uses port 0 (`sphero-sdk` 0.3.4's
+    /// `SerialAsyncDal` addresses 0x01 and 0x02, and matches answers by those sources).
     pub fn of_id(id: u8) -> Option<Processor> {
         match id {
-            0x11 => Some(Processor::Primary),
-            0x12 => Some(Processor::Secondary),
+            0x11 | 0x01 => Some(Processor::Primary),
+            0x12 | 0x02 => Some(Processor::Secondary),
             _ => None,
         }
+    }
+
+    /// The target id on RVR's UART (port 0, as Sphero's SDK addresses it there).
+    pub fn uart_id(self) -> u8 {
+        self.target_id() & 0x0F
     }
 
     pub fn name(self) -> &'static str {
