@@ -10,7 +10,7 @@
 //!   and time; [`wire`]: the turns across its pipe; [`host`]: droidctl's side of it, which
 //!   stops the droid whatever happens to the child;
 //! - [`infrared`]: the infrared calls as BOLT and RVR each take them on the wire;
-//! - [`run`]: a program on one droid, on droidctl's clock;
+//! - [`run`]: a program on one droid, on droidctl's clock; [`ready`]: when it may start;
 //! - [`timeline`]: a timed call's steps, made when due (a few numbers however long);
 //! - [`schedule`]: the timed calls pending, by when each is next due;
 //! - [`probe`]: a program run for its calls alone, and the bounds each call's effect keeps
@@ -37,6 +37,7 @@ pub mod host;
 mod hostile;
 pub mod infrared;
 pub mod probe;
+pub mod ready;
 pub mod run;
 pub mod schedule;
 pub mod timeline;
