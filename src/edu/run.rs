@@ -356,7 +356,11 @@ impl Player {
         let zero = |ready: bool| ready.then_some([0.0; 3]);
         let zero2 = |ready: bool| ready.then_some([0.0; 2]);
         Readings {
-            location: t.x_cm.zip(t.y_cm).map(|(x, y)| [x, y]).or(zero2(self.ready)),
+            location: t
+                .x_cm
+                .zip(t.y_cm)
+                .map(|(x, y)| [x, y])
+                .or(zero2(self.ready)),
             velocity: t.velocity_cm_s.or(zero2(self.ready)),
             orientation: match (t.pitch, t.roll, t.yaw) {
                 (Some(p), Some(r), Some(y)) => Some([p, r, y]),
@@ -603,8 +607,7 @@ impl Player {
         match c {
             Some(c) => {
                 let mut r = self.session.send_marked(c.clone(), latest);
-                if matches!(r, Err(RequestError::QueueFull))
-                    && self.session.room(ROOM_LIMIT).await
+                if matches!(r, Err(RequestError::QueueFull)) && self.session.room(ROOM_LIMIT).await
                 {
                     r = self.session.send_marked(c, latest);
                 }

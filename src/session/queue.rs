@@ -180,9 +180,8 @@ impl OutQueue {
 
     /// Whether the command with ticket `mark` is still waiting to be written.
     pub fn holds(&self, mark: Mark) -> bool {
-        let slot = |s: &Option<(Command, Option<Mark>)>| {
-            s.as_ref().is_some_and(|(_, m)| *m == Some(mark))
-        };
+        let slot =
+            |s: &Option<(Command, Option<Mark>)>| s.as_ref().is_some_and(|(_, m)| *m == Some(mark));
         slot(&self.drive) || slot(&self.head) || self.fifo.iter().any(|q| q.mark == Some(mark))
     }
 
