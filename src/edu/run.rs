@@ -121,8 +121,8 @@ struct Player {
     last_ir: Option<u8>,
     /// The infrared behaviours running, stopped when the program ends.
     ir_running: super::infrared::Running,
-    /// The tickets of the commands the call being applied sent: its clock starts when they
-    /// have left ([`Player::sent`]).
+    /// The tickets of the commands the program sent that may not have left yet: a timed call's
+    /// clock starts when they have ([`Player::sent`]).
     marks: Vec<Mark>,
     /// The droid was set up and its first sample came in: a reading it never sent reads 0.
     ready: bool,
@@ -132,6 +132,8 @@ struct Player {
 /// The longest a timed call's clock waits for its command to leave (a link that stopped
 /// taking writes must not hold the program for good).
 const LEAVE_LIMIT: Duration = Duration::from_secs(3);
+/// Tickets kept at most (the queue holds 64 requests and two slots).
+const MAX_MARKS: usize = 128;
 /// The longest the end of a run waits for what the program asked for to be written.
 const FLUSH_LIMIT: Duration = Duration::from_secs(10);
 /// The longest a call waits for room in a full request queue.
@@ -396,13 +398,13 @@ impl Player {
             line: op.line as usize,
             text: op.text.clone(),
         });
-        self.marks.clear();
         for a in &op.effect.now {
             self.act(op.line, a).await;
         }
-        // A timed call's clock starts when its commands have left, as spherov2's does (it
-        // sends each command before its call sleeps): queued behind the pacing, `rawMotor(l,
-        // r, 2)` would otherwise drive for less than 2 s.
+        // A timed call's clock starts when its commands, and those of the calls before it,
+        // have left, as spherov2's does (each of its calls sends its command before it
+        // returns): queued behind the pacing, `rawMotor(l, r, 2)` drove for less than 2 s, and
+        // `playMatrixAnimation(0); await delay(1)` showed animation 0 for a pacing tick.
         let now = match &op.effect.wait {
             Some(Wait::Timeline(_)) => self.sent().await,
             _ => Instant::now(),
@@ -437,7 +439,6 @@ impl Player {
 
     /// The timed actions that are due, in order.
     async fn due(&mut self) {
-        self.marks.clear();
         for due in self.timed.due(Instant::now()) {
             match due {
                 Due::Acts(acts) => {
@@ -452,7 +453,6 @@ impl Player {
 
     /// Waits on the droid that are over.
     async fn check_until(&mut self) {
-        self.marks.clear();
         self.readings();
         let now = Instant::now();
         let (distance, stance_done) = (self.distance, self.stance_done);
@@ -578,10 +578,25 @@ impl Player {
 
     /// When the commands the current call sent have left (now, if they already have).
     async fn sent(&mut self) -> Instant {
+        let by = Instant::now() + LEAVE_LIMIT;
         for mark in std::mem::take(&mut self.marks) {
-            self.session.left(mark, LEAVE_LIMIT).await;
+            let left = by.saturating_duration_since(Instant::now());
+            self.session.left(mark, left).await;
         }
         Instant::now()
+    }
+
+    /// Keep `mark` for [`Self::sent`]; those already gone are forgotten now and then, so the
+    /// list stays as short as the queue.
+    fn keep(&mut self, mark: Mark) {
+        if self.marks.len() >= MAX_MARKS {
+            let session = self.session.clone();
+            self.marks.retain(|m| session.holds(*m));
+            if self.marks.len() >= MAX_MARKS {
+                self.marks.remove(0);
+            }
+        }
+        self.marks.push(mark);
     }
 
     /// Everything the program asked for written before the run ends (issue 38: lights set
@@ -612,7 +627,7 @@ impl Player {
                     r = self.session.send_marked(c, latest);
                 }
                 match r {
-                    Ok(mark) => self.marks.push(mark),
+                    Ok(mark) => self.keep(mark),
                     Err(e) => self.warn(line, format!("{what}: {e}")),
                 }
             }
@@ -698,7 +713,7 @@ impl Player {
                 let c = crate::family::intent::drive(self.family, *speed, h, *reverse);
                 self.last_heading = *heading;
                 let mark = self.session.set_marked(Slot::Drive, c.clone());
-                self.marks.push(mark);
+                self.keep(mark);
                 self.drive = (*speed > 0).then_some(c);
             }
             Act::Raw(l, r) => {

@@ -400,6 +400,11 @@ impl SessionHandle {
         mark.unwrap_or(Mark(0))
     }
 
+    /// Whether the command with ticket `mark` is still waiting to be written.
+    pub fn holds(&self, mark: Mark) -> bool {
+        self.shared.with(|core| core.holds(mark))
+    }
+
     /// Wait until the command with ticket `mark` has left the queue (written, replaced by a
     /// newer one, or dropped with the link), at most `limit`; whether it did.
     pub async fn left(&self, mark: Mark, limit: Duration) -> bool {
