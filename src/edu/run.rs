@@ -132,6 +132,15 @@ struct Player {
 /// The longest a timed call's clock waits for its command to leave (a link that stopped
 /// taking writes must not hold the program for good).
 const LEAVE_LIMIT: Duration = Duration::from_secs(3);
+/// Why a program ended when the operator's emergency stop ended it.
+const EMERGENCY_STOP: &str = "emergency stop";
+
+/// Whether `e`, from [`run`], says the operator's emergency stop ended the program (not its
+/// own error): the app does not count that as the program failing.
+pub fn ended_by_emergency_stop(e: &MissionError) -> bool {
+    e.0.contains(&format!(": {EMERGENCY_STOP}; "))
+}
+
 /// Tickets kept at most (the queue holds 64 requests and two slots).
 const MAX_MARKS: usize = 128;
 /// The longest the end of a run waits for what the program asked for to be written.
@@ -263,7 +272,7 @@ impl Player {
                 }
             }
             _ = estops.changed() => {
-                return Err(Failure { line: None, message: "emergency stop".into() });
+                return Err(Failure { line: None, message: EMERGENCY_STOP.into() });
             }
             _ = sleep_until(deadline.unwrap_or(far)) => return Err(timed_out()),
         }
@@ -290,7 +299,7 @@ impl Player {
                         }
                     },
                     _ = estops.changed() => {
-                        return Err(Failure { line: None, message: "emergency stop".into() });
+                        return Err(Failure { line: None, message: EMERGENCY_STOP.into() });
                     }
                     _ = sleep_until(deadline.unwrap_or(far)) => return Err(timed_out()),
                 };
@@ -321,7 +330,7 @@ impl Player {
                 _ = estops.changed() => {
                     return Err(Failure {
                         line: None,
-                        message: "emergency stop".into(),
+                        message: EMERGENCY_STOP.into(),
                     });
                 }
                 _ = heartbeat.tick() => {
