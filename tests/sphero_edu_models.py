@@ -9,6 +9,7 @@ Usage: sphero_edu_models.py tcp PORT NAME | sphero_edu_models.py bleak NAME
 Prints one JSON object:
   class         the class spherov2 made of the toy
   yaw           [t_s, yaw] streamed from the start of the spin to a second after it
+  gyro          [t_s, z] the gyroscope's yaw rate (°/s, get_gyroscope()["z"]) at the same times
   raw_location  get_location() after raw_motor(80, 80, 1.5) (v1 droids only, else null)
   location      get_location() after the roll east into the wall
   collisions    the collision notifications spherov2 decoded: x_axis, y_axis, accel x/y
@@ -27,7 +28,8 @@ from sphero_edu import find_toy
 
 def main():
     toy = find_toy(sys.argv[1:])
-    out = {"class": type(toy).__name__, "yaw": [], "raw_location": None, "collisions": []}
+    out = {"class": type(toy).__name__, "yaw": [], "gyro": [], "raw_location": None,
+           "collisions": []}
     v1 = isinstance(toy, Sphero)  # BB-8, SPRK+ and Ollie derive from spherov2's v1 Sphero
     with SpheroEduAPI(toy) as api:
         time.sleep(0.5)
@@ -40,6 +42,9 @@ def main():
                 o = api.get_orientation()
                 if o is not None:
                     out["yaw"].append([time.time() - start, o["yaw"]])
+                g = api.get_gyroscope()
+                if g is not None:
+                    out["gyro"].append([time.time() - start, g["z"]])
                 time.sleep(0.02)
 
         sampler = threading.Thread(target=sample)

@@ -60,12 +60,22 @@ fn program(args: &DriveArgs) -> Result<Option<crate::edu::Program>, CliError> {
 const PROGRAM_LINES_BURST: u32 = 500;
 const PROGRAM_LINES_PER_S: u32 = 50;
 
+/// How a program beside the app ended.
+#[derive(Debug)]
+enum ProgramEnd {
+    Ended,
+    /// By the operator's emergency stop.
+    Stopped(String),
+    /// By its own error (or its engine's end): the app's exit status is 1.
+    Failed(String),
+}
+
 /// The program on every droid of the fleet, as tasks beside the app: its calls and warnings
 /// go to the log file (the screen is the app's); each ends with its droid's result.
 fn start_programs(
     fleet: &Fleet,
     program: Option<crate::edu::Program>,
-) -> Vec<tokio::task::JoinHandle<Result<(), String>>> {
+) -> Vec<tokio::task::JoinHandle<ProgramEnd>> {
     let Some(program) = program else {
         return Vec::new();
     };
@@ -108,7 +118,15 @@ fn start_programs(
                 let start = tokio::time::Instant::now();
                 let r = crate::edu::run(&session, model, &program, opts, emit, start).await;
                 tracing::info!(droid = %name, ?r, "program ended");
-                r.map(|_| ()).map_err(|e| format!("{name}: {e}"))
+                match r {
+                    Ok(_) => ProgramEnd::Ended,
+                    // The operator's emergency stop ended it: the operator's choice, not the
+                    // program's failure.
+                    Err(e) if crate::edu::run::ended_by_emergency_stop(&e) => {
+                        ProgramEnd::Stopped(format!("{name}: {e}"))
+                    }
+                    Err(e) => ProgramEnd::Failed(format!("{name}: {e}")),
+                }
             })
         })
         .collect()
@@ -362,7 +380,10 @@ async fn drive(
     let mut program_results = Vec::new();
     for p in programs {
         if p.is_finished() {
-            program_results.push(p.await.unwrap_or_else(|e| Err(e.to_string())));
+            program_results.push(
+                p.await
+                    .unwrap_or_else(|e| ProgramEnd::Failed(e.to_string())),
+            );
         } else {
             p.abort();
         }
@@ -383,10 +404,15 @@ async fn drive(
     reader.abort();
     signals.abort();
     guard.restore();
+    let mut program_failed = false;
     for r in program_results {
         match r {
-            Ok(()) => eprintln!("droidctl: the program ended"),
-            Err(e) => eprintln!("droidctl: the program: {e}"),
+            ProgramEnd::Ended => eprintln!("droidctl: the program ended"),
+            ProgramEnd::Stopped(e) => eprintln!("droidctl: the program: {e}"),
+            ProgramEnd::Failed(e) => {
+                program_failed = true;
+                eprintln!("droidctl: the program failed: {e}");
+            }
         }
     }
     match result {
@@ -401,7 +427,8 @@ async fn drive(
                     eprintln!("droidctl: {s}: stopped the droid and exited");
                 }
             }
-            Ok(0)
+            // A program that failed fails the run, as `droidctl run PROGRAM.js` does.
+            Ok(i32::from(program_failed))
         }
         Ok(Err(e)) => Err(CliError::failure(format!("terminal error: {e}"))),
         Err(join) => {

@@ -12,7 +12,7 @@
 //! - [`sounds`]: Sphero Edu's sounds on droids with a speaker, and said on the others;
 //! - [`names`]: the names a program calls, checked before anything is sent;
 //! - [`infrared`]: the infrared calls as BOLT and RVR each take them on the wire;
-//! - [`run`]: a program on one droid, on droidctl's clock;
+//! - [`run`]: a program on one droid, on droidctl's clock; [`ready`]: when it may start;
 //! - [`timeline`]: a timed call's steps, made when due (a few numbers however long);
 //! - [`schedule`]: the timed calls pending, by when each is next due;
 //! - [`probe`]: a program run for its calls alone, and the bounds each call's effect keeps
@@ -40,6 +40,7 @@ mod hostile;
 pub mod infrared;
 mod names;
 pub mod probe;
+pub mod ready;
 pub mod run;
 pub mod schedule;
 pub mod sounds;

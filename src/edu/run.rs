@@ -16,7 +16,7 @@ use crate::model::Model;
 use crate::protocol::notify::{Notification, RobotEvent};
 use crate::protocol::wire::LegAction;
 use crate::script::{Action, LedGroup, Step};
-use crate::session::{SessionEvent, SessionHandle, Slot};
+use crate::session::{Latest, Mark, RequestError, SessionEvent, SessionHandle, Slot};
 use crate::sync::lock;
 use crate::telemetry::{Stance, Telemetry};
 use crate::units::Heading;
@@ -135,8 +135,32 @@ struct Player {
     last_ir: Option<u8>,
     /// The infrared behaviours running, stopped when the program ends.
     ir_running: super::infrared::Running,
+    /// The tickets of the commands the program sent that may not have left yet: a timed call's
+    /// clock starts when they have ([`Player::sent`]).
+    marks: Vec<Mark>,
+    /// The droid was set up and its first sample came in: a reading it never sent reads 0.
+    ready: bool,
     mission: DroidMission,
 }
+
+/// The longest a timed call's clock waits for its command to leave (a link that stopped
+/// taking writes must not hold the program for good).
+const LEAVE_LIMIT: Duration = Duration::from_secs(3);
+/// Why a program ended when the operator's emergency stop ended it.
+const EMERGENCY_STOP: &str = "emergency stop";
+
+/// Whether `e`, from [`run`], says the operator's emergency stop ended the program (not its
+/// own error): the app does not count that as the program failing.
+pub fn ended_by_emergency_stop(e: &MissionError) -> bool {
+    e.0.contains(&format!(": {EMERGENCY_STOP}; "))
+}
+
+/// Tickets kept at most (the queue holds 64 requests and two slots).
+const MAX_MARKS: usize = 128;
+/// The longest the end of a run waits for what the program asked for to be written.
+const FLUSH_LIMIT: Duration = Duration::from_secs(10);
+/// The longest a call waits for room in a full request queue.
+const ROOM_LIMIT: Duration = Duration::from_secs(5);
 
 /// What the events told from the droid's reports last saw: spherov2's fall detector
 /// (`__process_falling`, on the acceleration's size), the gyroscope at its limit, the colour
@@ -228,10 +252,13 @@ pub async fn run_to_end(
         stance_done: false,
         last_ir: None,
         ir_running: Default::default(),
+        marks: Vec::new(),
+        ready: false,
         mission,
     };
     let r = p.play(program, &opts, events).await;
-    p.stop_motion();
+    p.stop_motion().await;
+    p.flush().await;
     let summary = p.mission.finish().await;
     match r {
         Ok(()) => ended(summary),
@@ -289,6 +316,24 @@ impl Player {
         let mut estops = self.session.watch_estops();
         estops.mark_unchanged();
         let mut listening: Vec<&'static str> = Vec::new();
+        // The program starts once the droid is set up and its first sample is in: every
+        // reading is a number from its first line (issue 38).
+        tokio::select! {
+            missing = super::ready::wait(&self.session, &self.telemetry, self.model, &opts.mission.setup) => {
+                self.ready = true;
+                if !missing.is_empty() {
+                    self.warn(0, format!(
+                        "{} sent no {} since it connected: the program reads 0 for it",
+                        self.model.display_name(),
+                        missing.join(", ")
+                    ));
+                }
+            }
+            _ = estops.changed() => {
+                return Err(Failure { line: None, message: EMERGENCY_STOP.into() });
+            }
+            _ = sleep_until(deadline.unwrap_or(far)) => return Err(timed_out()),
+        }
         let mut first = true;
         loop {
             if first || !self.fired.is_empty() || !self.events.is_empty() {
@@ -312,7 +357,7 @@ impl Player {
                         }
                     },
                     _ = estops.changed() => {
-                        return Err(Failure { line: None, message: "emergency stop".into() });
+                        return Err(Failure { line: None, message: EMERGENCY_STOP.into() });
                     }
                     _ = sleep_until(deadline.unwrap_or(far)) => return Err(timed_out()),
                 };
@@ -343,7 +388,7 @@ impl Player {
                 _ = estops.changed() => {
                     return Err(Failure {
                         line: None,
-                        message: "emergency stop".into(),
+                        message: EMERGENCY_STOP.into(),
                     });
                 }
                 _ = heartbeat.tick() => {
@@ -376,16 +421,23 @@ impl Player {
         let v_acc = t
             .accel
             .map(|a| (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt());
+        // Once ready, a reading the droid never sent is 0, never `null` (see `play`).
+        let zero = |ready: bool| ready.then_some([0.0; 3]);
+        let zero2 = |ready: bool| ready.then_some([0.0; 2]);
         Readings {
-            location: t.x_cm.zip(t.y_cm).map(|(x, y)| [x, y]),
-            velocity: t.velocity_cm_s,
+            location: t
+                .x_cm
+                .zip(t.y_cm)
+                .map(|(x, y)| [x, y])
+                .or(zero2(self.ready)),
+            velocity: t.velocity_cm_s.or(zero2(self.ready)),
             orientation: match (t.pitch, t.roll, t.yaw) {
                 (Some(p), Some(r), Some(y)) => Some([p, r, y]),
-                _ => None,
+                _ => zero(self.ready),
             },
-            acceleration: t.accel,
-            vertical_acceleration: v_acc,
-            gyroscope: t.gyro,
+            acceleration: t.accel.or(zero(self.ready)),
+            vertical_acceleration: v_acc.or(self.ready.then_some(0.0)),
+            gyroscope: t.gyro.or(zero(self.ready)),
             distance: self.distance,
             elapsed_s: self.start.elapsed().as_secs_f64(),
             luminosity: t.robot.ambient_lux,
@@ -416,7 +468,14 @@ impl Player {
         for a in &op.effect.now {
             self.act(op.line, a).await;
         }
-        let now = Instant::now();
+        // A timed call's clock starts when its commands, and those of the calls before it,
+        // have left, as spherov2's does (each of its calls sends its command before it
+        // returns): queued behind the pacing, `rawMotor(l, r, 2)` drove for less than 2 s, and
+        // `playMatrixAnimation(0); await delay(1)` showed animation 0 for a pacing tick.
+        let now = match &op.effect.wait {
+            Some(Wait::Timeline(_)) => self.sent().await,
+            _ => Instant::now(),
+        };
         match (op.effect.wait, op.promise) {
             (None, Some(id)) => self.fired.push(id),
             (None, None) => {}
@@ -584,11 +643,59 @@ impl Player {
         out
     }
 
-    fn send(&mut self, line: u32, c: Option<Command>, what: &str) {
+    /// When the commands the current call sent have left (now, if they already have).
+    async fn sent(&mut self) -> Instant {
+        let by = Instant::now() + LEAVE_LIMIT;
+        for mark in std::mem::take(&mut self.marks) {
+            let left = by.saturating_duration_since(Instant::now());
+            self.session.left(mark, left).await;
+        }
+        Instant::now()
+    }
+
+    /// Keep `mark` for [`Self::sent`]; those already gone are forgotten now and then, so the
+    /// list stays as short as the queue.
+    fn keep(&mut self, mark: Mark) {
+        if self.marks.len() >= MAX_MARKS {
+            let session = self.session.clone();
+            self.marks.retain(|m| session.holds(*m));
+            if self.marks.len() >= MAX_MARKS {
+                self.marks.remove(0);
+            }
+        }
+        self.marks.push(mark);
+    }
+
+    /// Everything the program asked for written before the run ends (issue 38: lights set
+    /// just before the end were dropped), bounded.
+    async fn flush(&mut self) {
+        if !self.session.is_closed() && !self.session.drained(FLUSH_LIMIT).await {
+            let left = self.session.queued();
+            self.warn(
+                0,
+                format!(
+                    "{left} command(s) were still waiting to be sent {} s after the program \
+                     ended; the link is too slow or gone",
+                    FLUSH_LIMIT.as_secs()
+                ),
+            );
+        }
+    }
+
+    /// A command for the droid, its ticket kept for [`Self::sent`]; `latest` (a light) replaces
+    /// an unwritten command for the same thing. A full queue is waited on, as spherov2 waits
+    /// for each command, rather than dropping what the program asked for.
+    async fn send(&mut self, line: u32, c: Option<Command>, what: &str, latest: Option<Latest>) {
         match c {
             Some(c) => {
-                if let Err(e) = self.session.send(c) {
-                    self.warn(line, format!("{what}: {e}"));
+                let mut r = self.session.send_marked(c.clone(), latest);
+                if matches!(r, Err(RequestError::QueueFull)) && self.session.room(ROOM_LIMIT).await
+                {
+                    r = self.session.send_marked(c, latest);
+                }
+                match r {
+                    Ok(mark) => self.keep(mark),
+                    Err(e) => self.warn(line, format!("{what}: {e}")),
                 }
             }
             None => self.warn(
@@ -611,23 +718,30 @@ impl Player {
 
     /// `intent` lowered by the droid's family and sent (`what` names the call in warnings); a
     /// model without it is warned about.
-    fn intend(&mut self, line: u32, intent: Intent, what: &str) {
+    async fn intend(&mut self, line: u32, intent: Intent, what: &str) {
+        self.intend_as(line, intent, what, None).await
+    }
+
+    /// [`Self::intend`] for a light: its commands replace the unwritten ones of the same light
+    /// (`light` names it), so a light loop never floods the queue and ends on its last state.
+    async fn intend_as(&mut self, line: u32, intent: Intent, what: &str, light: Option<u64>) {
         match self.family.lower(self.model, &intent) {
             Ok(cmds) => {
-                for c in cmds {
-                    self.send(line, Some(c), what);
+                for (i, c) in cmds.into_iter().enumerate() {
+                    let latest = light.map(|l| Latest(l << 8 | i as u64));
+                    self.send(line, Some(c), what, latest).await;
                 }
             }
-            Err(_) => self.send(line, None, what),
+            Err(_) => self.send(line, None, what, None).await,
         }
     }
 
     /// As [`Self::intend`], but a model without it does nothing (stabilisation on Robi 42,
     /// resetting the aim of a droid with no aim mode).
-    fn intend_quietly(&mut self, line: u32, intent: Intent, what: &str) {
+    async fn intend_quietly(&mut self, line: u32, intent: Intent, what: &str) {
         if let Ok(cmds) = self.family.lower(self.model, &intent) {
             for c in cmds {
-                self.send(line, Some(c), what);
+                self.send(line, Some(c), what, None).await;
             }
         }
     }
@@ -665,7 +779,8 @@ impl Player {
                 let h = Heading::wrapped(*heading as f64);
                 let c = crate::family::intent::drive(self.family, *speed, h, *reverse);
                 self.last_heading = *heading;
-                self.session.set(Slot::Drive, c.clone());
+                let mark = self.session.set_marked(Slot::Drive, c.clone());
+                self.keep(mark);
                 self.drive = (*speed > 0).then_some(c);
             }
             Act::Raw(l, r) => {
@@ -675,27 +790,24 @@ impl Player {
                     left: *l,
                     right: *r,
                 };
-                self.intend(line, raw, "rawMotor");
+                self.intend(line, raw, "rawMotor").await;
             }
             Act::Stabilization(on) => {
                 self.intend_quietly(line, Intent::Stabilization(*on), "setStabilization")
+                    .await
             }
-            Act::ResetAim => self.intend_quietly(line, Intent::ResetAim, "resetAim"),
-            Act::Main(rgb) => self.intend(line, Intent::MainLight(*rgb), "light"),
-            Act::Front(rgb) => self.intend(line, Intent::LedRgb(LedGroup::Front, *rgb), "light"),
-            Act::Back(rgb) => self.intend(line, Intent::LedRgb(LedGroup::Back, *rgb), "light"),
-            Act::BackBrightness(b) => {
-                self.intend(line, Intent::LedBrightness(LedGroup::Back, *b), "light")
+            Act::ResetAim => {
+                self.intend_quietly(line, Intent::ResetAim, "resetAim")
+                    .await
             }
-            Act::Holo(b) => self.intend(line, Intent::LedBrightness(LedGroup::Holo, *b), "light"),
-            Act::Logic(b) => self.intend(line, Intent::LedBrightness(LedGroup::Logic, *b), "light"),
-            // BB-9E's dome light, 0..15 scaled to 0..255 as spherov2 does.
-            Act::DomeLeds(b) => self.intend(
-                line,
-                Intent::LedBrightness(LedGroup::Holo, (*b as u16 * 255 / 15) as u8),
-                "light",
-            ),
-            Act::Matrix(m) => self.intend(line, Intent::Matrix(m.clone()), "matrix"),
+            Act::Main(_)
+            | Act::Front(_)
+            | Act::Back(_)
+            | Act::BackBrightness(_)
+            | Act::Holo(_)
+            | Act::Logic(_)
+            | Act::DomeLeds(_) => self.light(line, a).await,
+            Act::Matrix(m) => self.intend(line, Intent::Matrix(m.clone()), "matrix").await,
             Act::Dome(deg) => {
                 let head = Intent::Head(crate::units::HeadAngle::clamped(*deg));
                 match self.family.lower(self.model, &head) {
@@ -710,18 +822,19 @@ impl Player {
             Act::Stance(s) => {
                 self.drive = None;
                 lock(&self.telemetry).stance_requested(*s);
-                self.intend(line, Intent::Stance(*s), "setStance");
+                self.intend(line, Intent::Stance(*s), "setStance").await;
             }
             Act::Animation(id) => {
                 self.drive = None;
-                self.intend(line, Intent::Animation(*id), "playAnimation");
+                self.intend(line, Intent::Animation(*id), "playAnimation")
+                    .await;
             }
             Act::Sound(s) => match super::sounds::droid_clip(self.model, s)
                 .and_then(|id| self.family.lower(self.model, &Intent::Sound(id)).ok())
             {
                 Some(cmds) => {
                     for c in cmds {
-                        self.send(line, Some(c), "playSound");
+                        self.send(line, Some(c), "playSound", None).await;
                     }
                 }
                 None => self.say(line, format!("plays {}", super::sounds::described(s))),
@@ -733,15 +846,36 @@ impl Player {
             Act::Say(text) => self.say(line, format!("says {text:?}")),
             Act::CalibrateCompass => {
                 self.intend(line, Intent::CalibrateCompass, "calibrateCompass")
+                    .await
             }
-            Act::Ir(ir) => self.infrared(line, ir),
+            Act::Ir(ir) => self.infrared(line, ir).await,
         }
     }
 
+    /// A light's state: each light (and brightness) has its own key, so a newer state of one
+    /// light replaces its unwritten older one and no other light's.
+    async fn light(&mut self, line: u32, a: &Act) {
+        let (key, intent) = match a {
+            Act::Main(rgb) => (1, Intent::MainLight(*rgb)),
+            Act::Front(rgb) => (2, Intent::LedRgb(LedGroup::Front, *rgb)),
+            Act::Back(rgb) => (3, Intent::LedRgb(LedGroup::Back, *rgb)),
+            Act::BackBrightness(b) => (4, Intent::LedBrightness(LedGroup::Back, *b)),
+            Act::Holo(b) => (5, Intent::LedBrightness(LedGroup::Holo, *b)),
+            Act::Logic(b) => (6, Intent::LedBrightness(LedGroup::Logic, *b)),
+            // BB-9E's dome light, 0..15 scaled to 0..255 as spherov2 does.
+            Act::DomeLeds(b) => (
+                5,
+                Intent::LedBrightness(LedGroup::Holo, (*b as u16 * 255 / 15) as u8),
+            ),
+            _ => return,
+        };
+        self.intend_as(line, intent, "light", Some(key)).await;
+    }
+
     /// Robot-to-robot infrared: the robot's own commands ([`super::infrared`]).
-    fn infrared(&mut self, line: u32, ir: &Ir) {
+    async fn infrared(&mut self, line: u32, ir: &Ir) {
         self.ir_running.note(ir);
-        self.intend(line, Intent::Ir(ir.clone()), "infrared");
+        self.intend(line, Intent::Ir(ir.clone()), "infrared").await;
     }
 
     /// What a robot without a speaker would have said: a line of the output.
@@ -755,9 +889,9 @@ impl Player {
 
     /// Stop rolling and the motors (the run ends, or the program failed), and the infrared
     /// behaviours the program started (a follower or evader rolls by itself).
-    fn stop_motion(&mut self) {
+    async fn stop_motion(&mut self) {
         for stop in self.ir_running.stops() {
-            self.infrared(0, &stop);
+            self.infrared(0, &stop).await;
         }
         self.drive = None;
         let stop = crate::mission::drive_command(

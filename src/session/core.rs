@@ -8,7 +8,7 @@
 //! timing rule is a unit test on made-up instants (`core_tests.rs`) and a fuzz target
 //! (`crate::fuzzing::session_core`). [`super::task`] is the small tokio driver that feeds it.
 
-use super::queue::{Next, OutQueue, Queued, Reply, Slot};
+use super::queue::{Latest, Mark, Next, OutQueue, Queued, Reply, Slot};
 use super::{
     Direction, LogEntry, LogItem, RequestError, SessionConfig, SessionEvent, SessionStats,
 };
@@ -83,6 +83,7 @@ pub struct SessionCore {
     link: Option<Connected>,
     closed: bool,
     next_reply: u64,
+    next_mark: u64,
     events: VecDeque<SessionEvent>,
     log: VecDeque<LogEntry>,
     answers: VecDeque<Answer>,
@@ -117,6 +118,7 @@ impl SessionCore {
             link: None,
             closed: false,
             next_reply: 0,
+            next_mark: 0,
             events: VecDeque::new(),
             log: VecDeque::new(),
             answers: VecDeque::new(),
@@ -132,6 +134,19 @@ impl SessionCore {
         cmd: Command,
         wait: bool,
     ) -> Result<Option<Reply>, RequestError> {
+        self.handle_request_marked(cmd, wait, None)
+            .map(|(reply, _)| reply)
+    }
+
+    /// [`Self::handle_request`], with a ticket to learn when it leaves ([`Self::holds`]);
+    /// with `latest`, it replaces the unwritten request with the same key (whose waiter is
+    /// told `Superseded`).
+    pub fn handle_request_marked(
+        &mut self,
+        cmd: Command,
+        wait: bool,
+        latest: Option<Latest>,
+    ) -> Result<(Option<Reply>, Mark), RequestError> {
         if self.closed {
             return Err(RequestError::Closed);
         }
@@ -139,12 +154,21 @@ impl SessionCore {
             self.next_reply += 1;
             Reply(self.next_reply)
         });
+        let mark = self.new_mark();
         let q = Queued {
             reply,
+            mark: Some(mark),
+            latest,
             ..Queued::new(cmd)
         };
         match self.queue.push(q) {
-            Ok(()) => Ok(reply),
+            Ok(replaced) => {
+                self.stats.coalesced = self.queue.coalesced;
+                if let Some(r) = replaced.and_then(|q| q.reply) {
+                    self.answers.push_back((r, Err(RequestError::Superseded)));
+                }
+                Ok((reply, mark))
+            }
             Err(_) => {
                 self.stats.rejected += 1;
                 Err(RequestError::QueueFull)
@@ -152,14 +176,37 @@ impl SessionCore {
         }
     }
 
+    /// Whether the request queue is full (a request now would be refused).
+    pub fn is_full(&self) -> bool {
+        self.queue.is_full()
+    }
+
+    fn new_mark(&mut self) -> Mark {
+        self.next_mark += 1;
+        Mark(self.next_mark)
+    }
+
+    /// Whether the command with ticket `mark` is still waiting to be written: neither taken
+    /// for writing nor replaced by a newer one nor dropped with the link.
+    pub fn holds(&self, mark: Mark) -> bool {
+        self.queue.holds(mark)
+    }
+
     /// The latest value of a continuous control: replaces any older unwritten one, and a
     /// drive the drive commands queued before it (their waiters are told `Superseded`).
     pub fn handle_write(&mut self, slot: Slot, cmd: Command) {
-        let superseded = self.queue.set_slot(slot, cmd);
+        self.handle_write_marked(slot, cmd, false);
+    }
+
+    /// [`Self::handle_write`], with a ticket to learn when it leaves ([`Self::holds`]).
+    pub fn handle_write_marked(&mut self, slot: Slot, cmd: Command, mark: bool) -> Option<Mark> {
+        let mark = mark.then(|| self.new_mark());
+        let superseded = self.queue.set_slot_marked(slot, cmd, mark);
         self.stats.coalesced = self.queue.coalesced;
         for r in superseded.into_iter().filter_map(|q| q.reply) {
             self.answers.push_back((r, Err(RequestError::Superseded)));
         }
+        mark
     }
 
     /// Stop now: `stop` is the next write, ahead of pacing and of everything queued (after
@@ -490,6 +537,7 @@ impl SessionCore {
             retries,
             woken,
             quiet,
+            ..
         } = q;
         let want_response = want_response && self.codec.answers();
         let seq = self.next_seq(&cmd);

@@ -12,7 +12,7 @@ pub(crate) mod core;
 pub mod queue;
 mod task;
 
-pub use queue::Slot;
+pub use queue::{Latest, Mark, Slot};
 
 use self::core::SessionCore;
 use crate::family::{Command, DecodeError, DroidError, Explained, Packet};
@@ -257,6 +257,9 @@ pub(crate) struct Shared {
     /// Emergency stops so far: whatever drives the droid besides the operator (a Sphero Edu
     /// program, `crate::edu`) watches it and ends.
     pub estops: watch::Sender<u64>,
+    /// Writes so far (and link losses): who waits for a command to leave
+    /// ([`SessionHandle::left`]) looks again at each change.
+    pub written: watch::Sender<u64>,
 }
 
 impl Shared {
@@ -319,6 +322,7 @@ pub fn start(link: Box<dyn Link>, mut config: SessionConfig) -> SessionHandle {
         shutdown_wake: Notify::new(),
         urgent: Mutex::new(None),
         estops: watch::channel(0).0,
+        written: watch::channel(0).0,
     });
     let (state_tx, state_rx) = watch::channel(LinkState::Connecting);
     let (events, _) = broadcast::channel(config.event_capacity.max(16));
@@ -371,6 +375,73 @@ impl SessionHandle {
         }
         self.shared.wake.notify_one();
         Ok(())
+    }
+
+    /// [`Self::send`], with a ticket to learn when it leaves ([`Self::left`]); with `latest`
+    /// it replaces the unwritten command with the same key (what one light is set to, say),
+    /// so a loop faster than the pacing neither fills the queue nor delays its last state.
+    pub fn send_marked(
+        &self,
+        cmd: impl Into<Command>,
+        latest: Option<Latest>,
+    ) -> Result<Mark, RequestError> {
+        if self.is_closed() {
+            return Err(RequestError::Closed);
+        }
+        let mark = self
+            .shared
+            .with(|core| core.handle_request_marked(cmd.into(), false, latest))
+            .map(|(_, mark)| mark)?;
+        self.shared.wake.notify_one();
+        Ok(mark)
+    }
+
+    /// [`Self::set`], with a ticket to learn when it leaves ([`Self::left`]).
+    pub fn set_marked(&self, slot: Slot, cmd: impl Into<Command>) -> Mark {
+        let cmd = cmd.into();
+        let mark = self
+            .shared
+            .with(|core| core.handle_write_marked(slot, cmd, true));
+        self.shared.wake.notify_one();
+        mark.unwrap_or(Mark(0))
+    }
+
+    /// Whether the command with ticket `mark` is still waiting to be written.
+    pub fn holds(&self, mark: Mark) -> bool {
+        self.shared.with(|core| core.holds(mark))
+    }
+
+    /// Wait until the command with ticket `mark` has left the queue (written, replaced by a
+    /// newer one, or dropped with the link), at most `limit`; whether it did.
+    pub async fn left(&self, mark: Mark, limit: Duration) -> bool {
+        self.wait_written(limit, |core| !core.holds(mark)).await
+    }
+
+    /// Wait until the request queue has room again, at most `limit`; whether it has.
+    pub async fn room(&self, limit: Duration) -> bool {
+        self.wait_written(limit, |core| !core.is_full()).await
+    }
+
+    /// Wait until nothing is left to write (everything asked for is on the link), at most
+    /// `limit`; whether it is so.
+    pub async fn drained(&self, limit: Duration) -> bool {
+        self.wait_written(limit, |core| !core.has_work()).await
+    }
+
+    async fn wait_written(&self, limit: Duration, done: impl Fn(&SessionCore) -> bool) -> bool {
+        let mut written = self.shared.written.subscribe();
+        let wait = async {
+            loop {
+                written.mark_unchanged();
+                if self.is_closed() || self.shared.with(|core| done(core)) {
+                    return;
+                }
+                if written.changed().await.is_err() {
+                    return;
+                }
+            }
+        };
+        tokio::time::timeout(limit, wait).await.is_ok() && self.shared.with(|core| done(core))
     }
 
     /// Set the latest value of a continuous control (drive or head): replaces any older

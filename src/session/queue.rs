@@ -12,6 +12,18 @@ pub enum Slot {
     Head,
 }
 
+/// A command's ticket, to learn when it has left the queue ([`OutQueue::holds`]): a Sphero
+/// Edu program's timed call counts its duration from when its command leaves, not from when
+/// it was queued (issue 38; spherov2 sends each command before its call's clock starts).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct Mark(pub u64);
+
+/// What a state-setting command sets (one light, say): a newer request with the same key
+/// replaces an unwritten older one, so a loop that sets a light faster than the pacing
+/// never fills the queue, and the light ends on its last state (issue 38).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct Latest(pub u64);
+
 /// Who waits for a request's answer. The queue and the core hold only this number (they do
 /// no I/O); the handle keeps the channel it stands for and is given the answer under it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -34,6 +46,10 @@ pub struct Queued {
     /// An error answer is expected on some firmware (a fail-safe the droid may not know):
     /// logged once, not counted as an error.
     pub quiet: bool,
+    /// Its ticket, when someone wants to know it left.
+    pub mark: Option<Mark>,
+    /// What it sets, when only its latest value matters.
+    pub latest: Option<Latest>,
 }
 
 impl Queued {
@@ -46,6 +62,8 @@ impl Queued {
             retries: 0,
             woken: false,
             quiet: false,
+            mark: None,
+            latest: None,
         }
     }
 }
@@ -59,8 +77,8 @@ pub enum Next {
 
 #[derive(Debug)]
 pub struct OutQueue {
-    drive: Option<Command>,
-    head: Option<Command>,
+    drive: Option<(Command, Option<Mark>)>,
+    head: Option<(Command, Option<Mark>)>,
     fifo: VecDeque<Queued>,
     capacity: usize,
     slots_turn: bool,
@@ -94,6 +112,16 @@ impl OutQueue {
     /// one re-sent after a Wake): written after it, an older drive would undo it (an e-stop
     /// followed by the drive it stopped). They are returned, for their callers to be told.
     pub fn set_slot(&mut self, slot: Slot, cmd: impl Into<Command>) -> Vec<Queued> {
+        self.set_slot_marked(slot, cmd, None)
+    }
+
+    /// [`Self::set_slot`] with a ticket for the command ([`Self::holds`]).
+    pub fn set_slot_marked(
+        &mut self,
+        slot: Slot,
+        cmd: impl Into<Command>,
+        mark: Option<Mark>,
+    ) -> Vec<Queued> {
         let cmd = cmd.into();
         let mut superseded = Vec::new();
         if slot == Slot::Drive && self.fifo.iter().any(|q| q.cmd.is_drive()) {
@@ -115,20 +143,46 @@ impl OutQueue {
             Slot::Drive => &mut self.drive,
             Slot::Head => &mut self.head,
         };
-        if s.replace(cmd).is_some() {
+        if s.replace((cmd, mark)).is_some() {
             self.coalesced += 1;
         }
         self.coalesced += superseded.len() as u64;
         superseded
     }
 
-    /// Queue a discrete request; a full queue hands it back.
-    pub fn push(&mut self, q: Queued) -> Result<(), Queued> {
+    /// Queue a discrete request; a full queue hands it back. A request with a [`Latest`] key
+    /// replaces the unwritten one with the same key (returned, for its caller to be told),
+    /// and goes at the back: the order of what the droid is told stays the order it was
+    /// asked, so the last state asked for is the last written.
+    pub fn push(&mut self, q: Queued) -> Result<Option<Queued>, Queued> {
+        let mut replaced = None;
+        if let Some(key) = q.latest
+            && let Some(i) = self
+                .fifo
+                .iter()
+                .skip(self.setup_left)
+                .position(|old| old.latest == Some(key))
+        {
+            replaced = self.fifo.remove(self.setup_left + i);
+            self.coalesced += 1;
+        }
         if self.fifo.len() >= self.capacity {
             return Err(q);
         }
         self.fifo.push_back(q);
-        Ok(())
+        Ok(replaced)
+    }
+
+    /// Whether the FIFO takes no more requests now.
+    pub fn is_full(&self) -> bool {
+        self.fifo.len() >= self.capacity
+    }
+
+    /// Whether the command with ticket `mark` is still waiting to be written.
+    pub fn holds(&self, mark: Mark) -> bool {
+        let slot =
+            |s: &Option<(Command, Option<Mark>)>| s.as_ref().is_some_and(|(_, m)| *m == Some(mark));
+        slot(&self.drive) || slot(&self.head) || self.fifo.iter().any(|q| q.mark == Some(mark))
     }
 
     /// Queue ahead of everything else (connect setup, retries). The first `gate` items go
@@ -165,8 +219,8 @@ impl OutQueue {
             }
             self.setup_left = 0;
         }
-        if self.drive.as_ref().is_some_and(is_stop) {
-            return self.drive.take().map(|c| Next::Slot(Slot::Drive, c));
+        if self.drive.as_ref().is_some_and(|(c, _)| is_stop(c)) {
+            return self.drive.take().map(|(c, _)| Next::Slot(Slot::Drive, c));
         }
         let slot_first = self.slots_turn || self.fifo.is_empty();
         self.slots_turn = !self.slots_turn;
@@ -181,7 +235,7 @@ impl OutQueue {
                     Slot::Drive => self.drive.take(),
                     Slot::Head => self.head.take(),
                 };
-                if let Some(c) = taken {
+                if let Some((c, _)) = taken {
                     self.head_turn = slot == Slot::Drive;
                     return Some(Next::Slot(slot, c));
                 }
@@ -305,6 +359,50 @@ mod tests {
         q.push_front_all(vec![req(cmd::wake()), req(drive(0))]);
         assert!(q.set_slot(Slot::Drive, drive(30)).is_empty());
         assert_eq!(q.len(), 3);
+    }
+
+    #[test]
+    fn a_newer_light_replaces_the_unwritten_one_and_goes_last() {
+        let mut q = OutQueue::new(2);
+        let light = |c: Command, k: u64| Queued {
+            latest: Some(Latest(k)),
+            ..Queued::new(c)
+        };
+        // A hundred colours for one light and one for another: never full, two waiting.
+        q.push(light(cmd::wake().into(), 1)).unwrap();
+        for _ in 0..100 {
+            q.push(light(cmd::ping().into(), 2)).unwrap();
+        }
+        let last = q.push(light(cmd::reset_yaw().into(), 1)).unwrap();
+        assert_eq!(last.map(|r| r.cmd.cid()), Some(0x0D));
+        assert_eq!(q.coalesced, 100);
+        let order: Vec<u8> = std::iter::from_fn(|| q.pop())
+            .map(|n| match n {
+                Next::Fifo(q) => q.cmd.cid(),
+                Next::Slot(..) => 0,
+            })
+            .collect();
+        assert_eq!(order, [0x01, 0x06]);
+    }
+
+    #[test]
+    fn a_marked_command_is_held_until_it_is_taken() {
+        let mut q = OutQueue::new(4);
+        q.push(Queued {
+            mark: Some(Mark(1)),
+            ..Queued::new(cmd::ping().into())
+        })
+        .unwrap();
+        q.set_slot_marked(Slot::Drive, drive(50), Some(Mark(2)));
+        assert!(q.holds(Mark(1)) && q.holds(Mark(2)) && !q.holds(Mark(3)));
+        q.pop();
+        assert!(!q.holds(Mark(2)) && q.holds(Mark(1)));
+        q.pop();
+        assert!(!q.holds(Mark(1)));
+        // Replaced before it left: not held either (the newer command stands for it).
+        q.set_slot_marked(Slot::Drive, drive(50), Some(Mark(4)));
+        q.set_slot(Slot::Drive, drive(60));
+        assert!(!q.holds(Mark(4)));
     }
 
     #[test]

@@ -114,6 +114,7 @@ impl Task {
                         Ended::LinkLost(reason) => {
                             tracing::warn!(%reason, "link lost");
                             self.step(|core| core.handle_link_lost());
+                            self.shared.written.send_modify(|n| *n += 1);
                             attempt += 1;
                             if !self.wait_retry(attempt, reason).await {
                                 break;
@@ -140,6 +141,7 @@ impl Task {
         }
         self.step(|core| core.close());
         self.state.send_replace(LinkState::Closed { reason: None });
+        self.shared.written.send_modify(|n| *n += 1);
     }
 
     /// Show "reconnecting (attempt N)" and wait the backoff delay, or less when the link
@@ -171,6 +173,7 @@ impl Task {
                     return Ended::LinkLost(format!("write failed: {e}"));
                 }
                 self.step(|core| core.handle_written(now()));
+                self.shared.written.send_modify(|n| *n += 1);
                 if !t.urgent {
                     break;
                 }

@@ -114,6 +114,11 @@ pub struct Body {
     sounds_queued: u32,
     accel_fwd: f32,
     yaw_rate: f32,
+    /// The turn rate as the gyroscope reports it: [`yaw_rate`](Self::yaw_rate) through a
+    /// first-order low-pass of [`GYRO_TAU`] (issue 38 point 11: the body turns toward each
+    /// new heading of a spin at its full rate, then stands until the next, so the step's rate
+    /// sampled read 0 on about half the samples of a spin).
+    gyro_rate: f32,
     events: Vec<SimEvent>,
     /// A hop off the floor at full raw power: lift-off and touch-down ([`HOP_AIR`]).
     hop: Option<(Duration, Duration)>,
@@ -138,6 +143,13 @@ pub const HOP_AIR: Duration = Duration::from_millis(450);
 /// sample at 100 ms), at this many g.
 const LANDING: Duration = Duration::from_millis(100);
 const LANDING_G: f32 = 2.5;
+/// The gyroscope's smoothing, s: its reading follows the turn rate like a first-order
+/// low-pass of this time constant. No spec gives the droids' IMU filter; a motion IMU's
+/// digital low-pass is typically tens of Hz down to a few (InvenSense MPU-6050 datasheet,
+/// DLPF_CFG: 5–260 Hz), and 0.1 s (1.6 Hz) is what makes a 10 Hz sample of the simulated
+/// body's step-by-step spin read its average rate: an assumption, chosen for that.
+const GYRO_TAU: f32 = 0.1;
+
 /// The most the gyroscope measures, °/s (a faster spin reads this).
 const GYRO_MAX: f32 = 2000.0;
 /// Full power: this share of it or more on both motors, the same way.
@@ -194,6 +206,7 @@ impl Body {
             sounds_queued: 0,
             accel_fwd: 0.0,
             yaw_rate: 0.0,
+            gyro_rate: 0.0,
             events: Vec::new(),
             hop: None,
             on_charger: false,
@@ -624,6 +637,8 @@ impl Body {
         }
         self.state.yaw_deg = wrap360(self.yaw);
         self.yaw_rate = turn / dt;
+        let k = (dt / GYRO_TAU).min(1.0);
+        self.gyro_rate += (self.yaw_rate - self.gyro_rate) * k;
         // Speed with acceleration limits; signed along the facing.
         let target_v = if backward {
             -target_speed
@@ -808,7 +823,7 @@ impl Body {
             ("gyro_x", 0.0),
             ("gyro_y", 0.0),
             // The gyroscope measures ±2000°/s at most (droid-facts' streaming range).
-            ("gyro_z", self.yaw_rate.clamp(-GYRO_MAX, GYRO_MAX)),
+            ("gyro_z", self.gyro_rate.clamp(-GYRO_MAX, GYRO_MAX)),
             // BOLT's ambient light and RVR's colour sensor see a lit, grey floor.
             ("ambient_light", 320.0),
             ("color_red", 128.0),

@@ -212,7 +212,8 @@ fn a_crashed_engine_stops_the_droid_and_the_app_goes_on() {
     assert!(run.tui.try_wait().is_none(), "the app is still running");
     run.tui.send(b"q");
     let status = run.tui.wait_exit(Duration::from_secs(15));
-    assert!(status.success(), "{status:?}");
+    // The program failed (its engine crashed): exit status 1 (issue 38 point 10).
+    assert_eq!(status.exit_code(), 1, "{status:?}");
     std::thread::sleep(Duration::from_millis(200));
     assert!(!run.tui.alternate_screen(), "the terminal is given back");
     let screen = run.tui.text();
@@ -272,7 +273,8 @@ fn an_ended_program_keeps_no_core_busy() {
         "{used} ticks of CPU in 2 s after the program ended"
     );
     run.tui.send(b"q");
-    assert!(run.tui.wait_exit(Duration::from_secs(15)).success());
+    // The program was ended for computing without waiting: it failed, exit status 1.
+    assert_eq!(run.tui.wait_exit(Duration::from_secs(15)).exit_code(), 1);
 }
 
 /// Issue 37 item 10: a program calling in a tight loop fills neither the log (a burst, then a
@@ -289,4 +291,48 @@ fn a_program_cannot_flood_the_log() {
     assert!(size < 1 << 20, "the log is {size} bytes");
     run.tui.send(b"q");
     assert!(run.tui.wait_exit(Duration::from_secs(15)).success());
+}
+
+/// A program that fails makes the app's exit status 1 (issue 38 point 10), as `droidctl run
+/// PROGRAM.js` does; its error is said after the screen is restored.
+#[test]
+fn a_program_that_failed_makes_the_apps_exit_status_1() {
+    let dir = std::env::temp_dir().join(format!("droidctl-edu-app-f-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let program = dir.join("fails.js");
+    std::fs::write(
+        &program,
+        "async function startProgram() {\n  await delay(0.2);\n  throw new Error(\"boom\");\n}\n",
+    )
+    .unwrap();
+    let log = dir.join("droidctl.log");
+    let mut tui = pty::Tui::start(
+        &["--sim", "bolt", "--program", program.to_str().unwrap()],
+        &[
+            ("DROIDCTL_LOG_FILE", log.to_str().unwrap()),
+            ("DROIDCTL_CONFIG", "/dev/null"),
+        ],
+    );
+    let start = Instant::now();
+    while !std::fs::read_to_string(&log)
+        .unwrap_or_default()
+        .contains("program ended")
+    {
+        assert!(
+            start.elapsed() < Duration::from_secs(30),
+            "the program never ended; screen:\n{}",
+            tui.text()
+        );
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    tui.send(b"q");
+    let status = tui.wait_exit(Duration::from_secs(15));
+    assert_eq!(status.exit_code(), 1, "{status:?}");
+    assert!(
+        tui.text().contains("fails.js:3: Error: boom"),
+        "{}",
+        tui.text()
+    );
+    let _ = std::fs::remove_dir_all(&dir);
 }

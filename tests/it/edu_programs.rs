@@ -299,8 +299,8 @@ fn sensors_read_what_the_droid_streams() {
 /// R2-D2's own calls: the dome, stances waited for, its lights, a sound, speech printed.
 const R2: &str = r#"async function startProgram() {
   setDomePosition(45);
-  await setStance(Stance.Bipod);
   await setStance(Stance.Tripod);
+  await setStance(Stance.Bipod);
   setHoloProjectorLed(255);
   setLogicDisplayLeds(128);
   playSound("1915");
@@ -317,7 +317,8 @@ fn r2d2s_calls_run_and_speech_is_printed() {
     assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
     let text = stdout(&out);
     assert!(text.contains("R2-D2 says \"beep boop\""), "{text}");
-    // The stance change is waited for: the next line comes after it.
+    // The stance change is waited for: the next line comes after it (R2-D2 starts in bipod,
+    // so the change to tripod, which takes time, comes first).
     let at = |needle: &str| -> f64 {
         let line = text.lines().find(|l| l.contains(needle)).unwrap();
         line[1..line.find('s').unwrap()].trim().parse().unwrap()
@@ -378,7 +379,9 @@ fn a_bad_matrix_animation_is_an_error_naming_its_line_and_what_is_wrong() {
 
 /// `rawMotor` on the API v1 robots goes out as their Set Raw Motors (spherov2's `raw_motor`
 /// drives them too): the simulated BB-8, SPRK+ and Ollie roll forward on equal power and
-/// stop when the duration is over; opposite power turns them in place.
+/// stop when the duration is over; opposite power turns them in place (briefly: open-loop, it
+/// spins them like a top, Ollie past a whole turn in 0.5 s, which the yaw cannot tell from
+/// none).
 #[test]
 fn raw_motors_drive_the_api_v1_robots() {
     let dir = Scratch::new("edu", "raw-v1");
@@ -394,7 +397,7 @@ fn raw_motors_drive_the_api_v1_robots() {
          \x20 const b = getLocation();\n\
          \x20 check(Math.hypot(b.x - a.x, b.y - a.y) < 1, \"stopped: \" + JSON.stringify(b));\n\
          \x20 const yaw = getOrientation().yaw;\n\
-         \x20 await rawMotor(120, -120, 0.5);\n\
+         \x20 await rawMotor(120, -120, 0.3);\n\
          \x20 await delay(0.5);\n\
          \x20 const c = getLocation();\n\
          \x20 check(Math.hypot(c.x - b.x, c.y - b.y) < 5, \"in place: \" + JSON.stringify(c));\n\

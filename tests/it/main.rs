@@ -47,6 +47,7 @@ mod edu_charger;
 mod edu_field;
 mod edu_infrared;
 mod edu_programs;
+mod edu_runtime;
 mod edu_spherov2;
 mod examples;
 mod exit_status;
