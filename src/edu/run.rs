@@ -5,7 +5,7 @@
 //! become the droid's commands here, timed waits (`roll`'s duration, `spin`'s steps, `fade`,
 //! `delay`) run on tokio's clock, and the droid's notifications become the program's events.
 
-use super::api::{Act, Ir, Wait};
+use super::api::{Act, Wait};
 use super::engine::{Event, Failure, Op, Readings, Status};
 use super::host::{CheckError, Engine, EngineOptions, TurnError};
 use super::schedule::{Due, Schedule};
@@ -15,7 +15,7 @@ use crate::mission::{DroidMission, Emit, MissionError, MissionEvent, MissionOpti
 use crate::model::Model;
 use crate::protocol::notify::{Notification, RobotEvent};
 use crate::protocol::wire::LegAction;
-use crate::script::{Action, LedGroup, Step};
+use crate::script::{Action, Step};
 use crate::session::{Latest, Mark, RequestError, SessionEvent, SessionHandle, Slot};
 use crate::sync::lock;
 use crate::telemetry::{Stance, Telemetry};
@@ -24,6 +24,8 @@ use std::sync::{Arc, Mutex};
 use std::time::Duration;
 use tokio::sync::broadcast;
 use tokio::time::{Instant, sleep_until};
+
+mod lights;
 
 /// A program checked and ready to run.
 #[derive(Debug, Clone)]
@@ -839,10 +841,7 @@ impl Player {
                 }
                 None => self.say(line, format!("plays {}", super::sounds::described(s))),
             },
-            Act::Rvr(light, rgb) => {
-                let c = crate::family::v2::robots::rvr_leds(light.mask(), *rgb);
-                self.send(line, Some(c), "light");
-            }
+            Act::Rvr(light, rgb) => self.rvr_light(line, *light, *rgb).await,
             Act::Say(text) => self.say(line, format!("says {text:?}")),
             Act::CalibrateCompass => {
                 self.intend(line, Intent::CalibrateCompass, "calibrateCompass")
@@ -850,32 +849,6 @@ impl Player {
             }
             Act::Ir(ir) => self.infrared(line, ir).await,
         }
-    }
-
-    /// A light's state: each light (and brightness) has its own key, so a newer state of one
-    /// light replaces its unwritten older one and no other light's.
-    async fn light(&mut self, line: u32, a: &Act) {
-        let (key, intent) = match a {
-            Act::Main(rgb) => (1, Intent::MainLight(*rgb)),
-            Act::Front(rgb) => (2, Intent::LedRgb(LedGroup::Front, *rgb)),
-            Act::Back(rgb) => (3, Intent::LedRgb(LedGroup::Back, *rgb)),
-            Act::BackBrightness(b) => (4, Intent::LedBrightness(LedGroup::Back, *b)),
-            Act::Holo(b) => (5, Intent::LedBrightness(LedGroup::Holo, *b)),
-            Act::Logic(b) => (6, Intent::LedBrightness(LedGroup::Logic, *b)),
-            // BB-9E's dome light, 0..15 scaled to 0..255 as spherov2 does.
-            Act::DomeLeds(b) => (
-                5,
-                Intent::LedBrightness(LedGroup::Holo, (*b as u16 * 255 / 15) as u8),
-            ),
-            _ => return,
-        };
-        self.intend_as(line, intent, "light", Some(key)).await;
-    }
-
-    /// Robot-to-robot infrared: the robot's own commands ([`super::infrared`]).
-    async fn infrared(&mut self, line: u32, ir: &Ir) {
-        self.ir_running.note(ir);
-        self.intend(line, Intent::Ir(ir.clone()), "infrared").await;
     }
 
     /// What a robot without a speaker would have said: a line of the output.
