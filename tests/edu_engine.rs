@@ -97,11 +97,14 @@ fn crashes_while_driving(name: &str, prep: &str, at: f64, deep: &str) {
         "the capture is complete: {:?}",
         c.events.last()
     );
-    let crash = Duration::from_secs_f64(at);
-    assert!(
-        drives.iter().any(|d| d.1 > 0 && d.0 < crash),
-        "it drove: {drives:?}"
-    );
+    // The program starts once the droid is set up and its first sample is in (issue 38 point
+    // 1), with its first drive: its clock counts from there.
+    let started = drives
+        .iter()
+        .find(|d| d.1 > 0)
+        .map(|d| d.0)
+        .unwrap_or_else(|| panic!("it drove: {drives:?}"));
+    let crash = started + Duration::from_secs_f64(at);
     let stop = drives
         .iter()
         .find(|(t, speed)| *speed == 0 && *t >= crash - Duration::from_millis(100))
@@ -360,8 +363,9 @@ async fn killed_while_driving(dir: &Scratch, k: usize) -> (Duration, String) {
             droidctl::edu::run(&session, model, &program, opts, emit, start).await
         })
     };
-    // Driving, on the real clock.
-    tokio::time::sleep(Duration::from_millis(600)).await;
+    // Driving, on the real clock (the program starts once the droid is set up and streams:
+    // issue 38 point 1).
+    tokio::time::sleep(Duration::from_millis(2000)).await;
     let pids = engine_children();
     assert_eq!(pids.len(), 1, "one engine child: {pids:?}");
     let pid = libc::pid_t::try_from(pids[0]).unwrap();

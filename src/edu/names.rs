@@ -130,12 +130,17 @@ fn engine_globals() -> Vec<String> {
         .unwrap_or_default()
 }
 
-/// The calls droidctl's API defines (the calls table's plain names).
+/// Sphero Edu calls droidctl knows but cannot carry out, each refused with its own reason when
+/// reached (the prelude throws it): not misspellings.
+const REFUSED: &[&str] = &["setDisplayImage"];
+
+/// The calls droidctl's API defines (the calls table's plain names), and those it refuses.
 fn api_names() -> impl Iterator<Item = &'static str> {
     calls::CALLS
         .iter()
         .map(|c| c.name)
         .filter(|n| !n.contains('.'))
+        .chain(REFUSED.iter().copied())
 }
 
 /// The first name `source` calls that is neither the program's, droidctl's nor the engine's:

@@ -59,8 +59,8 @@ fn rvr_samples_come_evenly_at_the_rate_hello_says() {
     );
 }
 
-/// A `stream` changes a droid's rate: its reply, then the retained `info` and the retained
-/// `bridge` topic say the same rate (the `bridge` topic kept the old one).
+/// A `stream` changes a droid's rate: its reply, then the retained `info` and the bridge's
+/// retained `hello` (`bridge/ID`) say the same rate (the `hello` kept the old one).
 #[test]
 fn after_a_stream_info_and_the_bridge_topic_agree_on_the_rate() {
     let dir = scratch("rates");
@@ -69,11 +69,22 @@ fn after_a_stream_info_and_the_bridge_topic_agree_on_the_rate() {
     let sub = Sub::start(p, "droidctl/#", &[]);
     let _bridge = BridgeProc::start(
         &dir,
-        &["--mqtt", &broker.url(), "--sim", "bolt", "--rate", "100"],
+        &[
+            "--mqtt",
+            &broker.url(),
+            "--sim",
+            "bolt",
+            "--rate",
+            "100",
+            "--bridge-id",
+            "rates",
+        ],
     );
     sub.wait(20, "droidctl/SB-0001/state", |v| v["ready"] == true);
-    let before = Sub::start(p, "droidctl/bridge", &[]);
-    let hello = before.wait(5, "droidctl/bridge", |_| true);
+    // The bridge's own `hello`, under its id.
+    let topic = "droidctl/bridge/rates";
+    let before = Sub::start(p, topic, &[]);
+    let hello = before.wait(5, topic, |_| true);
     let was = hello["droids"][0]["telemetry_hz"].as_u64().unwrap();
     let want = if was == 20 { 10 } else { 20 };
     assert!(publish(
@@ -91,8 +102,8 @@ fn after_a_stream_info_and_the_bridge_topic_agree_on_the_rate() {
     let rate = info["telemetry_hz"].as_u64().unwrap();
     assert_eq!(rate, want, "{info}");
     // A client arriving now reads the same rate on both retained topics.
-    let late = Sub::start(p, "droidctl/bridge", &[]);
-    let bridge = late.wait(5, "droidctl/bridge", |_| true);
+    let late = Sub::start(p, topic, &[]);
+    let bridge = late.wait(5, topic, |_| true);
     let late = Sub::start(p, "droidctl/SB-0001/info", &[]);
     let info = late.wait(5, "droidctl/SB-0001/info", |_| true);
     assert_eq!(

@@ -897,7 +897,12 @@ fn sensor_streaming_follows_the_mask_rules() {
     assert!(samples.windows(2).all(|w| w[1].0 - w[0].0 == ms(100)));
     // While turning toward 90 the gyro shows the turn rate.
     let first = f32s(&samples[1].1.data);
-    assert!(close(first[5], 180.0, 0.5), "turning at 180°/s: {first:?}");
+    // (The streamed rate is low-pass filtered as an IMU's is, τ = 0.1 s, src/sim/body.rs:
+    // 0.2 s into the turn it shows ~86 % of 180°/s, and never more.)
+    assert!(
+        (150.0..=180.5).contains(&first[5]),
+        "turning at 180°/s: {first:?}"
+    );
     // The last sample: moving along +x, facing 90, dome at 90.
     let last = f32s(&samples.last().unwrap().1.data);
     assert!(close(last[0], 90.0, 0.01) && last[4] == 90.0, "{last:?}");
