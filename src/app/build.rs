@@ -97,8 +97,9 @@ pub(super) fn build(droids: Vec<Origin>, opts: AppOptions) -> App {
                         r.over_config(config.control.cruise_speed, config.stream_request().rate_hz);
                     if !over.is_empty() {
                         let key = keymap.shown(Action::ForgetSettings).unwrap_or_default();
+                        // The key first: a narrow screen cuts the end of a hint.
                         warnings.push(format!(
-                            "remembered for {}: {} ({key} forgets)",
+                            "remembered for {} ({key} forgets): {}",
                             model.display_name(),
                             over.join(", ")
                         ));

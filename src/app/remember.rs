@@ -226,7 +226,7 @@ impl super::core::App {
             .unwrap_or_default();
         let model = self.state.droid().model;
         self.hint(format!(
-            "forget {}'s remembered settings (cruise, scope, rate, filter)? {key} again: yes · any other key: no",
+            "forget {}'s remembered settings? {key} again: yes · other keys: no",
             model.display_name()
         ));
     }

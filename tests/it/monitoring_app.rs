@@ -470,8 +470,8 @@ async fn settings_are_remembered_per_model_and_forgotten_with_r() {
         .unwrap_or_default();
     assert!(
         hint.contains(&format!(
-            "remembered for R2-D2: cruise {cruise} (config 100)"
-        )) && hint.contains("R forgets"),
+            "remembered for R2-D2 (R forgets): cruise {cruise} (config 100)"
+        )),
         "{hint}"
     );
     assert_eq!(d.control.cruise, cruise);
