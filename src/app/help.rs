@@ -254,6 +254,15 @@ pub const MATRIX_PANEL: &[Hint] = &[
     (&[Action::Calibrate], "calibrate"),
 ];
 
+/// The lights panel of a rolling droid.
+pub const LIGHTS_PANEL: &[Hint] = &[
+    (&[Action::Aim], "aim (heading 0)"),
+    (&[Action::Colour], "main colour"),
+    (&[Action::BackLight], "back light"),
+];
+/// Aiming: the aim key again ends it.
+pub const AIM_AGAIN: &[Hint] = &[(&[Action::Aim], "again")];
+
 /// RVR's panel, out of tank mode.
 pub const TANK_PANEL: &[Hint] = &[(&[Action::Tank], "tank mode")];
 

@@ -377,7 +377,7 @@ actions! {
         LogFilter "filter" false All "filter" "filter (in|out dev:NAME droid:NAME text)";
         LogClearFilter "clear_filter" false All "" "clear the filter";
         LogBack "back" false All "back" "back to driving";
-        LogOpen "open" false All "detail" "the newest line shown in full (fields, frame, hex)";
+        LogOpen "open" false All "detail" "the selected line in full (fields, frame, hex)";
     }
     Palette {
         PaletteUp "up" false All "" "previous entry";

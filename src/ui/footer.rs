@@ -35,7 +35,14 @@ pub fn fit<'a>(keys: &[&'a FooterKey], w: usize) -> Vec<&'a FooterKey> {
 }
 
 pub fn render(frame: &mut Frame, area: Rect, state: &AppState) {
-    let keys = crate::app::help::footer_now(state);
+    let mut keys = crate::app::help::footer_now(state);
+    // Help on one page: no page keys to offer (they would do nothing).
+    if state.overlay == crate::app::state::Overlay::Help
+        && super::overlay::help_pages(state, frame.area()) <= 1
+    {
+        use crate::config::Action;
+        keys.retain(|k| !matches!(k.action, Some(Action::HelpNext | Action::HelpPrevious)));
+    }
     let mut spans = vec![Span::raw(" ")];
     for (i, k) in fit(&keys, area.width as usize).into_iter().enumerate() {
         if i > 0 {

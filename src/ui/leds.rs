@@ -46,12 +46,15 @@ pub fn render(frame: &mut Frame, area: Rect, s: &AppState) {
     spans.push(back);
     let mut lines = vec![Line::from(spans)];
     if inner.height >= 2 {
+        // The keys as bound, in words short enough for the panel (it was cut mid-word).
+        let hint = if s.droid().control.aiming {
+            let aim = crate::app::help::border(&s.keymap, crate::app::help::AIM_AGAIN);
+            format!("turn to face forward, then {aim}")
+        } else {
+            crate::app::help::border(&s.keymap, crate::app::help::LIGHTS_PANEL)
+        };
         lines.push(Line::from(Span::styled(
-            if s.droid().control.aiming {
-                "turn to face forward, then press aim again"
-            } else {
-                "aim sets heading 0 · colour key cycles the main LED"
-            },
+            super::text::truncate(&hint, inner.width as usize),
             theme::dim(),
         )));
     }

@@ -355,3 +355,35 @@ fn the_estop_badge_shows_over_every_overlay() {
         );
     }
 }
+
+/// Issue 39 point 13 at 120×40: help on one page offers no page keys (in its edge or the
+/// footer) and covers the screen's width rather than leaving a sliver of the panels beside
+/// it; BB-8's lights panel names its keys whole.
+#[test]
+fn at_120x40_help_and_the_lights_panel_say_only_what_is_true() {
+    let mut s = state(&[Model::BB8]);
+    let rows = screen(&s, 120, 40);
+    let all = rows.join("\n");
+    assert!(all.contains("o aim (heading 0)"), "{all}");
+    assert!(!all.contains("cycles the mai"), "{all}");
+    s.overlay = Overlay::Help;
+    let rows = screen(&s, 120, 40);
+    let footer = rows.last().expect("a footer");
+    assert!(!footer.contains("PgDn"), "one page, no page keys: {footer}");
+    assert!(footer.contains("Space stop"), "{footer}");
+    assert!(
+        rows.iter().all(|r| !r.contains("PgDn/PgUp pages")),
+        "{}",
+        rows.join("\n")
+    );
+    // No panel border shows beside the help box.
+    for r in &rows {
+        assert!(
+            !["││", "│╯", "│╮"].iter().any(|t| r.trim_end().ends_with(t)),
+            "{r}"
+        );
+    }
+    // On 80×24 help has pages, and the footer offers their keys.
+    let rows = screen(&s, 80, 24);
+    assert!(rows.last().is_some_and(|f| f.contains("PgDn")), "{rows:?}");
+}

@@ -110,15 +110,9 @@ fn flow(sections: Vec<Vec<Unit>>, rows: usize) -> Vec<Vec<Line<'static>>> {
     cols
 }
 
-/// `nav` names the stop that works over help (`Space stop`), `page_keys` the page keys as
-/// configured ([`crate::app::help::HELP_PAGES`]).
-pub fn render(
-    frame: &mut Frame,
-    area: Rect,
-    sections: &[HelpSection],
-    (nav, page_keys): (&str, &str),
-    page: usize,
-) {
+/// How help is laid out in `area`: the column width, the columns, how many a page shows, and
+/// the pages.
+fn layout(area: Rect, sections: &[HelpSection]) -> (usize, Vec<Vec<Line<'static>>>, usize, usize) {
     let rows = area.height.saturating_sub(2) as usize;
     let avail = area.width.saturating_sub(4) as usize;
     let max_cols = ((avail + GAP) / (MIN_COL_W + GAP)).max(1);
@@ -148,10 +142,35 @@ pub fn render(
             (w, cols, max_cols)
         });
     let pages = cols.len().div_ceil(per_page).max(1);
+    (col_w, cols, per_page, pages)
+}
+
+/// How many pages help takes in `area` (the footer offers the page keys only when there is
+/// another page).
+pub fn pages(area: Rect, sections: &[HelpSection]) -> usize {
+    layout(area, sections).3
+}
+
+/// `nav` names the stop that works over help (`Space stop`), `page_keys` the page keys as
+/// configured ([`crate::app::help::HELP_PAGES`]).
+pub fn render(
+    frame: &mut Frame,
+    area: Rect,
+    sections: &[HelpSection],
+    (nav, page_keys): (&str, &str),
+    page: usize,
+) {
+    let (col_w, cols, per_page, pages) = layout(area, sections);
     let page = page.min(pages - 1);
     let inner_h = cols.iter().map(Vec::len).max().unwrap_or(0);
     let inner_w = col_w * per_page + GAP * (per_page - 1);
-    let rect = centered(area, (inner_w + 4) as u16, (inner_h + 2) as u16);
+    let mut rect = centered(area, (inner_w + 4) as u16, (inner_h + 2) as u16);
+    // A box a column or two short of the screen would leave the panels' borders showing in a
+    // sliver beside it: the whole width then.
+    if area.width.saturating_sub(rect.width) <= 2 {
+        rect.x = area.x;
+        rect.width = area.width;
+    }
     let mut foot: Vec<String> = Vec::new();
     if pages > 1 {
         foot.push(format!("page {}/{pages}", page + 1));

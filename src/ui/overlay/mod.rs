@@ -42,14 +42,7 @@ fn draw(frame: &mut Frame, s: &AppState, area: ratatui::layout::Rect) {
     match &s.overlay {
         Overlay::None => {}
         Overlay::Help => {
-            // Only what applies to the chosen droid (R2's help lists no BOLT keys).
-            let (model, fleet) = (s.droid().model, s.droids.len() > 1);
-            let shown: Vec<_> = s
-                .help
-                .iter()
-                .map(|h| h.applying(model, fleet))
-                .filter(|h| !h.lines.is_empty())
-                .collect();
+            let shown = help_shown(s);
             let pages = border(&s.keymap, crate::app::help::HELP_PAGES);
             help::render(frame, area, &shown, (&s.help_nav, &pages), s.help_page)
         }
@@ -92,4 +85,20 @@ fn draw(frame: &mut Frame, s: &AppState, area: ratatui::layout::Rect) {
             },
         ),
     }
+}
+
+/// Help's sections for the chosen droid: only what applies to it (R2's help lists no BOLT
+/// keys).
+fn help_shown(s: &AppState) -> Vec<crate::app::state::HelpSection> {
+    let (model, fleet) = (s.droid().model, s.droids.len() > 1);
+    s.help
+        .iter()
+        .map(|h| h.applying(model, fleet))
+        .filter(|h| !h.lines.is_empty())
+        .collect()
+}
+
+/// How many pages help takes on a screen of `area`.
+pub fn help_pages(s: &AppState, area: ratatui::layout::Rect) -> usize {
+    help::pages(area, &help_shown(s))
 }
