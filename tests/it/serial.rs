@@ -36,6 +36,12 @@ fn drives(sim: &SerialSim) -> Vec<(u64, u64)> {
 /// Every command droidctl wrote is named, addressed as RVR's UART wants (target 0x01/0x02,
 /// no source: as Sphero's SDK sends), and answered without error when it asked.
 fn all_named_and_answered(sim: &SerialSim) {
+    // The simulator's trace is read as it is printed: a command just seen may have its answer
+    // a line later. Wait (boundedly) for every answer before judging.
+    let end = std::time::Instant::now() + std::time::Duration::from_secs(5);
+    while std::time::Instant::now() < end && !every_answer_in(&sim.packets()) {
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
     let packets = sim.packets();
     for (dir, p) in &packets {
         if dir != "in" {
@@ -62,6 +68,27 @@ fn all_named_and_answered(sim: &SerialSim) {
             assert!(r["err"].is_null() || r["err"] == 0, "{r}");
         }
     }
+}
+
+/// Whether every command in `packets` that asked for an answer has one.
+fn every_answer_in(packets: &[(String, serde_json::Value)]) -> bool {
+    packets
+        .iter()
+        .filter(|(d, p)| {
+            d == "in"
+                && p["flag_names"]
+                    .as_array()
+                    .is_some_and(|f| f.iter().any(|n| n == "requests_response"))
+        })
+        .all(|(_, p)| {
+            packets.iter().any(|(d, r)| {
+                d == "out"
+                    && r["kind"] == "response"
+                    && r["seq"] == p["seq"]
+                    && r["did"] == p["did"]
+                    && r["cid"] == p["cid"]
+            })
+        })
 }
 
 #[test]
