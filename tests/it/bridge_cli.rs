@@ -242,8 +242,10 @@ fn a_slow_reader_gets_every_answer_through_the_pipe() {
     input.extend_from_slice(b"{\"v\":1,\"cmd\":\"drive\",\"speed\":60,\"heading\":0}\n");
     let file = dir.join("input.jsonl");
     std::fs::write(&file, &input).unwrap();
+    // The wait for `ready` is bounded by the scan timeout (5 s by default): a loaded machine
+    // can take longer to set a droid up, so the bound here is far from the test's path.
     let mut child = Command::new(env!("CARGO_BIN_EXE_droidctl"))
-        .args(["bridge", "--stdio", "--sim", "r2d2"])
+        .args(["bridge", "--stdio", "--sim", "r2d2", "--scan-timeout", "60"])
         .env("DROIDCTL_CONFIG", "/dev/null")
         .stdin(std::fs::File::open(&file).unwrap())
         .stdout(Stdio::piped())
