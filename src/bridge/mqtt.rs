@@ -369,14 +369,17 @@ impl Takeovers {
 }
 
 /// What a droid's connection does with what the broker delivers: commands on the droid's
-/// `cmd` topic go to the bridge; a retained one does not (said once); anything else is
-/// ignored.
+/// `cmd` topic go to the bridge; a retained one does not (said once per connection to the
+/// broker: a reply said on a connection that then dropped may never have left); anything
+/// else is ignored.
 pub struct Inbox {
     bridge: Arc<Bridge>,
     i: usize,
     cmd: String,
     cmd_vel: String,
     retained: u64,
+    /// A retained command was said on this connection.
+    said: bool,
 }
 
 impl Inbox {
@@ -389,7 +392,13 @@ impl Inbox {
             bridge,
             i,
             retained: 0,
+            said: false,
         }
+    }
+
+    /// A new connection to the broker: the next retained command is said again.
+    pub fn connected(&mut self) {
+        self.said = false;
     }
 
     /// The topic it takes commands on.
@@ -417,7 +426,8 @@ impl Inbox {
             // A retained command is one the broker kept for whoever subscribes: it would
             // run at every (re)connect with nobody there (issue 26 point 5).
             self.retained += 1;
-            if self.retained == 1 {
+            if !self.said {
+                self.said = true;
                 let name = self.bridge.fleet().member(self.i).map(|m| m.name.clone());
                 let error = format!(
                     "a retained message on {topic} was ignored: commands are taken only from a \
@@ -674,6 +684,7 @@ async fn connection(
         match eventloop.poll().await {
             Ok(Event::Incoming(Packet::ConnAck(_))) => {
                 up = true;
+                inbox.connected();
                 let again = ever;
                 ever = true;
                 takeovers.connected(Instant::now());

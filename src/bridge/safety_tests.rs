@@ -137,6 +137,13 @@ async fn a_retained_mqtt_command_never_drives_and_is_said_once() {
     assert!(error.contains("mosquitto_pub -r -n"), "{error}");
     assert_eq!(droid.as_deref(), Some("BB-0001"));
     assert_eq!(inbox.retained(), 5);
+    // A new connection to the broker (the reply said on the last one may have been lost with
+    // it): the next retained delivery is said again, once.
+    inbox.connected();
+    assert!(inbox.publish("droidctl/BB-0001/cmd", true, drive).is_some());
+    assert!(inbox.publish("droidctl/BB-0001/cmd", true, drive).is_none());
+    run_for(300).await;
+    assert_eq!(codes(&r.said()), [(None, ErrorCode::Retained)]);
     let w: Vec<_> = r.writes(0).into_iter().filter(|(t, _)| *t >= t0).collect();
     assert!(
         w.iter().all(|(_, s)| *s == 0),
