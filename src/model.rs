@@ -236,6 +236,31 @@ const BB8_ROW: ModelSpec = ModelSpec {
     caps: V1_BALL,
 };
 
+/// What BOLT and BOLT+ share: the matrix, compass, light sensor, infrared and raw motors.
+const BOLT_CAPS: Caps = SPHERO
+    .with(Caps::AIM)
+    .with(Caps::FRONT_LED)
+    .with(Caps::MATRIX)
+    .with(Caps::COMPASS)
+    .with(Caps::LIGHT_SENSOR)
+    .with(Caps::IR)
+    .with(Caps::RAW_MOTORS)
+    .with(Caps::HOPS);
+
+/// BOLT's row, which BOLT+'s changes.
+const BOLT_ROW: ModelSpec = ModelSpec {
+    model: Model::Bolt,
+    id: "bolt",
+    aliases: &["spherobolt"],
+    advertised: Advertised::Prefix("SB-"),
+    name: "Sphero BOLT",
+    pacing_ms: 75,
+    processors: 2,
+    full_turn_ms: 450,
+    caps: BOLT_CAPS.with(Caps::MAIN_FRONT_BACK),
+    ..R2D2_ROW
+};
+
 /// The model table, in [`Model::ALL`]'s order (a test holds the two together). Pacing is
 /// the reference clients' minimum write interval (`droid-facts.md` §1; spherov2.py's
 /// `cmd_safe_interval` for BOLT, RVR and Mini, §6): only a default, configurable. BOLT and
@@ -293,27 +318,7 @@ pub const MODELS: [ModelSpec; 11] = [
         full_turn_ms: 450,
         caps: Caps::NONE,
     },
-    ModelSpec {
-        model: Model::Bolt,
-        id: "bolt",
-        aliases: &["spherobolt"],
-        advertised: Advertised::Prefix("SB-"),
-        name: "Sphero BOLT",
-        pacing_ms: 75,
-        processors: 2,
-        full_turn_ms: 450,
-        caps: SPHERO
-            .with(Caps::AIM)
-            .with(Caps::FRONT_LED)
-            .with(Caps::MAIN_FRONT_BACK)
-            .with(Caps::MATRIX)
-            .with(Caps::COMPASS)
-            .with(Caps::LIGHT_SENSOR)
-            .with(Caps::IR)
-            .with(Caps::RAW_MOTORS)
-            .with(Caps::HOPS),
-        ..R2D2_ROW
-    },
+    BOLT_ROW,
     // sphero-unsw's `BOLTPLUS`: `ToyType('Sphero BOLT', 'BP-', 'BP', .075)` (its display
     // name says BOLT; the prefix and the 75 ms pacing are its own), BOLT's LEDs, sensors and
     // robot-to-robot infrared, no anti-DoS unlock (its `_handshake` is commented out, "TODO:
@@ -327,21 +332,9 @@ pub const MODELS: [ModelSpec; 11] = [
         aliases: &["bolt+", "spheroboltplus", "spherobolt+"],
         advertised: Advertised::Prefix("BP-"),
         name: "Sphero BOLT+",
-        pacing_ms: 75,
-        processors: 2,
-        full_turn_ms: 450,
-        caps: SPHERO
-            .with(Caps::AIM)
-            .with(Caps::FRONT_LED)
-            .with(Caps::MATRIX)
-            .with(Caps::SCREEN)
-            .with(Caps::COMPASS)
-            .with(Caps::LIGHT_SENSOR)
-            .with(Caps::IR)
-            .with(Caps::RAW_MOTORS)
-            .with(Caps::HOPS)
-            .with(Caps::NO_UNLOCK),
-        ..R2D2_ROW
+        // Its own LED map (no main light that is front and back at once), a screen, no unlock.
+        caps: BOLT_CAPS.with(Caps::SCREEN).with(Caps::NO_UNLOCK),
+        ..BOLT_ROW
     },
     ModelSpec {
         model: Model::Mini,
