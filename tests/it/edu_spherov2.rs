@@ -25,30 +25,8 @@ fn root() -> &'static str {
 
 /// A Python that imports spherov2's Sphero Edu API, or why not.
 fn python() -> Result<String, String> {
-    let venv = format!("{}/target/spherov2-venv/bin/python", root());
-    let py = std::env::var("DROIDCTL_TEST_SPHEROV2_PYTHON").unwrap_or_else(|_| {
-        if Path::new(&venv).exists() {
-            venv
-        } else {
-            "python3".into()
-        }
-    });
-    let ok = Command::new(&py)
-        .args([
-            "-c",
-            "import spherov2.sphero_edu, spherov2.adapter.tcp_adapter",
-        ])
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .status()
-        .is_ok_and(|s| s.success());
-    if ok {
-        Ok(py)
-    } else {
-        Err(format!(
-            "{py} cannot import spherov2 (set DROIDCTL_TEST_SPHEROV2_PYTHON)"
-        ))
-    }
+    crate::common::python::Library::Spherov2
+        .python("spherov2.sphero_edu, spherov2.adapter.tcp_adapter")
 }
 
 struct Dir(PathBuf);

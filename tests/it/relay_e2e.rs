@@ -505,28 +505,13 @@ fn several_droids_behind_a_relay_open_the_picker() {
 
 // ---------------------------------------------------------------------------------------------
 // spherov2.py itself, when a Python with it is at hand (`pip install spherov2`, and bleak for
-// its server). Point DROIDCTL_TEST_SPHEROV2_PYTHON at that Python (default python3); without
+// its server). The Python is found as `common::python` says (the variable, the venv, python3); without
 // it these tests say they are skipped.
 // ---------------------------------------------------------------------------------------------
 
 /// A Python that imports all of `modules`, or why not.
 fn python_with(modules: &str) -> Result<String, String> {
-    let py =
-        std::env::var("DROIDCTL_TEST_SPHEROV2_PYTHON").unwrap_or_else(|_| "python3".to_string());
-    let ok = Command::new(&py)
-        .args(["-c", &format!("import {modules}")])
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .status()
-        .is_ok_and(|s| s.success());
-    if ok {
-        Ok(py)
-    } else {
-        Err(format!(
-            "{py} cannot import {modules} (set DROIDCTL_TEST_SPHEROV2_PYTHON to a Python with \
-             spherov2 installed)"
-        ))
-    }
+    crate::common::python::Library::Spherov2.python(modules)
 }
 
 /// Wait for a child with a limit; its output.

@@ -18,20 +18,7 @@ use std::process::Command;
 
 /// The Python with `sphero_sdk` importable, or why there is none.
 fn sdk_python() -> Result<String, String> {
-    let py = std::env::var("DROIDCTL_TEST_SPHERO_SDK_PYTHON")
-        .map_err(|_| "DROIDCTL_TEST_SPHERO_SDK_PYTHON is not set (.ci/run sets it)".to_string())?;
-    let ok = Command::new(&py)
-        .args(["-c", "import sphero_sdk, serial, serial_asyncio"])
-        .output()
-        .map_err(|e| format!("cannot run {py}: {e}"))?;
-    if ok.status.success() {
-        Ok(py)
-    } else {
-        Err(format!(
-            "{py} cannot import sphero_sdk: {}",
-            String::from_utf8_lossy(&ok.stderr).trim()
-        ))
-    }
+    crate::common::python::Library::SpheroSdk.python("sphero_sdk, serial, serial_asyncio")
 }
 
 fn script() -> String {

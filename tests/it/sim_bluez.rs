@@ -12,12 +12,12 @@
 
 #![cfg(target_os = "linux")]
 
+use crate::common::lines::{Lines, first_line};
 use dbus::arg::{PropMap, RefArg, Variant};
 use dbus::blocking::Connection;
 use dbus::message::MatchRule;
 use droidctl::protocol::v2::{Decoder, Packet};
 use std::collections::HashMap;
-use std::io::{BufRead, BufReader, Read};
 use std::process::{Child, Command, Output, Stdio};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
@@ -70,7 +70,7 @@ struct Sim {
     child: Child,
     address: String,
     /// Its stderr so far, line by line.
-    lines: Arc<Mutex<Vec<String>>>,
+    lines: Lines,
     /// Advertised names, in the order the models were given.
     names: Vec<String>,
     /// What it printed on stdout after the export line (nothing, once it ended).
@@ -94,33 +94,12 @@ impl Sim {
             .stderr(Stdio::piped())
             .spawn()
             .expect("start droidctl sim --bluez");
-        let lines = Arc::new(Mutex::new(Vec::new()));
-        {
-            let lines = lines.clone();
-            let stderr = child.stderr.take().unwrap();
-            std::thread::spawn(move || {
-                for line in BufReader::new(stderr).lines() {
-                    let Ok(line) = line else { break };
-                    lines.lock().unwrap().push(line);
-                }
-            });
-        }
-        let (tx, rx) = std::sync::mpsc::channel();
-        let stdout = child.stdout.take().unwrap();
-        std::thread::spawn(move || {
-            let mut out = BufReader::new(stdout);
-            let mut first = String::new();
-            let _ = out.read_line(&mut first);
-            let _ = tx.send(first);
-            // Anything more on stdout would break "only the export line": keep it for the
-            // check in `stop`.
-            let mut rest = String::new();
-            let _ = out.read_to_string(&mut rest);
-            let _ = tx.send(rest);
-        });
-        let first = rx
-            .recv_timeout(Duration::from_secs(10))
-            .expect("droidctl sim printed its address");
+        let lines = Lines::collect(child.stderr.take().unwrap());
+        // Anything more on stdout would break "only the export line": `stdout_rest` keeps it
+        // for the check in `stop`.
+        let (first, stdout_rest) =
+            first_line(child.stdout.take().unwrap(), Duration::from_secs(10));
+        let first = first.expect("droidctl sim printed its address");
         let address = first
             .trim()
             .strip_prefix("DBUS_SYSTEM_BUS_ADDRESS=")
@@ -132,7 +111,7 @@ impl Sim {
             address,
             lines,
             names: Vec::new(),
-            stdout_rest: rx,
+            stdout_rest,
         };
         // One "NAME (MODEL) at ADDRESS" line per droid, before "serving on".
         let serving = sim.wait_line("serving on", Duration::from_secs(5));
@@ -150,22 +129,11 @@ impl Sim {
     }
 
     fn lines(&self) -> Vec<String> {
-        self.lines.lock().unwrap().clone()
+        self.lines.all()
     }
 
     fn wait_line(&self, what: &str, limit: Duration) -> String {
-        let start = Instant::now();
-        loop {
-            if let Some(l) = self.lines().into_iter().find(|l| l.contains(what)) {
-                return l;
-            }
-            assert!(
-                start.elapsed() < limit,
-                "no {what:?} from the simulator:\n{}",
-                self.lines().join("\n")
-            );
-            std::thread::sleep(Duration::from_millis(20));
-        }
+        self.lines.wait_for(what, limit)
     }
 
     /// SIGTERM, and it must end cleanly: exit 0, its directory gone.

@@ -25,24 +25,8 @@ use std::time::Duration;
 
 /// A Python that imports sphero-unsw's Edu API and TCP adapter, or why not.
 fn python() -> Result<String, String> {
-    let py = crate::spherov2_catalogue::sphero_unsw_python();
-    let ok = Command::new(&py)
-        .args([
-            "-c",
-            "import sphero_unsw.sphero_edu, sphero_unsw.adapter.tcp_adapter",
-        ])
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .status()
-        .is_ok_and(|s| s.success());
-    if ok {
-        Ok(py)
-    } else {
-        Err(format!(
-            "{py} cannot import sphero_unsw (set DROIDCTL_TEST_SPHERO_UNSW_PYTHON to a Python \
-             with `pip install sphero-unsw`)"
-        ))
-    }
+    crate::common::python::Library::SpheroUnsw
+        .python("sphero_unsw.sphero_edu, sphero_unsw.adapter.tcp_adapter")
 }
 
 /// What the capture of one served session shows of the v2 conversation.

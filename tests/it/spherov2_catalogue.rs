@@ -22,25 +22,13 @@ use std::process::Command as Process;
 
 /// The packets spherov2 builds, or why they cannot be had.
 fn spherov2_packets() -> Result<Vec<Json>, String> {
-    let py =
-        std::env::var("DROIDCTL_TEST_SPHEROV2_PYTHON").unwrap_or_else(|_| "python3".to_string());
-    packets_of(&py, &[])
+    packets_of(&crate::common::python::Library::Spherov2.candidate(), &[])
 }
 
 /// The Python with sphero-unsw: DROIDCTL_TEST_SPHERO_UNSW_PYTHON, else the venv `.ci/run`
 /// makes (target/sphero-unsw-venv), else python3.
 pub fn sphero_unsw_python() -> String {
-    let venv = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/target/sphero-unsw-venv/bin/python"
-    );
-    std::env::var("DROIDCTL_TEST_SPHERO_UNSW_PYTHON").unwrap_or_else(|_| {
-        if std::path::Path::new(venv).exists() {
-            venv.to_string()
-        } else {
-            "python3".to_string()
-        }
-    })
+    crate::common::python::Library::SpheroUnsw.candidate()
 }
 
 /// The packets the helper prints with `py` and `args`, or why they cannot be had.

@@ -4,9 +4,11 @@
 pub mod bridge_proc;
 pub mod cli;
 pub mod edu_run;
+pub mod lines;
 pub mod mission_run;
 pub mod mosquitto;
 pub mod pty;
+pub mod python;
 pub mod scratch;
 pub mod serial_sim;
 pub mod source;

@@ -5,10 +5,9 @@
 #![allow(dead_code)]
 #![cfg(unix)]
 
+use super::lines::{Lines, first_line};
 use serde_json::Value;
-use std::io::{BufRead, BufReader};
 use std::process::{Child, Command, Stdio};
-use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 pub struct SerialSim {
@@ -20,7 +19,7 @@ pub struct SerialSim {
     /// The pseudo-terminal itself.
     pub pty: String,
     dir: std::path::PathBuf,
-    lines: Arc<Mutex<Vec<String>>>,
+    lines: Lines,
 }
 
 impl SerialSim {
@@ -41,28 +40,9 @@ impl SerialSim {
             .stderr(Stdio::piped())
             .spawn()
             .expect("start droidctl sim --serial rvr");
-        let lines = Arc::new(Mutex::new(Vec::new()));
-        {
-            let lines = lines.clone();
-            let stderr = child.stderr.take().unwrap();
-            std::thread::spawn(move || {
-                for line in BufReader::new(stderr).lines() {
-                    let Ok(line) = line else { break };
-                    lines.lock().unwrap_or_else(|e| e.into_inner()).push(line);
-                }
-            });
-        }
-        let (tx, rx) = std::sync::mpsc::channel();
-        let stdout = child.stdout.take().unwrap();
-        std::thread::spawn(move || {
-            let mut out = BufReader::new(stdout);
-            let mut first = String::new();
-            let _ = out.read_line(&mut first);
-            let _ = tx.send(first);
-        });
-        let first = rx
-            .recv_timeout(Duration::from_secs(10))
-            .expect("droidctl sim --serial printed its path");
+        let lines = Lines::collect(child.stderr.take().unwrap());
+        let (first, _rest) = first_line(child.stdout.take().unwrap(), Duration::from_secs(10));
+        let first = first.expect("droidctl sim --serial printed its path");
         let pty = first.trim().to_string();
         assert!(pty.starts_with("/dev/"), "a device path, got {first:?}");
         assert!(link.exists(), "--link made no {}", link.display());
@@ -77,17 +57,13 @@ impl SerialSim {
 
     /// Everything it said on stderr so far.
     pub fn stderr(&self) -> String {
-        self.lines
-            .lock()
-            .unwrap_or_else(|e| e.into_inner())
-            .join("\n")
+        self.lines.text()
     }
 
     /// The traced packets so far: (`dir`, `packet`).
     pub fn packets(&self) -> Vec<(String, Value)> {
         self.lines
-            .lock()
-            .unwrap_or_else(|e| e.into_inner())
+            .all()
             .iter()
             .filter_map(|l| serde_json::from_str::<Value>(l).ok())
             .filter_map(|v| {
