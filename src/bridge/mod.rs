@@ -812,9 +812,15 @@ impl Bridge {
     fn set_ready(&self, i: usize, ready: bool) {
         if let Some(d) = self.droids.get(i) {
             d.lock().ready = ready;
-            if ready {
-                d.was_ready.send_replace(true);
-            }
+        }
+    }
+
+    /// Let the commands held for droid `i`'s first `ready` go ([`Bridge::first_ready`]).
+    /// Called after the link object saying ready has been emitted, so no answer to them can
+    /// be said before it.
+    fn release_first_commands(&self, i: usize) {
+        if let Some(d) = self.droids.get(i) {
+            d.was_ready.send_replace(true);
         }
     }
 }

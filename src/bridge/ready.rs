@@ -90,6 +90,7 @@ pub async fn watch(bridge: Weak<Bridge>, i: usize) {
         }
         b.set_ready(i, true);
         b.emit(Some(i), link_out(&name, &LinkState::Connected, true));
+        b.release_first_commands(i);
         b.resend_held(i);
         drop(b);
         if state.changed().await.is_err() {

@@ -105,17 +105,11 @@ fn a_program_drives_a_simulated_droid_through_a_pipe() {
         v["type"] == "stopped"
     });
     assert_eq!(s["reason"], "input_closed");
-    let end = Instant::now() + Duration::from_secs(10);
-    let status = loop {
-        if let Some(s) = child.try_wait().unwrap() {
-            break s;
-        }
-        assert!(
-            Instant::now() < end,
-            "the bridge did not exit after its input ended"
-        );
-        std::thread::sleep(Duration::from_millis(50));
-    };
+    let status = crate::common::cli::exit_within(
+        &mut child,
+        Duration::from_secs(10),
+        "the bridge, after its input ended,",
+    );
     assert_eq!(status.code(), Some(0));
     let _ = std::fs::remove_dir_all(&dir);
 }
@@ -163,17 +157,11 @@ fn a_boltplus_draws_on_its_screen_through_the_bridge() {
     );
     assert_eq!(r["ok"], true, "{r}");
     drop(stdin);
-    let end = Instant::now() + Duration::from_secs(10);
-    let status = loop {
-        if let Some(s) = child.try_wait().unwrap() {
-            break s;
-        }
-        assert!(
-            Instant::now() < end,
-            "the bridge did not exit after its input ended"
-        );
-        std::thread::sleep(Duration::from_millis(50));
-    };
+    let status = crate::common::cli::exit_within(
+        &mut child,
+        Duration::from_secs(10),
+        "the bridge, after its input ended,",
+    );
     assert_eq!(status.code(), Some(0));
 }
 

@@ -370,19 +370,7 @@ impl Drop for Scratch {
     }
 }
 
-/// Wait for the child at most `limit`; `None` while it runs.
-fn wait(child: &mut Child, limit: Duration) -> Option<std::process::ExitStatus> {
-    let start = Instant::now();
-    loop {
-        if let Some(status) = child.try_wait().unwrap() {
-            return Some(status);
-        }
-        if start.elapsed() >= limit {
-            return None;
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    }
-}
+use crate::common::cli::exited_within as wait;
 
 /// SIGTERM (so a `sim --bluez` removes its bus), then SIGKILL if it does not end.
 fn stop(child: &mut Child) {

@@ -5,7 +5,7 @@
 
 use serde_json::Value;
 use std::process::{Command, Stdio};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use crate::common::scratch;
 use scratch::{Scratch, json_lines, path, stderr, stdout};
@@ -189,7 +189,7 @@ fn a_program_that_never_waits_cannot_hang_droidctl() {
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
-    let out = bounded(child, Duration::from_secs(60));
+    let out = crate::common::cli::finish(child, Duration::from_secs(60), "droidctl");
     assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
     assert!(stderr(&out).contains("without waiting"), "{}", stderr(&out));
     // A program that waits forever ends at --timeout, on the simulated clock.
@@ -224,26 +224,10 @@ fn ctrl_c_ends_a_program_that_never_waits() {
     let pid = child.id().to_string();
     let sent = Command::new("kill").args(["-INT", &pid]).status().unwrap();
     assert!(sent.success());
-    let out = bounded(child, Duration::from_secs(60));
+    let out = crate::common::cli::finish(child, Duration::from_secs(60), "droidctl");
     // 128 + SIGINT once the droid is stopped (docs/exit-status.md).
     assert_eq!(out.status.code(), Some(130), "{}", stderr(&out));
     assert!(stderr(&out).contains("SIGINT"), "{}", stderr(&out));
-}
-
-/// Wait for `child`, failing (and killing it) past `limit`.
-fn bounded(mut child: std::process::Child, limit: Duration) -> std::process::Output {
-    let start = Instant::now();
-    while child.try_wait().unwrap().is_none() {
-        if start.elapsed() > limit {
-            let _ = child.kill();
-            panic!(
-                "droidctl hung: {}",
-                stderr(&child.wait_with_output().unwrap())
-            );
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    child.wait_with_output().unwrap()
 }
 
 #[test]

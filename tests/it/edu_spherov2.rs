@@ -50,21 +50,7 @@ impl Drop for Dir {
     }
 }
 
-fn finish(mut child: Child, limit: Duration, what: &str) -> std::process::Output {
-    let start = Instant::now();
-    while child.try_wait().unwrap().is_none() {
-        if start.elapsed() > limit {
-            let _ = child.kill();
-            let out = child.wait_with_output().unwrap();
-            panic!(
-                "{what} did not finish: {}",
-                String::from_utf8_lossy(&out.stderr)
-            );
-        }
-        std::thread::sleep(Duration::from_millis(50));
-    }
-    child.wait_with_output().unwrap()
-}
+use crate::common::cli::finish;
 
 /// droidctl's run of the JavaScript: the final position, and the capture.
 fn run_js(program: &str, dir: &Dir) -> ([f64; 2], String) {

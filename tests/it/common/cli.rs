@@ -3,7 +3,8 @@
 
 #![allow(dead_code)]
 
-use std::process::{Command, Output, Stdio};
+use std::process::{Child, Command, ExitStatus, Output, Stdio};
+use std::time::{Duration, Instant};
 
 pub fn droidctl(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_droidctl"))
@@ -48,4 +49,40 @@ pub fn usage_error(args: &[&str]) -> String {
         assert!(!err.contains(bad), "{args:?}: {err:?}");
     }
     err
+}
+
+/// The child's status once it has ended, or `None` if it is still running after `limit`.
+pub fn exited_within(child: &mut Child, limit: Duration) -> Option<ExitStatus> {
+    let start = Instant::now();
+    loop {
+        if let Some(status) = child.try_wait().expect("the child's status") {
+            return Some(status);
+        }
+        if start.elapsed() >= limit {
+            return None;
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+/// The child's status; panics saying `what` did not end if it runs past `limit`.
+pub fn exit_within(child: &mut Child, limit: Duration, what: &str) -> ExitStatus {
+    exited_within(child, limit).unwrap_or_else(|| {
+        let _ = child.kill();
+        panic!("{what} did not end within {limit:?}")
+    })
+}
+
+/// The child's whole output; past `limit` it is killed and the test fails with its stderr,
+/// saying `what` did not finish.
+pub fn finish(mut child: Child, limit: Duration, what: &str) -> Output {
+    if exited_within(&mut child, limit).is_none() {
+        let _ = child.kill();
+        let out = child.wait_with_output().expect("the killed child's output");
+        panic!(
+            "{what} did not finish within {limit:?}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    child.wait_with_output().expect("the child's output")
 }
