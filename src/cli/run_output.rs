@@ -115,7 +115,7 @@ impl RunOutput {
                 });
             }
             return Err(CliError::failure(format!(
-                "cannot write the output: {e}; the mission was ended and the droid stopped"
+                "cannot write the output: {e}; the run was ended and the droid stopped"
             )));
         }
         match lock(&self.csv_error).as_ref() {
@@ -125,8 +125,8 @@ impl RunOutput {
     }
 }
 
-/// The mission interrupted because its output went away.
-pub const OUTPUT_GONE: &str = "the output went away: mission ended, the droid was stopped";
+/// A run (mission or program) interrupted because its output went away.
+pub const OUTPUT_GONE: &str = "the output went away: run ended, the droid was stopped";
 
 /// A JSON line naming its droid first (`run --json` and `replay --json` of a fleet).
 #[derive(serde::Serialize)]

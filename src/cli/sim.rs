@@ -248,11 +248,10 @@ fn serve(args: SimArgs, plan: Plan) -> Result<i32, CliError> {
     say(&format!(
         "serving on {address}; Ctrl-C stops (export the line on stdout for droidctl, bleak …)"
     ));
-    {
-        let mut out = std::io::stdout().lock();
-        let _ = writeln!(out, "DBUS_SYSTEM_BUS_ADDRESS={address}");
-        let _ = out.flush();
-    }
+    print_for_scripts(
+        &format!("DBUS_SYSTEM_BUS_ADDRESS={address}"),
+        "the bus address",
+    )?;
     let rt = tokio::runtime::Builder::new_current_thread()
         .enable_all()
         .build()
@@ -277,6 +276,22 @@ fn serve(args: SimArgs, plan: Plan) -> Result<i32, CliError> {
         }
         Ok(None) => Ok(0),
         Err(e) => Err(CliError::failure(e)),
+    }
+}
+
+/// Print the one line a simulator gives scripts on stdout (the bus address, the terminal's
+/// path). A full disk or another write error ends the simulator with status 1 before it
+/// serves (a script reading `$(droidctl sim …)` would get nothing); a reader that went away
+/// does not, since the line is said on stderr too and the simulator is still of use.
+pub(super) fn print_for_scripts(line: &str, what: &str) -> Result<(), CliError> {
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    match writeln!(out, "{line}").and_then(|()| out.flush()) {
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => Err(CliError::failure(format!(
+            "cannot write {what} to the standard output: {e}; free the space or write it \
+             elsewhere"
+        ))),
+        _ => Ok(()),
     }
 }
 

@@ -95,11 +95,7 @@ pub fn run(
             model.display_name(),
             path.display()
         ));
-        {
-            let mut out = std::io::stdout().lock();
-            let _ = writeln!(out, "{}", path.display());
-            let _ = out.flush();
-        }
+        super::sim::print_for_scripts(&path.display().to_string(), "the terminal's path")?;
         let report = |r: SerialReport| match r {
             SerialReport::Status(line) => say(&line),
             SerialReport::Trace { t_ms, record } => {

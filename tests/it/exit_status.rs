@@ -11,6 +11,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 
 const MISSION: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/missions/square.txt");
+const SQUARE_JS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/edu/square.js");
 
 fn scratch(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("droidctl-exit-{}-{name}", std::process::id()));
@@ -150,6 +151,14 @@ fn every_subcommand_keeps_the_contract() {
         (&["man"], Out::Full, None, 1),
         (&["examples"], Out::Full, None, 1),
         (&["examples", "tour.txt"], Out::Full, None, 1),
+        (&["sim", "--serial", "rvr"], Out::Full, None, 1),
+        (&["sim", "--bluez", "r2d2"], Out::Full, None, 1),
+        (
+            &["run", "--each", SQUARE_JS, SQUARE_JS, "--sim", "mini"],
+            Out::Full,
+            None,
+            1,
+        ),
         // The reader went away: 0.
         (&["packet", "list"], Out::Closed, None, 0),
         (
@@ -171,6 +180,12 @@ fn every_subcommand_keeps_the_contract() {
         (&["man"], Out::Closed, None, 0),
         (&["examples"], Out::Closed, None, 0),
         (&["examples", "square.js"], Out::Closed, None, 0),
+        (
+            &["run", "--each", SQUARE_JS, SQUARE_JS, "--sim", "mini"],
+            Out::Closed,
+            None,
+            0,
+        ),
     ];
     let mut wrong = Vec::new();
     for (args, out, config, want) in cases {
