@@ -13,7 +13,8 @@
 //! - [`keys`], [`pad`]: key dispatch by context and gamepad events;
 //! - [`actions`]: what reaches the droid (control outputs, lights, animations, sounds);
 //! - [`replay`], [`player`]: the app on a capture;
-//! - [`help`]: the help overlay's text, generated from the bindings;
+//! - [`help`]: the help overlay's text and the footer, generated from the bindings;
+//!   [`borders`]: the overlays' and panels' key hints, worded once from them;
 //! - [`monitor`]: the keys of the scope, its channel list and the settings palette;
 //! - [`pacing`], [`rates`]: frame pacing and per-second rates, small state machines without IO;
 //! - [`battery`]: the battery poller;
@@ -26,6 +27,7 @@
 
 mod actions;
 pub mod battery;
+pub mod borders;
 mod build;
 pub mod catalog;
 mod core;
