@@ -201,48 +201,67 @@ pub fn footer(km: &KeyMap, live: bool) -> Vec<(Context, Vec<FooterKey>)> {
     ]
 }
 
-/// The table of keys read in `place` (the scope's own while it is on screen in driving).
-pub fn context_of(place: Place, scope: bool) -> Context {
-    match place {
-        Place::Driving if scope => Context::Scope,
-        Place::Driving => Context::Drive,
-        Place::Replay => Context::Replay,
-        Place::Log => Context::Log,
-        Place::Filter | Place::Matrix => Context::Filter,
-        Place::Help => Context::Help,
-        Place::Palette => Context::Palette,
-        Place::Channels | Place::Tuning => Context::Settings,
-        Place::Packet => Context::Detail,
-    }
+/// When the footer leaves keys of its place's table out.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Unless {
+    /// Never offered there.
+    Never,
+    /// Only once a search was made (a packet in full).
+    Searched,
+    /// Only when help takes more than one page.
+    Paged,
 }
 
-/// The footer's keys now: for the place on top and the chosen droid.
-pub fn footer_now(state: &AppState) -> Vec<&FooterKey> {
+/// The footer's exceptions, per place: the keys of the place's table ([`Place::context`])
+/// that the footer does not offer there, and when they come back. Everything else the footer
+/// shows is the table's own; a place not named here has no exception.
+pub const FOOTER_EXCEPTIONS: &[(Place, &[Action], Unless)] = &[
+    // The channel list shares the settings' table, but there the apply key switches the
+    // row: its word is in the border, not "apply" here.
+    (Place::Channels, &[Action::SettingsApply], Unless::Never),
+    // A packet in full goes through matches only once there is a search.
+    (
+        Place::Packet,
+        &[Action::DetailNext, Action::DetailPrevious],
+        Unless::Searched,
+    ),
+    // Help on one page: no page keys to offer (they would do nothing).
+    (
+        Place::Help,
+        &[Action::HelpNext, Action::HelpPrevious],
+        Unless::Paged,
+    ),
+];
+
+/// The footer's keys now: for the place on top and the chosen droid. `help_paged`: help, if
+/// it is on top, takes more than one page of the screen (the UI knows its size).
+pub fn footer_now(state: &AppState, help_paged: bool) -> Vec<&FooterKey> {
     let replay = state.droid().replay.is_some();
     let place = Place::of(state, replay);
-    let ctx = match &state.overlay {
-        // Typing a search in a packet in full: the prompts' keys, as in the filter.
-        super::state::Overlay::Packet { typing: true, .. } => Context::Filter,
-        _ => context_of(place, state.droid().scope.visible),
+    let (typing, searched) = match &state.overlay {
+        super::state::Overlay::Packet { typing, search, .. } => (*typing, !search.is_empty()),
+        _ => (false, false),
+    };
+    let ctx = place.context(state.droid().scope.visible, typing);
+    let hidden = |a: Option<Action>| {
+        FOOTER_EXCEPTIONS.iter().any(|(p, actions, unless)| {
+            *p == place
+                && a.is_some_and(|a| actions.contains(&a))
+                && match unless {
+                    Unless::Never => true,
+                    Unless::Searched => !searched,
+                    Unless::Paged => !help_paged,
+                }
+        })
     };
     let (model, fleet) = (state.droid().model, state.droids.len() > 1);
-    let no_search = matches!(&state.overlay,
-        super::state::Overlay::Packet { search, .. } if search.is_empty());
     state
         .footer
         .iter()
         .find(|(c, _)| *c == ctx)
         .map(|(_, keys)| {
             keys.iter()
-                .filter(|k| k.needs.applies(model, fleet))
-                // The channel list shares the settings' table, but there the apply key
-                // switches the row: its word is in the border, not "apply" here.
-                .filter(|k| !(place == Place::Channels && k.action == Some(Action::SettingsApply)))
-                // A packet in full goes through matches only once there is a search.
-                .filter(|k| {
-                    !(no_search
-                        && matches!(k.action, Some(Action::DetailNext | Action::DetailPrevious)))
-                })
+                .filter(|k| k.needs.applies(model, fleet) && !hidden(k.action))
                 .collect()
         })
         .unwrap_or_default()

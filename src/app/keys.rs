@@ -143,14 +143,11 @@ impl App {
         // The emergency stop works over every overlay whose own table leaves its key free
         // (typing places take every printable key: there it is the Ctrl one above, or the
         // gamepad's).
-        let overlay_table = match place {
-            Place::Palette => Some(Context::Palette),
-            Place::Help => Some(Context::Help),
-            Place::Channels | Place::Tuning => Some(Context::Settings),
-            _ => None,
-        };
-        if let Some(ctx) = overlay_table
-            && self.keymap.action_in(ctx, &key).is_none()
+        if place.lets_the_stop_through()
+            && self
+                .keymap
+                .action_in(place.context(false, false), &key)
+                .is_none()
             && self.keymap.action(&key) == Some(Action::EStop)
         {
             if new_press {
