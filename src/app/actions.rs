@@ -1,15 +1,16 @@
 //! What reaches the droids: the driving input of the place on top turned into each droid's
 //! control tick, the emergency stop to every droid, and the one-shot actions — lights,
-//! animations, sounds — each built by the droid's family; a family without the capability
-//! gets a hint instead of a command. Nothing is sent in replay.
+//! animations, sounds — each said as an [`Intent`] and lowered by the droid's family (the
+//! vocabulary missions, Edu programs, the bridge and fleets use too); a droid without the
+//! capability gets a hint instead of a command. Nothing is sent in replay.
 
 use super::core::App;
 use super::droid::DroidMut;
 use super::place::Place;
 use super::view::matrix::MAIN_LED_CYCLE;
 use crate::config::Action;
-use crate::family::Command;
-use crate::script::{Action as ScriptAction, LedGroup};
+use crate::family::intent::Intent;
+use crate::script::LedGroup;
 use crate::teleop::control::Inputs;
 use tokio::time::Instant;
 
@@ -24,13 +25,10 @@ impl DroidMut<'_> {
             None => 0,
         };
         let rgb = MAIN_LED_CYCLE[next];
-        let action = ScriptAction::LedRgb(LedGroup::Front, rgb);
-        match self.io.family.led(self.view.model, &action) {
-            Some(c) => {
-                self.send(c, "colour");
-                self.view.leds.main = Some(rgb);
-            }
-            None => self.hint("this droid has no main LED"),
+        if self.act(&Intent::LedRgb(LedGroup::Front, rgb), "colour") {
+            self.view.leds.main = Some(rgb);
+        } else {
+            self.hint("this droid has no main LED")
         }
     }
 
@@ -40,34 +38,34 @@ impl DroidMut<'_> {
         } else {
             255
         };
-        let action = ScriptAction::LedBrightness(LedGroup::Back, b);
-        match self.io.family.led(self.view.model, &action) {
-            Some(c) => {
-                self.send(c, "back light");
-                self.view.leds.back = Some(b);
-            }
-            None => self.hint("this droid has no back light to switch (R2: use the colour key)"),
+        if self.act(&Intent::LedBrightness(LedGroup::Back, b), "back light") {
+            self.view.leds.back = Some(b);
+        } else {
+            self.hint("this droid has no back light to switch (R2: use the colour key)")
         }
     }
 
     pub fn play_animation(&mut self, id: u16, name: &str) {
-        let c = self.io.family.animation(self.view.model, id);
-        self.play(c, "animation", id, name, "this droid has no animations");
+        let i = Intent::Animation(id);
+        self.play(&i, "animation", id, name, "this droid has no animations");
     }
 
     pub fn play_sound(&mut self, id: u16, name: &str) {
-        let c = self.io.family.sound(self.view.model, id);
-        self.play(c, "sound", id, name, "this droid cannot play sounds");
+        self.play(
+            &Intent::Sound(id),
+            "sound",
+            id,
+            name,
+            "this droid cannot play sounds",
+        );
     }
 
     /// Send an animation or sound and say which, or say the droid has none.
-    fn play(&mut self, c: Option<Command>, what: &str, id: u16, name: &str, none: &str) {
-        match c {
-            Some(c) => {
-                self.send(c, what);
-                self.hint(format!("{what} {name} ({id})"));
-            }
-            None => self.hint(none),
+    fn play(&mut self, intent: &Intent, what: &str, id: u16, name: &str, none: &str) {
+        if self.act(intent, what) {
+            self.hint(format!("{what} {name} ({id})"));
+        } else {
+            self.hint(none)
         }
     }
 }

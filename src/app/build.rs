@@ -58,7 +58,7 @@ pub(super) enum Origin {
 /// The app for `droids` (at least one), in fleet order.
 pub(super) fn build(droids: Vec<Origin>, opts: AppOptions) -> App {
     let config = opts.config;
-    let keymap = config.keymap.clone();
+    let keymap = Arc::new(config.keymap.clone());
     let start = Instant::now();
     let live = droids.iter().any(|d| matches!(d, Origin::Live { .. }));
     let mut views = Vec::with_capacity(droids.len());
@@ -155,7 +155,8 @@ pub(super) fn build(droids: Vec<Origin>, opts: AppOptions) -> App {
         });
         views.push(view);
     }
-    let mut state = AppState::for_droids(views);
+    let borders = Arc::new(super::borders::Borders::new(&keymap));
+    let mut state = AppState::with_keys(views, keymap.clone(), borders);
     if let Some(first) = first {
         if let Some(f) = &first.log_filter {
             state.log.set_filter(super::packet_log::LogFilter::parse(f));
@@ -179,7 +180,6 @@ pub(super) fn build(droids: Vec<Origin>, opts: AppOptions) -> App {
     state.help_nav = super::help::nav(&keymap, live);
     state.theme = config.display.theme;
     state.footer = super::help::footer(&keymap, live);
-    state.keymap = Arc::new(keymap.clone());
     state.help = if live {
         super::help::live(&config)
     } else {

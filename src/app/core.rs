@@ -35,7 +35,8 @@ pub(super) struct App {
     /// Keys held in the driving place (filled only there, let go when the place changes).
     pub held: HeldKeys,
     pub pad: PadState,
-    pub keymap: KeyMap,
+    /// The bindings, shared with the screen's [`AppState::keymap`].
+    pub keymap: std::sync::Arc<KeyMap>,
     pub turbo_speed: u8,
     /// Whether a (re)connect's setup puts a droid with legs into tripod.
     pub tripod_on_connect: bool,

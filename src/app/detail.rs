@@ -5,7 +5,7 @@
 //! for the screen and the search alike.
 
 use super::core::App;
-use super::keys::edit;
+use super::overlay::filter::edit;
 use super::packet_log::LogLine;
 use super::state::Overlay;
 use crate::config::{Action, Context, Key};

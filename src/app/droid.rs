@@ -8,6 +8,7 @@ use super::packet_log::{LogLine, PacketLog};
 use super::player::Player;
 use super::rates::Rates;
 use super::state::{DroidState, HINT_TIME, Hint};
+use crate::family::intent::{Intent, Unsupported};
 use crate::family::{Command, Family};
 use crate::protocol::notify::Notification;
 use crate::protocol::wire::LegAction;
@@ -152,20 +153,35 @@ impl DroidMut<'_> {
         for o in outs {
             match o {
                 Out::Drive(c) => self.set(Slot::Drive, c),
-                Out::Head(c) => self.set(Slot::Head, c),
-                Out::Stance(a) => self.stance(a),
+                Out::Do(Intent::Head(a)) => {
+                    // The dome is a latest-wins value, as driving is.
+                    let model = self.view.model;
+                    for c in self
+                        .io
+                        .family
+                        .lower(model, &Intent::Head(a))
+                        .unwrap_or_default()
+                    {
+                        self.set(Slot::Head, c);
+                    }
+                }
+                Out::Do(Intent::Stance(a)) => self.stance(a),
+                Out::Do(Intent::ResetAim) => {
+                    // A droid with nothing to send for it still shows its back light off.
+                    self.act(&Intent::ResetAim, "aim");
+                    self.view.leds.back = Some(0);
+                }
+                Out::Do(i) => {
+                    if !self.act(&i, i.what()) {
+                        self.hint(Unsupported::of(self.view.model, &i).to_string());
+                    }
+                }
                 Out::AimBegin => {
                     let model = self.view.model;
                     for c in self.io.family.aim_begin(model).unwrap_or_default() {
                         self.send(c, "aim");
                     }
                     self.view.leds.back = Some(255);
-                }
-                Out::AimEnd => {
-                    for c in self.io.family.aim_end(self.view.model) {
-                        self.send(c, "aim");
-                    }
-                    self.view.leds.back = Some(0);
                 }
                 Out::Hint(h) => self.hint(h),
             }
@@ -187,6 +203,20 @@ impl DroidMut<'_> {
         }
     }
 
+    /// Send what `intent` is on this droid, as its family lowers it (each command's failure a
+    /// hint naming `what`); `false` when the droid cannot do it, and nothing is sent.
+    pub fn act(&mut self, intent: &Intent, what: &str) -> bool {
+        match self.io.family.lower(self.view.model, intent) {
+            Ok(commands) => {
+                for c in commands {
+                    self.send(c, what);
+                }
+                true
+            }
+            Err(_) => false,
+        }
+    }
+
     /// Send a one-shot command; a failure is a hint naming `what`.
     pub fn send(&mut self, c: Command, what: &str) {
         let Some(session) = &self.io.session else {
@@ -198,13 +228,13 @@ impl DroidMut<'_> {
     }
 
     fn stance(&mut self, a: LegAction) {
-        let Some(c) = self.io.family.stance(a) else {
+        let Ok(commands) = self.io.family.lower(self.view.model, &Intent::Stance(a)) else {
             return self.hint("this droid has no legs");
         };
         let Some(session) = &self.io.session else {
             return;
         };
-        match session.send(c) {
+        match commands.into_iter().try_for_each(|c| session.send(c)) {
             Ok(()) => self.view.telemetry.stance_requested(a),
             Err(e) => self.hint(format!("stance not sent: {e}")),
         }

@@ -6,6 +6,10 @@
 //! [`Needs`]). A rebound key shows in both because they are built from the same [`KeyMap`] the
 //! key dispatch reads.
 
+pub use super::borders::{
+    AIM_AGAIN, Borders, CHANNELS, DETAIL, DETAIL_MATCHES, DETAIL_TYPING, HELP_PAGES, Hint,
+    LIGHTS_PANEL, MATRIX_PANEL, PALETTE, PROMPT, TANK_PANEL, TUNING, border,
+};
 use super::place::Place;
 use super::state::{AppState, FooterKey, HelpLine, HelpSection};
 use crate::config::{Action, Config, Context, KeyMap, Needs};
@@ -81,9 +85,6 @@ pub fn nav(km: &KeyMap, live: bool) -> String {
         None => String::new(),
     }
 }
-
-/// Help's page keys.
-pub const HELP_PAGES: &[Hint] = &[(&[Action::HelpNext, Action::HelpPrevious], "pages")];
 
 /// The context footer's keys for every place keys are read: the keys the table gives a
 /// footer word, the first key bound to each, then (kept however narrow the row) the keys that
@@ -200,137 +201,67 @@ pub fn footer(km: &KeyMap, live: bool) -> Vec<(Context, Vec<FooterKey>)> {
     ]
 }
 
-/// One entry of an overlay's border hint: the actions whose first keys are shown, and the
-/// word for what they do there.
-pub type Hint = (&'static [Action], &'static str);
-
-/// The palettes' border.
-pub const PALETTE: &[Hint] = &[
-    (&[Action::PaletteUp, Action::PaletteDown], "select"),
-    (&[Action::PalettePlay], "play"),
-    (&[Action::PaletteClose], "close"),
-];
-/// The scope's channel list: both the toggle and the apply key switch the row there.
-pub const CHANNELS: &[Hint] = &[
-    (&[Action::SettingsUp, Action::SettingsDown], "choose"),
-    (&[Action::SettingsToggle, Action::SettingsApply], "switch"),
-    (&[Action::SettingsClose], "close"),
-];
-/// The streaming and collision settings.
-pub const TUNING: &[Hint] = &[
-    (&[Action::SettingsUp, Action::SettingsDown], "choose"),
-    (&[Action::SettingsLess, Action::SettingsMore], "value"),
-    (&[Action::SettingsToggle], "on/off"),
-    (&[Action::SettingsApply], "send"),
-    (&[Action::SettingsClose], "close"),
-];
-/// The text prompts (the log filter, BOLT's matrix).
-pub const PROMPT: &[Hint] = &[
-    (&[Action::FilterApply], "apply"),
-    (&[Action::FilterCancel], "cancel"),
-];
-/// A packet in full, browsing.
-pub const DETAIL: &[Hint] = &[
-    (&[Action::DetailSearch], "search"),
-    (&[Action::DetailUp, Action::DetailDown], "scroll"),
-    (&[Action::DetailClose], "close"),
-];
-/// A packet in full, typing the search (the prompts' keys).
-pub const DETAIL_TYPING: &[Hint] = &[
-    (&[Action::FilterApply], "find"),
-    (&[Action::FilterCancel], "cancel"),
-];
-/// A packet in full, going through the matches.
-pub const DETAIL_MATCHES: &[Hint] = &[
-    (&[Action::DetailNext], "next"),
-    (&[Action::DetailPrevious], "previous"),
-    (&[Action::DetailClose], "close"),
-];
-
-/// BOLT's matrix panel: its own keys.
-pub const MATRIX_PANEL: &[Hint] = &[
-    (&[Action::Matrix], "type"),
-    (&[Action::MatrixColour], "colour"),
-    (&[Action::Calibrate], "calibrate"),
-];
-
-/// The lights panel of a rolling droid.
-pub const LIGHTS_PANEL: &[Hint] = &[
-    (&[Action::Aim], "aim (heading 0)"),
-    (&[Action::Colour], "main colour"),
-    (&[Action::BackLight], "back light"),
-];
-/// Aiming: the aim key again ends it.
-pub const AIM_AGAIN: &[Hint] = &[(&[Action::Aim], "again")];
-
-/// RVR's panel, out of tank mode.
-pub const TANK_PANEL: &[Hint] = &[(&[Action::Tank], "tank mode")];
-
-/// A border hint from the bindings as configured (`↑↓ select · Enter play · Esc close`): each
-/// entry's actions by their first keys (run together when each is one character, as `↑↓`,
-/// else with `/`); an entry none of whose actions has a key is left out, so a hint never names
-/// a key that does not do it.
-pub fn border(km: &KeyMap, hints: &[Hint]) -> String {
-    hints
-        .iter()
-        .filter_map(|(actions, word)| {
-            let keys: Vec<String> = actions
-                .iter()
-                .filter_map(|a| km.keys(*a).first().map(ToString::to_string))
-                .collect();
-            if keys.is_empty() {
-                return None;
-            }
-            let short = keys.iter().all(|k| k.chars().count() == 1);
-            let keys = keys.join(if short { "" } else { "/" });
-            Some(format!("{keys} {word}"))
-        })
-        .collect::<Vec<_>>()
-        .join(" · ")
+/// When the footer leaves keys of its place's table out.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Unless {
+    /// Never offered there.
+    Never,
+    /// Only once a search was made (a packet in full).
+    Searched,
+    /// Only when help takes more than one page.
+    Paged,
 }
 
-/// The table of keys read in `place` (the scope's own while it is on screen in driving).
-pub fn context_of(place: Place, scope: bool) -> Context {
-    match place {
-        Place::Driving if scope => Context::Scope,
-        Place::Driving => Context::Drive,
-        Place::Replay => Context::Replay,
-        Place::Log => Context::Log,
-        Place::Filter | Place::Matrix => Context::Filter,
-        Place::Help => Context::Help,
-        Place::Palette => Context::Palette,
-        Place::Channels | Place::Tuning => Context::Settings,
-        Place::Packet => Context::Detail,
-    }
-}
+/// The footer's exceptions, per place: the keys of the place's table ([`Place::context`])
+/// that the footer does not offer there, and when they come back. Everything else the footer
+/// shows is the table's own; a place not named here has no exception.
+pub const FOOTER_EXCEPTIONS: &[(Place, &[Action], Unless)] = &[
+    // The channel list shares the settings' table, but there the apply key switches the
+    // row: its word is in the border, not "apply" here.
+    (Place::Channels, &[Action::SettingsApply], Unless::Never),
+    // A packet in full goes through matches only once there is a search.
+    (
+        Place::Packet,
+        &[Action::DetailNext, Action::DetailPrevious],
+        Unless::Searched,
+    ),
+    // Help on one page: no page keys to offer (they would do nothing).
+    (
+        Place::Help,
+        &[Action::HelpNext, Action::HelpPrevious],
+        Unless::Paged,
+    ),
+];
 
-/// The footer's keys now: for the place on top and the chosen droid.
-pub fn footer_now(state: &AppState) -> Vec<&FooterKey> {
+/// The footer's keys now: for the place on top and the chosen droid. `help_paged`: help, if
+/// it is on top, takes more than one page of the screen (the UI knows its size).
+pub fn footer_now(state: &AppState, help_paged: bool) -> Vec<&FooterKey> {
     let replay = state.droid().replay.is_some();
     let place = Place::of(state, replay);
-    let ctx = match &state.overlay {
-        // Typing a search in a packet in full: the prompts' keys, as in the filter.
-        super::state::Overlay::Packet { typing: true, .. } => Context::Filter,
-        _ => context_of(place, state.droid().scope.visible),
+    let (typing, searched) = match &state.overlay {
+        super::state::Overlay::Packet { typing, search, .. } => (*typing, !search.is_empty()),
+        _ => (false, false),
+    };
+    let ctx = place.context(state.droid().scope.visible, typing);
+    let hidden = |a: Option<Action>| {
+        FOOTER_EXCEPTIONS.iter().any(|(p, actions, unless)| {
+            *p == place
+                && a.is_some_and(|a| actions.contains(&a))
+                && match unless {
+                    Unless::Never => true,
+                    Unless::Searched => !searched,
+                    Unless::Paged => !help_paged,
+                }
+        })
     };
     let (model, fleet) = (state.droid().model, state.droids.len() > 1);
-    let no_search = matches!(&state.overlay,
-        super::state::Overlay::Packet { search, .. } if search.is_empty());
     state
         .footer
         .iter()
         .find(|(c, _)| *c == ctx)
         .map(|(_, keys)| {
             keys.iter()
-                .filter(|k| k.needs.applies(model, fleet))
-                // The channel list shares the settings' table, but there the apply key
-                // switches the row: its word is in the border, not "apply" here.
-                .filter(|k| !(place == Place::Channels && k.action == Some(Action::SettingsApply)))
-                // A packet in full goes through matches only once there is a search.
-                .filter(|k| {
-                    !(no_search
-                        && matches!(k.action, Some(Action::DetailNext | Action::DetailPrevious)))
-                })
+                .filter(|k| k.needs.applies(model, fleet) && !hidden(k.action))
                 .collect()
         })
         .unwrap_or_default()

@@ -11,26 +11,11 @@
 
 use super::core::{App, ExitReason};
 use super::input::{KeyKind, TermEvent};
-use super::packet_log::LogFilter;
+use super::overlay::filter::Prompted;
+use super::overlay::{self, Outcome};
 use super::place::Place;
 use super::state::{Focus, Overlay};
 use crate::config::{Action, Context, Key, KeyCode};
-
-/// Longest log filter typed.
-const FILTER_MAX: usize = 80;
-
-/// Typing into a prompt's `input`: Backspace, Space, and the characters `ok` takes, up to
-/// `max` bytes.
-pub(super) fn edit(input: &mut String, key: Key, max: usize, ok: impl Fn(char) -> bool) {
-    match key.code {
-        KeyCode::Backspace => {
-            input.pop();
-        }
-        KeyCode::Char(c) if !key.ctrl && ok(c) && input.len() < max => input.push(c),
-        KeyCode::Space if input.len() < max => input.push(' '),
-        _ => {}
-    }
-}
 
 impl App {
     /// A terminal event; returns an exit reason when the app should stop.
@@ -143,14 +128,11 @@ impl App {
         // The emergency stop works over every overlay whose own table leaves its key free
         // (typing places take every printable key: there it is the Ctrl one above, or the
         // gamepad's).
-        let overlay_table = match place {
-            Place::Palette => Some(Context::Palette),
-            Place::Help => Some(Context::Help),
-            Place::Channels | Place::Tuning => Some(Context::Settings),
-            _ => None,
-        };
-        if let Some(ctx) = overlay_table
-            && self.keymap.action_in(ctx, &key).is_none()
+        if place.lets_the_stop_through()
+            && self
+                .keymap
+                .action_in(place.context(false, false), &key)
+                .is_none()
             && self.keymap.action(&key) == Some(Action::EStop)
         {
             if new_press {
@@ -179,85 +161,55 @@ impl App {
         self.state.overlay = Overlay::Help;
     }
 
+    /// A key on a palette ([`overlay::palette`]); playing closes it.
     pub(super) fn palette_key(&mut self, key: Key, new_press: bool) {
-        let (selected, animations) = match self.state.overlay {
+        let (selected, animations) = match &mut self.state.overlay {
             Overlay::Animations { selected } => (selected, true),
             Overlay::Sounds { selected } => (selected, false),
             _ => return,
         };
-        let len = if animations {
-            self.state.animations.len()
+        let list = if animations {
+            &self.state.animations
         } else {
-            self.state.sounds.len()
+            &self.state.sounds
         };
-        let last = len.saturating_sub(1);
-        let sel = match self.keymap.action_in(Context::Palette, &key) {
-            Some(Action::PaletteUp) => selected.saturating_sub(1),
-            Some(Action::PaletteDown) => (selected + 1).min(last),
-            Some(Action::PalettePageUp) => selected.saturating_sub(10),
-            Some(Action::PalettePageDown) => (selected + 10).min(last),
-            Some(Action::PaletteClose) => {
-                self.state.overlay = Overlay::None;
-                return;
-            }
-            Some(Action::PalettePlay) if new_press => {
+        match overlay::palette::on_key(selected, list.len(), &self.keymap, key, new_press) {
+            Outcome::Stay => return,
+            Outcome::Close => {}
+            Outcome::Done(i) => {
                 let chosen = self.chosen();
-                let entry = if animations {
-                    self.state.animations.get(selected).cloned()
-                } else {
-                    self.state.sounds.get(selected).cloned()
-                };
-                if let (Some(e), Some(mut d)) = (entry, self.droid(chosen)) {
+                if let (Some(e), Some(mut d)) = (list.get(i).cloned(), self.droid(chosen)) {
                     if animations {
                         d.play_animation(e.id, &e.name);
                     } else {
                         d.play_sound(e.id, &e.name);
                     }
                 }
-                self.state.overlay = Overlay::None;
-                return;
             }
-            _ => selected,
-        };
-        self.state.overlay = if animations {
-            Overlay::Animations { selected: sel }
-        } else {
-            Overlay::Sounds { selected: sel }
-        };
+        }
+        self.state.overlay = Overlay::None;
     }
 
+    /// A key on help ([`overlay::help`]).
     fn help_key(&mut self, key: Key, new_press: bool) {
-        match self.keymap.action_in(Context::Help, &key) {
-            Some(Action::HelpNext) => self.state.help_page += 1,
-            Some(Action::HelpPrevious) => {
-                self.state.help_page = self.state.help_page.saturating_sub(1)
-            }
-            // Any other key closes help.
-            _ if new_press => self.state.overlay = Overlay::None,
-            _ => {}
+        let page = &mut self.state.help_page;
+        if overlay::help::on_key(page, &self.keymap, key, new_press) != Outcome::Stay {
+            self.state.overlay = Overlay::None;
         }
     }
 
+    /// A key on the log filter prompt ([`overlay::filter`]): the log follows as it is typed.
     fn filter_key(&mut self, key: Key) {
-        let action = self.keymap.action_in(Context::Filter, &key);
         let Overlay::Filter { input, before } = &mut self.state.overlay else {
             return;
         };
-        match action {
-            Some(Action::FilterCancel) => {
-                let before = std::mem::take(before.as_mut());
+        match overlay::filter::on_key(input, before, &self.keymap, key) {
+            Prompted::Stay => {}
+            Prompted::Typed(f) => self.state.log.set_filter(f),
+            Prompted::Applied => self.state.overlay = Overlay::None,
+            Prompted::Cancelled(before) => {
                 self.state.log.set_filter(before);
                 self.state.overlay = Overlay::None;
-            }
-            Some(Action::FilterApply) => self.state.overlay = Overlay::None,
-            // The rest is typing, and the log follows as it is typed.
-            _ => {
-                let was = input.clone();
-                edit(input, key, FILTER_MAX, |_| true);
-                if *input != was {
-                    let f = LogFilter::parse(input);
-                    self.state.log.set_filter(f);
-                }
             }
         }
     }

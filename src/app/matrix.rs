@@ -83,7 +83,9 @@ impl App {
                     self.draw_matrix();
                 }
             }
-            _ => super::keys::edit(input, key, SCROLL_TEXT_MAX, |c| c.is_ascii_graphic()),
+            _ => {
+                super::overlay::filter::edit(input, key, SCROLL_TEXT_MAX, |c| c.is_ascii_graphic())
+            }
         }
     }
 }

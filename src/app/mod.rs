@@ -10,10 +10,12 @@
 //! - [`state`]: what the screen shows ([`AppState`]), [`place`]: where keys are read;
 //! - [`view`]: view state below everything that changes it (the matrix as drawn, the scope
 //!   and the monitoring settings);
-//! - [`keys`], [`pad`]: key dispatch by context and gamepad events;
+//! - [`keys`], [`pad`]: key dispatch by place and gamepad events; [`overlay`]: the
+//!   overlays' keys as components (own state, own keys, an outcome the loop carries out);
 //! - [`actions`]: what reaches the droid (control outputs, lights, animations, sounds);
 //! - [`replay`], [`player`]: the app on a capture;
-//! - [`help`]: the help overlay's text, generated from the bindings;
+//! - [`help`]: the help overlay's text and the footer, generated from the bindings;
+//!   [`borders`]: the overlays' and panels' key hints, worded once from them;
 //! - [`monitor`]: the keys of the scope, its channel list and the settings palette;
 //! - [`pacing`], [`rates`]: frame pacing and per-second rates, small state machines without IO;
 //! - [`battery`]: the battery poller;
@@ -26,6 +28,7 @@
 
 mod actions;
 pub mod battery;
+pub mod borders;
 mod build;
 pub mod catalog;
 mod core;
@@ -39,6 +42,7 @@ pub mod layout;
 pub mod matrix;
 pub mod monitor;
 mod mouse;
+pub mod overlay;
 pub mod pacing;
 pub mod packet_log;
 mod pad;

@@ -10,6 +10,7 @@
 //! is never held, so it cannot drive once that place closes.
 
 use super::state::{AppState, Focus, Overlay};
+use crate::config::Context;
 
 /// Where keys are read.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -53,6 +54,35 @@ impl Place {
             Overlay::None if replay => Place::Replay,
             Overlay::None => Place::Driving,
         }
+    }
+
+    /// The table of keys read here: the one map from a place to its bindings, which the key
+    /// dispatch, the stop's way through an overlay and the footer all read. `scope`: the
+    /// scope is on screen (driving reads its own keys first); `typing`: a packet in full is
+    /// taking a search (the prompts' keys, as in the filter).
+    pub fn context(self, scope: bool, typing: bool) -> Context {
+        match self {
+            Place::Driving if scope => Context::Scope,
+            Place::Driving => Context::Drive,
+            Place::Replay => Context::Replay,
+            Place::Log => Context::Log,
+            Place::Filter | Place::Matrix => Context::Filter,
+            Place::Help => Context::Help,
+            Place::Palette => Context::Palette,
+            Place::Channels | Place::Tuning => Context::Settings,
+            Place::Packet if typing => Context::Filter,
+            Place::Packet => Context::Detail,
+        }
+    }
+
+    /// Whether the drive table's emergency stop works here when this place's own table
+    /// leaves its key free: the overlays that take no text (a typing place takes every
+    /// printable key: there the stop is the Ctrl one, or the gamepad's).
+    pub fn lets_the_stop_through(self) -> bool {
+        matches!(
+            self,
+            Place::Palette | Place::Help | Place::Channels | Place::Tuning
+        )
     }
 
     /// Whether keys pressed here may drive.

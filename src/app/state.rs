@@ -1,15 +1,26 @@
 //! The application state: everything the screen shows, owned by the event loop and updated
 //! from events. [`crate::ui`] renders an immutable borrow of it; nothing here draws.
 
+use super::borders::Borders;
 use super::catalog::{self, Entry};
 use super::packet_log::{LogFilter, PacketLog};
-use crate::config::{Context, Needs};
+use crate::config::{Context, KeyMap, Needs};
 use crate::model::Model;
 use crate::session::{LinkState, SessionStats};
 use crate::telemetry::Telemetry;
 pub use crate::teleop::control::ControlView;
 use std::path::PathBuf;
+use std::sync::{Arc, LazyLock};
 use std::time::Duration;
+
+/// The shipped bindings and their hints, parsed once per process: a screen made without a
+/// configuration (tests, benches, [`AppState::new`]) reads them; the app passes its own
+/// ([`AppState::with_keys`]) and parses nothing more.
+static SHIPPED_KEYS: LazyLock<(Arc<KeyMap>, Arc<Borders>)> = LazyLock::new(|| {
+    let km = crate::config::Config::defaults().keymap;
+    let borders = Borders::new(&km);
+    (Arc::new(km), Arc::new(borders))
+});
 
 /// Gamepad status for the status bar.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -194,7 +205,10 @@ pub struct AppState {
     pub footer: Vec<(Context, Vec<FooterKey>)>,
     /// The bindings as configured: overlays' border hints are built from them
     /// ([`crate::app::help::border`]), so no hint can name a key that does something else.
-    pub keymap: std::sync::Arc<crate::config::KeyMap>,
+    pub keymap: Arc<KeyMap>,
+    /// Every overlay's and panel's key hint, worded once from [`Self::keymap`] (a frame only
+    /// reads them).
+    pub borders: Arc<Borders>,
     pub animations: Vec<Entry>,
     pub sounds: Vec<Entry>,
     /// A collision flashes this long.
@@ -284,9 +298,20 @@ impl AppState {
         AppState::for_droids(vec![DroidState::new(model, droid_name)])
     }
 
-    /// The screen of a fleet (`droids` must not be empty; an empty list gets a placeholder
-    /// R2-D2 rather than a panic).
-    pub fn for_droids(mut droids: Vec<DroidState>) -> Self {
+    /// The screen of a fleet with the shipped bindings (`droids` must not be empty; an empty
+    /// list gets a placeholder R2-D2 rather than a panic).
+    pub fn for_droids(droids: Vec<DroidState>) -> Self {
+        let (keymap, borders) = SHIPPED_KEYS.clone();
+        AppState::with_keys(droids, keymap, borders)
+    }
+
+    /// The screen of a fleet read with `keymap`, whose hints are `borders` (built from it by
+    /// [`Borders::new`]).
+    pub fn with_keys(
+        mut droids: Vec<DroidState>,
+        keymap: Arc<KeyMap>,
+        borders: Arc<Borders>,
+    ) -> Self {
         if droids.is_empty() {
             droids.push(DroidState::new(Model::DEFAULT, String::new()));
         }
@@ -306,7 +331,8 @@ impl AppState {
             help_nav: String::new(),
             help_page: 0,
             footer: Vec::new(),
-            keymap: std::sync::Arc::new(crate::config::Config::defaults().keymap),
+            keymap,
+            borders,
             animations: catalog::animations(),
             sounds: catalog::sounds(),
             collision_flash: Duration::from_millis(1500),

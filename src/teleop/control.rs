@@ -1,6 +1,9 @@
 //! The control loop's logic: input state in, commands out, once per tick. Sans-IO: the caller
 //! supplies elapsed time and sends the outputs (drive and head through the session's
 //! latest-wins slots, so a change goes out at once and never queues behind stale commands).
+//! What is not driving is said as an [`Intent`] (the dome, the legs, the end of aiming), the
+//! vocabulary missions, Edu programs, fleets and the bridge use, and the droid's family
+//! lowers it.
 //!
 //! Safety rules: speed is 0 unless drive input is present right now (deadman: key released,
 //! emulated release timed out, stick in its deadzone, pad unplugged, focus lost, link down);
@@ -8,6 +11,7 @@
 
 use super::gamepad::PadDrive;
 use crate::config::{Control as ControlConfig, DriveMode};
+use crate::family::intent::Intent;
 use crate::family::{Command, Family};
 use crate::protocol::wire::{LegAction, LegState};
 use crate::telemetry::Stance;
@@ -96,16 +100,18 @@ pub struct DroidView {
 /// What to send or show.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Out {
-    /// Latest drive command (for the drive slot).
+    /// Latest drive command (for the drive slot). The family's own command rather than an
+    /// [`Intent::Drive`]: a steering droid's turn is a fraction that an intent's heading
+    /// would round to a degree, and the stop of [`Controller::estop_now`] is the family's
+    /// stop after the last drive command, not a drive.
     Drive(Command),
-    /// Latest dome command (for the head slot).
-    Head(Command),
-    /// Change stance.
-    Stance(LegAction),
-    /// Enter aim mode: back light on; turning now rotates the droid in place.
+    /// What the droid should do besides driving, for its family to lower:
+    /// [`Intent::Head`] (the dome: latest wins, the head slot), [`Intent::Stance`] (the
+    /// legs), [`Intent::ResetAim`] (leaving aim mode: the droid's facing becomes heading 0).
+    Do(Intent),
+    /// Enter aim mode: back light on; turning now rotates the droid in place. No intent
+    /// says it: only the app aims, with the family's own commands.
     AimBegin,
-    /// Leave aim mode: the droid's facing becomes heading 0.
-    AimEnd,
     /// Tell the operator something.
     Hint(String),
 }
@@ -275,7 +281,7 @@ impl Controller {
                     // the queued Set Heading (stops go first) and turn the droid back.
                     self.last_drive = Some((0, 0, 0));
                     vec![
-                        Out::AimEnd,
+                        Out::Do(Intent::ResetAim),
                         Out::Hint("heading set: forward is where it faces".into()),
                     ]
                 };
@@ -290,7 +296,7 @@ impl Controller {
                     A::Waddle => LegAction::Waddle,
                     _ => LegAction::Stop,
                 };
-                return vec![Out::Stance(leg)];
+                return vec![Out::Do(Intent::Stance(leg))];
             }
             _ => {}
         }
@@ -402,7 +408,7 @@ impl Controller {
                     if self.cfg.auto_tripod {
                         if !asked_recently {
                             self.tripod_asked = Some(self.now);
-                            out.push(Out::Stance(LegAction::Tripod));
+                            out.push(Out::Do(Intent::Stance(LegAction::Tripod)));
                             out.push(Out::Hint(
                                 "R2 can't roll on two legs — switching to tripod".into(),
                             ));
@@ -468,13 +474,9 @@ impl Controller {
 
         // Dome: when the target changes by a degree or more.
         let head = self.head_target.round() as i32;
-        if droid.connected
-            && droid.has_dome
-            && self.last_head != Some(head)
-            && let Some(c) = self.family.head(HeadAngle::clamped(head as f32))
-        {
+        if droid.connected && droid.has_dome && self.last_head != Some(head) {
             self.last_head = Some(head);
-            out.push(Out::Head(c));
+            out.push(Out::Do(Intent::Head(HeadAngle::clamped(head as f32))));
         }
 
         self.view = ControlView {
@@ -617,7 +619,10 @@ mod tests {
             "v1 Roll: speed 0, heading 45, state go"
         );
         assert_eq!(c.view().source, "aim");
-        assert!(c.on_press(Action::Aim, &bb8).contains(&Out::AimEnd));
+        assert!(
+            c.on_press(Action::Aim, &bb8)
+                .contains(&Out::Do(Intent::ResetAim))
+        );
         // The next ticks send nothing: a stop at heading 0 would jump the queue ahead of
         // Set Heading 0 and turn the droid back.
         assert!(drives(&c.tick(&Inputs::default(), TICK, &bb8, true)).is_empty());
@@ -706,7 +711,7 @@ mod tests {
             ..Inputs::default()
         };
         let out = c.tick(&fwd, TICK, &bipod, true);
-        assert!(out.contains(&Out::Stance(LegAction::Tripod)));
+        assert!(out.contains(&Out::Do(Intent::Stance(LegAction::Tripod))));
         assert!(
             out.iter()
                 .any(|o| matches!(o, Out::Hint(h) if h.contains("tripod")))
@@ -714,7 +719,7 @@ mod tests {
         assert!(drives(&out).iter().all(|d| d.0 == 0));
         // Asked once, not every tick.
         let out = c.tick(&fwd, TICK, &bipod, true);
-        assert!(!out.contains(&Out::Stance(LegAction::Tripod)));
+        assert!(!out.contains(&Out::Do(Intent::Stance(LegAction::Tripod))));
         // Transitioning: still held at 0; tripod: drives.
         let trans = DroidView {
             stance: Stance::Transitioning(LegState::Tripod),
@@ -746,7 +751,7 @@ mod tests {
             &bipod,
             true,
         );
-        assert!(!out.iter().any(|o| matches!(o, Out::Stance(_))));
+        assert!(!out.iter().any(|o| matches!(o, Out::Do(Intent::Stance(_)))));
         assert!(
             out.iter()
                 .any(|o| matches!(o, Out::Hint(h) if h.contains("press 1")))
@@ -765,7 +770,7 @@ mod tests {
             heads += c
                 .tick(&right, TICK, &R2, true)
                 .iter()
-                .filter(|o| matches!(o, Out::Head(_)))
+                .filter(|o| matches!(o, Out::Do(Intent::Head(_))))
                 .count();
         }
         assert_eq!(c.view().head_target, 180.0);
@@ -774,7 +779,7 @@ mod tests {
         assert!(
             !c.tick(&right, TICK, &R2, true)
                 .iter()
-                .any(|o| matches!(o, Out::Head(_)))
+                .any(|o| matches!(o, Out::Do(Intent::Head(_))))
         );
     }
 

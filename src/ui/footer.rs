@@ -1,6 +1,7 @@
 //! The context footer: the few keys that matter in the place on top and for the chosen
 //! droid, then `?` for the rest (as lazygit, bottom and htop keep one). Its keys come from
-//! [`crate::app::help::footer_now`], built from the same key table as help. Entries are never
+//! [`crate::app::help::footer_now`], built from the same key table as help, with the
+//! per-place exceptions of [`crate::app::help::FOOTER_EXCEPTIONS`]. Entries are never
 //! cut: the least important go whole when the row is too narrow, the kept ones (help, quit,
 //! close) stay.
 
@@ -35,14 +36,10 @@ pub fn fit<'a>(keys: &[&'a FooterKey], w: usize) -> Vec<&'a FooterKey> {
 }
 
 pub fn render(frame: &mut Frame, area: Rect, state: &AppState) {
-    let mut keys = crate::app::help::footer_now(state);
-    // Help on one page: no page keys to offer (they would do nothing).
-    if state.overlay == crate::app::state::Overlay::Help
-        && super::overlay::help_pages(state, frame.area()) <= 1
-    {
-        use crate::config::Action;
-        keys.retain(|k| !matches!(k.action, Some(Action::HelpNext | Action::HelpPrevious)));
-    }
+    // Only help's own size is the screen's business: the rest is the footer table's.
+    let help_paged = state.overlay == crate::app::state::Overlay::Help
+        && super::overlay::help_pages(state, frame.area()) > 1;
+    let keys = crate::app::help::footer_now(state, help_paged);
     let mut spans = vec![Span::raw(" ")];
     for (i, k) in fit(&keys, area.width as usize).into_iter().enumerate() {
         if i > 0 {

@@ -47,11 +47,10 @@ pub fn render(frame: &mut Frame, area: Rect, s: &AppState) {
     let mut lines = vec![Line::from(spans)];
     if inner.height >= 2 {
         // The keys as bound, in words short enough for the panel (it was cut mid-word).
-        let hint = if s.droid().control.aiming {
-            let aim = crate::app::help::border(&s.keymap, crate::app::help::AIM_AGAIN);
-            format!("turn to face forward, then {aim}")
+        let hint: std::borrow::Cow<str> = if s.droid().control.aiming {
+            format!("turn to face forward, then {}", s.borders.aim_again).into()
         } else {
-            crate::app::help::border(&s.keymap, crate::app::help::LIGHTS_PANEL)
+            s.borders.lights_panel.as_str().into()
         };
         lines.push(Line::from(Span::styled(
             super::text::truncate(&hint, inner.width as usize),

@@ -151,10 +151,7 @@ pub fn bolt(frame: &mut Frame, area: Rect, s: &AppState) {
             Span::raw(light),
         ]),
         // The keys as bound (a rebound key shows here as in the footer).
-        Line::from(Span::styled(
-            crate::app::help::border(&s.keymap, crate::app::help::MATRIX_PANEL),
-            theme::dim(),
-        )),
+        Line::from(Span::styled(s.borders.matrix_panel.as_str(), theme::dim())),
     ];
     frame.render_widget(Paragraph::new(lines), side);
 }
@@ -196,7 +193,7 @@ pub fn rvr(frame: &mut Frame, area: Rect, s: &AppState) {
     };
     let tracks = match s.droid().control.tank {
         Some((l, rt)) => format!("tracks L {l:+} R {rt:+}"),
-        None => crate::app::help::border(&s.keymap, crate::app::help::TANK_PANEL),
+        None => s.borders.tank_panel.clone(),
     };
     let mut lines = vec![
         Line::from(colour),

@@ -8,7 +8,6 @@ mod packet;
 mod palette;
 mod settings;
 
-use crate::app::help::border;
 use crate::app::state::{AppState, Overlay};
 use ratatui::Frame;
 
@@ -43,27 +42,21 @@ fn draw(frame: &mut Frame, s: &AppState, area: ratatui::layout::Rect) {
         Overlay::None => {}
         Overlay::Help => {
             let shown = help_shown(s);
-            let pages = border(&s.keymap, crate::app::help::HELP_PAGES);
-            help::render(frame, area, &shown, (&s.help_nav, &pages), s.help_page)
+            let pages = &s.borders.help_pages;
+            help::render(frame, area, &shown, (&s.help_nav, pages), s.help_page)
         }
         Overlay::Animations { selected } => {
-            let keys = border(&s.keymap, crate::app::help::PALETTE);
-            palette::render(frame, area, "Animations", &s.animations, *selected, &keys)
+            let keys = &s.borders.palette;
+            palette::render(frame, area, "Animations", &s.animations, *selected, keys)
         }
         Overlay::Sounds { selected } => {
-            let keys = border(&s.keymap, crate::app::help::PALETTE);
-            palette::render(frame, area, "Sounds", &s.sounds, *selected, &keys)
+            let keys = &s.borders.palette;
+            palette::render(frame, area, "Sounds", &s.sounds, *selected, keys)
         }
         Overlay::Filter { input, before } => {
-            let keys = border(&s.keymap, crate::app::help::PROMPT);
-            filter::render(frame, area, input, before, &keys)
+            filter::render(frame, area, input, before, &s.borders.prompt)
         }
-        Overlay::Matrix { input } => filter::matrix(
-            frame,
-            area,
-            input,
-            &border(&s.keymap, crate::app::help::PROMPT),
-        ),
+        Overlay::Matrix { input } => filter::matrix(frame, area, input, &s.borders.prompt),
         Overlay::Channels { selected } => settings::channels(frame, area, s, *selected),
         Overlay::Tuning { selected, draft } => settings::tuning(frame, area, s, *selected, draft),
         Overlay::Packet {
@@ -81,7 +74,7 @@ fn draw(frame: &mut Frame, s: &AppState, area: ratatui::layout::Rect) {
                 typing: *typing,
                 matched: *matched,
                 scroll: *scroll,
-                keymap: &s.keymap,
+                borders: &s.borders,
             },
         ),
     }

@@ -4,7 +4,6 @@
 use super::super::text::{clean, width, wrap};
 use super::super::theme;
 use crate::app::detail::{matches, rows};
-use crate::app::help::{self, border};
 use crate::app::packet_log::LogLine;
 use ratatui::Frame;
 use ratatui::layout::Rect;
@@ -18,8 +17,8 @@ pub struct View<'a> {
     pub typing: bool,
     pub matched: usize,
     pub scroll: usize,
-    /// The bindings, for the keys in the bottom edge.
-    pub keymap: &'a crate::config::KeyMap,
+    /// The hints as bound, for the keys in the bottom edge.
+    pub borders: &'a crate::app::borders::Borders,
 }
 
 const LABEL_W: usize = 10;
@@ -33,23 +32,19 @@ pub fn render(frame: &mut Frame, area: Rect, line: &LogLine, v: View<'_>) {
     };
     let rows = rows(line);
     let found = matches(&rows, v.search);
-    let keys = |hints| border(v.keymap, hints);
+    let b = v.borders;
     let foot = if v.typing {
-        format!(" /{}▏ {} ", clean(v.search), keys(help::DETAIL_TYPING))
+        format!(" /{}▏ {} ", clean(v.search), b.detail_typing)
     } else if v.search.is_empty() {
-        format!(" {} ", keys(help::DETAIL))
+        format!(" {} ", b.detail)
     } else if found.is_empty() {
-        format!(
-            " no match for {:?} · {} ",
-            clean(v.search),
-            keys(help::DETAIL)
-        )
+        format!(" no match for {:?} · {} ", clean(v.search), b.detail)
     } else {
         format!(
             " match {}/{} · {} ",
             v.matched % found.len() + 1,
             found.len(),
-            keys(help::DETAIL_MATCHES)
+            b.detail_matches
         )
     };
     let block = theme::panel(Span::styled(

@@ -62,7 +62,7 @@ pub fn channels(frame: &mut Frame, area: Rect, s: &AppState, selected: usize) {
         frame,
         area,
         "Scope channels",
-        &crate::app::help::border(&s.keymap, crate::app::help::CHANNELS),
+        &s.borders.channels,
         rows,
         selected,
     );
@@ -106,12 +106,5 @@ pub fn tuning(frame: &mut Frame, area: Rect, s: &AppState, selected: usize, d: &
         "Streaming and collision · now {}",
         super::super::scope::rates(s)
     );
-    list(
-        frame,
-        area,
-        &title,
-        &crate::app::help::border(&s.keymap, crate::app::help::TUNING),
-        rows,
-        selected,
-    );
+    list(frame, area, &title, &s.borders.tuning, rows, selected);
 }
