@@ -13,6 +13,7 @@
 //! - [`keys`], [`pad`]: key dispatch by context and gamepad events;
 //! - [`actions`]: what reaches the droid (control outputs, lights, animations, sounds);
 //! - [`replay`], [`player`]: the app on a capture;
+//! - [`program_status`]: the Sphero Edu program running beside it (`--program`);
 //! - [`help`]: the help overlay's text, generated from the bindings;
 //! - [`monitor`]: the keys of the scope, its channel list and the settings palette;
 //! - [`pacing`], [`rates`]: frame pacing and per-second rates, small state machines without IO;
@@ -45,6 +46,7 @@ mod pad;
 pub mod picker;
 pub mod place;
 pub mod player;
+pub mod program_status;
 pub mod rates;
 pub mod remember;
 mod replay;

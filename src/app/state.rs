@@ -227,6 +227,8 @@ pub struct DroidState {
     pub scope: super::view::scope::ScopeView,
     /// Streaming and collision detection as asked for and as sent.
     pub monitor: super::view::scope::MonitorView,
+    /// The Sphero Edu program running on it (`--program`), if any.
+    pub program: Option<super::program_status::ProgramView>,
 }
 
 impl DroidState {
@@ -252,6 +254,7 @@ impl DroidState {
                 },
                 crate::tuning::CollisionConfig::default(),
             ),
+            program: None,
         }
     }
 }
