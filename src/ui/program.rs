@@ -12,7 +12,7 @@ use ratatui::Frame;
 use ratatui::layout::Rect;
 use ratatui::style::{Modifier, Style};
 use ratatui::text::{Line, Span};
-use ratatui::widgets::{Block, Borders, Clear, Paragraph};
+use ratatui::widgets::{Clear, Paragraph};
 
 /// The status bar's words for the chosen droid's program: `▶ square.js line 4 delay(1)`,
 /// cut to `room` cells (the name first, the call last).
@@ -86,10 +86,8 @@ pub fn banner(frame: &mut Frame, s: &AppState, below: u16) {
     }
     .intersection(area);
     frame.render_widget(Clear, rect);
-    let block = Block::default()
-        .borders(Borders::ALL)
-        .border_style(style)
-        .title(Span::styled(title, style.add_modifier(Modifier::BOLD)));
+    let block =
+        theme::panel(Span::styled(title, style.add_modifier(Modifier::BOLD))).border_style(style);
     frame.render_widget(
         Paragraph::new(lines).block(block.padding(ratatui::widgets::Padding::horizontal(1))),
         rect,
