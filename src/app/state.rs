@@ -228,7 +228,7 @@ pub struct DroidState {
     /// Streaming and collision detection as asked for and as sent.
     pub monitor: super::view::scope::MonitorView,
     /// The Sphero Edu program running on it (`--program`), if any.
-    pub program: Option<super::program_status::ProgramView>,
+    pub program: Option<super::view::program::ProgramView>,
 }
 
 impl DroidState {
