@@ -189,9 +189,12 @@ impl DroidMut<'_> {
         // Redraw only when what the screen shows of the control changed: an idle control
         // loop ticks without drawing. In replay the screen shows the capture's commands
         // instead (`super::replay`).
-        let view = self.io.controller.view();
-        if self.io.player.is_none() && *view != self.view.control {
-            self.view.control = view.clone();
+        // A program beside the app drives too: its drive is shown while the operator's is
+        // idle.
+        let view =
+            super::program_status::shown(self.io.controller.view(), self.view.program.as_ref());
+        if self.io.player.is_none() && view != self.view.control {
+            self.view.control = view;
             *self.dirty = true;
         }
     }

@@ -45,6 +45,7 @@ impl App {
             }
             TermEvent::Key { key, kind } => {
                 self.dirty = true;
+                self.acknowledge_programs();
                 self.on_key_event(key, kind)
             }
         };

@@ -14,6 +14,7 @@
 //!   overlays' keys as components (own state, own keys, an outcome the loop carries out);
 //! - [`actions`]: what reaches the droid (control outputs, lights, animations, sounds);
 //! - [`replay`], [`player`]: the app on a capture;
+//! - [`program_status`]: the Sphero Edu program running beside it (`--program`);
 //! - [`help`]: the help overlay's text and the footer, generated from the bindings;
 //!   [`borders`]: the overlays' and panels' key hints, worded once from them;
 //! - [`monitor`]: the keys of the scope, its channel list and the settings palette;
@@ -49,6 +50,7 @@ mod pad;
 pub mod picker;
 pub mod place;
 pub mod player;
+pub mod program_status;
 pub mod rates;
 pub mod remember;
 mod replay;

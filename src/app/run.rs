@@ -83,6 +83,20 @@ pub async fn run<B: Backend>(
     inputs: AppInputs,
     draw: DrawFn,
 ) -> std::io::Result<Exit> {
+    run_with_programs(terminal, source, opts, inputs, Vec::new(), draw).await
+}
+
+/// [`run`] with Sphero Edu programs running beside the app (`--program`): each droid's
+/// program status, shown in the status bar, the gauges and the end banner
+/// ([`super::program_status`]).
+pub async fn run_with_programs<B: Backend>(
+    terminal: &mut Terminal<B>,
+    source: impl Into<Source>,
+    opts: AppOptions,
+    inputs: AppInputs,
+    programs: super::program_status::ProgramFeeds,
+    draw: DrawFn,
+) -> std::io::Result<Exit> {
     let (droids, trace) = match source.into() {
         Source::Live(session) => (
             vec![Origin::Live {
@@ -114,7 +128,7 @@ pub async fn run<B: Backend>(
             None,
         ),
     };
-    run_droids(terminal, droids, opts, inputs, draw, trace).await
+    run_droids(terminal, droids, opts, inputs, programs, draw, trace).await
 }
 
 /// The droids of a live fleet, in its order.
@@ -136,6 +150,7 @@ async fn run_droids<B: Backend>(
     droids: Vec<Origin>,
     opts: AppOptions,
     mut inputs: AppInputs,
+    programs: super::program_status::ProgramFeeds,
     draw: DrawFn,
     trace: Option<watch::Sender<InputTrace>>,
 ) -> std::io::Result<Exit> {
@@ -157,6 +172,8 @@ async fn run_droids<B: Backend>(
         .collect();
     // Every live droid's events, subscribed before anything can be missed.
     let (mut events, forwarders) = super::fleet::forward(&lives);
+    let (mut program_rx, program_tasks) = super::program_status::forward(programs);
+    let mut programs_open = !program_tasks.is_empty();
     let mut app = build(droids, opts);
     app.trace_tx = trace;
     let start = app.start;
@@ -214,6 +231,10 @@ async fn run_droids<B: Backend>(
                 Some((i, e)) => app.on_droid_event(i, e),
                 None => events_open = false,
             },
+            p = program_rx.recv(), if programs_open => match p {
+                Some((i, s)) => app.on_program(i, s),
+                None => programs_open = false,
+            },
             _ = second.tick() => {
                 // Rates per second of the session's time: capture time in replay.
                 if app.sample_rates(app.clock()) {
@@ -241,7 +262,7 @@ async fn run_droids<B: Backend>(
     };
     app.flush_samples();
     app.save_remembered();
-    for f in forwarders {
+    for f in forwarders.into_iter().chain(program_tasks) {
         f.abort();
     }
     // Every droid gets its stop now (the operator sees them stopped before the sessions

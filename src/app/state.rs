@@ -241,6 +241,8 @@ pub struct DroidState {
     pub scope: super::view::scope::ScopeView,
     /// Streaming and collision detection as asked for and as sent.
     pub monitor: super::view::scope::MonitorView,
+    /// The Sphero Edu program running on it (`--program`), if any.
+    pub program: Option<super::view::program::ProgramView>,
 }
 
 impl DroidState {
@@ -266,6 +268,7 @@ impl DroidState {
                 },
                 crate::tuning::CollisionConfig::default(),
             ),
+            program: None,
         }
     }
 }

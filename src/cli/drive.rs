@@ -71,21 +71,29 @@ enum ProgramEnd {
 }
 
 /// The program on every droid of the fleet, as tasks beside the app: its calls and warnings
-/// go to the log file (the screen is the app's); each ends with its droid's result.
+/// go to the log file, its status to the screen (each droid's, by fleet index); each ends
+/// with its droid's result.
 fn start_programs(
     fleet: &Fleet,
     program: Option<crate::edu::Program>,
-) -> Vec<tokio::task::JoinHandle<ProgramEnd>> {
+) -> (
+    Vec<tokio::task::JoinHandle<ProgramEnd>>,
+    crate::app::program_status::ProgramFeeds,
+) {
     let Some(program) = program else {
-        return Vec::new();
+        return (Vec::new(), Vec::new());
     };
     let program = std::sync::Arc::new(program);
-    fleet
+    let mut feeds = Vec::new();
+    let tasks = fleet
         .members()
         .iter()
-        .map(|m| {
+        .enumerate()
+        .map(|(i, m)| {
             let (session, model, name) = (m.session.clone(), m.model, m.name.clone());
             let program = program.clone();
+            let (progress, feed) = crate::edu::progress::channel(&program.path);
+            feeds.push((i, feed));
             tokio::spawn(async move {
                 let who = name.clone();
                 // A program that calls in a tight loop must not fill the log: a burst, then a
@@ -114,7 +122,10 @@ fn start_programs(
                         crate::mission::MissionEvent::Sample(_) => {}
                     }
                 });
-                let opts = crate::edu::ProgramOptions::default();
+                let opts = crate::edu::ProgramOptions {
+                    progress: Some(progress),
+                    ..Default::default()
+                };
                 let start = tokio::time::Instant::now();
                 let r = crate::edu::run(&session, model, &program, opts, emit, start).await;
                 tracing::info!(droid = %name, ?r, "program ended");
@@ -129,7 +140,8 @@ fn start_programs(
                 }
             })
         })
-        .collect()
+        .collect();
+    (tasks, feeds)
 }
 
 /// The simulated models asked for (`--sim r2d2,bb8`), none without `--sim`.
@@ -367,14 +379,15 @@ async fn drive(
     // The app runs as its own task so a panic in it is caught here: the droid is stopped first,
     // then the terminal restored, then the message shown.
     let app_fleet = fleet.clone();
+    let (programs, feeds) = start_programs(&fleet, program);
     let app = tokio::spawn(async move {
         let backend = CrosstermBackend::new(std::io::stdout());
         // The alternate screen was cleared on entry; `Terminal::clear` would also ask the
         // terminal for the cursor position, which some terminals never answer.
         let mut terminal = Terminal::new(backend)?;
-        run::run(&mut terminal, app_fleet, opts, inputs, crate::ui::draw).await
+        let draw = crate::ui::draw;
+        run::run_with_programs(&mut terminal, app_fleet, opts, inputs, feeds, draw).await
     });
-    let programs = start_programs(&fleet, program);
     let result = app.await;
     // A program still running ends with the app (the stops below stop its motion).
     let mut program_results = Vec::new();

@@ -15,6 +15,7 @@
 //! - [`run`]: a program on one droid, on droidctl's clock; [`ready`]: when it may start;
 //! - [`timeline`]: a timed call's steps, made when due (a few numbers however long);
 //! - [`schedule`]: the timed calls pending, by when each is next due;
+//! - [`progress`]: what a running program is doing, for a screen;
 //! - [`probe`]: a program run for its calls alone, and the bounds each call's effect keeps
 //!   (for tests and the fuzz target `edu`).
 //!
@@ -40,6 +41,7 @@ mod hostile;
 pub mod infrared;
 mod names;
 pub mod probe;
+pub mod progress;
 pub mod ready;
 pub mod run;
 pub mod schedule;

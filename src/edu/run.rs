@@ -71,6 +71,8 @@ pub struct ProgramOptions {
     /// `timeout` is droidctl's own limit for a program under `--sim`
     /// ([`SIM_TIME_LIMIT`]), not the user's `--timeout`: its end says so, and how to change it.
     pub default_limit: bool,
+    /// Where the program's status is published for a screen ([`super::progress`]).
+    pub progress: Option<super::progress::Progress>,
 }
 
 /// How long a program may run in simulated time when no `--timeout` is given: a program
@@ -90,6 +92,7 @@ impl Default for ProgramOptions {
             timeout: None,
             no_yield: Duration::from_secs(5),
             default_limit: false,
+            progress: None,
         }
     }
 }
@@ -143,6 +146,7 @@ struct Player {
     /// The droid was set up and its first sample came in: a reading it never sent reads 0.
     ready: bool,
     mission: DroidMission,
+    report: super::progress::Reporter,
 }
 
 /// The longest a timed call's clock waits for its command to leave (a link that stopped
@@ -257,8 +261,10 @@ pub async fn run_to_end(
         marks: Vec::new(),
         ready: false,
         mission,
+        report: super::progress::Reporter::new(opts.progress.clone()),
     };
     let r = p.play(program, &opts, events).await;
+    p.report.ended(&r, EMERGENCY_STOP);
     p.stop_motion().await;
     p.flush().await;
     let summary = p.mission.finish().await;
@@ -323,6 +329,7 @@ impl Player {
         tokio::select! {
             missing = super::ready::wait(&self.session, &self.telemetry, self.model, &opts.mission.setup) => {
                 self.ready = true;
+                self.report.waiting(&[]);
                 if !missing.is_empty() {
                     self.warn(0, format!(
                         "{} sent no {} since it connected: the program reads 0 for it",
@@ -341,6 +348,7 @@ impl Player {
             if first || !self.fired.is_empty() || !self.events.is_empty() {
                 first = false;
                 let fired = std::mem::take(&mut self.fired);
+                self.report.resolved(&fired);
                 let events = std::mem::take(&mut self.events);
                 let readings = self.readings();
                 // The emergency stop and the timeout end a program even while it computes
@@ -370,7 +378,7 @@ impl Player {
                 match out.status {
                     Status::Finished => return Ok(()),
                     Status::Failed(f) => return Err(f),
-                    Status::Running => {}
+                    Status::Running => self.report.waiting(&listening),
                 }
                 if !self.fired.is_empty() {
                     continue;
@@ -467,6 +475,9 @@ impl Player {
             line: op.line as usize,
             text: op.text.clone(),
         });
+        if let (Some(id), Some(_)) = (op.promise, &op.effect.wait) {
+            self.report.called(id, op.line, &op.text);
+        }
         for a in &op.effect.now {
             self.act(op.line, a).await;
         }
@@ -784,10 +795,12 @@ impl Player {
                 let mark = self.session.set_marked(Slot::Drive, c.clone());
                 self.keep(mark);
                 self.drive = (*speed > 0).then_some(c);
+                self.report.drove_at(*speed, *heading, *reverse);
             }
             Act::Raw(l, r) => {
                 self.drive = None;
                 self.raw = *l != 0 || *r != 0;
+                self.report.raw(*l, *r);
                 let raw = Intent::RawMotors {
                     left: *l,
                     right: *r,

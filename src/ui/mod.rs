@@ -19,6 +19,7 @@ mod log_pane;
 mod map;
 mod overlay;
 pub mod picker;
+mod program;
 mod robi;
 mod robots;
 mod roster;
@@ -70,6 +71,7 @@ fn draw_panels(frame: &mut Frame, state: &AppState) {
             ..p.status
         };
         scope::render(frame, body, state);
+        program::banner(frame, state, p.status.bottom());
         overlay::render(frame, state);
         return;
     }
@@ -129,5 +131,6 @@ fn draw_panels(frame: &mut Frame, state: &AppState) {
         frame.render_widget(Paragraph::new(Span::styled(msg, theme::dim())), r);
     }
     log_pane::render(frame, p.log, state);
+    program::banner(frame, state, p.status.bottom());
     overlay::render(frame, state);
 }

@@ -87,6 +87,9 @@ fn first_row(s: &AppState) -> Vec<Seg> {
     }
     let drive = if s.droid().control.estop {
         Span::styled(" E-STOP ", theme::alarm())
+    } else if s.droid().control.source == "program" {
+        // A Sphero Edu program drives (`--program`).
+        Span::styled("program", Style::new().fg(theme::OK))
     } else if s.droid().control.deadman {
         Span::styled("deadman", theme::dim())
     } else {
@@ -232,9 +235,20 @@ fn battery(t: &Telemetry) -> Vec<Span<'static>> {
 
 fn second_row(s: &AppState, width: usize) -> Vec<Seg> {
     let mut segs = Vec::new();
+    // The program running (`--program`) first: what it does now is what the operator needs.
+    if let Some(p) = &s.droid().program {
+        let room = (width / 2).clamp(24, 56);
+        segs.push(Seg::new(0, super::program::segment(p, room)));
+    }
     if let Some(h) = s.current_hint() {
         // Too long for the row: cut between words, never inside one (issue 30).
-        let room = width.saturating_sub(2);
+        let taken = total(&segs)
+            + if segs.is_empty() {
+                0
+            } else {
+                super::text::width(SEP)
+            };
+        let room = width.saturating_sub(2 + taken);
         segs.push(Seg::new(
             0,
             vec![Span::styled(
