@@ -227,6 +227,10 @@ pub struct DroidState {
     pub scope: super::view::scope::ScopeView,
     /// Streaming and collision detection as asked for and as sent.
     pub monitor: super::view::scope::MonitorView,
+    /// Where the droid started in its fleet's room, cm: its locator's (0, 0) there. The map
+    /// draws in room coordinates with it; `None` (a real droid: nobody knows where it
+    /// stood) draws from the droid's own start, as its locator counts.
+    pub room_origin: Option<(f32, f32)>,
 }
 
 impl DroidState {
@@ -252,6 +256,7 @@ impl DroidState {
                 },
                 crate::tuning::CollisionConfig::default(),
             ),
+            room_origin: None,
         }
     }
 }

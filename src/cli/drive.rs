@@ -218,6 +218,7 @@ pub fn run(args: DriveArgs) -> Result<i32, CliError> {
             model,
             link,
             origin: origin.into(),
+            room_origin: None,
         }]);
         let result = drive(fleet, config, log_path, samples, program).await;
         super::replay::finish(recorder.as_ref());
@@ -284,6 +285,7 @@ async fn drive_several(
             model,
             name,
             origin: "Bluetooth".into(),
+            room_origin: None,
         })
         .collect();
     drive_found(found, config, log_path, recorder, samples, program).await
