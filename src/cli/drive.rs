@@ -189,7 +189,10 @@ pub fn run(args: DriveArgs) -> Result<i32, CliError> {
             None => {
                 let c = args
                     .ble
-                    .connect(super::connect::Chooser::Screen(config.keymap.clone()))
+                    .connect(super::connect::Chooser::Screen(
+                        config.keymap.clone(),
+                        config.display.theme,
+                    ))
                     .await?;
                 if !c.others.is_empty() {
                     // Several marked in the picker: drive them all (the files name each
