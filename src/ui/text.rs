@@ -143,6 +143,29 @@ pub fn unit_fraction(v: f32, range: f32) -> f32 {
     (v / range).clamp(-1.0, 1.0)
 }
 
+/// A list of items joined by `sep` (key hints: "o aim · c main colour") wrapped into lines
+/// of at most `w` cells between items, never inside one: a hint cut mid-word reads as a
+/// different key. An item wider than a line is cut with `…`.
+pub fn wrap_items(s: &str, sep: &str, w: usize) -> Vec<String> {
+    let mut lines: Vec<String> = Vec::new();
+    let mut cur = String::new();
+    for item in s.split(sep).map(str::trim).filter(|i| !i.is_empty()) {
+        if !cur.is_empty() && width(&cur) + width(sep) + width(item) <= w {
+            cur.push_str(sep);
+            cur.push_str(item);
+            continue;
+        }
+        if !cur.is_empty() {
+            lines.push(std::mem::take(&mut cur));
+        }
+        cur = truncate(item, w);
+    }
+    if !cur.is_empty() {
+        lines.push(cur);
+    }
+    lines
+}
+
 /// Greedy word wrap into lines of at most `w` cells; words longer than a line are split.
 pub fn wrap(s: &str, w: usize) -> Vec<String> {
     let w = w.max(1);
@@ -201,7 +224,23 @@ pub fn runs(cells: impl IntoIterator<Item = (char, Style)>) -> Vec<Span<'static>
 
 #[cfg(test)]
 mod tests {
+
     use super::*;
+
+    #[test]
+    fn key_hints_wrap_between_items_never_inside_one() {
+        let h = "o aim (heading 0) · c main colour · b back light";
+        assert_eq!(wrap_items(h, " · ", 80), [h]);
+        assert_eq!(
+            wrap_items(h, " · ", 36),
+            ["o aim (heading 0) · c main colour", "b back light"]
+        );
+        assert_eq!(
+            wrap_items(h, " · ", 10),
+            ["o aim (he…", "c main co…", "b back li…"]
+        );
+        assert!(wrap_items("", " · ", 10).is_empty());
+    }
 
     #[test]
     fn words_are_cut_whole() {
