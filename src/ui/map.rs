@@ -100,7 +100,11 @@ pub fn render_with(
         .filter_map(|&p| in_room(room_origin, p))
         .collect();
     let all = points.iter().copied().chain(pos);
-    let (xb, yb) = bounds_with(all.chain(others.iter().map(|o| o.at)), inner.width, inner.height);
+    let (xb, yb) = bounds_with(
+        all.chain(others.iter().map(|o| o.at)),
+        inner.width,
+        inner.height,
+    );
     let extent = format!(
         " {}×{} cm ",
         num((xb[1] - xb[0]) as f32, 0),
