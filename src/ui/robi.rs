@@ -132,11 +132,11 @@ fn lamp(on: bool, label: &'static str) -> Span<'static> {
 fn link_quality(r: &RobiTelemetry, width: usize) -> Line<'static> {
     let measured = r
         .measured_fps()
-        .map(|f| format!("{f:.1}/s"))
+        .map(super::text::per_second)
         .unwrap_or_else(|| "-/s".into());
     let announced = r
         .announced_fps()
-        .map(|f| format!("{f:.0}/s"))
+        .map(super::text::per_second)
         .unwrap_or_else(|| "-".into());
     let ms = r
         .handshake

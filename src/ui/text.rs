@@ -127,6 +127,18 @@ pub fn num(v: f32, prec: usize) -> String {
     s
 }
 
+/// A rate, per second, in the one form every panel uses (issue 39 point 13: `10/s` in the
+/// status bar, `10.0/s` in the sensors' title for the same stream): one decimal below 10,
+/// whole numbers from there, as shown (9.96 is `10/s`, never `10.0/s`).
+pub fn per_second(v: f32) -> String {
+    let prec = if (v.abs() * 10.0).round() < 100.0 {
+        1
+    } else {
+        0
+    };
+    format!("{}/s", num(v, prec))
+}
+
 /// An optional reading: `-` until it has been received.
 pub fn opt(v: Option<f32>, prec: usize, unit: &str) -> String {
     match v {
@@ -226,6 +238,16 @@ pub fn runs(cells: impl IntoIterator<Item = (char, Style)>) -> Vec<Span<'static>
 mod tests {
 
     use super::*;
+
+    #[test]
+    fn rates_have_one_form() {
+        assert_eq!(per_second(10.0), "10/s");
+        assert_eq!(per_second(9.96), "10/s");
+        assert_eq!(per_second(9.8), "9.8/s");
+        assert_eq!(per_second(0.0), "0.0/s");
+        assert_eq!(per_second(100.0), "100/s");
+        assert_eq!(per_second(f32::NAN), "NaN/s");
+    }
 
     #[test]
     fn key_hints_wrap_between_items_never_inside_one() {
