@@ -124,7 +124,7 @@ fn lamp(on: bool, label: &'static str) -> Span<'static> {
     }
 }
 
-/// "link 10.0/s announced 100/s (10 ms) lost 3", shortened to fit `width` columns.
+/// "link 10/s announced 100/s (10 ms) lost 3", shortened to fit `width` columns.
 ///
 /// Fix: the line was one fixed text that just fit an 80×24 panel with a one-digit count, so
 /// "lost 12" was cut to "lost 1". Now the interval in ms goes first, then "announced"
