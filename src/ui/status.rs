@@ -274,17 +274,3 @@ fn log_path(s: &AppState, room: usize) -> Vec<Span<'static>> {
         Span::styled(path, Style::new().fg(Color::Gray)),
     ]
 }
-
-#[cfg(test)]
-mod tests {
-    /// Issue 39 point 13: a rate near 10 does not switch between "10" and "10.0"; the status
-    /// bar's rates are in the form every panel uses.
-    #[test]
-    fn a_rate_has_one_form_per_value_shown() {
-        use crate::ui::text::per_second;
-        assert_eq!(per_second(9.94), "9.9/s");
-        assert_eq!(per_second(9.96), "10/s");
-        assert_eq!(per_second(10.2), "10/s");
-        assert_eq!(per_second(0.0), "0.0/s");
-    }
-}

@@ -236,12 +236,14 @@ pub fn runs(cells: impl IntoIterator<Item = (char, Style)>) -> Vec<Span<'static>
 
 #[cfg(test)]
 mod tests {
-
     use super::*;
 
+    /// Issue 39 point 13: a rate near 10 does not switch between "10" and "10.0"; every
+    /// panel's rates are in this one form.
     #[test]
     fn rates_have_one_form() {
         assert_eq!(per_second(10.0), "10/s");
+        assert_eq!(per_second(9.94), "9.9/s");
         assert_eq!(per_second(9.96), "10/s");
         assert_eq!(per_second(9.8), "9.8/s");
         assert_eq!(per_second(0.0), "0.0/s");

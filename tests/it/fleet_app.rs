@@ -99,6 +99,20 @@ struct Harness {
     app: JoinHandle<Exit>,
 }
 
+/// The app on `fleet` (tripod on connect): the key channel to type into, and the app's task.
+fn launch(fleet: &Fleet, config: Config) -> (mpsc::Sender<TermEvent>, JoinHandle<Exit>) {
+    let (term, inputs, keep_alive) = inputs();
+    let opts = opts(config, true);
+    let f = fleet.clone();
+    let app = tokio::spawn(async move {
+        let _keep = keep_alive;
+        run::run(&mut terminal(), f, opts, inputs, keep)
+            .await
+            .unwrap()
+    });
+    (term, app)
+}
+
 /// Four droids in one room; droid `lost` (if any) loses its link for good at `lost_at`.
 async fn start(lost: Option<(usize, Duration)>) -> Harness {
     let config = Config::defaults();
@@ -130,15 +144,7 @@ async fn start(lost: Option<(usize, Duration)>) -> Harness {
         });
     }
     let fleet = Fleet::start(specs);
-    let (term, inputs, keep_alive) = inputs();
-    let opts = opts(config, true);
-    let f = fleet.clone();
-    let app = tokio::spawn(async move {
-        let _keep = keep_alive;
-        run::run(&mut terminal(), f, opts, inputs, keep)
-            .await
-            .unwrap()
-    });
+    let (term, app) = launch(&fleet, config);
     // Connected, and R2 up on three legs.
     sleep(Duration::from_secs(3)).await;
     Harness {
@@ -607,15 +613,7 @@ async fn a_simulated_fleet_stands_apart_on_the_map_in_room_coordinates() {
         .collect();
     assert!(specs.iter().all(|s| s.room_origin.is_some()));
     let fleet = Fleet::start(specs);
-    let (term, inputs, keep_alive) = inputs();
-    let opts = opts(config, true);
-    let f = fleet.clone();
-    let app = tokio::spawn(async move {
-        let _keep = keep_alive;
-        run::run(&mut terminal(), f, opts, inputs, keep)
-            .await
-            .unwrap()
-    });
+    let (term, app) = launch(&fleet, config);
     sleep(Duration::from_secs(3)).await;
     let state = seen();
     assert_eq!(state.chosen, 0, "R2 is the chosen droid");
