@@ -46,6 +46,8 @@ pub(super) enum Origin {
         model: Model,
         name: String,
         family: &'static dyn Family,
+        /// Where it started in its fleet's room, when known (the map draws it there).
+        room_origin: Option<(f32, f32)>,
     },
     /// A capture played back (the file's name shown): nothing is sent anywhere.
     Replay {
@@ -68,21 +70,23 @@ pub(super) fn build(droids: Vec<Origin>, opts: AppOptions) -> App {
     let mut first: Option<Remembered> = None;
     let mut io = Vec::with_capacity(droids.len());
     for origin in droids {
-        let (model, name, family, session, player) = match origin {
+        let (model, name, family, session, player, room_origin) = match origin {
             Origin::Live {
                 session,
                 model,
                 name,
                 family,
-            } => (model, name, family, Some(session), None),
+                room_origin,
+            } => (model, name, family, Some(session), None, room_origin),
             Origin::Replay { replay, name, file } => {
                 let model = replay.model();
                 let family = crate::family::for_model(model);
                 let player = Player::new(*replay, file, start);
-                (model, name, family, None, Some(player))
+                (model, name, family, None, Some(player), None)
             }
         };
         let mut view = DroidState::new(model, name.clone());
+        view.room_origin = room_origin;
         view.monitor =
             super::view::scope::MonitorView::new(model, config.stream_request(), config.collision);
         // What this model's droids were left with last time (live only: a replay is the

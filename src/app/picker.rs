@@ -99,6 +99,53 @@ impl Picker {
     }
 }
 
+/// The list's columns, as headed.
+pub const HEADINGS: [&str; 4] = ["name", "model", "address", "signal"];
+
+/// A name wider than this is cut (with `…`) so the other columns stay in view at 80 columns.
+pub const NAME_MAX: usize = 24;
+
+/// One entry's cells, in [`HEADINGS`] order: exactly what the list shows (a name is as heard;
+/// the screen cleans control characters out of it, and cuts it at [`NAME_MAX`]).
+pub fn cells(e: &ScanEntry) -> [String; 4] {
+    [
+        e.name.clone().unwrap_or_else(|| "?".into()),
+        e.model
+            .map(crate::model::Model::display_name)
+            .unwrap_or("?")
+            .to_string(),
+        e.id.to_string(),
+        e.rssi
+            .map(|r| format!("{r} dBm"))
+            .unwrap_or_else(|| "-".into()),
+    ]
+}
+
+/// Each column as wide as its widest cell or heading, in terminal columns: from the content,
+/// so a model name ("Sphero BOLT") or a long name never runs into the next column.
+pub fn widths(rows: &[[String; 4]]) -> [usize; 4] {
+    let mut w = HEADINGS.map(str::len);
+    for row in rows {
+        for (w, cell) in w.iter_mut().zip(row) {
+            *w = (*w).max(ratatui::text::Span::raw(cell.as_str()).width());
+        }
+    }
+    w
+}
+
+/// `cells` laid out in columns of `widths`, two spaces apart (the last one not padded).
+pub fn line(cells: &[String; 4], widths: &[usize; 4]) -> String {
+    let mut out = String::new();
+    for (i, (cell, w)) in cells.iter().zip(widths).enumerate() {
+        out.push_str(cell);
+        if i + 1 < cells.len() {
+            let pad = w.saturating_sub(ratatui::text::Span::raw(cell.as_str()).width());
+            out.extend(std::iter::repeat_n(' ', pad + 2));
+        }
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -28,6 +28,8 @@ pub struct RosterEntry {
     pub moving: bool,
     /// Where its locator puts it, cm, for the map of all droids.
     pub position: Option<(f32, f32)>,
+    /// Where it started in the fleet's room, when known: the map draws `position` from there.
+    pub room_origin: Option<(f32, f32)>,
 }
 
 impl Roster {
@@ -47,6 +49,7 @@ impl Roster {
                     rate_out: d.rate_out,
                     moving: d.control.speed > 0 && !d.control.estop,
                     position: t.x_cm.zip(t.y_cm),
+                    room_origin: d.room_origin,
                 }
             })
             .collect();

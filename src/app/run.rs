@@ -104,6 +104,7 @@ pub async fn run_with_programs<B: Backend>(
                 model: opts.model,
                 name: opts.droid_name.clone(),
                 family: crate::family::for_model(opts.model),
+                room_origin: None,
             }],
             None,
         ),
@@ -141,6 +142,7 @@ fn live(fleet: &crate::fleet::Fleet) -> Vec<Origin> {
             model: m.model,
             name: m.name.clone(),
             family: m.family,
+            room_origin: m.room_origin,
         })
         .collect()
 }

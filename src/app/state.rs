@@ -243,6 +243,10 @@ pub struct DroidState {
     pub monitor: super::view::scope::MonitorView,
     /// The Sphero Edu program running on it (`--program`), if any.
     pub program: Option<super::view::program::ProgramView>,
+    /// Where the droid started in its fleet's room, cm: its locator's (0, 0) there. The map
+    /// draws in room coordinates with it; `None` (a real droid: nobody knows where it
+    /// stood) draws from the droid's own start, as its locator counts.
+    pub room_origin: Option<(f32, f32)>,
 }
 
 impl DroidState {
@@ -269,6 +273,7 @@ impl DroidState {
                 crate::tuning::CollisionConfig::default(),
             ),
             program: None,
+            room_origin: None,
         }
     }
 }

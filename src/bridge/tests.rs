@@ -71,6 +71,7 @@ pub(super) async fn rig_with(models: &[Model], timeout_ms: u64, o: RigOptions) -
                 ..SessionConfig::default()
             },
             origin: "simulated".into(),
+            room_origin: None,
         })
         .collect();
     let fleet = Fleet::start(specs);

@@ -595,6 +595,7 @@ async fn start_fleet(
             model: c.model,
             name: c.name,
             origin,
+            room_origin: None,
         }]
     } else {
         super::fleet::find_all(sims, ble, config).await?

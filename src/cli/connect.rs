@@ -43,8 +43,9 @@ pub struct BleArgs {
 pub enum Chooser {
     /// A numbered list on stderr and an answer on stdin (`run`).
     Prompt,
-    /// A full-screen list (the app), read with these bindings.
-    Screen(crate::config::KeyMap),
+    /// A full-screen list (the app), read with these bindings and drawn in the app's theme
+    /// (`[display] theme`, `NO_COLOR`).
+    Screen(crate::config::KeyMap, crate::config::Theme),
 }
 
 impl BleArgs {
@@ -136,9 +137,9 @@ pub async fn connect(
     {
         match chooser {
             Chooser::Prompt => pick(&drivable)?.into_iter().collect(),
-            Chooser::Screen(keys) => {
+            Chooser::Screen(keys, theme) => {
                 let entries: Vec<ScanEntry> = drivable.iter().map(|e| (*e).clone()).collect();
-                tokio::task::spawn_blocking(move || pick_on_screen(entries, keys))
+                tokio::task::spawn_blocking(move || pick_on_screen(entries, keys, theme))
                     .await
                     .map_err(|e| CliError::failure(format!("picker failed: {e}")))??
             }
@@ -300,8 +301,8 @@ async fn connect_remote_picked(
                 let refs: Vec<&ScanEntry> = entries.iter().collect();
                 pick(&refs)?.into_iter().collect()
             }
-            Chooser::Screen(keys) => {
-                tokio::task::spawn_blocking(move || pick_on_screen(entries, keys))
+            Chooser::Screen(keys, theme) => {
+                tokio::task::spawn_blocking(move || pick_on_screen(entries, keys, theme))
                     .await
                     .map_err(|e| CliError::failure(format!("picker failed: {e}")))??
             }
@@ -375,19 +376,14 @@ pub async fn connect_serial(port: &std::path::Path) -> Result<Connected, CliErro
 /// A numbered list on stderr, an answer on stdin; Enter takes the strongest.
 fn pick(entries: &[&ScanEntry]) -> Result<Option<DeviceId>, CliError> {
     let mut err = std::io::stderr();
+    use crate::app::picker::{cells, line, widths};
     let _ = writeln!(err, "Several droids are in range:");
-    for (i, e) in entries.iter().enumerate() {
-        let _ = writeln!(
-            err,
-            "  {}. {:<12} {:<8} {}  {}",
-            i + 1,
-            e.name.as_deref().unwrap_or("?"),
-            e.model.map(Model::display_name).unwrap_or("?"),
-            e.id,
-            e.rssi
-                .map(|r| format!("{r} dBm"))
-                .unwrap_or_else(|| "-".into())
-        );
+    // Columns as wide as their content (a model name like "Sphero BOLT" included).
+    let rows: Vec<[String; 4]> = entries.iter().map(|e| cells(e)).collect();
+    let w = widths(&rows);
+    let digits = entries.len().max(1).to_string().len();
+    for (i, r) in rows.iter().enumerate() {
+        let _ = writeln!(err, "  {:>digits$}. {}", i + 1, line(r, &w));
     }
     let _ = write!(err, "Which one? [1-{}, Enter = 1] ", entries.len());
     let _ = err.flush();
@@ -408,10 +404,11 @@ fn pick(entries: &[&ScanEntry]) -> Result<Option<DeviceId>, CliError> {
     }
 }
 
-/// The full-screen picker: the `[keys.picker]` bindings (or a digit).
+/// The full-screen picker: the `[keys.picker]` bindings (or a digit), in the app's `theme`.
 fn pick_on_screen(
     entries: Vec<ScanEntry>,
     keys: crate::config::KeyMap,
+    theme: crate::config::Theme,
 ) -> Result<Vec<DeviceId>, CliError> {
     use crate::app::input::key_from_crossterm;
     use crate::app::picker::{Picked, Picker};
@@ -424,7 +421,7 @@ fn pick_on_screen(
             .map_err(|e| fail("cannot use this terminal", &e))?;
     let mut picker = Picker::new(entries, keys);
     let result = loop {
-        if let Err(e) = terminal.draw(|f| crate::ui::picker::draw(f, &picker)) {
+        if let Err(e) = terminal.draw(|f| crate::ui::picker::draw_themed(f, &picker, theme)) {
             break Err(fail("cannot draw", &e));
         }
         let ev = match read() {

@@ -201,7 +201,10 @@ pub fn run(args: DriveArgs) -> Result<i32, CliError> {
             None => {
                 let c = args
                     .ble
-                    .connect(super::connect::Chooser::Screen(config.keymap.clone()))
+                    .connect(super::connect::Chooser::Screen(
+                        config.keymap.clone(),
+                        config.display.theme,
+                    ))
                     .await?;
                 if !c.others.is_empty() {
                     // Several marked in the picker: drive them all (the files name each
@@ -230,6 +233,7 @@ pub fn run(args: DriveArgs) -> Result<i32, CliError> {
             model,
             link,
             origin: origin.into(),
+            room_origin: None,
         }]);
         let result = drive(fleet, config, log_path, samples, program).await;
         super::replay::finish(recorder.as_ref());
@@ -296,6 +300,7 @@ async fn drive_several(
             model,
             name,
             origin: "Bluetooth".into(),
+            room_origin: None,
         })
         .collect();
     drive_found(found, config, log_path, recorder, samples, program).await

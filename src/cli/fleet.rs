@@ -113,6 +113,8 @@ pub struct Found {
     pub model: Model,
     pub name: String,
     pub origin: String,
+    /// Where it starts in the room the simulated droids share ([`DroidSpec::room_origin`]).
+    pub room_origin: Option<(f32, f32)>,
 }
 
 /// Record every droid of `found` into `rec` (one file, each droid's lines apart), starting
@@ -155,6 +157,7 @@ impl Found {
             link: self.link,
             session,
             origin: self.origin,
+            room_origin: self.room_origin,
         }
     }
 }
@@ -176,6 +179,7 @@ pub fn simulated(models: &[Model]) -> Vec<Found> {
                 model: m,
                 name: crate::relay::sim_backend::sim_name(m, i),
                 origin: "simulated".into(),
+                room_origin: Some(origin),
             }
         })
         .collect()
@@ -202,6 +206,7 @@ pub async fn find_all(
             model: c.model,
             name: c.name,
             origin: format!("serial {}", port.display()),
+            room_origin: None,
         });
     }
     let scan_timeout = Duration::from_secs(ble.scan_timeout);
@@ -220,6 +225,7 @@ pub async fn find_all(
             model: c.model,
             name: c.name,
             origin: format!("relay {}", r.relay),
+            room_origin: None,
         });
     }
     if !ble.name.is_empty() {
@@ -303,6 +309,7 @@ async fn bluetooth(
             model,
             name,
             origin: format!("Bluetooth {adapter}"),
+            room_origin: None,
         });
     }
     Ok(out)

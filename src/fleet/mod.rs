@@ -44,6 +44,17 @@ pub struct DroidSpec {
     pub session: SessionConfig,
     /// Where it is, for people: `simulated`, `Bluetooth hci0`, `relay pi.local:50004`.
     pub origin: String,
+    /// Where it started in a room its fleet shares, cm, room coordinates (its locator's
+    /// (0, 0) there), so a map can draw every droid in one frame. `None` when nobody knows:
+    /// a real droid's locator counts from wherever that droid stood when it woke.
+    pub room_origin: Option<(f32, f32)>,
+}
+
+/// Where a droid of a started session is: for people, and in the fleet's room when known.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Seat {
+    pub origin: String,
+    pub room_origin: Option<(f32, f32)>,
 }
 
 /// A droid of the fleet.
@@ -53,6 +64,8 @@ pub struct Member {
     pub family: &'static dyn Family,
     pub session: SessionHandle,
     pub origin: String,
+    /// Where it started in the fleet's room, when known ([`DroidSpec::room_origin`]).
+    pub room_origin: Option<(f32, f32)>,
     telemetry: watch::Receiver<Telemetry>,
 }
 
@@ -137,18 +150,22 @@ impl Fleet {
             .into_iter()
             .map(|s| {
                 let session = session::start(s.link, s.session);
-                (s.name, s.model, session, s.origin)
+                let seat = Seat {
+                    origin: s.origin,
+                    room_origin: s.room_origin,
+                };
+                (s.name, s.model, session, seat)
             })
             .collect();
         Fleet::from_sessions(sessions)
     }
 
-    /// A fleet of sessions already started: name, model, session, origin.
-    pub fn from_sessions(sessions: Vec<(String, Model, SessionHandle, String)>) -> Fleet {
+    /// A fleet of sessions already started: name, model, session, where each is.
+    pub fn from_sessions(sessions: Vec<(String, Model, SessionHandle, Seat)>) -> Fleet {
         let start = Instant::now();
         let mut members = Vec::with_capacity(sessions.len());
         let mut folders = Vec::with_capacity(sessions.len());
-        for (name, model, session, origin) in sessions {
+        for (name, model, session, seat) in sessions {
             let (tx, rx) = watch::channel(Telemetry::default());
             folders.push(tokio::spawn(fold_telemetry(session.clone(), tx, start)));
             members.push(Member {
@@ -156,7 +173,8 @@ impl Fleet {
                 name,
                 model,
                 session,
-                origin,
+                origin: seat.origin,
+                room_origin: seat.room_origin,
                 telemetry: rx,
             });
         }

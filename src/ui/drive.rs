@@ -73,16 +73,53 @@ pub fn render(frame: &mut Frame, area: Rect, s: &AppState) {
     frame.render_widget(Paragraph::new(lines), info);
 }
 
-fn flag(on: bool, name: &'static str) -> Span<'static> {
-    if on {
-        Span::styled(
+/// How a drive flag (turbo, reverse) stands. One rule for both (issue 39 point 13: turbo
+/// stayed lit while the droid stood still, reverse went dim): lit only while it shapes what
+/// is sent; set but with nothing sent (stopped, e-stop) named in capitals but not lit; off
+/// dim and in lower case, so it reads as off without colour too.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Flag {
+    Off,
+    Set,
+    Lit,
+}
+
+impl Flag {
+    fn of(on: bool, c: &crate::teleop::control::ControlView) -> Flag {
+        let sending = c.speed > 0 || c.tank.is_some_and(|(l, r)| l != 0 || r != 0);
+        match (on, sending && !c.estop) {
+            (false, _) => Flag::Off,
+            (true, false) => Flag::Set,
+            (true, true) => Flag::Lit,
+        }
+    }
+}
+
+fn flag(state: Flag, name: &'static str) -> Span<'static> {
+    match state {
+        Flag::Lit => Span::styled(
             name,
             theme::commanded().add_modifier(Modifier::REVERSED | Modifier::BOLD),
-        )
-    } else {
-        // Lower case as well as dim, so "off" reads as off without colour too.
-        Span::styled(name.to_ascii_lowercase(), theme::dim())
+        ),
+        Flag::Set => Span::styled(name, theme::commanded()),
+        Flag::Off => Span::styled(name.to_ascii_lowercase(), theme::dim()),
     }
+}
+
+/// The flags line: turbo and reverse where the droid has them (Robi has no turbo and cannot
+/// reverse: only what applies is shown).
+fn flags(c: &crate::teleop::control::ControlView, turbo: bool, reverse: bool) -> Line<'static> {
+    let mut spans = Vec::new();
+    if turbo {
+        spans.push(flag(Flag::of(c.turbo, c), "TURBO"));
+    }
+    if reverse {
+        if !spans.is_empty() {
+            spans.push(Span::raw(" "));
+        }
+        spans.push(flag(Flag::of(c.reverse, c), "REVERSE"));
+    }
+    Line::from(spans)
 }
 
 fn text(s: &AppState) -> Vec<Line<'static>> {
@@ -142,18 +179,11 @@ fn text(s: &AppState) -> Vec<Line<'static>> {
             Span::raw(c.cruise.to_string()),
             Span::styled(format!(" {}", c.mode), theme::dim()),
         ]),
-        // Robi has no turbo: only what applies is shown.
-        if crate::config::Needs::Turbo.applies(s.droid().model, false) {
-            Line::from(vec![
-                flag(c.turbo, "TURBO"),
-                Span::raw(" "),
-                flag(c.reverse, "REVERSE"),
-            ])
-        } else if crate::family::for_model(s.droid().model).can_reverse() {
-            Line::from(flag(c.reverse, "REVERSE"))
-        } else {
-            Line::default()
-        },
+        flags(
+            c,
+            crate::config::Needs::Turbo.applies(s.droid().model, false),
+            crate::family::for_model(s.droid().model).can_reverse(),
+        ),
     ];
     if s.droid().model.has_legs() {
         let style = match t.stance {
@@ -180,4 +210,64 @@ fn text(s: &AppState) -> Vec<Line<'static>> {
         ]));
     }
     lines
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::teleop::control::ControlView;
+
+    fn styles(c: &ControlView) -> Vec<(String, Style)> {
+        flags(c, true, true)
+            .spans
+            .iter()
+            .filter(|s| !s.content.trim().is_empty())
+            .map(|s| (s.content.to_string(), s.style))
+            .collect()
+    }
+
+    /// Issue 39 point 13: turbo and reverse follow one rule. Off, both are dim lower case
+    /// alike; set while nothing is sent (standing, e-stop), turbo is named but not lit (it
+    /// was lit, reverse dim); lit only while driving with it.
+    #[test]
+    fn turbo_and_reverse_dim_by_one_rule() {
+        let off = ControlView::default();
+        let s = styles(&off);
+        assert_eq!(s[0], ("turbo".into(), theme::dim()));
+        assert_eq!(s[1], ("reverse".into(), theme::dim()));
+        let lit = theme::commanded().add_modifier(Modifier::REVERSED | Modifier::BOLD);
+        let standing = ControlView {
+            turbo: true,
+            reverse: true,
+            ..ControlView::default()
+        };
+        assert_eq!(
+            styles(&standing),
+            [
+                ("TURBO".to_string(), theme::commanded()),
+                ("REVERSE".to_string(), theme::commanded())
+            ]
+        );
+        let driving = ControlView {
+            speed: 200,
+            ..standing.clone()
+        };
+        assert_eq!(
+            styles(&driving),
+            [("TURBO".to_string(), lit), ("REVERSE".to_string(), lit)]
+        );
+        let stopped = ControlView {
+            estop: true,
+            ..driving.clone()
+        };
+        assert_eq!(styles(&stopped), styles(&standing));
+        // Turbo on, driving forward: turbo lit, reverse off as when standing.
+        let forward = ControlView {
+            reverse: false,
+            ..driving
+        };
+        assert_eq!(styles(&forward)[1], ("reverse".into(), theme::dim()));
+        // Only what applies: Robi shows neither.
+        assert!(flags(&forward, false, false).spans.is_empty());
+    }
 }

@@ -52,10 +52,20 @@ pub fn render(frame: &mut Frame, area: Rect, s: &AppState) {
         } else {
             s.borders.lights_panel.as_str().into()
         };
-        lines.push(Line::from(Span::styled(
-            super::text::truncate(&hint, inner.width as usize),
-            theme::dim(),
-        )));
+        // Whole hints over the lines there are (at 120×40 one line cut the last one
+        // mid-word); only what still does not fit is cut, at the last line's end.
+        let room = usize::from(inner.height - 1);
+        let w = inner.width as usize;
+        let mut wrapped = super::text::wrap_items(&hint, " · ", w);
+        if wrapped.len() > room {
+            let rest = wrapped.split_off(room - 1).join(" · ");
+            wrapped.push(super::text::truncate(&rest, w));
+        }
+        lines.extend(
+            wrapped
+                .into_iter()
+                .map(|l| Line::from(Span::styled(l, theme::dim()))),
+        );
     }
     frame.render_widget(Paragraph::new(lines), inner);
 }

@@ -1,6 +1,10 @@
 //! A small top-down map of the locator track. Bounds start room-sized (±200 cm) and grow to
 //! keep the whole track in view; one centimetre is the same length across and down, so a
 //! square driven by the droid looks square.
+//!
+//! A locator counts from where its droid started. Where that start is known in a room the
+//! fleet shares (simulated droids), every droid is drawn in room coordinates, so droids
+//! standing apart are apart on the map; else (a real droid) from its own start.
 
 use super::text::num;
 use super::theme;
@@ -16,25 +20,24 @@ use ratatui::widgets::canvas::{Canvas, Line as Segment};
 const ROOM_CM: f64 = 200.0;
 const TRACK: Color = Color::Blue;
 
-/// Finite points of the track, as f64 (NaN or inf from a bad sample is skipped, not drawn).
-fn finite(t: &Telemetry) -> impl Iterator<Item = (f64, f64)> + '_ {
-    t.track
-        .iter()
-        .map(|&(x, y)| (f64::from(x), f64::from(y)))
-        .filter(|(x, y)| x.is_finite() && y.is_finite())
-}
-
-fn position(t: &Telemetry) -> Option<(f64, f64)> {
-    let (x, y) = (f64::from(t.x_cm?), f64::from(t.y_cm?));
+/// Where a droid's locator reading `(x, y)` is on the map: shifted by where the droid
+/// started in the room (`room_origin`), when known; `None` when not finite (a bad sample is
+/// skipped, not drawn).
+pub fn in_room(room_origin: Option<(f32, f32)>, (x, y): (f32, f32)) -> Option<(f64, f64)> {
+    let (ox, oy) = room_origin.unwrap_or((0.0, 0.0));
+    let (x, y) = (f64::from(x) + f64::from(ox), f64::from(y) + f64::from(oy));
     (x.is_finite() && y.is_finite()).then_some((x, y))
 }
 
-/// Bounds covering the room, the track and `others` (a fleet's other droids), widened on one
-/// axis to keep cm square on screen (a cell is about twice as tall as wide).
-fn bounds_with(t: &Telemetry, others: &[Other], cols: u16, rows: u16) -> ([f64; 2], [f64; 2]) {
+/// Bounds covering the room and `points` (the track, the droid, a fleet's other droids),
+/// widened on one axis to keep cm square on screen (a cell is about twice as tall as wide).
+fn bounds_with(
+    points: impl Iterator<Item = (f64, f64)>,
+    cols: u16,
+    rows: u16,
+) -> ([f64; 2], [f64; 2]) {
     let (mut x0, mut x1, mut y0, mut y1) = (-ROOM_CM, ROOM_CM, -ROOM_CM, ROOM_CM);
-    let more = others.iter().map(|o| o.at);
-    for (x, y) in finite(t).chain(position(t)).chain(more) {
+    for (x, y) in points {
         x0 = x0.min(x * 1.1);
         x1 = x1.max(x * 1.1);
         y0 = y0.min(y * 1.1);
@@ -53,22 +56,34 @@ fn bounds_with(t: &Telemetry, others: &[Other], cols: u16, rows: u16) -> ([f64; 
     ([x0, x1], [y0, y1])
 }
 
-/// Another droid of a fleet on the map: its number in the roster and where its locator puts
-/// it (each droid's locator counts from where that droid started).
+/// Another droid of a fleet on the map: its number in the roster and where it is, in room
+/// coordinates when its start in the room is known ([`in_room`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Other {
     pub number: usize,
     pub at: (f64, f64),
 }
 
-/// The map; a fleet's other droids are marked by their roster numbers.
-pub fn render_with(frame: &mut Frame, area: Rect, t: &Telemetry, others: &[Other]) {
-    let pos = position(t);
-    let title = match pos {
+/// The map of the droid reporting `t`, which started at `room_origin` in its fleet's room
+/// (when known); a fleet's other droids are marked by their roster numbers.
+pub fn render_with(
+    frame: &mut Frame,
+    area: Rect,
+    t: &Telemetry,
+    room_origin: Option<(f32, f32)>,
+    others: &[Other],
+) {
+    // The title says what the droid's locator reports; the drawing is in the room.
+    let reported = t
+        .x_cm
+        .zip(t.y_cm)
+        .filter(|(x, y)| x.is_finite() && y.is_finite());
+    let pos = reported.and_then(|p| in_room(room_origin, p));
+    let title = match reported {
         Some((x, y)) => Line::from(vec![
             Span::raw(" Map "),
             Span::styled(
-                format!("x {} y {} cm ", num(x as f32, 0), num(y as f32, 0)),
+                format!("x {} y {} cm ", num(x, 0), num(y, 0)),
                 theme::reported(),
             ),
         ]),
@@ -79,14 +94,23 @@ pub fn render_with(frame: &mut Frame, area: Rect, t: &Telemetry, others: &[Other
     };
     let block = theme::panel(title);
     let inner = block.inner(area);
-    let (xb, yb) = bounds_with(t, others, inner.width, inner.height);
+    let points: Vec<(f64, f64)> = t
+        .track
+        .iter()
+        .filter_map(|&p| in_room(room_origin, p))
+        .collect();
+    let all = points.iter().copied().chain(pos);
+    let (xb, yb) = bounds_with(
+        all.chain(others.iter().map(|o| o.at)),
+        inner.width,
+        inner.height,
+    );
     let extent = format!(
         " {}×{} cm ",
         num((xb[1] - xb[0]) as f32, 0),
         num((yb[1] - yb[0]) as f32, 0)
     );
     let block = block.title_bottom(Line::from(Span::styled(extent, theme::dim())).right_aligned());
-    let points: Vec<(f64, f64)> = finite(t).collect();
     let others = others.to_vec();
     let canvas = Canvas::default()
         .block(block)

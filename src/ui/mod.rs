@@ -84,14 +84,13 @@ fn draw_panels(frame: &mut Frame, state: &AppState) {
             .iter()
             .flat_map(|roster| {
                 roster.droids.iter().enumerate().filter_map(|(i, d)| {
-                    let (x, y) = d.position?;
-                    let at = (f64::from(x), f64::from(y));
-                    (i != roster.chosen && at.0.is_finite() && at.1.is_finite())
-                        .then_some(map::Other { number: i + 1, at })
+                    let at = map::in_room(d.room_origin, d.position?)?;
+                    (i != roster.chosen).then_some(map::Other { number: i + 1, at })
                 })
             })
             .collect();
-        map::render_with(frame, r, &state.droid().telemetry, &others);
+        let droid = state.droid();
+        map::render_with(frame, r, &droid.telemetry, droid.room_origin, &others);
     }
     // Panels by capability: the dome's place shows the dome, Robi's motors, BOLT's matrix,
     // RVR's rover panel or the lights; the sensors' place shows Sphero sensors or Robi's I/O

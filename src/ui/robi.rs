@@ -124,7 +124,7 @@ fn lamp(on: bool, label: &'static str) -> Span<'static> {
     }
 }
 
-/// "link 10.0/s announced 100/s (10 ms) lost 3", shortened to fit `width` columns.
+/// "link 10/s announced 100/s (10 ms) lost 3", shortened to fit `width` columns.
 ///
 /// Fix: the line was one fixed text that just fit an 80×24 panel with a one-digit count, so
 /// "lost 12" was cut to "lost 1". Now the interval in ms goes first, then "announced"
@@ -132,11 +132,11 @@ fn lamp(on: bool, label: &'static str) -> Span<'static> {
 fn link_quality(r: &RobiTelemetry, width: usize) -> Line<'static> {
     let measured = r
         .measured_fps()
-        .map(|f| format!("{f:.1}/s"))
+        .map(super::text::per_second)
         .unwrap_or_else(|| "-/s".into());
     let announced = r
         .announced_fps()
-        .map(|f| format!("{f:.0}/s"))
+        .map(super::text::per_second)
         .unwrap_or_else(|| "-".into());
     let ms = r
         .handshake

@@ -156,6 +156,24 @@ pub fn bolt(frame: &mut Frame, area: Rect, s: &AppState) {
     frame.render_widget(Paragraph::new(lines), side);
 }
 
+/// The floor colour's words after `floor ■`, the longest form that fits `width` cells.
+fn floor_words(c: [u8; 3], index: u8, confidence: f32, width: usize) -> String {
+    let rgb = format!("{},{},{}", c[0], c[1], c[2]);
+    let sure = confidence * 100.0;
+    let forms = [
+        format!(" rgb {rgb} · colour {index} ({sure:.0}% sure)"),
+        format!(" {rgb} · colour {index} ({sure:.0}% sure)"),
+        format!(" {rgb} · colour {index} {sure:.0}%"),
+        format!(" {rgb} · #{index}"),
+    ];
+    let room = width.saturating_sub(super::text::width("floor ■"));
+    forms
+        .iter()
+        .find(|f| super::text::width(f) <= room)
+        .unwrap_or(&forms[3])
+        .clone()
+}
+
 /// RVR: the colour under it, its motors, its tracks.
 pub fn rvr(frame: &mut Frame, area: Rect, s: &AppState) {
     let block = theme::panel(title("Rover", s));
@@ -167,14 +185,9 @@ pub fn rvr(frame: &mut Frame, area: Rect, s: &AppState) {
             Span::styled("floor ", theme::label()),
             Span::styled("■", Style::new().fg(rgb(c))),
             // RVR's own words: the colour read (RGB), which of its known colours that is
-            // (an index), and how sure it is.
-            Span::raw(format!(
-                " rgb {},{},{} · colour {index} ({:.0}% sure)",
-                c[0],
-                c[1],
-                c[2],
-                confidence * 100.0
-            )),
+            // (an index), and how sure it is; in fewer words where the panel is narrow (at
+            // 80×24 the full line was cut mid-word: "(90% su").
+            Span::raw(floor_words(c, index, confidence, inner.width as usize)),
         ],
         None => vec![
             Span::styled("floor ", theme::label()),

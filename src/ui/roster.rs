@@ -36,7 +36,10 @@ fn entry(i: usize, e: &RosterEntry, chosen: bool, driven: bool, room: usize) -> 
         _ => theme::attention(),
     };
     let battery = e.battery_v.map(|v| format!(" {v:.1}V")).unwrap_or_default();
-    let rate = truncate(&format!(" {:.0}/s in", e.rate_in), RATE_W);
+    let rate = truncate(
+        &format!(" {} in", super::text::per_second(e.rate_in)),
+        RATE_W,
+    );
     let marker = match (chosen, driven) {
         (true, _) => "▶",
         (false, true) => "»",

@@ -8,7 +8,6 @@
 //! ([`crate::telemetry::history::History::series`]), so a frame costs the same at 1 and at
 //! 100 samples a second.
 
-use super::text::num;
 use super::theme;
 use crate::app::state::AppState;
 use crate::telemetry::history::Channel;
@@ -42,7 +41,7 @@ pub fn rates(s: &AppState) -> String {
         .telemetry
         .history
         .measured_rate(s.now)
-        .map_or("-".to_string(), |r| format!("{}/s", num(r, 1)));
+        .map_or("-".to_string(), super::text::per_second);
     format!("{}, measured {measured}", s.droid().monitor.requested())
 }
 

@@ -124,9 +124,9 @@ fn first_row(s: &AppState) -> Vec<Seg> {
             2,
             vec![
                 Span::styled("in ", theme::label()),
-                Span::raw(format!("{}/s", rate(s.droid().rate_in))),
+                Span::raw(super::text::per_second(s.droid().rate_in)),
                 Span::styled(" out ", theme::label()),
-                Span::raw(format!("{}/s", rate(s.droid().rate_out))),
+                Span::raw(super::text::per_second(s.droid().rate_out)),
             ],
         ),
     ])
@@ -155,19 +155,6 @@ fn replay_spans(r: &crate::app::state::ReplayView) -> Vec<Span<'static>> {
 fn clock(d: std::time::Duration) -> String {
     let tenths = d.as_millis() / 100;
     format!("{}:{:02}.{}", tenths / 600, tenths / 10 % 60, tenths % 10)
-}
-
-/// Packets per second: one decimal below 10, whole numbers above (the row is tight at 80).
-/// One decimal below 10 (as shown: 9.96 is "10", never "10.0"), none from there.
-fn rate(v: f32) -> String {
-    num(
-        v,
-        if (v.abs() * 10.0).round() < 100.0 {
-            1
-        } else {
-            0
-        },
-    )
 }
 
 fn link(l: &LinkState) -> Span<'static> {
@@ -300,16 +287,4 @@ fn log_path(s: &AppState, room: usize) -> Vec<Span<'static>> {
         Span::styled(label, theme::label()),
         Span::styled(path, Style::new().fg(Color::Gray)),
     ]
-}
-
-#[cfg(test)]
-mod tests {
-    /// Issue 39 point 13: a rate near 10 does not switch between "10" and "10.0".
-    #[test]
-    fn a_rate_has_one_form_per_value_shown() {
-        assert_eq!(super::rate(9.94), "9.9");
-        assert_eq!(super::rate(9.96), "10");
-        assert_eq!(super::rate(10.2), "10");
-        assert_eq!(super::rate(0.0), "0.0");
-    }
 }

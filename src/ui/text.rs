@@ -127,6 +127,18 @@ pub fn num(v: f32, prec: usize) -> String {
     s
 }
 
+/// A rate, per second, in the one form every panel uses (issue 39 point 13: `10/s` in the
+/// status bar, `10.0/s` in the sensors' title for the same stream): one decimal below 10,
+/// whole numbers from there, as shown (9.96 is `10/s`, never `10.0/s`).
+pub fn per_second(v: f32) -> String {
+    let prec = if (v.abs() * 10.0).round() < 100.0 {
+        1
+    } else {
+        0
+    };
+    format!("{}/s", num(v, prec))
+}
+
 /// An optional reading: `-` until it has been received.
 pub fn opt(v: Option<f32>, prec: usize, unit: &str) -> String {
     match v {
@@ -141,6 +153,29 @@ pub fn unit_fraction(v: f32, range: f32) -> f32 {
         return 0.0;
     }
     (v / range).clamp(-1.0, 1.0)
+}
+
+/// A list of items joined by `sep` (key hints: "o aim · c main colour") wrapped into lines
+/// of at most `w` cells between items, never inside one: a hint cut mid-word reads as a
+/// different key. An item wider than a line is cut with `…`.
+pub fn wrap_items(s: &str, sep: &str, w: usize) -> Vec<String> {
+    let mut lines: Vec<String> = Vec::new();
+    let mut cur = String::new();
+    for item in s.split(sep).map(str::trim).filter(|i| !i.is_empty()) {
+        if !cur.is_empty() && width(&cur) + width(sep) + width(item) <= w {
+            cur.push_str(sep);
+            cur.push_str(item);
+            continue;
+        }
+        if !cur.is_empty() {
+            lines.push(std::mem::take(&mut cur));
+        }
+        cur = truncate(item, w);
+    }
+    if !cur.is_empty() {
+        lines.push(cur);
+    }
+    lines
 }
 
 /// Greedy word wrap into lines of at most `w` cells; words longer than a line are split.
@@ -202,6 +237,34 @@ pub fn runs(cells: impl IntoIterator<Item = (char, Style)>) -> Vec<Span<'static>
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Issue 39 point 13: a rate near 10 does not switch between "10" and "10.0"; every
+    /// panel's rates are in this one form.
+    #[test]
+    fn rates_have_one_form() {
+        assert_eq!(per_second(10.0), "10/s");
+        assert_eq!(per_second(9.94), "9.9/s");
+        assert_eq!(per_second(9.96), "10/s");
+        assert_eq!(per_second(9.8), "9.8/s");
+        assert_eq!(per_second(0.0), "0.0/s");
+        assert_eq!(per_second(100.0), "100/s");
+        assert_eq!(per_second(f32::NAN), "NaN/s");
+    }
+
+    #[test]
+    fn key_hints_wrap_between_items_never_inside_one() {
+        let h = "o aim (heading 0) · c main colour · b back light";
+        assert_eq!(wrap_items(h, " · ", 80), [h]);
+        assert_eq!(
+            wrap_items(h, " · ", 36),
+            ["o aim (heading 0) · c main colour", "b back light"]
+        );
+        assert_eq!(
+            wrap_items(h, " · ", 10),
+            ["o aim (he…", "c main co…", "b back li…"]
+        );
+        assert!(wrap_items("", " · ", 10).is_empty());
+    }
 
     #[test]
     fn words_are_cut_whole() {

@@ -428,7 +428,7 @@ fn shown_frame_id(screen: &str) -> Option<u32> {
     screen[at..].split_whitespace().next()?.parse().ok()
 }
 
-/// The measured link rate in the Robi panel ("link 10.0/s announced …").
+/// The measured link rate in the Robi panel ("link 10/s announced …").
 fn shown_link_rate(screen: &str) -> Option<f32> {
     let line = screen.lines().find(|l| l.contains("announced"))?;
     let at = line.find("link ")? + 5;

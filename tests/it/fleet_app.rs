@@ -99,6 +99,20 @@ struct Harness {
     app: JoinHandle<Exit>,
 }
 
+/// The app on `fleet` (tripod on connect): the key channel to type into, and the app's task.
+fn launch(fleet: &Fleet, config: Config) -> (mpsc::Sender<TermEvent>, JoinHandle<Exit>) {
+    let (term, inputs, keep_alive) = inputs();
+    let opts = opts(config, true);
+    let f = fleet.clone();
+    let app = tokio::spawn(async move {
+        let _keep = keep_alive;
+        run::run(&mut terminal(), f, opts, inputs, keep)
+            .await
+            .unwrap()
+    });
+    (term, app)
+}
+
 /// Four droids in one room; droid `lost` (if any) loses its link for good at `lost_at`.
 async fn start(lost: Option<(usize, Duration)>) -> Harness {
     let config = Config::defaults();
@@ -126,18 +140,11 @@ async fn start(lost: Option<(usize, Duration)>) -> Harness {
             }),
             session: session_config(m, &config, true),
             origin: "simulated".into(),
+            room_origin: Some(origin),
         });
     }
     let fleet = Fleet::start(specs);
-    let (term, inputs, keep_alive) = inputs();
-    let opts = opts(config, true);
-    let f = fleet.clone();
-    let app = tokio::spawn(async move {
-        let _keep = keep_alive;
-        run::run(&mut terminal(), f, opts, inputs, keep)
-            .await
-            .unwrap()
-    });
+    let (term, app) = launch(&fleet, config);
     // Connected, and R2 up on three legs.
     sleep(Duration::from_secs(3)).await;
     Harness {
@@ -564,4 +571,86 @@ async fn the_mouse_chooses_droids_scrolls_focuses_and_picks() {
     );
     h.tap(Key::ch('q')).await;
     h.app.await.unwrap();
+}
+
+/// The map's box on a drawn screen, as rows of text inside its border (found by its title).
+fn map_box(buf: &ratatui::buffer::Buffer) -> Vec<String> {
+    let area = buf.area;
+    let row = |y: u16| -> Vec<&str> { (0..area.width).map(|x| buf[(x, y)].symbol()).collect() };
+    for y in 0..area.height {
+        let cells = row(y);
+        let line: String = cells.concat();
+        let Some(at) = line.find("╭ Map") else {
+            continue;
+        };
+        // The column of the corner (cells, not bytes).
+        let x0 = line[..at].chars().count();
+        let x1 = (x0 + 1..cells.len())
+            .find(|&x| cells[x] == "╮")
+            .expect("the map's right corner");
+        let y1 = (y + 1..area.height)
+            .find(|&yy| buf[(x0 as u16, yy)].symbol() == "╰")
+            .expect("the map's bottom corner");
+        return (y..=y1).map(|yy| row(yy)[x0..=x1].concat()).collect();
+    }
+    panic!("no map on the screen");
+}
+
+/// Issue 39 point 13: `--sim r2d2,bb8,robi` stand 60 cm apart in one room; the map draws
+/// them in room coordinates (the origins `cli::fleet::simulated` gives each droid), so R2
+/// (the chosen one, ●) and Robi (3) are on different cells, in the room's order left to
+/// right, where they were all drawn on one cell (Robi's 3 hidden under R2's ●).
+#[tokio::test(start_paused = true)]
+async fn a_simulated_fleet_stands_apart_on_the_map_in_room_coordinates() {
+    let config = Config::defaults();
+    let models = [Model::R2D2, Model::BB8, Model::Robi42];
+    let specs: Vec<DroidSpec> = droidctl::cli::fleet::simulated(&models)
+        .into_iter()
+        .map(|f| {
+            let session = session_config(f.model, &config, true);
+            f.into_spec(session)
+        })
+        .collect();
+    assert!(specs.iter().all(|s| s.room_origin.is_some()));
+    let fleet = Fleet::start(specs);
+    let (term, app) = launch(&fleet, config);
+    sleep(Duration::from_secs(3)).await;
+    let state = seen();
+    assert_eq!(state.chosen, 0, "R2 is the chosen droid");
+    let mut t = terminal();
+    t.draw(|f| droidctl::ui::draw(f, &state)).unwrap();
+    let map = map_box(t.backend().buffer());
+    let find = |mark: char| -> Vec<(usize, usize)> {
+        map.iter()
+            .enumerate()
+            .skip(1)
+            .take(map.len().saturating_sub(2))
+            .flat_map(|(y, l)| {
+                l.chars()
+                    .enumerate()
+                    .skip(1)
+                    .filter(move |(_, c)| *c == mark)
+                    .map(move |(x, _)| (x, y))
+            })
+            .collect()
+    };
+    let (r2, bb8, robi) = (find('●'), find('2'), find('3'));
+    let text = map.join("\n");
+    assert_eq!(r2.len(), 1, "R2 once:\n{text}");
+    assert_eq!(bb8.len(), 1, "BB-8 (2) once:\n{text}");
+    assert_eq!(robi.len(), 1, "Robi (3) once:\n{text}");
+    assert_ne!(r2[0], robi[0], "{text}");
+    assert!(
+        r2[0].0 < bb8[0].0 && bb8[0].0 < robi[0].0,
+        "R2, BB-8, Robi left to right, as they stand:\n{text}"
+    );
+    assert_eq!(r2[0].1, robi[0].1, "in one row:\n{text}");
+    insta::assert_snapshot!("fleet_map_in_room_coordinates", text);
+    term.send(TermEvent::Key {
+        key: Key::ch('q'),
+        kind: KeyKind::Press,
+    })
+    .await
+    .unwrap();
+    app.await.unwrap();
 }

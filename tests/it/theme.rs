@@ -49,3 +49,50 @@ fn no_color_and_theme_none_draw_without_colour_and_dark_with() {
     let light = coloured("light", &[], "[display]\ntheme = \"light\"\n");
     assert!(light > 50, "light has colours too: {light} cells");
 }
+
+/// Issue 39 point 13: the device picker shown before the app (several droids behind a relay,
+/// as in Bluetooth range) is drawn in the app's colours too: none under `NO_COLOR` or
+/// `theme = "none"` (it was always coloured), colours otherwise.
+#[test]
+fn the_device_picker_follows_no_color_and_the_theme() {
+    use crate::relay_e2e::{Serve, TempDir};
+    let dir = TempDir::new("theme-picker");
+    let serve = Serve::start(&["r2d2", "bolt"], &[], &dir);
+    let picker_cells = |name: &str, env: &[(&str, &str)], config: &str| -> usize {
+        let config_path = dir.path(&format!("{name}.toml"));
+        std::fs::write(&config_path, config).unwrap();
+        let (log, state) = (
+            dir.path(&format!("{name}.log")),
+            dir.path(&format!("{name}-state")),
+        );
+        let mut all: Vec<(&str, &str)> = vec![
+            ("DROIDCTL_CONFIG", &config_path),
+            ("DROIDCTL_LOG_FILE", &log),
+            ("DROIDCTL_STATE_DIR", &state),
+            (
+                "DBUS_SYSTEM_BUS_ADDRESS",
+                "unix:path=/nonexistent/droidctl-test/bus",
+            ),
+        ];
+        all.extend_from_slice(env);
+        let mut tui = Tui::spawn(&["--remote", &serve.address], &all, (80, 24), None).unwrap();
+        let screen = tui.wait_for("Several droids are in range", Duration::from_secs(20));
+        assert!(screen.contains("Sphero BOLT"), "{screen}");
+        let n = tui.coloured_cells();
+        // q cancels the picker: nothing is driven.
+        tui.send(b"q");
+        let _ = tui.wait_exit(Duration::from_secs(10));
+        n
+    };
+    let dark = picker_cells("dark", &[("NO_COLOR", "")], "");
+    assert!(
+        dark > 20,
+        "the default theme colours the picker: {dark} cells"
+    );
+    assert_eq!(picker_cells("nocolor", &[("NO_COLOR", "1")], ""), 0);
+    assert_eq!(
+        picker_cells("none", &[], "[display]\ntheme = \"none\"\n"),
+        0
+    );
+    serve.stop();
+}

@@ -387,3 +387,23 @@ fn at_120x40_help_and_the_lights_panel_say_only_what_is_true() {
     let rows = screen(&s, 80, 24);
     assert!(rows.last().is_some_and(|f| f.contains("PgDn")), "{rows:?}");
 }
+
+/// Issue 39 point 13, seen again at 120×40: BB-8's lights panel had room for its keys on two
+/// lines but cut the last one on the first (`b back li…`); every hint is whole, none cut.
+#[test]
+fn bb8_lights_panel_names_every_key_whole_at_120x40() {
+    let s = state(&[Model::BB8]);
+    let rows = screen(&s, 120, 40);
+    let all = rows.join("\n");
+    let panel: Vec<&String> = rows
+        .iter()
+        .skip_while(|r| !r.contains("╭ Lights"))
+        .take_while(|r| !r.contains("╰"))
+        .collect();
+    assert!(panel.len() > 2, "{all}");
+    let text: String = panel.iter().map(|r| r.as_str()).collect();
+    for hint in ["o aim (heading 0)", "c main colour", "b back light"] {
+        assert!(text.contains(hint), "{hint:?} whole:\n{all}");
+    }
+    assert!(!text.contains('…'), "nothing cut:\n{all}");
+}

@@ -138,6 +138,31 @@ fn rvr_panel_shows_the_floor_colour_a_stalled_motor_and_the_tracks() {
     assert!(all.contains("tracks L +200 R -100"), "{all}");
 }
 
+/// Issue 39 point 13, seen at 80×24: RVR's floor line was cut mid-word ("(90% su"); it says
+/// the colour in fewer words where the panel is narrow, never cut.
+#[test]
+fn rvr_floor_words_are_never_cut() {
+    let mut s = rvr();
+    s.droid_mut().telemetry.robot.color = Some(([128, 128, 128], 12, 1.0));
+    for (w, h) in [(80, 24), (100, 30), (120, 40), (160, 48)] {
+        let text = rows(render(&s, w, h).backend().buffer());
+        let row = text
+            .iter()
+            .find(|r| r.contains("floor"))
+            .unwrap_or_else(|| panic!("floor line at {w}×{h}"));
+        let cell = row
+            .split('│')
+            .find(|c| c.contains("floor"))
+            .expect("the panel's cell");
+        assert!(cell.contains("128,128,128 · colour 12"), "{w}×{h}: {cell}");
+        assert!(
+            cell.trim_end().ends_with("100% sure)") || cell.trim_end().ends_with("100%"),
+            "{w}×{h}: {cell}"
+        );
+        assert!(!cell.contains('…'), "{w}×{h}: {cell}");
+    }
+}
+
 #[test]
 fn mini_keeps_the_lights_panel_and_the_matrix_prompt_says_what_it_draws() {
     let term = render(&connected(Model::Mini, "SM-0B12"), 80, 24);
