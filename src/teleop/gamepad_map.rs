@@ -1,0 +1,491 @@
+//! SDL game-controller mappings, droidctl's own reading of them: a line of SDL's controller
+//! database (`GUID,name,a:b0,leftx:a0,dpup:h0.1,…`) turns a controller's raw elements (button
+//! N, axis N, hat N) into gilrs's named buttons and axes, with gilrs's conventions (stick Y up
+//! is +1, a trigger is a button with a 0..1 value, pressed at 0.75 and released at 0.65).
+//!
+//! Why our own: gilrs applies these lines inside itself and makes neither a `GamepadId` nor a
+//! `Code` without a device, so nothing can put a raw controller event through gilrs's mapping
+//! in a test. gilrs stays the device reader; this layer produces the same [`Named`] events
+//! gilrs's do, and [`super::gamepad::pad_event`] maps both the same way. It also checks a
+//! configured mapping line before gilrs is given it (a mistyped line is an error, not a pad
+//! that silently does nothing).
+//!
+//! Facts from SDL2's `SDL_gamecontroller.c` (the format's definition) and gilrs 0.11.2's
+//! `mapping/parser.rs` and `gamepad.rs` (its conventions): `bN` a button, `aN` an axis (`+aN`
+//! / `-aN` its half, `aN~` inverted), `hH.M` hat H with mask M (1 up, 2 right, 4 down, 8
+//! left); outputs may be halves too (`+leftx`); unknown output names are ignored by SDL, and
+//! so here; a trigger fed by a whole axis spans the axis (-1 → 0, +1 → 1).
+
+use super::gamepad::Named;
+use gilrs::{Axis, Button};
+use std::fmt;
+
+/// Longest mapping line read (SDL's own lines are under 400 bytes).
+pub const MAX_LINE: usize = 2048;
+/// Most bindings in one line (SDL names 26 outputs; halves can double some).
+const MAX_BINDS: usize = 64;
+
+/// gilrs's thresholds for a button fed by an axis (`GilrsBuilder` defaults).
+const PRESSED_AT: f32 = 0.75;
+const RELEASED_AT: f32 = 0.65;
+
+/// Which part of an axis an element or output is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Half {
+    Whole,
+    Positive,
+    Negative,
+}
+
+/// A controller's raw element, as the mapping line names it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Element {
+    Button(u8),
+    Axis { index: u8, half: Half, inverted: bool },
+    Hat { index: u8, mask: u8 },
+}
+
+/// What an element becomes: a gilrs button (triggers included) or (part of) a gilrs axis.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Target {
+    Button(Button),
+    Axis(Axis, Half),
+}
+
+/// One raw controller event, as a joystick layer reports it (SDL's ranges).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RawInput {
+    Button { index: u8, pressed: bool },
+    /// -32768..=32767, 0 at rest.
+    Axis { index: u8, value: i16 },
+    /// The hat's directions held (1 up, 2 right, 4 down, 8 left).
+    Hat { index: u8, mask: u8 },
+}
+
+/// Why a mapping line was refused.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum MappingError {
+    TooLong(usize),
+    /// Fewer than the GUID and the name.
+    Incomplete,
+    BadGuid(String),
+    /// A `name:element` field whose element does not read.
+    BadElement {
+        field: String,
+    },
+    TooManyBindings,
+}
+
+impl fmt::Display for MappingError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            MappingError::TooLong(n) => write!(
+                f,
+                "mapping line of {n} bytes (at most {MAX_LINE}): paste one line of SDL's gamecontrollerdb.txt"
+            ),
+            MappingError::Incomplete => f.write_str(
+                "mapping line needs GUID,name,bindings… (one line of SDL's gamecontrollerdb.txt)",
+            ),
+            MappingError::BadGuid(g) => {
+                write!(f, "mapping GUID {g:?} is not 32 hex digits")
+            }
+            MappingError::BadElement { field } => write!(
+                f,
+                "mapping field {field:?}: use bN (button), aN / +aN / -aN / aN~ (axis) or hH.M (hat)"
+            ),
+            MappingError::TooManyBindings => {
+                write!(f, "mapping has more than {MAX_BINDS} bindings")
+            }
+        }
+    }
+}
+
+impl std::error::Error for MappingError {}
+
+/// A parsed mapping line.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct SdlMapping {
+    pub guid: String,
+    pub name: String,
+    binds: Vec<(Element, Target)>,
+}
+
+/// An SDL output name as gilrs names it (`a` is gilrs's South, `leftshoulder` its
+/// LeftTrigger, `lefttrigger` its LeftTrigger2: gilrs's `mapping/parser.rs`).
+fn target(name: &str) -> Option<Target> {
+    let (half, base) = match name.as_bytes().first() {
+        Some(b'+') => (Half::Positive, &name[1..]),
+        Some(b'-') => (Half::Negative, &name[1..]),
+        _ => (Half::Whole, name),
+    };
+    let axis = |a| Some(Target::Axis(a, half));
+    let button = |b| (half == Half::Whole).then_some(Target::Button(b));
+    match base {
+        "leftx" => axis(Axis::LeftStickX),
+        "lefty" => axis(Axis::LeftStickY),
+        "rightx" => axis(Axis::RightStickX),
+        "righty" => axis(Axis::RightStickY),
+        "a" => button(Button::South),
+        "b" => button(Button::East),
+        "x" => button(Button::West),
+        "y" => button(Button::North),
+        "back" => button(Button::Select),
+        "start" => button(Button::Start),
+        "guide" => button(Button::Mode),
+        "leftstick" => button(Button::LeftThumb),
+        "rightstick" => button(Button::RightThumb),
+        "leftshoulder" => button(Button::LeftTrigger),
+        "rightshoulder" => button(Button::RightTrigger),
+        "lefttrigger" => button(Button::LeftTrigger2),
+        "righttrigger" => button(Button::RightTrigger2),
+        "dpup" => button(Button::DPadUp),
+        "dpdown" => button(Button::DPadDown),
+        "dpleft" => button(Button::DPadLeft),
+        "dpright" => button(Button::DPadRight),
+        // misc1, paddle1…4, touchpad, platform, crc, hint, sdk…: not read (SDL skips what it
+        // does not know too).
+        _ => None,
+    }
+}
+
+fn element(s: &str) -> Option<Element> {
+    let (half, rest) = match s.as_bytes().first() {
+        Some(b'+') => (Half::Positive, &s[1..]),
+        Some(b'-') => (Half::Negative, &s[1..]),
+        _ => (Half::Whole, s),
+    };
+    let (inverted, rest) = match rest.strip_suffix('~') {
+        Some(r) => (true, r),
+        None => (false, rest),
+    };
+    let plain = half == Half::Whole && !inverted;
+    if let Some(n) = rest.strip_prefix('b') {
+        return if plain {
+            n.parse().ok().map(Element::Button)
+        } else {
+            None
+        };
+    }
+    if let Some(n) = rest.strip_prefix('a') {
+        let index = n.parse().ok()?;
+        return Some(Element::Axis {
+            index,
+            half,
+            inverted,
+        });
+    }
+    if let Some(h) = rest.strip_prefix('h') {
+        let (index, mask) = h.split_once('.')?;
+        let mask: u8 = mask.parse().ok()?;
+        if !plain || mask == 0 || mask > 15 {
+            return None;
+        }
+        return Some(Element::Hat {
+            index: index.parse().ok()?,
+            mask,
+        });
+    }
+    None
+}
+
+impl SdlMapping {
+    /// Read one line of SDL's database (a trailing comma and spaces are fine).
+    pub fn parse(line: &str) -> Result<SdlMapping, MappingError> {
+        if line.len() > MAX_LINE {
+            return Err(MappingError::TooLong(line.len()));
+        }
+        let mut fields = line.trim().split(',');
+        let (Some(guid), Some(name)) = (fields.next(), fields.next()) else {
+            return Err(MappingError::Incomplete);
+        };
+        let guid = guid.trim();
+        if guid.len() != 32 || !guid.bytes().all(|b| b.is_ascii_hexdigit()) {
+            return Err(MappingError::BadGuid(guid.chars().take(40).collect()));
+        }
+        let mut binds = Vec::new();
+        for field in fields.map(str::trim).filter(|f| !f.is_empty()) {
+            let Some((out, el)) = field.split_once(':') else {
+                return Err(MappingError::BadElement {
+                    field: field.chars().take(40).collect(),
+                });
+            };
+            let Some(t) = target(out.trim()) else {
+                continue;
+            };
+            let e = element(el.trim()).ok_or_else(|| MappingError::BadElement {
+                field: field.chars().take(40).collect(),
+            })?;
+            if binds.len() == MAX_BINDS {
+                return Err(MappingError::TooManyBindings);
+            }
+            binds.push((e, t));
+        }
+        Ok(SdlMapping {
+            guid: guid.to_ascii_lowercase(),
+            name: name.trim().to_string(),
+            binds,
+        })
+    }
+
+    /// The element bound to `t`, if any.
+    pub fn element_of(&self, t: Target) -> Option<Element> {
+        self.binds.iter().find(|(_, x)| *x == t).map(|(e, _)| *e)
+    }
+}
+
+/// A controller seen through its mapping: raw events in, gilrs's named events out, with the
+/// pressed state gilrs keeps to make edges of buttons fed by axes and hats.
+#[derive(Debug, Clone)]
+pub struct SdlPad {
+    map: SdlMapping,
+    pressed: Vec<Button>,
+    /// Buttons' last values (absent: 0, at rest): an unchanged one is not reported again.
+    values: Vec<(Button, f32)>,
+}
+
+/// -1..=1 from SDL's range, exactly 0 at rest.
+fn unit(v: i16) -> f32 {
+    if v >= 0 {
+        v as f32 / 32767.0
+    } else {
+        v as f32 / 32768.0
+    }
+}
+
+impl SdlPad {
+    pub fn new(map: SdlMapping) -> SdlPad {
+        SdlPad {
+            map,
+            pressed: Vec::new(),
+            values: Vec::new(),
+        }
+    }
+
+    pub fn name(&self) -> &str {
+        &self.map.name
+    }
+
+    /// What gilrs reports when this controller is plugged in.
+    pub fn connected(&self) -> Named {
+        Named::Connected(self.map.name.clone())
+    }
+
+    /// One raw event, as gilrs's named events (none for an element the line does not bind).
+    pub fn feed(&mut self, raw: RawInput) -> Vec<Named> {
+        let mut out = Vec::new();
+        let binds = self.map.binds.clone();
+        for (el, t) in binds {
+            // The element's reading: 0..1 for a press or a half axis, -1..1 for a whole axis.
+            let v = match (el, raw) {
+                (Element::Button(i), RawInput::Button { index, pressed }) if i == index => {
+                    if pressed { 1.0 } else { 0.0 }
+                }
+                (Element::Hat { index: i, mask: m }, RawInput::Hat { index, mask })
+                    if i == index =>
+                {
+                    if mask & m != 0 { 1.0 } else { 0.0 }
+                }
+                (
+                    Element::Axis {
+                        index: i,
+                        half,
+                        inverted,
+                    },
+                    RawInput::Axis { index, value },
+                ) if i == index => {
+                    let u = unit(value) * if inverted { -1.0 } else { 1.0 };
+                    match half {
+                        Half::Whole => u,
+                        Half::Positive => u.max(0.0),
+                        Half::Negative => (-u).max(0.0),
+                    }
+                }
+                _ => continue,
+            };
+            let whole_axis = matches!(
+                el,
+                Element::Axis {
+                    half: Half::Whole,
+                    ..
+                }
+            );
+            match t {
+                Target::Button(b) => {
+                    // A whole axis spans the button's travel (a trigger at rest reads -1).
+                    let value = if whole_axis { (v + 1.0) / 2.0 } else { v };
+                    self.button(b, value, &mut out);
+                }
+                Target::Axis(a, half) => {
+                    let value = match half {
+                        // A half element fills the whole axis (SDL: 0..1 → -1..1).
+                        Half::Whole if !whole_axis => v * 2.0 - 1.0,
+                        Half::Whole => v,
+                        Half::Positive => v.abs(),
+                        Half::Negative => -v.abs(),
+                    };
+                    // gilrs: stick Y up is +1 (SDL's and evdev's down is +).
+                    let value = match a {
+                        Axis::LeftStickY | Axis::RightStickY => -value,
+                        _ => value,
+                    };
+                    out.push(Named::Axis(a, value.clamp(-1.0, 1.0)));
+                }
+            }
+        }
+        out
+    }
+
+    /// A button's new value: the edge (as gilrs's thresholds make it) then the value.
+    fn button(&mut self, b: Button, value: f32, out: &mut Vec<Named>) {
+        let last = self.values.iter().find(|(x, _)| *x == b).map_or(0.0, |v| v.1);
+        if last == value {
+            return;
+        }
+        self.values.retain(|(x, _)| *x != b);
+        self.values.push((b, value));
+        let was = self.pressed.contains(&b);
+        if value >= PRESSED_AT && !was {
+            self.pressed.push(b);
+            out.push(Named::Pressed(b));
+        } else if value <= RELEASED_AT && was {
+            self.pressed.retain(|x| *x != b);
+            out.push(Named::Released(b));
+        }
+        out.push(Named::Value(b, value));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// SDL_GameControllerDB's Linux line for the Xbox 360 controller (045e:028e), as vendored
+    /// in gilrs 0.11.2 (`SDL_GameControllerDB/gamecontrollerdb.txt`).
+    const XBOX: &str = "030000005e0400008e02000010010000,Xbox 360 Controller,a:b0,b:b1,back:b6,dpdown:h0.4,dpleft:h0.8,dpright:h0.2,dpup:h0.1,guide:b8,leftshoulder:b4,leftstick:b9,lefttrigger:a2,leftx:a0,lefty:a1,rightshoulder:b5,rightstick:b10,righttrigger:a5,rightx:a3,righty:a4,start:b7,x:b2,y:b3,platform:Linux,";
+    /// The same database's macOS line for it: D-pad as buttons, Y axes inverted (`a1~`).
+    const XBOX_MAC: &str = "030000005e0400008e02000010010000,Xbox 360 Controller,a:b0,b:b1,back:b9,dpdown:b12,dpleft:b13,dpright:b14,dpup:b11,guide:b10,leftshoulder:b4,leftstick:b6,lefttrigger:a2,leftx:a0,lefty:a1~,rightshoulder:b5,rightstick:b7,righttrigger:a5,rightx:a3,righty:a4~,start:b8,x:b2,y:b3,platform:Mac OS X,";
+
+    fn pad(line: &str) -> SdlPad {
+        SdlPad::new(SdlMapping::parse(line).unwrap())
+    }
+
+    #[test]
+    fn reads_a_database_line() {
+        let m = SdlMapping::parse(XBOX).unwrap();
+        assert_eq!(m.name, "Xbox 360 Controller");
+        assert_eq!(
+            m.element_of(Target::Button(Button::DPadUp)),
+            Some(Element::Hat { index: 0, mask: 1 })
+        );
+        assert_eq!(
+            m.element_of(Target::Axis(Axis::LeftStickY, Half::Whole)),
+            Some(Element::Axis {
+                index: 1,
+                half: Half::Whole,
+                inverted: false
+            })
+        );
+    }
+
+    #[test]
+    fn refuses_what_does_not_read() {
+        assert_eq!(SdlMapping::parse("x"), Err(MappingError::Incomplete));
+        assert!(matches!(
+            SdlMapping::parse("0300zz,Pad,a:b0"),
+            Err(MappingError::BadGuid(_))
+        ));
+        for bad in ["a:c0", "a:b", "a:+b0", "dpup:h0.0", "dpup:h0.16", "leftx"] {
+            let line = format!("030000005e0400008e02000010010000,Pad,{bad}");
+            assert!(
+                matches!(
+                    SdlMapping::parse(&line),
+                    Err(MappingError::BadElement { .. })
+                ),
+                "{bad}"
+            );
+        }
+        let long = "0".repeat(MAX_LINE + 1);
+        assert_eq!(
+            SdlMapping::parse(&long),
+            Err(MappingError::TooLong(MAX_LINE + 1))
+        );
+    }
+
+    #[test]
+    fn sticks_hats_and_triggers_as_gilrs_names_them() {
+        let mut p = pad(XBOX);
+        // Stick pushed up: SDL's -32768 on a1 is gilrs's +1 on LeftStickY.
+        assert_eq!(
+            p.feed(RawInput::Axis {
+                index: 1,
+                value: -32768
+            }),
+            vec![Named::Axis(Axis::LeftStickY, 1.0)]
+        );
+        assert_eq!(
+            p.feed(RawInput::Hat { index: 0, mask: 2 }),
+            vec![
+                Named::Pressed(Button::DPadRight),
+                Named::Value(Button::DPadRight, 1.0)
+            ]
+        );
+        // The trigger at rest reads -32768: value 0, as before; pressed from 0.75, released
+        // at 0.65.
+        let t = |p: &mut SdlPad, v| p.feed(RawInput::Axis { index: 5, value: v });
+        assert_eq!(t(&mut p, -32768), vec![]);
+        assert_eq!(t(&mut p, 32767)[0], Named::Pressed(Button::RightTrigger2));
+        assert_eq!(t(&mut p, 13107).len(), 1, "0.7: still pressed");
+        assert_eq!(t(&mut p, 0)[0], Named::Released(Button::RightTrigger2));
+    }
+
+    #[test]
+    fn inverted_axes_and_button_dpads() {
+        let mut p = pad(XBOX_MAC);
+        // macOS reports the stick up as +: `a1~` makes it gilrs's +1 all the same.
+        assert_eq!(
+            p.feed(RawInput::Axis {
+                index: 1,
+                value: 32767
+            }),
+            vec![Named::Axis(Axis::LeftStickY, 1.0)]
+        );
+        assert_eq!(
+            p.feed(RawInput::Button {
+                index: 11,
+                pressed: true
+            })[0],
+            Named::Pressed(Button::DPadUp)
+        );
+        assert!(
+            p.feed(RawInput::Button {
+                index: 30,
+                pressed: true
+            })
+            .is_empty(),
+            "an unbound button is nothing"
+        );
+    }
+
+    #[test]
+    fn half_axes() {
+        let line = "030000005e0400008e02000010010000,Pad,-leftx:-a0,+leftx:+a0,dpup:-a1";
+        let mut p = pad(line);
+        assert_eq!(
+            p.feed(RawInput::Axis {
+                index: 0,
+                value: -16384
+            }),
+            vec![
+                Named::Axis(Axis::LeftStickX, -0.5),
+                Named::Axis(Axis::LeftStickX, 0.0)
+            ]
+        );
+        assert_eq!(
+            p.feed(RawInput::Axis {
+                index: 1,
+                value: -32768
+            })[0],
+            Named::Pressed(Button::DPadUp)
+        );
+    }
+}
