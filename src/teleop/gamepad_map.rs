@@ -41,8 +41,15 @@ pub enum Half {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Element {
     Button(u8),
-    Axis { index: u8, half: Half, inverted: bool },
-    Hat { index: u8, mask: u8 },
+    Axis {
+        index: u8,
+        half: Half,
+        inverted: bool,
+    },
+    Hat {
+        index: u8,
+        mask: u8,
+    },
 }
 
 /// What an element becomes: a gilrs button (triggers included) or (part of) a gilrs axis.
@@ -55,11 +62,20 @@ pub enum Target {
 /// One raw controller event, as a joystick layer reports it (SDL's ranges).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum RawInput {
-    Button { index: u8, pressed: bool },
+    Button {
+        index: u8,
+        pressed: bool,
+    },
     /// -32768..=32767, 0 at rest.
-    Axis { index: u8, value: i16 },
+    Axis {
+        index: u8,
+        value: i16,
+    },
     /// The hat's directions held (1 up, 2 right, 4 down, 8 left).
-    Hat { index: u8, mask: u8 },
+    Hat {
+        index: u8,
+        mask: u8,
+    },
 }
 
 /// Why a mapping line was refused.
@@ -270,6 +286,13 @@ impl SdlPad {
         Named::Connected(self.map.name.clone())
     }
 
+    /// What gilrs reports when it is unplugged; its buttons and axes are at rest after.
+    pub fn disconnected(&mut self) -> Named {
+        self.pressed.clear();
+        self.values.clear();
+        Named::Disconnected
+    }
+
     /// One raw event, as gilrs's named events (none for an element the line does not bind).
     pub fn feed(&mut self, raw: RawInput) -> Vec<Named> {
         let mut out = Vec::new();
@@ -278,12 +301,20 @@ impl SdlPad {
             // The element's reading: 0..1 for a press or a half axis, -1..1 for a whole axis.
             let v = match (el, raw) {
                 (Element::Button(i), RawInput::Button { index, pressed }) if i == index => {
-                    if pressed { 1.0 } else { 0.0 }
+                    if pressed {
+                        1.0
+                    } else {
+                        0.0
+                    }
                 }
                 (Element::Hat { index: i, mask: m }, RawInput::Hat { index, mask })
                     if i == index =>
                 {
-                    if mask & m != 0 { 1.0 } else { 0.0 }
+                    if mask & m != 0 {
+                        1.0
+                    } else {
+                        0.0
+                    }
                 }
                 (
                     Element::Axis {
@@ -337,7 +368,11 @@ impl SdlPad {
 
     /// A button's new value: the edge (as gilrs's thresholds make it) then the value.
     fn button(&mut self, b: Button, value: f32, out: &mut Vec<Named>) {
-        let last = self.values.iter().find(|(x, _)| *x == b).map_or(0.0, |v| v.1);
+        let last = self
+            .values
+            .iter()
+            .find(|(x, _)| *x == b)
+            .map_or(0.0, |v| v.1);
         if last == value {
             return;
         }
