@@ -254,7 +254,12 @@ pub fn pad_event(n: Named) -> Option<PadEvent> {
 
 /// Start the gamepad thread. It sends events until the receiver is dropped. When gilrs cannot
 /// start (no udev, no /dev/input) it sends one `Unavailable` and ends.
-pub fn spawn(tx: mpsc::Sender<PadEvent>) -> std::io::Result<std::thread::JoinHandle<()>> {
+/// `mappings`: SDL controller-database lines (checked when the configuration loaded) added to
+/// gilrs's own database.
+pub fn spawn(
+    tx: mpsc::Sender<PadEvent>,
+    mappings: Vec<String>,
+) -> std::io::Result<std::thread::JoinHandle<()>> {
     std::thread::Builder::new()
         .name("gamepad".into())
         .spawn(move || {
@@ -263,7 +268,11 @@ pub fn spawn(tx: mpsc::Sender<PadEvent>) -> std::io::Result<std::thread::JoinHan
                 let _ = tx.blocking_send(PadEvent::Unavailable(why));
                 return;
             }
-            let mut gilrs = match gilrs::Gilrs::new() {
+            let mut builder = gilrs::GilrsBuilder::new();
+            for line in &mappings {
+                builder = builder.add_mappings(line);
+            }
+            let mut gilrs = match builder.build() {
                 Ok(g) => g,
                 Err(e) => {
                     let _ = tx.blocking_send(PadEvent::Unavailable(describe_error(&e)));

@@ -1,63 +1,21 @@
-//! SDL game-controller mappings, droidctl's own reading of them: a line of SDL's controller
-//! database (`GUID,name,a:b0,leftx:a0,dpup:h0.1,…`) turns a controller's raw elements (button
-//! N, axis N, hat N) into gilrs's named buttons and axes, with gilrs's conventions (stick Y up
-//! is +1, a trigger is a button with a 0..1 value, pressed at 0.75 and released at 0.65).
+//! SDL game-controller mappings applied: a controller's raw events (button N, axis N, hat N)
+//! through its mapping line ([`crate::config::pad_mapping`]) into gilrs's named events, with
+//! gilrs's conventions (stick Y up is +1, a trigger is a button with a 0..1 value, pressed at
+//! 0.75 and released at 0.65; a trigger fed by a whole axis spans it, -1 → 0 and +1 → 1).
 //!
 //! Why our own: gilrs applies these lines inside itself and makes neither a `GamepadId` nor a
 //! `Code` without a device, so nothing can put a raw controller event through gilrs's mapping
-//! in a test. gilrs stays the device reader; this layer produces the same [`Named`] events
-//! gilrs's do, and [`super::gamepad::pad_event`] maps both the same way. It also checks a
-//! configured mapping line before gilrs is given it (a mistyped line is an error, not a pad
-//! that silently does nothing).
-//!
-//! Facts from SDL2's `SDL_gamecontroller.c` (the format's definition) and gilrs 0.11.2's
-//! `mapping/parser.rs` and `gamepad.rs` (its conventions): `bN` a button, `aN` an axis (`+aN`
-//! / `-aN` its half, `aN~` inverted), `hH.M` hat H with mask M (1 up, 2 right, 4 down, 8
-//! left); outputs may be halves too (`+leftx`); unknown output names are ignored by SDL, and
-//! so here; a trigger fed by a whole axis spans the axis (-1 → 0, +1 → 1).
+//! in a test. gilrs stays the device reader (given the configured lines too); this layer
+//! produces the [`Named`] events gilrs's do, and [`super::gamepad::pad_event`] maps both the
+//! same way.
 
 use super::gamepad::Named;
+pub use crate::config::pad_mapping::{Element, Half, MappingError, SdlMapping, Target};
 use gilrs::{Axis, Button};
-use std::fmt;
-
-/// Longest mapping line read (SDL's own lines are under 400 bytes).
-pub const MAX_LINE: usize = 2048;
-/// Most bindings in one line (SDL names 26 outputs; halves can double some).
-const MAX_BINDS: usize = 64;
 
 /// gilrs's thresholds for a button fed by an axis (`GilrsBuilder` defaults).
 const PRESSED_AT: f32 = 0.75;
 const RELEASED_AT: f32 = 0.65;
-
-/// Which part of an axis an element or output is.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Half {
-    Whole,
-    Positive,
-    Negative,
-}
-
-/// A controller's raw element, as the mapping line names it.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Element {
-    Button(u8),
-    Axis {
-        index: u8,
-        half: Half,
-        inverted: bool,
-    },
-    Hat {
-        index: u8,
-        mask: u8,
-    },
-}
-
-/// What an element becomes: a gilrs button (triggers included) or (part of) a gilrs axis.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Target {
-    Button(Button),
-    Axis(Axis, Half),
-}
 
 /// One raw controller event, as a joystick layer reports it (SDL's ranges).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -76,177 +34,6 @@ pub enum RawInput {
         index: u8,
         mask: u8,
     },
-}
-
-/// Why a mapping line was refused.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub enum MappingError {
-    TooLong(usize),
-    /// Fewer than the GUID and the name.
-    Incomplete,
-    BadGuid(String),
-    /// A `name:element` field whose element does not read.
-    BadElement {
-        field: String,
-    },
-    TooManyBindings,
-}
-
-impl fmt::Display for MappingError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            MappingError::TooLong(n) => write!(
-                f,
-                "mapping line of {n} bytes (at most {MAX_LINE}): paste one line of SDL's gamecontrollerdb.txt"
-            ),
-            MappingError::Incomplete => f.write_str(
-                "mapping line needs GUID,name,bindings… (one line of SDL's gamecontrollerdb.txt)",
-            ),
-            MappingError::BadGuid(g) => {
-                write!(f, "mapping GUID {g:?} is not 32 hex digits")
-            }
-            MappingError::BadElement { field } => write!(
-                f,
-                "mapping field {field:?}: use bN (button), aN / +aN / -aN / aN~ (axis) or hH.M (hat)"
-            ),
-            MappingError::TooManyBindings => {
-                write!(f, "mapping has more than {MAX_BINDS} bindings")
-            }
-        }
-    }
-}
-
-impl std::error::Error for MappingError {}
-
-/// A parsed mapping line.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct SdlMapping {
-    pub guid: String,
-    pub name: String,
-    binds: Vec<(Element, Target)>,
-}
-
-/// An SDL output name as gilrs names it (`a` is gilrs's South, `leftshoulder` its
-/// LeftTrigger, `lefttrigger` its LeftTrigger2: gilrs's `mapping/parser.rs`).
-fn target(name: &str) -> Option<Target> {
-    let (half, base) = match name.as_bytes().first() {
-        Some(b'+') => (Half::Positive, &name[1..]),
-        Some(b'-') => (Half::Negative, &name[1..]),
-        _ => (Half::Whole, name),
-    };
-    let axis = |a| Some(Target::Axis(a, half));
-    let button = |b| (half == Half::Whole).then_some(Target::Button(b));
-    match base {
-        "leftx" => axis(Axis::LeftStickX),
-        "lefty" => axis(Axis::LeftStickY),
-        "rightx" => axis(Axis::RightStickX),
-        "righty" => axis(Axis::RightStickY),
-        "a" => button(Button::South),
-        "b" => button(Button::East),
-        "x" => button(Button::West),
-        "y" => button(Button::North),
-        "back" => button(Button::Select),
-        "start" => button(Button::Start),
-        "guide" => button(Button::Mode),
-        "leftstick" => button(Button::LeftThumb),
-        "rightstick" => button(Button::RightThumb),
-        "leftshoulder" => button(Button::LeftTrigger),
-        "rightshoulder" => button(Button::RightTrigger),
-        "lefttrigger" => button(Button::LeftTrigger2),
-        "righttrigger" => button(Button::RightTrigger2),
-        "dpup" => button(Button::DPadUp),
-        "dpdown" => button(Button::DPadDown),
-        "dpleft" => button(Button::DPadLeft),
-        "dpright" => button(Button::DPadRight),
-        // misc1, paddle1…4, touchpad, platform, crc, hint, sdk…: not read (SDL skips what it
-        // does not know too).
-        _ => None,
-    }
-}
-
-fn element(s: &str) -> Option<Element> {
-    let (half, rest) = match s.as_bytes().first() {
-        Some(b'+') => (Half::Positive, &s[1..]),
-        Some(b'-') => (Half::Negative, &s[1..]),
-        _ => (Half::Whole, s),
-    };
-    let (inverted, rest) = match rest.strip_suffix('~') {
-        Some(r) => (true, r),
-        None => (false, rest),
-    };
-    let plain = half == Half::Whole && !inverted;
-    if let Some(n) = rest.strip_prefix('b') {
-        return if plain {
-            n.parse().ok().map(Element::Button)
-        } else {
-            None
-        };
-    }
-    if let Some(n) = rest.strip_prefix('a') {
-        let index = n.parse().ok()?;
-        return Some(Element::Axis {
-            index,
-            half,
-            inverted,
-        });
-    }
-    if let Some(h) = rest.strip_prefix('h') {
-        let (index, mask) = h.split_once('.')?;
-        let mask: u8 = mask.parse().ok()?;
-        if !plain || mask == 0 || mask > 15 {
-            return None;
-        }
-        return Some(Element::Hat {
-            index: index.parse().ok()?,
-            mask,
-        });
-    }
-    None
-}
-
-impl SdlMapping {
-    /// Read one line of SDL's database (a trailing comma and spaces are fine).
-    pub fn parse(line: &str) -> Result<SdlMapping, MappingError> {
-        if line.len() > MAX_LINE {
-            return Err(MappingError::TooLong(line.len()));
-        }
-        let mut fields = line.trim().split(',');
-        let (Some(guid), Some(name)) = (fields.next(), fields.next()) else {
-            return Err(MappingError::Incomplete);
-        };
-        let guid = guid.trim();
-        if guid.len() != 32 || !guid.bytes().all(|b| b.is_ascii_hexdigit()) {
-            return Err(MappingError::BadGuid(guid.chars().take(40).collect()));
-        }
-        let mut binds = Vec::new();
-        for field in fields.map(str::trim).filter(|f| !f.is_empty()) {
-            let Some((out, el)) = field.split_once(':') else {
-                return Err(MappingError::BadElement {
-                    field: field.chars().take(40).collect(),
-                });
-            };
-            let Some(t) = target(out.trim()) else {
-                continue;
-            };
-            let e = element(el.trim()).ok_or_else(|| MappingError::BadElement {
-                field: field.chars().take(40).collect(),
-            })?;
-            if binds.len() == MAX_BINDS {
-                return Err(MappingError::TooManyBindings);
-            }
-            binds.push((e, t));
-        }
-        Ok(SdlMapping {
-            guid: guid.to_ascii_lowercase(),
-            name: name.trim().to_string(),
-            binds,
-        })
-    }
-
-    /// The element bound to `t`, if any.
-    pub fn element_of(&self, t: Target) -> Option<Element> {
-        self.binds.iter().find(|(_, x)| *x == t).map(|(e, _)| *e)
-    }
 }
 
 /// A controller seen through its mapping: raw events in, gilrs's named events out, with the
@@ -296,7 +83,7 @@ impl SdlPad {
     /// One raw event, as gilrs's named events (none for an element the line does not bind).
     pub fn feed(&mut self, raw: RawInput) -> Vec<Named> {
         let mut out = Vec::new();
-        let binds = self.map.binds.clone();
+        let binds = self.map.binds().to_vec();
         for (el, t) in binds {
             // The element's reading: 0..1 for a press or a half axis, -1..1 for a whole axis.
             let v = match (el, raw) {
@@ -402,48 +189,6 @@ mod tests {
 
     fn pad(line: &str) -> SdlPad {
         SdlPad::new(SdlMapping::parse(line).unwrap())
-    }
-
-    #[test]
-    fn reads_a_database_line() {
-        let m = SdlMapping::parse(XBOX).unwrap();
-        assert_eq!(m.name, "Xbox 360 Controller");
-        assert_eq!(
-            m.element_of(Target::Button(Button::DPadUp)),
-            Some(Element::Hat { index: 0, mask: 1 })
-        );
-        assert_eq!(
-            m.element_of(Target::Axis(Axis::LeftStickY, Half::Whole)),
-            Some(Element::Axis {
-                index: 1,
-                half: Half::Whole,
-                inverted: false
-            })
-        );
-    }
-
-    #[test]
-    fn refuses_what_does_not_read() {
-        assert_eq!(SdlMapping::parse("x"), Err(MappingError::Incomplete));
-        assert!(matches!(
-            SdlMapping::parse("0300zz,Pad,a:b0"),
-            Err(MappingError::BadGuid(_))
-        ));
-        for bad in ["a:c0", "a:b", "a:+b0", "dpup:h0.0", "dpup:h0.16", "leftx"] {
-            let line = format!("030000005e0400008e02000010010000,Pad,{bad}");
-            assert!(
-                matches!(
-                    SdlMapping::parse(&line),
-                    Err(MappingError::BadElement { .. })
-                ),
-                "{bad}"
-            );
-        }
-        let long = "0".repeat(MAX_LINE + 1);
-        assert_eq!(
-            SdlMapping::parse(&long),
-            Err(MappingError::TooLong(MAX_LINE + 1))
-        );
     }
 
     #[test]
