@@ -446,3 +446,25 @@ async fn a_pad_unplugged_mid_drive_stops_the_droid_and_says_so() {
     assert!(rig.drives_since(t).iter().all(|d| d.0 == 0));
     rig.quit().await;
 }
+
+/// A pad gilrs does not know is given its SDL line in `gamepad.mappings`: a line that reads is
+/// kept for gilrs, a mistyped one stops the configuration from loading, with its key and what
+/// to write instead.
+#[test]
+fn configured_mappings_are_read_when_the_configuration_loads() {
+    use droidctl::config::Config;
+    let good = format!("[gamepad]\nmappings = [{DUALSHOCK_4:?}]\n");
+    let c = Config::parse_merged(None, &good).expect("SDL's own line loads");
+    assert_eq!(c.gamepad.mappings, vec![DUALSHOCK_4.to_string()]);
+    assert!(Config::defaults().gamepad.mappings.is_empty());
+
+    let typo = DUALSHOCK_4.replace("b:b2", "b:2");
+    let bad = format!("[gamepad]\nmappings = [{DUALSHOCK_4:?}, {typo:?}]\n");
+    let e = Config::parse_merged(None, &bad).expect_err("a mistyped line is refused");
+    assert_eq!(e.key.as_deref(), Some("gamepad.mappings"), "{e}");
+    let shown = e.to_string();
+    assert!(
+        shown.contains("line 2 of the list") && shown.contains("\"b:2\"") && shown.contains("bN"),
+        "{shown}"
+    );
+}
