@@ -352,7 +352,7 @@ async fn drive(
     // Gamepad.
     let (pad_tx, pad_rx) = mpsc::channel(256);
     if config.gamepad.enabled {
-        if let Err(e) = crate::teleop::gamepad::spawn(pad_tx) {
+        if let Err(e) = crate::teleop::gamepad::spawn(pad_tx, config.gamepad.mappings.clone()) {
             tracing::warn!(error = %e, "no gamepad thread");
         }
     } else {

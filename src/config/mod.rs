@@ -10,6 +10,7 @@ pub mod bridge;
 pub mod keys;
 pub mod monitor;
 pub mod pad;
+pub mod pad_mapping;
 
 pub use keys::{Action, Context, KEY_TABLE, Key, KeyCode, KeyDef, KeyEntry, KeyMap, Needs};
 pub use pad::{Button, PadAction, PadBindings};
@@ -98,6 +99,7 @@ struct RawGamepad {
     sound_down: u16,
     sound_left: u16,
     sound_right: u16,
+    mappings: Vec<String>,
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -113,6 +115,9 @@ pub struct Gamepad {
     pub sound_down: u16,
     pub sound_left: u16,
     pub sound_right: u16,
+    /// SDL controller-database lines for pads gilrs does not know, each checked when the
+    /// configuration loads ([`pad_mapping::SdlMapping::parse`]); gilrs is given them.
+    pub mappings: Vec<String>,
 }
 
 /// `[display]`: how the app looks.
@@ -528,6 +533,8 @@ impl Config {
                 sound_down: g.sound_down,
                 sound_left: g.sound_left,
                 sound_right: g.sound_right,
+                mappings: pad_mapping::checked(g.mappings)
+                    .map_err(|msg| ("gamepad".to_string(), "mappings".to_string(), msg))?,
             },
             fleet: raw.fleet,
             streaming: raw.streaming,

@@ -197,9 +197,69 @@ impl PadState {
     }
 }
 
+/// What droidctl reads of one gilrs event: the element gilrs named and its value. gilrs's
+/// `Event` also carries a `GamepadId` and a `Code`, which gilrs makes only for a device; this
+/// is what both the device thread ([`Named::from_gilrs`]) and the SDL mapping layer
+/// ([`super::gamepad_map::SdlPad`], for tests and checked mappings) produce, so one function,
+/// [`pad_event`], maps both.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Named {
+    Connected(String),
+    Disconnected,
+    Pressed(gilrs::Button),
+    Released(gilrs::Button),
+    /// A button's value 0..1 (analog triggers), sent after its press or release.
+    Value(gilrs::Button, f32),
+    Axis(gilrs::Axis, f32),
+}
+
+impl Named {
+    /// gilrs's event as droidctl reads it; `name` is the pad's, asked only on a connection.
+    pub fn from_gilrs(e: gilrs::EventType, name: impl FnOnce() -> String) -> Option<Named> {
+        use gilrs::EventType as E;
+        Some(match e {
+            E::Connected => Named::Connected(name()),
+            E::Disconnected => Named::Disconnected,
+            E::ButtonPressed(b, _) => Named::Pressed(b),
+            E::ButtonReleased(b, _) => Named::Released(b),
+            E::ButtonChanged(b, v, _) => Named::Value(b, v),
+            E::AxisChanged(a, v, _) => Named::Axis(a, v),
+            _ => return None,
+        })
+    }
+}
+
+/// The one mapping from gilrs's names to droidctl's pad events: the sticks, the analog right
+/// trigger (turbo), and the buttons droidctl binds.
+pub fn pad_event(n: Named) -> Option<PadEvent> {
+    Some(match n {
+        Named::Connected(name) => PadEvent::Connected(name),
+        Named::Disconnected => PadEvent::Disconnected,
+        Named::Axis(a, v) => PadEvent::Axis(
+            match a {
+                gilrs::Axis::LeftStickX => Axis::LeftX,
+                gilrs::Axis::LeftStickY => Axis::LeftY,
+                gilrs::Axis::RightStickX => Axis::RightX,
+                gilrs::Axis::RightStickY => Axis::RightY,
+                _ => return None,
+            },
+            v,
+        ),
+        Named::Value(gilrs::Button::RightTrigger2, v) => PadEvent::Axis(Axis::RightTrigger, v),
+        Named::Value(..) => return None,
+        Named::Pressed(b) => PadEvent::Pressed(button_from_gilrs(b)?),
+        Named::Released(b) => PadEvent::Released(button_from_gilrs(b)?),
+    })
+}
+
 /// Start the gamepad thread. It sends events until the receiver is dropped. When gilrs cannot
 /// start (no udev, no /dev/input) it sends one `Unavailable` and ends.
-pub fn spawn(tx: mpsc::Sender<PadEvent>) -> std::io::Result<std::thread::JoinHandle<()>> {
+/// `mappings`: SDL controller-database lines (checked when the configuration loaded) added to
+/// gilrs's own database.
+pub fn spawn(
+    tx: mpsc::Sender<PadEvent>,
+    mappings: Vec<String>,
+) -> std::io::Result<std::thread::JoinHandle<()>> {
     std::thread::Builder::new()
         .name("gamepad".into())
         .spawn(move || {
@@ -208,7 +268,11 @@ pub fn spawn(tx: mpsc::Sender<PadEvent>) -> std::io::Result<std::thread::JoinHan
                 let _ = tx.blocking_send(PadEvent::Unavailable(why));
                 return;
             }
-            let mut gilrs = match gilrs::Gilrs::new() {
+            let mut builder = gilrs::GilrsBuilder::new();
+            for line in &mappings {
+                builder = builder.add_mappings(line);
+            }
+            let mut gilrs = match builder.build() {
                 Ok(g) => g,
                 Err(e) => {
                     let _ = tx.blocking_send(PadEvent::Unavailable(describe_error(&e)));
@@ -230,26 +294,8 @@ pub fn spawn(tx: mpsc::Sender<PadEvent>) -> std::io::Result<std::thread::JoinHan
                 let Some(ev) = gilrs.next_event_blocking(Some(Duration::from_millis(200))) else {
                     continue;
                 };
-                use gilrs::EventType as E;
-                let out = match ev.event {
-                    E::Connected => {
-                        Some(PadEvent::Connected(gilrs.gamepad(ev.id).name().to_string()))
-                    }
-                    E::Disconnected => Some(PadEvent::Disconnected),
-                    E::AxisChanged(a, v, _) => match a {
-                        gilrs::Axis::LeftStickX => Some(PadEvent::Axis(Axis::LeftX, v)),
-                        gilrs::Axis::LeftStickY => Some(PadEvent::Axis(Axis::LeftY, v)),
-                        gilrs::Axis::RightStickX => Some(PadEvent::Axis(Axis::RightX, v)),
-                        gilrs::Axis::RightStickY => Some(PadEvent::Axis(Axis::RightY, v)),
-                        _ => None,
-                    },
-                    E::ButtonChanged(gilrs::Button::RightTrigger2, v, _) => {
-                        Some(PadEvent::Axis(Axis::RightTrigger, v))
-                    }
-                    E::ButtonPressed(b, _) => button_from_gilrs(b).map(PadEvent::Pressed),
-                    E::ButtonReleased(b, _) => button_from_gilrs(b).map(PadEvent::Released),
-                    _ => None,
-                };
+                let name = || gilrs.gamepad(ev.id).name().to_string();
+                let out = Named::from_gilrs(ev.event, name).and_then(pad_event);
                 if let Some(out) = out
                     && tx.blocking_send(out).is_err()
                 {

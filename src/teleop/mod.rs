@@ -4,5 +4,6 @@
 
 pub mod control;
 pub mod gamepad;
+pub mod gamepad_map;
 pub mod held;
 pub mod tank;

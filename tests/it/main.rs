@@ -56,6 +56,7 @@ mod failsafe;
 mod fleet_app;
 mod fleet_mission;
 mod fuzz_smoke;
+mod gamepad;
 mod hints;
 mod layering;
 mod layout;
