@@ -206,7 +206,7 @@ impl Presence {
                     let _ = c.try_publish(t, QoS::AtLeastOnce, true, p);
                 }
             };
-            let mut takeovers = super::mqtt::Takeovers::default();
+            let mut takeovers = super::takeover::Takeovers::default();
             loop {
                 match ev.poll().await {
                     Ok(Event::Incoming(Packet::ConnAck(_))) => {
@@ -238,10 +238,10 @@ impl Presence {
                              is connected with the same client id ({cid}); give each bridge its \
                              own --client-id (or leave it out: the default is unique). Trying \
                              again in {} s",
-                            super::mqtt::TAKEOVERS,
-                            super::mqtt::TAKEOVER_BACKOFF.as_secs()
+                            super::takeover::TAKEOVERS,
+                            super::takeover::TAKEOVER_BACKOFF.as_secs()
                         );
-                        tokio::time::sleep(super::mqtt::TAKEOVER_BACKOFF).await;
+                        tokio::time::sleep(super::takeover::TAKEOVER_BACKOFF).await;
                     }
                     Err(_) => tokio::time::sleep(Duration::from_secs(1)).await,
                 }

@@ -1,10 +1,10 @@
 //! The bridge's safety promises of issues 26 and 27 on simulated droids under paused time:
 //! nothing waits for a droid's link to come back (26.8), a retained MQTT command never
-//! drives and a large payload is an error (26.5, 26.6, through [`mqtt::Inbox`], the MQTT
+//! drives and a large payload is an error (26.5, 26.6, through [`super::inbox::Inbox`], the MQTT
 //! transport without its connection), two droids never share a topic (26.7), and answers
 //! are never dropped for a slow reader (27.5).
 
-use super::mqtt::Inbox;
+use super::inbox::Inbox;
 use super::schema::{ErrorCode, Out};
 use super::tests::{RigOptions, rig, rig_with, run_for};
 use super::*;
