@@ -27,7 +27,6 @@
 mod actions;
 pub mod battery;
 mod build;
-pub mod catalog;
 mod core;
 pub mod detail;
 mod droid;

@@ -1,9 +1,9 @@
 //! The application state: everything the screen shows, owned by the event loop and updated
 //! from events. [`crate::ui`] renders an immutable borrow of it; nothing here draws.
 
-use super::catalog::{self, Entry};
 use super::packet_log::{LogFilter, PacketLog};
 use crate::config::{Context, Needs};
+use crate::family::catalog::{self, Entry};
 use crate::model::Model;
 use crate::session::{LinkState, SessionStats};
 use crate::telemetry::Telemetry;

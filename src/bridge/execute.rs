@@ -108,6 +108,11 @@ impl Bridge {
         if matches!(req.cmd, Cmd::Hold | Cmd::Release) {
             return self.reply(&req, Some(i), None);
         }
+        // The bridge's own setting: nothing is sent, so the link does not matter.
+        if let Cmd::Cruise(speed) = req.cmd {
+            self.set_cruise(i, speed);
+            return self.reply(&req, Some(i), None);
+        }
         // Nothing waits for a link to come back (issue 26 point 8): a command kept until a
         // reconnect would run when nobody expects it (the session's queue keeps what is sent
         // while the link is down); the reconnect's own stop is all a droid gets then.
@@ -135,7 +140,7 @@ impl Bridge {
         match &req.cmd {
             Cmd::Drive { speed, heading } => {
                 let m = Motion::Drive {
-                    speed: *speed,
+                    speed: speed.unwrap_or_else(|| self.cruise(i)),
                     heading: heading.degrees(),
                 };
                 let w = self.droids[i].lock().holder.command(now, m);
@@ -173,7 +178,7 @@ impl Bridge {
                 self.droids[i].lock().holder.stop();
                 self.stop_here(i);
             }
-            Cmd::Estop | Cmd::Hold | Cmd::Release => {}
+            Cmd::Estop | Cmd::Hold | Cmd::Release | Cmd::Cruise(_) => {}
             Cmd::Head(_)
             | Cmd::Stance(_)
             | Cmd::Lights(_)
@@ -294,6 +299,7 @@ impl Bridge {
             }
             match failed {
                 None => {
+                    bridge.said_played(i, &req.cmd);
                     bridge.reply(&req, Some(i), note);
                     // Its telemetry rate may have changed: the info anew (retained on MQTT).
                     if matches!(req.cmd, Cmd::Stream { .. })

@@ -3,8 +3,8 @@
 //! job.
 
 use super::Bridge;
-use super::mqtt::topic;
 use super::schema::{ErrorCode, Out};
+use super::topics::topic;
 use std::sync::Arc;
 
 /// What a droid's connection does with what the broker delivers: commands on the droid's

@@ -13,6 +13,7 @@
 //!   [`Out`] values from the channel [`Bridge::start`] returns.
 
 pub mod broker;
+mod cruise;
 mod execute;
 pub mod feeds;
 pub mod ha_light;
@@ -24,6 +25,7 @@ pub mod motion;
 pub mod mqtt;
 pub mod msgpack;
 pub mod outbox;
+mod played;
 pub mod presence;
 pub mod ready;
 pub mod ros;
@@ -123,6 +125,10 @@ struct DroidState {
     ready: bool,
     /// Held (`hold`, issue 40 point 6): what would move it is refused until `release`.
     held: bool,
+    /// The speed of a `drive` that gives none ([`Cmd::Cruise`](schema::Cmd::Cruise)).
+    cruise: u8,
+    /// The last animation and sound played ([`Out::Played`]), retained on MQTT.
+    played: [Option<Out>; 2],
 }
 
 /// The bridge's capability words, each with the flags of the model table it stands for
@@ -209,6 +215,8 @@ impl Bridge {
                     battery: None,
                     ready: false,
                     held: false,
+                    cruise: 0,
+                    played: [None, None],
                 }),
                 was_ready: tokio::sync::watch::Sender::new(false),
             })

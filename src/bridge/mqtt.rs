@@ -14,13 +14,15 @@
 //! | `PREFIX/DROID/info` | out, retained | the droid as `hello` says it on stdio (`info`) |
 //! | `PREFIX/DROID/reply` | out | replies, errors, and the bridge's own stops |
 //! | `PREFIX/DROID/hold` | out, retained | whether the droid is held ([`super::hold`]) |
+//! | `PREFIX/DROID/cruise` | out, retained | the cruise speed ([`super::cruise`]) |
+//! | `PREFIX/DROID/animation`, `…/sound` | out, retained | what it played last ([`super::played`]) |
 //! | `PREFIX/DROID/collisions` | out, retained | the collision count ([`super::kept`]) |
 //! | `PREFIX/DROID/light`, `…/light/set` | out retained, in | Home Assistant's light ([`super::ha_light`]) |
 //! | `PREFIX/bridge/ID` | out, retained | the `hello` object: every droid of bridge `ID` ([`super::presence`]) |
 //! | `PREFIX/bridge/ID/state` | out, retained | the bridge online or offline (its own last will) |
 //!
-//! The retained `info`, `hold`, `collisions`, `light` and `bridge/ID` topics are cleared
-//! when the bridge ends cleanly; `state` says offline.
+//! The retained `info`, `hold`, `cruise`, `animation`, `sound`, `collisions`, `light` and
+//! `bridge/ID` topics are cleared when the bridge ends cleanly; `state` says offline.
 //!
 //! When the broker goes, the droids driven through it are stopped and the connection is
 //! retried (backoff up to 5 s) while the droids' links stay up; back, the subscriptions and
@@ -42,11 +44,14 @@
 //! of the bridge (issue 37 point 7: whoever took the id over would end it at will).
 
 use super::Bridge;
+use super::cruise::CRUISE_LEAF;
 use super::feeds::{link_out, offline};
 use super::inbox::Inbox;
 use super::outbox::Outputs;
+use super::played::PLAYED_LEAVES;
 use super::schema::{ErrorCode, Out};
 use super::takeover::{TAKEOVER_BACKOFF, TAKEOVERS, Takeovers};
+pub use super::topics::topic;
 use rumqttc::{AsyncClient, Event, EventLoop, LastWill, MqttOptions, Packet, QoS};
 use std::sync::Arc;
 use std::time::Duration;
@@ -191,11 +196,6 @@ fn qos(q: u8) -> QoS {
     }
 }
 
-/// The topic of droid topic-name `t`'s `leaf`.
-pub fn topic(prefix: &str, t: &str, leaf: &str) -> String {
-    format!("{prefix}/{t}/{leaf}")
-}
-
 /// The topic leaves of telemetry: dropped, never replayed, when the broker was away.
 pub const TELEMETRY_LEAVES: [&str; 4] = ["telemetry", "collision", "battery", "odom"];
 
@@ -219,6 +219,8 @@ fn route(o: &Out) -> (&'static str, bool) {
         Out::Link { .. } => ("state", true),
         Out::Info { .. } => ("info", true),
         Out::Hold { .. } => ("hold", true),
+        Out::Cruise { .. } => (CRUISE_LEAF, true),
+        Out::Played { what, .. } => (what, true),
         Out::Hello { .. } | Out::Stopped { .. } | Out::Reply { .. } | Out::Error { .. } => {
             ("reply", false)
         }
@@ -460,8 +462,9 @@ pub async fn run(
     // asked (issue 40 point 4): availability says they are gone.
     let remove = bridge.settings().homeassistant_remove;
     for (i, ((name, t), client)) in members.iter().zip(&clients).enumerate() {
-        let mut gone: Vec<String> = ["info", "hold", super::kept::COLLISIONS_LEAF]
+        let mut gone: Vec<String> = ["info", "hold", CRUISE_LEAF, super::kept::COLLISIONS_LEAF]
             .into_iter()
+            .chain(PLAYED_LEAVES)
             .chain(
                 bridge
                     .settings()
@@ -574,14 +577,13 @@ async fn connection(
                 }
                 // What the droid and the bridge are, retained (a broker restarted without
                 // persistence forgot them).
-                let mut retained: Vec<(String, String)> = [
-                    bridge.info(i).map(|o| ("info", o)),
-                    bridge.hold_state(i).map(|o| ("hold", o)),
-                ]
-                .into_iter()
-                .flatten()
-                .map(|(leaf, o)| (topic(&settings.prefix, &t, leaf), o.to_json()))
-                .collect();
+                let mut retained: Vec<(String, String)> =
+                    [bridge.info(i), bridge.hold_state(i), bridge.cruise_state(i)]
+                        .into_iter()
+                        .flatten()
+                        .chain(bridge.played_state(i))
+                        .map(|o| (topic(&settings.prefix, &t, route(&o).0), o.to_json()))
+                        .collect();
                 retained.extend(
                     kept.at_connect(i, &name, ha.light.is_some())
                         .into_iter()

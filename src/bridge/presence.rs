@@ -10,7 +10,8 @@
 //! the very same moment can still both see nothing: the probe narrows the race to the
 //! probe's own round trip, it cannot close it (MQTT has no lock).
 
-use super::mqtt::{MqttSettings, topic};
+use super::mqtt::MqttSettings;
+use super::topics::topic;
 use rumqttc::{AsyncClient, Event, LastWill, Packet, QoS};
 use serde_json::{Value, json};
 use std::collections::HashSet;
