@@ -511,6 +511,8 @@ async fn control(bridge: std::sync::Weak<Bridge>) {
 }
 
 #[cfg(test)]
+mod cruise_tests;
+#[cfg(test)]
 mod hostile_tests;
 #[cfg(test)]
 mod integrator_tests;
