@@ -111,7 +111,7 @@ async fn a_request_for_a_droid_whose_link_is_down_is_answered_at_once_and_never_
     run_for(1000).await;
     let said = r.said();
     assert!(
-        matches!(&said[..], [Out::Reply { id, .. }] if id == "again"),
+        matches!(&said[..], [Out::Played { what: "sound", id: 3, .. }, Out::Reply { id, .. }] if id == "again"),
         "{said:?}"
     );
 }
