@@ -31,7 +31,6 @@ mod actions;
 pub mod battery;
 pub mod borders;
 mod build;
-pub mod catalog;
 mod core;
 pub mod detail;
 mod droid;

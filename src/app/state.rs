@@ -2,9 +2,9 @@
 //! from events. [`crate::ui`] renders an immutable borrow of it; nothing here draws.
 
 use super::borders::Borders;
-use super::catalog::{self, Entry};
 use super::packet_log::{LogFilter, PacketLog};
 use crate::config::{Context, KeyMap, Needs};
+use crate::family::catalog::{self, Entry};
 use crate::model::Model;
 use crate::session::{LinkState, SessionStats};
 use crate::telemetry::Telemetry;

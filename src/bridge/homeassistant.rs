@@ -4,7 +4,9 @@
 //! (`via_device`), made by Sphero, with its battery (volts and percent), its connection and
 //! collisions (diagnostic), a stop button, a "Motion enabled" switch (the latched stop:
 //! [`super::hold`]), its main light in colour and brightness (JSON schema:
-//! [`super::ha_light`]) and a stance select where it has legs.
+//! [`super::ha_light`]), a stance select where it has legs, animation and sound selects
+//! where it plays them (the catalogue's names: [`crate::family::catalog`]), and speed
+//! ([`super::cruise`]) and heading numbers where it rolls toward a heading.
 //!
 //! Sans-IO: [`configs`] and [`bridge_configs`] make the retained discovery messages; the
 //! MQTT transport publishes them at each connection to the broker and again when Home
@@ -17,7 +19,8 @@
 //! those of the MQTT sensor, binary sensor, button, switch, select and light (JSON schema)
 //! integrations. The entities read the bridge's own topics: nothing is published twice.
 
-use super::mqtt::topic;
+use super::topics::topic;
+use crate::family::catalog::Palette;
 use crate::model::Model;
 use serde_json::{Value, json};
 
@@ -303,16 +306,86 @@ pub fn configs(ha: &str, d: &Droid) -> Vec<(String, String)> {
             }),
         ));
     }
+    for (palette, what, object, name, icon) in [
+        (
+            Palette::Animations,
+            "animation",
+            "animation",
+            "Animation",
+            "mdi:robot-excited",
+        ),
+        (
+            Palette::Sounds,
+            "sound",
+            "sound",
+            "Sound",
+            "mdi:volume-high",
+        ),
+    ] {
+        // Offered as the app offers them: where the droid's family plays them.
+        let plays = match palette {
+            Palette::Animations => family.animation(d.model, 0).is_some(),
+            Palette::Sounds => family.sound(d.model, 0).is_some(),
+        };
+        if !plays {
+            continue;
+        }
+        let options: Vec<&str> = palette.entries().iter().map(|e| e.name.as_str()).collect();
+        entities.push((
+            "select",
+            object,
+            json!({
+                "name": name,
+                "command_topic": cmd,
+                // The name as JSON (`tojson`): the bridge takes it as the catalogue's.
+                "command_template": format!(
+                    "{{\"v\":{},\"cmd\":\"{what}\",\"{what}\":{{{{ value | tojson }}}}}}",
+                    super::schema::VERSION
+                ),
+                "options": options,
+                // What the droid played (said once it answered), retained.
+                "state_topic": at(what),
+                "value_template": "{{ value_json.name }}",
+                "icon": icon,
+                "availability": availability,
+            }),
+        ));
+    }
     if d.model.has(crate::model::Caps::HEADING) {
+        entities.push((
+            "number",
+            "speed",
+            json!({
+                "name": "Speed",
+                "command_topic": cmd,
+                // The cruise speed ([`super::cruise`]): what the Heading number rolls at.
+                // It moves nothing by itself (a drive alone stops after the command
+                // timeout); retained, so Home Assistant shows it after a restart.
+                "command_template": format!(
+                    "{{\"v\":{},\"cmd\":\"cruise\",\"speed\":{{{{ value | int }}}}}}",
+                    super::schema::VERSION
+                ),
+                "state_topic": at(super::cruise::CRUISE_LEAF),
+                "value_template": "{{ value_json.speed }}",
+                "min": 0,
+                "max": 255,
+                "step": 1,
+                "mode": "slider",
+                "icon": "mdi:speedometer",
+                "availability": availability,
+            }),
+        ));
         entities.push((
             "number",
             "heading",
             json!({
                 "name": "Heading",
                 "command_topic": cmd,
-                // Speed 0 toward a heading: the droid turns in place to face it.
+                // A drive without a speed: at the cruise speed (the Speed number) toward the
+                // heading, until the command timeout stops it; at cruise 0 (the default)
+                // the droid turns in place to face it.
                 "command_template": format!(
-                    "{{\"v\":{},\"cmd\":\"drive\",\"speed\":0,\"heading\":{{{{ value | int }}}}}}",
+                    "{{\"v\":{},\"cmd\":\"drive\",\"heading\":{{{{ value | int }}}}}}",
                     super::schema::VERSION
                 ),
                 "min": 0,
@@ -482,6 +555,9 @@ mod tests {
                 "homeassistant/switch/droidctl_D2-0001/motion/config",
                 "homeassistant/light/droidctl_D2-0001/light/config",
                 "homeassistant/select/droidctl_D2-0001/stance/config",
+                "homeassistant/select/droidctl_D2-0001/animation/config",
+                "homeassistant/select/droidctl_D2-0001/sound/config",
+                "homeassistant/number/droidctl_D2-0001/speed/config",
                 "homeassistant/number/droidctl_D2-0001/heading/config",
             ]
         );

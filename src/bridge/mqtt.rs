@@ -14,13 +14,15 @@
 //! | `PREFIX/DROID/info` | out, retained | the droid as `hello` says it on stdio (`info`) |
 //! | `PREFIX/DROID/reply` | out | replies, errors, and the bridge's own stops |
 //! | `PREFIX/DROID/hold` | out, retained | whether the droid is held ([`super::hold`]) |
+//! | `PREFIX/DROID/cruise` | out, retained | the cruise speed ([`super::cruise`]) |
+//! | `PREFIX/DROID/animation`, `…/sound` | out, retained | what it played last ([`super::played`]) |
 //! | `PREFIX/DROID/collisions` | out, retained | the collision count ([`super::kept`]) |
 //! | `PREFIX/DROID/light`, `…/light/set` | out retained, in | Home Assistant's light ([`super::ha_light`]) |
 //! | `PREFIX/bridge/ID` | out, retained | the `hello` object: every droid of bridge `ID` ([`super::presence`]) |
 //! | `PREFIX/bridge/ID/state` | out, retained | the bridge online or offline (its own last will) |
 //!
-//! The retained `info`, `hold`, `collisions`, `light` and `bridge/ID` topics are cleared
-//! when the bridge ends cleanly; `state` says offline.
+//! The retained `info`, `hold`, `cruise`, `animation`, `sound`, `collisions`, `light` and
+//! `bridge/ID` topics are cleared when the bridge ends cleanly; `state` says offline.
 //!
 //! When the broker goes, the droids driven through it are stopped and the connection is
 //! retried (backoff up to 5 s) while the droids' links stay up; back, the subscriptions and
@@ -30,20 +32,26 @@
 //! for the broker is taken out of its queue; `stopped`, `link` objects, replies and errors
 //! are kept and delivered after the reconnect.
 //!
-//! What arrives is handled by an [`Inbox`] (no connection in it: the fuzz target drives
+//! What arrives is handled by an [`Inbox`] ([`super::inbox`]) (no connection in it: the fuzz target drives
 //! it): a command the broker hands over flagged retained (kept, at a (re)subscription)
 //! never drives (issue 26 point 5; one published retained while the bridge is subscribed
 //! arrives live, unflagged, and runs once: issue 40 point 10), a payload over the command
 //! limit is a `bad_json` error (the client takes payloads far larger than that, so one
 //! large message does not end the connection: point 6), and a connection the broker ends
 //! right after making it, again and again, is another client with the same client id
-//! ([`Takeovers`], point 7): said, and tried again after [`TAKEOVER_BACKOFF`], never the end
+//! ([`Takeovers`]: [`super::takeover`], point 7): said, and tried again after
+//! [`TAKEOVER_BACKOFF`], never the end
 //! of the bridge (issue 37 point 7: whoever took the id over would end it at will).
 
 use super::Bridge;
+use super::cruise::CRUISE_LEAF;
 use super::feeds::{link_out, offline};
+use super::inbox::Inbox;
 use super::outbox::Outputs;
+use super::played::PLAYED_LEAVES;
 use super::schema::{ErrorCode, Out};
+use super::takeover::{TAKEOVER_BACKOFF, TAKEOVERS, Takeovers};
+pub use super::topics::topic;
 use rumqttc::{AsyncClient, Event, EventLoop, LastWill, MqttOptions, Packet, QoS};
 use std::sync::Arc;
 use std::time::Duration;
@@ -188,11 +196,6 @@ fn qos(q: u8) -> QoS {
     }
 }
 
-/// The topic of droid topic-name `t`'s `leaf`.
-pub fn topic(prefix: &str, t: &str, leaf: &str) -> String {
-    format!("{prefix}/{t}/{leaf}")
-}
-
 /// The topic leaves of telemetry: dropped, never replayed, when the broker was away.
 pub const TELEMETRY_LEAVES: [&str; 4] = ["telemetry", "collision", "battery", "odom"];
 
@@ -216,6 +219,8 @@ fn route(o: &Out) -> (&'static str, bool) {
         Out::Link { .. } => ("state", true),
         Out::Info { .. } => ("info", true),
         Out::Hold { .. } => ("hold", true),
+        Out::Cruise { .. } => (CRUISE_LEAF, true),
+        Out::Played { what, .. } => (what, true),
         Out::Hello { .. } | Out::Stopped { .. } | Out::Reply { .. } | Out::Error { .. } => {
             ("reply", false)
         }
@@ -323,144 +328,6 @@ pub enum BrokerState {
     /// The broker refused the first connection (credentials, authorization, TLS): not
     /// retried before the bridge has ever been connected.
     Refused(String),
-}
-
-/// How many connections in a row ended by the broker within [`TAKEOVER_WINDOW`] of being made
-/// mean that another client has taken the session over.
-pub const TAKEOVERS: u32 = 3;
-
-/// A connection the broker ends sooner than this after accepting it counts as taken over.
-pub const TAKEOVER_WINDOW: Duration = Duration::from_secs(2);
-
-/// How long a droid's connection waits after [`TAKEOVERS`] quick ends before it tries again.
-pub const TAKEOVER_BACKOFF: Duration = Duration::from_secs(30);
-
-/// Two clients with the same client id knock each other off for ever: the broker ends the
-/// older connection whenever the other one connects (MQTT 3.1.1, 3.1.4-2). Seen from one of
-/// them: connections accepted, then ended within moments, again and again. (sans-IO: the
-/// times are given.)
-#[derive(Debug, Default)]
-pub struct Takeovers {
-    since: Option<Instant>,
-    quick: u32,
-}
-
-impl Takeovers {
-    /// A connection was accepted at `now`.
-    pub fn connected(&mut self, now: Instant) {
-        self.since = Some(now);
-    }
-
-    /// The connection ended at `now`: true when that makes [`TAKEOVERS`] quick ends in a row
-    /// (counted afresh after that, so each such run is said once).
-    pub fn lost(&mut self, now: Instant) -> bool {
-        match self.since.take() {
-            Some(t) if now.duration_since(t) < TAKEOVER_WINDOW => self.quick += 1,
-            Some(_) => self.quick = 0,
-            // Not connected: a failed attempt says nothing either way.
-            None => {}
-        }
-        let taken = self.quick >= TAKEOVERS;
-        if taken {
-            self.quick = 0;
-        }
-        taken
-    }
-}
-
-/// What a droid's connection does with what the broker delivers: commands on the droid's
-/// `cmd` topic go to the bridge; a retained one does not (said once per connection to the
-/// broker: a reply said on a connection that then dropped may never have left); anything
-/// else is ignored.
-pub struct Inbox {
-    bridge: Arc<Bridge>,
-    i: usize,
-    cmd: String,
-    cmd_vel: String,
-    retained: u64,
-    /// A retained command was said on this connection.
-    said: bool,
-}
-
-impl Inbox {
-    /// Droid `i`'s inbox, its commands on `PREFIX/TOPIC/cmd`.
-    pub fn new(bridge: Arc<Bridge>, i: usize, prefix: &str) -> Inbox {
-        let t = bridge.topic(i).unwrap_or("droid").to_string();
-        Inbox {
-            cmd: topic(prefix, &t, "cmd"),
-            cmd_vel: topic(prefix, &t, super::ros::CMD_VEL),
-            bridge,
-            i,
-            retained: 0,
-            said: false,
-        }
-    }
-
-    /// A new connection to the broker: the next retained command is said again.
-    pub fn connected(&mut self) {
-        self.said = false;
-    }
-
-    /// The topic it takes commands on.
-    pub fn cmd_topic(&self) -> &str {
-        &self.cmd
-    }
-
-    /// The topic it takes ROS Twists on.
-    pub fn cmd_vel_topic(&self) -> &str {
-        &self.cmd_vel
-    }
-
-    /// Retained commands ignored so far.
-    pub fn retained(&self) -> u64 {
-        self.retained
-    }
-
-    /// One publish delivered by the broker; the first retained command ignored is said on
-    /// the droid's `reply` topic and in the log, and returned for the terminal.
-    pub fn publish(&mut self, topic: &str, retain: bool, payload: &[u8]) -> Option<String> {
-        if topic != self.cmd && topic != self.cmd_vel {
-            return None;
-        }
-        if retain {
-            // A retained command is one the broker kept for whoever subscribes: it would
-            // run at every (re)connect with nobody there (issue 26 point 5).
-            self.retained += 1;
-            if !self.said {
-                self.said = true;
-                let name = self.bridge.fleet().member(self.i).map(|m| m.name.clone());
-                let error = format!(
-                    "a retained message on {topic} was ignored: commands are taken only from a \
-                     client that is there (publish without -r); clear it with \
-                     `mosquitto_pub -r -n -t {topic}`"
-                );
-                tracing::warn!(topic, "bridge: a retained command ignored");
-                let said = format!("droidctl: {error}");
-                self.bridge.emit(
-                    Some(self.i),
-                    Out::Error {
-                        id: None,
-                        droid: name,
-                        cmd: None,
-                        code: ErrorCode::Retained,
-                        robot: None,
-                        capability: None,
-                        error,
-                    },
-                );
-                return Some(said);
-            }
-            tracing::debug!(topic, "bridge: a retained command ignored");
-            return None;
-        }
-        if topic == self.cmd_vel {
-            self.bridge
-                .handle_parsed(super::ros::cmd_vel(payload), Some(self.i));
-        } else {
-            self.bridge.handle(payload, Some(self.i));
-        }
-        None
-    }
 }
 
 /// Run the bridge through the broker until `stopped` completes: a connection per droid,
@@ -595,8 +462,9 @@ pub async fn run(
     // asked (issue 40 point 4): availability says they are gone.
     let remove = bridge.settings().homeassistant_remove;
     for (i, ((name, t), client)) in members.iter().zip(&clients).enumerate() {
-        let mut gone: Vec<String> = ["info", "hold", super::kept::COLLISIONS_LEAF]
+        let mut gone: Vec<String> = ["info", "hold", CRUISE_LEAF, super::kept::COLLISIONS_LEAF]
             .into_iter()
+            .chain(PLAYED_LEAVES)
             .chain(
                 bridge
                     .settings()
@@ -709,14 +577,13 @@ async fn connection(
                 }
                 // What the droid and the bridge are, retained (a broker restarted without
                 // persistence forgot them).
-                let mut retained: Vec<(String, String)> = [
-                    bridge.info(i).map(|o| ("info", o)),
-                    bridge.hold_state(i).map(|o| ("hold", o)),
-                ]
-                .into_iter()
-                .flatten()
-                .map(|(leaf, o)| (topic(&settings.prefix, &t, leaf), o.to_json()))
-                .collect();
+                let mut retained: Vec<(String, String)> =
+                    [bridge.info(i), bridge.hold_state(i), bridge.cruise_state(i)]
+                        .into_iter()
+                        .flatten()
+                        .chain(bridge.played_state(i))
+                        .map(|o| (topic(&settings.prefix, &t, route(&o).0), o.to_json()))
+                        .collect();
                 retained.extend(
                     kept.at_connect(i, &name, ha.light.is_some())
                         .into_iter()
@@ -821,36 +688,6 @@ async fn connection(
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn repeated_immediate_ends_are_a_takeover_and_a_long_connection_resets_the_count() {
-        let t0 = Instant::now();
-        let at = |ms: u64| t0 + Duration::from_millis(ms);
-        let mut t = Takeovers::default();
-        // The broker restarting: a long connection, then failed attempts, then back.
-        t.connected(at(0));
-        assert!(!t.lost(at(60_000)));
-        assert!(!t.lost(at(61_000)));
-        assert!(!t.lost(at(62_000)));
-        // Another client with the same id: ended within moments each time.
-        let mut now = 70_000;
-        for n in 1..=TAKEOVERS * 2 {
-            t.connected(at(now));
-            now += 300;
-            assert_eq!(
-                t.lost(at(now)),
-                n % TAKEOVERS == 0,
-                "takeover {n}: said once a run"
-            );
-            now += 250;
-        }
-        // Two quick ends and a long connection between: no takeover.
-        let mut t = Takeovers::default();
-        for (up, down) in [(0, 100), (400, 500), (800, 10_000), (10_300, 10_400)] {
-            t.connected(at(up));
-            assert!(!t.lost(at(down)));
-        }
-    }
 
     #[test]
     fn the_default_client_id_is_unique_per_process() {

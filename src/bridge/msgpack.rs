@@ -192,32 +192,35 @@ fn float(f: f64, at: usize) -> Result<Value, Error> {
         .ok_or(Error::NotFinite(at))
 }
 
+#[cfg(any(test, feature = "test-hooks"))]
+/// `msgpack.dumps({"linear": {"x": 0.3, "y": 0.0, "z": 0.0}, "angular": {"x": 0.0,
+/// "y": 0.0, "z": -0.5}})` as Python's msgpack 1.0 writes it (floats as float 64,
+/// strings as fixstr), built byte by byte from the spec: the one encoder of the unit tests
+/// and the integration tests (`tests/it/bridge_ros.rs`), which publish it on `cmd_vel`.
+/// Tests only: the bridge reads MessagePack, it never writes it.
+pub fn twist_bytes(linear_x: f64, angular_z: f64) -> Vec<u8> {
+    let mut b = vec![0x82];
+    for (name, v) in [
+        ("linear", [linear_x, 0.0, 0.0]),
+        ("angular", [0.0, 0.0, angular_z]),
+    ] {
+        b.push(0xa0 | name.len() as u8);
+        b.extend_from_slice(name.as_bytes());
+        b.push(0x83);
+        for (axis, x) in ["x", "y", "z"].iter().zip(v) {
+            b.push(0xa1);
+            b.extend_from_slice(axis.as_bytes());
+            b.push(0xcb);
+            b.extend_from_slice(&x.to_be_bytes());
+        }
+    }
+    b
+}
+
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
     use serde_json::json;
-
-    /// `msgpack.dumps({"linear": {"x": 0.3, "y": 0.0, "z": 0.0}, "angular": {"x": 0.0,
-    /// "y": 0.0, "z": -0.5}})` as Python's msgpack 1.0 writes it (floats as float 64,
-    /// strings as fixstr), built byte by byte from the spec.
-    pub fn twist_bytes(linear_x: f64, angular_z: f64) -> Vec<u8> {
-        let mut b = vec![0x82];
-        for (name, v) in [
-            ("linear", [linear_x, 0.0, 0.0]),
-            ("angular", [0.0, 0.0, angular_z]),
-        ] {
-            b.push(0xa0 | name.len() as u8);
-            b.extend_from_slice(name.as_bytes());
-            b.push(0x83);
-            for (axis, x) in ["x", "y", "z"].iter().zip(v) {
-                b.push(0xa1);
-                b.extend_from_slice(axis.as_bytes());
-                b.push(0xcb);
-                b.extend_from_slice(&x.to_be_bytes());
-            }
-        }
-        b
-    }
 
     #[test]
     fn a_twist_as_python_msgpack_writes_it() {

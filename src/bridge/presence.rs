@@ -10,7 +10,8 @@
 //! the very same moment can still both see nothing: the probe narrows the race to the
 //! probe's own round trip, it cannot close it (MQTT has no lock).
 
-use super::mqtt::{MqttSettings, topic};
+use super::mqtt::MqttSettings;
+use super::topics::topic;
 use rumqttc::{AsyncClient, Event, LastWill, Packet, QoS};
 use serde_json::{Value, json};
 use std::collections::HashSet;
@@ -206,7 +207,7 @@ impl Presence {
                     let _ = c.try_publish(t, QoS::AtLeastOnce, true, p);
                 }
             };
-            let mut takeovers = super::mqtt::Takeovers::default();
+            let mut takeovers = super::takeover::Takeovers::default();
             loop {
                 match ev.poll().await {
                     Ok(Event::Incoming(Packet::ConnAck(_))) => {
@@ -238,10 +239,10 @@ impl Presence {
                              is connected with the same client id ({cid}); give each bridge its \
                              own --client-id (or leave it out: the default is unique). Trying \
                              again in {} s",
-                            super::mqtt::TAKEOVERS,
-                            super::mqtt::TAKEOVER_BACKOFF.as_secs()
+                            super::takeover::TAKEOVERS,
+                            super::takeover::TAKEOVER_BACKOFF.as_secs()
                         );
-                        tokio::time::sleep(super::mqtt::TAKEOVER_BACKOFF).await;
+                        tokio::time::sleep(super::takeover::TAKEOVER_BACKOFF).await;
                     }
                     Err(_) => tokio::time::sleep(Duration::from_secs(1)).await,
                 }

@@ -305,7 +305,7 @@ mod tests {
     fn a_bare_twist_in_json_msgpack_and_rosbridge() {
         let json = br#"{"linear":{"x":0.3,"y":0.0,"z":0.0},"angular":{"x":0.0,"y":0.0,"z":-0.5}}"#;
         assert_eq!(twist_of(cmd_vel(json)), (0.3, -0.5));
-        let mp = crate::bridge::msgpack::tests::twist_bytes(0.25, 1.0);
+        let mp = crate::bridge::msgpack::twist_bytes(0.25, 1.0);
         assert_eq!(twist_of(cmd_vel(&mp)), (0.25, 1.0));
         let rb = br#"{"op":"publish","topic":"/cmd_vel","msg":{"linear":{"x":-0.2},"angular":{"z":0.1}}}"#;
         assert_eq!(twist_of(cmd_vel(rb)), (-0.2, 0.1));

@@ -1,10 +1,10 @@
 //! The bridge's safety promises of issues 26 and 27 on simulated droids under paused time:
 //! nothing waits for a droid's link to come back (26.8), a retained MQTT command never
-//! drives and a large payload is an error (26.5, 26.6, through [`mqtt::Inbox`], the MQTT
+//! drives and a large payload is an error (26.5, 26.6, through [`super::inbox::Inbox`], the MQTT
 //! transport without its connection), two droids never share a topic (26.7), and answers
 //! are never dropped for a slow reader (27.5).
 
-use super::mqtt::Inbox;
+use super::inbox::Inbox;
 use super::schema::{ErrorCode, Out};
 use super::tests::{RigOptions, rig, rig_with, run_for};
 use super::*;
@@ -111,7 +111,7 @@ async fn a_request_for_a_droid_whose_link_is_down_is_answered_at_once_and_never_
     run_for(1000).await;
     let said = r.said();
     assert!(
-        matches!(&said[..], [Out::Reply { id, .. }] if id == "again"),
+        matches!(&said[..], [Out::Played { what: "sound", id: 3, .. }, Out::Reply { id, .. }] if id == "again"),
         "{said:?}"
     );
 }

@@ -10,6 +10,7 @@
 //! `assets/bridge.schema.json` is the same contract as a JSON Schema; the tests validate
 //! both directions against it.
 
+use crate::family::catalog::Palette;
 use crate::mission::Sample;
 use crate::protocol::wire::LegAction;
 use crate::script::{Action, LedGroup, MatrixAction};
@@ -42,11 +43,16 @@ pub struct Request {
 #[derive(Debug, Clone, PartialEq)]
 pub enum Cmd {
     /// Roll at `speed` (0..=255) toward `heading` (degrees, clockwise); re-sent by the client
-    /// within the command timeout to keep rolling.
+    /// within the command timeout to keep rolling. No `speed`: the droid's cruise speed
+    /// ([`Cmd::Cruise`]), 0 until one is set (the droid turns to face the heading).
     Drive {
-        speed: u8,
+        speed: Option<u8>,
         heading: Heading,
     },
+    /// The droid's cruise speed (0..=255): the speed of a `drive` that gives none (Home
+    /// Assistant's Speed number, which its Heading number then rolls at). It moves nothing
+    /// by itself; kept until changed, across reconnects, for the bridge's life.
+    Cruise(u8),
     /// ROS's `cmd_vel`: forward m/s (negative backs up) and yaw rad/s (positive turns left);
     /// as flat numbers or as ROS's `geometry_msgs/Twist` (`linear.x`, `angular.z`).
     Twist {
@@ -89,6 +95,7 @@ impl Cmd {
             Cmd::Sound(id) => Intent::Sound(*id),
             Cmd::Matrix(m) => Intent::Matrix(Matrix::from(m)),
             Cmd::Drive { .. }
+            | Cmd::Cruise(_)
             | Cmd::Twist { .. }
             | Cmd::Stop
             | Cmd::Estop
@@ -104,6 +111,7 @@ impl Cmd {
     pub fn verb(&self) -> &'static str {
         match self {
             Cmd::Drive { .. } => "drive",
+            Cmd::Cruise(_) => "cruise",
             Cmd::Twist { .. } => "twist",
             Cmd::Stop => "stop",
             Cmd::Estop => "estop",
@@ -141,6 +149,7 @@ impl Cmd {
 /// The verbs, with the fields each takes besides `v`, `cmd`, `droid` and `id`.
 pub const VERBS: &[(&str, &[&str])] = &[
     ("drive", &["speed", "heading"]),
+    ("cruise", &["speed"]),
     ("twist", &["linear", "angular"]),
     ("stop", &[]),
     ("estop", &[]),
@@ -341,10 +350,14 @@ fn parse_object(obj: &Map<String, Value>) -> Result<Request, Refusal> {
     let f = Fields { obj, verb };
     let cmd = match verb {
         "drive" => Cmd::Drive {
-            speed: f.int("speed", 0, 255)? as u8,
+            speed: match obj.get("speed") {
+                None => None,
+                Some(_) => Some(f.int("speed", 0, 255)? as u8),
+            },
             heading: Heading::new(f.int("heading", 0, 359)? as u16)
                 .ok_or_else(|| field_err("heading is 0..=359"))?,
         },
+        "cruise" => Cmd::Cruise(f.int("speed", 0, 255)? as u8),
         "twist" => Cmd::Twist {
             linear: f.vector("linear", 'x', 5.0)?,
             angular: f.vector("angular", 'z', 20.0)?,
@@ -376,8 +389,8 @@ fn parse_object(obj: &Map<String, Value>) -> Result<Request, Refusal> {
             },
         ),
         "lights" => Cmd::Lights(f.lights()?),
-        "animation" => Cmd::Animation(f.int("animation", 0, u16::MAX as i64)? as u16),
-        "sound" => Cmd::Sound(f.int("sound", 0, u16::MAX as i64)? as u16),
+        "animation" => Cmd::Animation(f.palette("animation", Palette::Animations)?),
+        "sound" => Cmd::Sound(f.palette("sound", Palette::Sounds)?),
         "matrix" => Cmd::Matrix(f.matrix()?),
         "stream" => Cmd::Stream {
             rate_hz: f.int("rate_hz", 0, 100)? as u16,
@@ -406,6 +419,28 @@ impl Fields<'_> {
         integer(v)
             .filter(|n| (lo..=hi).contains(n))
             .ok_or_else(|| field_err(format!("`{k}` is an integer in {lo}..={hi}, not {v}")))
+    }
+
+    /// An animation's or a sound's id, or its name in the catalogue (as the app and Home
+    /// Assistant's selects offer them: [`Palette`]).
+    fn palette(&self, k: &str, palette: Palette) -> Result<u16, Refusal> {
+        let v = self.get(k)?;
+        if let Value::String(name) = v {
+            return palette.id_of(name).ok_or_else(|| {
+                let names: Vec<&str> = palette.entries().iter().map(|e| e.name.as_str()).collect();
+                field_err(format!(
+                    "no {k} is named {name:?}: one of {}, or an id 0..=65535",
+                    names.join(", ")
+                ))
+            });
+        }
+        integer(v)
+            .and_then(|n| u16::try_from(n).ok())
+            .ok_or_else(|| {
+                field_err(format!(
+                    "`{k}` is an id 0..=65535 or a name from the catalogue, not {v}"
+                ))
+            })
     }
 
     /// A finite number within ±`limit`.
@@ -729,6 +764,19 @@ pub enum Out {
     /// Whether the droid is held (`hold`, `release`; issue 40 point 6): sent at each
     /// change, retained on MQTT's `hold` topic.
     Hold { droid: String, held: bool },
+    /// The droid's cruise speed ([`Cmd::Cruise`]): sent at each change, retained on MQTT's
+    /// `cruise` topic (Home Assistant's Speed number reads it).
+    Cruise { droid: String, speed: u8 },
+    /// An animation or a sound the droid played (it answered the command): retained on
+    /// MQTT's `animation` or `sound` topic, which Home Assistant's selects read. `name` is
+    /// the catalogue's ([`crate::family::catalog`]), `null` for an id it does not name.
+    Played {
+        droid: String,
+        /// `animation` or `sound`.
+        what: &'static str,
+        id: u16,
+        name: Option<&'static str>,
+    },
     /// A command done (sent only for commands with an `id`).
     Reply {
         id: Value,
@@ -771,6 +819,8 @@ impl Out {
             | Out::Battery { droid, .. }
             | Out::Link { droid, .. }
             | Out::Hold { droid, .. }
+            | Out::Cruise { droid, .. }
+            | Out::Played { droid, .. }
             | Out::Stopped { droid, .. } => Some(droid),
             Out::Reply { droid, .. } | Out::Error { droid, .. } => droid.as_deref(),
         }

@@ -43,3 +43,8 @@ pub fn topic_names_besides(
     }
     out
 }
+
+/// The topic of droid topic-name `t`'s `leaf`.
+pub fn topic(prefix: &str, t: &str, leaf: &str) -> String {
+    format!("{prefix}/{t}/{leaf}")
+}

@@ -16,10 +16,12 @@
 //! - [`Family::lower`]: what a droid should do ([`intent::Intent`], the one vocabulary of
 //!   everything above the families) as `(model, intent)` → commands, or
 //!   [`intent::Unsupported`]. What the model can do is the model table's ([`crate::model::Caps`]),
-//!   not something to find out by building dummy commands.
+//!   not something to find out by building dummy commands;
+//! - [`catalog`]: the names of the animations and sounds the Star Wars droids play.
 //!
 //! Everything here is sans-IO: no clocks, no tokio.
 
+pub mod catalog;
 pub mod error;
 pub mod intent;
 pub mod listing;

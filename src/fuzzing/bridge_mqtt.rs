@@ -17,7 +17,7 @@
 
 use super::bridge::{Writes, fleet, still, watch_writes};
 use super::{Bytes, Target};
-use crate::bridge::mqtt::Inbox;
+use crate::bridge::inbox::Inbox;
 use crate::bridge::outbox::Routed;
 use crate::bridge::schema::{self, ErrorCode, Out};
 use crate::bridge::{Bridge, Settings};

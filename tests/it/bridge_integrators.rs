@@ -61,13 +61,15 @@ const HA_KEYS: &[(&str, &[&str], &[&str])] = &[
     (
         "select",
         &["command_topic", "options"],
-        &["command_template"],
+        &["command_template", "state_topic", "value_template"],
     ),
     (
         "number",
         &["command_topic"],
         &[
             "command_template",
+            "state_topic",
+            "value_template",
             "min",
             "max",
             "step",
@@ -147,10 +149,10 @@ fn home_assistant_discovery_through_mosquitto() {
         "droidctl/Robi-42/state".into(),
     ];
     sub.wait_all(20, &both, |v| v["ready"] == true);
-    // Retained: a subscriber that comes later gets every config: R2-D2's 9, Robi's 4, the
+    // Retained: a subscriber that comes later gets every config: R2-D2's 12, Robi's 4, the
     // bridge's 1.
     let ha = Sub::start(p, "homeassistant/#", &[]);
-    let configs = gather(&ha, 5, |got| got.len() >= 14);
+    let configs = gather(&ha, 5, |got| got.len() >= 17);
     let mut seen = Vec::new();
     for (topic, payload) in &configs {
         let (component, node, object) =
@@ -207,6 +209,9 @@ fn home_assistant_discovery_through_mosquitto() {
         "droidctl_D2-0001/light",
         "droidctl_D2-0001/stance",
         "droidctl_D2-0001/heading",
+        "droidctl_D2-0001/speed",
+        "droidctl_D2-0001/animation",
+        "droidctl_D2-0001/sound",
         "droidctl_Robi-42/connection",
         "droidctl_Robi-42/stop",
         "droidctl_Robi-42/motion",
@@ -336,18 +341,67 @@ fn home_assistant_discovery_through_mosquitto() {
     assert!(publish(p, cmd_topic, free, &[]));
     let r = sub.wait(5, "droidctl/D2-0001/reply", |v| v["id"] == "d2");
     assert_eq!(r["type"], "reply", "{r}");
+    // The Speed number sets the cruise speed (retained, read back), moving nothing; the
+    // Heading number then rolls at it until the command timeout.
+    let speed_n = config("D2-0001/speed/config");
+    let heading_n = config("D2-0001/heading/config");
+    let render = |c: &Value, v: u32| {
+        c["command_template"]
+            .as_str()
+            .unwrap()
+            .replace("{{ value | int }}", &v.to_string())
+    };
+    assert!(publish(p, cmd_topic, &render(&speed_n, 150), &[]));
+    let cruise_topic = speed_n["state_topic"].as_str().unwrap();
+    let c = sub.wait(5, cruise_topic, |v| v["speed"] == 150);
+    assert_eq!(c["type"], "cruise", "{c}");
+    assert_eq!(speed_n["value_template"], "{{ value_json.speed }}");
+    std::thread::sleep(Duration::from_millis(600));
+    let _ = sub.drain();
+    let t = sub.wait(3, "droidctl/D2-0001/telemetry", |_| true);
+    assert!(
+        speed(&t) < 3.0,
+        "the speed number alone moved the droid: {t}"
+    );
+    // A drive (held until the command timeout stops it); that it rolls at the cruise
+    // speed is shown in src/bridge/cruise_tests.rs.
+    assert!(publish(p, cmd_topic, &render(&heading_n, 180), &[]));
+    sub.wait(5, "droidctl/D2-0001/reply", |v| {
+        v["type"] == "stopped" && v["reason"] == "timeout"
+    });
+    // The animation select (issue 40 point 5), after the drives (R2 plays it for a while): an option, sent through the command template
+    // as Home Assistant renders it, plays that animation, and the state is retained.
+    let select = config("D2-0001/animation/config");
+    let option = select["options"]
+        .as_array()
+        .and_then(|o| o.iter().find(|o| *o == "Frustrated"))
+        .expect("the catalogue's names as options");
+    let template = select["command_template"].as_str().unwrap();
+    assert!(template.contains("{{ value | tojson }}"), "{template}");
+    let payload = template.replace("{{ value | tojson }}", &option.to_string());
+    assert!(publish(p, cmd_topic, &payload, &[]));
+    let state = select["state_topic"].as_str().unwrap();
+    let played = sub.wait(5, state, |v| v["type"] == "played");
+    assert_eq!(
+        (&played["id"], &played["name"]),
+        (&Value::from(10), option),
+        "{played}"
+    );
+    assert_eq!(select["value_template"], "{{ value_json.name }}");
+    let later = Sub::start(p, state, &[]).wait(5, state, |_| true);
+    assert_eq!(later["name"], *option, "retained: {later}");
     // Home Assistant's birth message: every config published again.
     let _ = ha.drain();
     assert!(publish(p, "homeassistant/status", "online", &[]));
-    let again = gather(&ha, 5, |got| got.len() >= 14);
-    assert!(again.len() >= 14, "{} configs again", again.len());
+    let again = gather(&ha, 5, |got| got.len() >= 17);
+    assert!(again.len() >= 17, "{} configs again", again.len());
     // A clean end keeps the entities (availability says offline) …
     drop(ha);
     interrupt(&mut bridge);
     std::thread::sleep(Duration::from_millis(500));
     let after = Sub::start(p, "homeassistant/#", &[]);
-    let kept = gather(&after, 5, |got| got.len() >= 14);
-    assert_eq!(kept.len(), 14, "{kept:?}");
+    let kept = gather(&after, 5, |got| got.len() >= 17);
+    assert_eq!(kept.len(), 17, "{kept:?}");
     drop(after);
     // … and --homeassistant-remove removes them.
     let mut bridge = BridgeProc::start(

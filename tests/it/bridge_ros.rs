@@ -10,27 +10,6 @@ use crate::common::mosquitto::{self, Broker, Kind, Sub, mosquitto_here, publish}
 use serde_json::{Value, json};
 use std::time::{Duration, Instant, SystemTime};
 
-/// `msgpack.dumps` of a Twist's fields as Python's msgpack 1.x writes them (fixmap, fixstr
-/// keys, float 64 values), built from the MessagePack spec.
-pub fn msgpack_twist(linear_x: f64, angular_z: f64) -> Vec<u8> {
-    let mut b = vec![0x82];
-    for (name, v) in [
-        ("linear", [linear_x, 0.0, 0.0]),
-        ("angular", [0.0, 0.0, angular_z]),
-    ] {
-        b.push(0xa0 | name.len() as u8);
-        b.extend_from_slice(name.as_bytes());
-        b.push(0x83);
-        for (axis, x) in ["x", "y", "z"].iter().zip(v) {
-            b.push(0xa1);
-            b.extend_from_slice(axis.as_bytes());
-            b.push(0xcb);
-            b.extend_from_slice(&x.to_be_bytes());
-        }
-    }
-    b
-}
-
 /// groove-x `mqtt_bridge` with `serializer: json:dumps`: Python's `json.dumps` of the
 /// fields (floats written with a point, spaces after separators).
 fn json_twist(linear_x: f64, angular_z: f64) -> String {
@@ -105,7 +84,12 @@ fn ros_twists_drive_and_odometry_follows(kind: Kind) {
     let o = sub.wait(5, odom, |v| lin(v) > 0.2);
     assert!(schema.is_valid(&o), "{o}");
     // groove-x's default, MessagePack: turning left (counter-clockwise, angular.z > 0).
-    stream(p, cmd_vel, &msgpack_twist(0.3, 1.5), 1500);
+    stream(
+        p,
+        cmd_vel,
+        &droidctl::bridge::msgpack::twist_bytes(0.3, 1.5),
+        1500,
+    );
     let o = sub.wait(5, odom, |v| ang(v) > 0.3);
     let q = &o["pose"]["pose"]["orientation"];
     let norm: f64 = ["x", "y", "z", "w"]

@@ -52,6 +52,12 @@ fn the_schema_is_valid_and_takes_the_readme_examples() {
         json!({"v":1,"cmd":"lights","group":"logic","brightness":200}),
         json!({"v":1,"cmd":"animation","animation":3}),
         json!({"v":1,"cmd":"sound","sound":12}),
+        // The catalogue's names, as Home Assistant's selects send them (issue 40 point 5).
+        json!({"v":1,"cmd":"animation","animation":"Frustrated"}),
+        json!({"v":1,"cmd":"sound","sound":"r2 burnout"}),
+        // The cruise speed, and a drive at it (Home Assistant's Speed and Heading numbers).
+        json!({"v":1,"cmd":"cruise","speed":120,"id":"c"}),
+        json!({"v":1,"cmd":"drive","heading":90}),
         json!({"v":1,"cmd":"matrix","op":"text","text":"HELLO","rgb":[0,255,0]}),
         json!({"v":1,"cmd":"matrix","op":"char","char":"A"}),
         json!({"v":1,"cmd":"matrix","op":"fill","rgb":[0,0,255]}),
@@ -106,6 +112,11 @@ fn what_the_schema_refuses_the_bridge_refuses() {
         json!({"v":1,"cmd":"lights","group":"front","rgb":[1,2]}),
         json!({"v":1,"cmd":"lights","group":"front","rgb":[1,2,256]}),
         json!({"v":1,"cmd":"animation","animation":65536}),
+        json!({"v":1,"cmd":"animation","animation":""}),
+        json!({"v":1,"cmd":"sound","sound":null}),
+        json!({"v":1,"cmd":"cruise","speed":256}),
+        json!({"v":1,"cmd":"cruise"}),
+        json!({"v":1,"cmd":"cruise","speed":10,"heading":0}),
         json!({"v":1,"cmd":"matrix","op":"text","text":""}),
         json!({"v":1,"cmd":"matrix","op":"text","text":"abcdefghijklmnopqrstuvwxyz"}),
         json!({"v":1,"cmd":"matrix","op":"text","text":"é"}),
@@ -197,6 +208,11 @@ async fn a_session() -> Vec<Value> {
     send(r#"{"v":1,"cmd":"hold","droid":"BB-0002","id":"h1"}"#).await;
     send(r#"{"v":1,"cmd":"drive","droid":"BB-0002","speed":255,"heading":0,"id":"h2"}"#).await;
     send(r#"{"v":1,"cmd":"release","droid":"BB-0002","id":"h3"}"#).await;
+    // A cruise speed, and what R2 played by its catalogue name (issue 40 point 5).
+    send(r#"{"v":1,"cmd":"cruise","droid":"BB-0002","speed":60,"id":"c1"}"#).await;
+    send(r#"{"v":1,"cmd":"drive","droid":"BB-0002","heading":180,"id":"c2"}"#).await;
+    send(r#"{"v":1,"cmd":"animation","droid":"D2-0001","animation":"frustrated","id":"a1"}"#).await;
+    sleep(Duration::from_secs(1)).await;
     send(r#"{"v":1,"cmd":"twist","droid":"D2-0001","linear":0.2,"angular":0.3}"#).await;
     sleep(Duration::from_secs(1)).await;
     send(r#"{"v":1,"cmd":"drive","droid":"robi","speed":40,"heading":0}"#).await;
@@ -229,6 +245,8 @@ async fn everything_the_bridge_sends_is_valid_against_the_schema() {
         "battery",
         "link",
         "hold",
+        "cruise",
+        "played",
         "stopped",
         "reply",
         "error",
@@ -253,6 +271,20 @@ async fn everything_the_bridge_sends_is_valid_against_the_schema() {
     assert_eq!(
         (&holds[0]["held"], &holds[1]["held"]),
         (&json!(true), &json!(false))
+    );
+    let cruise: Vec<&Value> = lines.iter().filter(|v| v["type"] == "cruise").collect();
+    assert_eq!(cruise.len(), 1, "{cruise:?}");
+    assert_eq!(
+        (&cruise[0]["droid"], &cruise[0]["speed"]),
+        (&json!("BB-0002"), &json!(60))
+    );
+    let played = lines
+        .iter()
+        .find(|v| v["type"] == "played")
+        .expect("R2's animation said played");
+    assert_eq!(
+        (&played["what"], &played["id"], &played["name"]),
+        (&json!("animation"), &json!(10), &json!("Frustrated"))
     );
     // Readiness and odometry (issue 31 points 3 and 5).
     assert!(

@@ -5,7 +5,7 @@
 use super::super::layout::palette_rect;
 use super::super::text::{clean, truncate, width};
 use super::super::theme;
-use crate::app::catalog::Entry;
+use crate::family::catalog::Entry;
 use ratatui::Frame;
 use ratatui::layout::Rect;
 use ratatui::text::{Line, Span};
