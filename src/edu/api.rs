@@ -393,10 +393,16 @@ impl Driver {
                 }
                 e.now.push(Act::Raw(self.raw.0, self.raw.1));
                 if n(2) >= 0.0 {
-                    let mut then = vec![Act::Raw(0, 0)];
+                    // spherov2's order (sphero_edu.py `raw_motor`): stabilization back on,
+                    // then the motors off, so the motors run for the duration and the time
+                    // the first of those two commands takes to leave. Motors off first ended
+                    // a field figure-eight's `rawMotor(80, 80, 0.8)` 9 cm short of its
+                    // spherov2 twin's (tests/it/edu_twins.rs). Sphero's docs are silent.
+                    let mut then = Vec::new();
                     if was {
                         then.push(Act::Stabilization(true));
                     }
+                    then.push(Act::Raw(0, 0));
                     e.wait = Some(Wait::Timeline(Timeline {
                         steps: Steps::Once(d, then),
                         end: d,

@@ -467,6 +467,19 @@ impl Player {
             line: op.line as usize,
             text: op.text.clone(),
         });
+        // A timed move leaves after the commands of the calls before it, as spherov2's does
+        // (each of its calls sends before it returns): the drive's slot jumps the queue, so
+        // `registerMatrixAnimation(…); await roll(0, 70, 1)` drove while the frames were still
+        // going out and stopped a second after they had gone, 1.7 s in all (a field maze
+        // program ended 30 cm past its spherov2 twin, tests/it/edu_twins.rs).
+        let moves = op
+            .effect
+            .now
+            .iter()
+            .any(|a| matches!(a, Act::Drive { .. } | Act::Raw(..)));
+        if moves && matches!(op.effect.wait, Some(Wait::Timeline(_))) {
+            self.sent().await;
+        }
         for a in &op.effect.now {
             self.act(op.line, a).await;
         }
@@ -515,7 +528,15 @@ impl Player {
                         self.act(0, a).await;
                     }
                 }
-                Due::Fire(id) => self.fired.push(id),
+                // The call returns once its last step has left, as spherov2's do (each sends
+                // before it returns): otherwise `spin`'s last heading shares the drive slot
+                // with the next call's and is replaced before it goes, and a field program's
+                // `setSpeed(50); await spin(360, 2); stopRoll()` stopped a step short of
+                // where spherov2's twin turned (tests/it/edu_twins.rs).
+                Due::Fire(id) => {
+                    self.sent().await;
+                    self.fired.push(id);
+                }
             }
         }
     }
