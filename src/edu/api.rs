@@ -427,9 +427,24 @@ impl Driver {
                 self.front = rgb(0);
                 e.now.push(Act::Front(self.front));
             }
+            // spherov2's `set_back_led` (sphero_edu.py): a colour lights the back of R2-D2,
+            // R2-Q5, BOLT, RVR and Mini (Mini's user body light); the other robots' back
+            // light takes a brightness (`setBackLed(255)`, the prelude's brightness form),
+            // and a colour leaves it as it was. A field program's blue back light on BB-8
+            // lit it where spherov2's twin did not (tests/it/edu_twins.rs).
             "setBackLed" => {
-                self.back = rgb(0);
-                e.now.push(Act::Back(self.back));
+                if matches!(
+                    self.model,
+                    Model::R2D2
+                        | Model::R2Q5
+                        | Model::Bolt
+                        | Model::BoltPlus
+                        | Model::Rvr
+                        | Model::Mini
+                ) {
+                    self.back = rgb(0);
+                    e.now.push(Act::Back(self.back));
+                }
             }
             "setBackLedBrightness" => {
                 self.back = [0, 0, byte(n(0))];

@@ -38,8 +38,10 @@ pub fn led(model: Model, action: &Action) -> Option<Option<Command>> {
         (Model::Mini, Action::LedRgb(LedGroup::Front, rgb)) => {
             cmd::set_all_leds_with_16_bit_mask(Mask(0x7E), Bytes([*rgb, *rgb].concat()))
         }
-        (Model::Mini, Action::LedRgb(LedGroup::Back, [r, g, b])) => {
-            cmd::set_all_leds_with_16_bit_mask(Mask(0x01), Bytes(vec![*r.max(g).max(b)]))
+        // A colour for Mini's back is its user body light, as spherov2.py's
+        // `ToyUtil.set_back_led` sets it (utils.py); the aiming light takes a brightness.
+        (Model::Mini, Action::LedRgb(LedGroup::Back, rgb)) => {
+            cmd::set_all_leds_with_16_bit_mask(Mask(0x70), Bytes(rgb.to_vec()))
         }
         (Model::Mini, Action::LedBrightness(LedGroup::Back, v)) => {
             cmd::set_all_leds_with_16_bit_mask(Mask(0x01), Bytes(vec![*v]))
