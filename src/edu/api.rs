@@ -427,21 +427,12 @@ impl Driver {
                 self.front = rgb(0);
                 e.now.push(Act::Front(self.front));
             }
-            // spherov2's `set_back_led` (sphero_edu.py): a colour lights the back of R2-D2,
-            // R2-Q5, BOLT, RVR and Mini (Mini's user body light); the other robots' back
-            // light takes a brightness (`setBackLed(255)`, the prelude's brightness form),
-            // and a colour leaves it as it was. A field program's blue back light on BB-8
-            // lit it where spherov2's twin did not (tests/it/edu_twins.rs).
+            // spherov2's `set_back_led` (sphero_edu.py): a colour lights the back of the
+            // robots with a coloured front light (R2-D2, R2-Q5, BOLT, RVR; Mini's user body
+            // light); the others' back light takes a brightness (`setBackLed(255)`), and a
+            // colour leaves it as it was (tests/it/edu_twins.rs: BB-8's lit, spherov2's not).
             "setBackLed" => {
-                if matches!(
-                    self.model,
-                    Model::R2D2
-                        | Model::R2Q5
-                        | Model::Bolt
-                        | Model::BoltPlus
-                        | Model::Rvr
-                        | Model::Mini
-                ) {
+                if self.model.has(Caps::FRONT_LED) {
                     self.back = rgb(0);
                     e.now.push(Act::Back(self.back));
                 }

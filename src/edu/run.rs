@@ -467,11 +467,9 @@ impl Player {
             line: op.line as usize,
             text: op.text.clone(),
         });
-        // A timed move leaves after the commands of the calls before it, as spherov2's does
-        // (each of its calls sends before it returns): the drive's slot jumps the queue, so
-        // `registerMatrixAnimation(…); await roll(0, 70, 1)` drove while the frames were still
-        // going out and stopped a second after they had gone, 1.7 s in all (a field maze
-        // program ended 30 cm past its spherov2 twin, tests/it/edu_twins.rs).
+        // A timed move leaves after the calls before it, as spherov2's (each call sends before
+        // it returns): the drive's slot jumps the queue, and `registerMatrixAnimation(…);
+        // await roll(0, 70, 1)` drove 1.7 s, its clock waiting for the frames (edu_twins).
         let moves = op
             .effect
             .now
@@ -528,11 +526,9 @@ impl Player {
                         self.act(0, a).await;
                     }
                 }
-                // The call returns once its last step has left, as spherov2's do (each sends
-                // before it returns): otherwise `spin`'s last heading shares the drive slot
-                // with the next call's and is replaced before it goes, and a field program's
-                // `setSpeed(50); await spin(360, 2); stopRoll()` stopped a step short of
-                // where spherov2's twin turned (tests/it/edu_twins.rs).
+                // The call returns once its last step has left, as spherov2's: else `spin`'s
+                // last heading shares the drive slot with the next call's and is replaced
+                // before it goes (`await spin(360, 2); stopRoll()`, tests/it/edu_twins.rs).
                 Due::Fire(id) => {
                     self.sent().await;
                     self.fired.push(id);

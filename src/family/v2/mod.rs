@@ -470,14 +470,10 @@ impl Family for V2 {
                 .into_iter()
                 .map(Command::from)
                 .collect()),
-            // RVR's main light is every one of its coloured lights (bits 0..29: headlights,
-            // status, battery door, power button, brake lights), as spherov2.py's
-            // `ToyUtil.set_main_led` sets it (utils.py); the headlights and brake lights
-            // alone left a field program's side lights dark where spherov2's were lit.
-            Intent::MainLight(rgb) if model == Model::Rvr => {
-                Ok(vec![robots::rvr_leds(robots::RVR_MAIN_LIGHTS, *rgb)])
-            }
             Intent::MainLight(rgb) => {
+                if let Some(all) = robots::all_lights(model, *rgb) {
+                    return Ok(vec![all]);
+                }
                 let mut out = Vec::new();
                 for i in robots::main_light(model, *rgb) {
                     out.extend(self.lower(model, &i)?);

@@ -66,6 +66,13 @@ pub fn led(model: Model, action: &Action) -> Option<Option<Command>> {
 /// light): its main light, as spherov2.py's `ToyUtil.set_main_led` sets it.
 pub const RVR_MAIN_LIGHTS: u32 = 0x3FFF_FFFF;
 
+/// RVR's main light: every one of its coloured lights (headlights, status, battery door,
+/// power button, brake lights), as spherov2.py's `ToyUtil.set_main_led` maps it (utils.py);
+/// `None` for the others ([`main_light`]).
+pub fn all_lights(model: Model, rgb: [u8; 3]) -> Option<Command> {
+    (model == Model::Rvr).then(|| rvr_leds(RVR_MAIN_LIGHTS, rgb))
+}
+
 /// RVR's LEDs of `mask` (its 32-bit mask, three bits a light) all set to `rgb`: the Edu API's
 /// headlights and side lights, one by one.
 pub fn rvr_leds(mask: u32, rgb: [u8; 3]) -> Command {
@@ -206,7 +213,7 @@ pub fn matrix(m: &Matrix) -> Command {
 /// The main light as each v2 robot shows it: spherov2 lights BOLT's whole matrix
 /// (`set_led_matrix_one_colour`), sphero-unsw fills BOLT+'s screen (`set_matrix_fill(0, 0, 7,
 /// 7, …)`), R2-D2 and R2-Q5 light front and back, the others their front (or body) light;
-/// RVR's is all its lights, [`RVR_MAIN_LIGHTS`] (lowered in `super::V2`'s `lower`).
+/// RVR's is all its lights ([`all_lights`]).
 pub fn main_light(model: Model, rgb: [u8; 3]) -> Vec<Intent> {
     match model {
         m if m.has_matrix() => vec![Intent::Matrix(Matrix::Fill([0, 0, 7, 7], rgb))],
