@@ -393,10 +393,16 @@ impl Driver {
                 }
                 e.now.push(Act::Raw(self.raw.0, self.raw.1));
                 if n(2) >= 0.0 {
-                    let mut then = vec![Act::Raw(0, 0)];
+                    // spherov2's order (sphero_edu.py `raw_motor`): stabilization back on,
+                    // then the motors off, so the motors run for the duration and the time
+                    // the first of those two commands takes to leave. Motors off first ended
+                    // a field figure-eight's `rawMotor(80, 80, 0.8)` 9 cm short of its
+                    // spherov2 twin's (tests/it/edu_twins.rs). Sphero's docs are silent.
+                    let mut then = Vec::new();
                     if was {
                         then.push(Act::Stabilization(true));
                     }
+                    then.push(Act::Raw(0, 0));
                     e.wait = Some(Wait::Timeline(Timeline {
                         steps: Steps::Once(d, then),
                         end: d,
@@ -421,9 +427,15 @@ impl Driver {
                 self.front = rgb(0);
                 e.now.push(Act::Front(self.front));
             }
+            // spherov2's `set_back_led` (sphero_edu.py): a colour lights the back of the
+            // robots with a coloured front light (R2-D2, R2-Q5, BOLT, RVR; Mini's user body
+            // light); the others' back light takes a brightness (`setBackLed(255)`), and a
+            // colour leaves it as it was (tests/it/edu_twins.rs: BB-8's lit, spherov2's not).
             "setBackLed" => {
-                self.back = rgb(0);
-                e.now.push(Act::Back(self.back));
+                if self.model.has(Caps::FRONT_LED) {
+                    self.back = rgb(0);
+                    e.now.push(Act::Back(self.back));
+                }
             }
             "setBackLedBrightness" => {
                 self.back = [0, 0, byte(n(0))];

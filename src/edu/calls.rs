@@ -219,7 +219,8 @@ pub const CALLS: &[Call] = &[
         "color or brightness",
         false,
         Sphero,
-        "the back light: a colour, or the blue aiming light 0..255",
+        "the back light: a colour (R2-D2, R2-Q5, BOLT, RVR; Mini's user body light; elsewhere it \
+         changes nothing, as with spherov2), or the blue aiming light 0..255",
     ),
     call(
         "fade",
@@ -670,26 +671,46 @@ pub fn not_on(name: &str, model: Model) -> Option<String> {
     })
 }
 
-/// How droidctl runs a call next to Sphero Edu: as Sphero Edu does, or differently and how.
-/// (A robot a call is not on is the table's robots column: there the program is refused
-/// before anything is sent.)
-pub fn support(name: &str) -> &'static str {
+/// How droidctl runs a call next to Sphero Edu (the table's last column). A robot a call is
+/// not applicable to is the table's robots column: there the program is refused before
+/// anything is sent.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Support {
+    /// As Sphero Edu does.
+    Supported,
+    /// Differently: how.
+    Differently(&'static str),
+}
+
+impl Support {
+    /// The table's words for it.
+    pub fn says(self) -> String {
+        match self {
+            Support::Supported => "supported".into(),
+            Support::Differently(how) => format!("supported differently: {how}"),
+        }
+    }
+}
+
+/// How droidctl runs the call named `name` next to Sphero Edu.
+pub fn support(name: &str) -> Support {
+    use Support::{Differently, Supported};
     match name {
-        "rollDistance" => "droidctl's own name for rollToDistance",
-        "speak" | "playSound" | "Sound.Category.Name.play" => {
-            "differently: printed where the robot has no speaker (Sphero Edu plays it on the \
-             phone or tablet); a sound's length is guessed"
-        }
+        "rollDistance" => Differently("droidctl's own name for rollToDistance"),
+        "speak" | "playSound" | "Sound.Category.Name.play" => Differently(
+            "printed where the robot has no speaker (Sphero Edu plays it on the phone or \
+             tablet); a sound's length is guessed",
+        ),
         "getCurrentTime" => {
-            "differently: seconds since the program started, not the device's clock"
+            Differently("seconds since the program started, not the device's clock")
         }
-        "setTimeout" | "setInterval" => {
-            "differently: the program ends when startProgram returns and no event is \
-             registered, timers pending or not"
-        }
-        "console.log" => "printed as a call line",
-        "registerMatrixAnimation" => "at most 64 frames in all",
-        _ => "as Sphero Edu",
+        "setTimeout" | "setInterval" => Differently(
+            "the program ends when startProgram returns and no event is registered, timers \
+             pending or not",
+        ),
+        "console.log" => Differently("printed as a call line"),
+        "registerMatrixAnimation" => Differently("at most 64 frames in all"),
+        _ => Supported,
     }
 }
 
@@ -697,7 +718,8 @@ pub fn support(name: &str) -> &'static str {
 /// docs/edu-programs.md has it.
 pub fn markdown() -> String {
     let mut out = String::from(
-        "| call | robots | what it does | next to Sphero Edu |\n| --- | --- | --- | --- |\n",
+        "| call | robots (not applicable to the others) | what it does | next to Sphero Edu |\n| --- \
+         | --- | --- | --- |\n",
     );
     for c in CALLS {
         let aw = if c.waits { "await " } else { "" };
@@ -707,7 +729,7 @@ pub fn markdown() -> String {
             c.args,
             c.robots.names(),
             c.what,
-            support(c.name)
+            support(c.name).says()
         ));
     }
     out.push_str("\n| event | robots | when |\n| --- | --- | --- |\n");
@@ -774,6 +796,32 @@ mod tests {
             }
         }
         assert_eq!(Robots::Sphero.names(), "all but Robi 42");
+    }
+
+    /// Every call says how it is supported (issue 38): the table's last column is
+    /// "supported" or "supported differently: how"; the robots column names where it applies.
+    #[test]
+    fn every_call_says_how_it_is_supported() {
+        let table = markdown();
+        for c in CALLS {
+            let said = support(c.name).says();
+            let how = said.strip_prefix("supported differently: ");
+            assert!(
+                said == "supported" || how.is_some_and(|h| h.len() > 10),
+                "{}: {said}",
+                c.name
+            );
+            let row = table
+                .lines()
+                .find(|l| {
+                    l.starts_with(&format!("| `{}(", c.name))
+                        || l.starts_with(&format!("| `await {}(", c.name))
+                })
+                .unwrap_or_else(|| panic!("no row for {}", c.name));
+            assert!(row.ends_with(&format!("| {said} |")), "{row}");
+        }
+        assert_eq!(support("roll"), Support::Supported);
+        assert!(matches!(support("getCurrentTime"), Support::Differently(_)));
     }
 
     #[test]

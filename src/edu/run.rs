@@ -26,6 +26,8 @@ use tokio::sync::broadcast;
 use tokio::time::{Instant, sleep_until};
 
 mod lights;
+mod sensed;
+use sensed::Sensed;
 
 /// A program checked and ready to run.
 #[derive(Debug, Clone)]
@@ -168,21 +170,6 @@ const FLUSH_LIMIT: Duration = Duration::from_secs(10);
 /// The longest a call waits for room in a full request queue.
 const ROOM_LIMIT: Duration = Duration::from_secs(5);
 
-/// What the events told from the droid's reports last saw: spherov2's fall detector
-/// (`__process_falling`, on the acceleration's size), the gyroscope at its limit, the colour
-/// sensor's index and the charger.
-struct Sensed {
-    v: f32,
-    since: Option<Instant>,
-    free: bool,
-    should_land: bool,
-    gyro_max: bool,
-    /// The colour sensor's palette index last fired on (`onColor`).
-    colour: Option<u8>,
-    /// On the charger, as the droid last said.
-    charging: Option<bool>,
-}
-
 /// Run `program` on the droid behind `session`.
 pub async fn run(
     session: &SessionHandle,
@@ -246,15 +233,7 @@ pub async fn run_to_end(
         raw: false,
         distance: 0.0,
         last_location: None,
-        sensed: Sensed {
-            v: 1.0,
-            since: None,
-            free: false,
-            should_land: false,
-            gyro_max: false,
-            colour: None,
-            charging: None,
-        },
+        sensed: Sensed::default(),
         stance_done: false,
         last_ir: None,
         ir_running: Default::default(),
@@ -478,6 +457,17 @@ impl Player {
         if let (Some(id), Some(_)) = (op.promise, &op.effect.wait) {
             self.report.called(id, op.line, &op.text);
         }
+        // A timed move leaves after the calls before it, as spherov2's (each call sends before
+        // it returns): the drive's slot jumps the queue, and `registerMatrixAnimation(…);
+        // await roll(0, 70, 1)` drove 1.7 s, its clock waiting for the frames (edu_twins).
+        let moves = op
+            .effect
+            .now
+            .iter()
+            .any(|a| matches!(a, Act::Drive { .. } | Act::Raw(..)));
+        if moves && matches!(op.effect.wait, Some(Wait::Timeline(_))) {
+            self.sent().await;
+        }
         for a in &op.effect.now {
             self.act(op.line, a).await;
         }
@@ -526,7 +516,13 @@ impl Player {
                         self.act(0, a).await;
                     }
                 }
-                Due::Fire(id) => self.fired.push(id),
+                // The call returns once its last step has left, as spherov2's: else `spin`'s
+                // last heading shares the drive slot with the next call's and is replaced
+                // before it goes (`await spin(360, 2); stopRoll()`, tests/it/edu_twins.rs).
+                Due::Fire(id) => {
+                    self.sent().await;
+                    self.fired.push(id);
+                }
             }
         }
     }
@@ -606,54 +602,6 @@ impl Player {
         if matches!(n, Notification::LegActionComplete) {
             self.check_until().await;
         }
-    }
-
-    /// `onCharging` when the droid says it is on its charger, `onNotCharging` when it is taken
-    /// off (not when the first report says it is off).
-    fn charging(&mut self, now: bool) -> Option<Event> {
-        let was = self.sensed.charging.replace(now);
-        match (was, now) {
-            (Some(a), b) if a == b => None,
-            (None, false) => None,
-            (_, true) => Some(Event::Charging),
-            (_, false) => Some(Event::NotCharging),
-        }
-    }
-
-    /// `onColor` as spherov2 fires it: when the colour sensor's palette index changes (streamed
-    /// or notified), is a colour (not 255) and is seen with confidence 0.71 or more.
-    fn colour(&mut self, reading: Option<([u8; 3], u8, f32)>) -> Option<Event> {
-        let (rgb, index, confidence) = reading?;
-        if Some(index) == self.sensed.colour || index == 255 || confidence < 0.71 {
-            return None;
-        }
-        self.sensed.colour = Some(index);
-        Some(Event::Color(rgb))
-    }
-
-    /// spherov2's free fall and landing, on the acceleration's size (1 g at rest, 0 falling).
-    fn fall(&mut self, a: [f32; 3]) -> Vec<Event> {
-        let size = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
-        let f = &mut self.sensed;
-        f.v = (f.v + size * 3.0) / 4.0;
-        let now = Instant::now();
-        let mut out = Vec::new();
-        if f.v.abs() < 0.5 {
-            let since = *f.since.get_or_insert(now);
-            if now - since > Duration::from_millis(200) && !f.free {
-                out.push(Event::Freefall);
-                f.free = true;
-                f.should_land = true;
-            }
-        } else {
-            f.since = None;
-            f.free = false;
-        }
-        if f.should_land && f.v > 1.1 {
-            out.push(Event::Landing);
-            f.should_land = false;
-        }
-        out
     }
 
     /// When the commands the current call sent have left (now, if they already have).

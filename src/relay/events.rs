@@ -51,6 +51,10 @@ pub enum ServerEvent {
         /// The stop command was written.
         stopped: bool,
         reason: String,
+        /// Where a simulated droid was as its client went (before the stop): the truth a
+        /// client's run is judged by.
+        #[serde(skip_serializing_if = "Option::is_none")]
+        pose: Option<super::backend::Pose>,
     },
     ClientClosed {
         client: u64,
@@ -107,6 +111,7 @@ impl ServerEvent {
                 address,
                 stopped,
                 reason,
+                ..
             } => format!(
                 "client {client}: droid {name} ({address}) {}released ({reason})",
                 if *stopped { "stopped and " } else { "" }

@@ -193,6 +193,10 @@ impl GattConnection for RecordingConnection {
         self.inner.subscribe(characteristic)
     }
 
+    fn pose(&mut self) -> Option<super::backend::Pose> {
+        self.inner.pose()
+    }
+
     fn disconnect(&mut self) -> BoxFuture<'_, ()> {
         Box::pin(async move {
             self.inner.disconnect().await;

@@ -709,6 +709,7 @@ impl ClientTask {
             return;
         };
         let gone = reason.starts_with("the droid disconnected");
+        let pose = held.conn.pose();
         let stopped = match held.stop_as {
             Some(model) if !gone => {
                 let last = held.last_drive.take();
@@ -724,6 +725,7 @@ impl ClientTask {
             address: held.address,
             stopped,
             reason: reason.to_string(),
+            pose,
         });
     }
 }

@@ -4,7 +4,7 @@
 //! as a droid cuts them. Time is tokio's, so tests may pause it.
 
 use super::backend::{
-    BackendDevice, BackendError, Connected, DroidEvent, GattBackend, GattConnection,
+    BackendDevice, BackendError, Connected, DroidEvent, GattBackend, GattConnection, Pose,
 };
 use crate::gatt::GattUuid;
 use crate::model::Model;
@@ -261,6 +261,18 @@ impl GattConnection for SimConnection {
             lock(&self.slot.droid)
                 .start_notify(ch, self.epoch.elapsed())
                 .map_err(|e| BackendError(e.to_string()))
+        })
+    }
+
+    fn pose(&mut self) -> Option<Pose> {
+        let mut d = lock(&self.slot.droid);
+        // Brought up to now: the pump may be a step behind.
+        forward(d.advance(self.epoch.elapsed()), &self.tx);
+        let s = d.state();
+        Some(Pose {
+            x_cm: s.x_cm,
+            y_cm: s.y_cm,
+            yaw_deg: s.yaw_deg,
         })
     }
 

@@ -50,6 +50,7 @@ mod edu_infrared;
 mod edu_programs;
 mod edu_runtime;
 mod edu_spherov2;
+mod edu_twins;
 mod examples;
 mod exit_status;
 mod failsafe;

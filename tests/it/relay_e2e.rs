@@ -510,7 +510,7 @@ fn several_droids_behind_a_relay_open_the_picker() {
 // ---------------------------------------------------------------------------------------------
 
 /// A Python that imports all of `modules`, or why not.
-fn python_with(modules: &str) -> Result<String, String> {
+pub(crate) fn python_with(modules: &str) -> Result<String, String> {
     crate::common::python::Library::Spherov2.python(modules)
 }
 

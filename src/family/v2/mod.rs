@@ -471,6 +471,9 @@ impl Family for V2 {
                 .map(Command::from)
                 .collect()),
             Intent::MainLight(rgb) => {
+                if let Some(all) = robots::all_lights(model, *rgb) {
+                    return Ok(vec![all]);
+                }
                 let mut out = Vec::new();
                 for i in robots::main_light(model, *rgb) {
                     out.extend(self.lower(model, &i)?);

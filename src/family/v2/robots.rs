@@ -31,12 +31,17 @@ pub fn led(model: Model, action: &Action) -> Option<Option<Command>> {
         (Model::Bolt | Model::BoltPlus, Action::LedBrightness(LedGroup::Back, v)) => {
             cmd::set_all_leds_with_8_bit_mask(Mask(0x38), Bytes(vec![0, 0, *v]))
         }
-        // Mini: bit 0 aiming (back) light, 1..3 body RGB (16-bit mask).
+        // Mini: bit 0 aiming (back) light, 1..3 body RGB, 4..6 the user body RGB (16-bit
+        // mask). Its one light is both: spherov2.py's `ToyUtil.set_main_led` sets the body and
+        // the user body together (utils.py), and a field program's last colour on Mini was
+        // half its spherov2 twin's (tests/it/edu_twins.rs).
         (Model::Mini, Action::LedRgb(LedGroup::Front, rgb)) => {
-            cmd::set_all_leds_with_16_bit_mask(Mask(0x0E), Bytes(rgb.to_vec()))
+            cmd::set_all_leds_with_16_bit_mask(Mask(0x7E), Bytes([*rgb, *rgb].concat()))
         }
-        (Model::Mini, Action::LedRgb(LedGroup::Back, [r, g, b])) => {
-            cmd::set_all_leds_with_16_bit_mask(Mask(0x01), Bytes(vec![*r.max(g).max(b)]))
+        // A colour for Mini's back is its user body light, as spherov2.py's
+        // `ToyUtil.set_back_led` sets it (utils.py); the aiming light takes a brightness.
+        (Model::Mini, Action::LedRgb(LedGroup::Back, rgb)) => {
+            cmd::set_all_leds_with_16_bit_mask(Mask(0x70), Bytes(rgb.to_vec()))
         }
         (Model::Mini, Action::LedBrightness(LedGroup::Back, v)) => {
             cmd::set_all_leds_with_16_bit_mask(Mask(0x01), Bytes(vec![*v]))
@@ -55,6 +60,17 @@ pub fn led(model: Model, action: &Action) -> Option<Option<Command>> {
         _ => return None,
     };
     Some(Some(c.into()))
+}
+
+/// RVR's coloured lights, bits 0..29 of its 32-bit mask (bit 30 is the white undercarriage
+/// light): its main light, as spherov2.py's `ToyUtil.set_main_led` sets it.
+pub const RVR_MAIN_LIGHTS: u32 = 0x3FFF_FFFF;
+
+/// RVR's main light: every one of its coloured lights (headlights, status, battery door,
+/// power button, brake lights), as spherov2.py's `ToyUtil.set_main_led` maps it (utils.py);
+/// `None` for the others ([`main_light`]).
+pub fn all_lights(model: Model, rgb: [u8; 3]) -> Option<Command> {
+    (model == Model::Rvr).then(|| rvr_leds(RVR_MAIN_LIGHTS, rgb))
 }
 
 /// RVR's LEDs of `mask` (its 32-bit mask, three bits a light) all set to `rgb`: the Edu API's
@@ -196,11 +212,12 @@ pub fn matrix(m: &Matrix) -> Command {
 
 /// The main light as each v2 robot shows it: spherov2 lights BOLT's whole matrix
 /// (`set_led_matrix_one_colour`), sphero-unsw fills BOLT+'s screen (`set_matrix_fill(0, 0, 7,
-/// 7, …)`), R2-D2, R2-Q5 and RVR light front and back, the others their front (or body) light.
+/// 7, …)`), R2-D2 and R2-Q5 light front and back, the others their front (or body) light;
+/// RVR's is all its lights ([`all_lights`]).
 pub fn main_light(model: Model, rgb: [u8; 3]) -> Vec<Intent> {
     match model {
         m if m.has_matrix() => vec![Intent::Matrix(Matrix::Fill([0, 0, 7, 7], rgb))],
-        Model::R2D2 | Model::R2Q5 | Model::Rvr => vec![
+        Model::R2D2 | Model::R2Q5 => vec![
             Intent::LedRgb(LedGroup::Front, rgb),
             Intent::LedRgb(LedGroup::Back, rgb),
         ],

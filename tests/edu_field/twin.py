@@ -1,0 +1,54 @@
+#!/usr/bin/env python3
+"""Run one Python twin of a field-style Sphero Edu program (tests/edu_field/NAME.py, beside
+NAME.js) with spherov2.py's own SpheroEduAPI against `droidctl serve --sim MODEL`
+(tests/it/edu_twins.rs compares where the simulated droid ends, and its lights and matrix,
+with droidctl's run of NAME.js).
+
+Usage: twin.py PORT NAME PROGRAM.py
+A twin module defines `program(api)`, written line for line as its JavaScript, and may set
+`HOLD` (seconds): a program whose events keep it going (no exitProgram) runs until HOLD
+seconds after it started, as `droidctl run --timeout HOLD` ends the JavaScript. Sphero Edu
+plays sounds on the phone or tablet, so a twin waits a waited sound's length (1 s, the
+length droidctl takes: src/edu/sounds.rs) with time.sleep.
+Prints nothing; the pose is read from serve's `droid_released` event.
+"""
+
+import importlib.util
+import os
+import sys
+import time
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
+
+from spherov2.sphero_edu import SpheroEduAPI  # noqa: E402
+
+from sphero_edu import find_toy  # noqa: E402
+
+
+def quiet_background(api):
+    """spherov2's API resends the speed every 0.8 s from a thread (`__background`), a
+    keep-alive the simulated droids do not need; on a link with a 120 ms round trip (Mini's)
+    a resend that falls just before a timed call's stop holds that stop back a round trip, and
+    the roll goes 10 cm further, by chance. The twin keeps the thread but not the resends, so
+    its runs are as repeatable as droidctl's."""
+    api._SpheroEduAPI__stopped.wait()
+
+
+def main():
+    port, name, path = sys.argv[1:4]
+    spec = importlib.util.spec_from_file_location("twin", path)
+    twin = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(twin)
+    SpheroEduAPI._SpheroEduAPI__background = quiet_background
+    toy = find_toy(["tcp", port, name])
+    with SpheroEduAPI(toy) as api:
+        start = time.time()
+        twin.program(api)
+        hold = getattr(twin, "HOLD", 0)
+        left = hold - (time.time() - start)
+        if left > 0:
+            time.sleep(left)
+
+
+if __name__ == "__main__":
+    main()
