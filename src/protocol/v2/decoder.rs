@@ -188,10 +188,9 @@ impl Decoder {
         self.buf.extend_from_slice(&body[..esc]);
         let mut i = esc;
         loop {
-            let b = *body.get(i)?;
-            match b {
+            // `body[i]` is a framing byte: an escape, the end, or a SOP that should not be.
+            match body[i] {
                 EOP => return Some(i),
-                SOP => return None,
                 ESC => {
                     let v = match *body.get(i + 1)? {
                         ESC_ESC => ESC,
@@ -202,11 +201,13 @@ impl Decoder {
                     self.buf.push(v);
                     i += 2;
                 }
-                _ => {
-                    self.buf.push(b);
-                    i += 1;
-                }
+                _ => return None,
             }
+            // The run up to the next framing byte, copied whole.
+            let rest = body.get(i..)?;
+            let run = memchr::memchr3(SOP, EOP, ESC, rest)?;
+            self.buf.extend_from_slice(&rest[..run]);
+            i += run;
             if self.buf.len() > self.max_body {
                 return None;
             }
