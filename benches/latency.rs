@@ -8,7 +8,11 @@
 //!
 //! - `sim`: the in-process simulated R2-D2 (`--sim`);
 //! - `bluez`: btleplug on the virtual BlueZ (`sim --bluez` in this process, on a private
-//!   `dbus-daemon`; Linux only): D-Bus, BlueZ's GATT calls, the droid behind them.
+//!   `dbus-daemon`; Linux only): D-Bus, BlueZ's GATT calls, the droid behind them;
+//! - `serial`: an RVR on a serial line (issue 41; Linux and macOS): `sim --serial rvr`'s
+//!   server on a new pseudo-terminal (on a thread of its own) and the app on `--serial
+//!   PATH`'s link, the write timed to its return from the port. The single-droid inputs
+//!   only (RVR has no fleet case here).
 //!
 //! Then the emergency stop of a fleet (issue 26): four droids (R2-D2, BB-8, Robi 42, BB-9E)
 //! driven by `droidctl::app::run::run` on a fleet as `droidctl --sim r2d2,bb8,robi,bb9e` or
@@ -26,6 +30,7 @@
 //!     cargo bench --bench latency                  # both links, 100 of each input
 //!     cargo bench --bench latency -- --reps 300 --only sim
 //!     cargo bench --bench latency -- --reps 50 --part fleet   # the fleet's e-stop only
+//!     cargo bench --bench latency -- --reps 200 --only serial  # RVR on a serial line
 
 use droidctl::app::input::{KeyKind, TermEvent};
 use droidctl::app::run::{self, AppInputs, AppOptions};
@@ -180,6 +185,12 @@ impl Link for Timed {
                 events: c.events,
             })
         })
+    }
+
+    /// A serial line's own framing (no BLE chunking, 5 ms pacing), which the session takes
+    /// from the link as it does without the timing in between.
+    fn framing(&self) -> Option<droidctl::link::Framing> {
+        self.inner.framing()
     }
 
     fn describe(&self) -> String {
@@ -627,6 +638,64 @@ mod bluez {
     }
 }
 
+#[cfg(unix)]
+mod serial {
+    use droidctl::model::Model;
+    use std::path::PathBuf;
+    use tokio::sync::oneshot;
+
+    /// `sim --serial rvr` in this process: the simulated RVR served on a new
+    /// pseudo-terminal by a thread with its own runtime, until dropped.
+    pub struct Served {
+        stop: Option<oneshot::Sender<()>>,
+        thread: Option<std::thread::JoinHandle<()>>,
+        pub path: PathBuf,
+    }
+
+    impl Served {
+        pub fn start() -> Served {
+            let (stop, stopped) = oneshot::channel::<()>();
+            let (ready, is_ready) = std::sync::mpsc::channel();
+            let thread = std::thread::spawn(move || {
+                let rt = tokio::runtime::Builder::new_current_thread()
+                    .enable_all()
+                    .build()
+                    .expect("the simulator's runtime");
+                rt.block_on(async move {
+                    // Opened inside the runtime (it registers with the reactor); the terminal
+                    // side stays open while the simulator runs, as `sim --serial` keeps it.
+                    let (pty, _peer, path) =
+                        droidctl::link::serial::tty::open_pty().expect("a pseudo-terminal");
+                    let _ = ready.send(path);
+                    tokio::select! {
+                        _ = stopped => {}
+                        why = droidctl::sim::serial::serve(pty, Model::Rvr, false, |_| {}) => {
+                            eprintln!("the serial simulator stopped: {why}");
+                        }
+                    }
+                });
+            });
+            let path = is_ready.recv().expect("the simulator starts");
+            Served {
+                stop: Some(stop),
+                thread: Some(thread),
+                path,
+            }
+        }
+    }
+
+    impl Drop for Served {
+        fn drop(&mut self) {
+            if let Some(stop) = self.stop.take() {
+                let _ = stop.send(());
+            }
+            if let Some(t) = self.thread.take() {
+                let _ = t.join();
+            }
+        }
+    }
+}
+
 /// The fleet's e-stop, the others idle and then mirrored, over the links `found` makes.
 fn fleet_both(
     rt: &tokio::runtime::Runtime,
@@ -692,6 +761,26 @@ fn main() {
         fleet_both(&rt, "in-process simulator", reps, async || {
             droidctl::cli::fleet::simulated(&FLEET)
         });
+    }
+    #[cfg(unix)]
+    if wanted("serial") && single {
+        // RVR on its UART (issue 41): `sim --serial rvr`'s server on a pseudo-terminal, on a
+        // thread and runtime of its own as the simulator's own process would be, and the app
+        // on `--serial PATH`'s link, timed to the return of the link's write on the port.
+        let served = serial::Served::start();
+        let model = Model::Rvr;
+        let (r, missed) = rt.block_on(async {
+            let link = droidctl::link::serial::SerialLink::new(&served.path, model);
+            measure(Box::new(link), model, reps).await
+        });
+        report(
+            &format!(
+                "serial link (RVR on the pseudo-terminal {})",
+                served.path.display()
+            ),
+            &r,
+            missed,
+        );
     }
     #[cfg(target_os = "linux")]
     if let Some(served) = served {

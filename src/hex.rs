@@ -49,18 +49,35 @@ pub fn parse(text: &str) -> Result<Vec<u8>, String> {
 /// Upper-case hex with a space between bytes, as the specs write packets.
 pub fn spaced(bytes: &[u8]) -> String {
     let mut s = String::with_capacity(bytes.len() * 3);
-    for (i, b) in bytes.iter().enumerate() {
+    for (i, &b) in bytes.iter().enumerate() {
         if i > 0 {
             s.push(' ');
         }
-        s.push_str(&format!("{b:02X}"));
+        s.push(UPPER[(b >> 4) as usize] as char);
+        s.push(UPPER[(b & 0xF) as usize] as char);
     }
     s
 }
 
+const UPPER: &[u8; 16] = b"0123456789ABCDEF";
+const LOWER: &[u8; 16] = b"0123456789abcdef";
+
+/// Write `bytes` as lower-case hex digits into `out`, two per byte (`out` must hold
+/// `2 * bytes.len()`): a digit table, not a `format!` per byte, which was most of the cost of
+/// `packet decode --json` on long payloads (issue 42 point 6).
+pub fn compact_into(bytes: &[u8], out: &mut [u8]) {
+    for (pair, &b) in out.chunks_exact_mut(2).zip(bytes) {
+        pair[0] = LOWER[(b >> 4) as usize];
+        pair[1] = LOWER[(b & 0xF) as usize];
+    }
+}
+
 /// Lower-case hex with no separators, for JSON.
 pub fn compact(bytes: &[u8]) -> String {
-    bytes.iter().map(|b| format!("{b:02x}")).collect()
+    let mut digits = vec![0u8; bytes.len() * 2];
+    compact_into(bytes, &mut digits);
+    // Only ASCII hex digits were written.
+    String::from_utf8(digits).unwrap_or_default()
 }
 
 #[cfg(test)]

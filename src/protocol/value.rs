@@ -139,18 +139,16 @@ pub struct HexJson<'a>(pub &'a [u8]);
 
 impl Serialize for HexJson<'_> {
     fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        const DIGITS: &[u8; 16] = b"0123456789abcdef";
-        let mut buf = [0u8; 128];
-        if self.0.len() * 2 <= buf.len() {
-            for (i, b) in self.0.iter().enumerate() {
-                buf[2 * i] = DIGITS[(b >> 4) as usize];
-                buf[2 * i + 1] = DIGITS[(b & 0xF) as usize];
+        // On the stack up to the longest body a decoder takes by default (512 bytes): a
+        // sensor notification of 17 floats is 68 bytes, longer than the 64 this once held.
+        let mut buf = [0u8; 1024];
+        match buf.get_mut(..self.0.len() * 2) {
+            Some(digits) => {
+                crate::hex::compact_into(self.0, digits);
+                // Only ASCII hex digits were written.
+                s.serialize_str(std::str::from_utf8(digits).unwrap_or_default())
             }
-            // Only ASCII hex digits were written.
-            let text = std::str::from_utf8(&buf[..self.0.len() * 2]).unwrap_or_default();
-            s.serialize_str(text)
-        } else {
-            s.serialize_str(&crate::hex::compact(self.0))
+            None => s.serialize_str(&crate::hex::compact(self.0)),
         }
     }
 }

@@ -437,6 +437,23 @@ impl<const N: usize> Wire for FixedText<N> {
     }
 }
 
+/// The rest of the payload as big-endian f32 values, all of it taken.
+fn f32s<'a>(
+    r: &mut Reader<'a>,
+    field: &'static str,
+) -> Result<impl Iterator<Item = f32> + 'a, FieldError> {
+    let n = r.remaining();
+    if !n.is_multiple_of(4) {
+        return Err(FieldError::Invalid {
+            field,
+            reason: format!("{n} bytes is not a whole number of f32 values"),
+        });
+    }
+    Ok(r.rest()
+        .chunks_exact(4)
+        .map(|c| f32::from_be_bytes([c[0], c[1], c[2], c[3]])))
+}
+
 /// Big-endian f32 values filling the rest of the payload.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct F32List(pub Vec<f32>);
@@ -450,22 +467,21 @@ impl Wire for F32List {
         }
     }
     fn get(r: &mut Reader<'_>, field: &'static str) -> Result<Self, FieldError> {
-        let n = r.remaining();
-        if !n.is_multiple_of(4) {
-            return Err(FieldError::Invalid {
-                field,
-                reason: format!("{n} bytes is not a whole number of f32 values"),
-            });
-        }
-        let raw = r.rest();
-        Ok(F32List(
-            raw.chunks_exact(4)
-                .map(|c| f32::from_be_bytes([c[0], c[1], c[2], c[3]]))
-                .collect(),
-        ))
+        Ok(F32List(f32s(r, field)?.collect()))
     }
     fn value(&self) -> Value {
         Value::List(self.0.iter().map(|v| Value::Float(*v as f64)).collect())
+    }
+    /// Straight to the values, without the `Vec<f32>` in between: a sensor notification
+    /// decoded without masks is 17 of them, on every other packet of a busy stream.
+    fn decode_into(
+        r: &mut Reader<'_>,
+        name: &'static str,
+        out: &mut Fields,
+    ) -> Result<(), FieldError> {
+        let values = f32s(r, name)?.map(|v| Value::Float(v as f64)).collect();
+        out.push((name, Value::List(values)));
+        Ok(())
     }
     fn parse(text: &str) -> Result<Self, ParamError> {
         text.split(',')

@@ -36,6 +36,7 @@ mod cli_errors;
 mod cli_models;
 mod cli_packet;
 mod cli_packet_families;
+mod cli_packet_stream;
 mod cli_run;
 mod cli_run_robi;
 mod cli_run_robots;

@@ -150,23 +150,24 @@ pub fn decode_reader(
     let is_hex = looks_like_hex(&block[..first]);
     let mut hex = HexText::default();
     let mut failure = None;
-    if is_hex {
-        if let Err(e) = hex.convert(&block[..first], &mut bytes) {
-            failure = Some(e);
-        }
-    } else {
-        bytes.extend_from_slice(&block[..first]);
+    // Hex text is converted into `bytes`; binary input is decoded from the block it was read
+    // into, not copied first.
+    if is_hex && let Err(e) = hex.convert(&block[..first], &mut bytes) {
+        failure = Some(e);
     }
-    let (family, mut reader) = super::reader_for(args, &bytes, true)?;
+    let (family, mut reader) =
+        super::reader_for(args, if is_hex { &bytes } else { &block[..first] }, true)?;
     let mut printer = Printer::new(out, json, true, summary_only);
     let mut read = first as u64;
+    let mut n = first;
     loop {
-        feed(&mut *reader, &bytes, &mut printer).map_err(io_err)?;
+        let chunk = if is_hex { &bytes[..] } else { &block[..n] };
+        feed(&mut *reader, chunk, &mut printer).map_err(io_err)?;
         bytes.clear();
         if failure.is_some() {
             break;
         }
-        let n = match read_block(input, &mut block, read) {
+        n = match read_block(input, &mut block, read) {
             Ok(0) => break,
             Ok(n) => n,
             Err(e) => {
@@ -175,12 +176,8 @@ pub fn decode_reader(
             }
         };
         read += n as u64;
-        if is_hex {
-            if let Err(e) = hex.convert(&block[..n], &mut bytes) {
-                failure = Some(e);
-            }
-        } else {
-            bytes.extend_from_slice(&block[..n]);
+        if is_hex && let Err(e) = hex.convert(&block[..n], &mut bytes) {
+            failure = Some(e);
         }
     }
     if is_hex

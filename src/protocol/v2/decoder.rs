@@ -44,6 +44,14 @@ enum State {
     Discarding,
 }
 
+/// Where [`Decoder::whole_body`] put a packet that lies whole in the input.
+enum Whole<'b> {
+    /// The body is the input itself (no escapes).
+    Input(&'b [u8]),
+    /// The body was unescaped into the decoder's buffer.
+    Unescaped,
+}
+
 /// The streaming decoder. Feed it with [`Decoder::feed`].
 #[derive(Debug, Clone)]
 pub struct Decoder {
@@ -117,16 +125,20 @@ impl Decoder {
     /// packet borrows the input itself when it lies whole in it without escapes, else the
     /// decoder's buffer.
     fn next_in<'s>(&'s mut self, bytes: &'s [u8], pos: &mut usize) -> Option<Decoded<'s>> {
-        if let Some(body) = self.whole_body(bytes, pos) {
-            if let Ok(packet) = parse_body_ref(body) {
-                self.stats.packets += 1;
-                let offset = self.packet_start;
-                return Some(Decoded::Packet { offset, packet });
+        match self.whole_body(bytes, pos) {
+            Some(Whole::Input(body)) => {
+                if let Ok(packet) = parse_body_ref(body) {
+                    self.stats.packets += 1;
+                    let offset = self.packet_start;
+                    return Some(Decoded::Packet { offset, packet });
+                }
+                // Not a packet: reported as the buffered path reports it.
+                self.buf.clear();
+                self.buf.extend_from_slice(body);
+                return self.buffered_body();
             }
-            // Not a packet: reported as the buffered path reports it.
-            self.buf.clear();
-            self.buf.extend_from_slice(body);
-            return self.buffered_body();
+            Some(Whole::Unescaped) => return self.buffered_body(),
+            None => {}
         }
         match self.scan(bytes, pos)? {
             Err(e) => Some(Decoded::Error(e)),
@@ -136,10 +148,12 @@ impl Decoder {
     }
 
     /// The fast path of a clean stream: at `bytes[*pos]` a packet starts (no garbage
-    /// pending) and ends in `bytes` with no escape and no SOP inside, within the bound. Its
-    /// body is the input itself (nothing copied); `pos`, the offsets and the statistics move
-    /// on exactly as [`Decoder::scan`] would move them.
-    fn whole_body<'b>(&mut self, bytes: &'b [u8], pos: &mut usize) -> Option<&'b [u8]> {
+    /// pending) and ends in `bytes`, with no SOP inside, every escape a good one, within the
+    /// bound. Without escapes its body is the input itself (nothing copied); with them it is
+    /// unescaped into `buf` in one pass. `pos`, the offsets and the statistics move on exactly
+    /// as [`Decoder::scan`] would move them; anything else (an error to report, a packet that
+    /// goes on past the input) is left to `scan`, from the same place, nothing changed.
+    fn whole_body<'b>(&mut self, bytes: &'b [u8], pos: &mut usize) -> Option<Whole<'b>> {
         if self.state != State::Hunting || self.garbage_start.is_some() {
             return None;
         }
@@ -147,15 +161,57 @@ impl Decoder {
         if rest.first() != Some(&SOP) {
             return None;
         }
-        let len = memchr::memchr3(SOP, EOP, ESC, &rest[1..])?;
-        if rest[1 + len] != EOP || len > self.max_body {
+        let body = &rest[1..];
+        let first = memchr::memchr3(SOP, EOP, ESC, body)?;
+        if first > self.max_body {
             return None;
         }
-        let body = &rest[1..1 + len];
+        let (end, whole) = match body[first] {
+            EOP => (first, Whole::Input(&body[..first])),
+            ESC => (self.unescape_whole(body, first)?, Whole::Unescaped),
+            _ => return None,
+        };
+        // SOP, the body with its escapes, EOP.
+        let wire = end + 2;
         self.packet_start = self.offset;
-        self.packet_wire_len = len as u64 + 2;
-        self.advance(pos, len + 2);
-        Some(body)
+        self.packet_wire_len = wire as u64;
+        self.advance(pos, wire);
+        Some(whole)
+    }
+
+    /// `body` (the bytes after a SOP, the first framing byte in them an ESC at `esc`)
+    /// unescaped into `buf`, up to its EOP, whose index in `body` comes back; `None` when it
+    /// has a SOP or a bad escape before its end, outgrows the bound or goes on past `body`
+    /// (`buf` is then left for `scan` to clear).
+    fn unescape_whole(&mut self, body: &[u8], esc: usize) -> Option<usize> {
+        self.buf.clear();
+        self.buf.extend_from_slice(&body[..esc]);
+        let mut i = esc;
+        loop {
+            // `body[i]` is a framing byte: an escape, the end, or a SOP that should not be.
+            match body[i] {
+                EOP => return Some(i),
+                ESC => {
+                    let v = match *body.get(i + 1)? {
+                        ESC_ESC => ESC,
+                        ESC_SOP => SOP,
+                        ESC_EOP => EOP,
+                        _ => return None,
+                    };
+                    self.buf.push(v);
+                    i += 2;
+                }
+                _ => return None,
+            }
+            // The run up to the next framing byte, copied whole.
+            let rest = body.get(i..)?;
+            let run = memchr::memchr3(SOP, EOP, ESC, rest)?;
+            self.buf.extend_from_slice(&rest[..run]);
+            i += run;
+            if self.buf.len() > self.max_body {
+                return None;
+            }
+        }
     }
 
     /// The body in `buf` as a packet, or the error it is.

@@ -145,8 +145,23 @@ impl Packet {
 }
 
 /// The v2 checksum: the byte sum of everything between SOP and CHK, mod 256, bit-inverted.
+///
+/// Summed in 16 lanes, 16 bytes at a time, then the lanes: the plain fold compiled to a loop
+/// of 4 bytes a step, a sixth of the decoder's time on a busy stream (issue 42 point 6).
+#[inline]
 pub fn checksum(body: &[u8]) -> u8 {
-    !body.iter().fold(0u8, |acc, &b| acc.wrapping_add(b))
+    let mut chunks = body.chunks_exact(16);
+    let mut lanes = [0u8; 16];
+    for chunk in &mut chunks {
+        for (lane, &b) in lanes.iter_mut().zip(chunk) {
+            *lane = lane.wrapping_add(b);
+        }
+    }
+    let sum = lanes
+        .iter()
+        .chain(chunks.remainder())
+        .fold(0u8, |acc, &b| acc.wrapping_add(b));
+    !sum
 }
 
 fn push_escaped(out: &mut Vec<u8>, b: u8) {
@@ -228,6 +243,7 @@ pub(crate) fn body_ref_unchecked(body: &[u8]) -> Option<PacketRef<'_>> {
 
 /// Parse an unescaped body (everything between SOP and EOP, checksum included) without
 /// copying the payload. On a bad checksum the packet as read comes back with the error.
+#[inline]
 pub fn parse_body_ref(body: &[u8]) -> Result<PacketRef<'_>, (BodyError, Option<PacketRef<'_>>)> {
     let packet = header_ref(body).map_err(|e| (e, None))?;
     let got = body.len();
@@ -241,6 +257,7 @@ pub fn parse_body_ref(body: &[u8]) -> Result<PacketRef<'_>, (BodyError, Option<P
 
 /// The header fields and payload of a body, its length checked against its flags (the
 /// checksum is not looked at).
+#[inline]
 fn header_ref(body: &[u8]) -> Result<PacketRef<'_>, BodyError> {
     let got = body.len();
     let Some(&flag_byte) = body.first() else {
@@ -316,6 +333,12 @@ mod tests {
     fn checksum_is_inverted_sum() {
         assert_eq!(checksum(&[0x0A, 0x13, 0x0D, 0x00]), 0xD5);
         assert_eq!(checksum(&[]), 0xFF);
+        // Every length around the 16-byte lanes, against the plain sum.
+        let bytes: Vec<u8> = (0..100u32).map(|i| (i * 37 + 201) as u8).collect();
+        for n in 0..bytes.len() {
+            let plain = !bytes[..n].iter().fold(0u8, |a, &b| a.wrapping_add(b));
+            assert_eq!(checksum(&bytes[..n]), plain, "{n} bytes");
+        }
     }
 
     #[test]
