@@ -229,13 +229,6 @@ const KNOWN: &[(&str, &str, &str)] = &[
     ("figure_eight", "sprk", SPIN),
     ("first_sensors", "r2d2", TRIPOD),
     ("light_loop", "r2d2", TRIPOD),
-    (
-        "unawaited",
-        "mini",
-        "the helper's light leaves 10 ms before the first roll's stop is due, and Mini's link \
-         takes a command every 120 ms: droidctl's stop goes a slot late and the roll is 0.11 s \
-         (10 cm) long; spherov2's threads happened not to meet there",
-    ),
 ];
 
 /// Why a spin while rolling ends apart.
