@@ -231,9 +231,11 @@ const KNOWN: &[(&str, &str, &str)] = &[
 
 /// Why a spin while rolling ends apart.
 const SPIN: &str = "spin while rolling: spherov2's spin steps its heading once per command \
-                    round trip and sends its last heading after the duration is over \
-                    (sphero_edu.py `spin`), so its arcs run longer: 3-35 cm further on, \
-                    varying from run to run with the round trips";
+                    round trip, sends a first step of 0 degrees and its last heading after \
+                    the duration is over, and says so itself (sphero_edu.py `spin`: 'may be \
+                    longer than the specified duration'); droidctl keeps the duration. On \
+                    Mini's 120 ms link spherov2 rolled 4.67 s where droidctl rolled 4.32 s \
+                    (captures, 2026-11-29): 3-25 cm further on, varying with the round trips";
 
 // R2-D2's and R2-Q5's tripod: spherov2's SpheroEduAPI asks for three legs as it starts
 // (utils.py `set_robot_state_on_start`, THREE_LEGS) and does not wait for them; the droid rolls
