@@ -145,6 +145,9 @@ struct Player {
     /// The tickets of the commands the program sent that may not have left yet: a timed call's
     /// clock starts when they have ([`Player::sent`]).
     marks: Vec<Mark>,
+    /// Lights held back while a stop is due within a pacing slot (line, light, state): one
+    /// per light, so at most a few ([`Player::light`]).
+    held: Vec<(u32, u64, Intent)>,
     /// The droid was set up and its first sample came in: a reading it never sent reads 0.
     ready: bool,
     mission: DroidMission,
@@ -238,6 +241,7 @@ pub async fn run_to_end(
         last_ir: None,
         ir_running: Default::default(),
         marks: Vec::new(),
+        held: Vec::new(),
         ready: false,
         mission,
         report: super::progress::Reporter::new(opts.progress.clone()),
@@ -245,6 +249,7 @@ pub async fn run_to_end(
     let r = p.play(program, &opts, events).await;
     p.report.ended(&r, EMERGENCY_STOP);
     p.stop_motion().await;
+    p.release_lights(true).await;
     p.flush().await;
     let summary = p.mission.finish().await;
     match r {
@@ -479,6 +484,7 @@ impl Player {
             Some(Wait::Timeline(_)) => self.sent().await,
             _ => Instant::now(),
         };
+        self.release_lights(false).await;
         match (op.effect.wait, op.promise) {
             (None, Some(id)) => self.fired.push(id),
             (None, None) => {}
@@ -509,6 +515,7 @@ impl Player {
 
     /// The timed actions that are due, in order.
     async fn due(&mut self) {
+        let mut fired = false;
         for due in self.timed.due(Instant::now()) {
             match due {
                 Due::Acts(acts) => {
@@ -522,8 +529,13 @@ impl Player {
                 Due::Fire(id) => {
                     self.sent().await;
                     self.fired.push(id);
+                    fired = true;
                 }
             }
+        }
+        // A call ended: the program's next call sends the held lights, after its own drive.
+        if !fired {
+            self.release_lights(false).await;
         }
     }
 

@@ -83,6 +83,21 @@ impl Schedule {
         self.heap.peek().map(|e| e.0.at)
     }
 
+    /// When the next one-off move is due (`roll`'s or `rawMotor`'s stop; `None`: none
+    /// pending). Spin's steps are not counted: a light that waited for them would wait for
+    /// the whole spin.
+    pub fn next_stop(&self) -> Option<Instant> {
+        self.heap
+            .iter()
+            .filter(|e| {
+                e.0.next == 0
+                    && matches!(&e.0.timeline.steps, super::timeline::Steps::Once(_, acts)
+                        if acts.iter().any(|a| matches!(a, Act::Drive { .. } | Act::Raw(..))))
+            })
+            .map(|e| e.0.at)
+            .min()
+    }
+
     /// How many calls are pending (one entry each, however many steps they have left).
     pub fn len(&self) -> usize {
         self.heap.len()
@@ -169,6 +184,37 @@ mod tests {
             ]
         );
         assert!(s.is_empty());
+    }
+
+    /// A light set just before a roll's stop is held for it (src/edu/run/lights.rs): the
+    /// schedule tells when the next stop is due, and neither a spin's headings nor a
+    /// strobe's or a delay's steps count as one.
+    #[tokio::test(start_paused = true)]
+    async fn the_next_stop_is_a_rolls_or_raw_motors_end_not_a_spins_step() {
+        let mut d = Driver::new(Model::Mini);
+        let mut s = Schedule::default();
+        let t0 = Instant::now();
+        s.add(t0, timeline(&mut d, "spin", &[360.0, 0.5]), Some(1));
+        s.add(t0, timeline(&mut d, "delay", &[0.2]), Some(2));
+        s.add(
+            t0,
+            timeline(&mut d, "strobe", &[9.0, 0.0, 0.0, 0.1, 3.0]),
+            Some(3),
+        );
+        assert_eq!(s.next_stop(), None);
+        s.add(t0, timeline(&mut d, "roll", &[0.0, 70.0, 1.5]), Some(4));
+        s.add(
+            t0,
+            timeline(&mut d, "rawMotor", &[80.0, 80.0, 2.0]),
+            Some(5),
+        );
+        assert_eq!(s.next_stop(), Some(t0 + Duration::from_millis(1_500)));
+        tokio::time::advance(Duration::from_millis(1_500)).await;
+        s.due(Instant::now());
+        assert_eq!(s.next_stop(), Some(t0 + Duration::from_secs(2)));
+        tokio::time::advance(Duration::from_millis(500)).await;
+        s.due(Instant::now());
+        assert_eq!(s.next_stop(), None);
     }
 
     /// Issue 37: 990 pending hour-long spins and strobes are 1980 entries, not millions of

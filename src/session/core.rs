@@ -286,6 +286,11 @@ impl SessionCore {
         self.fail_all(RequestError::Closed);
     }
 
+    /// The time between two paced writes: what a command queued behind another waits.
+    pub fn pacing(&self) -> std::time::Duration {
+        self.cfg.pacing
+    }
+
     /// A write finished at `now`: the next paced write waits one pacing interval from here,
     /// and the keep-alive counts quiet time from here.
     pub fn handle_written(&mut self, now: Instant) {

@@ -406,6 +406,12 @@ impl SessionHandle {
         mark.unwrap_or(Mark(0))
     }
 
+    /// The time between two paced writes (a Sphero Edu program holds a light that would
+    /// take the slot a timed stop needs, [`crate::edu`]).
+    pub fn pacing(&self) -> Duration {
+        self.shared.with(|core| core.pacing())
+    }
+
     /// Whether the command with ticket `mark` is still waiting to be written.
     pub fn holds(&self, mark: Mark) -> bool {
         self.shared.with(|core| core.holds(mark))

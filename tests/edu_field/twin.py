@@ -16,10 +16,12 @@ Prints nothing; the pose is read from serve's `droid_released` event.
 import importlib.util
 import os
 import sys
+import threading
 import time
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
 
+from spherov2.commands.animatronic import Animatronic  # noqa: E402
 from spherov2.sphero_edu import SpheroEduAPI  # noqa: E402
 
 from sphero_edu import find_toy  # noqa: E402
@@ -34,6 +36,25 @@ def quiet_background(api):
     api._SpheroEduAPI__stopped.wait()
 
 
+def on_tripod(toy):
+    """An event set when a droid with legs has finished the tripod stance spherov2's
+    SpheroEduAPI asks for as it starts (utils.py `set_robot_state_on_start`: THREE_LEGS, not
+    waited for); `None` for a robot without legs. R2-D2 rolls only on three legs
+    (shared/spec/droid-facts.md section 2) and droidctl's run waits for the tripod before the
+    first roll; spherov2's first roll instead starts while the legs still move, and how much of
+    it is lost depends on how long its setup's round trips took (5-10 cm on the simulated
+    R2-D2). That is transport timing, not a semantic of Sphero Edu, so the twin starts its
+    program once the droid stands, as droidctl's first roll does."""
+    if not hasattr(toy, "perform_leg_action"):
+        return None
+    stood = threading.Event()
+    # The notification's key (device 0x17, command 0x26, sequence 0xff), as spherov2 names it.
+    toy._add_listener(
+        (Animatronic.leg_action_complete_notify, lambda done, _packet: done()), stood.set
+    )
+    return stood
+
+
 def main():
     port, name, path = sys.argv[1:4]
     spec = importlib.util.spec_from_file_location("twin", path)
@@ -41,7 +62,10 @@ def main():
     spec.loader.exec_module(twin)
     SpheroEduAPI._SpheroEduAPI__background = quiet_background
     toy = find_toy(["tcp", port, name])
+    stood = on_tripod(toy)
     with SpheroEduAPI(toy) as api:
+        if stood is not None and not stood.wait(10):
+            sys.exit("the droid never said its tripod stance was complete")
         start = time.time()
         twin.program(api)
         hold = getattr(twin, "HOLD", 0)

@@ -227,28 +227,23 @@ const KNOWN: &[(&str, &str, &str)] = &[
     ("figure_eight", "bolt", SPIN),
     ("figure_eight", "mini", SPIN),
     ("figure_eight", "sprk", SPIN),
-    ("first_sensors", "r2d2", TRIPOD),
-    ("light_loop", "r2d2", TRIPOD),
-    (
-        "unawaited",
-        "mini",
-        "the helper's light leaves 10 ms before the first roll's stop is due, and Mini's link \
-         takes a command every 120 ms: droidctl's stop goes a slot late and the roll is 0.11 s \
-         (10 cm) long; spherov2's threads happened not to meet there",
-    ),
 ];
 
 /// Why a spin while rolling ends apart.
 const SPIN: &str = "spin while rolling: spherov2's spin steps its heading once per command \
-                    round trip and sends its last heading after the duration is over \
-                    (sphero_edu.py `spin`), so its arcs run longer: 3-35 cm further on, \
-                    varying from run to run with the round trips";
+                    round trip, sends a first step of 0 degrees and its last heading after \
+                    the duration is over, and says so itself (sphero_edu.py `spin`: 'may be \
+                    longer than the specified duration'); droidctl keeps the duration. On \
+                    Mini's 120 ms link spherov2 rolled 4.67 s where droidctl rolled 4.32 s \
+                    (captures, 2026-11-29): 3-25 cm further on, varying with the round trips";
 
-/// Why R2-D2's first roll ends apart.
-const TRIPOD: &str = "droidctl puts R2-D2 on three legs and waits for them before its first roll \
-                      (`stance tripod`); spherov2 rolls at once and the simulated R2-D2 \
-                      unfolds its third leg while the roll's clock runs, so spherov2's first \
-                      roll goes 5-10 cm less far";
+// R2-D2's and R2-Q5's tripod: spherov2's SpheroEduAPI asks for three legs as it starts
+// (utils.py `set_robot_state_on_start`, THREE_LEGS) and does not wait for them; the droid rolls
+// only on three legs (shared/spec/droid-facts.md section 2), and droidctl waits for the stance
+// before the first roll. spherov2's first roll then lost as much as its setup's round trips
+// left of the 2 s stance change (5-10 cm on the simulated R2-D2): transport timing, not a
+// semantic, so the twin starts its program once the droid says it stands (twin.py
+// `on_tripod`), as droidctl's first roll does.
 
 /// spherov2 lights RVR's main light with BOLT's matrix command (its `ToyUtil.set_main_led`
 /// tries `set_compressed_frame_player_one_color` first, and its RVR class has it), so no RVR

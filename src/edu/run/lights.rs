@@ -5,6 +5,7 @@ use super::super::api::{Act, Ir, RvrLight};
 use super::Player;
 use crate::family::intent::Intent;
 use crate::script::LedGroup;
+use tokio::time::Instant;
 
 /// RVR's lights' keys start here (each light's bits: its own key, beside the others').
 const RVR_KEYS: u64 = 100;
@@ -27,7 +28,36 @@ impl Player {
             ),
             _ => return,
         };
+        if self.stop_due_within_a_slot() {
+            self.held.retain(|h| h.1 != key);
+            self.held.push((line, key, intent));
+            return;
+        }
+        self.release_lights(false).await;
         self.intend_as(line, intent, "light", Some(key)).await;
+    }
+
+    /// Whether a `roll`'s or `rawMotor`'s stop is due before a light written now would free
+    /// the link: the stop would then leave a pacing slot late and the robot roll on (Mini's
+    /// 120 ms slot: 10 cm, `unawaited.js` in tests/it/edu_twins.rs). spherov2 never meets
+    /// this by design, only by its threads' timing; a light held one slot is not seen late,
+    /// a stop is.
+    fn stop_due_within_a_slot(&self) -> bool {
+        let slot = Instant::now() + self.session.pacing();
+        self.timed.next_stop().is_some_and(|at| at <= slot)
+    }
+
+    /// The lights held for a stop ([`Self::light`]), sent once no stop is that close (or the
+    /// program ended). After the stop they wait for the program's next call, so its drive
+    /// (`roll` after `roll`) does not wait a slot behind them either: spherov2 sends the next
+    /// roll one round trip after the stop.
+    pub(super) async fn release_lights(&mut self, ended: bool) {
+        if self.held.is_empty() || (!ended && self.stop_due_within_a_slot()) {
+            return;
+        }
+        for (line, key, intent) in std::mem::take(&mut self.held) {
+            self.intend_as(line, intent, "light", Some(key)).await;
+        }
     }
 
     /// Robot-to-robot infrared: the robot's own commands ([`super::infrared`]).
