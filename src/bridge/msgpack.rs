@@ -192,12 +192,12 @@ fn float(f: f64, at: usize) -> Result<Value, Error> {
         .ok_or(Error::NotFinite(at))
 }
 
-#[cfg(any(test, feature = "test-hooks"))]
 /// `msgpack.dumps({"linear": {"x": 0.3, "y": 0.0, "z": 0.0}, "angular": {"x": 0.0,
 /// "y": 0.0, "z": -0.5}})` as Python's msgpack 1.0 writes it (floats as float 64,
 /// strings as fixstr), built byte by byte from the spec: the one encoder of the unit tests
 /// and the integration tests (`tests/it/bridge_ros.rs`), which publish it on `cmd_vel`.
-/// Tests only: the bridge reads MessagePack, it never writes it.
+/// The bridge itself only reads MessagePack; this is public (not behind `test-hooks`) so that
+/// the integration tests, built with and without that feature, share it.
 pub fn twist_bytes(linear_x: f64, angular_z: f64) -> Vec<u8> {
     let mut b = vec![0x82];
     for (name, v) in [

@@ -283,6 +283,7 @@ fn serve(args: SimArgs, plan: Plan) -> Result<i32, CliError> {
 /// path). A full disk or another write error ends the simulator with status 1 before it
 /// serves (a script reading `$(droidctl sim …)` would get nothing); a reader that went away
 /// does not, since the line is said on stderr too and the simulator is still of use.
+#[cfg(unix)]
 pub(super) fn print_for_scripts(line: &str, what: &str) -> Result<(), CliError> {
     use std::io::Write;
     let mut out = std::io::stdout().lock();

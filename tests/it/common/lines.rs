@@ -2,6 +2,9 @@
 //! a full pipe, and looked at from the test whenever it likes: what was said so far, or a
 //! bounded wait for a line.
 
+// Shared by tests some of which are Unix-only: on other targets parts go unused.
+#![allow(dead_code)]
+
 use std::io::{BufRead, BufReader, Read};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};

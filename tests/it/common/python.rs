@@ -3,6 +3,9 @@
 //! in the venv `.ci/run` makes under `target/`, then in `python3`; a test that cannot have
 //! one prints why and is skipped by its caller.
 
+// Shared by tests some of which are Unix-only: on other targets parts go unused.
+#![allow(dead_code)]
+
 use std::process::Command;
 
 /// A Python library of the field the tests are judged by.
