@@ -4,16 +4,15 @@
 //! processor, and its compass calibrates; Mini drives by heading like BB-8.
 
 use droidctl::app::input::{KeyKind, TermEvent};
-use droidctl::app::run::{self, AppInputs, AppOptions};
+use droidctl::app::run::{self, AppInputs};
 use droidctl::app::state::AppState;
-use droidctl::config::{Config, Key, KeyCode};
+use droidctl::config::{Key, KeyCode};
 use droidctl::family::setup::{SetupOptions, connect_setup};
 use droidctl::model::Model;
 use droidctl::protocol::v2::Packet;
 use droidctl::session::{self, Direction, LogEntry, LogItem, SessionConfig};
 use droidctl::sim::{Faults, SimConfig, SimLink, link::SimProbe};
 use droidctl::teleop::gamepad::{Axis, PadEvent};
-use droidctl::teleop::held::ReleaseMode;
 use ratatui::{Frame, Terminal, backend::TestBackend};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
@@ -65,16 +64,7 @@ async fn start(model: Model) -> Harness {
     let (term, term_rx) = mpsc::channel(64);
     let (pad, pad_rx) = mpsc::channel(64);
     let (quit, quit_rx) = mpsc::channel(4);
-    let opts = AppOptions {
-        config: Config::defaults(),
-        model,
-        droid_name: format!("{} (simulated)", model.display_name()),
-        log_path: None,
-        release: ReleaseMode::Reported,
-        tripod_on_connect: false,
-        samples: None,
-        remember: None,
-    };
+    let opts = crate::common::app::simulated_options(model);
     let app = tokio::spawn(async move {
         let mut terminal = Terminal::new(TestBackend::new(80, 24)).unwrap();
         let inputs = AppInputs {

@@ -7,7 +7,7 @@
 
 use droidctl::app::input::{KeyKind, TermEvent};
 use droidctl::app::place::Place;
-use droidctl::app::run::{self, AppInputs, AppOptions, Exit};
+use droidctl::app::run::{self, AppInputs, Exit};
 use droidctl::app::state::AppState;
 use droidctl::config::{Config, Key, KeyCode};
 use droidctl::family::setup::{SetupOptions, connect_setup};
@@ -17,7 +17,6 @@ use droidctl::session::{self, Direction, LogEntry, LogItem, SessionConfig};
 use droidctl::sim::{Faults, SimConfig, SimLink, link::SimProbe};
 use droidctl::teleop::gamepad::{Named, PadEvent, pad_event};
 use droidctl::teleop::gamepad_map::{RawInput, SdlMapping, SdlPad};
-use droidctl::teleop::held::ReleaseMode;
 use ratatui::{Frame, Terminal, backend::TestBackend};
 use std::cell::RefCell;
 use std::sync::{Arc, Mutex};
@@ -118,16 +117,7 @@ impl Rig {
         let (term, term_rx) = mpsc::channel(64);
         let (pad, pad_rx) = mpsc::channel(64);
         let (quit, quit_rx) = mpsc::channel(4);
-        let opts = AppOptions {
-            config: Config::defaults(),
-            model,
-            droid_name: format!("{} (simulated)", model.display_name()),
-            log_path: None,
-            release: ReleaseMode::Reported,
-            tripod_on_connect: false,
-            samples: None,
-            remember: None,
-        };
+        let opts = crate::common::app::simulated_options(model);
         let app = tokio::spawn(async move {
             let mut terminal = Terminal::new(TestBackend::new(100, 30)).expect("test backend");
             let inputs = AppInputs {

@@ -1,6 +1,7 @@
 //! What several areas' tests share: the built binary run with arguments, scratch
 //! directories, the app in a pseudo-terminal, brokers and bridges as processes.
 
+pub mod app;
 pub mod bridge_proc;
 pub mod cli;
 pub mod edu_run;
