@@ -37,12 +37,17 @@ fn drives(sim: &SerialSim) -> Vec<(u64, u64)> {
 /// no source: as Sphero's SDK sends), and answered without error when it asked.
 fn all_named_and_answered(sim: &SerialSim) {
     // The simulator's trace is read as it is printed: a command just seen may have its answer
-    // a line later. Wait (boundedly) for every answer before judging.
+    // a line later. Wait (boundedly) for every answer, and judge the very trace the wait ended
+    // on: a fresh look could hold a command written since, its answer not yet printed (the
+    // drive slot's re-send of an e-stop comes a pacing interval after the stop itself).
     let end = std::time::Instant::now() + std::time::Duration::from_secs(5);
-    while std::time::Instant::now() < end && !every_answer_in(&sim.packets()) {
+    let packets = loop {
+        let packets = sim.packets();
+        if every_answer_in(&packets) || std::time::Instant::now() >= end {
+            break packets;
+        }
         std::thread::sleep(std::time::Duration::from_millis(50));
-    }
-    let packets = sim.packets();
+    };
     for (dir, p) in &packets {
         if dir != "in" {
             continue;

@@ -160,6 +160,11 @@ impl Sim {
             assert!(start.elapsed() < Duration::from_secs(5), "sim did not stop");
             std::thread::sleep(Duration::from_millis(20));
         };
+        // Everything it said read to the end before anyone judges it.
+        assert!(
+            self.lines.wait_end(Duration::from_secs(5)),
+            "its stderr did not end"
+        );
         assert!(status.success(), "{status:?}\n{}", self.lines().join("\n"));
         let rest = self
             .stdout_rest

@@ -9,9 +9,9 @@ use std::io::{BufRead, BufReader, Read};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
-/// The lines read so far from one of a child's pipes.
+/// The lines read so far from one of a child's pipes, and whether the pipe has ended.
 #[derive(Clone, Default)]
-pub struct Lines(Arc<Mutex<Vec<String>>>);
+pub struct Lines(Arc<Mutex<(Vec<String>, bool)>>);
 
 impl Lines {
     /// Read `from` until it ends, keeping every line.
@@ -21,15 +21,36 @@ impl Lines {
         std::thread::spawn(move || {
             for line in BufReader::new(from).lines() {
                 let Ok(line) = line else { break };
-                keep.0.lock().unwrap_or_else(|e| e.into_inner()).push(line);
+                keep.0
+                    .lock()
+                    .unwrap_or_else(|e| e.into_inner())
+                    .0
+                    .push(line);
             }
+            keep.0.lock().unwrap_or_else(|e| e.into_inner()).1 = true;
         });
         lines
     }
 
     /// Every line so far.
     pub fn all(&self) -> Vec<String> {
-        self.0.lock().unwrap_or_else(|e| e.into_inner()).clone()
+        self.0.lock().unwrap_or_else(|e| e.into_inner()).0.clone()
+    }
+
+    /// Wait (up to `limit`) until the pipe has ended, so that [`Self::all`] holds everything
+    /// the child said: a child that has exited may still have lines in the pipe that this
+    /// side has not read yet. Whether it ended.
+    pub fn wait_end(&self, limit: Duration) -> bool {
+        let start = Instant::now();
+        loop {
+            if self.0.lock().unwrap_or_else(|e| e.into_inner()).1 {
+                return true;
+            }
+            if start.elapsed() >= limit {
+                return false;
+            }
+            std::thread::sleep(Duration::from_millis(10));
+        }
     }
 
     /// Every line so far, one text.

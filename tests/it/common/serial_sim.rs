@@ -99,6 +99,11 @@ impl SerialSim {
         let end = Instant::now() + Duration::from_secs(10);
         loop {
             if let Some(s) = self.child.try_wait().unwrap() {
+                // Everything it said read to the end before anyone judges the trace.
+                assert!(
+                    self.lines.wait_end(Duration::from_secs(10)),
+                    "sim --serial's stderr did not end"
+                );
                 return s.code();
             }
             assert!(Instant::now() < end, "sim --serial did not stop");
