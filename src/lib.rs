@@ -24,6 +24,7 @@ pub mod net;
 pub mod output;
 pub mod own_file;
 pub mod plot;
+pub mod printable;
 pub mod protocol;
 pub mod relay;
 pub mod rng;

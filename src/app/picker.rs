@@ -109,7 +109,10 @@ pub const NAME_MAX: usize = 24;
 /// the screen cleans control characters out of it, and cuts it at [`NAME_MAX`]).
 pub fn cells(e: &ScanEntry) -> [String; 4] {
     [
-        e.name.clone().unwrap_or_else(|| "?".into()),
+        // Cleaned here: the numbered prompt on stderr prints these cells as they are.
+        e.name
+            .as_deref()
+            .map_or_else(|| "?".into(), crate::printable::clean),
         e.model
             .map(crate::model::Model::display_name)
             .unwrap_or("?")
@@ -166,6 +169,14 @@ mod tests {
             rssi: Some(rssi),
             heard: true,
         }
+    }
+
+    #[test]
+    fn a_hostile_name_becomes_a_printable_cell() {
+        // The numbered prompt (`droidctl` with several droids in range, no terminal for the
+        // full-screen list) writes these cells to stderr as they are.
+        let [name, ..] = cells(&entry("D2-\u{1b}]0;owned\u{7}", -40));
+        assert_eq!(name, "D2-·]0;owned·");
     }
 
     #[test]

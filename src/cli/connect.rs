@@ -168,7 +168,7 @@ pub async fn connect(
     if chatty {
         eprintln!(
             "droidctl: connecting to {} ({}, {})",
-            found.name,
+            crate::printable::clean(&found.name),
             found.model.display_name(),
             found.id
         );
@@ -209,7 +209,8 @@ pub async fn connect(
         let profile = link.profile().clone();
         if chatty {
             eprintln!(
-                "droidctl: connecting to {name} ({}, {})",
+                "droidctl: connecting to {} ({}, {})",
+                crate::printable::clean(&name),
                 model.display_name(),
                 e.id
             );
@@ -343,7 +344,7 @@ async fn connect_remote_picked(
     first.others = links.collect();
     eprintln!(
         "droidctl: connecting to {} ({}) behind {relay}",
-        first.name,
+        crate::printable::clean(&first.name),
         first.model.display_name()
     );
     Ok(first)

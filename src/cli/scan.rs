@@ -234,12 +234,14 @@ fn table(header: &[&str], rows: Vec<Vec<String>>, out: &mut dyn Write) -> io::Re
     let mut widths: Vec<usize> = header.iter().map(|h| h.chars().count()).collect();
     for r in &rows {
         for (w, c) in widths.iter_mut().zip(r) {
+            // As printed: a control character is one `·`.
             *w = (*w).max(c.chars().count());
         }
     }
     for r in std::iter::once(&header).chain(&rows) {
         let mut line = String::new();
         for (i, c) in r.iter().enumerate() {
+            let c = &crate::printable::clean(c);
             if i + 1 == r.len() {
                 line.push_str(c);
             } else {
@@ -304,6 +306,19 @@ mod tests {
              D2-AAAA  R2-D2  F1:00:00:00:00:01  -70 dBm\n\
              D2-OLD0  R2-D2  F1:00:00:00:00:03  not in range (remembered)\n"
         );
+    }
+
+    #[test]
+    fn a_hostile_name_is_listed_not_obeyed() {
+        let s = scan::summarize(&[scan_ad(Some("D2-\u{1b}[2J\u{7}"), 1, Some(-70))], false);
+        let mut out = Vec::new();
+        render(&s, false, &mut out).unwrap();
+        let text = String::from_utf8(out).unwrap();
+        assert!(
+            !text.chars().any(|c| c.is_control() && c != '\n'),
+            "{text:?}"
+        );
+        assert!(text.contains("D2-·[2J·  R2-D2"), "{text:?}");
     }
 
     use crate::link::ble::fake::FakeCentral;

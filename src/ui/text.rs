@@ -20,11 +20,7 @@ fn char_width(c: char) -> usize {
 
 /// Replace control characters (from droid names, error strings, paths) so they cannot move
 /// the cursor or break a row.
-pub fn clean(s: &str) -> String {
-    s.chars()
-        .map(|c| if c.is_control() { '·' } else { c })
-        .collect()
-}
+pub use crate::printable::clean;
 
 /// Keep the start of `s` within `max` cells, ending with `…` when cut.
 pub fn truncate(s: &str, max: usize) -> String {

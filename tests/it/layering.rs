@@ -24,6 +24,8 @@ const RANKS: &[(&str, u32)] = &[
     ("text_file", 0),
     // What a user tunes about monitoring: sensor groups, collision detection.
     ("tuning", 0),
+    // Outside text made safe to print on a terminal.
+    ("printable", 0),
     // Which addresses are loopback.
     ("net", 0),
     // The examples built into the binary (they name the models they are for).
