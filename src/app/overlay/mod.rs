@@ -294,6 +294,75 @@ mod tests {
         }
     }
 
+    /// A key to `o` through the registry, with R2-D2's monitoring and the shipped keys.
+    fn press(o: &mut Overlay, action: crate::config::Action, new_press: bool) -> Outcome<Do> {
+        let km = Config::defaults().keymap;
+        let droid = DroidState::new(Model::DEFAULT, String::new());
+        let mut page = 0;
+        let key = km.keys(action)[0];
+        let mut around = Around {
+            keymap: &km,
+            model: droid.model,
+            monitor: &droid.monitor,
+            animations: &[],
+            sounds: &[],
+            help_page: &mut page,
+            area: Rect::new(0, 0, 80, 24),
+        };
+        o.on_key(&mut around, key, new_press)
+    }
+
+    /// What reaches beyond an overlay is an outcome the app carries out, never done by the
+    /// overlay itself: the channel switched (the list stays), the settings sent (it closes),
+    /// the matrix drawn (it closes; nothing typed just closes), the filter restored.
+    #[test]
+    fn the_overlays_outcomes_name_what_the_app_does() {
+        use crate::config::Action as A;
+        let mut channels = Overlay::Channels { selected: 0 };
+        let first = channels::offered(Model::DEFAULT)[0];
+        assert_eq!(
+            press(&mut channels, A::SettingsToggle, false),
+            Outcome::Stay
+        );
+        assert_eq!(
+            press(&mut channels, A::SettingsToggle, true),
+            Outcome::Apply(Do::ToggleChannel(first))
+        );
+        assert_eq!(press(&mut channels, A::SettingsClose, true), Outcome::Close);
+
+        let mut tuning = <tuning::Tuning as Component>::sample();
+        let Overlay::Tuning { draft, .. } = tuning.clone() else {
+            panic!("the settings' sample is the settings");
+        };
+        assert_eq!(press(&mut tuning, A::SettingsApply, false), Outcome::Stay);
+        assert_eq!(
+            press(&mut tuning, A::SettingsApply, true),
+            Outcome::Done(Do::Tune(draft))
+        );
+
+        let mut matrix = <matrix::Matrix as Component>::sample();
+        assert_eq!(press(&mut matrix, A::FilterApply, true), Outcome::Close);
+        let mut matrix = Overlay::Matrix { input: "R2".into() };
+        assert_eq!(
+            press(&mut matrix, A::FilterApply, true),
+            Outcome::Done(Do::Matrix(MatrixShows::Text("R2".into())))
+        );
+
+        let before = LogFilter::parse("ack");
+        let mut filter = Overlay::Filter {
+            input: "ack r".into(),
+            before: Box::new(before.clone()),
+        };
+        assert_eq!(
+            press(&mut filter, A::FilterCancel, true),
+            Outcome::Done(Do::Filter(before))
+        );
+
+        let mut packet = <packet::Packet as Component>::sample();
+        assert_eq!(press(&mut packet, A::DetailClose, false), Outcome::Stay);
+        assert_eq!(press(&mut packet, A::DetailClose, true), Outcome::Close);
+    }
+
     #[test]
     fn a_packet_being_searched_reads_the_prompts_keys() {
         let Overlay::Packet { line, .. } = <packet::Packet as Component>::sample() else {
