@@ -2,16 +2,11 @@
 //! with every field, the frame's parts (start, flags, device, command, seq, data, checksum,
 //! end) and hex, its time, direction and droid. A search (`/`) marks the rows that contain
 //! the text; `n` and `N` go to the next and previous match. The rows are made here, once,
-//! for the screen and the search alike.
+//! for the screen and the search alike; its keys are a component,
+//! [`super::overlay::packet`], and `App::open_detail` (in [`super::keys`], the log's keys)
+//! opens it.
 
-use super::core::App;
-use super::overlay::filter::edit;
 use super::packet_log::LogLine;
-use super::state::Overlay;
-use crate::config::{Action, Context, Key};
-
-/// Longest search typed.
-const SEARCH_MAX: usize = 60;
 
 /// One row of the detail: a label and its value (never cut: the screen wraps it).
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -92,86 +87,4 @@ pub fn matches(rows: &[Row], search: &str) -> Vec<usize> {
         .filter(|(_, r)| r.label.to_lowercase().contains(&s) || r.value.to_lowercase().contains(&s))
         .map(|(i, _)| i)
         .collect()
-}
-
-impl App {
-    /// The log's selected line, in full.
-    pub(super) fn open_detail(&mut self) {
-        let rows = self.log_rows();
-        let Some(line) = self.state.log.selected(rows).cloned() else {
-            return self.hint("no packet to show");
-        };
-        self.state.overlay = Overlay::Packet {
-            line: Box::new(line),
-            search: String::new(),
-            typing: false,
-            matched: 0,
-            scroll: 0,
-        };
-    }
-
-    pub(super) fn detail_scroll(&mut self, n: usize, down: bool) {
-        if let Overlay::Packet { scroll, line, .. } = &mut self.state.overlay {
-            let last = rows(line).len().saturating_sub(1);
-            *scroll = if down {
-                (*scroll + n).min(last)
-            } else {
-                scroll.saturating_sub(n)
-            };
-        }
-    }
-
-    pub(super) fn detail_key(&mut self, key: Key, new_press: bool) {
-        let action = self.keymap.action_in(Context::Detail, &key);
-        let Overlay::Packet {
-            line,
-            search,
-            typing,
-            matched,
-            scroll,
-        } = &mut self.state.overlay
-        else {
-            return;
-        };
-        let rows = rows(line);
-        if *typing {
-            // While typing, the prompts' keys (as the log filter's): the rest is text.
-            match self.keymap.action_in(Context::Filter, &key) {
-                Some(Action::FilterApply) => {
-                    *typing = false;
-                    *matched = 0;
-                    if let Some(&i) = matches(&rows, search).first() {
-                        *scroll = i;
-                    }
-                }
-                Some(Action::FilterCancel) => {
-                    *typing = false;
-                    search.clear();
-                }
-                _ => edit(search, key, SEARCH_MAX, |_| true),
-            }
-            return;
-        }
-        let found = matches(&rows, search);
-        match action {
-            Some(Action::DetailUp) => *scroll = scroll.saturating_sub(1),
-            Some(Action::DetailDown) => *scroll = (*scroll + 1).min(rows.len().saturating_sub(1)),
-            Some(_) if !new_press => {}
-            Some(Action::DetailSearch) => {
-                *typing = true;
-                search.clear();
-            }
-            Some(Action::DetailNext) | Some(Action::DetailPrevious) if !found.is_empty() => {
-                let n = found.len();
-                *matched = if action == Some(Action::DetailNext) {
-                    (*matched + 1) % n
-                } else {
-                    (*matched + n - 1) % n
-                };
-                *scroll = found[*matched];
-            }
-            Some(Action::DetailClose) => self.state.overlay = Overlay::None,
-            _ => {}
-        }
-    }
 }

@@ -238,11 +238,13 @@ pub const FOOTER_EXCEPTIONS: &[(Place, &[Action], Unless)] = &[
 pub fn footer_now(state: &AppState, help_paged: bool) -> Vec<&FooterKey> {
     let replay = state.droid().replay.is_some();
     let place = Place::of(state, replay);
-    let (typing, searched) = match &state.overlay {
-        super::state::Overlay::Packet { typing, search, .. } => (*typing, !search.is_empty()),
-        _ => (false, false),
-    };
-    let ctx = place.context(state.droid().scope.visible, typing);
+    let searched = matches!(
+        &state.overlay,
+        super::state::Overlay::Packet { search, .. } if !search.is_empty()
+    );
+    // An open overlay's table is the registry's (a packet's search types with the prompts').
+    let ctx = (state.overlay.context())
+        .unwrap_or_else(|| place.context(state.droid().scope.visible, false));
     let hidden = |a: Option<Action>| {
         FOOTER_EXCEPTIONS.iter().any(|(p, actions, unless)| {
             *p == place

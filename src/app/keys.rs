@@ -1,6 +1,7 @@
-//! Key dispatch: a key is read in the context that has the keyboard — an open overlay (a
-//! palette, help, the filter prompt), the focused packet log, a replay, or driving — and
-//! looked up in that context's bindings from the key map. Nothing is hard-coded but Ctrl+C,
+//! Key dispatch: a key is read in the context that has the keyboard — an open overlay (any
+//! registered in [`super::overlay`]: the registry hands it the key, and the app carries its
+//! outcome out here), the focused packet log, a replay, or driving — and looked up in that
+//! context's bindings from the key map. Nothing is hard-coded but Ctrl+C,
 //! which always quits (the droid is stopped first).
 //!
 //! Held actions (drive, turn, dome, e-stop) track press and release through [`HeldKeys`]
@@ -11,8 +12,7 @@
 
 use super::core::{App, ExitReason};
 use super::input::{KeyKind, TermEvent};
-use super::overlay::filter::Prompted;
-use super::overlay::{self, Outcome};
+use super::overlay::{self, Do, Outcome};
 use super::place::Place;
 use super::state::{Focus, Overlay};
 use crate::config::{Action, Context, Key, KeyCode};
@@ -142,19 +142,79 @@ impl App {
             return None;
         }
         match place {
-            Place::Palette => self.palette_key(key, new_press),
-            Place::Help => self.help_key(key, new_press),
-            Place::Filter => self.filter_key(key),
-            Place::Matrix => self.matrix_key(key),
-            Place::Channels => self.channels_key(key, new_press),
-            Place::Tuning => self.tuning_key(key, new_press),
-            Place::Packet => self.detail_key(key, new_press),
             Place::Driving if scope_key => self.scope_key(key, new_press),
             Place::Log => return self.log_key(key, new_press),
             Place::Replay => return self.replay_key(key, new_press),
             Place::Driving => return self.drive_key(key, new_press),
+            // Every other place is an open overlay's: the registry hands it the key.
+            _ => {
+                let (overlay, mut around) = self.overlay_around();
+                let out = overlay.on_key(&mut around, key, new_press);
+                self.carry_out(out);
+            }
         }
         None
+    }
+
+    /// The open overlay, and what it reads beside its state ([`overlay::Around`]).
+    pub(super) fn overlay_around(&mut self) -> (&mut Overlay, overlay::Around<'_>) {
+        let s = &mut self.state;
+        let d = &s.droids[s.chosen.min(s.droids.len() - 1)];
+        let around = overlay::Around {
+            keymap: &self.keymap,
+            model: d.model,
+            monitor: &d.monitor,
+            animations: &s.animations,
+            sounds: &s.sounds,
+            help_page: &mut s.help_page,
+            area: self.area,
+        };
+        (&mut s.overlay, around)
+    }
+
+    /// What an overlay's key or click asked for: close it, and do what reaches beyond it.
+    pub(super) fn carry_out(&mut self, out: Outcome<Do>) {
+        let todo = match out {
+            Outcome::Stay => None,
+            Outcome::Apply(d) => Some(d),
+            Outcome::Close => {
+                self.state.overlay = Overlay::None;
+                None
+            }
+            Outcome::Done(d) => {
+                self.state.overlay = Overlay::None;
+                Some(d)
+            }
+        };
+        match todo {
+            None => {}
+            Some(Do::Play { animation, index }) => {
+                let list = if animation {
+                    &self.state.animations
+                } else {
+                    &self.state.sounds
+                };
+                let chosen = self.chosen();
+                if let (Some(e), Some(mut d)) = (list.get(index).cloned(), self.droid(chosen)) {
+                    if animation {
+                        d.play_animation(e.id, &e.name);
+                    } else {
+                        d.play_sound(e.id, &e.name);
+                    }
+                }
+            }
+            Some(Do::Filter(f)) => self.state.log.set_filter(f),
+            Some(Do::ToggleChannel(c)) => self.state.droid_mut().scope.toggle(c),
+            Some(Do::Tune(draft)) => {
+                if let Some(mut d) = self.droid(self.chosen()) {
+                    d.apply_tuning(draft);
+                }
+            }
+            Some(Do::Matrix(shows)) => {
+                self.state.droid_mut().matrix.shows = shows;
+                self.draw_matrix();
+            }
+        }
     }
 
     fn open_help(&mut self) {
@@ -162,57 +222,19 @@ impl App {
         self.state.overlay = Overlay::Help;
     }
 
-    /// A key on a palette ([`overlay::palette`]); playing closes it.
-    pub(super) fn palette_key(&mut self, key: Key, new_press: bool) {
-        let (selected, animations) = match &mut self.state.overlay {
-            Overlay::Animations { selected } => (selected, true),
-            Overlay::Sounds { selected } => (selected, false),
-            _ => return,
+    /// The log's selected line, in full ([`overlay::packet`]).
+    fn open_detail(&mut self) {
+        let rows = self.log_rows();
+        let Some(line) = self.state.log.selected(rows).cloned() else {
+            return self.hint("no packet to show");
         };
-        let list = if animations {
-            &self.state.animations
-        } else {
-            &self.state.sounds
+        self.state.overlay = Overlay::Packet {
+            line: Box::new(line),
+            search: String::new(),
+            typing: false,
+            matched: 0,
+            scroll: 0,
         };
-        match overlay::palette::on_key(selected, list.len(), &self.keymap, key, new_press) {
-            Outcome::Stay => return,
-            Outcome::Close => {}
-            Outcome::Done(i) => {
-                let chosen = self.chosen();
-                if let (Some(e), Some(mut d)) = (list.get(i).cloned(), self.droid(chosen)) {
-                    if animations {
-                        d.play_animation(e.id, &e.name);
-                    } else {
-                        d.play_sound(e.id, &e.name);
-                    }
-                }
-            }
-        }
-        self.state.overlay = Overlay::None;
-    }
-
-    /// A key on help ([`overlay::help`]).
-    fn help_key(&mut self, key: Key, new_press: bool) {
-        let page = &mut self.state.help_page;
-        if overlay::help::on_key(page, &self.keymap, key, new_press) != Outcome::Stay {
-            self.state.overlay = Overlay::None;
-        }
-    }
-
-    /// A key on the log filter prompt ([`overlay::filter`]): the log follows as it is typed.
-    fn filter_key(&mut self, key: Key) {
-        let Overlay::Filter { input, before } = &mut self.state.overlay else {
-            return;
-        };
-        match overlay::filter::on_key(input, before, &self.keymap, key) {
-            Prompted::Stay => {}
-            Prompted::Typed(f) => self.state.log.set_filter(f),
-            Prompted::Applied => self.state.overlay = Overlay::None,
-            Prompted::Cancelled(before) => {
-                self.state.log.set_filter(before);
-                self.state.overlay = Overlay::None;
-            }
-        }
     }
 
     /// The packet log has the keys: its own bindings first, then the drive table's quit,

@@ -1,12 +1,12 @@
-//! BOLT's LED matrix in the app: the prompt that types on it (one character is drawn, more
-//! scroll), the colour key, and the compass calibration key. Every command is the family's
+//! BOLT's LED matrix in the app: opening the prompt that types on it (its keys are a
+//! component, [`super::overlay::matrix`]), drawing what it shows, the colour key, and the
+//! compass calibration key. Every command is the family's
 //! (`Family::matrix`). What droidctl drew on it is view state, [`super::view::matrix`].
 
 use super::core::App;
 use super::state::Overlay;
-use super::view::matrix::{MAIN_LED_CYCLE, MatrixShows, MatrixView};
-use crate::config::{Action, Context, Key};
-use crate::protocol::v2::types::SCROLL_TEXT_MAX;
+use super::view::matrix::{MAIN_LED_CYCLE, MatrixShows};
+use crate::config::Action;
 
 impl App {
     /// The robot-only keys of the drive table; `false` when `a` is not one of them.
@@ -51,7 +51,7 @@ impl App {
     }
 
     /// Send what the chosen droid's matrix view says it shows.
-    fn draw_matrix(&mut self) {
+    pub(super) fn draw_matrix(&mut self) {
         let Some(mut d) = self.droid(self.chosen()) else {
             return;
         };
@@ -63,28 +63,6 @@ impl App {
         if let Ok(cmds) = d.io.family.lower(d.view.model, &draw) {
             for c in cmds {
                 d.send(c, "matrix");
-            }
-        }
-    }
-
-    /// A key while the matrix prompt is open (the filter table's apply and cancel keys).
-    pub fn matrix_key(&mut self, key: Key) {
-        let action = self.keymap.action_in(Context::Filter, &key);
-        let Overlay::Matrix { input } = &mut self.state.overlay else {
-            return;
-        };
-        match action {
-            Some(Action::FilterCancel) => self.state.overlay = Overlay::None,
-            Some(Action::FilterApply) => {
-                let typed = MatrixView::typed(input);
-                self.state.overlay = Overlay::None;
-                if let Some(shows) = typed {
-                    self.state.droid_mut().matrix.shows = shows;
-                    self.draw_matrix();
-                }
-            }
-            _ => {
-                super::overlay::filter::edit(input, key, SCROLL_TEXT_MAX, |c| c.is_ascii_graphic())
             }
         }
     }

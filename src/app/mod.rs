@@ -1,6 +1,6 @@
 //! The application: state, the packet log, palettes, and the event loop that owns them.
 //! Imports point down and close no circle (`tests/circles.rs`): [`view`] and [`state`] know
-//! nothing of [`core`]'s `App`; the handlers (`impl App` in keys, pad, actions, fleet,
+//! nothing of [`core`]'s `App`; the handlers (`impl App` in keys, mouse, pad, actions, fleet,
 //! matrix, monitor, remember, replay) sit above it, `build` and [`run`] on top.
 //!
 //! - [`run`]: the event loop and its wiring (inputs in, frames out);
@@ -11,13 +11,17 @@
 //! - [`view`]: view state below everything that changes it (the matrix as drawn, the scope
 //!   and the monitoring settings);
 //! - [`keys`], [`pad`]: key dispatch by place and gamepad events; [`overlay`]: the
-//!   overlays' keys as components (own state, own keys, an outcome the loop carries out);
+//!   overlays as components (own state, own keys and mouse, an outcome the app carries
+//!   out) and their registry, one list that makes [`state::Overlay`] and its place, key
+//!   context, key and mouse dispatch. To add an overlay: its component file in
+//!   [`overlay`], its line in the registry, its drawing in `ui::overlay`;
 //! - [`actions`]: what reaches the droid (control outputs, lights, animations, sounds);
 //! - [`replay`], [`player`]: the app on a capture;
 //! - [`program_status`]: the Sphero Edu program running beside it (`--program`);
 //! - [`help`]: the help overlay's text and the footer, generated from the bindings;
 //!   [`borders`]: the overlays' and panels' key hints, worded once from them;
-//! - [`monitor`]: the keys of the scope, its channel list and the settings palette;
+//! - [`monitor`]: the keys of the scope, opening its channel list and the settings palette,
+//!   and sending the settings; [`detail`]: a packet in full's rows;
 //! - [`pacing`], [`rates`]: frame pacing and per-second rates, small state machines without IO;
 //! - [`battery`]: the battery poller;
 //! - `fleet`, [`roster`]: several droids (every droid held alike in fleet order, the chosen
@@ -25,7 +29,7 @@
 //! - [`layout`]: where each part of the screen goes (the UI draws there, the mouse hits
 //!   there); `mouse`: wheel and clicks;
 //! - [`remember`]: settings remembered per droid model between launches;
-//! - [`matrix`]: BOLT's LED matrix's prompt, colour and compass keys.
+//! - [`matrix`]: BOLT's LED matrix: opening its prompt, drawing it, colour and compass keys.
 
 mod actions;
 pub mod battery;

@@ -1,5 +1,6 @@
-//! Monitoring in the app (issue 22 points 1-3): the keys of the scope, its channel list and
-//! the settings palette. What they change is view state ([`super::view::scope`]: the scope's
+//! Monitoring in the app (issue 22 points 1-3): the keys of the scope, opening its channel
+//! list and the settings palette (their keys are components: [`super::overlay::channels`],
+//! [`super::overlay::tuning`]), and sending the settings. What they change is view state ([`super::view::scope`]: the scope's
 //! window and channels, the streaming and collision settings in effect), one per droid in
 //! [`AppState`], so it follows the droid shown.
 //!
@@ -15,7 +16,6 @@ use super::view::scope::{TuningDraft, WINDOWS, tuning_rows};
 use crate::config::{Action, Context, Key};
 use crate::family::setup::{SetupOptions, connect_setup};
 use crate::family::stream;
-use crate::telemetry::history::Channel;
 use crate::tuning::StreamRequest;
 
 impl App {
@@ -52,44 +52,6 @@ impl App {
         self.dirty = true;
     }
 
-    /// The channels this droid reports, as the channel list shows them.
-    pub fn channels_offered(&self) -> Vec<Channel> {
-        let robi = self.state.droid().model.reports_state_frames();
-        Channel::ALL
-            .iter()
-            .copied()
-            .filter(|c| c.reported_by(robi))
-            .collect()
-    }
-
-    /// A key in the channel list.
-    pub fn channels_key(&mut self, key: Key, new_press: bool) {
-        let Overlay::Channels { selected } = self.state.overlay else {
-            return;
-        };
-        let offered = self.channels_offered();
-        let last = offered.len().saturating_sub(1);
-        match self.keymap.action_in(Context::Settings, &key) {
-            Some(Action::SettingsUp) => {
-                self.state.overlay = Overlay::Channels {
-                    selected: selected.saturating_sub(1),
-                }
-            }
-            Some(Action::SettingsDown) => {
-                self.state.overlay = Overlay::Channels {
-                    selected: (selected + 1).min(last),
-                }
-            }
-            Some(Action::SettingsToggle | Action::SettingsApply) if new_press => {
-                if let Some(c) = offered.get(selected) {
-                    self.state.droid_mut().scope.toggle(*c);
-                }
-            }
-            Some(Action::SettingsClose) => self.state.overlay = Overlay::None,
-            _ => {}
-        }
-    }
-
     /// Open the streaming and collision settings.
     pub fn open_tuning(&mut self) {
         let m = &self.state.droid().monitor;
@@ -112,46 +74,6 @@ impl App {
             collision: m.collision,
         };
         self.state.overlay = Overlay::Tuning { selected: 0, draft };
-    }
-
-    /// A key in the settings palette.
-    pub fn tuning_key(&mut self, key: Key, new_press: bool) {
-        let rows = tuning_rows(&self.state.droid().monitor);
-        let caps = self.state.droid().monitor.caps;
-        let Overlay::Tuning { selected, draft } = &mut self.state.overlay else {
-            return;
-        };
-        let row = rows.get(*selected).copied();
-        match self.keymap.action_in(Context::Settings, &key) {
-            Some(Action::SettingsUp) => *selected = selected.saturating_sub(1),
-            Some(Action::SettingsDown) => {
-                *selected = (*selected + 1).min(rows.len().saturating_sub(1))
-            }
-            Some(Action::SettingsLess) => {
-                if let Some(r) = row {
-                    draft.change(caps.as_ref(), r, Some(false));
-                }
-            }
-            Some(Action::SettingsMore) => {
-                if let Some(r) = row {
-                    draft.change(caps.as_ref(), r, Some(true));
-                }
-            }
-            Some(Action::SettingsToggle) if new_press => {
-                if let Some(r) = row {
-                    draft.change(caps.as_ref(), r, None);
-                }
-            }
-            Some(Action::SettingsApply) if new_press => {
-                let draft = draft.clone();
-                self.state.overlay = Overlay::None;
-                if let Some(mut d) = self.droid(self.chosen()) {
-                    d.apply_tuning(draft);
-                }
-            }
-            Some(Action::SettingsClose) => self.state.overlay = Overlay::None,
-            _ => {}
-        }
     }
 }
 

@@ -1,6 +1,7 @@
 //! The mouse: the wheel scrolls the packet log and pages help; a click chooses a droid on the
-//! roster, gives the keys to the pane it lands on (the log, or driving), or picks a palette
-//! entry. It never drives, and every key stays bound (keyboard-only use is complete). Where
+//! roster, or gives the keys to the pane it lands on (the log, or driving); over an overlay
+//! it goes to the overlay's component (the registry's [`super::overlay::Overlay::on_mouse`]:
+//! help's pages, a palette's entries, a packet's rows). It never drives, and every key stays bound (keyboard-only use is complete). Where
 //! things are comes from the same [`super::layout::screen`] the UI draws with, for the
 //! terminal's area at the last frame.
 
@@ -8,8 +9,7 @@ use super::core::App;
 use super::input::MouseKind;
 use super::layout;
 use super::place::Place;
-use super::state::{Focus, Overlay};
-use crate::config::Action;
+use super::state::Focus;
 use ratatui::layout::{Position, Rect};
 
 /// Log lines one wheel step scrolls.
@@ -22,22 +22,14 @@ impl App {
         let before = (self.place(), self.chosen(), self.mirroring());
         let at = Position::new(col, row);
         match before.0 {
-            Place::Help => match kind {
-                MouseKind::ScrollDown => self.state.help_page += 1,
-                MouseKind::ScrollUp => {
-                    self.state.help_page = self.state.help_page.saturating_sub(1)
-                }
-                MouseKind::Click => self.state.overlay = Overlay::None,
-            },
-            Place::Palette => self.palette_mouse(kind, at),
             Place::Driving | Place::Log | Place::Replay => self.screen_mouse(kind, at),
-            // Typing places and the settings lists: keys only.
-            Place::Packet => match kind {
-                MouseKind::ScrollDown => self.detail_scroll(3, true),
-                MouseKind::ScrollUp => self.detail_scroll(3, false),
-                MouseKind::Click => {}
-            },
-            Place::Filter | Place::Matrix | Place::Channels | Place::Tuning => {}
+            // Every other place is an open overlay's: the registry hands it the event (the
+            // typing places and the settings lists take none: keys only).
+            _ => {
+                let (overlay, mut around) = self.overlay_around();
+                let out = overlay.on_mouse(&mut around, kind, at);
+                self.carry_out(out);
+            }
         }
         if (self.place(), self.chosen(), self.mirroring()) != before {
             self.clear_held();
@@ -75,56 +67,6 @@ impl App {
                     self.state.focus = Focus::Drive;
                 }
             }
-        }
-    }
-
-    /// The palette: the wheel moves the selection, a click on an entry plays it (as Enter
-    /// does), a click outside closes it.
-    fn palette_mouse(&mut self, kind: MouseKind, at: Position) {
-        let (selected, entries) = match &self.state.overlay {
-            Overlay::Animations { selected } => (*selected, &self.state.animations),
-            Overlay::Sounds { selected } => (*selected, &self.state.sounds),
-            _ => return,
-        };
-        let len = entries.len();
-        let rect = layout::palette_rect(
-            self.area,
-            entries
-                .iter()
-                .map(|e| ratatui::text::Span::raw(e.name.as_str()).width()),
-            len,
-        );
-        let inner = Rect {
-            x: rect.x + 1,
-            y: rect.y + 1,
-            width: rect.width.saturating_sub(2),
-            height: rect.height.saturating_sub(2),
-        };
-        let sel = match kind {
-            MouseKind::ScrollUp => selected.saturating_sub(1),
-            MouseKind::ScrollDown => (selected + 1).min(len.saturating_sub(1)),
-            MouseKind::Click if inner.contains(at) => {
-                let first = layout::list_offset(selected, len, inner.height as usize);
-                let i = first + (at.y - inner.y) as usize;
-                if i >= len {
-                    return;
-                }
-                i
-            }
-            MouseKind::Click => {
-                self.state.overlay = Overlay::None;
-                return;
-            }
-        };
-        match &mut self.state.overlay {
-            Overlay::Animations { selected } | Overlay::Sounds { selected } => *selected = sel,
-            _ => {}
-        }
-        if kind == MouseKind::Click
-            && let Some(play) = self.keymap.keys(Action::PalettePlay).first().copied()
-        {
-            // The same path as the play key.
-            self.palette_key(play, true);
         }
     }
 }

@@ -1,7 +1,8 @@
 //! The place that has the keyboard. Keys go to one place only, and each place reads its own
 //! table of the key map; only [`Place::Driving`] turns keys into motion. Which place is on top
 //! follows from what the screen shows (an overlay, the focused log, a replay), so there is no
-//! second copy of it to fall out of step.
+//! second copy of it to fall out of step: `Place::of` (beside the state it reads, in
+//! [`super::state`]) asks the overlay registry ([`super::overlay`]) for an open overlay's.
 //!
 //! The rule the safety promises rest on: whenever the place on top changes (an overlay opens
 //! or closes, the log takes or gives back the keys), another droid is chosen, mirror mode is
@@ -9,7 +10,6 @@
 //! are told at once ([`super::core::App::clear_held`]). A key pressed anywhere but in driving
 //! is never held, so it cannot drive once that place closes.
 
-use super::state::{AppState, Focus, Overlay};
 use crate::config::Context;
 
 /// Where keys are read.
@@ -40,22 +40,6 @@ pub enum Place {
 }
 
 impl Place {
-    /// The place on top for what `state` shows (`replay`: a capture plays).
-    pub fn of(state: &AppState, replay: bool) -> Place {
-        match &state.overlay {
-            Overlay::Help => Place::Help,
-            Overlay::Animations { .. } | Overlay::Sounds { .. } => Place::Palette,
-            Overlay::Filter { .. } => Place::Filter,
-            Overlay::Matrix { .. } => Place::Matrix,
-            Overlay::Channels { .. } => Place::Channels,
-            Overlay::Tuning { .. } => Place::Tuning,
-            Overlay::Packet { .. } => Place::Packet,
-            Overlay::None if state.focus == Focus::Log => Place::Log,
-            Overlay::None if replay => Place::Replay,
-            Overlay::None => Place::Driving,
-        }
-    }
-
     /// The table of keys read here: the one map from a place to its bindings, which the key
     /// dispatch, the stop's way through an overlay and the footer all read. `scope`: the
     /// scope is on screen (driving reads its own keys first); `typing`: a packet in full is

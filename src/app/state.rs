@@ -2,7 +2,9 @@
 //! from events. [`crate::ui`] renders an immutable borrow of it; nothing here draws.
 
 use super::borders::Borders;
-use super::packet_log::{LogFilter, PacketLog};
+pub use super::overlay::Overlay;
+use super::packet_log::PacketLog;
+use super::place::Place;
 use crate::config::{Context, KeyMap, Needs};
 use crate::family::catalog::{self, Entry};
 use crate::model::Model;
@@ -41,50 +43,6 @@ pub enum KeyboardMode {
     ReleaseEvents,
     /// Releases are inferred from the auto-repeat stopping.
     Emulated,
-}
-
-/// What overlays the main screen.
-#[derive(Debug, Clone, PartialEq)]
-pub enum Overlay {
-    None,
-    Help,
-    /// Picking an animation; `selected` indexes [`AppState::animations`].
-    Animations {
-        selected: usize,
-    },
-    /// Picking a sound; `selected` indexes [`AppState::sounds`].
-    Sounds {
-        selected: usize,
-    },
-    /// Typing a packet-log filter. It applies as it is typed; `before` is the filter to go
-    /// back to on cancel.
-    Filter {
-        input: String,
-        before: Box<LogFilter>,
-    },
-    /// Typing what BOLT's matrix shows: one character is drawn, more scroll.
-    Matrix {
-        input: String,
-    },
-    /// Choosing the scope's channels; `selected` indexes the channels the droid reports.
-    Channels {
-        selected: usize,
-    },
-    /// A packet in full: its fields, its frame's parts and hex, its time and droid; a search
-    /// through them (`typing`: the search is being typed), the view scrolled by `scroll` rows.
-    Packet {
-        line: Box<super::packet_log::LogLine>,
-        search: String,
-        typing: bool,
-        /// The match shown (an index into the matching rows).
-        matched: usize,
-        scroll: usize,
-    },
-    /// The streaming and collision settings being edited (sent on apply).
-    Tuning {
-        selected: usize,
-        draft: super::view::scope::TuningDraft,
-    },
 }
 
 /// Which pane has the keyboard.
@@ -298,6 +256,20 @@ pub struct ReplayView {
 pub struct LedView {
     pub main: Option<[u8; 3]>,
     pub back: Option<u8>,
+}
+
+impl Place {
+    /// The place on top for what `state` shows (`replay`: a capture plays): an open
+    /// overlay's (the registry's, [`Overlay::place`]), else the focused log, a replay or
+    /// driving.
+    pub fn of(state: &AppState, replay: bool) -> Place {
+        match state.overlay.place() {
+            Some(p) => p,
+            None if state.focus == Focus::Log => Place::Log,
+            None if replay => Place::Replay,
+            None => Place::Driving,
+        }
+    }
 }
 
 impl AppState {

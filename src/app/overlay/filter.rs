@@ -1,8 +1,37 @@
 //! The packet-log filter prompt: typed text that applies as it is typed; apply keeps it,
 //! cancel goes back to the filter from before.
 
+use super::{Around, Component, Do, Outcome, Overlay};
 use crate::app::packet_log::LogFilter;
+use crate::app::place::Place;
 use crate::config::{Action, Context, Key, KeyCode, KeyMap};
+
+/// The packet-log filter prompt.
+pub struct Filter;
+
+impl Component for Filter {
+    const PLACE: Place = Place::Filter;
+
+    fn on_key(o: &mut Overlay, around: &mut Around, key: Key, _new_press: bool) -> Outcome<Do> {
+        let Overlay::Filter { input, before } = o else {
+            return Outcome::Stay;
+        };
+        match on_key(input, before, around.keymap, key) {
+            Prompted::Stay => Outcome::Stay,
+            Prompted::Typed(f) => Outcome::Apply(Do::Filter(f)),
+            Prompted::Applied => Outcome::Close,
+            Prompted::Cancelled(before) => Outcome::Done(Do::Filter(before)),
+        }
+    }
+
+    #[cfg(test)]
+    fn sample() -> Overlay {
+        Overlay::Filter {
+            input: String::new(),
+            before: Default::default(),
+        }
+    }
+}
 
 /// Longest log filter typed.
 const FILTER_MAX: usize = 80;

@@ -1,7 +1,40 @@
-//! Help's pages: the page keys turn them; any other key pressed closes help.
+//! Help's pages: the page keys turn them; any other key pressed closes help. The wheel turns
+//! them too, and a click closes help.
 
-use super::Outcome;
+use super::{Around, Component, Do, Outcome, Overlay};
+use crate::app::input::MouseKind;
+use crate::app::place::Place;
 use crate::config::{Action, Context, Key, KeyMap};
+use ratatui::layout::Position;
+
+/// The help overlay (its page is the app's [`crate::app::state::AppState::help_page`]).
+pub struct Help;
+
+impl Component for Help {
+    const PLACE: Place = Place::Help;
+
+    fn on_key(_: &mut Overlay, around: &mut Around, key: Key, new_press: bool) -> Outcome<Do> {
+        match on_key(around.help_page, around.keymap, key, new_press) {
+            Outcome::Stay => Outcome::Stay,
+            _ => Outcome::Close,
+        }
+    }
+
+    fn on_mouse(_: &mut Overlay, around: &mut Around, kind: MouseKind, _: Position) -> Outcome<Do> {
+        let page = &mut *around.help_page;
+        match kind {
+            MouseKind::ScrollDown => *page += 1,
+            MouseKind::ScrollUp => *page = page.saturating_sub(1),
+            MouseKind::Click => return Outcome::Close,
+        }
+        Outcome::Stay
+    }
+
+    #[cfg(test)]
+    fn sample() -> Overlay {
+        Overlay::Help
+    }
+}
 
 /// A key on help showing `page` (the UI clamps it to the last page).
 pub fn on_key(page: &mut usize, km: &KeyMap, key: Key, new_press: bool) -> Outcome {

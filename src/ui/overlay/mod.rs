@@ -1,6 +1,7 @@
-//! Overlays drawn over the main screen: help, the animation and sound palettes, and the
-//! packet-log filter prompt. Each clears its own rect first so the panels below never bleed
-//! through.
+//! Overlays drawn over the main screen, one file each (help, the palettes, the prompts, the
+//! settings lists, a packet in full), chosen by the open overlay of the app's registry
+//! ([`crate::app::overlay`]): adding an overlay there asks for its arm in [`draw`] (the match
+//! is exhaustive). Each clears its own rect first so the panels below never bleed through.
 
 mod filter;
 mod help;
@@ -94,4 +95,30 @@ fn help_shown(s: &AppState) -> Vec<crate::app::state::HelpSection> {
 /// How many pages help takes on a screen of `area`.
 pub fn help_pages(s: &AppState, area: ratatui::layout::Rect) -> usize {
     help::pages(area, &help_shown(s))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::Model;
+    use ratatui::{Terminal, backend::TestBackend};
+
+    fn screen(s: &AppState) -> String {
+        let Ok(mut t) = Terminal::new(TestBackend::new(80, 24));
+        t.draw(|f| render(f, s)).expect("a test backend draws");
+        let buf = t.backend().buffer();
+        buf.content().iter().map(|c| c.symbol()).collect()
+    }
+
+    /// Every overlay of the app's registry is drawn: the screen under it changes.
+    #[test]
+    fn every_registered_overlay_is_drawn() {
+        let mut s = AppState::new(Model::R2D2, "R2-D2".into());
+        s.help = crate::app::help::live(&crate::config::Config::defaults());
+        let bare = screen(&s);
+        for o in Overlay::samples() {
+            s.overlay = o.clone();
+            assert_ne!(screen(&s), bare, "{:?} draws nothing", o.name());
+        }
+    }
 }

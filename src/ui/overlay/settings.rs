@@ -7,7 +7,6 @@ use super::super::theme;
 use super::palette::offset;
 use crate::app::state::AppState;
 use crate::app::view::scope::{TuningDraft, TuningRow, tuning_rows};
-use crate::telemetry::history::Channel;
 use ratatui::Frame;
 use ratatui::layout::Rect;
 use ratatui::text::{Line, Span};
@@ -49,10 +48,9 @@ fn check(on: bool) -> &'static str {
 }
 
 pub fn channels(frame: &mut Frame, area: Rect, s: &AppState, selected: usize) {
-    let robi = s.droid().model.reports_state_frames();
-    let rows: Vec<Line> = Channel::ALL
+    // The channels the list offers, as its keys read them.
+    let rows: Vec<Line> = crate::app::overlay::channels::offered(s.droid().model)
         .iter()
-        .filter(|c| c.reported_by(robi))
         .map(|c| {
             let on = s.droid().scope.channels.contains(c);
             Line::from(vec![Span::raw(check(on)), Span::raw(c.label())])
