@@ -152,20 +152,21 @@ impl DroidMut<'_> {
     pub fn apply(&mut self, outs: Vec<Out>) {
         for o in outs {
             match o {
-                Out::Drive(c) => self.set(Slot::Drive, c),
-                Out::Do(Intent::Head(a)) => {
-                    // The dome is a latest-wins value, as driving is.
-                    let model = self.view.model;
-                    for c in self
-                        .io
-                        .family
-                        .lower(model, &Intent::Head(a))
-                        .unwrap_or_default()
-                    {
-                        self.set(Slot::Head, c);
-                    }
-                }
+                // Motion is a latest-wins value: the drive slot.
+                Out::Do(
+                    i @ (Intent::Drive { .. }
+                    | Intent::Steer { .. }
+                    | Intent::RawMotors { .. }
+                    | Intent::Stop { .. }),
+                ) => self.set_lowered(Slot::Drive, &i),
+                // The dome is a latest-wins value, as driving is.
+                Out::Do(i @ Intent::Head(_)) => self.set_lowered(Slot::Head, &i),
                 Out::Do(Intent::Stance(a)) => self.stance(a),
+                Out::Do(Intent::StartAim) => {
+                    // A droid with nothing to send for it still shows its back light on.
+                    self.act(&Intent::StartAim, "aim");
+                    self.view.leds.back = Some(255);
+                }
                 Out::Do(Intent::ResetAim) => {
                     // A droid with nothing to send for it still shows its back light off.
                     self.act(&Intent::ResetAim, "aim");
@@ -175,13 +176,6 @@ impl DroidMut<'_> {
                     if !self.act(&i, i.what()) {
                         self.hint(Unsupported::of(self.view.model, &i).to_string());
                     }
-                }
-                Out::AimBegin => {
-                    let model = self.view.model;
-                    for c in self.io.family.aim_begin(model).unwrap_or_default() {
-                        self.send(c, "aim");
-                    }
-                    self.view.leds.back = Some(255);
                 }
                 Out::Hint(h) => self.hint(h),
             }
@@ -204,6 +198,26 @@ impl DroidMut<'_> {
         if let Some(s) = &self.io.session {
             s.set(slot, c);
         }
+    }
+
+    /// Set `slot` to what `intent` is on this droid, as its family lowers it; a droid that
+    /// cannot do it is told in a hint.
+    fn set_lowered(&mut self, slot: Slot, intent: &Intent) {
+        match self.io.family.lower(self.view.model, intent) {
+            Ok(commands) => commands.into_iter().for_each(|c| self.set(slot, c)),
+            Err(e) => self.hint(e.to_string()),
+        }
+    }
+
+    /// The one command of a stop ([`Intent::Stop`]) on this droid, for the session's urgent
+    /// path and the exit: every family lowers a stop to one drive command; should one ever
+    /// not, its own stop goes instead (a stop is never dropped).
+    fn stop_command(&self, stop: &Intent) -> Command {
+        match self.io.family.lower(self.view.model, stop) {
+            Ok(commands) if commands.len() == 1 => commands.into_iter().next(),
+            _ => None,
+        }
+        .unwrap_or_else(|| self.io.family.stop_after(None))
     }
 
     /// Send what `intent` is on this droid, as its family lowers it (each command's failure a
@@ -246,9 +260,8 @@ impl DroidMut<'_> {
     /// The emergency stop on this droid: latched in its controller and written at once,
     /// ahead of pacing, whatever the app believed of it (idle droids too).
     pub fn estop(&mut self) {
-        let Out::Drive(stop) = self.io.controller.estop_now() else {
-            return;
-        };
+        let stop = self.io.controller.estop_now();
+        let stop = self.stop_command(&stop);
         if let Some(s) = &self.io.session {
             s.emergency_stop(stop);
         }
@@ -281,10 +294,9 @@ impl DroidMut<'_> {
     /// The stop sent on exit (speed 0 at the heading its controller last commanded), also
     /// set in its drive slot now.
     pub fn stop_for_exit(&mut self) -> Command {
-        let stop = self
-            .io
-            .family
-            .drive(0, self.io.controller.view().heading, false);
+        let stop = self.stop_command(&Intent::Stop {
+            heading: self.io.controller.view().heading,
+        });
         self.set(Slot::Drive, stop.clone());
         stop
     }

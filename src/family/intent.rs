@@ -21,6 +21,21 @@ pub enum Intent {
         heading: Heading,
         reverse: bool,
     },
+    /// Forward at `speed` (0..=255) steering `turn`, −1 full left ..= 1 full right, for a
+    /// robot driven by velocity and steering (Robi 42). A fraction, not a heading: the app's
+    /// keys steer 0.6 of full lock and a stick any fraction, which [`Intent::Drive`]'s
+    /// whole-degree heading would round (Robi's steering byte has 255 steps over the range,
+    /// `droid-facts.md` §5). A robot driven toward a heading cannot do it ([`Unsupported`]).
+    Steer {
+        speed: u8,
+        turn: f32,
+    },
+    /// Speed 0, still facing `heading` (the one it was last told, so it does not turn back
+    /// to 0): the control loop's release, its emergency stop and the stop on exit. Each
+    /// family lowers it to its own drive at speed 0 (Robi: velocity 0, steering straight).
+    Stop {
+        heading: Heading,
+    },
     /// Each motor's raw power, −255..=255 (RVR's tracks, spherov2's `raw_motor`).
     RawMotors {
         left: i16,
@@ -28,6 +43,9 @@ pub enum Intent {
     },
     /// The control system on or off.
     Stabilization(bool),
+    /// Enter aim mode: the back light on, and turning rotates the droid in place
+    /// (stabilised, a drive at speed 0 turns it). The end is [`Intent::ResetAim`].
+    StartAim,
     /// Leave aim mode: where the droid faces becomes heading 0.
     ResetAim,
     /// The main light as the robot shows it (BOLT: its whole matrix; R2 and RVR: front and
@@ -56,8 +74,11 @@ impl Intent {
     pub fn what(&self) -> &'static str {
         match self {
             Intent::Drive { .. } => "drive",
+            Intent::Steer { .. } => "steering",
+            Intent::Stop { .. } => "stop",
             Intent::RawMotors { .. } => "raw motors",
             Intent::Stabilization(_) => "stabilization",
+            Intent::StartAim => "aim",
             Intent::ResetAim => "reset aim",
             Intent::MainLight(_) | Intent::LedRgb(..) | Intent::LedBrightness(..) => "light",
             Intent::Matrix(_) => "matrix",
@@ -216,8 +237,14 @@ pub fn lower_common<F: Family + ?Sized>(
             heading,
             reverse,
         } => Some(vec![drive(f, *speed, *heading, *reverse)]),
+        // Only a steering family builds a steering command.
+        Intent::Steer { speed, turn } => one(f.steer(*speed, *turn)),
+        // The family's drive at speed 0 toward the heading, not its `stop_after`: these are
+        // the bytes the control loop always sent (v1's Roll keeps state Go).
+        Intent::Stop { heading } => Some(vec![f.drive(0, *heading, false)]),
         Intent::RawMotors { .. } if !model.has(Caps::RAW_MOTORS) => None,
         Intent::RawMotors { left, right } => one(f.tank(*left, *right)),
+        Intent::StartAim => f.aim_begin(model),
         Intent::ResetAim => Some(f.aim_end(model)).filter(|c| !c.is_empty()),
         Intent::MainLight(rgb) => one(f.led(model, &Action::LedRgb(LedGroup::Front, *rgb))),
         Intent::LedRgb(g, rgb) => one(f.led(model, &Action::LedRgb(*g, *rgb))),

@@ -1,15 +1,18 @@
-//! The control loop's drive outputs lowered by the droid's family: the wire bytes are the
-//! ones the family's own drive, steer and tank commands make from what the controller says it
-//! commands (its view), for every model over random key, stick, tank, aim and e-stop input.
-//! Written against the controller that built the family's commands itself, and kept as the
-//! guard of the lowering that replaced it.
+//! The control loop's outputs lowered by the droid's family ([`Intent`]): the wire bytes are
+//! the ones the family's own drive, steer, tank and aim commands make — what the controller
+//! and the app built themselves before the lowering. Over models × speeds × headings × turns
+//! × tracks, and through the controller for every model over random key, stick, tank, aim
+//! and e-stop input (that check was written against the controller that still built the
+//! commands, and passed there). Kept as the lowering's guard.
 
 use droidctl::config::{Action, Config};
+use droidctl::family::intent::Intent;
 use droidctl::family::{self, Command, Family};
 use droidctl::model::{MODELS, Model};
 use droidctl::telemetry::Stance;
 use droidctl::teleop::control::{Controller, DroidView, Inputs, Out};
 use droidctl::teleop::gamepad::PadDrive;
+use droidctl::units::Heading;
 use proptest::prelude::*;
 use std::time::Duration;
 
@@ -18,22 +21,33 @@ fn wire(f: &dyn Family, model: Model, c: &Command) -> Vec<(droidctl::gatt::Endpo
     f.codec_for(model).encode_writes(c, 7, true).0
 }
 
-/// The drive commands of the controller's outputs, as the droid gets them.
-fn drive_commands(_model: Model, outs: &[Out]) -> Vec<Command> {
+/// The one command `intent` lowers to on `model` (the app's drive slot takes one).
+fn lowered(model: Model, intent: &Intent) -> Command {
+    match family::intent::lower(model, intent).as_deref() {
+        Ok([c]) => c.clone(),
+        other => panic!("{model:?}: {intent:?} lowered to {other:?}"),
+    }
+}
+
+/// The drive commands of the controller's outputs, as the droid gets them: its motion
+/// intents lowered by the model's family.
+fn drive_commands(model: Model, outs: &[Out]) -> Vec<Command> {
     outs.iter()
         .filter_map(|o| match o {
-            Out::Drive(c) => Some(c.clone()),
+            Out::Do(
+                i @ (Intent::Drive { .. }
+                | Intent::Steer { .. }
+                | Intent::RawMotors { .. }
+                | Intent::Stop { .. }),
+            ) => Some(lowered(model, i)),
             _ => None,
         })
         .collect()
 }
 
 /// The e-stop's command, as the droid gets it.
-fn estop_command(_model: Model, c: &mut Controller) -> Command {
-    match c.estop_now() {
-        Out::Drive(c) => c,
-        other => panic!("the e-stop gave {other:?}"),
-    }
+fn estop_command(model: Model, c: &mut Controller) -> Command {
+    lowered(model, &c.estop_now())
 }
 
 /// The command the controller built itself before the lowering, from what it says it
@@ -166,13 +180,88 @@ fn check(model: Model, steps: &[(Step, u16, bool)]) -> Result<usize, String> {
     Ok(checked)
 }
 
+/// The commands the control loop and the app built from the family's own methods before
+/// the lowering (`None`: the droid has no such thing, and the controller never asked it).
+fn old_path(f: &dyn Family, model: Model, intent: &Intent) -> Option<Vec<Command>> {
+    match *intent {
+        Intent::Drive {
+            speed,
+            heading,
+            reverse,
+        } if !f.steers() => Some(vec![f.drive(speed, heading, reverse)]),
+        Intent::Steer { speed, turn } if f.steers() => f.steer(speed, turn).map(|c| vec![c]),
+        Intent::Stop { heading } => Some(vec![f.drive(0, heading, false)]),
+        Intent::RawMotors { left, right } if model.has_tracks() => {
+            f.tank(left, right).map(|c| vec![c])
+        }
+        Intent::StartAim if model.can_aim() => f.aim_begin(model),
+        _ => None,
+    }
+}
+
+fn all_wire(
+    f: &dyn Family,
+    model: Model,
+    cs: &[Command],
+) -> Vec<(droidctl::gatt::Endpoint, Vec<u8>)> {
+    cs.iter().flat_map(|c| wire(f, model, c)).collect()
+}
+
+fn models() -> impl Strategy<Value = Model> {
+    prop::sample::select(MODELS.iter().map(|s| s.model).collect::<Vec<_>>())
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 512, ..ProptestConfig::default() })]
+
+    /// Models × speeds × headings × turns × tracks: what the controller says lowers to the
+    /// bytes the family's own methods made, wherever the controller says it.
+    #[test]
+    fn every_models_motion_intents_lower_to_the_bytes_of_the_old_path(
+        model in models(),
+        speed in any::<u8>(),
+        degrees in 0u16..360,
+        reverse in any::<bool>(),
+        turn in prop_oneof![8 => -1.0f32..=1.0, 1 => -3.0f32..3.0, 1 => Just(f32::NAN)],
+        left in -255i16..=255,
+        right in -255i16..=255,
+    ) {
+        let f = family::for_model(model);
+        let heading = Heading::wrapped(degrees as f64);
+        let intents = [
+            Intent::Drive { speed, heading, reverse: reverse && f.can_reverse() },
+            Intent::Steer { speed, turn },
+            Intent::Stop { heading },
+            Intent::RawMotors { left, right },
+            Intent::StartAim,
+        ];
+        for i in &intents {
+            let Some(old) = old_path(f, model, i) else { continue };
+            let new = family::intent::lower(model, i)
+                .map_err(|e| TestCaseError::fail(format!("{i:?}: {e}")))?;
+            prop_assert_eq!(
+                all_wire(f, model, &new),
+                all_wire(f, model, &old),
+                "{:?} on {:?}",
+                i,
+                model
+            );
+        }
+        // A robot driven toward a heading has no steering, and the others no tracks.
+        prop_assert_eq!(
+            family::intent::lower(model, &Intent::Steer { speed, turn }).is_ok(),
+            f.steers()
+        );
+    }
+}
+
 proptest! {
     #![proptest_config(ProptestConfig { cases: 96, ..ProptestConfig::default() })]
 
     /// Every model, random input: the bytes are the family's own.
     #[test]
     fn the_controllers_drive_is_the_familys_own_command_on_every_model(
-        model in prop::sample::select(MODELS.iter().map(|s| s.model).collect::<Vec<_>>()),
+        model in models(),
         steps in prop::collection::vec(step(), 1..50),
     ) {
         if let Err(e) = check(model, &steps) {
