@@ -2,7 +2,9 @@
 //! input into them) and the handle its handlers run on ([`DroidMut`]: its view and IO, and
 //! what it shares with the rest of the app — the hint line, the packet log, the sample
 //! files). A droid's events (notifications, log lines, link changes, battery readings) and
-//! its control tick are handled here, on the droid they belong to.
+//! its control tick are handled here, on the droid they belong to; the control loop's
+//! intents are lowered here by the droid's family (motion into the drive slot, the dome into
+//! the head slot, the e-stop's stop into the session's urgent path).
 
 use super::packet_log::{LogLine, PacketLog};
 use super::player::Player;
@@ -209,17 +211,6 @@ impl DroidMut<'_> {
         }
     }
 
-    /// The one command of a stop ([`Intent::Stop`]) on this droid, for the session's urgent
-    /// path and the exit: every family lowers a stop to one drive command; should one ever
-    /// not, its own stop goes instead (a stop is never dropped).
-    fn stop_command(&self, stop: &Intent) -> Command {
-        match self.io.family.lower(self.view.model, stop) {
-            Ok(commands) if commands.len() == 1 => commands.into_iter().next(),
-            _ => None,
-        }
-        .unwrap_or_else(|| self.io.family.stop_after(None))
-    }
-
     /// Send what `intent` is on this droid, as its family lowers it (each command's failure a
     /// hint naming `what`); `false` when the droid cannot do it, and nothing is sent.
     pub fn act(&mut self, intent: &Intent, what: &str) -> bool {
@@ -261,7 +252,10 @@ impl DroidMut<'_> {
     /// ahead of pacing, whatever the app believed of it (idle droids too).
     pub fn estop(&mut self) {
         let stop = self.io.controller.estop_now();
-        let stop = self.stop_command(&stop);
+        // One command for the urgent path; never none (see `intent::stop_command`).
+        let family = self.io.family;
+        let stop = crate::family::intent::one_command(family, self.view.model, &stop)
+            .unwrap_or_else(|| family.stop_after(None));
         if let Some(s) = &self.io.session {
             s.emergency_stop(stop);
         }
@@ -294,9 +288,8 @@ impl DroidMut<'_> {
     /// The stop sent on exit (speed 0 at the heading its controller last commanded), also
     /// set in its drive slot now.
     pub fn stop_for_exit(&mut self) -> Command {
-        let stop = self.stop_command(&Intent::Stop {
-            heading: self.io.controller.view().heading,
-        });
+        let heading = self.io.controller.view().heading;
+        let stop = crate::family::intent::stop_command(self.io.family, self.view.model, heading);
         self.set(Slot::Drive, stop.clone());
         stop
     }

@@ -285,6 +285,23 @@ pub fn lower(model: Model, intent: &Intent) -> Result<Vec<Command>, Unsupported>
     super::for_model(model).lower(model, intent)
 }
 
+/// The one command `intent` lowers to on `model` through `f`, for what takes exactly one: a
+/// latest-wins slot (drive, dome) or a request waited for (a stance). `None` when the model
+/// cannot do it.
+pub fn one_command<F: Family + ?Sized>(f: &F, model: Model, intent: &Intent) -> Option<Command> {
+    match f.lower(model, intent) {
+        Ok(mut commands) if commands.len() == 1 => commands.pop(),
+        _ => None,
+    }
+}
+
+/// The one command of [`Intent::Stop`] toward `heading` on `model`, for the urgent stop and
+/// the stop on exit. Every family lowers a stop to one command; should one ever not, its own
+/// stop goes instead: a stop is never dropped.
+pub fn stop_command<F: Family + ?Sized>(f: &F, model: Model, heading: Heading) -> Command {
+    one_command(f, model, &Intent::Stop { heading }).unwrap_or_else(|| f.stop_after(None))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
