@@ -30,9 +30,12 @@ pub enum Intent {
         speed: u8,
         turn: f32,
     },
-    /// Speed 0, still facing `heading` (the one it was last told, so it does not turn back
-    /// to 0): the control loop's release, its emergency stop and the stop on exit. Each
-    /// family lowers it to its own drive at speed 0 (Robi: velocity 0, steering straight).
+    /// Speed 0, still facing `heading` (the one it was last told, or where it is measured to
+    /// face, so it does not turn back to 0): the control loop's emergency stop, the app's stop
+    /// on exit, the bridge's stop where the droid is. Each family lowers it to its own drive
+    /// at speed 0 (Robi: velocity 0, steering straight). Not the session's
+    /// [`super::Family::stop_after`], which knows the last command written (after raw motors,
+    /// the motors off) and stays the session's own.
     Stop {
         heading: Heading,
     },
