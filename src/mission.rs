@@ -200,10 +200,8 @@ pub fn validate(model: Model, steps: &[Step]) -> Result<(), Vec<crate::script::S
     }
 }
 
-/// The LED command for a script line, from the model's family.
-pub fn led_command(model: Model, action: &Action) -> Option<Command> {
-    crate::family::for_model(model).led(model, action)
-}
+/// Both tracks still (a `tank` line's end, or a stop after one).
+const TRACKS_STOPPED: Intent = Intent::RawMotors { left: 0, right: 0 };
 
 /// Where a mission's steps, samples and warnings go.
 pub type Emit = Arc<dyn Fn(MissionEvent) + Send + Sync>;
@@ -254,6 +252,12 @@ impl Runner {
         drive_command(self.family, speed, heading)
     }
 
+    /// The one command `intent` is on this droid, as its family lowers it (`None`: it cannot;
+    /// [`validate`] refused such a line before the run).
+    fn one(&self, intent: &Intent) -> Option<Command> {
+        crate::family::intent::one_command(self.family, self.model, intent)
+    }
+
     /// Let `d` pass, re-sending the held drive command on the heartbeat.
     async fn hold(&mut self, d: Duration) {
         let end = Instant::now() + d;
@@ -272,7 +276,7 @@ impl Runner {
             }
             if let Some((left, right)) = self.tracking
                 && Instant::now() < end
-                && let Some(c) = self.family.tank(left, right)
+                && let Some(c) = self.one(&Intent::RawMotors { left, right })
             {
                 self.session.set(Slot::Drive, c);
             }
@@ -360,7 +364,7 @@ impl Runner {
         lock(&self.telemetry).stance_requested(a);
         // Subscribe fresh so an old completion is not taken for this one.
         self.events = self.events.resubscribe();
-        if let Some(c) = self.family.stance(a)
+        if let Some(c) = self.one(&Intent::Stance(a))
             && self.request(line, c).await
             && a != LegAction::Stop
         {
@@ -430,7 +434,7 @@ impl Runner {
             Action::Stop => {
                 self.driving = None;
                 if self.tracking.take().is_some()
-                    && let Some(c) = self.family.tank(0, 0)
+                    && let Some(c) = self.one(&TRACKS_STOPPED)
                 {
                     self.session.set(Slot::Drive, c);
                 }
@@ -438,7 +442,7 @@ impl Runner {
                     .set(Slot::Drive, self.drive_cmd(0, self.last_heading));
             }
             Action::Head(a) => {
-                if let Some(c) = self.family.head(*a) {
+                if let Some(c) = self.one(&Intent::Head(*a)) {
                     self.session.set(Slot::Head, c);
                 }
             }
@@ -463,14 +467,18 @@ impl Runner {
                 duration,
             } => {
                 self.driving = None;
-                if let Some(c) = self.family.tank(*left, *right) {
+                let tracks = Intent::RawMotors {
+                    left: *left,
+                    right: *right,
+                };
+                if let Some(c) = self.one(&tracks) {
                     self.session.set(Slot::Drive, c);
                 }
                 self.tracking = (*left != 0 || *right != 0).then_some((*left, *right));
                 if let Some(d) = duration {
                     self.hold(*d).await;
                     self.tracking = None;
-                    if let Some(c) = self.family.tank(0, 0) {
+                    if let Some(c) = self.one(&TRACKS_STOPPED) {
                         self.session.set(Slot::Drive, c);
                     }
                 }

@@ -2,7 +2,9 @@
 //! input into them) and the handle its handlers run on ([`DroidMut`]: its view and IO, and
 //! what it shares with the rest of the app — the hint line, the packet log, the sample
 //! files). A droid's events (notifications, log lines, link changes, battery readings) and
-//! its control tick are handled here, on the droid they belong to.
+//! its control tick are handled here, on the droid they belong to; the control loop's
+//! intents are lowered here by the droid's family (motion into the drive slot, the dome into
+//! the head slot, the e-stop's stop into the session's urgent path).
 
 use super::packet_log::{LogLine, PacketLog};
 use super::player::Player;
@@ -152,20 +154,21 @@ impl DroidMut<'_> {
     pub fn apply(&mut self, outs: Vec<Out>) {
         for o in outs {
             match o {
-                Out::Drive(c) => self.set(Slot::Drive, c),
-                Out::Do(Intent::Head(a)) => {
-                    // The dome is a latest-wins value, as driving is.
-                    let model = self.view.model;
-                    for c in self
-                        .io
-                        .family
-                        .lower(model, &Intent::Head(a))
-                        .unwrap_or_default()
-                    {
-                        self.set(Slot::Head, c);
-                    }
-                }
+                // Motion is a latest-wins value: the drive slot.
+                Out::Do(
+                    i @ (Intent::Drive { .. }
+                    | Intent::Steer { .. }
+                    | Intent::RawMotors { .. }
+                    | Intent::Stop { .. }),
+                ) => self.set_lowered(Slot::Drive, &i),
+                // The dome is a latest-wins value, as driving is.
+                Out::Do(i @ Intent::Head(_)) => self.set_lowered(Slot::Head, &i),
                 Out::Do(Intent::Stance(a)) => self.stance(a),
+                Out::Do(Intent::StartAim) => {
+                    // A droid with nothing to send for it still shows its back light on.
+                    self.act(&Intent::StartAim, "aim");
+                    self.view.leds.back = Some(255);
+                }
                 Out::Do(Intent::ResetAim) => {
                     // A droid with nothing to send for it still shows its back light off.
                     self.act(&Intent::ResetAim, "aim");
@@ -175,13 +178,6 @@ impl DroidMut<'_> {
                     if !self.act(&i, i.what()) {
                         self.hint(Unsupported::of(self.view.model, &i).to_string());
                     }
-                }
-                Out::AimBegin => {
-                    let model = self.view.model;
-                    for c in self.io.family.aim_begin(model).unwrap_or_default() {
-                        self.send(c, "aim");
-                    }
-                    self.view.leds.back = Some(255);
                 }
                 Out::Hint(h) => self.hint(h),
             }
@@ -203,6 +199,15 @@ impl DroidMut<'_> {
     pub fn set(&self, slot: Slot, c: Command) {
         if let Some(s) = &self.io.session {
             s.set(slot, c);
+        }
+    }
+
+    /// Set `slot` to what `intent` is on this droid, as its family lowers it; a droid that
+    /// cannot do it is told in a hint.
+    fn set_lowered(&mut self, slot: Slot, intent: &Intent) {
+        match self.io.family.lower(self.view.model, intent) {
+            Ok(commands) => commands.into_iter().for_each(|c| self.set(slot, c)),
+            Err(e) => self.hint(e.to_string()),
         }
     }
 
@@ -246,9 +251,11 @@ impl DroidMut<'_> {
     /// The emergency stop on this droid: latched in its controller and written at once,
     /// ahead of pacing, whatever the app believed of it (idle droids too).
     pub fn estop(&mut self) {
-        let Out::Drive(stop) = self.io.controller.estop_now() else {
-            return;
-        };
+        let stop = self.io.controller.estop_now();
+        // One command for the urgent path; never none (see `intent::stop_command`).
+        let family = self.io.family;
+        let stop = crate::family::intent::one_command(family, self.view.model, &stop)
+            .unwrap_or_else(|| family.stop_after(None));
         if let Some(s) = &self.io.session {
             s.emergency_stop(stop);
         }
@@ -281,10 +288,8 @@ impl DroidMut<'_> {
     /// The stop sent on exit (speed 0 at the heading its controller last commanded), also
     /// set in its drive slot now.
     pub fn stop_for_exit(&mut self) -> Command {
-        let stop = self
-            .io
-            .family
-            .drive(0, self.io.controller.view().heading, false);
+        let heading = self.io.controller.view().heading;
+        let stop = crate::family::intent::stop_command(self.io.family, self.view.model, heading);
         self.set(Slot::Drive, stop.clone());
         stop
     }

@@ -271,7 +271,12 @@ async fn run_droids<B: Backend>(
     // write them).
     let stops = app.stop_all_for_exit();
     let stop = stops.first().cloned().unwrap_or_else(|| {
-        crate::family::for_model(app.state.droid().model).drive(0, Default::default(), false)
+        let model = app.state.droid().model;
+        crate::family::intent::stop_command(
+            crate::family::for_model(model),
+            model,
+            Default::default(),
+        )
     });
     Ok(Exit {
         reason,

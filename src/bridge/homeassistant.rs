@@ -21,6 +21,7 @@
 
 use super::topics::topic;
 use crate::family::catalog::Palette;
+use crate::family::intent::{Intent, lower};
 use crate::model::Model;
 use serde_json::{Value, json};
 
@@ -96,8 +97,7 @@ const PERCENT_TEMPLATE: &str =
 
 /// The light group Home Assistant switches: the first the droid lights in colour.
 pub fn main_light(model: Model) -> Option<&'static str> {
-    use crate::script::{Action, LedGroup};
-    let family = crate::family::for_model(model);
+    use crate::script::LedGroup;
     [
         (LedGroup::Front, "front"),
         (LedGroup::Back, "back"),
@@ -105,7 +105,7 @@ pub fn main_light(model: Model) -> Option<&'static str> {
         (LedGroup::Holo, "holo"),
     ]
     .into_iter()
-    .find(|(g, _)| family.led(model, &Action::LedRgb(*g, [0, 0, 0])).is_some())
+    .find(|(g, _)| lower(model, &Intent::LedRgb(*g, [0, 0, 0])).is_ok())
     .map(|(_, n)| n)
 }
 
@@ -324,8 +324,8 @@ pub fn configs(ha: &str, d: &Droid) -> Vec<(String, String)> {
     ] {
         // Offered as the app offers them: where the droid's family plays them.
         let plays = match palette {
-            Palette::Animations => family.animation(d.model, 0).is_some(),
-            Palette::Sounds => family.sound(d.model, 0).is_some(),
+            Palette::Animations => lower(d.model, &Intent::Animation(0)).is_ok(),
+            Palette::Sounds => lower(d.model, &Intent::Sound(0)).is_ok(),
         };
         if !plays {
             continue;

@@ -37,6 +37,7 @@ mod topics;
 
 pub use topics::{topic_name, topic_names, topic_names_besides};
 
+use crate::family::intent::{Intent, one_command};
 use crate::fleet::Fleet;
 use crate::model::Model;
 use crate::session::Slot;
@@ -355,20 +356,32 @@ impl Bridge {
         let Some(m) = self.fleet.member(i) else {
             return;
         };
+        let drive = |speed, heading, reverse| Intent::Drive {
+            speed,
+            heading,
+            reverse,
+        };
+        // Lowered by the droid's family; a robot driven toward a heading has no steering
+        // (`motion` gives it only to steering robots): it rolls straight ahead instead.
         let c = match w {
             Wheels::Roll {
                 speed,
                 heading,
                 reverse,
-            } => m
-                .family
-                .drive(speed, Heading::new(heading).unwrap_or_default(), reverse),
-            Wheels::Steer { speed, turn } => match m.family.steer(speed, turn) {
-                Some(c) => c,
-                None => m.family.drive(speed, Heading::default(), false),
-            },
+            } => one_command(
+                m.family,
+                m.model,
+                &drive(speed, Heading::new(heading).unwrap_or_default(), reverse),
+            ),
+            Wheels::Steer { speed, turn } => {
+                one_command(m.family, m.model, &Intent::Steer { speed, turn }).or_else(|| {
+                    one_command(m.family, m.model, &drive(speed, Heading::default(), false))
+                })
+            }
         };
-        m.session.set(Slot::Drive, c);
+        if let Some(c) = c {
+            m.session.set(Slot::Drive, c);
+        }
     }
 
     /// Every droid stops now; nothing stays held.

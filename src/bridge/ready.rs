@@ -165,7 +165,9 @@ impl Bridge {
             .and_then(|t| t.borrow().heading())
             .filter(|_| !m.family.steers());
         match measured {
-            Some(h) => m.session.emergency_stop(m.family.drive(0, h, false)),
+            Some(h) => m
+                .session
+                .emergency_stop(crate::family::intent::stop_command(m.family, m.model, h)),
             None => m.session.stop_now(m.family),
         }
     }

@@ -21,6 +21,24 @@ pub enum Intent {
         heading: Heading,
         reverse: bool,
     },
+    /// Forward at `speed` (0..=255) steering `turn`, −1 full left ..= 1 full right, for a
+    /// robot driven by velocity and steering (Robi 42). A fraction, not a heading: the app's
+    /// keys steer 0.6 of full lock and a stick any fraction, which [`Intent::Drive`]'s
+    /// whole-degree heading would round (Robi's steering byte has 255 steps over the range,
+    /// `droid-facts.md` §5). A robot driven toward a heading cannot do it ([`Unsupported`]).
+    Steer {
+        speed: u8,
+        turn: f32,
+    },
+    /// Speed 0, still facing `heading` (the one it was last told, or where it is measured to
+    /// face, so it does not turn back to 0): the control loop's emergency stop, the app's stop
+    /// on exit, the bridge's stop where the droid is. Each family lowers it to its own drive
+    /// at speed 0 (Robi: velocity 0, steering straight). Not the session's
+    /// [`super::Family::stop_after`], which knows the last command written (after raw motors,
+    /// the motors off) and stays the session's own.
+    Stop {
+        heading: Heading,
+    },
     /// Each motor's raw power, −255..=255 (RVR's tracks, spherov2's `raw_motor`).
     RawMotors {
         left: i16,
@@ -28,6 +46,9 @@ pub enum Intent {
     },
     /// The control system on or off.
     Stabilization(bool),
+    /// Enter aim mode: the back light on, and turning rotates the droid in place
+    /// (stabilised, a drive at speed 0 turns it). The end is [`Intent::ResetAim`].
+    StartAim,
     /// Leave aim mode: where the droid faces becomes heading 0.
     ResetAim,
     /// The main light as the robot shows it (BOLT: its whole matrix; R2 and RVR: front and
@@ -56,8 +77,11 @@ impl Intent {
     pub fn what(&self) -> &'static str {
         match self {
             Intent::Drive { .. } => "drive",
+            Intent::Steer { .. } => "steering",
+            Intent::Stop { .. } => "stop",
             Intent::RawMotors { .. } => "raw motors",
             Intent::Stabilization(_) => "stabilization",
+            Intent::StartAim => "aim",
             Intent::ResetAim => "reset aim",
             Intent::MainLight(_) | Intent::LedRgb(..) | Intent::LedBrightness(..) => "light",
             Intent::Matrix(_) => "matrix",
@@ -216,8 +240,14 @@ pub fn lower_common<F: Family + ?Sized>(
             heading,
             reverse,
         } => Some(vec![drive(f, *speed, *heading, *reverse)]),
+        // Only a steering family builds a steering command.
+        Intent::Steer { speed, turn } => one(f.steer(*speed, *turn)),
+        // The family's drive at speed 0 toward the heading, not its `stop_after`: these are
+        // the bytes the control loop always sent (v1's Roll keeps state Go).
+        Intent::Stop { heading } => Some(vec![f.drive(0, *heading, false)]),
         Intent::RawMotors { .. } if !model.has(Caps::RAW_MOTORS) => None,
         Intent::RawMotors { left, right } => one(f.tank(*left, *right)),
+        Intent::StartAim => f.aim_begin(model),
         Intent::ResetAim => Some(f.aim_end(model)).filter(|c| !c.is_empty()),
         Intent::MainLight(rgb) => one(f.led(model, &Action::LedRgb(LedGroup::Front, *rgb))),
         Intent::LedRgb(g, rgb) => one(f.led(model, &Action::LedRgb(*g, *rgb))),
@@ -256,6 +286,23 @@ pub fn drive<F: Family + ?Sized>(f: &F, speed: u8, heading: Heading, reverse: bo
 /// The commands of `intent` on `model`, from the model's family.
 pub fn lower(model: Model, intent: &Intent) -> Result<Vec<Command>, Unsupported> {
     super::for_model(model).lower(model, intent)
+}
+
+/// The one command `intent` lowers to on `model` through `f`, for what takes exactly one: a
+/// latest-wins slot (drive, dome) or a request waited for (a stance). `None` when the model
+/// cannot do it.
+pub fn one_command<F: Family + ?Sized>(f: &F, model: Model, intent: &Intent) -> Option<Command> {
+    match f.lower(model, intent) {
+        Ok(mut commands) if commands.len() == 1 => commands.pop(),
+        _ => None,
+    }
+}
+
+/// The one command of [`Intent::Stop`] toward `heading` on `model`, for the urgent stop and
+/// the stop on exit. Every family lowers a stop to one command; should one ever not, its own
+/// stop goes instead: a stop is never dropped.
+pub fn stop_command<F: Family + ?Sized>(f: &F, model: Model, heading: Heading) -> Command {
+    one_command(f, model, &Intent::Stop { heading }).unwrap_or_else(|| f.stop_after(None))
 }
 
 #[cfg(test)]

@@ -1,9 +1,11 @@
-//! The control loop's logic: input state in, commands out, once per tick. Sans-IO: the caller
-//! supplies elapsed time and sends the outputs (drive and head through the session's
-//! latest-wins slots, so a change goes out at once and never queues behind stale commands).
-//! What is not driving is said as an [`Intent`] (the dome, the legs, the end of aiming), the
-//! vocabulary missions, Edu programs, fleets and the bridge use, and the droid's family
-//! lowers it.
+//! The control loop's logic: input state in, intents out, once per tick. Sans-IO: the caller
+//! supplies elapsed time, lowers the outputs through the droid's family and sends them (drive
+//! and head through the session's latest-wins slots, so a change goes out at once and never
+//! queues behind stale commands). Everything the droid should do is said as an [`Intent`]
+//! (driving toward a heading, steering, the tracks, the stop, the dome, the legs, aiming), the
+//! vocabulary missions, Edu programs, fleets and the bridge use; the controller builds no
+//! family command. It asks its family only how the droid is driven ([`Family::steers`],
+//! [`Family::can_reverse`]).
 //!
 //! Safety rules: speed is 0 unless drive input is present right now (deadman: key released,
 //! emulated release timed out, stick in its deadzone, pad unplugged, focus lost, link down);
@@ -11,8 +13,8 @@
 
 use super::gamepad::PadDrive;
 use crate::config::{Control as ControlConfig, DriveMode};
+use crate::family::Family;
 use crate::family::intent::Intent;
-use crate::family::{Command, Family};
 use crate::protocol::wire::{LegAction, LegState};
 use crate::telemetry::Stance;
 use crate::units::{HEAD_MAX_DEG, HEAD_MIN_DEG, HeadAngle, Heading};
@@ -100,18 +102,12 @@ pub struct DroidView {
 /// What to send or show.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Out {
-    /// Latest drive command (for the drive slot). The family's own command rather than an
-    /// [`Intent::Drive`]: a steering droid's turn is a fraction that an intent's heading
-    /// would round to a degree, and the stop of [`Controller::estop_now`] is the family's
-    /// stop after the last drive command, not a drive.
-    Drive(Command),
-    /// What the droid should do besides driving, for its family to lower:
-    /// [`Intent::Head`] (the dome: latest wins, the head slot), [`Intent::Stance`] (the
-    /// legs), [`Intent::ResetAim`] (leaving aim mode: the droid's facing becomes heading 0).
+    /// What the droid should do, for its family to lower: the motion (latest wins, the drive
+    /// slot) as [`Intent::Drive`] toward a heading, [`Intent::Steer`] on a steering robot
+    /// (its turn a fraction), [`Intent::RawMotors`] in tank mode or [`Intent::Stop`];
+    /// [`Intent::Head`] (the dome: latest wins, the head slot); [`Intent::Stance`] (the
+    /// legs); [`Intent::StartAim`] and [`Intent::ResetAim`] (entering and leaving aim mode).
     Do(Intent),
-    /// Enter aim mode: back light on; turning now rotates the droid in place. No intent
-    /// says it: only the app aims, with the family's own commands.
-    AimBegin,
     /// Tell the operator something.
     Hint(String),
 }
@@ -190,11 +186,6 @@ impl Controller {
         &self.view
     }
 
-    fn stop_cmd(&self) -> Command {
-        self.family
-            .drive(0, Heading::wrapped(self.heading as f64), false)
-    }
-
     pub fn aiming(&self) -> bool {
         self.aiming
     }
@@ -210,15 +201,16 @@ impl Controller {
         self.tank.available = has;
     }
 
-    /// Emergency stop, now: the stop to put in the drive slot at once.
-    pub fn estop_now(&mut self) -> Out {
+    /// Emergency stop, now: the stop to write at once (speed 0 at the heading last
+    /// commanded), for the caller to lower and hand to the session's urgent path.
+    pub fn estop_now(&mut self) -> Intent {
         self.estop = true;
         self.latched = 0;
-        let stop = self.stop_cmd();
-        self.last_drive = Some((0, Heading::wrapped(self.heading as f64).degrees(), 0));
+        let heading = Heading::wrapped(self.heading as f64);
+        self.last_drive = Some((0, heading.degrees(), 0));
         self.view.estop = true;
         self.view.speed = 0;
-        Out::Drive(stop)
+        Intent::Stop { heading }
     }
 
     /// The operator's input went away (the place on top changed, another droid was chosen,
@@ -252,7 +244,7 @@ impl Controller {
             A::Backward if self.cfg.mode == DriveMode::Latched => {
                 self.latched = (self.latched - step).max(-255)
             }
-            A::EStop => return vec![self.estop_now()],
+            A::EStop => return vec![Out::Do(self.estop_now())],
             A::Tank => {
                 let out = self.tank.toggle();
                 self.latched = 0;
@@ -268,7 +260,7 @@ impl Controller {
                 self.latched = 0;
                 return if self.aiming {
                     vec![
-                        Out::AimBegin,
+                        Out::Do(Intent::StartAim),
                         Out::Hint(
                             "aim: ←/→ turn the droid, press the aim key again to set heading 0"
                                 .into(),
@@ -431,13 +423,13 @@ impl Controller {
             } else {
                 self.cruise
             };
-            if let Some((tracks, c)) =
+            if let Some((left, right)) =
                 self.tank
-                    .tick(inp, live, cruise, heartbeat, self.family, droid.connected)
+                    .tick(inp, live, cruise, heartbeat, droid.connected)
             {
                 self.last_drive = None;
-                self.view.tank = Some(tracks);
-                out.push(Out::Drive(c));
+                self.view.tank = Some((left, right));
+                out.push(Out::Do(Intent::RawMotors { left, right }));
             }
             self.view.speed = 0;
             self.view.estop = self.estop;
@@ -457,18 +449,19 @@ impl Controller {
             };
             steer = Some(turn);
             let key = (speed, ((turn + 1.0) * 100.0).round() as u16, 0);
-            if droid.connected
-                && ((speed > 0 && heartbeat) || self.last_drive != Some(key))
-                && let Some(c) = self.family.steer(speed, turn)
-            {
+            if droid.connected && ((speed > 0 && heartbeat) || self.last_drive != Some(key)) {
                 self.last_drive = Some(key);
-                out.push(Out::Drive(c));
+                out.push(Out::Do(Intent::Steer { speed, turn }));
             }
         } else {
             let key = (speed, travel.degrees(), reverse as u8);
             if droid.connected && ((speed > 0 && heartbeat) || self.last_drive != Some(key)) {
                 self.last_drive = Some(key);
-                out.push(Out::Drive(self.family.drive(speed, travel, reverse)));
+                out.push(Out::Do(Intent::Drive {
+                    speed,
+                    heading: travel,
+                    reverse,
+                }));
             }
         }
 
@@ -503,6 +496,7 @@ mod tests {
     use super::*;
     use crate::config::Action;
     use crate::config::Config;
+    use crate::model::Model;
 
     const R2: DroidView = DroidView {
         connected: true,
@@ -517,14 +511,24 @@ mod tests {
         Controller::new(Config::defaults().control)
     }
 
+    /// The drive bytes (speed, heading, flags or state) of the motion in `out`, as R2's
+    /// family lowers it.
     fn drives(out: &[Out]) -> Vec<(u8, u16, u8)> {
+        drives_on(Model::R2D2, out)
+    }
+
+    /// As [`drives`], lowered by `model`'s family.
+    fn drives_on(model: Model, out: &[Out]) -> Vec<(u8, u16, u8)> {
         out.iter()
             .filter_map(|o| match o {
-                Out::Drive(c) => Some((
-                    c.data()[0],
-                    u16::from_be_bytes([c.data()[1], c.data()[2]]),
-                    c.data()[3],
-                )),
+                Out::Do(i @ (Intent::Drive { .. } | Intent::Stop { .. })) => {
+                    let c = crate::family::intent::lower(model, i).unwrap().remove(0);
+                    Some((
+                        c.data()[0],
+                        u16::from_be_bytes([c.data()[1], c.data()[2]]),
+                        c.data()[3],
+                    ))
+                }
                 _ => None,
             })
             .collect()
@@ -602,7 +606,10 @@ mod tests {
             matches!(c.on_press(Action::Aim, &R2)[0], Out::Hint(_)),
             "R2 cannot aim"
         );
-        assert!(c.on_press(Action::Aim, &bb8).contains(&Out::AimBegin));
+        assert!(
+            c.on_press(Action::Aim, &bb8)
+                .contains(&Out::Do(Intent::StartAim))
+        );
         // Forward is ignored while aiming; turning rotates the droid in place (speed 0).
         let fwd_right = Inputs {
             forward: true,
@@ -611,7 +618,7 @@ mod tests {
         };
         let mut last = Vec::new();
         for _ in 0..5 {
-            last = drives(&c.tick(&fwd_right, TICK, &bb8, true));
+            last = drives_on(Model::BB8, &c.tick(&fwd_right, TICK, &bb8, true));
         }
         assert_eq!(
             last,
@@ -625,7 +632,7 @@ mod tests {
         );
         // The next ticks send nothing: a stop at heading 0 would jump the queue ahead of
         // Set Heading 0 and turn the droid back.
-        assert!(drives(&c.tick(&Inputs::default(), TICK, &bb8, true)).is_empty());
+        assert!(drives_on(Model::BB8, &c.tick(&Inputs::default(), TICK, &bb8, true)).is_empty());
         assert_eq!(c.view().heading.degrees(), 0);
     }
 
@@ -637,10 +644,14 @@ mod tests {
             ..Inputs::default()
         };
         c.tick(&fwd, TICK, &R2, true);
-        let Out::Drive(stop) = c.estop_now() else {
-            panic!()
-        };
-        assert_eq!(stop.data()[0], 0);
+        let stop = c.estop_now();
+        assert_eq!(
+            stop,
+            Intent::Stop {
+                heading: Heading::default()
+            }
+        );
+        assert_eq!(drives(&[Out::Do(stop)]), vec![(0, 0, 0)]);
         let held = Inputs {
             forward: true,
             estop: true,

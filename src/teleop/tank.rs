@@ -4,7 +4,6 @@
 //! lost link, aim mode or the e-stop give both tracks 0 (the deadman).
 
 use super::control::{Inputs, Out};
-use crate::family::{Command, Family};
 
 /// Tank mode's state in the control loop.
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -53,17 +52,17 @@ impl TankMode {
         self.last.is_some_and(|(l, r)| l != 0 || r != 0)
     }
 
-    /// One tick: the tracks and their command when they changed, or on the heartbeat while
-    /// moving. `live` is false while the e-stop, aim mode or a lost link hold it still.
+    /// One tick: the tracks to send (as [`crate::family::intent::Intent::RawMotors`], which
+    /// the droid's family lowers) when they changed, or on the heartbeat while moving. `live`
+    /// is false while the e-stop, aim mode or a lost link hold it still.
     pub fn tick(
         &mut self,
         inp: &Inputs,
         live: bool,
         cruise: u8,
         heartbeat: bool,
-        family: &dyn Family,
         connected: bool,
-    ) -> Option<((i16, i16), Command)> {
+    ) -> Option<(i16, i16)> {
         let tracks = match (live, inp.pad_tracks) {
             (false, _) => (0, 0),
             // The sticks carry their own scale (the gamepad's top speed).
@@ -77,19 +76,22 @@ impl TankMode {
         if !connected || (self.last == Some(tracks) && !(moving && heartbeat)) {
             return None;
         }
-        let c = family.tank(tracks.0, tracks.1)?;
         self.last = Some(tracks);
-        Some((tracks, c))
+        Some(tracks)
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::family::for_model;
+    use crate::family::intent::{Intent, lower};
     use crate::model::Model;
 
-    fn tracks_of(c: &Command) -> (u8, u8, u8, u8) {
+    /// RVR's raw-motor bytes (left mode, left power, right mode, right power) of `tracks`.
+    fn rvr_bytes((left, right): (i16, i16)) -> (u8, u8, u8, u8) {
+        let c = lower(Model::Rvr, &Intent::RawMotors { left, right })
+            .unwrap()
+            .remove(0);
         let d = c.data();
         (d[0], d[1], d[2], d[3])
     }
@@ -112,7 +114,6 @@ mod tests {
 
     #[test]
     fn deadman_and_heartbeat() {
-        let family = for_model(Model::Rvr);
         let mut t = TankMode {
             available: true,
             on: true,
@@ -122,27 +123,24 @@ mod tests {
             pad_tracks: Some((1.0, -0.5)),
             ..Inputs::default()
         };
-        let (tracks, c) = t.tick(&sticks, true, 200, true, family, true).unwrap();
+        let tracks = t.tick(&sticks, true, 200, true, true).unwrap();
         assert_eq!(tracks, (255, -128));
         // Raw motors: left forward 255, right reverse 128.
-        assert_eq!(tracks_of(&c), (1, 255, 2, 128));
+        assert_eq!(rvr_bytes(tracks), (1, 255, 2, 128));
         // Unchanged: only on the heartbeat.
-        assert!(t.tick(&sticks, true, 200, false, family, true).is_none());
-        assert!(t.tick(&sticks, true, 200, true, family, true).is_some());
+        assert!(t.tick(&sticks, true, 200, false, true).is_none());
+        assert!(t.tick(&sticks, true, 200, true, true).is_some());
         // Sticks let go: both tracks stop, once.
-        let (tracks, c) = t
-            .tick(&Inputs::default(), true, 200, true, family, true)
-            .unwrap();
-        assert_eq!((tracks, tracks_of(&c)), ((0, 0), (0, 0, 0, 0)));
-        assert!(
-            t.tick(&Inputs::default(), true, 200, true, family, true)
-                .is_none()
-        );
+        let tracks = t.tick(&Inputs::default(), true, 200, true, true).unwrap();
+        assert_eq!((tracks, rvr_bytes(tracks)), ((0, 0), (0, 0, 0, 0)));
+        assert!(t.tick(&Inputs::default(), true, 200, true, true).is_none());
         // The e-stop (not live) holds it still whatever the sticks say.
-        let (tracks, _) = t.tick(&sticks, true, 200, true, family, true).unwrap();
+        let tracks = t.tick(&sticks, true, 200, true, true).unwrap();
         assert_eq!(tracks, (255, -128));
-        let (tracks, _) = t.tick(&sticks, false, 200, true, family, true).unwrap();
+        let tracks = t.tick(&sticks, false, 200, true, true).unwrap();
         assert_eq!(tracks, (0, 0));
+        // A lost link sends nothing.
+        assert!(t.tick(&sticks, true, 200, true, false).is_none());
         let mut none = TankMode::default();
         assert!(matches!(&none.toggle()[..], [Out::Hint(h)] if h.contains("no tracks")));
     }

@@ -62,6 +62,7 @@ mod gamepad;
 mod hints;
 mod layering;
 mod layout;
+mod lowering;
 mod man_pages;
 mod monitoring;
 mod monitoring_app;

@@ -4,6 +4,7 @@
 
 use droidctl::config::Action;
 use droidctl::config::{Config, DriveMode};
+use droidctl::family::intent::{Intent, lower};
 use droidctl::family::{Command, RobiControl};
 use droidctl::model::Model;
 use droidctl::telemetry::Stance;
@@ -43,8 +44,16 @@ fn rc(velocity: u8, steering: u8) -> RobiControl {
 fn drives(out: &[Out]) -> Vec<RobiControl> {
     out.iter()
         .filter_map(|o| match o {
-            Out::Drive(Command::Robi(c)) => Some(*c),
-            Out::Drive(other) => panic!("a Robi controller drives with RobiControl: {other:?}"),
+            // Motion, as Robi's family lowers it.
+            Out::Do(
+                i @ (Intent::Drive { .. }
+                | Intent::Steer { .. }
+                | Intent::Stop { .. }
+                | Intent::RawMotors { .. }),
+            ) => match lower(Model::Robi42, i).as_deref() {
+                Ok([Command::Robi(c)]) => Some(*c),
+                other => panic!("a Robi controller drives with RobiControl: {i:?} {other:?}"),
+            },
             _ => None,
         })
         .collect()
@@ -217,10 +226,8 @@ fn release_stops_once_with_the_steering_straight() {
 fn estop_stops_at_once_and_holds_while_held() {
     let mut c = controller();
     c.tick(&keys(true, false, true, false), TICK, &ROBI, true);
-    let Out::Drive(Command::Robi(stop)) = c.estop_now() else {
-        panic!("e-stop is a drive")
-    };
-    assert_eq!(stop, RobiControl::STOP);
+    let stop = drives(&[Out::Do(c.estop_now())]);
+    assert_eq!(stop, [RobiControl::STOP]);
     let held = Inputs { estop: true, ..FWD };
     for _ in 0..5 {
         let out = c.tick(&held, TICK, &ROBI, true);
