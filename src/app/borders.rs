@@ -29,7 +29,7 @@ pub const TUNING: &[Hint] = &[
     (&[Action::SettingsUp, Action::SettingsDown], "choose"),
     (&[Action::SettingsLess, Action::SettingsMore], "value"),
     (&[Action::SettingsToggle], "on/off"),
-    (&[Action::SettingsApply], "send"),
+    (&[Action::SettingsApply], "apply"),
     (&[Action::SettingsClose], "close"),
 ];
 /// The text prompts (the log filter, BOLT's matrix).

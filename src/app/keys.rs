@@ -16,6 +16,7 @@ use super::overlay::{self, Do, Outcome};
 use super::place::Place;
 use super::state::{Focus, Overlay};
 use crate::config::{Action, Context, Key, KeyCode};
+use crate::family::intent::Intent;
 
 impl App {
     /// A terminal event; returns an exit reason when the app should stop.
@@ -346,10 +347,11 @@ impl App {
             }
             Action::Animations | Action::Sounds => {
                 let model = self.state.droid().model;
-                let family = self.io[self.chosen()].family;
-                if action == Action::Animations && family.animation(model, 0).is_none() {
+                // What the palette would play, asked of the droid's family as the play is.
+                let can = |i: Intent| self.io[self.chosen()].family.lower(model, &i).is_ok();
+                if action == Action::Animations && !can(Intent::Animation(0)) {
                     self.hint("this droid has no animations")
-                } else if action == Action::Sounds && family.sound(model, 0).is_none() {
+                } else if action == Action::Sounds && !can(Intent::Sound(0)) {
                     self.hint("this droid cannot play sounds")
                 } else if action == Action::Animations {
                     self.state.overlay = Overlay::Animations { selected: 0 }

@@ -231,7 +231,7 @@ fn at_80x24_no_word_is_cut() {
         all.contains("Streaming and collision · now 10/s, measured - "),
         "{all}"
     );
-    assert!(all.contains("Enter send · Esc close "), "{all}");
+    assert!(all.contains("Enter apply · Esc close "), "{all}");
     insta::assert_snapshot!("context_tuning_80x24", all);
 }
 
