@@ -26,6 +26,7 @@ use tokio::sync::broadcast;
 use tokio::time::{Instant, sleep_until};
 
 mod lights;
+mod paced;
 mod sensed;
 use sensed::Sensed;
 
@@ -148,6 +149,11 @@ struct Player {
     /// Lights held back while a stop is due within a pacing slot (line, light, state): one
     /// per light, so at most a few ([`Player::light`]).
     held: Vec<(u32, u64, Intent)>,
+    /// Paced steps (`spin`'s) whose drive waits for its answer: (ticket, call), one per
+    /// pending spin at most ([`paced`]).
+    awaiting: Vec<(Mark, u64)>,
+    /// The ticket of the last drive set ([`Player::act`]), for [`Player::paced`].
+    drive_mark: Option<Mark>,
     /// The droid was set up and its first sample came in: a reading it never sent reads 0.
     ready: bool,
     mission: DroidMission,
@@ -242,6 +248,8 @@ pub async fn run_to_end(
         ir_running: Default::default(),
         marks: Vec::new(),
         held: Vec::new(),
+        awaiting: Vec::new(),
+        drive_mark: None,
         ready: false,
         mission,
         report: super::progress::Reporter::new(opts.progress.clone()),
@@ -370,8 +378,15 @@ impl Player {
             }
             let next = self.timed.next().unwrap_or(far);
             let by = deadline.unwrap_or(far);
+            let paced = self.paced_waits();
             tokio::select! {
                 _ = sleep_until(next) => self.due().await,
+                in_time = async {
+                    match &paced {
+                        Some((session, marks)) => session.answered(marks, paced::ANSWER_LIMIT).await,
+                        None => std::future::pending().await,
+                    }
+                }, if paced.is_some() => self.paced_answered(in_time),
                 _ = sleep_until(by) => return Err(timed_out()),
                 // The engine's child died while the program waited (killed, out of memory):
                 // the droid stops now, not at the next turn.
@@ -523,6 +538,7 @@ impl Player {
                         self.act(0, a).await;
                     }
                 }
+                Due::Paced { call, acts } => self.paced(call, &acts).await,
                 // The call returns once its last step has left, as spherov2's: else `spin`'s
                 // last heading shares the drive slot with the next call's and is replaced
                 // before it goes (`await spin(360, 2); stopRoll()`, tests/it/edu_twins.rs).
@@ -754,6 +770,7 @@ impl Player {
                 self.last_heading = *heading;
                 let mark = self.session.set_marked(Slot::Drive, c.clone());
                 self.keep(mark);
+                self.drive_mark = Some(mark);
                 self.drive = (*speed > 0).then_some(c);
                 self.report.drove_at(*speed, *heading, *reverse);
             }
