@@ -401,7 +401,9 @@ impl Player {
                     });
                 }
                 _ = heartbeat.tick() => {
-                    if let Some(c) = &self.drive {
+                    // A spin's step waiting for its answer keeps the drive fresh itself; a
+                    // re-send would replace it unwritten and make its next step early.
+                    if let Some(c) = self.drive.as_ref().filter(|_| self.awaiting.is_empty()) {
                         self.session.set(Slot::Drive, c.clone());
                     }
                     self.check_until().await;
