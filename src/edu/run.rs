@@ -146,12 +146,11 @@ struct Player {
     /// The tickets of the commands the program sent that may not have left yet: a timed call's
     /// clock starts when they have ([`Player::sent`]).
     marks: Vec<Mark>,
-    /// Lights held back while a stop is due within a pacing slot (line, light, state): one
-    /// per light, so at most a few ([`Player::light`]).
-    held: Vec<(u32, u64, Intent)>,
-    /// Paced steps (`spin`'s) whose drive waits for its answer: (ticket, call), one per
-    /// pending spin at most ([`paced`]).
-    awaiting: Vec<(Mark, u64)>,
+    /// Lights held back while a stop is due within a pacing slot ([`Player::light`]).
+    held: lights::Held,
+    /// Paced steps (`spin`'s) whose drive waits for its answer: (ticket, call, soonest next
+    /// step), one per pending spin at most ([`paced`]).
+    awaiting: Vec<(Mark, u64, Instant)>,
     /// The ticket of the last drive set ([`Player::act`]), for [`Player::paced`].
     drive_mark: Option<Mark>,
     /// The droid was set up and its first sample came in: a reading it never sent reads 0.
@@ -247,7 +246,7 @@ pub async fn run_to_end(
         last_ir: None,
         ir_running: Default::default(),
         marks: Vec::new(),
-        held: Vec::new(),
+        held: Default::default(),
         awaiting: Vec::new(),
         drive_mark: None,
         ready: false,
@@ -379,8 +378,11 @@ impl Player {
             let next = self.timed.next().unwrap_or(far);
             let by = deadline.unwrap_or(far);
             let paced = self.paced_waits();
+            // Held lights go a pacing slot after they were held at the latest.
+            let lights_by = self.held.due_by(self.session.pacing());
             tokio::select! {
                 _ = sleep_until(next) => self.due().await,
+                _ = sleep_until(lights_by.unwrap_or(far)), if lights_by.is_some() => self.due().await,
                 in_time = async {
                     match &paced {
                         Some((session, marks)) => session.answered(marks, paced::ANSWER_LIMIT).await,

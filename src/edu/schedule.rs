@@ -87,12 +87,12 @@ impl Schedule {
         }));
     }
 
-    /// The step a paced call played (`call`, from [`Due::Paced`]) was answered at `now`: its
-    /// next step (or its end) is due at once. An unknown call is no one's.
-    pub fn answered(&mut self, call: u64, now: Instant) {
+    /// The step a paced call played (`call`, from [`Due::Paced`]) was answered: its next
+    /// step (or its end) is due at `at`. An unknown call is no one's.
+    pub fn answered(&mut self, call: u64, at: Instant) {
         if let Some(i) = self.waiting.iter().position(|e| e.seq == call) {
             let mut e = self.waiting.swap_remove(i);
-            e.at = now;
+            e.at = at;
             self.heap.push(Reverse(e));
         }
     }

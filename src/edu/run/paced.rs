@@ -2,8 +2,11 @@
 //! made, as spherov2's `spin` sends a heading and waits for the droid's answer before it
 //! computes the next ([`crate::edu::timeline::spin_turned`]). On droidctl's links the answer
 //! comes within the pacing slot the next write waits for anyway, so its steps go once per
-//! slot, as spherov2's go once per round trip; where nothing answers, a step counts as
-//! answered once it is written.
+//! slot, as spherov2's go once per round trip. The next step is made no sooner than one
+//! pacing slot after the one before was played: where nothing answers (a step counts as
+//! answered once written), and where a step was replaced in the drive slot before it left
+//! (several spins at once, issue 37's 990 pending spins), the steps still go once per slot
+//! rather than in a loop that takes no time.
 
 use super::super::api::Act;
 use super::{LEAVE_LIMIT, Player};
@@ -18,9 +21,10 @@ impl Player {
         for a in acts {
             self.act(0, a).await;
         }
+        let next = Instant::now() + self.session.pacing();
         match self.drive_mark.take() {
-            Some(mark) => self.awaiting.push((mark, call)),
-            None => self.timed.answered(call, Instant::now()),
+            Some(mark) => self.awaiting.push((mark, call, next)),
+            None => self.timed.answered(call, next),
         }
     }
 
@@ -28,21 +32,22 @@ impl Player {
     /// drives (`None`: no step waits).
     pub(super) fn paced_waits(&self) -> Option<(SessionHandle, Vec<Mark>)> {
         (!self.awaiting.is_empty()).then(|| {
-            let marks = self.awaiting.iter().map(|(m, _)| *m).collect();
+            let marks = self.awaiting.iter().map(|(m, ..)| *m).collect();
             (self.session.clone(), marks)
         })
     }
 
     /// Steps answered (`in_time`), or given up on after [`LEAVE_LIMIT`] (a link that stopped
-    /// answering must not hold a spin for good): their calls' next steps are due now.
+    /// answering must not hold a spin for good): their calls' next steps are due now, or a
+    /// pacing slot after the step was played if that is later.
     pub(super) fn paced_answered(&mut self, in_time: bool) {
         let now = Instant::now();
         let session = self.session.clone();
         let timed = &mut self.timed;
-        self.awaiting.retain(|(mark, call)| {
+        self.awaiting.retain(|(mark, call, next)| {
             let done = !in_time || !session.awaits(*mark);
             if done {
-                timed.answered(*call, now);
+                timed.answered(*call, now.max(*next));
             }
             !done
         });
