@@ -123,8 +123,9 @@ pub struct Effect {
     pub stops: bool,
 }
 
-/// Steps of `spin` and `fade` (spherov2 loops as fast as its link goes; 20 a second keeps
-/// the droid's link unhurried and the turn smooth).
+/// Steps of `fade` (spherov2 loops as fast as its link goes; 20 a second keeps the droid's
+/// link unhurried and the colour smooth). `spin` is paced by its link's answers instead, as
+/// spherov2's is ([`super::timeline::spin_turned`]).
 pub const STEP: Duration = Duration::from_millis(50);
 
 /// The program's side of the robot: what it last asked.
@@ -356,7 +357,8 @@ impl Driver {
                 e.now.push(Driver::drive(self.heading, 0));
             }
             // spherov2's `spin`: at least the model's time for the turn, its heading stepped
-            // toward `round(elapsed / duration · |angle|)`; here in [`STEP`]s, made when due.
+            // toward `round(elapsed / duration · |angle|)`, a step each time the one before
+            // was answered ([`super::timeline::spin_turned`]); it may end past `duration`.
             "spin" => {
                 if !n(0).is_finite() {
                     return Err(format!("spin: degrees is a number, not {}", n(0)));
@@ -367,9 +369,8 @@ impl Driver {
                 }
                 let d = n(1).max(self.turn_time() * total / 360.0);
                 let d = secs(name, "turning", d)?;
-                // Bounded by MAX_SECONDS: at most 6.9e7 degrees, 1.7e6 steps.
+                // Bounded by MAX_SECONDS: at most 6.9e7 degrees.
                 let angle = n(0).round() as i64;
-                let count = ((d.as_secs_f64() / STEP.as_secs_f64()).ceil() as u64).max(1);
                 let from = self.heading;
                 self.heading = (from + angle).rem_euclid(360);
                 e.wait = Some(Wait::Timeline(Timeline {
@@ -377,7 +378,7 @@ impl Driver {
                         from,
                         angle,
                         speed: self.speed,
-                        count,
+                        d,
                     },
                     end: d,
                 }));

@@ -28,8 +28,11 @@ fn mini_speeds_are_mapped() {
     assert_eq!(d.speed, 151);
 }
 
+/// spherov2's `spin`: the heading of a step is a function of the time since the call,
+/// rounded half to even, the first at 0 s turned 0°, the last the first to turn the whole
+/// angle (sphero_edu.py `spin`).
 #[test]
-fn spin_ends_a_whole_turn_later_in_steps() {
+fn spin_steps_are_the_turn_at_the_time_they_are_made_and_end_on_the_whole_angle() {
     let mut d = Driver::new(Model::Bolt);
     d.heading = 10;
     let e = d.call("spin", &num(&[360.0, 1.0])).unwrap();
@@ -37,19 +40,36 @@ fn spin_ends_a_whole_turn_later_in_steps() {
     let Some(Wait::Timeline(t)) = e.wait else {
         panic!("a timeline")
     };
+    assert!(t.paced());
     assert_eq!(t.end, Duration::from_secs(1));
-    assert_eq!(t.len(), 20);
-    // Halfway: 180° on; at the end, where it started.
-    assert_eq!(t.acts(9), vec![Driver::drive(190, 0)]);
-    assert_eq!(t.at(9), Duration::from_millis(500));
-    assert_eq!(t.acts(19), vec![Driver::drive(10, 0)]);
-    // Counter-clockwise, 90°: the heading it ends on is the driver's at once.
+    let ms = Duration::from_millis;
+    // The first step, at once: 0° turned, and not the last.
+    assert_eq!(
+        t.spin_step(Duration::ZERO),
+        (vec![Driver::drive(10, 0)], false)
+    );
+    // A round trip of 121 ms later: round(43.56) = 44°.
+    assert_eq!(t.spin_step(ms(121)), (vec![Driver::drive(54, 0)], false));
+    // Halfway: 180° on.
+    assert_eq!(t.spin_step(ms(500)), (vec![Driver::drive(190, 0)], false));
+    // 359.5° rounds to 360 (half to even): the last step, a little before the duration.
+    assert_eq!(t.spin_step(ms(998)), (vec![Driver::drive(9, 0)], false));
+    assert_eq!(
+        t.spin_step(Duration::from_micros(998_612)),
+        (vec![Driver::drive(10, 0)], true)
+    );
+    // Late: where it started, the last step.
+    assert_eq!(t.spin_step(ms(1_250)), (vec![Driver::drive(10, 0)], true));
+    // Counter-clockwise, 90°: at least BOLT's 0.45 s per turn; the heading it ends on is the
+    // driver's at once.
     let e = d.call("spin", &num(&[-90.0, 0.0])).unwrap();
     assert_eq!(d.heading, 280);
     let Some(Wait::Timeline(t)) = e.wait else {
         panic!("a timeline")
     };
-    assert_eq!(t.acts(t.len() - 1), vec![Driver::drive(280, 0)]);
+    assert_eq!(t.end, Duration::from_micros(112_500));
+    assert_eq!(t.spin_step(ms(50)), (vec![Driver::drive(330, 0)], false));
+    assert_eq!(t.spin_step(ms(200)), (vec![Driver::drive(280, 0)], true));
 }
 
 /// Every model, as spherov2's `set_speed` bounds it (`bound_value(-255, speed, 255)`,
@@ -132,7 +152,9 @@ fn a_long_spin_or_strobe_is_a_few_numbers_however_long() {
     let Some(Wait::Timeline(t)) = e.wait else {
         panic!("a timeline")
     };
-    assert_eq!((t.len(), t.end), (9_000, Duration::from_secs(450)));
+    // One step at a time as the answers come, none listed up front.
+    assert!(t.paced() && std::mem::size_of_val(&t) < 128);
+    assert_eq!(t.end, Duration::from_secs(450));
     let e = d
         .call("strobe", &num(&[255.0, 0.0, 0.0, 0.0, 1e6]))
         .unwrap();

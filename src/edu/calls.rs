@@ -174,7 +174,7 @@ pub const CALLS: &[Call] = &[
         "degrees, duration",
         true,
         Sphero,
-        "turn degrees (positive clockwise) over duration (s)",
+        "turn degrees (positive clockwise) over duration (s), a step per answer of the robot, the last up to a round trip past duration, as spherov2's",
     ),
     call(
         "rawMotor",

@@ -26,6 +26,7 @@ use tokio::sync::broadcast;
 use tokio::time::{Instant, sleep_until};
 
 mod lights;
+mod paced;
 mod sensed;
 use sensed::Sensed;
 
@@ -145,9 +146,13 @@ struct Player {
     /// The tickets of the commands the program sent that may not have left yet: a timed call's
     /// clock starts when they have ([`Player::sent`]).
     marks: Vec<Mark>,
-    /// Lights held back while a stop is due within a pacing slot (line, light, state): one
-    /// per light, so at most a few ([`Player::light`]).
-    held: Vec<(u32, u64, Intent)>,
+    /// Lights held back while a stop is due within a pacing slot ([`Player::light`]).
+    held: lights::Held,
+    /// Paced steps (`spin`'s) whose drive waits for its answer: (ticket, call, soonest next
+    /// step), one per pending spin at most ([`paced`]).
+    awaiting: Vec<(Mark, u64, Instant)>,
+    /// The ticket of the last drive set ([`Player::act`]), for [`Player::paced`].
+    drive_mark: Option<Mark>,
     /// The droid was set up and its first sample came in: a reading it never sent reads 0.
     ready: bool,
     mission: DroidMission,
@@ -241,7 +246,9 @@ pub async fn run_to_end(
         last_ir: None,
         ir_running: Default::default(),
         marks: Vec::new(),
-        held: Vec::new(),
+        held: Default::default(),
+        awaiting: Vec::new(),
+        drive_mark: None,
         ready: false,
         mission,
         report: super::progress::Reporter::new(opts.progress.clone()),
@@ -370,8 +377,18 @@ impl Player {
             }
             let next = self.timed.next().unwrap_or(far);
             let by = deadline.unwrap_or(far);
+            let paced = self.paced_waits();
+            // Held lights go a pacing slot after they were held at the latest.
+            let lights_by = self.held.due_by(self.session.pacing());
             tokio::select! {
                 _ = sleep_until(next) => self.due().await,
+                _ = sleep_until(lights_by.unwrap_or(far)), if lights_by.is_some() => self.due().await,
+                in_time = async {
+                    match &paced {
+                        Some((session, marks)) => session.answered(marks, paced::ANSWER_LIMIT).await,
+                        None => std::future::pending().await,
+                    }
+                }, if paced.is_some() => self.paced_answered(in_time),
                 _ = sleep_until(by) => return Err(timed_out()),
                 // The engine's child died while the program waited (killed, out of memory):
                 // the droid stops now, not at the next turn.
@@ -386,7 +403,9 @@ impl Player {
                     });
                 }
                 _ = heartbeat.tick() => {
-                    if let Some(c) = &self.drive {
+                    // A spin's step waiting for its answer keeps the drive fresh itself; a
+                    // re-send would replace it unwritten and make its next step early.
+                    if let Some(c) = self.drive.as_ref().filter(|_| self.awaiting.is_empty()) {
                         self.session.set(Slot::Drive, c.clone());
                     }
                     self.check_until().await;
@@ -523,6 +542,7 @@ impl Player {
                         self.act(0, a).await;
                     }
                 }
+                Due::Paced { call, acts } => self.paced(call, &acts).await,
                 // The call returns once its last step has left, as spherov2's: else `spin`'s
                 // last heading shares the drive slot with the next call's and is replaced
                 // before it goes (`await spin(360, 2); stopRoll()`, tests/it/edu_twins.rs).
@@ -754,6 +774,7 @@ impl Player {
                 self.last_heading = *heading;
                 let mark = self.session.set_marked(Slot::Drive, c.clone());
                 self.keep(mark);
+                self.drive_mark = Some(mark);
                 self.drive = (*speed > 0).then_some(c);
                 self.report.drove_at(*speed, *heading, *reverse);
             }

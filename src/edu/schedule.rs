@@ -3,7 +3,8 @@
 //! call due, not a scan of every step of every call (issue 37: 990 pending `strobe`s once kept
 //! 20 million steps in a list and took each out with `Vec::remove`, and `--timeout` waited
 //! behind them). Sans-IO: [`super::run`] sleeps until [`Schedule::next`] and plays what
-//! [`Schedule::due`] returns.
+//! [`Schedule::due`] returns. A paced call (`spin`) waits out of the queue between its steps
+//! until the player says its last step was answered ([`Schedule::answered`]).
 
 use super::api::Act;
 use super::timeline::Timeline;
@@ -16,6 +17,9 @@ use tokio::time::Instant;
 pub enum Due {
     /// A step's actions.
     Acts(Vec<Act>),
+    /// A paced call's step (`spin`): its actions, then [`Schedule::answered`] with `call`
+    /// once they are answered, for its next step (or its end).
+    Paced { call: u64, acts: Vec<Act> },
     /// A call is over: resolve its promise.
     Fire(u64),
 }
@@ -30,6 +34,8 @@ struct Entry {
     next: u64,
     timeline: Timeline,
     fire: Option<u64>,
+    /// A paced call whose last step was played: once answered, it ends.
+    over: bool,
 }
 
 impl PartialEq for Entry {
@@ -56,6 +62,8 @@ impl Ord for Entry {
 #[derive(Debug, Default)]
 pub struct Schedule {
     heap: BinaryHeap<Reverse<Entry>>,
+    /// Paced calls waiting for their last step's answer (one entry each, out of the heap).
+    waiting: Vec<Entry>,
     seq: u64,
 }
 
@@ -75,7 +83,18 @@ impl Schedule {
             next: 0,
             timeline,
             fire,
+            over: false,
         }));
+    }
+
+    /// The step a paced call played (`call`, from [`Due::Paced`]) was answered: its next
+    /// step (or its end) is due at `at`. An unknown call is no one's.
+    pub fn answered(&mut self, call: u64, at: Instant) {
+        if let Some(i) = self.waiting.iter().position(|e| e.seq == call) {
+            let mut e = self.waiting.swap_remove(i);
+            e.at = at;
+            self.heap.push(Reverse(e));
+        }
     }
 
     /// When the next step or end is due (`None`: nothing pending).
@@ -100,11 +119,11 @@ impl Schedule {
 
     /// How many calls are pending (one entry each, however many steps they have left).
     pub fn len(&self) -> usize {
-        self.heap.len()
+        self.heap.len() + self.waiting.len()
     }
 
     pub fn is_empty(&self) -> bool {
-        self.heap.is_empty()
+        self.heap.is_empty() && self.waiting.is_empty()
     }
 
     /// What is due by `now`, in time order. A call late by several steps plays only the
@@ -116,6 +135,19 @@ impl Schedule {
             let Some(Reverse(mut e)) = self.heap.pop() else {
                 break;
             };
+            if e.timeline.paced() {
+                if e.over {
+                    if let Some(id) = e.fire {
+                        out.push(Due::Fire(id));
+                    }
+                    continue;
+                }
+                let (acts, last) = e.timeline.spin_step(now.saturating_duration_since(e.start));
+                e.over = last;
+                out.push(Due::Paced { call: e.seq, acts });
+                self.waiting.push(e);
+                continue;
+            }
             let len = e.timeline.len();
             if e.next >= len {
                 if let Some(id) = e.fire {
@@ -217,6 +249,65 @@ mod tests {
         assert_eq!(s.next_stop(), None);
     }
 
+    /// spherov2's `spin` on a link with a 121 ms round trip (Mini's): a first step at once
+    /// turned 0°, each next only once the one before was answered, its heading the turn at
+    /// that time; the last once the turn rounds to the whole angle (past the 2 s asked), and
+    /// the promise once that last step is answered.
+    #[tokio::test(start_paused = true)]
+    async fn a_spin_steps_once_per_answer_and_ends_after_its_last_step_is_answered() {
+        let mut d = Driver::new(Model::Mini);
+        let mut s = Schedule::default();
+        let t0 = Instant::now();
+        s.add(t0, timeline(&mut d, "spin", &[360.0, 2.0]), Some(7));
+        let rtt = Duration::from_millis(121);
+        let mut headings = Vec::new();
+        let mut fired = None;
+        for _ in 0..40 {
+            let now = Instant::now();
+            for due in s.due(now) {
+                match due {
+                    Due::Paced { call, acts } => {
+                        let [Act::Drive { heading, .. }] = acts[..] else {
+                            panic!("{acts:?}")
+                        };
+                        headings.push(((now - t0).as_millis(), heading));
+                        // Nothing more until this step is answered, however late.
+                        tokio::time::advance(rtt / 2).await;
+                        assert!(s.due(Instant::now()).is_empty());
+                        tokio::time::advance(rtt - rtt / 2).await;
+                        s.answered(call, Instant::now());
+                    }
+                    Due::Fire(id) => fired = Some((id, (now - t0).as_millis())),
+                    Due::Acts(a) => panic!("{a:?}"),
+                }
+            }
+            if fired.is_some() {
+                break;
+            }
+        }
+        // round(k · 0.121 / 2 · 360), half to even: 0, 22 (21.78), 44 (43.56), …
+        assert_eq!(headings[..4], [(0, 0), (121, 22), (242, 44), (363, 65)]);
+        // 16 · 121 ms = 1.936 s turns 348°; 17 · 121 = 2.057 s is past 2 s: the whole turn.
+        assert_eq!(headings[16], (1_936, 348));
+        assert_eq!(headings.len(), 18);
+        assert_eq!(headings[17], (2_057, 0));
+        assert_eq!(fired, Some((7, 2_178)));
+        assert!(s.is_empty());
+    }
+
+    /// One wake: what is due, each paced step answered at once (as a link with no round
+    /// trip would).
+    fn wake(s: &mut Schedule) -> Vec<Due> {
+        let now = Instant::now();
+        let due = s.due(now);
+        for d in &due {
+            if let Due::Paced { call, .. } = d {
+                s.answered(*call, now);
+            }
+        }
+        due
+    }
+
     /// Issue 37: 990 pending hour-long spins and strobes are 1980 entries, not millions of
     /// steps, and a wake an hour late plays one step per call.
     #[tokio::test(start_paused = true)]
@@ -240,19 +331,29 @@ mod tests {
         // Ten simulated seconds in steps: at most one step per call each time.
         for _ in 0..200 {
             tokio::time::advance(Duration::from_millis(50)).await;
-            let due = s.due(Instant::now());
+            let due = wake(&mut s);
             assert!(due.len() <= 1_980, "{}", due.len());
             assert_eq!(s.len(), 1_980);
         }
         // An hour late: one step per call, nothing over (the spins take 3600 s, the
         // strobes 3600 s).
         tokio::time::advance(Duration::from_secs(3_000)).await;
-        let due = s.due(Instant::now());
+        let due = wake(&mut s);
         assert_eq!(due.len(), 1_980);
         assert_eq!(s.len(), 1_980);
+        // Past the end: the strobes end; each spin plays its last step, and ends once it is
+        // answered.
         tokio::time::advance(Duration::from_secs(600)).await;
-        let due = s.due(Instant::now());
+        let due = wake(&mut s);
         let fired = due.iter().filter(|d| matches!(d, Due::Fire(_))).count();
-        assert_eq!((fired, s.len()), (1_980, 0));
+        let last = due
+            .iter()
+            .filter(|d| matches!(d, Due::Paced { .. }))
+            .count();
+        assert_eq!((fired, last, s.len()), (990, 990, 990));
+        tokio::time::advance(Duration::from_millis(1)).await;
+        let due = wake(&mut s);
+        let fired = due.iter().filter(|d| matches!(d, Due::Fire(_))).count();
+        assert_eq!((fired, s.len()), (990, 0));
     }
 }

@@ -7,6 +7,10 @@
 //! light), so a player that is late may play only the last step due and skip the ones before
 //! it: the robot ends where it would have, as spherov2's time-driven loops (`spin`, `fade`)
 //! do when its link is slow. Sans-IO: [`super::run`] plays it on droidctl's clock.
+//!
+//! `spin` is paced by its link, not by a clock ([`Timeline::paced`]): each of its steps is
+//! made when the one before it was answered, its heading a function of the time since the
+//! call ([`Timeline::spin_step`]), as spherov2's `SpheroEduAPI.spin` does.
 
 use super::api::{Act, Driver, STEP};
 use std::time::Duration;
@@ -18,14 +22,15 @@ pub enum Steps {
     None,
     /// One step (`roll`'s stop, `rawMotor`'s stop).
     Once(Duration, Vec<Act>),
-    /// `spin`: `count` steps, [`STEP`] apart from the first at [`STEP`]; step `k` (1-based)
-    /// drives at `speed` toward `from` turned by `round(k / count · |angle|)` degrees in
-    /// `angle`'s direction.
+    /// `spin` over `d`: a step made `elapsed` after the call drives at `speed` toward `from`
+    /// turned by [`spin_turned`] degrees in `angle`'s direction; the first at 0, each next
+    /// once the one before was answered, the last the first to turn the whole `|angle|`
+    /// ([`Timeline::spin_step`]). Its promise resolves once that last step is answered.
     Spin {
         from: i64,
         angle: i64,
         speed: i64,
-        count: u64,
+        d: Duration,
     },
     /// `fade`: `count − 1` mixes, [`STEP`] apart from the first at [`STEP`], then `to` at `d`.
     Fade {
@@ -49,6 +54,29 @@ pub struct Timeline {
     pub end: Duration,
 }
 
+/// Degrees a `spin` of `|angle|` = `total` over `d` has turned `elapsed` after the call:
+/// `round(min(elapsed / d, 1) · total)`, rounding half to even.
+///
+/// Source: spherov2's `SpheroEduAPI.spin` (sphero_edu.py): it loops while the degrees gone
+/// are short of `abs(angle)`, each time sending the heading turned by
+/// `round(min((time.time() - start) / duration, 1.) * abs_angle)` with Python's `round`
+/// (half to even) and waiting for the droid's answer; its first step, at 0 s, turns 0°, and
+/// its last goes once that rounds to the whole angle ("performance of spin is guaranteed,
+/// but may be longer than the specified duration", its docstring says). Sphero's own Edu
+/// documentation says nothing of how a spin is paced, so spherov2, the field's library, is
+/// the judge (tests/it/edu_twins.rs, `figure_eight`).
+pub fn spin_turned(total: u64, d: Duration, elapsed: Duration) -> u64 {
+    let f = if d.is_zero() {
+        1.0
+    } else {
+        (elapsed.as_secs_f64() / d.as_secs_f64()).min(1.0)
+    };
+    // `total` is at most a few million degrees (MAX_SECONDS): exact in f64.
+    (f * total as f64)
+        .round_ties_even()
+        .clamp(0.0, total as f64) as u64
+}
+
 /// `d · k`, saturating (no step is past [`super::api::MAX_SECONDS`] anyway).
 fn times(d: Duration, k: u64) -> Duration {
     let n = d.as_nanos().saturating_mul(u128::from(k));
@@ -69,7 +97,9 @@ impl Timeline {
         match &self.steps {
             Steps::None => 0,
             Steps::Once(..) => 1,
-            Steps::Spin { count, .. } => *count,
+            // Paced: made one at a time as answers come ([`Timeline::spin_step`]), not
+            // counted up front; at least one.
+            Steps::Spin { .. } => 1,
             Steps::Fade { count, .. } => (*count).max(1),
             Steps::Strobe { count, .. } => count.saturating_mul(2),
         }
@@ -84,8 +114,7 @@ impl Timeline {
         match &self.steps {
             Steps::None => self.end,
             Steps::Once(at, _) => *at,
-            // The last step at the end, not past it (the count is the end in steps, rounded up).
-            Steps::Spin { .. } => times(STEP, i.saturating_add(1)).min(self.end),
+            Steps::Spin { .. } => Duration::ZERO,
             Steps::Fade { d, .. } => {
                 if i.saturating_add(1) >= self.len() {
                     *d
@@ -102,17 +131,7 @@ impl Timeline {
         match &self.steps {
             Steps::None => Vec::new(),
             Steps::Once(_, acts) => acts.clone(),
-            Steps::Spin {
-                from,
-                angle,
-                speed,
-                count,
-            } => {
-                let k = i.saturating_add(1);
-                let frac = (k as f64 / (*count).max(1) as f64).min(1.0);
-                let delta = (frac * angle.unsigned_abs() as f64).round() as i64;
-                vec![Driver::drive(from + angle.signum() * delta, *speed)]
-            }
+            Steps::Spin { .. } => self.spin_step(Duration::ZERO).0,
             Steps::Fade { from, to, d, .. } => {
                 if i.saturating_add(1) >= self.len() {
                     return vec![Act::Main(*to)];
@@ -130,6 +149,31 @@ impl Timeline {
                 vec![Act::Main(if i & 1 == 1 { *rgb } else { [0, 0, 0] })]
             }
         }
+    }
+
+    /// Whether the steps are paced by the link rather than the clock: each made once the one
+    /// before it was answered (`spin`, [`Timeline::spin_step`]).
+    pub fn paced(&self) -> bool {
+        matches!(self.steps, Steps::Spin { .. })
+    }
+
+    /// The step of a paced timeline made `elapsed` after the call, and whether it is the last
+    /// (nothing for a timeline that is not paced).
+    pub fn spin_step(&self, elapsed: Duration) -> (Vec<Act>, bool) {
+        let Steps::Spin {
+            from,
+            angle,
+            speed,
+            d,
+        } = &self.steps
+        else {
+            return (Vec::new(), true);
+        };
+        let total = angle.unsigned_abs();
+        let turned = spin_turned(total, *d, elapsed);
+        // At most MAX_SECONDS' worth of degrees: far inside i64.
+        let heading = from + angle.signum() * turned as i64;
+        (vec![Driver::drive(heading, *speed)], turned >= total)
     }
 
     /// The last step at or after `i` that is due `elapsed` after the call (`None`: step `i`
@@ -179,6 +223,19 @@ mod tests {
             t.last_due(0, Duration::from_secs(1_000_000)),
             Some(1_999_999)
         );
+    }
+
+    /// spherov2 rounds with Python's `round`: half to even (sphero_edu.py `spin`).
+    #[test]
+    fn a_spins_turn_rounds_half_to_even_and_stops_at_the_whole_angle() {
+        let s = Duration::from_secs;
+        let ms = Duration::from_millis;
+        // 2° over 1 s: 0.5° at 250 ms rounds to 0, 1.5° at 750 ms to 2.
+        assert_eq!(spin_turned(2, s(1), ms(250)), 0);
+        assert_eq!(spin_turned(2, s(1), ms(750)), 2);
+        assert_eq!(spin_turned(360, s(2), ms(1_000)), 180);
+        assert_eq!(spin_turned(360, s(2), s(60)), 360);
+        assert_eq!(spin_turned(90, Duration::ZERO, Duration::ZERO), 90);
     }
 
     #[test]

@@ -41,6 +41,8 @@ struct Pending {
     retries: u8,
     woken: bool,
     quiet: bool,
+    /// Its ticket, kept until the answer ([`SessionCore::awaits`]).
+    mark: Option<Mark>,
 }
 
 /// What is only true while a connection is up.
@@ -190,6 +192,13 @@ impl SessionCore {
     /// for writing nor replaced by a newer one nor dropped with the link.
     pub fn holds(&self, mark: Mark) -> bool {
         self.queue.holds(mark)
+    }
+
+    /// Whether the command with ticket `mark` still waits: to be written, or, written, for
+    /// its answer (a command nothing answers waits only to be written). A Sphero Edu `spin`
+    /// makes its next step once its last one is answered, as spherov2's does ([`crate::edu`]).
+    pub fn awaits(&self, mark: Mark) -> bool {
+        self.queue.holds(mark) || self.pending.values().any(|p| p.mark == Some(mark))
     }
 
     /// The latest value of a continuous control: replaces any older unwritten one, and a
@@ -531,7 +540,8 @@ impl SessionCore {
 
     /// Turn the next queued item into wire chunks, registering its pending entry.
     fn take_next(&mut self, now: Instant) -> Option<Vec<(Endpoint, Vec<u8>)>> {
-        let q = match self.queue.pop()? {
+        let (next, mark) = self.queue.pop_marked()?;
+        let q = match next {
             Next::Slot(_, c) => Queued::new(c),
             Next::Fifo(q) => q,
         };
@@ -563,6 +573,7 @@ impl SessionCore {
                     retries,
                     woken,
                     quiet,
+                    mark,
                 },
             );
         } else if let Some(r) = reply {

@@ -307,3 +307,24 @@ fn a_long_packet_goes_in_chunks_one_pacing_slot_apart() {
     let extra = PACE * (chunks as u32 - 1);
     assert_eq!(core.poll_timeout(), Some(t + TIMEOUT + extra));
 }
+
+/// A Sphero Edu `spin` makes its next step once its last one is answered (src/edu/run/paced.rs):
+/// a marked drive awaits while queued and while written but unanswered, and no longer once
+/// the droid answers it; a marked request the same.
+#[test]
+fn a_marked_command_awaits_until_it_is_written_and_answered() {
+    let (mut core, t) = connected(SessionConfig::default());
+    let drive_mark = core
+        .handle_write_marked(Slot::Drive, drive(50), true)
+        .unwrap();
+    assert!(core.awaits(drive_mark));
+    let (written, at) = next_packet(&mut core, t);
+    assert!(!core.holds(drive_mark) && core.awaits(drive_mark));
+    respond(&mut core, &written, at + ms(5));
+    assert!(!core.awaits(drive_mark));
+    let (_, volume_mark) = core.handle_request_marked(volume(3), false, None).unwrap();
+    let (written, at) = next_packet(&mut core, at + PACE);
+    assert!(core.awaits(volume_mark));
+    respond(&mut core, &written, at);
+    assert!(!core.awaits(volume_mark));
+}

@@ -257,8 +257,9 @@ pub(crate) struct Shared {
     /// Emergency stops so far: whatever drives the droid besides the operator (a Sphero Edu
     /// program, `crate::edu`) watches it and ends.
     pub estops: watch::Sender<u64>,
-    /// Writes so far (and link losses): who waits for a command to leave
-    /// ([`SessionHandle::left`]) looks again at each change.
+    /// Writes, answers and link losses so far: who waits for a command to leave or be
+    /// answered ([`SessionHandle::left`], [`SessionHandle::answered`]) looks again at each
+    /// change.
     pub written: watch::Sender<u64>,
 }
 
@@ -421,6 +422,19 @@ impl SessionHandle {
     /// newer one, or dropped with the link), at most `limit`; whether it did.
     pub async fn left(&self, mark: Mark, limit: Duration) -> bool {
         self.wait_written(limit, |core| !core.holds(mark)).await
+    }
+
+    /// Wait until one of the commands with tickets `marks` no longer awaits anything
+    /// (written and answered, or written where nothing answers, or replaced, or dropped with
+    /// the link), at most `limit`; whether one did.
+    pub async fn answered(&self, marks: &[Mark], limit: Duration) -> bool {
+        self.wait_written(limit, |core| marks.iter().any(|m| !core.awaits(*m)))
+            .await
+    }
+
+    /// Whether the command with ticket `mark` still waits to be written or answered.
+    pub fn awaits(&self, mark: Mark) -> bool {
+        self.shared.with(|core| core.awaits(mark))
     }
 
     /// Wait until the request queue has room again, at most `limit`; whether it has.

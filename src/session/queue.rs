@@ -212,15 +212,25 @@ impl OutQueue {
     /// otherwise slots and the FIFO take turns so neither starves the other, and so do the
     /// drive and head slots.
     pub fn pop(&mut self) -> Option<Next> {
+        self.pop_marked().map(|(next, _)| next)
+    }
+
+    /// [`Self::pop`], with the ticket of a slot's command (a FIFO item carries its own), so
+    /// the session can tell when that command is answered ([`super::core::SessionCore::awaits`]).
+    pub fn pop_marked(&mut self) -> Option<(Next, Option<Mark>)> {
         if self.setup_left > 0 {
             if let Some(q) = self.fifo.pop_front() {
                 self.setup_left -= 1;
-                return Some(Next::Fifo(q));
+                let mark = q.mark;
+                return Some((Next::Fifo(q), mark));
             }
             self.setup_left = 0;
         }
         if self.drive.as_ref().is_some_and(|(c, _)| is_stop(c)) {
-            return self.drive.take().map(|(c, _)| Next::Slot(Slot::Drive, c));
+            return self
+                .drive
+                .take()
+                .map(|(c, mark)| (Next::Slot(Slot::Drive, c), mark));
         }
         let slot_first = self.slots_turn || self.fifo.is_empty();
         self.slots_turn = !self.slots_turn;
@@ -235,13 +245,16 @@ impl OutQueue {
                     Slot::Drive => self.drive.take(),
                     Slot::Head => self.head.take(),
                 };
-                if let Some((c, _)) = taken {
+                if let Some((c, mark)) = taken {
                     self.head_turn = slot == Slot::Drive;
-                    return Some(Next::Slot(slot, c));
+                    return Some((Next::Slot(slot, c), mark));
                 }
             }
         }
-        self.fifo.pop_front().map(Next::Fifo)
+        self.fifo.pop_front().map(|q| {
+            let mark = q.mark;
+            (Next::Fifo(q), mark)
+        })
     }
 
     /// Drop everything (link lost); the discrete requests are returned so their callers can

@@ -190,7 +190,11 @@ impl Task {
                 // New work (an emergency stop first of all): the top of the loop writes it.
                 _ = self.shared.wake.notified() => {}
                 ev = conn.events.recv() => match ev {
-                    Some(LinkEvent::Data(bytes)) => self.step(|core| core.handle_bytes(&bytes, now())),
+                    Some(LinkEvent::Data(bytes)) => {
+                        self.step(|core| core.handle_bytes(&bytes, now()));
+                        // An answer: whoever waits on one ([`SessionHandle::answered`]) looks.
+                        self.shared.written.send_modify(|n| *n += 1);
+                    }
                     Some(LinkEvent::Disconnected(reason)) => {
                         conn.writer.close().await;
                         return Ended::LinkLost(reason);

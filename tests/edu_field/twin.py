@@ -36,6 +36,33 @@ def quiet_background(api):
     api._SpheroEduAPI__stopped.wait()
 
 
+def paced_from_write_start(toy):
+    """spherov2's writer thread (toy/__init__.py `Toy.__process_packet`) writes a command,
+    then sleeps the toy type's `cmd_safe_interval` (120 ms on Mini, 75 on BOLT, 60 on SPRK+):
+    its pacing counts from the end of the write. Through serve a write waits for the relay's
+    OK over TCP and the adapter's threads, 1-2 ms each time, so its commands went 121.5 ms
+    apart on Mini where droidctl's simulated link (whose writes take no time) sends them
+    120 ms apart: over a figure eight's 38 round trips that was 59 ms more rolling, 4.3 cm
+    (captures, 2026-11-29). That is transport timing, not a semantic of Sphero Edu, so the
+    twin counts the interval from the start of each write (as if writing took no time, as in
+    droidctl's simulator). Everything else is spherov2's: one command at a time, in order."""
+    toy_class = type(toy)
+    interval = toy_class.toy_type.cmd_safe_interval
+
+    def writer(self):
+        queue = self._Toy__packet_queue
+        while self._Toy__adapter is not None:
+            payload = queue.get()
+            if payload is None:
+                break
+            due = time.monotonic() + interval
+            for at in range(0, len(payload), 20):
+                self._Toy__adapter.write(self._send_uuid, payload[at : at + 20])
+            time.sleep(max(0.0, due - time.monotonic()))
+
+    toy_class._Toy__process_packet = writer
+
+
 def on_tripod(toy):
     """An event set when a droid with legs has finished the tripod stance spherov2's
     SpheroEduAPI asks for as it starts (utils.py `set_robot_state_on_start`: THREE_LEGS, not
@@ -62,6 +89,7 @@ def main():
     spec.loader.exec_module(twin)
     SpheroEduAPI._SpheroEduAPI__background = quiet_background
     toy = find_toy(["tcp", port, name])
+    paced_from_write_start(toy)
     stood = on_tripod(toy)
     with SpheroEduAPI(toy) as api:
         if stood is not None and not stood.wait(10):

@@ -222,20 +222,15 @@ fn shows(model: &str, cap: &str) -> Vec<String> {
 
 /// Where the two ends still disagree, with what is known of why: measured and printed, not
 /// failed (their lights are judged). Each is a lead for the next fix; the issue's tolerance
-/// is the goal.
-const KNOWN: &[(&str, &str, &str)] = &[
-    ("figure_eight", "bolt", SPIN),
-    ("figure_eight", "mini", SPIN),
-    ("figure_eight", "sprk", SPIN),
-];
+/// is the goal. Empty: every pair is judged.
+const KNOWN: &[(&str, &str, &str)] = &[];
 
-/// Why a spin while rolling ends apart.
-const SPIN: &str = "spin while rolling: spherov2's spin steps its heading once per command \
-                    round trip, sends a first step of 0 degrees and its last heading after \
-                    the duration is over, and says so itself (sphero_edu.py `spin`: 'may be \
-                    longer than the specified duration'); droidctl keeps the duration. On \
-                    Mini's 120 ms link spherov2 rolled 4.67 s where droidctl rolled 4.32 s \
-                    (captures, 2026-11-29): 3-25 cm further on, varying with the round trips";
+// A spin while rolling (`figure_eight`): droidctl's `spin` is paced as spherov2's is, a step
+// per answer with its heading a function of the time since the call (src/edu/timeline.rs
+// `spin_turned`), so both end the spin past its duration alike. What was left was transport
+// timing: spherov2's pacing counts from the end of each write, and its writes through serve
+// took 1-2 ms (4.3 cm over a figure eight on Mini), so the twin paces from the start of each
+// write, as droidctl's simulated link does (twin.py `paced_from_write_start`).
 
 // R2-D2's and R2-Q5's tripod: spherov2's SpheroEduAPI asks for three legs as it starts
 // (utils.py `set_robot_state_on_start`, THREE_LEGS) and does not wait for them; the droid rolls

@@ -5,10 +5,51 @@ use super::super::api::{Act, Ir, RvrLight};
 use super::Player;
 use crate::family::intent::Intent;
 use crate::script::LedGroup;
+use std::time::Duration;
 use tokio::time::Instant;
 
 /// RVR's lights' keys start here (each light's bits: its own key, beside the others').
 const RVR_KEYS: u64 = 100;
+
+/// Lights held back while a stop is due within a pacing slot ([`Player::light`]): one state
+/// per light, so at most a few, and since when the first of them waits.
+#[derive(Debug, Default)]
+pub(super) struct Held {
+    /// (line, light, state).
+    lights: Vec<(u32, u64, Intent)>,
+    since: Option<Instant>,
+}
+
+impl Held {
+    /// Hold `intent` for light `key` at `now`, in place of that light's older held state.
+    fn hold(&mut self, line: u32, key: u64, intent: Intent, now: Instant) {
+        self.lights.retain(|h| h.1 != key);
+        self.lights.push((line, key, intent));
+        self.since.get_or_insert(now);
+    }
+
+    fn is_empty(&self) -> bool {
+        self.lights.is_empty()
+    }
+
+    /// When the held lights go at the latest: one pacing slot after the first was held, by
+    /// when the stop they wait for has gone. Without it a program that then waits only on
+    /// an event, with no timer pending, kept them held until the next call, for good maybe.
+    pub(super) fn due_by(&self, pacing: Duration) -> Option<Instant> {
+        self.since.map(|t| t + pacing)
+    }
+
+    /// Whether the held lights are past [`Self::due_by`] at `now`.
+    fn overdue(&self, now: Instant, pacing: Duration) -> bool {
+        self.due_by(pacing).is_some_and(|by| now >= by)
+    }
+
+    /// The held lights, in the order held; none held after.
+    fn take(&mut self) -> Vec<(u32, u64, Intent)> {
+        self.since = None;
+        std::mem::take(&mut self.lights)
+    }
+}
 
 impl Player {
     /// A light's state: each light (and brightness) has its own key, so a newer state of one
@@ -29,8 +70,7 @@ impl Player {
             _ => return,
         };
         if self.stop_due_within_a_slot() {
-            self.held.retain(|h| h.1 != key);
-            self.held.push((line, key, intent));
+            self.held.hold(line, key, intent, Instant::now());
             return;
         }
         self.release_lights(false).await;
@@ -47,15 +87,16 @@ impl Player {
         self.timed.next_stop().is_some_and(|at| at <= slot)
     }
 
-    /// The lights held for a stop ([`Self::light`]), sent once no stop is that close (or the
-    /// program ended). After the stop they wait for the program's next call, so its drive
+    /// The lights held for a stop ([`Self::light`]), sent once no stop is that close, or a
+    /// pacing slot after they were first held ([`Held::due_by`]), or when the program ended. After the stop they wait for the program's next call, so its drive
     /// (`roll` after `roll`) does not wait a slot behind them either: spherov2 sends the next
     /// roll one round trip after the stop.
     pub(super) async fn release_lights(&mut self, ended: bool) {
-        if self.held.is_empty() || (!ended && self.stop_due_within_a_slot()) {
+        let overdue = self.held.overdue(Instant::now(), self.session.pacing());
+        if self.held.is_empty() || (!ended && !overdue && self.stop_due_within_a_slot()) {
             return;
         }
-        for (line, key, intent) in std::mem::take(&mut self.held) {
+        for (line, key, intent) in self.held.take() {
             self.intend_as(line, intent, "light", Some(key)).await;
         }
     }
@@ -72,5 +113,36 @@ impl Player {
         let key = RVR_KEYS + u64::from(light.mask().trailing_zeros());
         self.send(line, Some(c), "light", Some(crate::session::Latest(key)))
             .await;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A held light goes one pacing slot after it was first held at the latest: lights held
+    /// later, or a light held again, do not push that back.
+    #[test]
+    fn held_lights_are_due_one_pacing_slot_after_the_first_was_held() {
+        let ms = Duration::from_millis;
+        let pacing = ms(120);
+        let t0 = Instant::now();
+        let mut held = Held::default();
+        assert_eq!(held.due_by(pacing), None);
+        assert!(!held.overdue(t0 + ms(10_000), pacing));
+        held.hold(3, 1, Intent::MainLight([255, 0, 0]), t0);
+        held.hold(4, 2, Intent::MainLight([0, 255, 0]), t0 + ms(50));
+        held.hold(5, 1, Intent::MainLight([0, 0, 255]), t0 + ms(100));
+        assert_eq!(held.due_by(pacing), Some(t0 + pacing));
+        assert!(!held.overdue(t0 + ms(119), pacing));
+        assert!(held.overdue(t0 + pacing, pacing));
+        // One state per light, in the order held; none held after.
+        let lights: Vec<(u32, u64)> = held.take().into_iter().map(|h| (h.0, h.1)).collect();
+        assert_eq!(lights, vec![(4, 2), (5, 1)]);
+        assert!(held.is_empty());
+        assert_eq!(held.due_by(pacing), None);
+        // Held again later: counted from then.
+        held.hold(6, 1, Intent::MainLight([1, 2, 3]), t0 + ms(500));
+        assert_eq!(held.due_by(pacing), Some(t0 + ms(620)));
     }
 }
