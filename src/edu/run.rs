@@ -868,7 +868,11 @@ impl Player {
         );
         self.session.set(Slot::Drive, stop);
         if self.raw
-            && let Some(c) = self.family.tank(0, 0)
+            && let Some(c) = crate::family::intent::one_command(
+                self.family,
+                self.model,
+                &Intent::RawMotors { left: 0, right: 0 },
+            )
         {
             let _ = self.session.send(c);
         }
