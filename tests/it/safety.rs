@@ -6,8 +6,11 @@
 //! time, checked against an oracle that reads only the events and the place each one left
 //! the app in.
 
-use droidctl::config::{Key, KeyCode};
-use droidctl::fuzzing::app_input::{EMULATED, KEYS, Step, check, run, run_with};
+use droidctl::config::{Button, Key, KeyCode};
+use droidctl::fuzzing::app_input::{
+    AXES, BUTTONS, EMULATED, KEYS, Step, check, decode_with_pad, run, run_with,
+};
+use droidctl::teleop::gamepad::Axis;
 use droidctl::teleop::held::ReleaseMode;
 use proptest::prelude::*;
 use std::time::Duration;
@@ -309,6 +312,47 @@ proptest! {
         steps in prop::collection::vec(step(), 1..60),
     ) {
         let release = if emulated { EMULATED } else { ReleaseMode::Reported };
+        if let Err(e) = check(release, &steps) {
+            return Err(TestCaseError::fail(e));
+        }
+    }
+}
+
+/// A pad step: a stick or the trigger moved (often centred, often inside the deadzone), a
+/// button pressed or released, the pad plugged in or lost.
+fn pad_step() -> impl Strategy<Value = Step> {
+    let axis = (0..AXES.len()).prop_map(|i| AXES[i]);
+    let value = prop_oneof![Just(0i8), -14i8..=14, -100i8..=100, Just(100), Just(-100)];
+    let button = (0..BUTTONS.len()).prop_map(|i| BUTTONS[i]);
+    prop_oneof![
+        6 => (axis, value).prop_map(|(a, v)| Step::Stick(a, v)),
+        3 => button.clone().prop_map(Step::PadPress),
+        3 => button.prop_map(Step::PadRelease),
+        1 => Just(Step::PadFound),
+        1 => Just(Step::PadLost),
+    ]
+}
+
+/// The number of cases of the mixed property: `DROIDCTL_SAFETY_CASES` for a longer search.
+fn mixed_cases() -> u32 {
+    std::env::var("DROIDCTL_SAFETY_CASES")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(48)
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: mixed_cases(), ..ProptestConfig::default() })]
+
+    /// The same promises with the gamepad in the sequences: keys and pad events mixed, the
+    /// pad plugged in first (and lost and found again at random).
+    #[test]
+    fn nothing_moves_unless_a_drive_key_or_the_stick_is_held_in_driving(
+        emulated in any::<bool>(),
+        steps in prop::collection::vec(prop_oneof![step(), pad_step()], 1..60),
+    ) {
+        let release = if emulated { EMULATED } else { ReleaseMode::Reported };
+        let steps: Vec<Step> = std::iter::once(Step::PadFound).chain(steps).collect();
         if let Err(e) = check(release, &steps) {
             return Err(TestCaseError::fail(e));
         }
