@@ -488,6 +488,9 @@ struct PadReading {
     /// Since when the stick has driven each droid (out of its deadzone, driving on top, the
     /// droid driven), while it does.
     driving: Vec<Option<Instant>>,
+    /// When the stick let go of each droid (centred, the pad lost, another place on top,
+    /// another droid driven): a stop is written then, at once, unless a key drives on.
+    let_go: Vec<Vec<Instant>>,
     /// Since when the stop button has been held, while it is.
     stop_from: Option<Instant>,
     /// Spans in which the stop button was held (every droid is held at 0 then).
@@ -504,6 +507,7 @@ impl PadReading {
             connected: false,
             left: (0, 0),
             driving: vec![None; MODELS.len()],
+            let_go: vec![Vec::new(); MODELS.len()],
             stop_from: None,
             stop_spans: Vec::new(),
         }
@@ -656,6 +660,7 @@ impl Oracle {
                 (true, None) => self.pad.driving[i] = Some(now),
                 (false, Some(from)) => {
                     self.pad.driving[i] = None;
+                    self.pad.let_go[i].push(now);
                     // The stick points the heading: it drives and turns.
                     self.drive_spans[i].push((from, now));
                     self.turn_spans[i].push((from, now));
@@ -733,6 +738,21 @@ impl Oracle {
                         b.heading,
                         a.at,
                         b.at
+                    ));
+                }
+            }
+            // "Unplugging the pad, or the stick back in its deadzone, writes a stop at once":
+            // when the stick lets go and no key drives on, the last write by then is a stop.
+            for t in &self.pad.let_go[i] {
+                let keys_drive_on = self.drive_spans[i].iter().any(|(a, b)| a <= t && t < b);
+                let last = w.iter().rfind(|x| x.at <= *t);
+                if let Some(x) = last.filter(|x| x.speed > 0 && !keys_drive_on) {
+                    return Err(format!(
+                        "the stick let go of droid {i} ({}) at {t:?} but its last write then \
+                         was speed {} at {:?}, not a stop",
+                        MODELS[i].display_name(),
+                        x.speed,
+                        x.at
                     ));
                 }
             }
