@@ -83,22 +83,28 @@ pub const TARGET: Target = Target {
     ],
 };
 
-/// The pad's buttons a sequence presses: every one droidctl maps (the stop, help, aim,
-/// stances, animation and the D-pad's sounds) and Start, which is bound to nothing.
-pub const BUTTONS: [Button; 12] = [
-    Button::South,
-    Button::East,
-    Button::North,
-    Button::West,
-    Button::Start,
-    Button::Select,
-    Button::LeftBumper,
-    Button::RightBumper,
-    Button::DPadUp,
-    Button::DPadDown,
-    Button::DPadLeft,
-    Button::DPadRight,
-];
+/// The pad's buttons a sequence presses: every bindable one (the stop, help, aim, stances,
+/// animation, and those bound to nothing by default) then the D-pad's sounds.
+pub const BUTTONS: [Button; 12] = {
+    const DPAD: [Button; 4] = [
+        Button::DPadUp,
+        Button::DPadDown,
+        Button::DPadLeft,
+        Button::DPadRight,
+    ];
+    let bindable = Button::BINDABLE;
+    let mut all = [Button::South; 12];
+    let mut i = 0;
+    while i < all.len() {
+        all[i] = if i < bindable.len() {
+            bindable[i]
+        } else {
+            DPAD[i - bindable.len()]
+        };
+        i += 1;
+    }
+    all
+};
 
 /// The pad's axes a sequence moves (the right stick's Y is RVR's tank track only).
 pub const AXES: [Axis; 4] = [Axis::LeftX, Axis::LeftY, Axis::RightX, Axis::RightTrigger];
