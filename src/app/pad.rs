@@ -42,8 +42,12 @@ impl App {
         if self.place() != before {
             self.clear_held();
         }
-        // Stick back in its deadzone or pad unplugged: stop at once.
-        if matches!(e, PadEvent::Disconnected | PadEvent::Axis(..)) {
+        // Stick back in its deadzone, pad unplugged, or a pad plugged in (its sticks at
+        // rest): stop at once.
+        if matches!(
+            e,
+            PadEvent::Disconnected | PadEvent::Connected(_) | PadEvent::Axis(..)
+        ) {
             self.control(false);
         }
         self.dirty = true;

@@ -1,34 +1,55 @@
 //! The app's input routing against its safety promises: a fleet of simulated droids (R2-D2,
 //! BB-8, Robi 42) driven through the whole event loop on paused time by a sequence of key
-//! presses, repeats, releases, focus changes and pauses, in either keyboard mode. Whatever the
-//! sequence:
+//! presses, repeats, releases, focus changes and pauses, in either keyboard mode, mixed with
+//! a gamepad's events (sticks moved or centred, the right trigger, buttons pressed and
+//! released, the pad plugged in and lost). Whatever the sequence:
 //!
 //! 1. a drive with speed above 0 is written to a droid only while a drive key is held in the
 //!    driving place for that droid (pressed there, not released, not expired, and no place
-//!    change, droid change, mirror switch or focus loss since);
+//!    change, droid change, mirror switch or focus loss since), or while the pad's left stick
+//!    is out of its deadzone with the driving place on top and that droid driven (the stick
+//!    is a deadman: centred, or the pad lost, is let go; a pad plugged in has its sticks at
+//!    rest until they move), and never while the pad's stop button is held;
 //! 2. a droid's heading changes between two drive writes only while a turn key is held there
-//!    in the same sense (or the aim key was pressed there, which makes the facing heading 0);
-//! 3. every emergency stop raised is written to every connected droid at that same instant.
+//!    in the same sense, or the left stick drives it (the stick points the heading), or the
+//!    aim key or button was pressed (which makes the facing heading 0);
+//! 3. every emergency stop raised (a key or the pad's stop button) is written to every
+//!    connected droid at that same instant.
 //!
-//! The oracle knows only the default key map and, after each event, the place the app says
-//! the event left it in ([`InputTrace`]); it does not share the app's held-key code.
+//! The oracle knows only the default key map and pad bindings and, after each event, the
+//! place the app says the event left it in ([`InputTrace`]); it does not share the app's
+//! held-key or stick code. Its reading of the pad is the manual's (docs/app.md, "Gamepad"):
+//! the stick drives while its distance from centre is above `gamepad.deadzone`, the pad is
+//! read whatever has the terminal's focus (focus loss lets go of keys, whose releases are
+//! lost then, not of the stick, whose position gilrs keeps reporting), and "plugged in
+//! again, nothing moves until the stick does".
 //!
 //! Sessions write with no pacing here, so a write happens at the instant the app decides it;
 //! pacing is the session's business and is tested there.
 //!
 //! Input layout: the first byte's low bit chooses the keyboard mode (reported releases or
-//! emulated); then two bytes a step: the first picks the kind (press, repeat, release, pause,
-//! focus lost) and the second the key or the pause length.
+//! emulated), and its bit 1 (`0x02`) lets pad steps in; then two bytes a step. The first byte
+//! of a step picks the kind; the second the key, the pause length, the button or the stick's
+//! value. Without bit 1 (the layout before the pad, which the existing corpus uses) the kind
+//! is the first byte modulo 8: 0–2 press, 3 repeat, 4–5 release, 6 pause of 8 ms per unit,
+//! 7 focus lost (second byte below 8) or a pause of 1 ms per unit. With bit 1, a step whose
+//! first byte has bit 3 (`0x08`) clear reads as before, and one with it set is a pad step by
+//! the first byte modulo 8: 0 left stick X, 1 left stick Y, 2 right stick X, 3 right trigger
+//! (the second byte as a signed value in hundredths, clamped to ±100), 4 a button pressed,
+//! 5 released ([`BUTTONS`], the second byte modulo their count), 6 the pad plugged in, 7 the
+//! pad lost.
 
 use super::Target;
 use crate::app::input::{KeyKind, TermEvent};
 use crate::app::run::{self, AppInputs, AppOptions};
 use crate::app::{AppState, InputTrace, Place};
 use crate::config::{Action, Config, Key, KeyCode};
+use crate::config::{Button, PadAction};
 use crate::fleet::Fleet;
 use crate::model::Model;
 use crate::session::{Direction, LinkState, LogItem};
 use crate::sync::lock;
+use crate::teleop::gamepad::{Axis, PadEvent};
 use crate::teleop::held::ReleaseMode;
 use ratatui::{Frame, Terminal, backend::TestBackend};
 use std::collections::HashMap;
@@ -51,8 +72,42 @@ pub const TARGET: Target = Target {
         b"\x00\x0e",
         b"\x00\x0f",
         b"\x00\x10",
+        b"\x0e\x00",
+        b"\x0f\x00",
+        b"\x09\x64",
+        b"\x09\x00",
+        b"\x08\x9c",
+        b"\x0c\x01",
+        b"\x0d\x01",
+        b"\x0c\x05",
     ],
 };
+
+/// The pad's buttons a sequence presses: every bindable one (the stop, help, aim, stances,
+/// animation, and those bound to nothing by default) then the D-pad's sounds.
+pub const BUTTONS: [Button; 12] = {
+    const DPAD: [Button; 4] = [
+        Button::DPadUp,
+        Button::DPadDown,
+        Button::DPadLeft,
+        Button::DPadRight,
+    ];
+    let bindable = Button::BINDABLE;
+    let mut all = [Button::South; 12];
+    let mut i = 0;
+    while i < all.len() {
+        all[i] = if i < bindable.len() {
+            bindable[i]
+        } else {
+            DPAD[i - bindable.len()]
+        };
+        i += 1;
+    }
+    all
+};
+
+/// The pad's axes a sequence moves (the right stick's Y is RVR's tank track only).
+pub const AXES: [Axis; 4] = [Axis::LeftX, Axis::LeftY, Axis::RightX, Axis::RightTrigger];
 
 /// The keys a sequence is made of: every place's way in and out, typing, and the drive keys.
 pub const KEYS: [Key; 33] = [
@@ -101,6 +156,15 @@ pub enum Step {
     FocusLost,
     /// Nothing happens for this long (ticks, emulated releases, the droids move).
     Pause(Duration),
+    /// A pad axis moved to this value in hundredths (-100..=100; 0 is centred, the trigger
+    /// at rest).
+    Stick(Axis, i8),
+    PadPress(Button),
+    PadRelease(Button),
+    /// A pad is plugged in (its sticks at rest until they move).
+    PadFound,
+    /// The pad is unplugged.
+    PadLost,
 }
 
 /// The emulated release timeouts the rig uses (the config's defaults are of this order).
@@ -118,7 +182,11 @@ pub fn run_input(data: &[u8]) {
     } else {
         EMULATED
     };
-    let steps = decode(rest);
+    let steps = if mode & 2 == 0 {
+        decode(rest)
+    } else {
+        decode_with_pad(rest)
+    };
     if let Err(v) = check(release, &steps) {
         panic!("{v}");
     }
@@ -128,15 +196,39 @@ pub fn run_input(data: &[u8]) {
 pub fn decode(data: &[u8]) -> Vec<Step> {
     data.chunks_exact(2)
         .take(200)
+        .map(|c| key_step(c[0], c[1]))
+        .collect()
+}
+
+/// A keyboard step from its two bytes (the layout before the pad).
+fn key_step(kind: u8, arg: u8) -> Step {
+    let key = KEYS[arg as usize % KEYS.len()];
+    match kind % 8 {
+        0..=2 => Step::Press(key),
+        3 => Step::Repeat(key),
+        4 | 5 => Step::Release(key),
+        6 => Step::Pause(Duration::from_millis(arg as u64 * 8)),
+        _ if arg < 8 => Step::FocusLost,
+        _ => Step::Pause(Duration::from_millis(arg as u64)),
+    }
+}
+
+/// Two bytes a step, the pad's among the keys' (see the module's layout).
+pub fn decode_with_pad(data: &[u8]) -> Vec<Step> {
+    data.chunks_exact(2)
+        .take(200)
         .map(|c| {
-            let key = KEYS[c[1] as usize % KEYS.len()];
+            if c[0] & 8 == 0 {
+                return key_step(c[0], c[1]);
+            }
+            let value = (c[1] as i8).clamp(-100, 100);
+            let button = BUTTONS[c[1] as usize % BUTTONS.len()];
             match c[0] % 8 {
-                0..=2 => Step::Press(key),
-                3 => Step::Repeat(key),
-                4 | 5 => Step::Release(key),
-                6 => Step::Pause(Duration::from_millis(c[1] as u64 * 8)),
-                _ if c[1] < 8 => Step::FocusLost,
-                _ => Step::Pause(Duration::from_millis(c[1] as u64)),
+                k @ 0..=3 => Step::Stick(AXES[k as usize], value),
+                4 => Step::PadPress(button),
+                5 => Step::PadRelease(button),
+                6 => Step::PadFound,
+                _ => Step::PadLost,
             }
         })
         .collect()
@@ -194,6 +286,12 @@ fn keep(_: &mut Frame, s: &AppState) {
 
 const MODELS: [Model; 3] = [Model::R2D2, Model::BB8, Model::Robi42];
 
+/// A step's event, for the terminal's channel or the pad's.
+enum Event {
+    Term(TermEvent),
+    Pad(PadEvent),
+}
+
 /// A drive write seen on a droid's link.
 #[derive(Debug, Clone, Copy)]
 struct Write {
@@ -227,7 +325,7 @@ async fn rig(
         }
     }
     let (term, term_rx) = mpsc::channel(8);
-    let (_pad, pad_rx) = mpsc::channel(1);
+    let (pad, pad_rx) = mpsc::channel(8);
     let (_quit, quit_rx) = mpsc::channel(1);
     let (trace_tx, mut trace) = watch::channel(InputTrace::default());
     let opts = AppOptions {
@@ -270,22 +368,31 @@ async fn rig(
                 sleep(d).await;
                 continue;
             }
-            Step::FocusLost => TermEvent::FocusLost,
-            Step::Press(key) => TermEvent::Key {
+            Step::FocusLost => Event::Term(TermEvent::FocusLost),
+            Step::Press(key) => Event::Term(TermEvent::Key {
                 key,
                 kind: KeyKind::Press,
-            },
-            Step::Repeat(key) => TermEvent::Key {
+            }),
+            Step::Repeat(key) => Event::Term(TermEvent::Key {
                 key,
                 kind: KeyKind::Repeat,
-            },
-            Step::Release(key) => TermEvent::Key {
+            }),
+            Step::Release(key) => Event::Term(TermEvent::Key {
                 key,
                 kind: KeyKind::Release,
-            },
+            }),
+            Step::Stick(axis, at) => Event::Pad(PadEvent::Axis(axis, at as f32 / 100.0)),
+            Step::PadPress(b) => Event::Pad(PadEvent::Pressed(b)),
+            Step::PadRelease(b) => Event::Pad(PadEvent::Released(b)),
+            Step::PadFound => Event::Pad(PadEvent::Connected("fuzz pad".into())),
+            Step::PadLost => Event::Pad(PadEvent::Disconnected),
         };
         let before = *trace.borrow_and_update();
-        if term.send(event).await.is_err() {
+        let sent = match event {
+            Event::Term(e) => term.send(e).await.is_ok(),
+            Event::Pad(e) => pad.send(e).await.is_ok(),
+        };
+        if !sent {
             quit = true;
             break;
         }
@@ -303,6 +410,7 @@ async fn rig(
     // A quit key ends the app after its event was traced: its input channel is closed then.
     quit |= term.is_closed();
     drop(term);
+    drop(pad);
     let _ = app.await;
     fleet.shutdown_all(|_| Vec::new()).await;
     let w = lock(&writes).clone();
@@ -369,6 +477,60 @@ struct Oracle {
     aims: Vec<Instant>,
     /// When an emergency stop was raised.
     estops: Vec<Instant>,
+    /// The pad as the oracle reads it (see [`PadReading`]).
+    pad: PadReading,
+}
+
+/// The pad by the oracle's own reading of the manual and the default bindings: where the left
+/// stick was last reported, whether a pad is plugged in, and when the stick or the stop
+/// button held each droid.
+struct PadReading {
+    deadzone: f32,
+    stop: Button,
+    aim: Button,
+    connected: bool,
+    /// The left stick, hundredths (x right, y up).
+    left: (i8, i8),
+    /// Since when the stick has driven each droid (out of its deadzone, driving on top, the
+    /// droid driven), while it does.
+    driving: Vec<Option<Instant>>,
+    /// When the stick let go of each droid (centred, the pad lost, another place on top,
+    /// another droid driven): a stop is written then, at once, unless a key drives on.
+    let_go: Vec<Vec<Instant>>,
+    /// Since when the stop button has been held, while it is.
+    stop_from: Option<Instant>,
+    /// Spans in which the stop button was held (every droid is held at 0 then).
+    stop_spans: Vec<(Instant, Instant)>,
+}
+
+impl PadReading {
+    fn new(config: &Config) -> PadReading {
+        let pad = &config.gamepad;
+        PadReading {
+            deadzone: pad.deadzone,
+            stop: pad.buttons.button(PadAction::EStop),
+            aim: pad.buttons.button(PadAction::Aim),
+            connected: false,
+            left: (0, 0),
+            driving: vec![None; MODELS.len()],
+            let_go: vec![Vec::new(); MODELS.len()],
+            stop_from: None,
+            stop_spans: Vec::new(),
+        }
+    }
+
+    /// The left stick out of its deadzone (a hair's width at the edge counts as out: the
+    /// oracle allows, it does not ask for, a drive there).
+    fn out(&self) -> bool {
+        let (x, y) = (self.left.0 as f64 / 100.0, self.left.1 as f64 / 100.0);
+        self.connected && (x * x + y * y).sqrt() > self.deadzone as f64 - 1e-4
+    }
+
+    fn let_go_stop(&mut self, at: Instant) {
+        if let Some(from) = self.stop_from.take() {
+            self.stop_spans.push((from, at));
+        }
+    }
 }
 
 impl Oracle {
@@ -381,6 +543,7 @@ impl Oracle {
             turn_spans: vec![Vec::new(); MODELS.len()],
             aims: Vec::new(),
             estops: Vec::new(),
+            pad: PadReading::new(config),
         }
     }
 
@@ -468,6 +631,49 @@ impl Oracle {
         if after.clears != before.clears {
             self.let_go_all(now);
         }
+        self.pad_step(now, step, after);
+    }
+
+    /// A pad step read, then which droids the stick drives from now on.
+    fn pad_step(&mut self, now: Instant, step: &Step, after: &InputTrace) {
+        let pad = &mut self.pad;
+        match *step {
+            Step::Stick(Axis::LeftX, v) => pad.left.0 = v,
+            Step::Stick(Axis::LeftY, v) => pad.left.1 = v,
+            Step::PadPress(b) if b == pad.stop => {
+                pad.stop_from.get_or_insert(now);
+            }
+            // The aim button does what the aim key does, in every place (the pad's buttons
+            // are not routed by place; only the stick is).
+            Step::PadPress(b) if b == pad.aim => self.aims.push(now),
+            Step::PadRelease(b) if b == pad.stop => pad.let_go_stop(now),
+            Step::PadFound => {
+                pad.connected = true;
+                // "Plugged in again, nothing moves until the stick does."
+                pad.left = (0, 0);
+            }
+            Step::PadLost => {
+                pad.connected = false;
+                pad.left = (0, 0);
+                pad.let_go_stop(now);
+            }
+            _ => {}
+        }
+        let out = self.pad.out() && after.place == Place::Driving;
+        for i in 0..MODELS.len() {
+            let drives = out && (after.mirror || after.chosen == i);
+            match (drives, self.pad.driving[i]) {
+                (true, None) => self.pad.driving[i] = Some(now),
+                (false, Some(from)) => {
+                    self.pad.driving[i] = None;
+                    self.pad.let_go[i].push(now);
+                    // The stick points the heading: it drives and turns.
+                    self.drive_spans[i].push((from, now));
+                    self.turn_spans[i].push((from, now));
+                }
+                _ => {}
+            }
+        }
     }
 
     /// Check every write against what was held; `end`: when the sequence ended with the app
@@ -475,6 +681,13 @@ impl Oracle {
     fn verify(mut self, writes: &[Vec<Write>], end: Option<Instant>) -> Result<(), String> {
         let end = end.unwrap_or_else(Instant::now);
         self.let_go_all(end);
+        for i in 0..MODELS.len() {
+            if let Some(from) = self.pad.driving[i].take() {
+                self.drive_spans[i].push((from, end));
+                self.turn_spans[i].push((from, end));
+            }
+        }
+        self.pad.let_go_stop(end);
         let within = |spans: &[(Instant, Instant)], t: Instant| {
             spans.iter().any(|(a, b)| *a <= t && t <= *b)
         };
@@ -486,11 +699,26 @@ impl Oracle {
                 if !within(&self.drive_spans[i], x.at) {
                     return Err(format!(
                         "droid {i} ({}) was written speed {} at {:?} with no drive key held in \
-                         driving: drive spans {:?}",
+                         driving and the stick not driving it: drive spans {:?}",
                         MODELS[i].display_name(),
                         x.speed,
                         x.at,
                         self.drive_spans[i]
+                    ));
+                }
+                // Strictly inside: a tick at the press's instant may come before the press.
+                if let Some((a, b)) = self
+                    .pad
+                    .stop_spans
+                    .iter()
+                    .find(|(a, b)| *a < x.at && x.at < *b)
+                {
+                    return Err(format!(
+                        "droid {i} ({}) was written speed {} at {:?} while the pad's stop \
+                         button was held ({a:?} to {b:?})",
+                        MODELS[i].display_name(),
+                        x.speed,
+                        x.at,
                     ));
                 }
             }
@@ -510,12 +738,27 @@ impl Oracle {
                 if !aimed && !reversed && !overlaps(&self.turn_spans[i], a.at, b.at) {
                     return Err(format!(
                         "droid {i} ({}) turned from {:?} to {:?} between {:?} and {:?} with no \
-                         turn key held in driving",
+                         turn key held in driving and the stick not driving it",
                         MODELS[i].display_name(),
                         a.heading,
                         b.heading,
                         a.at,
                         b.at
+                    ));
+                }
+            }
+            // "Unplugging the pad, or the stick back in its deadzone, writes a stop at once":
+            // when the stick lets go and no key drives on, the last write by then is a stop.
+            for t in &self.pad.let_go[i] {
+                let keys_drive_on = self.drive_spans[i].iter().any(|(a, b)| a <= t && t < b);
+                let last = w.iter().rfind(|x| x.at <= *t);
+                if let Some(x) = last.filter(|x| x.speed > 0 && !keys_drive_on) {
+                    return Err(format!(
+                        "the stick let go of droid {i} ({}) at {t:?} but its last write then \
+                         was speed {} at {:?}, not a stop",
+                        MODELS[i].display_name(),
+                        x.speed,
+                        x.at
                     ));
                 }
             }

@@ -109,7 +109,14 @@ impl PadState {
     /// Fold in one event; returns the command a button press asks for.
     pub fn apply(&mut self, e: &PadEvent) -> Option<PadCommand> {
         match e {
-            PadEvent::Connected(_) => self.connected = true,
+            PadEvent::Connected(_) => {
+                // A pad plugged in has its sticks at rest until it reports them moved (gilrs
+                // reports changes only): a value from before, from a pad since lost, must not
+                // drive ("plugged in again, nothing moves until the stick does"). Buttons
+                // stay: a stop button held on another pad keeps holding.
+                self.connected = true;
+                self.axes = [0.0; 5];
+            }
             PadEvent::Disconnected | PadEvent::Unavailable(_) => {
                 // Unplugged: everything back to rest (the deadman stops the droid).
                 self.connected = false;
@@ -374,6 +381,23 @@ mod tests {
         p.apply(&PadEvent::Disconnected);
         assert!(p.drive().is_none() && !p.estop_held());
         assert_eq!(p.dome_rate(), 0.0);
+    }
+
+    /// Found by the app_input safety property: a stick value reported while no pad was
+    /// connected drove at once when one was plugged in.
+    #[test]
+    fn a_pad_plugged_in_has_its_sticks_at_rest() {
+        let mut p = pad();
+        p.apply(&PadEvent::Disconnected);
+        p.apply(&PadEvent::Axis(Axis::LeftY, 1.0));
+        p.apply(&PadEvent::Pressed(Button::East));
+        p.apply(&PadEvent::Connected("Another Pad".into()));
+        assert!(p.drive().is_none(), "the old stick value drives");
+        assert!(p.estop_held(), "the stop held is let go by a plug-in");
+        p.apply(&PadEvent::Axis(Axis::LeftY, 1.0));
+        assert!(p.drive().is_some());
+        p.apply(&PadEvent::Connected("A Third Pad".into()));
+        assert!(p.drive().is_none());
     }
 
     #[test]
