@@ -3,6 +3,7 @@
 //! deadzone stops the droid at once, not at the next tick.
 
 use super::core::App;
+use super::place::Place;
 use super::state::{GamepadStatus, Overlay};
 use crate::config::{Action, PadAction};
 use crate::teleop::gamepad::{PadCommand, PadEvent};
@@ -63,7 +64,13 @@ impl App {
             _ => None,
         };
         if let Some(action) = key_action {
-            return self.press(action);
+            // As their keys: only where the keyboard drives. Over help, a palette, the log or
+            // a prompt, the pad's stance and aim buttons do nothing (R2 would change stance
+            // behind the help page); the stop and help buttons work everywhere.
+            if self.place() == Place::Driving {
+                self.press(action);
+            }
+            return;
         }
         match a {
             PadAction::Tripod | PadAction::Bipod | PadAction::Aim => {}

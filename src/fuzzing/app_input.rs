@@ -631,11 +631,11 @@ impl Oracle {
         if after.clears != before.clears {
             self.let_go_all(now);
         }
-        self.pad_step(now, step, after);
+        self.pad_step(now, step, after, stayed);
     }
 
     /// A pad step read, then which droids the stick drives from now on.
-    fn pad_step(&mut self, now: Instant, step: &Step, after: &InputTrace) {
+    fn pad_step(&mut self, now: Instant, step: &Step, after: &InputTrace, stayed: bool) {
         let pad = &mut self.pad;
         match *step {
             Step::Stick(Axis::LeftX, v) => pad.left.0 = v,
@@ -643,9 +643,9 @@ impl Oracle {
             Step::PadPress(b) if b == pad.stop => {
                 pad.stop_from.get_or_insert(now);
             }
-            // The aim button does what the aim key does, in every place (the pad's buttons
-            // are not routed by place; only the stick is).
-            Step::PadPress(b) if b == pad.aim => self.aims.push(now),
+            // The aim button does what the aim key does, where the aim key does it: in
+            // driving (docs/app.md's gamepad table); over any other place it does nothing.
+            Step::PadPress(b) if b == pad.aim && stayed => self.aims.push(now),
             Step::PadRelease(b) if b == pad.stop => pad.let_go_stop(now),
             Step::PadFound => {
                 pad.connected = true;

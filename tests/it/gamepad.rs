@@ -458,3 +458,45 @@ fn configured_mappings_are_read_when_the_configuration_loads() {
         "{shown}"
     );
 }
+
+/// The pad's stance and aim buttons do what their keys do, where their keys do it: in driving.
+/// Over help, a palette or the log they do nothing (R2 would change stance behind the help
+/// page); the stop button is the one that works everywhere (above).
+#[tokio::test(start_paused = true)]
+async fn the_stance_buttons_act_only_where_the_keyboard_drives() {
+    use droidctl::protocol::wire::LegState;
+    let mut rig = Rig::start(Model::R2D2, XBOX_360).await;
+    rig.plug().await;
+    let stance = |rig: &Rig| rig.probe.state().stance;
+    let first = stance(&rig);
+    // The Xbox's A (b0, South) asks for the tripod, Y (b3, North) for the bipod: press the one
+    // that changes what R2 stands on now.
+    let (button, wanted) = if first == LegState::Tripod {
+        (3, LegState::Bipod)
+    } else {
+        (0, LegState::Tripod)
+    };
+    for (name, open) in [
+        ("help", Key::ch('?')),
+        ("animations", Key::ch('n')),
+        ("log", Key::ch('l')),
+    ] {
+        rig.key(open).await;
+        assert_ne!(Place::of(&state().await, false), Place::Driving, "{name}");
+        rig.button(button, true).await;
+        rig.button(button, false).await;
+        sleep(Duration::from_secs(3)).await;
+        assert_eq!(stance(&rig), first, "{name}: the stance changed behind it");
+        rig.key(Key::plain(KeyCode::Esc)).await;
+        assert_eq!(Place::of(&state().await, false), Place::Driving, "{name}");
+    }
+    rig.button(button, true).await;
+    rig.button(button, false).await;
+    sleep(Duration::from_secs(3)).await;
+    assert_eq!(
+        stance(&rig),
+        wanted,
+        "in driving the button changes the stance"
+    );
+    rig.quit().await;
+}
