@@ -58,22 +58,8 @@ fn stream() -> Vec<u8> {
                 Packet::notification(0x18, 0x02, data)
             }
             4 => {
-                let names = [
-                    "pitch",
-                    "roll",
-                    "yaw",
-                    "accel_x",
-                    "accel_y",
-                    "accel_z",
-                    "locator_x",
-                    "locator_y",
-                    "velocity_x",
-                    "velocity_y",
-                    "head_angle",
-                    "gyro_x",
-                    "gyro_y",
-                    "gyro_z",
-                ];
+                // The full configuration's fields, in its order (v2_vectors pins that order).
+                let names: Vec<&str> = cfg.layout().iter().flatten().map(|f| f.name).collect();
                 let values: Vec<(&str, f32)> =
                     names.iter().map(|n| (*n, r.range(-200.0, 200.0))).collect();
                 Packet::notification(0x18, 0x02, encode_sample(&cfg, &values))
